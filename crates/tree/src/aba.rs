@@ -1,0 +1,117 @@
+//! The articulated-body algorithm (Featherstone §7.3): O(n) forward dynamics, the default.
+
+use crate::data::Data;
+use crate::error::DynamicsError;
+use crate::kinematics::{base_motion, check_len, update_transforms};
+use crate::model::{BaseKind, Model};
+use crate::spatial::{ArticulatedInertia, Force, Motion};
+use nalgebra::{DVector, Matrix6, Vector6};
+
+/// Pivots `Dᵢ` below this fraction of the articulated inertia's scale are singular.
+pub const SINGULAR_PIVOT_RELATIVE: f64 = 1e-13;
+
+/// Forward dynamics: the accelerations `q̈` produced by generalised forces `tau` and external
+/// body forces `fext` (conventions of [`crate::rnea`]), into `data.ddq`.
+///
+/// A free base's accelerations are the body-frame derivatives of `[ω; v]`. Fails with
+/// [`DynamicsError::SingularHinge`] where a hinge's articulated inertia vanishes (gimbal lock
+/// of massless links).
+///
+/// ```
+/// use satsim_tree::{BaseKind, Body, Data, ModelBuilder, aba, spatial::{Mat3, Vec3}};
+/// let model = ModelBuilder::new(BaseKind::Free)
+///     .body(Body::new("bus", 4.0, Mat3::from_diagonal(&Vec3::new(1.0, 2.0, 3.0))))
+///     .build()?;
+/// let mut data = Data::new(&model);
+/// let tau = [0.0, 0.0, 6.0, 8.0, 0.0, 0.0]; // a torque about z and a force along x
+/// let ddq = aba(&model, &mut data, &model.neutral(), &[0.0; 6], &tau, None)?;
+/// assert!((ddq[2] - 2.0).abs() < 1e-12 && (ddq[3] - 2.0).abs() < 1e-12);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn aba<'d>(
+    model: &Model,
+    data: &'d mut Data,
+    q: &[f64],
+    v: &[f64],
+    tau: &[f64],
+    fext: Option<&[Force]>,
+) -> Result<&'d DVector<f64>, DynamicsError> {
+    check_len("v", v.len(), model.nv())?;
+    check_len("tau", tau.len(), model.nv())?;
+    if let Some(f) = fext {
+        check_len("fext", f.len(), model.n_bodies())?;
+    }
+    update_transforms(model, data, q)?;
+    let n = model.n_bodies();
+    // Pass 1, outward: velocities, velocity-product accelerations, rigid inertias, bias forces.
+    data.v[0] = base_motion(model, v);
+    data.c[0] = Motion::zero();
+    for i in 0..n {
+        if let Some(joint) = &model.joints[i] {
+            let p = model.parent[i].expect("parent");
+            let vj = joint.s * v[joint.dof];
+            data.v[i] = data.xup[i].apply_motion(&data.v[p]) + vj;
+            data.c[i] = data.v[i].cross_motion(&vj);
+        }
+        let inertia = &model.bodies[i].inertia;
+        data.ia[i] = ArticulatedInertia::from(*inertia);
+        let vi = data.v[i];
+        data.pa[i] = vi.cross_force(&inertia.mul_motion(&vi));
+        if let Some(f) = fext {
+            data.pa[i] -= f[i];
+        }
+    }
+    // Pass 2, inward: articulated inertias and bias forces.
+    for i in (1..n).rev() {
+        let joint = model.joints[i].as_ref().expect("joint");
+        let ia = data.ia[i];
+        let u_col = ia.mul_motion(&joint.s);
+        let d = joint.s.dot(&u_col);
+        let scale = ia.a.trace() + ia.c.trace() * joint.child_at.norm_squared();
+        if !(d > SINGULAR_PIVOT_RELATIVE * scale) || !d.is_finite() {
+            return Err(DynamicsError::SingularHinge {
+                hinge: model.hinge_names[joint.hinge].clone(),
+                pivot: d,
+                relative: if scale > 0.0 { d / scale } else { 0.0 },
+            });
+        }
+        let u = tau[joint.dof] - joint.s.dot(&data.pa[i]);
+        data.u_col[i] = u_col;
+        data.d[i] = d;
+        data.u[i] = u;
+        let inv_d = 1.0 / d;
+        let mut ia_proj = ia;
+        ia_proj.sub_outer(&u_col, inv_d);
+        let pa = data.pa[i] + ia_proj.mul_motion(&data.c[i]) + u_col * (u * inv_d);
+        let p = model.parent[i].expect("parent");
+        let x = data.xup[i];
+        data.ia[p] += ia_proj.inv_transform(&x);
+        data.pa[p] += x.inv_apply_force(&pa);
+    }
+    // Pass 3, outward: accelerations.
+    data.a[0] = match model.base {
+        BaseKind::Free => {
+            let mut rhs = -data.pa[0].to_vector();
+            for (r, t) in tau[..6].iter().enumerate() {
+                rhs[r] += t;
+            }
+            let m: Matrix6<f64> = data.ia[0].to_matrix();
+            let a0: Vector6<f64> = m.cholesky().ok_or(DynamicsError::SingularBase)?.solve(&rhs);
+            for r in 0..6 {
+                data.ddq[r] = a0[r];
+            }
+            Motion::from_slice(a0.as_slice())
+        }
+        BaseKind::Fixed => Motion::zero(),
+    };
+    for i in 1..n {
+        let joint = model.joints[i].as_ref().expect("joint");
+        let p = model.parent[i].expect("parent");
+        let a = data.xup[i].apply_motion(&data.a[p]) + data.c[i];
+        let qdd =
+            (data.u[i] - data.u_col[i].ang.dot(&a.ang) - data.u_col[i].lin.dot(&a.lin)) / data.d[i];
+        data.ddq[joint.dof] = qdd;
+        data.a[i] = a + joint.s * qdd;
+    }
+    Ok(&data.ddq)
+}

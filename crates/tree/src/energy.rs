@@ -1,0 +1,67 @@
+//! Energy, centre of mass and momentum of the whole tree.
+
+use crate::data::Data;
+use crate::error::DynamicsError;
+use crate::kinematics::forward_kinematics;
+use crate::model::Model;
+use crate::spatial::Vec3;
+
+/// Kinetic energy `½ Σ vᵢᵀ Iᵢ vᵢ` (J), running [`forward_kinematics`] first.
+///
+/// ```
+/// use satsim_tree::{BaseKind, Body, Data, ModelBuilder, kinetic_energy, spatial::Mat3};
+/// let model = ModelBuilder::new(BaseKind::Free).body(Body::new("b", 2.0, Mat3::identity())).build()?;
+/// let mut data = Data::new(&model);
+/// let t = kinetic_energy(&model, &mut data, &model.neutral(), &[0.0, 0.0, 2.0, 3.0, 0.0, 0.0])?;
+/// assert!((t - (0.5 * 4.0 + 0.5 * 2.0 * 9.0)).abs() < 1e-12);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn kinetic_energy(
+    model: &Model,
+    data: &mut Data,
+    q: &[f64],
+    v: &[f64],
+) -> Result<f64, DynamicsError> {
+    forward_kinematics(model, data, q, v)?;
+    Ok((0..model.n_bodies())
+        .map(|i| 0.5 * data.v[i].dot(&model.bodies[i].inertia.mul_motion(&data.v[i])))
+        .sum())
+}
+
+/// The system's centre of mass in inertial coordinates (m), from the poses of the last
+/// [`forward_kinematics`]. For a massless model, the root's origin.
+pub fn center_of_mass(model: &Model, data: &Data) -> Vec3 {
+    let mut m = 0.0;
+    let mut mc = Vec3::zeros();
+    for (i, b) in model.bodies.iter().enumerate() {
+        m += b.mass;
+        mc += (data.position[i] + data.rotation[i] * b.com) * b.mass;
+    }
+    if m > 0.0 { mc / m } else { data.position[0] }
+}
+
+/// Total linear momentum (N s) and angular momentum about the system centre of mass (N m s),
+/// both in inertial coordinates, from the last [`forward_kinematics`].
+///
+/// ```
+/// use satsim_tree::{BaseKind, Body, Data, ModelBuilder, forward_kinematics, momentum, spatial::{Mat3, Vec3}};
+/// let model = ModelBuilder::new(BaseKind::Free).body(Body::new("b", 2.0, Mat3::identity() * 3.0)).build()?;
+/// let mut data = Data::new(&model);
+/// forward_kinematics(&model, &mut data, &model.neutral(), &[0.0, 0.0, 2.0, 1.0, 0.0, 0.0])?;
+/// let (p, h) = momentum(&model, &data);
+/// assert!((p - Vec3::new(2.0, 0.0, 0.0)).norm() < 1e-12 && (h - Vec3::new(0.0, 0.0, 6.0)).norm() < 1e-12);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn momentum(model: &Model, data: &Data) -> (Vec3, Vec3) {
+    let mut p = Vec3::zeros();
+    let mut h_origin = Vec3::zeros();
+    for (i, b) in model.bodies.iter().enumerate() {
+        let f = b.inertia.mul_motion(&data.v[i]);
+        let r = &data.rotation[i];
+        let lin = r * f.lin;
+        p += lin;
+        h_origin += r * f.ang + data.position[i].cross(&lin);
+    }
+    let c = center_of_mass(model, data);
+    (p, h_origin - c.cross(&p))
+}

@@ -1,0 +1,151 @@
+//! Errors of model construction and of the per-call algorithms.
+
+use thiserror::Error;
+
+/// Why a model could not be built. Each variant names the body or hinge concerned.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum ModelError {
+    /// The model has no body.
+    #[error("the model has no body (the first body listed is the root)")]
+    NoBodies,
+    /// Two bodies share a name.
+    #[error("duplicate body name `{0}`")]
+    DuplicateBody(String),
+    /// Two hinges share a name.
+    #[error("duplicate hinge name `{0}`")]
+    DuplicateHinge(String),
+    /// A hinge names a body that does not exist.
+    #[error("hinge `{hinge}`: unknown {role} body `{body}`")]
+    UnknownBody {
+        /// The hinge.
+        hinge: String,
+        /// `parent` or `child`.
+        role: &'static str,
+        /// The unknown name.
+        body: String,
+    },
+    /// A hinge joins a body to itself.
+    #[error("hinge `{0}` joins a body to itself")]
+    SelfLoop(String),
+    /// The root (first body) is the child of a hinge.
+    #[error(
+        "hinge `{hinge}` makes the root body `{body}` a child (the first body listed is the root)"
+    )]
+    RootIsChild {
+        /// The hinge.
+        hinge: String,
+        /// The root body.
+        body: String,
+    },
+    /// A body is the child of two hinges.
+    #[error("body `{body}` has two parents (hinges `{first}` and `{second}`)")]
+    TwoParents {
+        /// The body.
+        body: String,
+        /// The first hinge naming it as child.
+        first: String,
+        /// The second hinge naming it as child.
+        second: String,
+    },
+    /// A body other than the root is the child of no hinge (a second root).
+    #[error(
+        "body `{0}` is the child of no hinge (a second root); only the first body may be the root"
+    )]
+    NoParent(String),
+    /// The hinges form a cycle not connected to the root.
+    #[error("the hinges form a cycle through bodies {0:?}")]
+    Cycle(Vec<String>),
+    /// A number is NaN or infinite.
+    #[error("{0}: value is not finite")]
+    NonFinite(String),
+    /// A negative mass.
+    #[error("body `{body}`: mass {mass} is negative")]
+    NegativeMass {
+        /// The body.
+        body: String,
+        /// The mass given.
+        mass: f64,
+    },
+    /// An inertia tensor that is not symmetric.
+    #[error("body `{0}`: inertia is not symmetric")]
+    InertiaNotSymmetric(String),
+    /// An inertia tensor with a negative principal moment.
+    #[error("body `{body}`: inertia is not positive semi-definite (principal moment {moment})")]
+    InertiaNotPositive {
+        /// The body.
+        body: String,
+        /// The smallest principal moment.
+        moment: f64,
+    },
+    /// Principal moments that break the triangle inequality (no mass distribution has them).
+    #[error("body `{body}`: principal moments {moments:?} break the triangle inequality")]
+    InertiaTriangle {
+        /// The body.
+        body: String,
+        /// The principal moments.
+        moments: [f64; 3],
+    },
+    /// A hinge axis whose norm is not 1 (within 1e-6).
+    #[error("hinge `{hinge}`: axis norm {norm} is not 1 (within 1e-6)")]
+    AxisNorm {
+        /// The hinge.
+        hinge: String,
+        /// The norm given.
+        norm: f64,
+    },
+    /// A hinge rotation quaternion whose norm is not 1 (within 1e-6).
+    #[error("hinge `{hinge}`: rotation quaternion norm {norm} is not 1 (within 1e-6)")]
+    RotationNorm {
+        /// The hinge.
+        hinge: String,
+        /// The norm given.
+        norm: f64,
+    },
+    /// A leaf body with zero mass and zero inertia: its hinge acceleration is undetermined.
+    #[error(
+        "body `{0}` is a leaf with zero mass and zero inertia: its hinge acceleration would be undetermined"
+    )]
+    MasslessLeaf(String),
+}
+
+/// Why a per-call algorithm could not produce a result.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum DynamicsError {
+    /// A slice had the wrong length.
+    #[error("{what}: expected {expected} entries, got {got}")]
+    Dimension {
+        /// What the slice is (`q`, `v`, `tau`, `fext`).
+        what: &'static str,
+        /// The length the model needs.
+        expected: usize,
+        /// The length given.
+        got: usize,
+    },
+    /// The articulated inertia about a hinge axis vanished: the configuration is singular
+    /// (for example the gimbal lock of a 3-DOF hinge made of massless links).
+    #[error(
+        "singular configuration at hinge `{hinge}`: articulated inertia about its axis is {pivot:e} (relative {relative:e})"
+    )]
+    SingularHinge {
+        /// The hinge.
+        hinge: String,
+        /// The pivot `D = Sᵀ IA S`.
+        pivot: f64,
+        /// The pivot relative to the system's inertia scale.
+        relative: f64,
+    },
+    /// The floating base's articulated inertia is not positive definite.
+    #[error("singular floating base: its articulated inertia is not positive definite")]
+    SingularBase,
+    /// The mass matrix is not positive definite (Cholesky failed at a generalised coordinate).
+    #[error("mass matrix is not positive definite at coordinate {index} (pivot {pivot:e})")]
+    NotPositiveDefinite {
+        /// The coordinate.
+        index: usize,
+        /// The failing pivot.
+        pivot: f64,
+    },
+    /// A non-finite number in the input.
+    #[error("{0} contains a non-finite number")]
+    NonFinite(&'static str),
+}

@@ -1,0 +1,53 @@
+//! # satsim-tree: a generic recursive multibody engine
+//!
+//! Trees of rigid bodies joined by revolute hinges, with a free-floating or fixed root, after
+//! Featherstone's *Rigid Body Dynamics Algorithms*. It knows nothing about spacecraft.
+//!
+//! - [`ModelBuilder`] builds an immutable, validated [`Model`]; [`Data`] is its reusable
+//!   workspace: the per-call algorithms below allocate nothing.
+//! - One file per algorithm: [`forward_kinematics`], [`crba`] (mass matrix), [`rnea`]
+//!   (inverse dynamics, [`bias`]), [`aba`] (O(n) forward dynamics, the default),
+//!   [`crba_cholesky`] (forward dynamics through the mass matrix), [`kinetic_energy`],
+//!   [`center_of_mass`], [`momentum`].
+//! - [`io`] reads the model TOML and state JSON files of the command-line contract.
+//!
+//! Conventions: SI units; spatial vectors angular-then-linear, in body coordinates about the
+//! body frame's origin ([`spatial`]); quaternions are Hamilton `[w, x, y, z]`; a hinge torque
+//! acts on the child and reacts on the parent. See [`model`] for the coordinates `q` and `v`.
+//!
+//! ```
+//! use satsim_tree::{BaseKind, Body, Data, Hinge, ModelBuilder, aba, spatial::{Mat3, Vec3}};
+//! let model = ModelBuilder::new(BaseKind::Free)
+//!     .body(Body::new("bus", 500.0, Mat3::identity() * 40.0))
+//!     .body(Body::new("panel", 20.0, Mat3::from_diagonal(&Vec3::new(1.7, 6.7, 8.3))))
+//!     .hinge(Hinge::revolute("h", "bus", "panel", Vec3::x()).at(Vec3::y()).child_at(Vec3::new(0.0, -1.0, 0.0)))
+//!     .build()?;
+//! let mut data = Data::new(&model);
+//! let mut tau = vec![0.0; model.nv()];
+//! tau[6] = 1.0; // 1 N m on the hinge
+//! let ddq = aba(&model, &mut data, &model.neutral(), &vec![0.0; model.nv()], &tau, None)?;
+//! assert!(ddq[6] > 0.0 && ddq[0] < 0.0); // the panel turns one way, the bus the other
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+#![warn(missing_docs)]
+
+pub mod aba;
+pub mod cholesky;
+pub mod crba;
+pub mod data;
+pub mod energy;
+pub mod error;
+pub mod kinematics;
+pub mod model;
+pub mod rnea;
+pub mod spatial;
+
+pub use aba::aba;
+pub use cholesky::crba_cholesky;
+pub use crba::crba;
+pub use data::Data;
+pub use energy::{center_of_mass, kinetic_energy, momentum};
+pub use error::{DynamicsError, ModelError};
+pub use kinematics::{base_pose, forward_kinematics, forward_kinematics_acc, update_transforms};
+pub use model::{BaseKind, Body, BodyInfo, Hinge, Joint, Model, ModelBuilder};
+pub use rnea::{bias, rnea};

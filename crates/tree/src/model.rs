@@ -1,0 +1,523 @@
+//! The immutable [`Model`]: topology and parameters of a tree of rigid bodies joined by
+//! revolute hinges, built and validated by [`ModelBuilder`].
+//!
+//! Frames and kinematics (the model file's contract): with `R_p`, `r_p` the parent frame's
+//! attitude and origin, a hinge at angle `φ` places its child at
+//! `R_c = R_p · Rot(axis, φ) · rotation`, hinge point `h = r_p + R_p · at`,
+//! child origin `r_c = h − R_c · child_at`. The axis is given in the parent's frame.
+//!
+//! Coordinates: `q = [attitude w x y z, position x y z, hinge angles…]` for a free base
+//! (`nq = 7 + n`), `q = [hinge angles…]` for a fixed one; `v = [ω (3), v (3), hinge rates…]`
+//! (root-body axes, root frame origin) or `[hinge rates…]`. Hinges follow the order in
+//! which they were added (the model file's order), whatever the tree's shape.
+
+use crate::error::ModelError;
+use crate::spatial::{Mat3, Motion, RigidInertia, Transform, Vec3, rotation_about};
+use nalgebra::{Quaternion, SymmetricEigen, UnitQuaternion};
+use std::collections::HashMap;
+
+/// How the root body is attached to the inertial frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum BaseKind {
+    /// A 6-DOF floating root (a spacecraft).
+    #[default]
+    Free,
+    /// The root is fixed in the inertial frame (a robot arm on a table).
+    Fixed,
+}
+
+/// A rigid body as given to the builder.
+///
+/// ```
+/// use satsim_tree::{Body, spatial::{Mat3, Vec3}};
+/// let bus = Body::new("bus", 500.0, Mat3::from_diagonal(&Vec3::new(40.0, 40.0, 30.0)))
+///     .with_com(Vec3::new(0.0, 0.0, 0.1));
+/// assert_eq!(bus.name, "bus");
+/// ```
+#[derive(Clone, Debug, PartialEq)]
+pub struct Body {
+    /// Unique name.
+    pub name: String,
+    /// Mass (kg), `>= 0`.
+    pub mass: f64,
+    /// Centre of mass in the body frame (m).
+    pub com: Vec3,
+    /// Inertia tensor about the centre of mass, body axes (kg m²).
+    pub inertia: Mat3,
+}
+
+impl Body {
+    /// A body with its centre of mass at the frame origin.
+    pub fn new(name: impl Into<String>, mass: f64, inertia: Mat3) -> Self {
+        Self {
+            name: name.into(),
+            mass,
+            com: Vec3::zeros(),
+            inertia,
+        }
+    }
+    /// A massless, inertia-free link (to build multi-axis hinges from 1-DOF hinges).
+    pub fn massless(name: impl Into<String>) -> Self {
+        Self::new(name, 0.0, Mat3::zeros())
+    }
+    /// Sets the centre of mass (body frame, m).
+    pub fn with_com(mut self, com: Vec3) -> Self {
+        self.com = com;
+        self
+    }
+}
+
+/// A revolute hinge as given to the builder.
+///
+/// ```
+/// use satsim_tree::{Hinge, spatial::Vec3};
+/// let h = Hinge::revolute("yaw", "bus", "panel", Vec3::z()).at(Vec3::new(0.75, 0.0, 0.0));
+/// assert_eq!(h.parent, "bus");
+/// ```
+#[derive(Clone, Debug, PartialEq)]
+pub struct Hinge {
+    /// Unique name.
+    pub name: String,
+    /// Parent body's name.
+    pub parent: String,
+    /// Child body's name.
+    pub child: String,
+    /// Rotation axis in the parent frame (normalised by the builder if within 1e-6 of unit).
+    pub axis: Vec3,
+    /// Hinge point in the parent frame (m).
+    pub at: Vec3,
+    /// Hinge point in the child frame (m).
+    pub child_at: Vec3,
+    /// Child frame relative to the parent frame at zero angle (maps child to parent
+    /// coordinates); a Hamilton quaternion, normalised by the builder if within 1e-6 of unit.
+    pub rotation: Quaternion<f64>,
+}
+
+impl Hinge {
+    /// A revolute hinge with coincident frames at zero angle.
+    pub fn revolute(
+        name: impl Into<String>,
+        parent: impl Into<String>,
+        child: impl Into<String>,
+        axis: Vec3,
+    ) -> Self {
+        Self {
+            name: name.into(),
+            parent: parent.into(),
+            child: child.into(),
+            axis,
+            at: Vec3::zeros(),
+            child_at: Vec3::zeros(),
+            rotation: Quaternion::identity(),
+        }
+    }
+    /// Sets the hinge point in the parent frame.
+    pub fn at(mut self, at: Vec3) -> Self {
+        self.at = at;
+        self
+    }
+    /// Sets the hinge point in the child frame.
+    pub fn child_at(mut self, child_at: Vec3) -> Self {
+        self.child_at = child_at;
+        self
+    }
+    /// Sets the fixed rotation (child to parent at zero angle).
+    pub fn rotation(mut self, rotation: Quaternion<f64>) -> Self {
+        self.rotation = rotation;
+        self
+    }
+}
+
+/// Collects bodies and hinges, then validates them into a [`Model`].
+///
+/// ```
+/// use satsim_tree::{BaseKind, Body, Hinge, ModelBuilder, spatial::{Mat3, Vec3}};
+/// let model = ModelBuilder::new(BaseKind::Free)
+///     .body(Body::new("bus", 500.0, Mat3::identity() * 40.0))
+///     .body(Body::new("panel", 20.0, Mat3::identity() * 2.0))
+///     .hinge(Hinge::revolute("h", "bus", "panel", Vec3::z()).at(Vec3::x()))
+///     .build()?;
+/// assert_eq!((model.nq(), model.nv()), (8, 7));
+/// # Ok::<(), satsim_tree::ModelError>(())
+/// ```
+#[derive(Clone, Debug, Default)]
+pub struct ModelBuilder {
+    base: BaseKind,
+    bodies: Vec<Body>,
+    hinges: Vec<Hinge>,
+}
+
+/// Tolerance on the norm of axes and quaternions given by the user.
+pub const UNIT_NORM_TOLERANCE: f64 = 1e-6;
+
+impl ModelBuilder {
+    /// An empty builder with the given base.
+    pub fn new(base: BaseKind) -> Self {
+        Self {
+            base,
+            ..Self::default()
+        }
+    }
+    /// Adds a body; the first body added is the root.
+    pub fn body(mut self, body: Body) -> Self {
+        self.bodies.push(body);
+        self
+    }
+    /// Adds a hinge; hinges' coordinates follow the order in which they are added.
+    pub fn hinge(mut self, hinge: Hinge) -> Self {
+        self.hinges.push(hinge);
+        self
+    }
+    /// Adds a body in place.
+    pub fn push_body(&mut self, body: Body) -> &mut Self {
+        self.bodies.push(body);
+        self
+    }
+    /// Adds a hinge in place.
+    pub fn push_hinge(&mut self, hinge: Hinge) -> &mut Self {
+        self.hinges.push(hinge);
+        self
+    }
+
+    /// Validates and builds the model.
+    pub fn build(&self) -> Result<Model, ModelError> {
+        if self.bodies.is_empty() {
+            return Err(ModelError::NoBodies);
+        }
+        let mut index: HashMap<&str, usize> = HashMap::new();
+        for (i, b) in self.bodies.iter().enumerate() {
+            if index.insert(b.name.as_str(), i).is_some() {
+                return Err(ModelError::DuplicateBody(b.name.clone()));
+            }
+            check_body(b)?;
+        }
+        let mut hinge_names: HashMap<&str, ()> = HashMap::new();
+        // parent_hinge[b] = index of the hinge whose child is body b (file order)
+        let mut parent_hinge: Vec<Option<usize>> = vec![None; self.bodies.len()];
+        let mut units = Vec::with_capacity(self.hinges.len());
+        for (k, h) in self.hinges.iter().enumerate() {
+            if hinge_names.insert(h.name.as_str(), ()).is_some() {
+                return Err(ModelError::DuplicateHinge(h.name.clone()));
+            }
+            let p = *index
+                .get(h.parent.as_str())
+                .ok_or_else(|| ModelError::UnknownBody {
+                    hinge: h.name.clone(),
+                    role: "parent",
+                    body: h.parent.clone(),
+                })?;
+            let c = *index
+                .get(h.child.as_str())
+                .ok_or_else(|| ModelError::UnknownBody {
+                    hinge: h.name.clone(),
+                    role: "child",
+                    body: h.child.clone(),
+                })?;
+            if p == c {
+                return Err(ModelError::SelfLoop(h.name.clone()));
+            }
+            if c == 0 {
+                return Err(ModelError::RootIsChild {
+                    hinge: h.name.clone(),
+                    body: h.child.clone(),
+                });
+            }
+            if let Some(first) = parent_hinge[c] {
+                return Err(ModelError::TwoParents {
+                    body: h.child.clone(),
+                    first: self.hinges[first].name.clone(),
+                    second: h.name.clone(),
+                });
+            }
+            parent_hinge[c] = Some(k);
+            units.push(check_hinge(h)?);
+        }
+        for (b, ph) in parent_hinge.iter().enumerate().skip(1) {
+            if ph.is_none() {
+                return Err(ModelError::NoParent(self.bodies[b].name.clone()));
+            }
+        }
+        // Every non-root body has exactly one parent; a body unreachable from the root lies
+        // on a cycle. Order bodies depth-first from the root so that λ(i) < i.
+        let mut children: Vec<Vec<usize>> = vec![Vec::new(); self.bodies.len()];
+        for (k, h) in self.hinges.iter().enumerate() {
+            let _ = k;
+            children[index[h.parent.as_str()]].push(index[h.child.as_str()]);
+        }
+        let mut order = Vec::with_capacity(self.bodies.len());
+        let mut stack = vec![0usize];
+        while let Some(b) = stack.pop() {
+            order.push(b);
+            for &c in children[b].iter().rev() {
+                stack.push(c);
+            }
+        }
+        if order.len() < self.bodies.len() {
+            let mut seen = vec![false; self.bodies.len()];
+            for &b in &order {
+                seen[b] = true;
+            }
+            let cycle = (0..self.bodies.len())
+                .filter(|&b| !seen[b])
+                .map(|b| self.bodies[b].name.clone())
+                .collect();
+            return Err(ModelError::Cycle(cycle));
+        }
+        for (b, kids) in children.iter().enumerate() {
+            let body = &self.bodies[b];
+            if kids.is_empty() && body.mass == 0.0 && body.inertia.norm() == 0.0 && b != 0 {
+                return Err(ModelError::MasslessLeaf(body.name.clone()));
+            }
+        }
+        let mut position = vec![0usize; self.bodies.len()];
+        for (i, &b) in order.iter().enumerate() {
+            position[b] = i;
+        }
+        let base_nv = match self.base {
+            BaseKind::Free => 6,
+            BaseKind::Fixed => 0,
+        };
+        let bodies: Vec<BodyInfo> = order
+            .iter()
+            .map(|&b| {
+                let body = &self.bodies[b];
+                BodyInfo {
+                    name: body.name.clone(),
+                    mass: body.mass,
+                    com: body.com,
+                    inertia_com: body.inertia,
+                    inertia: RigidInertia::from_com(body.mass, body.com, body.inertia),
+                }
+            })
+            .collect();
+        let mut parent = vec![None; bodies.len()];
+        let mut joints = vec![None; bodies.len()];
+        let mut hinge_body = vec![0usize; self.hinges.len()];
+        for (i, &b) in order.iter().enumerate().skip(1) {
+            let k = parent_hinge[b].expect("checked above");
+            let h = &self.hinges[k];
+            let (axis, rot0) = units[k];
+            parent[i] = Some(position[index[h.parent.as_str()]]);
+            hinge_body[k] = i;
+            // Motion subspace in child coordinates: the axis is invariant under its own
+            // rotation, so S = [rot0ᵀ axis; child_at × rot0ᵀ axis] is constant.
+            let s = rot0.tr_mul(&axis);
+            joints[i] = Some(Joint {
+                hinge: k,
+                dof: base_nv + k,
+                axis,
+                at: h.at,
+                child_at: h.child_at,
+                rot0,
+                s: Motion::new(s, h.child_at.cross(&s)),
+            });
+        }
+        Ok(Model {
+            base: self.base,
+            bodies,
+            parent,
+            joints,
+            hinge_names: self.hinges.iter().map(|h| h.name.clone()).collect(),
+            hinge_body,
+            base_nv,
+        })
+    }
+}
+
+fn finite3(v: &Vec3, what: impl FnOnce() -> String) -> Result<(), ModelError> {
+    if v.iter().all(|x| x.is_finite()) {
+        Ok(())
+    } else {
+        Err(ModelError::NonFinite(what()))
+    }
+}
+
+fn check_body(b: &Body) -> Result<(), ModelError> {
+    if !b.mass.is_finite() {
+        return Err(ModelError::NonFinite(format!("body `{}`: mass", b.name)));
+    }
+    if b.mass < 0.0 {
+        return Err(ModelError::NegativeMass {
+            body: b.name.clone(),
+            mass: b.mass,
+        });
+    }
+    finite3(&b.com, || format!("body `{}`: com", b.name))?;
+    if !b.inertia.iter().all(|x| x.is_finite()) {
+        return Err(ModelError::NonFinite(format!("body `{}`: inertia", b.name)));
+    }
+    let i = &b.inertia;
+    let scale = i.abs().max().max(f64::MIN_POSITIVE);
+    if (i - i.transpose()).abs().max() > 1e-9 * scale {
+        return Err(ModelError::InertiaNotSymmetric(b.name.clone()));
+    }
+    let mut p: Vec<f64> = SymmetricEigen::new(*i)
+        .eigenvalues
+        .iter()
+        .copied()
+        .collect();
+    p.sort_by(f64::total_cmp);
+    let tol = 1e-9 * scale;
+    if p[0] < -tol {
+        return Err(ModelError::InertiaNotPositive {
+            body: b.name.clone(),
+            moment: p[0],
+        });
+    }
+    if p[2] > p[0] + p[1] + tol {
+        return Err(ModelError::InertiaTriangle {
+            body: b.name.clone(),
+            moments: [p[0], p[1], p[2]],
+        });
+    }
+    Ok(())
+}
+
+fn check_hinge(h: &Hinge) -> Result<(Vec3, Mat3), ModelError> {
+    finite3(&h.axis, || format!("hinge `{}`: axis", h.name))?;
+    finite3(&h.at, || format!("hinge `{}`: at", h.name))?;
+    finite3(&h.child_at, || format!("hinge `{}`: child_at", h.name))?;
+    if !h.rotation.coords.iter().all(|x| x.is_finite()) {
+        return Err(ModelError::NonFinite(format!(
+            "hinge `{}`: rotation",
+            h.name
+        )));
+    }
+    let norm = h.axis.norm();
+    if (norm - 1.0).abs() > UNIT_NORM_TOLERANCE {
+        return Err(ModelError::AxisNorm {
+            hinge: h.name.clone(),
+            norm,
+        });
+    }
+    let qn = h.rotation.norm();
+    if (qn - 1.0).abs() > UNIT_NORM_TOLERANCE {
+        return Err(ModelError::RotationNorm {
+            hinge: h.name.clone(),
+            norm: qn,
+        });
+    }
+    let rot0 = UnitQuaternion::from_quaternion(h.rotation)
+        .to_rotation_matrix()
+        .into_inner();
+    Ok((h.axis / norm, rot0))
+}
+
+/// A body of a built model, with its inertia about its frame origin.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BodyInfo {
+    /// Name.
+    pub name: String,
+    /// Mass (kg).
+    pub mass: f64,
+    /// Centre of mass, body frame (m).
+    pub com: Vec3,
+    /// Inertia about the centre of mass, body axes (kg m²).
+    pub inertia_com: Mat3,
+    /// Spatial inertia about the body frame's origin.
+    pub inertia: RigidInertia,
+}
+
+/// The revolute hinge that joins body `i` to its parent `λ(i)`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Joint {
+    /// Index of the hinge in the order of addition (the model file's order).
+    pub hinge: usize,
+    /// Index of its coordinate in `v` (and of its angle in the hinge part of `q`).
+    pub dof: usize,
+    /// Unit axis, parent frame.
+    pub axis: Vec3,
+    /// Hinge point, parent frame.
+    pub at: Vec3,
+    /// Hinge point, child frame.
+    pub child_at: Vec3,
+    /// Child to parent rotation at zero angle.
+    pub rot0: Mat3,
+    /// Motion subspace `S` (constant, child coordinates).
+    pub s: Motion,
+}
+
+impl Joint {
+    /// `Xup`: the transform from the parent's coordinates to the child's at angle `phi`.
+    #[inline]
+    pub fn transform(&self, phi: f64) -> Transform {
+        // Eᵀ = Rot(axis, φ) · rot0 maps child to parent coordinates.
+        let et = rotation_about(&self.axis, phi) * self.rot0;
+        Transform::new(et.transpose(), self.at - et * self.child_at)
+    }
+}
+
+/// The immutable model: bodies in depth-first order (`λ(i) < i`, body 0 the root), the
+/// parent array `λ` and one revolute [`Joint`] per non-root body.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Model {
+    /// Free or fixed root.
+    pub base: BaseKind,
+    /// Bodies, depth-first from the root.
+    pub bodies: Vec<BodyInfo>,
+    /// `λ(i)`: the parent of body `i` (`None` for the root).
+    pub parent: Vec<Option<usize>>,
+    /// The hinge joining body `i` to `λ(i)` (`None` for the root).
+    pub joints: Vec<Option<Joint>>,
+    /// Hinge names in the order of addition.
+    pub hinge_names: Vec<String>,
+    /// For hinge `k` (order of addition), the body it moves.
+    pub hinge_body: Vec<usize>,
+    base_nv: usize,
+}
+
+impl Model {
+    /// Number of bodies.
+    pub fn n_bodies(&self) -> usize {
+        self.bodies.len()
+    }
+    /// Number of hinges.
+    pub fn n_hinges(&self) -> usize {
+        self.hinge_names.len()
+    }
+    /// Number of velocity coordinates (degrees of freedom).
+    pub fn nv(&self) -> usize {
+        self.base_nv + self.n_hinges()
+    }
+    /// Number of position coordinates.
+    pub fn nq(&self) -> usize {
+        self.base_nq() + self.n_hinges()
+    }
+    /// Degrees of freedom of the base (6 or 0).
+    pub fn base_nv(&self) -> usize {
+        self.base_nv
+    }
+    /// Position coordinates of the base (7 or 0).
+    pub fn base_nq(&self) -> usize {
+        if self.base_nv == 6 { 7 } else { 0 }
+    }
+    /// Index of the body called `name`.
+    pub fn body_index(&self, name: &str) -> Option<usize> {
+        self.bodies.iter().position(|b| b.name == name)
+    }
+    /// Index (order of addition) of the hinge called `name`.
+    pub fn hinge_index(&self, name: &str) -> Option<usize> {
+        self.hinge_names.iter().position(|h| h == name)
+    }
+    /// Total mass (kg).
+    pub fn total_mass(&self) -> f64 {
+        self.bodies.iter().map(|b| b.mass).sum()
+    }
+    /// Children of body `i`.
+    pub fn children(&self, i: usize) -> impl Iterator<Item = usize> + '_ {
+        (i + 1..self.n_bodies()).filter(move |&j| self.parent[j] == Some(i))
+    }
+    /// The neutral configuration: identity attitude, origin, zero angles.
+    pub fn neutral(&self) -> Vec<f64> {
+        let mut q = vec![0.0; self.nq()];
+        if self.base_nv == 6 {
+            q[0] = 1.0;
+        }
+        q
+    }
+    /// The hinge angle of body `i`'s joint in `q`.
+    #[inline]
+    pub(crate) fn angle(&self, q: &[f64], joint: &Joint) -> f64 {
+        q[self.base_nq() + joint.hinge]
+    }
+}

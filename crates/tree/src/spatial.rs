@@ -1,0 +1,505 @@
+//! Spatial (6-D) algebra after Featherstone, *Rigid Body Dynamics Algorithms* (2008), ch. 2.
+//!
+//! Conventions, fixed once for the whole engine:
+//! - spatial vectors are **angular first**: a motion is `[ω; v]`, a force is `[n; f]`;
+//! - a body's vectors are expressed in the body's own axes about the body frame's origin;
+//! - a [`Transform`] `X` from frame A to frame B holds `E` (the rotation taking A-coordinates to
+//!   B-coordinates) and `r` (B's origin in A-coordinates), i.e. `X = [E 0; -E[r]× E]`;
+//! - inertias act on motions and give forces: `f = I v`.
+//!
+//! Every operation works on 3-D blocks, so no 6x6 product is ever formed in the per-call paths.
+
+use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
+use std::ops::{Add, AddAssign, Mul, Neg, Sub, SubAssign};
+
+/// 3-vector of `f64`.
+pub type Vec3 = Vector3<f64>;
+/// 3x3 matrix of `f64`.
+pub type Mat3 = Matrix3<f64>;
+
+/// The matrix `[a]×` with `[a]× b = a × b`.
+///
+/// ```
+/// use satsim_tree::spatial::{skew, Vec3};
+/// let (a, b) = (Vec3::new(1.0, 2.0, 3.0), Vec3::new(-1.0, 0.5, 2.0));
+/// assert!((skew(&a) * b - a.cross(&b)).norm() < 1e-15);
+/// ```
+#[inline]
+pub fn skew(a: &Vec3) -> Mat3 {
+    Mat3::new(0.0, -a.z, a.y, a.z, 0.0, -a.x, -a.y, a.x, 0.0)
+}
+
+/// A spatial motion vector (velocity, acceleration, motion subspace column): `[ω; v]`.
+///
+/// ```
+/// use satsim_tree::spatial::{Motion, Vec3};
+/// let v = Motion::new(Vec3::z(), Vec3::x());
+/// assert_eq!(v.cross_motion(&v), Motion::zero()); // v ×m v = 0
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub struct Motion {
+    /// Angular part ω (rad/s, rad/s²).
+    pub ang: Vec3,
+    /// Linear part v of the frame origin (m/s, m/s²).
+    pub lin: Vec3,
+}
+
+/// A spatial force vector: `[n; f]`, the moment `n` about the frame origin and the force `f`.
+///
+/// ```
+/// use satsim_tree::spatial::{Force, Motion, Vec3};
+/// let f = Force::new(Vec3::new(0.0, 0.0, 2.0), Vec3::zeros());
+/// let v = Motion::new(Vec3::z(), Vec3::zeros());
+/// assert_eq!(v.dot(&f), 2.0); // power
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub struct Force {
+    /// Moment about the frame origin (N m).
+    pub ang: Vec3,
+    /// Force (N).
+    pub lin: Vec3,
+}
+
+impl Motion {
+    /// A motion from its angular and linear parts.
+    #[inline]
+    pub fn new(ang: Vec3, lin: Vec3) -> Self {
+        Self { ang, lin }
+    }
+    /// The zero motion.
+    #[inline]
+    pub fn zero() -> Self {
+        Self::default()
+    }
+    /// `self ×m m` (Featherstone's `crm(v) m`).
+    #[inline]
+    pub fn cross_motion(&self, m: &Motion) -> Motion {
+        Motion {
+            ang: self.ang.cross(&m.ang),
+            lin: self.ang.cross(&m.lin) + self.lin.cross(&m.ang),
+        }
+    }
+    /// `self ×* f` (Featherstone's `crf(v) f`).
+    #[inline]
+    pub fn cross_force(&self, f: &Force) -> Force {
+        Force {
+            ang: self.ang.cross(&f.ang) + self.lin.cross(&f.lin),
+            lin: self.ang.cross(&f.lin),
+        }
+    }
+    /// The scalar product with a force (power).
+    #[inline]
+    pub fn dot(&self, f: &Force) -> f64 {
+        self.ang.dot(&f.ang) + self.lin.dot(&f.lin)
+    }
+    /// As a 6-vector `[ω; v]`.
+    pub fn to_vector(&self) -> Vector6<f64> {
+        Vector6::new(
+            self.ang.x, self.ang.y, self.ang.z, self.lin.x, self.lin.y, self.lin.z,
+        )
+    }
+    /// From the first six entries of a slice `[ω; v]`.
+    ///
+    /// # Panics
+    /// If the slice has fewer than six entries (a programming error, not user data).
+    pub fn from_slice(s: &[f64]) -> Self {
+        Self::new(Vec3::new(s[0], s[1], s[2]), Vec3::new(s[3], s[4], s[5]))
+    }
+}
+
+impl Force {
+    /// A force from its moment and force parts.
+    #[inline]
+    pub fn new(ang: Vec3, lin: Vec3) -> Self {
+        Self { ang, lin }
+    }
+    /// The zero force.
+    #[inline]
+    pub fn zero() -> Self {
+        Self::default()
+    }
+    /// As a 6-vector `[n; f]`.
+    pub fn to_vector(&self) -> Vector6<f64> {
+        Vector6::new(
+            self.ang.x, self.ang.y, self.ang.z, self.lin.x, self.lin.y, self.lin.z,
+        )
+    }
+}
+
+macro_rules! linear_ops {
+    ($t:ty) => {
+        impl Add for $t {
+            type Output = $t;
+            #[inline]
+            fn add(self, o: $t) -> $t {
+                Self {
+                    ang: self.ang + o.ang,
+                    lin: self.lin + o.lin,
+                }
+            }
+        }
+        impl Sub for $t {
+            type Output = $t;
+            #[inline]
+            fn sub(self, o: $t) -> $t {
+                Self {
+                    ang: self.ang - o.ang,
+                    lin: self.lin - o.lin,
+                }
+            }
+        }
+        impl AddAssign for $t {
+            #[inline]
+            fn add_assign(&mut self, o: $t) {
+                self.ang += o.ang;
+                self.lin += o.lin;
+            }
+        }
+        impl SubAssign for $t {
+            #[inline]
+            fn sub_assign(&mut self, o: $t) {
+                self.ang -= o.ang;
+                self.lin -= o.lin;
+            }
+        }
+        impl Neg for $t {
+            type Output = $t;
+            #[inline]
+            fn neg(self) -> $t {
+                Self {
+                    ang: -self.ang,
+                    lin: -self.lin,
+                }
+            }
+        }
+        impl Mul<f64> for $t {
+            type Output = $t;
+            #[inline]
+            fn mul(self, s: f64) -> $t {
+                Self {
+                    ang: self.ang * s,
+                    lin: self.lin * s,
+                }
+            }
+        }
+    };
+}
+linear_ops!(Motion);
+linear_ops!(Force);
+
+/// A Plücker transform from frame A (the parent) to frame B (the child): `X = [E 0; -E[r]× E]`.
+///
+/// ```
+/// use satsim_tree::spatial::{Mat3, Motion, Transform, Vec3};
+/// // B is A shifted by 1 m along x: a pure spin about A's origin is seen in B
+/// // as a spin plus a linear velocity of B's origin.
+/// let x = Transform::new(Mat3::identity(), Vec3::x());
+/// let v = x.apply_motion(&Motion::new(Vec3::z(), Vec3::zeros()));
+/// assert!((v.lin - Vec3::y()).norm() < 1e-15);
+/// assert_eq!(x.inv_apply_motion(&v), Motion::new(Vec3::z(), Vec3::zeros()));
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Transform {
+    /// `E`: rotates A-coordinates into B-coordinates.
+    pub rot: Mat3,
+    /// `r`: B's origin in A-coordinates (m).
+    pub trans: Vec3,
+}
+
+impl Default for Transform {
+    fn default() -> Self {
+        Self::identity()
+    }
+}
+
+impl Transform {
+    /// A transform from `E` (A to B coordinates) and `r` (B's origin in A).
+    #[inline]
+    pub fn new(rot: Mat3, trans: Vec3) -> Self {
+        Self { rot, trans }
+    }
+    /// The identity transform.
+    pub fn identity() -> Self {
+        Self::new(Mat3::identity(), Vec3::zeros())
+    }
+    /// `X m`: a motion in A-coordinates expressed in B-coordinates.
+    #[inline]
+    pub fn apply_motion(&self, m: &Motion) -> Motion {
+        Motion {
+            ang: self.rot * m.ang,
+            lin: self.rot * (m.lin - self.trans.cross(&m.ang)),
+        }
+    }
+    /// `X⁻¹ m`: a motion in B-coordinates expressed in A-coordinates.
+    #[inline]
+    pub fn inv_apply_motion(&self, m: &Motion) -> Motion {
+        let ang = self.rot.tr_mul(&m.ang);
+        Motion {
+            ang,
+            lin: self.rot.tr_mul(&m.lin) + self.trans.cross(&ang),
+        }
+    }
+    /// `X* f`: a force in A-coordinates expressed in B-coordinates.
+    #[inline]
+    pub fn apply_force(&self, f: &Force) -> Force {
+        Force {
+            ang: self.rot * (f.ang - self.trans.cross(&f.lin)),
+            lin: self.rot * f.lin,
+        }
+    }
+    /// `Xᵀ f`: a force in B-coordinates expressed in A-coordinates.
+    #[inline]
+    pub fn inv_apply_force(&self, f: &Force) -> Force {
+        let lin = self.rot.tr_mul(&f.lin);
+        Force {
+            ang: self.rot.tr_mul(&f.ang) + self.trans.cross(&lin),
+            lin,
+        }
+    }
+    /// `self * other`: first `other` (A to B), then `self` (B to C); gives A to C.
+    #[inline]
+    pub fn compose(&self, other: &Transform) -> Transform {
+        Transform {
+            rot: self.rot * other.rot,
+            trans: other.trans + other.rot.tr_mul(&self.trans),
+        }
+    }
+    /// The 6x6 motion-transform matrix.
+    pub fn to_matrix(&self) -> Matrix6<f64> {
+        let mut x = Matrix6::zeros();
+        x.fixed_view_mut::<3, 3>(0, 0).copy_from(&self.rot);
+        x.fixed_view_mut::<3, 3>(3, 3).copy_from(&self.rot);
+        x.fixed_view_mut::<3, 3>(3, 0)
+            .copy_from(&(-self.rot * skew(&self.trans)));
+        x
+    }
+}
+
+/// The spatial inertia of a rigid body (or a rigid composite) about a frame origin:
+/// mass `m`, first moment `h = m c` and rotational inertia `I` about the origin.
+///
+/// ```
+/// use satsim_tree::spatial::{Mat3, Motion, RigidInertia, Vec3};
+/// let i = RigidInertia::from_com(2.0, Vec3::new(0.5, 0.0, 0.0), Mat3::identity());
+/// // Spinning about the origin moves the centre of mass: linear momentum m ω × c.
+/// let f = i.mul_motion(&Motion::new(Vec3::z(), Vec3::zeros()));
+/// assert!((f.lin - Vec3::new(0.0, 1.0, 0.0)).norm() < 1e-15);
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub struct RigidInertia {
+    /// Mass (kg).
+    pub mass: f64,
+    /// First moment of mass about the origin, `m c` (kg m).
+    pub h: Vec3,
+    /// Rotational inertia about the origin (kg m²).
+    pub inertia: Mat3,
+}
+
+impl RigidInertia {
+    /// From mass, centre of mass `c` and rotational inertia `ic` about the centre of mass.
+    pub fn from_com(mass: f64, com: Vec3, ic: Mat3) -> Self {
+        let cx = skew(&com);
+        Self {
+            mass,
+            h: com * mass,
+            inertia: ic - cx * cx * mass,
+        }
+    }
+    /// `I v`: the momentum of a body moving with `v`.
+    #[inline]
+    pub fn mul_motion(&self, v: &Motion) -> Force {
+        Force {
+            ang: self.inertia * v.ang + self.h.cross(&v.lin),
+            lin: v.lin * self.mass - self.h.cross(&v.ang),
+        }
+    }
+    /// `Xᵀ I X`: this inertia, given in B-coordinates, expressed in A-coordinates
+    /// (moves a child's inertia to its parent; Featherstone eq. 2.66 in 3-D blocks).
+    #[inline]
+    pub fn inv_transform(&self, x: &Transform) -> RigidInertia {
+        let e = &x.rot;
+        let r = skew(&x.trans);
+        let h = e.tr_mul(&self.h);
+        let hx = skew(&h);
+        let hp = h + x.trans * self.mass;
+        RigidInertia {
+            mass: self.mass,
+            h: hp,
+            inertia: e.tr_mul(&(self.inertia * e)) - r * hx - skew(&hp) * r,
+        }
+    }
+    /// The 6x6 matrix `[I [h]×; [h]×ᵀ m1]`.
+    pub fn to_matrix(&self) -> Matrix6<f64> {
+        ArticulatedInertia::from(*self).to_matrix()
+    }
+}
+
+impl Add for RigidInertia {
+    type Output = RigidInertia;
+    #[inline]
+    fn add(self, o: RigidInertia) -> RigidInertia {
+        RigidInertia {
+            mass: self.mass + o.mass,
+            h: self.h + o.h,
+            inertia: self.inertia + o.inertia,
+        }
+    }
+}
+impl AddAssign for RigidInertia {
+    #[inline]
+    fn add_assign(&mut self, o: RigidInertia) {
+        self.mass += o.mass;
+        self.h += o.h;
+        self.inertia += o.inertia;
+    }
+}
+
+/// A general symmetric 6x6 inertia `[A B; Bᵀ C]` (articulated-body inertia), in 3x3 blocks.
+///
+/// ```
+/// use satsim_tree::spatial::{ArticulatedInertia, Mat3, RigidInertia, Vec3};
+/// let rigid = RigidInertia::from_com(3.0, Vec3::new(0.1, 0.2, 0.3), Mat3::identity());
+/// let ia = ArticulatedInertia::from(rigid);
+/// assert!((ia.to_matrix() - rigid.to_matrix()).norm() < 1e-15);
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub struct ArticulatedInertia {
+    /// Angular-angular block `A`.
+    pub a: Mat3,
+    /// Angular-linear block `B`.
+    pub b: Mat3,
+    /// Linear-linear block `C`.
+    pub c: Mat3,
+}
+
+impl From<RigidInertia> for ArticulatedInertia {
+    #[inline]
+    fn from(i: RigidInertia) -> Self {
+        Self {
+            a: i.inertia,
+            b: skew(&i.h),
+            c: Mat3::from_diagonal_element(i.mass),
+        }
+    }
+}
+
+impl ArticulatedInertia {
+    /// `IA v`.
+    #[inline]
+    pub fn mul_motion(&self, v: &Motion) -> Force {
+        Force {
+            ang: self.a * v.ang + self.b * v.lin,
+            lin: self.b.tr_mul(&v.ang) + self.c * v.lin,
+        }
+    }
+    /// `IA - u uᵀ / d` for a force-like column `u` (the hinge's projection out of `IA`).
+    #[inline]
+    pub fn sub_outer(&mut self, u: &Force, inv_d: f64) {
+        let un = u.ang * inv_d;
+        let uf = u.lin * inv_d;
+        self.a -= un * u.ang.transpose();
+        self.b -= un * u.lin.transpose();
+        self.c -= uf * u.lin.transpose();
+    }
+    /// `Xᵀ IA X`: this inertia, given in B-coordinates, expressed in A-coordinates.
+    #[inline]
+    pub fn inv_transform(&self, x: &Transform) -> ArticulatedInertia {
+        let e = &x.rot;
+        let a = e.tr_mul(&(self.a * e));
+        let b = e.tr_mul(&(self.b * e));
+        let c = e.tr_mul(&(self.c * e));
+        let r = skew(&x.trans);
+        // [1 [r]; 0 1] [A B; Bᵀ C] [1 0; -[r] 1]
+        let nb = b + r * c;
+        let na = a + r * b.transpose() - nb * r;
+        ArticulatedInertia { a: na, b: nb, c }
+    }
+    /// The full 6x6 matrix.
+    pub fn to_matrix(&self) -> Matrix6<f64> {
+        let mut m = Matrix6::zeros();
+        m.fixed_view_mut::<3, 3>(0, 0).copy_from(&self.a);
+        m.fixed_view_mut::<3, 3>(0, 3).copy_from(&self.b);
+        m.fixed_view_mut::<3, 3>(3, 0)
+            .copy_from(&self.b.transpose());
+        m.fixed_view_mut::<3, 3>(3, 3).copy_from(&self.c);
+        m
+    }
+}
+
+impl AddAssign for ArticulatedInertia {
+    #[inline]
+    fn add_assign(&mut self, o: ArticulatedInertia) {
+        self.a += o.a;
+        self.b += o.b;
+        self.c += o.c;
+    }
+}
+
+/// Rodrigues' formula: the rotation by `angle` about the unit vector `axis`.
+///
+/// ```
+/// use satsim_tree::spatial::{rotation_about, Vec3};
+/// let r = rotation_about(&Vec3::z(), std::f64::consts::FRAC_PI_2);
+/// assert!((r * Vec3::x() - Vec3::y()).norm() < 1e-15);
+/// ```
+#[inline]
+pub fn rotation_about(axis: &Vec3, angle: f64) -> Mat3 {
+    let (s, c) = angle.sin_cos();
+    let k = skew(axis);
+    Mat3::identity() + k * s + k * k * (1.0 - c)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sample() -> (Transform, Motion, Force, RigidInertia) {
+        let e = rotation_about(&Vec3::new(1.0, 2.0, 2.0).normalize(), 0.7);
+        let x = Transform::new(e, Vec3::new(0.3, -1.2, 0.5));
+        let m = Motion::new(Vec3::new(0.1, -0.4, 0.9), Vec3::new(2.0, 0.3, -1.0));
+        let f = Force::new(Vec3::new(-0.5, 1.0, 0.2), Vec3::new(0.7, 0.1, 3.0));
+        let ic = Mat3::new(2.0, 0.1, 0.2, 0.1, 3.0, -0.3, 0.2, -0.3, 4.0);
+        let i = RigidInertia::from_com(5.0, Vec3::new(0.2, -0.1, 0.4), ic);
+        (x, m, f, i)
+    }
+
+    #[test]
+    fn block_ops_match_6x6_matrices() {
+        let (x, m, f, i) = sample();
+        let xm = x.to_matrix();
+        let xf = xm.try_inverse().unwrap().transpose(); // X* = X^-T
+        assert!((x.apply_motion(&m).to_vector() - xm * m.to_vector()).norm() < 1e-13);
+        assert!((x.apply_force(&f).to_vector() - xf * f.to_vector()).norm() < 1e-13);
+        assert!(
+            (x.inv_apply_force(&f).to_vector() - xm.transpose() * f.to_vector()).norm() < 1e-13
+        );
+        let back = x.inv_apply_motion(&x.apply_motion(&m));
+        assert!((back.to_vector() - m.to_vector()).norm() < 1e-13);
+        assert!((i.mul_motion(&m).to_vector() - i.to_matrix() * m.to_vector()).norm() < 1e-13);
+        let ip = i.inv_transform(&x).to_matrix();
+        assert!((ip - xm.transpose() * i.to_matrix() * xm).norm() < 1e-12);
+        let ia = ArticulatedInertia::from(i).inv_transform(&x).to_matrix();
+        assert!((ia - ip).norm() < 1e-12);
+    }
+
+    #[test]
+    fn cross_products_match_featherstone() {
+        let (_, m, f, _) = sample();
+        let v = Motion::new(Vec3::new(0.3, 0.2, -0.1), Vec3::new(1.0, -2.0, 0.5));
+        let mut crm = Matrix6::zeros();
+        crm.fixed_view_mut::<3, 3>(0, 0).copy_from(&skew(&v.ang));
+        crm.fixed_view_mut::<3, 3>(3, 3).copy_from(&skew(&v.ang));
+        crm.fixed_view_mut::<3, 3>(3, 0).copy_from(&skew(&v.lin));
+        let crf = -crm.transpose();
+        assert!((v.cross_motion(&m).to_vector() - crm * m.to_vector()).norm() < 1e-14);
+        assert!((v.cross_force(&f).to_vector() - crf * f.to_vector()).norm() < 1e-14);
+    }
+
+    #[test]
+    fn compose_is_matrix_product() {
+        let (x, ..) = sample();
+        let y = Transform::new(rotation_about(&Vec3::y(), -0.4), Vec3::new(1.0, 0.0, 2.0));
+        let z = y.compose(&x);
+        assert!((z.to_matrix() - y.to_matrix() * x.to_matrix()).norm() < 1e-13);
+    }
+}

@@ -1,0 +1,11 @@
+//! satsim: attitude dynamics of hinged spacecraft.
+//!
+//! This facade re-exports the workspace crates:
+//! - [`tree`]: the generic recursive multibody engine (CRBA, RNEA, ABA);
+//! - [`satellite`]: the Keldysh preprint's layout, effects, scenes and runs;
+//! - [`integrate`]: ODE integrators and event location.
+#![warn(missing_docs)]
+
+pub use satsim_integrate as integrate;
+pub use satsim_satellite as satellite;
+pub use satsim_tree as tree;
