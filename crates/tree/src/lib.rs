@@ -40,6 +40,7 @@ pub mod error;
 pub mod kinematics;
 pub mod model;
 pub mod rnea;
+pub mod samples;
 pub mod spatial;
 
 pub use aba::aba;

@@ -322,10 +322,12 @@ impl RigidInertia {
         let h = e.tr_mul(&self.h);
         let hx = skew(&h);
         let hp = h + x.trans * self.mass;
+        let i = e.tr_mul(&(self.inertia * e)) - r * hx - skew(&hp) * r;
         RigidInertia {
             mass: self.mass,
             h: hp,
-            inertia: e.tr_mul(&(self.inertia * e)) - r * hx - skew(&hp) * r,
+            // Symmetric in exact arithmetic; averaging keeps it symmetric to the last bit.
+            inertia: (i + i.transpose()) * 0.5,
         }
     }
     /// The 6x6 matrix `[I [h]×; [h]×ᵀ m1]`.

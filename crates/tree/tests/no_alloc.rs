@@ -1,0 +1,56 @@
+//! The per-call algorithms allocate nothing once `Data` exists (Pinocchio's Model/Data rule).
+
+use satsim_tree::samples::{random_tree, chain};
+use satsim_tree::*;
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+struct Counting;
+static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
+
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        unsafe { System.dealloc(ptr, layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+#[test]
+fn per_call_algorithms_do_not_allocate() {
+    // One small model (in-house Cholesky) and one large enough for faer's path.
+    for model in [random_tree(12, BaseKind::Free, true, 5), chain(80, BaseKind::Free)] {
+        let mut data = Data::new(&model);
+        let q = model.neutral();
+        let v = vec![0.1; model.nv()];
+        let tau = vec![0.2; model.nv()];
+        let fext = vec![spatial::Force::new(spatial::Vec3::x(), spatial::Vec3::y()); model.n_bodies()];
+        // One warm-up round: faer initialises process-wide state (its kernel dispatch) on its
+        // first call. Every later call must allocate nothing.
+        let mut before = 0;
+        for round in 0..4 {
+            if round == 1 {
+                before = ALLOCATIONS.load(Ordering::SeqCst);
+            }
+            forward_kinematics(&model, &mut data, &q, &v).unwrap();
+            crba(&model, &mut data, &q).unwrap();
+            rnea(&model, &mut data, &q, &v, &tau, Some(&fext)).unwrap();
+            bias(&model, &mut data, &q, &v, None).unwrap();
+            aba(&model, &mut data, &q, &v, &tau, Some(&fext)).unwrap();
+            crba_cholesky(&model, &mut data, &q, &v, &tau, None).unwrap();
+            kinetic_energy(&model, &mut data, &q, &v).unwrap();
+            momentum(&model, &data);
+        }
+        let after = ALLOCATIONS.load(Ordering::SeqCst);
+        assert_eq!(after - before, 0, "{} allocations in the per-call algorithms ({} DOF)", after - before, model.nv());
+    }
+}
