@@ -36,6 +36,49 @@ pub fn aba<'d>(
     tau: &[f64],
     fext: Option<&[Force]>,
 ) -> Result<&'d DVector<f64>, DynamicsError> {
+    articulated(model, data, q, v, tau, fext, None)
+}
+
+/// Hybrid dynamics (Featherstone §9.2) with locked hinges: as [`aba`], except that a hinge
+/// whose entry in `locked` (one per hinge, in the order of addition) is `true` has zero
+/// acceleration and passes its child's inertia rigidly to its parent; its `τ` is ignored.
+/// This is how a latched hinge stop is simulated without rebuilding the model. O(n).
+///
+/// ```
+/// use satsim_tree::{BaseKind, Body, Data, Hinge, ModelBuilder, aba_hybrid, spatial::{Mat3, Vec3}};
+/// let model = ModelBuilder::new(BaseKind::Free)
+///     .body(Body::new("bus", 4.0, Mat3::identity()))
+///     .body(Body::new("arm", 1.0, Mat3::identity()).with_com(Vec3::x()))
+///     .hinge(Hinge::revolute("h", "bus", "arm", Vec3::z()))
+///     .build()?;
+/// let mut data = Data::new(&model);
+/// let tau = [0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 5.0]; // the hinge torque is ignored when locked
+/// let ddq = aba_hybrid(&model, &mut data, &model.neutral(), &[0.0; 7], &tau, None, &[true])?;
+/// assert_eq!(ddq[6], 0.0);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn aba_hybrid<'d>(
+    model: &Model,
+    data: &'d mut Data,
+    q: &[f64],
+    v: &[f64],
+    tau: &[f64],
+    fext: Option<&[Force]>,
+    locked: &[bool],
+) -> Result<&'d DVector<f64>, DynamicsError> {
+    check_len("locked", locked.len(), model.n_hinges())?;
+    articulated(model, data, q, v, tau, fext, Some(locked))
+}
+
+fn articulated<'d>(
+    model: &Model,
+    data: &'d mut Data,
+    q: &[f64],
+    v: &[f64],
+    tau: &[f64],
+    fext: Option<&[Force]>,
+    locked: Option<&[bool]>,
+) -> Result<&'d DVector<f64>, DynamicsError> {
     check_len("v", v.len(), model.nv())?;
     check_len("tau", tau.len(), model.nv())?;
     if let Some(f) = fext {
@@ -64,6 +107,16 @@ pub fn aba<'d>(
     // Pass 2, inward: articulated inertias and bias forces.
     for i in (1..n).rev() {
         let joint = model.joints[i].as_ref().expect("joint");
+        let p = model.parent[i].expect("parent");
+        let x = data.xup[i];
+        if locked.is_some_and(|l| l[joint.hinge]) {
+            // Known (zero) acceleration: the child rides rigidly on its parent.
+            let ia = data.ia[i];
+            let pa = data.pa[i] + ia.mul_motion(&data.c[i]);
+            data.ia[p] += ia.inv_transform(&x);
+            data.pa[p] += x.inv_apply_force(&pa);
+            continue;
+        }
         let ia = data.ia[i];
         let u_col = ia.mul_motion(&joint.s);
         let d = joint.s.dot(&u_col);
@@ -83,8 +136,6 @@ pub fn aba<'d>(
         let mut ia_proj = ia;
         ia_proj.sub_outer(&u_col, inv_d);
         let pa = data.pa[i] + ia_proj.mul_motion(&data.c[i]) + u_col * (u * inv_d);
-        let p = model.parent[i].expect("parent");
-        let x = data.xup[i];
         data.ia[p] += ia_proj.inv_transform(&x);
         data.pa[p] += x.inv_apply_force(&pa);
     }
@@ -108,6 +159,11 @@ pub fn aba<'d>(
         let joint = model.joints[i].as_ref().expect("joint");
         let p = model.parent[i].expect("parent");
         let a = data.xup[i].apply_motion(&data.a[p]) + data.c[i];
+        if locked.is_some_and(|l| l[joint.hinge]) {
+            data.ddq[joint.dof] = 0.0;
+            data.a[i] = a;
+            continue;
+        }
         let qdd =
             (data.u[i] - data.u_col[i].ang.dot(&a.ang) - data.u_col[i].lin.dot(&a.lin)) / data.d[i];
         data.ddq[joint.dof] = qdd;

@@ -37,13 +37,14 @@ pub mod crba;
 pub mod data;
 pub mod energy;
 pub mod error;
+pub mod impulse;
 pub mod kinematics;
 pub mod model;
 pub mod rnea;
 pub mod samples;
 pub mod spatial;
 
-pub use aba::aba;
+pub use aba::{aba, aba_hybrid};
 pub use cholesky::crba_cholesky;
 pub use crba::crba;
 pub use data::Data;

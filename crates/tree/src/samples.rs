@@ -6,8 +6,12 @@ use crate::spatial::{Mat3, Vec3};
 use nalgebra::Quaternion;
 
 fn link(i: usize) -> Body {
-    Body::new(format!("b{i}"), 1.0, Mat3::from_diagonal(&Vec3::new(0.02, 0.08, 0.09)))
-        .with_com(Vec3::new(0.25, 0.0, 0.0))
+    Body::new(
+        format!("b{i}"),
+        1.0,
+        Mat3::from_diagonal(&Vec3::new(0.02, 0.08, 0.09)),
+    )
+    .with_com(Vec3::new(0.25, 0.0, 0.0))
 }
 
 fn hinge(i: usize, parent: usize) -> Hinge {
@@ -17,7 +21,8 @@ fn hinge(i: usize, parent: usize) -> Hinge {
         1 => Vec3::y(),
         _ => Vec3::x(),
     };
-    Hinge::revolute(format!("h{i}"), format!("b{parent}"), format!("b{i}"), axis).at(Vec3::new(0.5, 0.0, 0.0))
+    Hinge::revolute(format!("h{i}"), format!("b{parent}"), format!("b{i}"), axis)
+        .at(Vec3::new(0.5, 0.0, 0.0))
 }
 
 /// A chain of `n` bodies: body 0 the root, body `i` hinged to body `i − 1`.
@@ -51,7 +56,8 @@ pub fn binary_tree(n: usize, base: BaseKind) -> Model {
             b.push_hinge(hinge(i, (i - 1) / 2));
         }
     }
-    b.build().expect("a binary tree of identical links is valid")
+    b.build()
+        .expect("a binary tree of identical links is valid")
 }
 
 /// A small deterministic generator (SplitMix64), so samples need no dependency.
@@ -92,7 +98,10 @@ impl SplitMix {
 pub fn random_inertia(rng: &mut SplitMix, scale: f64) -> Mat3 {
     let (a, b) = (rng.range(0.2, 1.0), rng.range(0.2, 1.0));
     let c = rng.range((a - b).abs() + 0.01, a + b);
-    let r = nalgebra::Rotation3::from_axis_angle(&nalgebra::Unit::new_normalize(rng.unit()), rng.range(0.0, 3.0));
+    let r = nalgebra::Rotation3::from_axis_angle(
+        &nalgebra::Unit::new_normalize(rng.unit()),
+        rng.range(0.0, 3.0),
+    );
     let m = r.matrix() * Mat3::from_diagonal(&Vec3::new(a, b, c)) * r.matrix().transpose() * scale;
     (m + m.transpose()) * 0.5
 }
@@ -108,8 +117,18 @@ pub fn random_inertia(rng: &mut SplitMix, scale: f64) -> Mat3 {
 /// ```
 pub fn random_tree(n: usize, base: BaseKind, massless_links: bool, seed: u64) -> Model {
     let mut rng = SplitMix(seed);
-    let parents: Vec<usize> = (0..n).map(|i| if i == 0 { 0 } else { (rng.next_f64() * i as f64) as usize }).collect();
-    let has_child: Vec<bool> = (0..n).map(|i| parents.iter().skip(1).any(|&p| p == i)).collect();
+    let parents: Vec<usize> = (0..n)
+        .map(|i| {
+            if i == 0 {
+                0
+            } else {
+                (rng.next_f64() * i as f64) as usize
+            }
+        })
+        .collect();
+    let has_child: Vec<bool> = (0..n)
+        .map(|i| parents.iter().skip(1).any(|&p| p == i))
+        .collect();
     let mut b = ModelBuilder::new(base);
     let mut massless = vec![false; n];
     for i in 0..n {
@@ -129,14 +148,32 @@ pub fn random_tree(n: usize, base: BaseKind, massless_links: bool, seed: u64) ->
     let mut hinges: Vec<Hinge> = (1..n)
         .map(|i| {
             let p = parents[i];
-            let q = Quaternion::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0));
+            let q = Quaternion::new(
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+            );
             // Massless links are zero-length: the hinge point is the link's origin.
-            let child_at = if massless[i] { Vec3::zeros() } else { rng.vec3(0.5) };
-            let at = if massless[p] { Vec3::zeros() } else { rng.vec3(0.5) };
-            Hinge::revolute(format!("h{i}"), format!("b{p}"), format!("b{i}"), rng.unit())
-                .at(at)
-                .child_at(child_at)
-                .rotation(q.normalize())
+            let child_at = if massless[i] {
+                Vec3::zeros()
+            } else {
+                rng.vec3(0.5)
+            };
+            let at = if massless[p] {
+                Vec3::zeros()
+            } else {
+                rng.vec3(0.5)
+            };
+            Hinge::revolute(
+                format!("h{i}"),
+                format!("b{p}"),
+                format!("b{i}"),
+                rng.unit(),
+            )
+            .at(at)
+            .child_at(child_at)
+            .rotation(q.normalize())
         })
         .collect();
     for k in (1..hinges.len()).rev() {

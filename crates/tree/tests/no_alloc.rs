@@ -1,6 +1,6 @@
 //! The per-call algorithms allocate nothing once `Data` exists (Pinocchio's Model/Data rule).
 
-use satsim_tree::samples::{random_tree, chain};
+use satsim_tree::samples::{chain, random_tree};
 use satsim_tree::*;
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -28,12 +28,16 @@ static GLOBAL: Counting = Counting;
 #[test]
 fn per_call_algorithms_do_not_allocate() {
     // One small model (in-house Cholesky) and one large enough for faer's path.
-    for model in [random_tree(12, BaseKind::Free, true, 5), chain(80, BaseKind::Free)] {
+    for model in [
+        random_tree(12, BaseKind::Free, true, 5),
+        chain(80, BaseKind::Free),
+    ] {
         let mut data = Data::new(&model);
         let q = model.neutral();
         let v = vec![0.1; model.nv()];
         let tau = vec![0.2; model.nv()];
-        let fext = vec![spatial::Force::new(spatial::Vec3::x(), spatial::Vec3::y()); model.n_bodies()];
+        let fext =
+            vec![spatial::Force::new(spatial::Vec3::x(), spatial::Vec3::y()); model.n_bodies()];
         // One warm-up round: faer initialises process-wide state (its kernel dispatch) on its
         // first call. Every later call must allocate nothing.
         let mut before = 0;
@@ -51,6 +55,12 @@ fn per_call_algorithms_do_not_allocate() {
             momentum(&model, &data);
         }
         let after = ALLOCATIONS.load(Ordering::SeqCst);
-        assert_eq!(after - before, 0, "{} allocations in the per-call algorithms ({} DOF)", after - before, model.nv());
+        assert_eq!(
+            after - before,
+            0,
+            "{} allocations in the per-call algorithms ({} DOF)",
+            after - before,
+            model.nv()
+        );
     }
 }

@@ -1,0 +1,306 @@
+//! Pieces shared by the steppers: the evaluation context, error norm,
+//! initial step selection and the explicit methods' step-size controller.
+
+use crate::{error::IntegrateError, options::Options, system::System};
+
+/// Counters and settings shared by the driver and a stepper.
+#[derive(Debug)]
+pub(crate) struct Ctx {
+    pub rtol: f64,
+    pub atol: f64,
+    pub h0: Option<f64>,
+    pub h_max: f64,
+    pub fixed: Option<f64>,
+    pub max_steps: usize,
+    /// Error-norm weights and their sum (the norm is a weighted RMS).
+    pub weights: Vec<f64>,
+    pub wsum: f64,
+    pub rhs_evals: usize,
+    pub steps_accepted: usize,
+    pub steps_rejected: usize,
+    pub jacobian_evals: usize,
+    pub lu_decompositions: usize,
+}
+
+impl Ctx {
+    pub fn new<S: System + ?Sized>(sys: &S, opts: &Options) -> Result<Self, IntegrateError> {
+        let mut weights = vec![1.0; sys.dim()];
+        sys.error_weights(&mut weights);
+        if weights.iter().any(|w| !(*w >= 0.0 && w.is_finite())) {
+            return Err(IntegrateError::InvalidOptions(
+                "error weights must be finite and >= 0".into(),
+            ));
+        }
+        let wsum = weights.iter().sum();
+        Ok(Self {
+            rtol: opts.rtol,
+            atol: opts.atol,
+            h0: opts.h0,
+            h_max: opts.h_max,
+            fixed: opts.fixed_step,
+            max_steps: opts.max_steps,
+            weights,
+            wsum,
+            rhs_evals: 0,
+            steps_accepted: 0,
+            steps_rejected: 0,
+            jacobian_evals: 0,
+            lu_decompositions: 0,
+        })
+    }
+
+    /// Evaluates `f(t, x)`. A non-finite derivative of a finite state is the
+    /// system's doing and is reported; a non-finite state comes from a trial
+    /// step that blew up, which the step control rejects.
+    #[inline]
+    pub fn eval<S: System + ?Sized>(
+        &mut self,
+        sys: &mut S,
+        t: f64,
+        x: &[f64],
+        dx: &mut [f64],
+    ) -> Result<(), IntegrateError> {
+        self.rhs_evals += 1;
+        sys.rhs(t, x, dx)
+            .map_err(|source| IntegrateError::System { t, source })?;
+        if !all_finite(dx) && all_finite(x) {
+            return Err(IntegrateError::NonFinite { t });
+        }
+        Ok(())
+    }
+
+    /// Fails once the step budget is spent.
+    #[inline]
+    pub fn check_budget(&self, t: f64) -> Result<(), IntegrateError> {
+        if self.steps_accepted + self.steps_rejected >= self.max_steps {
+            Err(IntegrateError::MaxSteps { t })
+        } else {
+            Ok(())
+        }
+    }
+
+    /// Weighted RMS of `e_i / (atol + rtol * max(|x0_i|, |x1_i|))`.
+    /// Non-finite input yields `f64::INFINITY` (forcing a rejection).
+    pub fn norm(&self, e: &[f64], x0: &[f64], x1: &[f64]) -> f64 {
+        scaled_norm(e, x0, x1, &self.weights, self.wsum, self.rtol, self.atol)
+    }
+
+    /// Hairer's starting step (HINIT in DOPRI5) for a method of order `order`;
+    /// `f0 = f(t, x)`, `x1` and `f1` are scratch. Respects `h0`, `h_max` and
+    /// the distance to `t_end`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn initial_step<S: System + ?Sized>(
+        &mut self,
+        sys: &mut S,
+        order: usize,
+        t: f64,
+        x: &[f64],
+        f0: &[f64],
+        x1: &mut [f64],
+        f1: &mut [f64],
+    ) -> Result<f64, IntegrateError> {
+        if let Some(h0) = self.h0 {
+            return Ok(h0.min(self.h_max));
+        }
+        let dnf = self.norm(f0, x, x);
+        let dny = self.norm(x, x, x);
+        let mut h = if dnf <= 1e-5 || dny <= 1e-5 {
+            1e-6
+        } else {
+            0.01 * dny / dnf
+        };
+        h = h.min(self.h_max);
+        for i in 0..x.len() {
+            x1[i] = x[i] + h * f0[i];
+        }
+        self.eval(sys, t + h, x1, f1)?;
+        for i in 0..x.len() {
+            x1[i] = f1[i] - f0[i];
+        }
+        let der2 = self.norm(x1, x, x) / h;
+        let der12 = der2.max(dnf);
+        let h1 = if der12 <= 1e-15 {
+            (h * 1e-3).max(1e-6)
+        } else {
+            (0.01 / der12).powf(1.0 / (order as f64 + 1.0))
+        };
+        Ok((100.0 * h).min(h1).min(self.h_max))
+    }
+}
+
+pub(crate) fn scaled_norm(
+    e: &[f64],
+    x0: &[f64],
+    x1: &[f64],
+    w: &[f64],
+    wsum: f64,
+    rtol: f64,
+    atol: f64,
+) -> f64 {
+    if wsum == 0.0 {
+        return 0.0;
+    }
+    let mut s = 0.0;
+    for i in 0..e.len() {
+        if w[i] != 0.0 {
+            let sc = atol + rtol * x0[i].abs().max(x1[i].abs());
+            let r = e[i] / sc;
+            s += w[i] * r * r;
+        }
+    }
+    let n = (s / wsum).sqrt();
+    if n.is_finite() { n } else { f64::INFINITY }
+}
+
+#[inline]
+pub(crate) fn all_finite(x: &[f64]) -> bool {
+    x.iter().all(|v| v.is_finite())
+}
+
+/// Fails when `h` is too small to change `t`.
+#[inline]
+pub(crate) fn check_step_size(t: f64, h: f64) -> Result<(), IntegrateError> {
+    if h <= 8.0 * f64::EPSILON * t.abs() || h < f64::MIN_POSITIVE * 1e10 {
+        Err(IntegrateError::StepSizeUnderflow { t, h })
+    } else {
+        Ok(())
+    }
+}
+
+/// Chooses the step toward `limit`: the whole remainder when it is within a
+/// hair of `h` (or below), so we never leave a sliver step behind.
+#[inline]
+pub(crate) fn clamp_to_limit(t: f64, h: f64, limit: f64) -> (f64, bool) {
+    let rest = limit - t;
+    if rest <= h * (1.0 + 1e-9) {
+        (rest, true)
+    } else {
+        (h, false)
+    }
+}
+
+/// Hairer's PI step-size controller of DOPRI5/DOP853 (Lund stabilisation).
+#[derive(Debug, Clone)]
+pub(crate) struct PiController {
+    expo1: f64,
+    beta: f64,
+    safe: f64,
+    /// `1 / facmin` and `1 / facmax` in Hairer's notation (facc1, facc2).
+    facc1: f64,
+    facc2: f64,
+    facold: f64,
+    pub rejected_last: bool,
+}
+
+impl PiController {
+    /// `order` is the exponent order q in `err^(1/q)` (5 for DOPRI5, 8 for DOP853).
+    pub fn new(order: f64, beta: f64, facmin: f64, facmax: f64) -> Self {
+        Self {
+            expo1: 1.0 / order - beta * 0.75,
+            beta,
+            safe: 0.9,
+            facc1: 1.0 / facmin,
+            facc2: 1.0 / facmax,
+            facold: 1e-4,
+            rejected_last: false,
+        }
+    }
+
+    pub fn reset(&mut self) {
+        self.facold = 1e-4;
+        self.rejected_last = false;
+    }
+
+    /// Returns `(accepted, h_new)` for a step `h` with scaled error `err`.
+    pub fn control(&mut self, err: f64, h: f64) -> (bool, f64) {
+        if !err.is_finite() {
+            self.rejected_last = true;
+            return (false, h / self.facc1);
+        }
+        let fac11 = err.powf(self.expo1);
+        if err <= 1.0 {
+            let fac = fac11 / self.facold.powf(self.beta);
+            let fac = (fac / self.safe).clamp(self.facc2, self.facc1);
+            let mut h_new = h / fac;
+            if self.rejected_last {
+                h_new = h_new.min(h);
+            }
+            self.facold = err.max(1e-4);
+            self.rejected_last = false;
+            (true, h_new)
+        } else {
+            self.rejected_last = true;
+            (false, h / self.facc1.min(fac11 / self.safe))
+        }
+    }
+}
+
+/// Interface between the driver and one method. The stepper owns the current
+/// state and the data for dense output over its last step `[t_old, t]`.
+pub(crate) trait Stepper {
+    /// (Re)starts at `(t, x)`: discards FSAL/history and picks a first step.
+    fn restart<S: System + ?Sized>(
+        &mut self,
+        sys: &mut S,
+        ctx: &mut Ctx,
+        t: f64,
+        x: &[f64],
+    ) -> Result<(), IntegrateError>;
+
+    /// Advances by one accepted step, ending at or before `limit` (ending
+    /// exactly on `limit` when the step reaches it).
+    fn step<S: System + ?Sized>(
+        &mut self,
+        sys: &mut S,
+        ctx: &mut Ctx,
+        limit: f64,
+    ) -> Result<(), IntegrateError>;
+
+    /// Makes [`Stepper::dense`] usable for the last step (some methods need
+    /// extra stages, evaluated only when interpolation is actually needed).
+    fn prepare_dense<S: System + ?Sized>(
+        &mut self,
+        _sys: &mut S,
+        _ctx: &mut Ctx,
+    ) -> Result<(), IntegrateError> {
+        Ok(())
+    }
+
+    /// Interpolated state at `t` in `[t_old, t]` of the last step.
+    fn dense(&self, t: f64, out: &mut [f64]);
+
+    fn t(&self) -> f64;
+    fn t_old(&self) -> f64;
+    fn x(&self) -> &[f64];
+    fn x_mut(&mut self) -> &mut [f64];
+
+    /// The state was modified outside the stepper (projection): cached
+    /// derivatives at the current point are stale.
+    fn state_modified(&mut self);
+}
+
+/// `out = h * Σ_j coeffs[j] * ks[j]`; zero coefficients are skipped.
+#[inline]
+pub(crate) fn lincomb(out: &mut [f64], h: f64, coeffs: &[f64], ks: &[Vec<f64>]) {
+    out.fill(0.0);
+    for (a, k) in coeffs.iter().zip(ks) {
+        if *a != 0.0 {
+            for (o, ki) in out.iter_mut().zip(k) {
+                *o += a * ki;
+            }
+        }
+    }
+    for o in out.iter_mut() {
+        *o *= h;
+    }
+}
+
+/// `out = x + h * Σ_j coeffs[j] * ks[j]` (explicit Runge-Kutta stage input
+/// or solution update).
+#[inline]
+pub(crate) fn combine(out: &mut [f64], x: &[f64], h: f64, coeffs: &[f64], ks: &[Vec<f64>]) {
+    lincomb(out, h, coeffs, ks);
+    for (o, xi) in out.iter_mut().zip(x) {
+        *o += xi;
+    }
+}

@@ -1,0 +1,52 @@
+//! Integration errors.
+
+use crate::system::SystemError;
+
+/// Why an integration failed. Every output before the failure has already
+/// been passed to the observer.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum IntegrateError {
+    /// The options (or the time span / output request) are inconsistent.
+    #[error("invalid options: {0}")]
+    InvalidOptions(String),
+    /// The step size became negligible relative to `t` (e.g. a finite-time
+    /// blow-up or a discontinuity the error control cannot pass).
+    #[error("step size underflow at t = {t} (h = {h:e})")]
+    StepSizeUnderflow {
+        /// Time reached.
+        t: f64,
+        /// Step size that was too small.
+        h: f64,
+    },
+    /// More step attempts than `Options::max_steps` (typically: a stiff
+    /// problem given to an explicit method).
+    #[error("maximum number of steps exceeded at t = {t}")]
+    MaxSteps {
+        /// Time reached.
+        t: f64,
+    },
+    /// The system returned a non-finite derivative for a finite state, or a
+    /// fixed-step run produced a non-finite state.
+    #[error("non-finite value at t = {t}")]
+    NonFinite {
+        /// Time of the offending evaluation.
+        t: f64,
+    },
+    /// The Newton iteration of an implicit method did not converge in
+    /// fixed-step mode, or its iteration matrix stayed singular.
+    #[error("implicit solver failed to converge at t = {t} (h = {h:e})")]
+    ConvergenceFailure {
+        /// Time reached.
+        t: f64,
+        /// Step size attempted.
+        h: f64,
+    },
+    /// The system reported a failure.
+    #[error("system error at t = {t}: {source}")]
+    System {
+        /// Time of the failing evaluation.
+        t: f64,
+        /// The system's error.
+        source: SystemError,
+    },
+}

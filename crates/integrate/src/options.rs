@@ -1,0 +1,273 @@
+//! Method selection, tolerances and output requests.
+
+use std::{fmt, str::FromStr};
+
+use crate::error::IntegrateError;
+
+/// An integration method.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Method {
+    /// Classic fixed-step fourth-order Runge-Kutta; needs `Options::fixed_step`.
+    Rk4,
+    /// Dormand-Prince 5(4) with FSAL, PI step control and 4th-order dense output.
+    Dp54,
+    /// Hairer's DOP853: order 8, 5/3 error estimator, 7th-order dense output.
+    Dop853,
+    /// Implicit Radau IIA of order 5 (3 stages) for stiff problems. As in
+    /// Hairer's RADAU5 the tolerances are mapped internally to
+    /// `rtol' = 0.1 rtol^(2/3)`, `atol' = rtol' atol / rtol` (its error
+    /// estimate is of order 3), so a given `rtol` yields roughly that accuracy.
+    Radau5,
+}
+
+impl Method {
+    /// All methods, in the order of [`Method::NAMES`].
+    pub const ALL: [Method; 4] = [Method::Rk4, Method::Dp54, Method::Dop853, Method::Radau5];
+    /// The names accepted by [`Method::from_str`].
+    pub const NAMES: [&'static str; 4] = ["rk4", "dp54", "dop853", "radau5"];
+
+    /// The method's name, as parsed by [`Method::from_str`].
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Rk4 => "rk4",
+            Method::Dp54 => "dp54",
+            Method::Dop853 => "dop853",
+            Method::Radau5 => "radau5",
+        }
+    }
+
+    /// Classical order of the method.
+    pub fn order(self) -> usize {
+        match self {
+            Method::Rk4 => 4,
+            Method::Dp54 | Method::Radau5 => 5,
+            Method::Dop853 => 8,
+        }
+    }
+}
+
+impl fmt::Display for Method {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// A method name that [`Method::from_str`] did not recognise.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("unknown integration method `{0}`; valid names: rk4, dp54, dop853, radau5")]
+pub struct UnknownMethod(pub String);
+
+impl FromStr for Method {
+    type Err = UnknownMethod;
+
+    /// ```
+    /// use satsim_integrate::Method;
+    /// assert_eq!("dop853".parse::<Method>().unwrap(), Method::Dop853);
+    /// assert!("euler".parse::<Method>().unwrap_err().to_string().contains("radau5"));
+    /// ```
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        Method::ALL
+            .into_iter()
+            .find(|m| m.name().eq_ignore_ascii_case(s.trim()))
+            .ok_or_else(|| UnknownMethod(s.to_owned()))
+    }
+}
+
+/// Integrator settings. Build with [`Options::new`] and the `with_*` setters,
+/// or with struct update syntax from `Options::default()` (DP54, rtol 1e-6, atol 1e-9).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Options {
+    /// The method.
+    pub method: Method,
+    /// Relative tolerance (>= 0).
+    pub rtol: f64,
+    /// Absolute tolerance (>= 0; `rtol + atol > 0`).
+    pub atol: f64,
+    /// First step of an adaptive run; chosen automatically (Hairer's
+    /// algorithm) when `None`.
+    pub h0: Option<f64>,
+    /// Largest step an adaptive method may take.
+    pub h_max: f64,
+    /// Maximum number of step attempts (accepted + rejected).
+    pub max_steps: usize,
+    /// Run at this constant step without error control. Required by
+    /// [`Method::Rk4`]; optional for the others (used to measure their order).
+    /// Steps are shortened to land exactly on output times and on `t_end`.
+    pub fixed_step: Option<f64>,
+    /// Events are located to within this time (s).
+    pub event_tol: f64,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Self {
+            method: Method::Dp54,
+            rtol: 1e-6,
+            atol: 1e-9,
+            h0: None,
+            h_max: f64::INFINITY,
+            max_steps: 1_000_000,
+            fixed_step: None,
+            event_tol: 1e-10,
+        }
+    }
+}
+
+impl Options {
+    /// Default options for `method`.
+    pub fn new(method: Method) -> Self {
+        Self {
+            method,
+            ..Self::default()
+        }
+    }
+    /// Sets both tolerances.
+    pub fn with_tolerances(mut self, rtol: f64, atol: f64) -> Self {
+        self.rtol = rtol;
+        self.atol = atol;
+        self
+    }
+    /// Sets the fixed step (see [`Options::fixed_step`]).
+    pub fn with_fixed_step(mut self, h: f64) -> Self {
+        self.fixed_step = Some(h);
+        self
+    }
+    /// Sets the first step.
+    pub fn with_h0(mut self, h0: f64) -> Self {
+        self.h0 = Some(h0);
+        self
+    }
+    /// Sets the largest step.
+    pub fn with_h_max(mut self, h_max: f64) -> Self {
+        self.h_max = h_max;
+        self
+    }
+    /// Sets the maximum number of step attempts.
+    pub fn with_max_steps(mut self, n: usize) -> Self {
+        self.max_steps = n;
+        self
+    }
+    /// Sets the event location tolerance.
+    pub fn with_event_tol(mut self, tol: f64) -> Self {
+        self.event_tol = tol;
+        self
+    }
+
+    pub(crate) fn validate(&self) -> Result<(), IntegrateError> {
+        let bad = |m: String| Err(IntegrateError::InvalidOptions(m));
+        if !(self.rtol >= 0.0 && self.rtol.is_finite()) {
+            return bad(format!("rtol must be finite and >= 0, got {}", self.rtol));
+        }
+        if !(self.atol >= 0.0 && self.atol.is_finite()) {
+            return bad(format!("atol must be finite and >= 0, got {}", self.atol));
+        }
+        if self.rtol == 0.0 && self.atol == 0.0 {
+            return bad("rtol and atol cannot both be zero".into());
+        }
+        if let Some(h0) = self.h0.filter(|h0| !(*h0 > 0.0 && h0.is_finite())) {
+            return bad(format!("h0 must be finite and > 0, got {h0}"));
+        }
+        if self.h_max.is_nan() || self.h_max <= 0.0 {
+            return bad(format!("h_max must be > 0, got {}", self.h_max));
+        }
+        if self.max_steps == 0 {
+            return bad("max_steps must be > 0".into());
+        }
+        match self.fixed_step {
+            Some(h) if !(h > 0.0 && h.is_finite()) => {
+                return bad(format!("fixed_step must be finite and > 0, got {h}"));
+            }
+            None if self.method == Method::Rk4 => {
+                return bad("rk4 is a fixed-step method: set fixed_step".into());
+            }
+            _ => {}
+        }
+        if !(self.event_tol > 0.0 && self.event_tol.is_finite()) {
+            return bad(format!(
+                "event_tol must be finite and > 0, got {}",
+                self.event_tol
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// When the observer is called.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Output {
+    /// At `t0 + i * dt` for `i = 0, 1, ...` up to `t_end`, and at `t_end`.
+    Interval(f64),
+    /// At these times (non-decreasing, within `[t0, t_end]`).
+    Times(Vec<f64>),
+    /// At `t0` and at the end of every accepted step (and at events that
+    /// reset or stop the run, with the post-event state).
+    Steps,
+}
+
+/// Iterates the requested output times without allocating.
+#[derive(Debug)]
+pub(crate) struct OutputTimes<'a> {
+    kind: &'a Output,
+    t0: f64,
+    t_end: f64,
+    i: usize,
+    done: bool,
+}
+
+impl<'a> OutputTimes<'a> {
+    pub(crate) fn new(kind: &'a Output, t0: f64, t_end: f64) -> Result<Self, IntegrateError> {
+        let bad = |m: String| Err(IntegrateError::InvalidOptions(m));
+        match kind {
+            Output::Interval(dt) if !(*dt > 0.0 && dt.is_finite()) => {
+                return bad(format!("output interval must be finite and > 0, got {dt}"));
+            }
+            Output::Times(ts) => {
+                if ts.iter().any(|t| !(*t >= t0 && *t <= t_end)) {
+                    return bad(format!("output times must lie within [{t0}, {t_end}]"));
+                }
+                if ts.windows(2).any(|w| w[1] < w[0]) {
+                    return bad("output times must be non-decreasing".into());
+                }
+            }
+            _ => {}
+        }
+        Ok(Self {
+            kind,
+            t0,
+            t_end,
+            i: 0,
+            done: false,
+        })
+    }
+
+    /// The next pending output time, if any (`Steps` has none).
+    pub(crate) fn peek(&self) -> Option<f64> {
+        if self.done {
+            return None;
+        }
+        match self.kind {
+            Output::Steps => None,
+            Output::Times(ts) => ts.get(self.i).copied(),
+            Output::Interval(dt) => {
+                let t = self.t0 + self.i as f64 * dt;
+                // Snap to t_end when within rounding of it, so t_end is hit exactly once.
+                if t >= self.t_end - 1e-12 * self.t_end.abs().max(*dt) {
+                    Some(self.t_end)
+                } else {
+                    Some(t)
+                }
+            }
+        }
+    }
+
+    pub(crate) fn advance(&mut self) {
+        if matches!(self.kind, Output::Interval(_)) && self.peek() == Some(self.t_end) {
+            self.done = true;
+        }
+        self.i += 1;
+    }
+
+    pub(crate) fn every_step(&self) -> bool {
+        matches!(self.kind, Output::Steps)
+    }
+}

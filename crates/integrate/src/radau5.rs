@@ -1,0 +1,626 @@
+//! Implicit Radau IIA of order 5 (three stages), after Hairer & Wanner's
+//! RADAU5: simplified Newton iterations with a finite-difference (or
+//! user-supplied) Jacobian, LU factors reused while convergence is good and
+//! the step size is unchanged, the embedded error estimate filtered by
+//! `(I - h γ₀ J)⁻¹`, Gustafsson's predictive step-size controller and the
+//! collocation polynomial as dense output.
+//!
+//! Unlike RADAU5 we solve the stage system `(I - h A⊗J) ΔZ = -Z + h (A⊗I) F(Z)`
+//! directly as one real `3n × 3n` system instead of transforming it into a
+//! real and a complex `n × n` system: for the small states here (n ≲ 40) the
+//! simpler code is worth the extra flops, and the iterates are the same.
+
+use faer::{
+    Mat, MatMut, Par,
+    dyn_stack::{MemBuffer, MemStack, StackReq},
+    linalg::lu::partial_pivoting::{factor, solve},
+    perm::PermRef,
+};
+
+use crate::{
+    common::{Ctx, Stepper, all_finite, check_step_size, clamp_to_limit},
+    error::IntegrateError,
+    system::System,
+};
+
+const SQ6: f64 = 2.449_489_742_783_178;
+/// Nodes of Radau IIA (order 5).
+pub(crate) const C: [f64; 3] = [(4.0 - SQ6) / 10.0, (4.0 + SQ6) / 10.0, 1.0];
+/// Butcher matrix of Radau IIA (order 5).
+pub(crate) const A: [[f64; 3]; 3] = [
+    [
+        (88.0 - 7.0 * SQ6) / 360.0,
+        (296.0 - 169.0 * SQ6) / 1800.0,
+        (-2.0 + 3.0 * SQ6) / 225.0,
+    ],
+    [
+        (296.0 + 169.0 * SQ6) / 1800.0,
+        (88.0 + 7.0 * SQ6) / 360.0,
+        (-2.0 - 3.0 * SQ6) / 225.0,
+    ],
+    [(16.0 - SQ6) / 36.0, (16.0 + SQ6) / 36.0, 1.0 / 9.0],
+];
+/// Error-estimate weights on the stage increments (Hairer's DD1..DD3).
+pub(crate) const DD: [f64; 3] = [
+    -(13.0 + 7.0 * SQ6) / 3.0,
+    (-13.0 + 7.0 * SQ6) / 3.0,
+    -1.0 / 3.0,
+];
+
+/// The real eigenvalue of `A⁻¹` (Hairer's U1 after inversion): `1/γ₀`.
+pub(crate) fn u1() -> f64 {
+    let (c81, c9) = (81f64.cbrt(), 9f64.cbrt());
+    30.0 / (6.0 + c81 - c9)
+}
+
+/// Maximum Newton iterations per step.
+const NIT: usize = 7;
+const SAFE: f64 = 0.9;
+/// Jacobian is kept when the Newton contraction rate stays below this.
+const THET: f64 = 0.001;
+/// Bounds of `h / h_new`.
+const FACL: f64 = 5.0;
+const FACR: f64 = 1.0 / 8.0;
+/// Keep `h` (and the LU) when `h_new / h` falls in `[QUOT1, QUOT2]`.
+const QUOT1: f64 = 1.0;
+const QUOT2: f64 = 1.2;
+
+/// An in-place LU factorisation with partial pivoting (faer), reusable
+/// without allocation.
+#[derive(Debug)]
+struct Lu {
+    m: Mat<f64>,
+    fwd: Vec<usize>,
+    inv: Vec<usize>,
+}
+
+impl Lu {
+    fn new(n: usize) -> Self {
+        Self {
+            m: Mat::zeros(n, n),
+            fwd: vec![0; n],
+            inv: vec![0; n],
+        }
+    }
+
+    fn scratch(n: usize) -> StackReq {
+        StackReq::any_of(&[
+            factor::lu_in_place_scratch::<usize, f64>(n, n, Par::Seq, Default::default()),
+            solve::solve_in_place_scratch::<usize, f64>(n, 1, Par::Seq),
+        ])
+    }
+
+    /// Factors `self.m` in place; false when the matrix is (numerically) singular.
+    fn factor(&mut self, stack: &mut MemStack) -> bool {
+        factor::lu_in_place(
+            self.m.as_mut(),
+            &mut self.fwd,
+            &mut self.inv,
+            Par::Seq,
+            stack,
+            Default::default(),
+        );
+        let n = self.m.nrows();
+        (0..n).all(|i| {
+            let d = self.m[(i, i)];
+            d != 0.0 && d.is_finite()
+        }) && (0..n).all(|j| (0..n).all(|i| self.m[(i, j)].is_finite()))
+    }
+
+    fn solve(&self, rhs: &mut [f64], stack: &mut MemStack) {
+        let n = self.m.nrows();
+        let perm = PermRef::new_checked(&self.fwd, &self.inv, n);
+        solve::solve_in_place(
+            self.m.as_ref(),
+            self.m.as_ref(),
+            perm,
+            MatMut::from_column_major_slice_mut(rhs, n, 1),
+            Par::Seq,
+            stack,
+        );
+    }
+}
+
+/// Radau IIA stepper.
+pub(crate) struct Radau5 {
+    n: usize,
+    t: f64,
+    t_old: f64,
+    /// Proposed next step.
+    h: f64,
+    /// Last accepted step (for dense output and extrapolation).
+    h_old: f64,
+    x: Vec<f64>,
+    /// `f(t, x)` at the step start; valid when `f0_valid`.
+    f0: Vec<f64>,
+    f0_valid: bool,
+    /// Stage increments `z_i = Y_i - x`, stacked (3n), their derivatives and the Newton update.
+    z: Vec<f64>,
+    fz: Vec<f64>,
+    dz: Vec<f64>,
+    tmp: Vec<f64>,
+    err: Vec<f64>,
+    scal: Vec<f64>,
+    /// Collocation polynomial of the last step: `x + s (c0 + (s - c2 + 1)(c1 + (s - c1 + 1) c2))`.
+    cont: [Vec<f64>; 3],
+    jac: Mat<f64>,
+    jac_user: Vec<f64>,
+    big: Lu,
+    e1: Lu,
+    stack: MemBuffer,
+    /// Tolerances transformed as in RADAU5 (the method's error estimate is
+    /// of lower order than the solution).
+    rtol: f64,
+    atol: f64,
+    fnewt: f64,
+    first: bool,
+    reject: bool,
+    /// The Jacobian was evaluated at the current step start.
+    jac_current: bool,
+    need_jac: bool,
+    /// Step size the current LU factors were built for (NaN: invalid).
+    h_lu: f64,
+    theta: f64,
+    faccon: f64,
+    hacc: f64,
+    erracc: f64,
+    n_accepted: usize,
+}
+
+impl Radau5 {
+    pub fn new(n: usize, rtol: f64, atol: f64) -> Self {
+        let z = || vec![0.0; n];
+        let rt = 0.1 * rtol.powf(2.0 / 3.0);
+        let at = if rtol > 0.0 { rt * (atol / rtol) } else { atol };
+        let rt_newton = rt.max(1e-12);
+        let fnewt = (10.0 * f64::EPSILON / rt_newton).max(0.03f64.min(rt_newton.sqrt()));
+        Self {
+            n,
+            t: 0.0,
+            t_old: 0.0,
+            h: 0.0,
+            h_old: 0.0,
+            x: z(),
+            f0: z(),
+            f0_valid: false,
+            z: vec![0.0; 3 * n],
+            fz: vec![0.0; 3 * n],
+            dz: vec![0.0; 3 * n],
+            tmp: z(),
+            err: z(),
+            scal: z(),
+            cont: [z(), z(), z()],
+            jac: Mat::zeros(n, n),
+            jac_user: vec![0.0; n * n],
+            big: Lu::new(3 * n),
+            e1: Lu::new(n),
+            stack: MemBuffer::new(Lu::scratch(3 * n)),
+            rtol: rt,
+            atol: at,
+            fnewt,
+            first: true,
+            reject: false,
+            jac_current: false,
+            need_jac: true,
+            h_lu: f64::NAN,
+            theta: THET,
+            faccon: 1.0,
+            hacc: 0.0,
+            erracc: 0.0,
+            n_accepted: 0,
+        }
+    }
+
+    fn compute_jacobian<S: System + ?Sized>(
+        &mut self,
+        sys: &mut S,
+        ctx: &mut Ctx,
+    ) -> Result<(), IntegrateError> {
+        let (n, t) = (self.n, self.t);
+        ctx.jacobian_evals += 1;
+        let analytic = sys
+            .jacobian(t, &self.x, &mut self.jac_user)
+            .map_err(|source| IntegrateError::System { t, source })?;
+        if analytic {
+            if !all_finite(&self.jac_user) {
+                return Err(IntegrateError::NonFinite { t });
+            }
+            for i in 0..n {
+                for j in 0..n {
+                    self.jac[(i, j)] = self.jac_user[i * n + j];
+                }
+            }
+        } else {
+            // Forward differences with RADAU5's increment sqrt(eps * max(1e-5, |x_j|)).
+            for j in 0..n {
+                let xj = self.x[j];
+                let delta = (f64::EPSILON * xj.abs().max(1e-5)).sqrt();
+                self.x[j] = xj + delta;
+                let r = ctx.eval(sys, t, &self.x, &mut self.tmp);
+                self.x[j] = xj;
+                r?;
+                for i in 0..n {
+                    self.jac[(i, j)] = (self.tmp[i] - self.f0[i]) / delta;
+                }
+            }
+        }
+        self.jac_current = true;
+        self.h_lu = f64::NAN;
+        Ok(())
+    }
+
+    /// Builds and factors `I - h A⊗J` (and `(u1/h) I - J` for the error
+    /// estimate when `with_error`). False if singular.
+    fn factor(&mut self, ctx: &mut Ctx, h: f64, with_error: bool) -> bool {
+        let n = self.n;
+        for bi in 0..3 {
+            for bj in 0..3 {
+                let ha = h * A[bi][bj];
+                for c in 0..n {
+                    for r in 0..n {
+                        let id = if bi == bj && r == c { 1.0 } else { 0.0 };
+                        self.big.m[(bi * n + r, bj * n + c)] = id - ha * self.jac[(r, c)];
+                    }
+                }
+            }
+        }
+        let stack = MemStack::new(&mut self.stack);
+        ctx.lu_decompositions += 1;
+        if !self.big.factor(stack) {
+            return false;
+        }
+        if with_error {
+            let fac1 = u1() / h;
+            for c in 0..n {
+                for r in 0..n {
+                    let id = if r == c { fac1 } else { 0.0 };
+                    self.e1.m[(r, c)] = id - self.jac[(r, c)];
+                }
+            }
+            ctx.lu_decompositions += 1;
+            if !self.e1.factor(MemStack::new(&mut self.stack)) {
+                return false;
+            }
+        }
+        self.h_lu = h;
+        true
+    }
+
+    /// Weighted RMS of `e / scal`, floored at 1e-10 as in RADAU5.
+    fn err_norm(&self, ctx: &Ctx, e: &[f64]) -> f64 {
+        if ctx.wsum == 0.0 {
+            return 1e-10;
+        }
+        let mut s = 0.0;
+        for i in 0..self.n {
+            let w = ctx.weights[i];
+            if w != 0.0 {
+                let r = e[i] / self.scal[i];
+                s += w * r * r;
+            }
+        }
+        let e = (s / ctx.wsum).sqrt().max(1e-10);
+        if e.is_finite() { e } else { f64::INFINITY }
+    }
+
+    /// Simplified Newton iteration for the stage increments at step `h`.
+    /// `Ok(Ok(iterations))` on convergence, `Ok(Err(factor))` when the step
+    /// must be retried with `h * factor`.
+    fn newton<S: System + ?Sized>(
+        &mut self,
+        sys: &mut S,
+        ctx: &mut Ctx,
+        h: f64,
+    ) -> Result<Result<usize, f64>, IntegrateError> {
+        let (n, t) = (self.n, self.t);
+        // Starting values: zero, or the previous collocation polynomial extrapolated.
+        if self.first {
+            self.z.fill(0.0);
+        } else {
+            let c3q = h / self.h_old;
+            let (c1m1, c2m1) = (C[0] - 1.0, C[1] - 1.0);
+            for (s, ci) in C.iter().enumerate() {
+                let q = ci * c3q;
+                for i in 0..n {
+                    self.z[s * n + i] = q
+                        * (self.cont[0][i]
+                            + (q - c2m1) * (self.cont[1][i] + (q - c1m1) * self.cont[2][i]));
+                }
+            }
+        }
+        self.faccon = self.faccon.max(f64::EPSILON).powf(0.8);
+        self.theta = THET;
+        let mut dyno_old = 0.0;
+        let mut thq_old = 0.0;
+        let mut newt = 0;
+        loop {
+            if newt >= NIT {
+                return Ok(Err(0.5));
+            }
+            for s in 0..3 {
+                for i in 0..n {
+                    self.tmp[i] = self.x[i] + self.z[s * n + i];
+                }
+                ctx.eval(
+                    sys,
+                    t + C[s] * h,
+                    &self.tmp,
+                    &mut self.fz[s * n..(s + 1) * n],
+                )?;
+            }
+            // Residual -Z + h (A⊗I) F(Z), then ΔZ from the factored iteration matrix.
+            for s in 0..3 {
+                for i in 0..n {
+                    let af = A[s][0] * self.fz[i]
+                        + A[s][1] * self.fz[n + i]
+                        + A[s][2] * self.fz[2 * n + i];
+                    self.dz[s * n + i] = h * af - self.z[s * n + i];
+                }
+            }
+            self.big.solve(&mut self.dz, MemStack::new(&mut self.stack));
+            newt += 1;
+            let mut sum = 0.0;
+            for s in 0..3 {
+                for i in 0..n {
+                    let r = self.dz[s * n + i] / self.scal[i];
+                    sum += r * r;
+                }
+            }
+            let dyno = (sum / (3 * n) as f64).sqrt();
+            if !dyno.is_finite() {
+                return Ok(Err(0.5));
+            }
+            if newt > 1 && newt < NIT {
+                let thq = dyno / dyno_old;
+                self.theta = if newt == 2 {
+                    thq
+                } else {
+                    (thq * thq_old).sqrt()
+                };
+                thq_old = thq;
+                if self.theta < 0.99 {
+                    self.faccon = self.theta / (1.0 - self.theta);
+                    // Predicted error after the remaining iterations too large: shrink h now.
+                    let dyth =
+                        self.faccon * dyno * self.theta.powi((NIT - 1 - newt) as i32) / self.fnewt;
+                    if dyth >= 1.0 {
+                        let qnewt = dyth.clamp(1e-4, 20.0);
+                        return Ok(Err(0.8 * qnewt.powf(-1.0 / (4.0 + (NIT - 1 - newt) as f64))));
+                    }
+                } else {
+                    return Ok(Err(0.5));
+                }
+            }
+            dyno_old = dyno.max(f64::EPSILON);
+            for (zi, dzi) in self.z.iter_mut().zip(&self.dz) {
+                *zi += dzi;
+            }
+            if self.faccon * dyno <= self.fnewt {
+                return Ok(Ok(newt));
+            }
+        }
+    }
+
+    /// The filtered error estimate of RADAU5 (ESTRAD).
+    fn error_estimate<S: System + ?Sized>(
+        &mut self,
+        sys: &mut S,
+        ctx: &mut Ctx,
+        h: f64,
+    ) -> Result<f64, IntegrateError> {
+        let n = self.n;
+        // tmp = Σ (dd_i / h) z_i; err = (u1/h I - J)⁻¹ (f0 + tmp).
+        for i in 0..n {
+            self.tmp[i] =
+                (DD[0] * self.z[i] + DD[1] * self.z[n + i] + DD[2] * self.z[2 * n + i]) / h;
+            self.err[i] = self.tmp[i] + self.f0[i];
+        }
+        self.e1.solve(&mut self.err, MemStack::new(&mut self.stack));
+        let mut err = self.err_norm(ctx, &self.err);
+        if err >= 1.0 && (self.first || self.reject) {
+            // One more filtering pass through f, which tames the estimate for
+            // very stiff components (Hairer & Wanner IV.8).
+            for i in 0..n {
+                self.err[i] += self.x[i];
+            }
+            // `dz` (3n) is free here; use its head as scratch for f.
+            let (fe, _) = self.dz.split_at_mut(n);
+            ctx.eval(sys, self.t, &self.err, fe)?;
+            for i in 0..n {
+                self.err[i] = fe[i] + self.tmp[i];
+            }
+            self.e1.solve(&mut self.err, MemStack::new(&mut self.stack));
+            err = self.err_norm(ctx, &self.err);
+        }
+        Ok(err)
+    }
+
+    fn accept(&mut self, h: f64, t_new: f64) {
+        let n = self.n;
+        let (c1, c2) = (C[0], C[1]);
+        let (c1m1, c2m1, c1mc2) = (c1 - 1.0, c2 - 1.0, c1 - c2);
+        for i in 0..n {
+            let (z1, z2, z3) = (self.z[i], self.z[n + i], self.z[2 * n + i]);
+            self.x[i] += z3;
+            self.cont[0][i] = (z2 - z3) / c2m1;
+            let ak = (z1 - z2) / c1mc2;
+            let acont3 = (ak - z1 / c1) / c2;
+            self.cont[1][i] = (ak - self.cont[0][i]) / c1m1;
+            self.cont[2][i] = self.cont[1][i] - acont3;
+        }
+        self.t_old = self.t;
+        self.t = t_new;
+        self.h_old = h;
+        self.first = false;
+        self.jac_current = false;
+        self.f0_valid = false;
+    }
+}
+
+impl Stepper for Radau5 {
+    fn restart<S: System + ?Sized>(
+        &mut self,
+        sys: &mut S,
+        ctx: &mut Ctx,
+        t: f64,
+        x: &[f64],
+    ) -> Result<(), IntegrateError> {
+        self.t = t;
+        self.t_old = t;
+        self.x.copy_from_slice(x);
+        self.first = true;
+        self.reject = false;
+        self.need_jac = true;
+        self.jac_current = false;
+        self.h_lu = f64::NAN;
+        self.theta = THET;
+        self.faccon = 1.0;
+        self.n_accepted = 0;
+        ctx.eval(sys, t, x, &mut self.f0)?;
+        self.f0_valid = true;
+        self.h = match ctx.fixed {
+            Some(h) => h,
+            None => {
+                let (a, b) = self.dz.split_at_mut(self.n);
+                ctx.initial_step(sys, 5, t, x, &self.f0, a, &mut b[..self.n])?
+            }
+        };
+        Ok(())
+    }
+
+    fn step<S: System + ?Sized>(
+        &mut self,
+        sys: &mut S,
+        ctx: &mut Ctx,
+        limit: f64,
+    ) -> Result<(), IntegrateError> {
+        let t = self.t;
+        if !self.f0_valid {
+            ctx.eval(sys, t, &self.x, &mut self.f0)?;
+            self.f0_valid = true;
+        }
+        for i in 0..self.n {
+            self.scal[i] = self.atol + self.rtol * self.x[i].abs();
+        }
+        let fixed = ctx.fixed.is_some();
+        // Fixed steps have no error control to catch a stale Jacobian.
+        if fixed {
+            self.need_jac = !self.jac_current;
+        }
+        let mut n_singular = 0;
+        loop {
+            ctx.check_budget(t)?;
+            let (h, land) = clamp_to_limit(t, self.h.min(ctx.h_max), limit);
+            if !fixed {
+                check_step_size(t, h)?;
+            }
+            if self.need_jac {
+                self.compute_jacobian(sys, ctx)?;
+                self.need_jac = false;
+            }
+            if h != self.h_lu && !self.factor(ctx, h, !fixed) {
+                n_singular += 1;
+                if n_singular >= 5 || fixed {
+                    return Err(IntegrateError::ConvergenceFailure { t, h });
+                }
+                self.h = 0.5 * h;
+                self.reject = true;
+                ctx.steps_rejected += 1;
+                continue;
+            }
+            let newt = match self.newton(sys, ctx, h)? {
+                Ok(it) => it,
+                Err(fac) => {
+                    if fixed {
+                        if self.jac_current {
+                            return Err(IntegrateError::ConvergenceFailure { t, h });
+                        }
+                        self.need_jac = true;
+                        continue;
+                    }
+                    self.h = h * fac;
+                    self.reject = true;
+                    self.need_jac = !self.jac_current;
+                    ctx.steps_rejected += 1;
+                    continue;
+                }
+            };
+            let t_new = if land { limit } else { t + h };
+            if fixed {
+                self.accept(h, t_new);
+                if !all_finite(&self.x) {
+                    return Err(IntegrateError::NonFinite { t: t_new });
+                }
+                ctx.steps_accepted += 1;
+                return Ok(());
+            }
+            let err = self.error_estimate(sys, ctx, h)?;
+            // Step-size proposal, damped when Newton needed many iterations.
+            let cfac = SAFE * (1 + 2 * NIT) as f64;
+            let fac = SAFE.min(cfac / (newt + 2 * NIT) as f64);
+            let mut quot = (err.powf(0.25) / fac).clamp(FACR, FACL);
+            let mut h_new = h / quot;
+            if err < 1.0 {
+                self.n_accepted += 1;
+                if self.n_accepted > 1 {
+                    // Gustafsson's predictive controller.
+                    let facgus = ((self.hacc / h) * (err * err / self.erracc).powf(0.25) / SAFE)
+                        .clamp(FACR, FACL);
+                    quot = quot.max(facgus);
+                    h_new = h / quot;
+                }
+                self.hacc = h;
+                self.erracc = err.max(1e-2);
+                self.accept(h, t_new);
+                ctx.steps_accepted += 1;
+                h_new = h_new.min(ctx.h_max);
+                if self.reject {
+                    h_new = h_new.min(h);
+                }
+                self.reject = false;
+                let qt = h_new / h;
+                if self.theta <= THET && (QUOT1..=QUOT2).contains(&qt) {
+                    // Keep h and the LU factors.
+                    self.h = h;
+                } else {
+                    self.h = h_new;
+                    self.need_jac = self.theta > THET;
+                }
+                return Ok(());
+            }
+            self.reject = true;
+            ctx.steps_rejected += 1;
+            self.h = if self.first { 0.1 * h } else { h_new };
+            self.need_jac = !self.jac_current;
+        }
+    }
+
+    fn dense(&self, t: f64, out: &mut [f64]) {
+        let s = if self.h_old > 0.0 {
+            (t - self.t) / self.h_old
+        } else {
+            0.0
+        };
+        let (c1m1, c2m1) = (C[0] - 1.0, C[1] - 1.0);
+        let c = &self.cont;
+        for i in 0..out.len() {
+            out[i] = self.x[i] + s * (c[0][i] + (s - c2m1) * (c[1][i] + (s - c1m1) * c[2][i]));
+        }
+    }
+
+    fn t(&self) -> f64 {
+        self.t
+    }
+    fn t_old(&self) -> f64 {
+        self.t_old
+    }
+    fn x(&self) -> &[f64] {
+        &self.x
+    }
+    fn x_mut(&mut self) -> &mut [f64] {
+        &mut self.x
+    }
+    fn state_modified(&mut self) {
+        self.f0_valid = false;
+    }
+}

@@ -1,0 +1,182 @@
+//! The [`System`] trait: what an integrator needs to know about an ODE.
+
+use std::fmt;
+
+/// A failure detected by a [`System`] while evaluating its right-hand side
+/// (e.g. a singular configuration).
+///
+/// It is just a message so that the physics code can produce one with
+/// `SystemError::new(format!(...))` or `"text".into()`.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct SystemError(pub String);
+
+impl SystemError {
+    /// Wraps a message.
+    pub fn new(msg: impl Into<String>) -> Self {
+        Self(msg.into())
+    }
+}
+
+impl fmt::Display for SystemError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for SystemError {}
+
+impl From<String> for SystemError {
+    fn from(s: String) -> Self {
+        Self(s)
+    }
+}
+
+impl From<&str> for SystemError {
+    fn from(s: &str) -> Self {
+        Self(s.to_owned())
+    }
+}
+
+/// Which sign changes of an event function `g_k` trigger the event.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum EventDirection {
+    /// `g` goes from negative to non-negative.
+    Rising,
+    /// `g` goes from positive to non-positive.
+    Falling,
+    /// Either of the above.
+    #[default]
+    Both,
+}
+
+impl EventDirection {
+    /// Whether going from `g0` (start of an interval) to `g1` (its end) is a
+    /// crossing in this direction. A start exactly on zero never counts, so an
+    /// event that was just handled (or a reset that leaves `g = 0`) does not
+    /// fire again immediately.
+    #[inline]
+    pub fn crosses(self, g0: f64, g1: f64) -> bool {
+        let rising = g0 < 0.0 && g1 >= 0.0;
+        let falling = g0 > 0.0 && g1 <= 0.0;
+        match self {
+            Self::Rising => rising,
+            Self::Falling => falling,
+            Self::Both => rising || falling,
+        }
+    }
+}
+
+/// What the integrator does after [`System::on_event`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum EventAction {
+    /// Nothing changed; carry on with the current step.
+    Continue,
+    /// The system modified the state in place; the integrator restarts from
+    /// the event time and that state (new first step, FSAL data discarded).
+    Reset,
+    /// End the integration at the event.
+    Stop,
+}
+
+/// An ODE `dx/dt = f(t, x)` on a flat state vector, plus optional hooks.
+///
+/// Only [`dim`](System::dim) and [`rhs`](System::rhs) are required.
+///
+/// ```
+/// use satsim_integrate::{System, SystemError};
+///
+/// /// Harmonic oscillator x'' = -x.
+/// struct Oscillator;
+/// impl System for Oscillator {
+///     fn dim(&self) -> usize { 2 }
+///     fn rhs(&mut self, _t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), SystemError> {
+///         dx[0] = x[1];
+///         dx[1] = -x[0];
+///         Ok(())
+///     }
+/// }
+/// let mut dx = [0.0; 2];
+/// Oscillator.rhs(0.0, &[1.0, 0.0], &mut dx).unwrap();
+/// assert_eq!(dx, [0.0, -1.0]);
+/// ```
+pub trait System {
+    /// Dimension of the state vector.
+    fn dim(&self) -> usize;
+
+    /// Evaluates `dx = f(t, x)`.
+    ///
+    /// Returning `Err` stops the integration with
+    /// [`IntegrateError::System`](crate::IntegrateError::System) carrying `t`.
+    fn rhs(&mut self, t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), SystemError>;
+
+    /// Called on the state after each accepted step (e.g. to renormalise a
+    /// quaternion). The default does nothing.
+    ///
+    /// The modification should be of the size of the local error: it is not
+    /// seen by the error control. If it changes `x`, FSAL methods re-evaluate
+    /// the derivative at the start of the next step (one extra `rhs` call).
+    fn project(&mut self, _x: &mut [f64]) {}
+
+    /// Per-component weights of the error norm, written into `w`
+    /// (`w.len() == dim()`); `0` excludes a component. Default: all 1.
+    /// Queried once at the start of an integration.
+    fn error_weights(&self, w: &mut [f64]) {
+        w.fill(1.0);
+    }
+
+    /// Analytic Jacobian `jac[i * n + j] = ∂f_i/∂x_j` (row-major), used by
+    /// implicit methods. Return `Ok(false)` (the default) to let the
+    /// integrator use finite differences.
+    fn jacobian(&mut self, _t: f64, _x: &[f64], _jac: &mut [f64]) -> Result<bool, SystemError> {
+        Ok(false)
+    }
+
+    /// Number of event functions. Default: none.
+    fn n_events(&self) -> usize {
+        0
+    }
+
+    /// Evaluates the event functions `g_k(t, x)` into `g` (`g.len() == n_events()`).
+    fn events(&mut self, _t: f64, _x: &[f64], _g: &mut [f64]) {}
+
+    /// Direction of sign change that triggers event `k`. Default: both.
+    fn event_direction(&self, _k: usize) -> EventDirection {
+        EventDirection::Both
+    }
+
+    /// Called at a located event `k` with the time and state at the event.
+    /// For [`EventAction::Reset`] the system modifies `x` in place. Default: stop.
+    fn on_event(&mut self, _k: usize, _t: f64, _x: &mut [f64]) -> EventAction {
+        EventAction::Stop
+    }
+}
+
+impl<S: System + ?Sized> System for &mut S {
+    fn dim(&self) -> usize {
+        (**self).dim()
+    }
+    fn rhs(&mut self, t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), SystemError> {
+        (**self).rhs(t, x, dx)
+    }
+    fn project(&mut self, x: &mut [f64]) {
+        (**self).project(x)
+    }
+    fn error_weights(&self, w: &mut [f64]) {
+        (**self).error_weights(w)
+    }
+    fn jacobian(&mut self, t: f64, x: &[f64], jac: &mut [f64]) -> Result<bool, SystemError> {
+        (**self).jacobian(t, x, jac)
+    }
+    fn n_events(&self) -> usize {
+        (**self).n_events()
+    }
+    fn events(&mut self, t: f64, x: &[f64], g: &mut [f64]) {
+        (**self).events(t, x, g)
+    }
+    fn event_direction(&self, k: usize) -> EventDirection {
+        (**self).event_direction(k)
+    }
+    fn on_event(&mut self, k: usize, t: f64, x: &mut [f64]) -> EventAction {
+        (**self).on_event(k, t, x)
+    }
+}

@@ -1,0 +1,297 @@
+//! Stiff problems, every error variant, and the projection hook.
+
+mod common;
+
+use common::{Smooth, run};
+use satsim_integrate::{IntegrateError, Method, Options, Output, System, SystemError, integrate};
+
+/// y' = -1e6 (y - cos t): solution hugs cos t after a 1 µs transient.
+struct StiffScalar;
+impl System for StiffScalar {
+    fn dim(&self) -> usize {
+        1
+    }
+    fn rhs(&mut self, t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), SystemError> {
+        dx[0] = -1e6 * (x[0] - t.cos());
+        Ok(())
+    }
+}
+
+/// Robertson's chemical kinetics (stiff, 3 species).
+struct Robertson;
+impl System for Robertson {
+    fn dim(&self) -> usize {
+        3
+    }
+    fn rhs(&mut self, _t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), SystemError> {
+        dy[0] = -0.04 * y[0] + 1e4 * y[1] * y[2];
+        dy[2] = 3e7 * y[1] * y[1];
+        dy[1] = -dy[0] - dy[2];
+        Ok(())
+    }
+}
+
+/// Van der Pol with mu = 1e3, with an analytic Jacobian.
+struct VanDerPol;
+const MU: f64 = 1e3;
+impl System for VanDerPol {
+    fn dim(&self) -> usize {
+        2
+    }
+    fn rhs(&mut self, _t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), SystemError> {
+        dx[0] = x[1];
+        dx[1] = MU * (1.0 - x[0] * x[0]) * x[1] - x[0];
+        Ok(())
+    }
+    fn jacobian(&mut self, _t: f64, x: &[f64], jac: &mut [f64]) -> Result<bool, SystemError> {
+        jac.copy_from_slice(&[0.0, 1.0, -2.0 * MU * x[0] * x[1] - 1.0, MU * (1.0 - x[0] * x[0])]);
+        Ok(true)
+    }
+}
+
+#[test]
+fn radau5_stable_on_stiff_scalar_with_large_steps() {
+    let opts = Options::new(Method::Radau5).with_tolerances(1e-6, 1e-8);
+    let stats = run(&mut StiffScalar, &opts, &[0.0], 0.0, 10.0).unwrap();
+    println!("radau5 stiff scalar: {stats:?}");
+    assert!((stats.x_final[0] - 10f64.cos()).abs() < 1e-5);
+    assert!(stats.rhs_evals < 2000, "{} evals", stats.rhs_evals);
+    // Far beyond the explicit stability limit (~3e-6): large steps were taken.
+    assert!(stats.steps_accepted < 200);
+}
+
+#[test]
+fn dp54_on_stiff_problem_hits_max_steps() {
+    let opts = Options::new(Method::Dp54).with_max_steps(5000);
+    match run(&mut StiffScalar, &opts, &[0.0], 0.0, 10.0) {
+        Err(IntegrateError::MaxSteps { t }) => assert!(t > 0.0 && t < 10.0),
+        other => panic!("expected MaxSteps, got {other:?}"),
+    }
+}
+
+#[test]
+fn radau5_far_cheaper_than_dp54_when_stiff() {
+    let opts = |m| Options::new(m).with_tolerances(1e-6, 1e-8);
+    let radau = run(&mut StiffScalar, &opts(Method::Radau5), &[0.0], 0.0, 0.1).unwrap();
+    let dp = run(&mut StiffScalar, &opts(Method::Dp54), &[0.0], 0.0, 0.1).unwrap();
+    println!("t_end 0.1: radau5 {} evals, dp54 {} evals", radau.rhs_evals, dp.rhs_evals);
+    assert!(10 * radau.rhs_evals < dp.rhs_evals);
+    assert!((radau.x_final[0] - dp.x_final[0]).abs() < 1e-5);
+}
+
+#[test]
+fn radau5_robertson_reference() {
+    let opts = Options::new(Method::Radau5).with_tolerances(1e-8, 1e-12);
+    let stats = run(&mut Robertson, &opts, &[1.0, 0.0, 0.0], 0.0, 40.0).unwrap();
+    println!("robertson: {stats:?}");
+    // Reference values at t = 40 (Hairer & Wanner).
+    let reference = [0.715_827_068_7, 9.185_534_765e-6, 0.284_163_745_7];
+    for (i, (x, r)) in stats.x_final.iter().zip(reference).enumerate() {
+        assert!((x - r).abs() / r < 1e-5, "component {i}: {x} vs {r}");
+    }
+    assert!(stats.steps_accepted < 200);
+}
+
+#[test]
+fn radau5_van_der_pol_with_analytic_jacobian() {
+    let opts = Options::new(Method::Radau5).with_tolerances(1e-6, 1e-6);
+    let stats = run(&mut VanDerPol, &opts, &[2.0, 0.0], 0.0, 3000.0).unwrap();
+    println!("vdp: {stats:?}");
+    assert!(stats.steps_accepted < 2000);
+    assert!(stats.jacobian_evals < stats.steps_accepted, "Jacobian reused across steps");
+    assert!(stats.x_final[0].abs() < 2.1);
+    // Same run with a finite-difference Jacobian agrees.
+    struct VdpFd;
+    impl System for VdpFd {
+        fn dim(&self) -> usize {
+            2
+        }
+        fn rhs(&mut self, t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), SystemError> {
+            VanDerPol.rhs(t, x, dx)
+        }
+    }
+    let fd = run(&mut VdpFd, &opts, &[2.0, 0.0], 0.0, 3000.0).unwrap();
+    assert!((fd.x_final[0] - stats.x_final[0]).abs() < 1e-3);
+}
+
+#[test]
+fn invalid_options_are_rejected() {
+    let bad = [
+        Options::new(Method::Dp54).with_tolerances(-1e-6, 1e-9),
+        Options::new(Method::Dp54).with_tolerances(0.0, 0.0),
+        Options::new(Method::Dp54).with_fixed_step(0.0),
+        Options::new(Method::Dp54).with_h0(-1.0),
+        Options::new(Method::Dp54).with_max_steps(0),
+        Options::new(Method::Rk4), // rk4 needs a fixed step
+        Options::new(Method::Dp54).with_event_tol(0.0),
+    ];
+    for opts in bad {
+        assert!(
+            matches!(run(&mut Smooth, &opts, &Smooth::X0, 0.0, 1.0), Err(IntegrateError::InvalidOptions(_))),
+            "{opts:?}"
+        );
+    }
+    let ok = Options::new(Method::Dp54);
+    let cont = |_: f64, _: &[f64]| std::ops::ControlFlow::Continue(());
+    // t_end before t0, wrong dimension, bad output requests.
+    let cases: [(f64, &[f64], Output); 5] = [
+        (-1.0, &Smooth::X0, Output::Steps),
+        (1.0, &[1.0, 2.0], Output::Steps),
+        (1.0, &Smooth::X0, Output::Interval(-0.1)),
+        (1.0, &Smooth::X0, Output::Times(vec![0.5, 0.2])),
+        (1.0, &Smooth::X0, Output::Times(vec![2.0])),
+    ];
+    for (t_end, x0, out) in cases {
+        let r = integrate(&mut Smooth, &ok, 0.0, x0, t_end, &out, cont);
+        assert!(matches!(r, Err(IntegrateError::InvalidOptions(_))), "{t_end} {x0:?} {out:?}: {r:?}");
+    }
+    let err = "euler".parse::<Method>().unwrap_err().to_string();
+    assert!(err.contains("rk4") && err.contains("dp54") && err.contains("dop853") && err.contains("radau5"));
+    for m in Method::ALL {
+        assert_eq!(m.name().parse::<Method>().unwrap(), m);
+    }
+}
+
+/// Returns NaN (or an error) once t passes 0.5.
+struct Faulty {
+    fail_with_error: bool,
+}
+impl System for Faulty {
+    fn dim(&self) -> usize {
+        1
+    }
+    fn rhs(&mut self, t: f64, _x: &[f64], dx: &mut [f64]) -> Result<(), SystemError> {
+        if t > 0.5 {
+            if self.fail_with_error {
+                return Err(SystemError::new(format!("singular configuration at {t}")));
+            }
+            dx[0] = f64::NAN;
+        } else {
+            dx[0] = 1.0;
+        }
+        Ok(())
+    }
+}
+
+fn options_for(method: Method) -> Options {
+    let o = Options::new(method);
+    if method == Method::Rk4 { o.with_fixed_step(0.01) } else { o }
+}
+
+#[test]
+fn non_finite_rhs_is_reported() {
+    for method in Method::ALL {
+        match run(&mut Faulty { fail_with_error: false }, &options_for(method), &[0.0], 0.0, 1.0) {
+            Err(IntegrateError::NonFinite { t }) => assert!(t > 0.5 && t <= 1.0, "{method}: t = {t}"),
+            other => panic!("{method}: expected NonFinite, got {other:?}"),
+        }
+    }
+}
+
+#[test]
+fn system_error_propagates_with_time() {
+    for method in Method::ALL {
+        match run(&mut Faulty { fail_with_error: true }, &options_for(method), &[0.0], 0.0, 1.0) {
+            Err(IntegrateError::System { t, source }) => {
+                assert!(t > 0.5 && t <= 1.0);
+                assert!(source.to_string().contains("singular"));
+            }
+            other => panic!("{method}: expected System, got {other:?}"),
+        }
+    }
+}
+
+/// y' = y², y(0) = 1 blows up at t = 1.
+struct BlowUp;
+impl System for BlowUp {
+    fn dim(&self) -> usize {
+        1
+    }
+    fn rhs(&mut self, _t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), SystemError> {
+        dx[0] = x[0] * x[0];
+        Ok(())
+    }
+}
+
+#[test]
+fn step_size_underflow_at_blow_up() {
+    for method in [Method::Dp54, Method::Dop853, Method::Radau5] {
+        match run(&mut BlowUp, &Options::new(method), &[1.0], 0.0, 2.0) {
+            Err(IntegrateError::StepSizeUnderflow { t, h }) => {
+                assert!((t - 1.0).abs() < 1e-3 && h > 0.0, "{method}: t = {t}");
+            }
+            other => panic!("{method}: expected StepSizeUnderflow, got {other:?}"),
+        }
+    }
+}
+
+#[test]
+fn radau5_fixed_step_newton_failure() {
+    // A fixed step far past the blow-up: the implicit equations have no solution.
+    let opts = Options::new(Method::Radau5).with_fixed_step(2.0);
+    match run(&mut BlowUp, &opts, &[1.0], 0.0, 2.0) {
+        Err(IntegrateError::ConvergenceFailure { t, h }) => assert!(t == 0.0 && h == 2.0),
+        other => panic!("expected ConvergenceFailure, got {other:?}"),
+    }
+}
+
+/// Rotation of a unit vector; the projection renormalises it and counts calls.
+struct Spinner {
+    projections: usize,
+}
+impl System for Spinner {
+    fn dim(&self) -> usize {
+        3
+    }
+    fn rhs(&mut self, _t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), SystemError> {
+        let w = [0.3, -0.5, 1.1];
+        dx[0] = w[1] * x[2] - w[2] * x[1];
+        dx[1] = w[2] * x[0] - w[0] * x[2];
+        dx[2] = w[0] * x[1] - w[1] * x[0];
+        Ok(())
+    }
+    fn project(&mut self, x: &mut [f64]) {
+        self.projections += 1;
+        let n = x.iter().map(|v| v * v).sum::<f64>().sqrt();
+        x.iter_mut().for_each(|v| *v /= n);
+    }
+}
+
+#[test]
+fn projection_called_after_each_accepted_step() {
+    for method in Method::ALL {
+        let mut opts = Options::new(method).with_tolerances(1e-4, 1e-6);
+        if method == Method::Rk4 {
+            opts = opts.with_fixed_step(0.5);
+        }
+        let mut sys = Spinner { projections: 0 };
+        let stats = run(&mut sys, &opts, &[1.0, 0.0, 0.0], 0.0, 50.0).unwrap();
+        assert_eq!(sys.projections, stats.steps_accepted, "{method}");
+        let norm = stats.x_final.iter().map(|v| v * v).sum::<f64>().sqrt();
+        assert!((norm - 1.0).abs() < 1e-15, "{method}: norm {norm}");
+    }
+}
+
+#[test]
+fn error_weights_exclude_components() {
+    // Component 2 is wild but excluded: the step count matches a run without it.
+    struct Weighted(bool);
+    impl System for Weighted {
+        fn dim(&self) -> usize {
+            2
+        }
+        fn rhs(&mut self, t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), SystemError> {
+            dx[0] = -x[0];
+            dx[1] = (50.0 * t).sin() * 100.0;
+            Ok(())
+        }
+        fn error_weights(&self, w: &mut [f64]) {
+            w[0] = 1.0;
+            w[1] = if self.0 { 0.0 } else { 1.0 };
+        }
+    }
+    let opts = Options::new(Method::Dp54);
+    let excluded = run(&mut Weighted(true), &opts, &[1.0, 0.0], 0.0, 5.0).unwrap();
+    let included = run(&mut Weighted(false), &opts, &[1.0, 0.0], 0.0, 5.0).unwrap();
+    assert!(excluded.steps_accepted * 3 < included.steps_accepted);
+}
