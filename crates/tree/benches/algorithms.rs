@@ -1,1 +1,93 @@
-fn main() {}
+//! Per-call cost of the engine's algorithms: the preprint satellite (11 DOF) and chains and
+//! binary trees of 10, 100 and 1000 bodies. `cargo bench -p satsim-tree --bench algorithms`.
+//! Results and the scaling slopes are in docs/src/results/performance.md.
+
+use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
+use satsim_tree::samples::{binary_tree, chain};
+use satsim_tree::*;
+use std::hint::black_box;
+use std::path::Path;
+use std::time::Duration;
+
+fn satellite() -> Model {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/satellite.toml");
+    read_model(&path).expect("examples/satellite.toml loads")
+}
+
+fn bench_model(c: &mut Criterion, label: &str, model: &Model) {
+    let mut data = Data::new(model);
+    let mut q = model.neutral();
+    for (k, x) in q[model.base_nq()..].iter_mut().enumerate() {
+        *x = 0.1 + 0.01 * k as f64;
+    }
+    let v: Vec<f64> = (0..model.nv())
+        .map(|k| 0.01 * (1.0 + k as f64).sin())
+        .collect();
+    let tau: Vec<f64> = (0..model.nv())
+        .map(|k| 0.1 * (2.0 + k as f64).cos())
+        .collect();
+    let mut group = c.benchmark_group(label);
+    if model.nv() > 500 {
+        group.sample_size(10);
+    }
+    group.bench_function(BenchmarkId::new("crba", model.nv()), |b| {
+        b.iter(|| {
+            crba(model, &mut data, black_box(&q)).unwrap();
+        })
+    });
+    group.bench_function(BenchmarkId::new("rnea", model.nv()), |b| {
+        b.iter(|| {
+            rnea(
+                model,
+                &mut data,
+                black_box(&q),
+                black_box(&v),
+                black_box(&tau),
+                None,
+            )
+            .unwrap();
+        })
+    });
+    group.bench_function(BenchmarkId::new("aba", model.nv()), |b| {
+        b.iter(|| {
+            aba(
+                model,
+                &mut data,
+                black_box(&q),
+                black_box(&v),
+                black_box(&tau),
+                None,
+            )
+            .unwrap();
+        })
+    });
+    group.bench_function(BenchmarkId::new("crba_cholesky", model.nv()), |b| {
+        b.iter(|| {
+            crba_cholesky(
+                model,
+                &mut data,
+                black_box(&q),
+                black_box(&v),
+                black_box(&tau),
+                None,
+            )
+            .unwrap();
+        })
+    });
+    group.finish();
+}
+
+fn algorithms(c: &mut Criterion) {
+    bench_model(c, "satellite", &satellite());
+    for n in [10, 100, 1000] {
+        bench_model(c, &format!("chain{n}"), &chain(n, BaseKind::Free));
+        bench_model(c, &format!("binary{n}"), &binary_tree(n, BaseKind::Free));
+    }
+}
+
+criterion_group! {
+    name = benches;
+    config = Criterion::default().warm_up_time(Duration::from_millis(300)).measurement_time(Duration::from_secs(1));
+    targets = algorithms
+}
+criterion_main!(benches);

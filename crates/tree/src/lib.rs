@@ -38,6 +38,7 @@ pub mod data;
 pub mod energy;
 pub mod error;
 pub mod impulse;
+pub mod io;
 pub mod kinematics;
 pub mod model;
 pub mod rnea;
@@ -50,6 +51,9 @@ pub use crba::crba;
 pub use data::Data;
 pub use energy::{center_of_mass, kinetic_energy, momentum};
 pub use error::{DynamicsError, ModelError};
+pub use io::{
+    FileError, ModelFile, State, StateFile, parse_model, parse_state, read_model, read_state,
+};
 pub use kinematics::{base_pose, forward_kinematics, forward_kinematics_acc, update_transforms};
 pub use model::{BaseKind, Body, BodyInfo, Hinge, Joint, Model, ModelBuilder};
 pub use rnea::{bias, rnea};

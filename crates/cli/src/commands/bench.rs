@@ -1,0 +1,215 @@
+//! `satsim bench --model MODEL.toml [--state STATE.json] [--calls N]` (contract section 5):
+//! the per-call cost of `crba`, `rnea`, `aba` and `crba_cholesky` on one model and state.
+//!
+//! For each algorithm: a warm-up, then [`REPETITIONS`] repetitions of `calls` calls; each
+//! repetition gives the mean time per call, and the figure printed is their median. Without
+//! `--calls`, a short calibration picks a round number of calls that makes the whole
+//! benchmark take about [`TARGET_SECONDS`].
+
+use super::{CliError, Options, Output, json_number, usage_line};
+use satsim_tree::io::{State, read_model, read_state};
+use satsim_tree::{Data, Model, aba, crba, crba_cholesky, rnea};
+use std::hint::black_box;
+use std::time::{Duration, Instant};
+
+const NAME: &str = "bench";
+
+/// One timed algorithm: a call on the workspace.
+type Timed<'a> = Box<dyn FnMut(&mut Data) + 'a>;
+
+/// Timed repetitions per algorithm.
+pub const REPETITIONS: usize = 7;
+
+/// Approximate wall time of a benchmark without `--calls` (s).
+pub const TARGET_SECONDS: f64 = 1.5;
+
+/// The default state: neutral configuration (identity attitude, zero angles) with small
+/// non-zero velocities and no torque.
+pub fn default_state(model: &Model) -> State {
+    let mut s = State::rest(model);
+    let nb = model.base_nv();
+    if nb == 6 {
+        s.v[..6].copy_from_slice(&[0.01, -0.02, 0.015, 0.001, 0.002, -0.001]);
+    }
+    for (k, v) in s.v[nb..].iter_mut().enumerate() {
+        *v = 0.01 * (1.0 + (k % 3) as f64) * if k % 2 == 0 { 1.0 } else { -1.0 };
+    }
+    s
+}
+
+/// Runs the command.
+pub fn run(args: &[std::ffi::OsString]) -> Result<Output, CliError> {
+    let opts = Options::parse(NAME, args, &["model", "state", "calls"], 0)?;
+    if opts.help {
+        return Ok(format!("usage: {}\n", usage_line(Some(NAME))));
+    }
+    let model_path = opts.required_path(NAME, "model")?;
+    let calls = match opts.get("calls") {
+        None => None,
+        Some(c) => {
+            let text = c.to_string_lossy();
+            match text.parse::<usize>() {
+                Ok(n) if n > 0 => Some(n),
+                _ => {
+                    return Err(CliError::Usage {
+                        command: Some(NAME),
+                        message: format!("`--calls` must be a positive integer, got `{text}`"),
+                    });
+                }
+            }
+        }
+    };
+    let model = read_model(&model_path)?;
+    let state_path = opts.path("state");
+    let state = match &state_path {
+        Some(p) => read_state(p, &model)?,
+        None => default_state(&model),
+    };
+    let where_ = state_path.as_ref().unwrap_or(&model_path).display();
+    let n = model.nv();
+    let mut data = Data::new(&model);
+    // RNEA's accelerations: small, non-zero.
+    let acc: Vec<f64> = (0..n).map(|i| 1e-3 * (1.0 + i as f64)).collect();
+    let (q, v, tau) = (&state.q, &state.v, &state.tau);
+
+    // Check every algorithm once: the timed loops ignore results.
+    let check = |r: Result<(), satsim_tree::DynamicsError>| {
+        r.map_err(|e| CliError::Other(format!("{where_}: {e}")))
+    };
+    check(crba(&model, &mut data, q).map(|_| ()))?;
+    check(rnea(&model, &mut data, q, v, &acc, None).map(|_| ()))?;
+    check(aba(&model, &mut data, q, v, tau, None).map(|_| ()))?;
+    check(crba_cholesky(&model, &mut data, q, v, tau, None).map(|_| ()))?;
+
+    let mut algorithms: [(&str, Timed<'_>); 4] = [
+        (
+            "crba",
+            Box::new(|d: &mut Data| {
+                let _ = black_box(crba(black_box(&model), d, black_box(q)).is_ok());
+            }),
+        ),
+        (
+            "rnea",
+            Box::new(|d: &mut Data| {
+                let _ = black_box(
+                    rnea(
+                        black_box(&model),
+                        d,
+                        black_box(q),
+                        black_box(v),
+                        black_box(&acc),
+                        None,
+                    )
+                    .is_ok(),
+                );
+            }),
+        ),
+        (
+            "aba",
+            Box::new(|d: &mut Data| {
+                let _ = black_box(
+                    aba(
+                        black_box(&model),
+                        d,
+                        black_box(q),
+                        black_box(v),
+                        black_box(tau),
+                        None,
+                    )
+                    .is_ok(),
+                );
+            }),
+        ),
+        (
+            "crba_cholesky",
+            Box::new(|d: &mut Data| {
+                let _ = black_box(
+                    crba_cholesky(
+                        black_box(&model),
+                        d,
+                        black_box(q),
+                        black_box(v),
+                        black_box(tau),
+                        None,
+                    )
+                    .is_ok(),
+                );
+            }),
+        ),
+    ];
+
+    let calls = match calls {
+        Some(c) => c,
+        None => {
+            // Calibrate: the cost of one call of each, from ~20 ms of calls each.
+            let mut total = 0.0;
+            for (_, f) in algorithms.iter_mut() {
+                total += mean_ns(f, &mut data, Duration::from_millis(20));
+            }
+            // Warm-up of one repetition plus REPETITIONS timed ones, for all four.
+            let per_call_all = total * 1e-9 * (REPETITIONS + 1) as f64;
+            round_down((TARGET_SECONDS / per_call_all).max(100.0) as usize)
+        }
+    };
+
+    let mut figures = Vec::with_capacity(4);
+    for (name, f) in algorithms.iter_mut() {
+        for _ in 0..calls {
+            f(&mut data);
+        }
+        let mut means: Vec<f64> = (0..REPETITIONS)
+            .map(|_| {
+                let t = Instant::now();
+                for _ in 0..calls {
+                    f(&mut data);
+                }
+                t.elapsed().as_nanos() as f64 / calls as f64
+            })
+            .collect();
+        means.sort_by(f64::total_cmp);
+        figures.push(format!(
+            "\"{name}\": {}",
+            json_number(means[REPETITIONS / 2])
+        ));
+    }
+    Ok(format!(
+        "{{\"dof\": {n}, \"calls\": {calls}, \"repetitions\": {REPETITIONS}, \"ns_per_call\": {{{}}}}}\n",
+        figures.join(", ")
+    ))
+}
+
+/// Mean ns per call of `f`, calling it for about `budget`.
+fn mean_ns(f: &mut Timed<'_>, data: &mut Data, budget: Duration) -> f64 {
+    let start = Instant::now();
+    let mut calls = 0u64;
+    while start.elapsed() < budget {
+        for _ in 0..64 {
+            f(data);
+        }
+        calls += 64;
+    }
+    start.elapsed().as_nanos() as f64 / calls as f64
+}
+
+/// The largest of 1, 2, 5 times a power of ten not above `n` (at least 1).
+fn round_down(n: usize) -> usize {
+    let mut p = 1usize;
+    while p * 10 <= n {
+        p *= 10;
+    }
+    [5 * p, 2 * p, p].into_iter().find(|&c| c <= n).unwrap_or(1)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::round_down;
+
+    #[test]
+    fn round_numbers() {
+        assert_eq!(round_down(1), 1);
+        assert_eq!(round_down(7), 5);
+        assert_eq!(round_down(199_999), 100_000);
+        assert_eq!(round_down(250_000), 200_000);
+        assert_eq!(round_down(999), 500);
+    }
+}

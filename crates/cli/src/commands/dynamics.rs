@@ -1,0 +1,66 @@
+//! `satsim dynamics --model MODEL.toml --state STATE.json` (contract section 3): the mass
+//! matrix, the bias forces, the forward-dynamics acceleration (ABA) and the kinetic energy
+//! of one state, as one JSON object with every number at full `f64` precision.
+
+use super::{CliError, Options, Output, json_array, json_number, usage_line};
+use satsim_tree::io::{read_model, read_state};
+use satsim_tree::{Data, aba, bias, crba, kinetic_energy};
+
+const NAME: &str = "dynamics";
+
+/// Runs the command.
+pub fn run(args: &[std::ffi::OsString]) -> Result<Output, CliError> {
+    let opts = Options::parse(NAME, args, &["model", "state"], 0)?;
+    if opts.help {
+        return Ok(format!("usage: {}\n", usage_line(Some(NAME))));
+    }
+    let model_path = opts.required_path(NAME, "model")?;
+    let state_path = opts.required_path(NAME, "state")?;
+    let model = read_model(&model_path)?;
+    let state = read_state(&state_path, &model)?;
+    let failed = |e: satsim_tree::DynamicsError| {
+        CliError::Other(format!(
+            "{}: {e} (model {})",
+            state_path.display(),
+            model_path.display()
+        ))
+    };
+
+    let n = model.nv();
+    let mut data = Data::new(&model);
+    let m = crba(&model, &mut data, &state.q).map_err(failed)?.clone();
+    let b = bias(&model, &mut data, &state.q, &state.v, None)
+        .map_err(failed)?
+        .clone();
+    let a = aba(&model, &mut data, &state.q, &state.v, &state.tau, None)
+        .map_err(failed)?
+        .clone();
+    let ke = kinetic_energy(&model, &mut data, &state.q, &state.v).map_err(failed)?;
+    let finite = m
+        .iter()
+        .chain(b.iter())
+        .chain(a.iter())
+        .all(|x| x.is_finite())
+        && ke.is_finite();
+    if !finite {
+        return Err(CliError::Other(format!(
+            "{}: the dynamics of this state overflow (a non-finite result)",
+            state_path.display()
+        )));
+    }
+
+    let rows: Vec<String> = (0..n)
+        .map(|i| format!("    {}", json_array((0..n).map(|j| m[(i, j)]))))
+        .collect();
+    let matrix = if n == 0 {
+        "[]".to_owned()
+    } else {
+        format!("[\n{}\n  ]", rows.join(",\n"))
+    };
+    Ok(format!(
+        "{{\n  \"dof\": {n},\n  \"mass_matrix\": {matrix},\n  \"bias\": {},\n  \"acceleration\": {},\n  \"kinetic_energy\": {}\n}}\n",
+        json_array(b.iter().copied()),
+        json_array(a.iter().copied()),
+        json_number(ke)
+    ))
+}

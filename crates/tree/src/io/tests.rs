@@ -1,0 +1,576 @@
+use super::*;
+
+/// A valid two-body model: the bad inputs below are small edits of it.
+/// Line numbers: 1 `[base]`, 4 `[[body]]` bus, 9 `[[body]]` panel, 14 `[[hinge]]`.
+const GOOD: &str = r#"[base]
+kind = "free"
+
+[[body]]
+name = "bus"
+mass = 500
+inertia = [[40, 0, 0], [0, 40, 0], [0, 0, 30]]
+
+[[body]]
+name = "panel"
+mass = 20.0
+inertia = [[1.7, 0, 0], [0, 6.7, 0], [0, 0, 8.3]]
+
+[[hinge]]
+name = "h"
+parent = "bus"
+child = "panel"
+axis = [1, 0, 0]
+at = [0, 1, 0]
+"#;
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Kind {
+    Empty,
+    Syntax,
+    Schema,
+    Model,
+}
+
+fn kind(e: &FileError) -> Kind {
+    match e {
+        FileError::Empty { .. } => Kind::Empty,
+        FileError::Syntax { .. } => Kind::Syntax,
+        FileError::Schema { .. } => Kind::Schema,
+        FileError::Model { .. } => Kind::Model,
+        other => panic!("unexpected error kind: {other}"),
+    }
+}
+
+fn model_err(text: &str) -> FileError {
+    match parse_model(text, Path::new("dir/bad.toml")) {
+        Ok(_) => panic!("accepted:\n{text}"),
+        Err(e) => e,
+    }
+}
+
+#[test]
+fn good_model_builds() {
+    let (m, f) = parse_model(GOOD, Path::new("good.toml")).unwrap();
+    assert_eq!((m.nq(), m.nv(), m.n_bodies()), (8, 7, 2));
+    assert_eq!(f.body.len(), 2);
+    assert_eq!(f.base_kind(), BaseKind::Free);
+    assert_eq!(line_of(GOOD, f.hinge[0].span().start), 14);
+}
+
+#[test]
+fn model_error_table() {
+    // (description, edited text, kind, line, substring of the message)
+    let body3 =
+        "\n[[body]]\nname = \"extra\"\nmass = 1.0\ninertia = [[1, 0, 0], [0, 1, 0], [0, 0, 1]]\n";
+    let hinge2 = |parent: &str, child: &str| {
+        format!(
+            "\n[[hinge]]\nname = \"h2\"\nparent = \"{parent}\"\nchild = \"{child}\"\naxis = [0, 0, 1]\n"
+        )
+    };
+    let cases: Vec<(&str, String, Kind, Option<usize>, &str)> = vec![
+        ("empty", "  \n\n".into(), Kind::Empty, None, "empty"),
+        (
+            "toml syntax",
+            GOOD.replace("mass = 20.0", "mass = = 20.0"),
+            Kind::Syntax,
+            Some(11),
+            "syntax error",
+        ),
+        (
+            "unterminated string",
+            GOOD.replace("name = \"h\"", "name = \"h"),
+            Kind::Syntax,
+            Some(15),
+            "syntax error",
+        ),
+        (
+            "missing mass",
+            GOOD.replace("mass = 20.0\n", ""),
+            Kind::Schema,
+            Some(9),
+            "missing required key `mass`",
+        ),
+        (
+            "missing axis",
+            GOOD.replace("axis = [1, 0, 0]\n", ""),
+            Kind::Schema,
+            Some(14),
+            "missing required key `axis`",
+        ),
+        (
+            "missing name",
+            GOOD.replace("name = \"panel\"\n", ""),
+            Kind::Schema,
+            Some(9),
+            "missing required key `name`",
+        ),
+        (
+            "missing inertia with mass",
+            GOOD.replace("inertia = [[1.7, 0, 0], [0, 6.7, 0], [0, 0, 8.3]]\n", ""),
+            Kind::Schema,
+            Some(9),
+            "body `panel`: missing key `inertia`",
+        ),
+        (
+            "misspelt intertia",
+            GOOD.replace("inertia = [[1.7", "intertia = [[1.7"),
+            Kind::Schema,
+            Some(12),
+            "unknown key `intertia`",
+        ),
+        (
+            "unknown top-level key",
+            format!("gravity = 9.81\n{GOOD}"),
+            Kind::Schema,
+            Some(1),
+            "unknown key `gravity`",
+        ),
+        (
+            "unknown hinge key",
+            GOOD.replace("at = [0, 1, 0]", "att = [0, 1, 0]"),
+            Kind::Schema,
+            Some(19),
+            "unknown key `att`",
+        ),
+        (
+            "mass of wrong type",
+            GOOD.replace("mass = 20.0", "mass = \"heavy\""),
+            Kind::Schema,
+            Some(11),
+            "`body.mass`: invalid type",
+        ),
+        (
+            "vector of wrong length",
+            GOOD.replace("at = [0, 1, 0]", "at = [0, 1]"),
+            Kind::Schema,
+            Some(19),
+            "invalid length 2",
+        ),
+        (
+            "unknown base kind",
+            GOOD.replace("kind = \"free\"", "kind = \"floating\""),
+            Kind::Schema,
+            Some(2),
+            "unknown value `floating`",
+        ),
+        (
+            "duplicate body",
+            GOOD.replace("name = \"panel\"", "name = \"bus\""),
+            Kind::Model,
+            Some(10),
+            "duplicate body name `bus`",
+        ),
+        (
+            "duplicate hinge",
+            format!(
+                "{GOOD}{body3}{}",
+                hinge2("bus", "extra").replace("\"h2\"", "\"h\"")
+            ),
+            Kind::Model,
+            Some(27),
+            "duplicate hinge name `h`",
+        ),
+        (
+            "unknown parent",
+            GOOD.replace("parent = \"bus\"", "parent = \"bsu\""),
+            Kind::Model,
+            Some(16),
+            "hinge `h`: unknown parent body `bsu`",
+        ),
+        (
+            "unknown child",
+            GOOD.replace("child = \"panel\"", "child = \"pannel\""),
+            Kind::Model,
+            Some(17),
+            "unknown child body `pannel`",
+        ),
+        (
+            "second root",
+            format!("{GOOD}{body3}"),
+            Kind::Model,
+            Some(22),
+            "body `extra` is the child of no hinge",
+        ),
+        (
+            "two parents",
+            format!("{GOOD}{}", hinge2("bus", "panel")),
+            Kind::Model,
+            Some(24),
+            "body `panel` has two parents",
+        ),
+        (
+            "root as child",
+            format!("{GOOD}{}", hinge2("panel", "bus")),
+            Kind::Model,
+            Some(24),
+            "makes the root body `bus` a child",
+        ),
+        (
+            "cycle",
+            format!(
+                "{}{body3}{}",
+                GOOD.replace("parent = \"bus\"", "parent = \"extra\""),
+                hinge2("panel", "extra")
+            ),
+            Kind::Model,
+            Some(10),
+            "cycle",
+        ),
+        (
+            "negative mass",
+            GOOD.replace("mass = 20.0", "mass = -20.0"),
+            Kind::Model,
+            Some(11),
+            "mass -20 is negative",
+        ),
+        (
+            "non-finite mass",
+            GOOD.replace("mass = 20.0", "mass = nan"),
+            Kind::Model,
+            Some(11),
+            "body `panel`: mass: value is not finite",
+        ),
+        (
+            "non-finite vector",
+            GOOD.replace("at = [0, 1, 0]", "at = [0, inf, 0]"),
+            Kind::Model,
+            Some(19),
+            "hinge `h`: at: value is not finite",
+        ),
+        (
+            "non-symmetric inertia",
+            GOOD.replace("[[1.7, 0, 0], [0, 6.7, 0]", "[[1.7, 0.5, 0], [0, 6.7, 0]"),
+            Kind::Model,
+            Some(12),
+            "inertia is not symmetric",
+        ),
+        (
+            "inertia not positive",
+            GOOD.replace("[0, 0, 8.3]]", "[0, 0, -8.3]]"),
+            Kind::Model,
+            Some(12),
+            "not positive semi-definite",
+        ),
+        (
+            "inertia triangle",
+            GOOD.replace("[0, 0, 8.3]]", "[0, 0, 9.3]]"),
+            Kind::Model,
+            Some(12),
+            "triangle inequality",
+        ),
+        (
+            "axis norm",
+            GOOD.replace("axis = [1, 0, 0]", "axis = [1, 1, 0]"),
+            Kind::Model,
+            Some(18),
+            "axis norm 1.41",
+        ),
+        (
+            "rotation norm",
+            GOOD.replace("at = [0, 1, 0]", "rotation = [1, 0, 0, 0.1]"),
+            Kind::Model,
+            Some(19),
+            "rotation quaternion norm",
+        ),
+        (
+            "massless leaf",
+            GOOD.replace("mass = 20.0", "mass = 0").replace(
+                "inertia = [[1.7, 0, 0], [0, 6.7, 0], [0, 0, 8.3]]",
+                "inertia = [[0, 0, 0], [0, 0, 0], [0, 0, 0]]",
+            ),
+            Kind::Model,
+            Some(10),
+            "body `panel` is a leaf with zero mass and zero inertia",
+        ),
+        (
+            "massless leaf, inertia defaulted",
+            GOOD.replace("mass = 20.0", "mass = 0")
+                .replace("inertia = [[1.7, 0, 0], [0, 6.7, 0], [0, 0, 8.3]]\n", ""),
+            Kind::Model,
+            Some(10),
+            "zero mass and zero inertia",
+        ),
+        (
+            "no bodies",
+            "[base]\nkind = \"fixed\"\n".into(),
+            Kind::Model,
+            None,
+            "no body",
+        ),
+    ];
+    for (what, text, k, line, needle) in cases {
+        let e = model_err(&text);
+        let msg = e.to_string();
+        assert_eq!(kind(&e), k, "{what}: {msg}");
+        assert_eq!(e.line(), line, "{what}: {msg}");
+        let prefix = match line {
+            Some(l) => format!("dir/bad.toml:{l}: "),
+            None => "dir/bad.toml: ".to_owned(),
+        };
+        assert!(msg.starts_with(&prefix), "{what}: {msg}");
+        assert!(msg.contains(needle), "{what}: `{msg}` lacks `{needle}`");
+        assert!(!msg.contains('\n'), "{what}: one line: {msg}");
+    }
+}
+
+#[test]
+fn lenient_inputs() {
+    // Integers where numbers are expected, axis and rotation normalised within 1e-6,
+    // defaults for `base`, `com`, `at`, `child_at`, `rotation`, inertia of a massless body.
+    let text = r#"
+[[body]]
+name = "bus"
+mass = 10
+inertia = [[1, 0, 0], [0, 1, 0], [0, 0, 1]]
+
+[[body]]
+name = "link"
+mass = 0
+
+[[body]]
+name = "tip"
+mass = 1
+inertia = [[1, 0, 0], [0, 1, 0], [0, 0, 1]]
+
+[[hinge]]
+name = "b"
+parent = "link"
+child = "tip"
+axis = [0, 1.0000005, 0]
+rotation = [1.0000005, 0, 0, 0]
+
+[[hinge]]
+name = "a"
+parent = "bus"
+child = "link"
+axis = [0, 0, 1]
+"#;
+    let (m, _) = parse_model(text, Path::new("ok.toml")).unwrap();
+    assert_eq!(m.base, BaseKind::Free);
+    assert_eq!(m.hinge_names, ["b", "a"]);
+    let j = m.joints[m.hinge_body[0]].as_ref().unwrap();
+    assert!((j.axis.norm() - 1.0).abs() < 1e-15);
+}
+
+#[test]
+fn read_errors() {
+    let e = read_model("/nonexistent/dir/model.toml").unwrap_err();
+    assert!(matches!(e, FileError::Read { .. }));
+    assert!(
+        e.to_string()
+            .starts_with("/nonexistent/dir/model.toml: cannot read the file")
+    );
+    let dir = std::env::temp_dir().join(format!("satsim-io-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = dir.join("empty.toml");
+    std::fs::write(&p, "").unwrap();
+    let e = read_model(&p).unwrap_err();
+    assert!(matches!(e, FileError::Empty { .. }), "{e}");
+    assert!(e.to_string().starts_with(&p.display().to_string()));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+fn model() -> Model {
+    parse_model(GOOD, Path::new("good.toml")).unwrap().0
+}
+
+#[test]
+fn good_state() {
+    let m = model();
+    let s = parse_state(
+        r#"{"base": {"attitude": [2e-7, 0, 0, 1], "angular_velocity": [1, 2, 3], "velocity": [4, 5, 6]},
+            "hinges": {"angle": [0.5], "rate": [-1], "torque": [2]}}"#,
+        Path::new("s.json"),
+        &m,
+    )
+    .unwrap();
+    assert_eq!(s.q.len(), 8);
+    assert!((s.q[..4].iter().map(|x| x * x).sum::<f64>() - 1.0).abs() < 1e-15);
+    assert_eq!(s.q[7], 0.5);
+    assert_eq!(s.v, [1.0, 2.0, 3.0, 4.0, 5.0, 6.0, -1.0]);
+    assert_eq!(s.tau, [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 2.0]);
+    // No base: identity and rest; no torque: zeros.
+    let s = parse_state(
+        r#"{"hinges": {"angle": [0], "rate": [0]}}"#,
+        Path::new("s.json"),
+        &m,
+    )
+    .unwrap();
+    assert_eq!(s, State::rest(&m));
+}
+
+#[test]
+fn fixed_base_ignores_base_object() {
+    let fixed = GOOD.replace("kind = \"free\"", "kind = \"fixed\"");
+    let (m, _) = parse_model(&fixed, Path::new("f.toml")).unwrap();
+    let s = parse_state(
+        r#"{"base": {"attitude": [5, 0, 0, 0]}, "hinges": {"angle": [0.25], "rate": [1]}}"#,
+        Path::new("s.json"),
+        &m,
+    )
+    .unwrap();
+    assert_eq!((s.q, s.v, s.tau), (vec![0.25], vec![1.0], vec![0.0]));
+}
+
+#[test]
+fn state_error_table() {
+    let m = model();
+    #[derive(Debug, PartialEq)]
+    enum K {
+        Empty,
+        Syntax,
+        Schema,
+        State,
+    }
+    let cases: Vec<(&str, &str, K, &str)> = vec![
+        ("empty", "\n", K::Empty, "s/bad.json: the file is empty"),
+        (
+            "syntax",
+            "{\n  \"hinges\": {\"angle\": [0], \"rate\": [0],}\n}",
+            K::Syntax,
+            "s/bad.json:2: syntax error",
+        ),
+        (
+            "truncated",
+            "{\n  \"hinges\": {\"angle\": [0],",
+            K::Syntax,
+            "s/bad.json:2: syntax error",
+        ),
+        (
+            "unknown key",
+            "{\n \"hinges\": {\"angle\": [0], \"rate\": [0],\n \"torques\": [0]}}",
+            K::Schema,
+            "s/bad.json:3: unknown key `torques`",
+        ),
+        (
+            "missing rate",
+            "{\"hinges\": {\"angle\": [0]}}",
+            K::Schema,
+            "s/bad.json:1: missing required key `rate`",
+        ),
+        (
+            "wrong type",
+            "{\"hinges\": {\"angle\": [\"zero\"], \"rate\": [0]}}",
+            K::Schema,
+            "s/bad.json:1: invalid type",
+        ),
+        (
+            "missing hinges",
+            "{}",
+            K::State,
+            "s/bad.json: hinges: missing",
+        ),
+        (
+            "angle length",
+            "{\"hinges\": {\"angle\": [0, 1], \"rate\": [0]}}",
+            K::State,
+            "s/bad.json: hinges.angle: expected 1 entries (one per hinge), got 2",
+        ),
+        (
+            "rate length",
+            "{\"hinges\": {\"angle\": [0], \"rate\": []}}",
+            K::State,
+            "s/bad.json: hinges.rate: expected 1 entries (one per hinge), got 0",
+        ),
+        (
+            "torque length",
+            "{\"hinges\": {\"angle\": [0], \"rate\": [0], \"torque\": [1, 2]}}",
+            K::State,
+            "s/bad.json: hinges.torque: expected 1 entries",
+        ),
+        (
+            "attitude length",
+            "{\"base\": {\"attitude\": [1, 0, 0]}, \"hinges\": {\"angle\": [0], \"rate\": [0]}}",
+            K::State,
+            "s/bad.json: base.attitude: expected 4 entries",
+        ),
+        (
+            "attitude norm",
+            "{\"base\": {\"attitude\": [1, 0, 0, 0.01]}, \"hinges\": {\"angle\": [0], \"rate\": [0]}}",
+            K::State,
+            "s/bad.json: base.attitude: quaternion norm",
+        ),
+        (
+            "velocity length",
+            "{\"base\": {\"velocity\": [1]}, \"hinges\": {\"angle\": [0], \"rate\": [0]}}",
+            K::State,
+            "s/bad.json: base.velocity: expected 3 entries",
+        ),
+        (
+            "out-of-range number",
+            "{\"hinges\": {\"angle\": [1e999], \"rate\": [0]}}",
+            K::Syntax,
+            "s/bad.json:1:",
+        ),
+    ];
+    for (what, text, k, prefix) in cases {
+        let e = parse_state(text, Path::new("s/bad.json"), &m).unwrap_err();
+        let got = match e {
+            FileError::Empty { .. } => K::Empty,
+            FileError::Syntax { .. } => K::Syntax,
+            FileError::Schema { .. } => K::Schema,
+            FileError::State { .. } => K::State,
+            _ => panic!("{what}: {e}"),
+        };
+        let msg = e.to_string();
+        assert_eq!(got, k, "{what}: {msg}");
+        assert!(msg.starts_with(prefix), "{what}: `{msg}` vs `{prefix}`");
+        assert!(!msg.contains('\n'), "{what}: one line: {msg}");
+    }
+    // Non-finite numbers cannot be written in JSON but can reach `resolve` from TOML.
+    let file = StateFile {
+        base: None,
+        hinges: Some(HingesStateFile {
+            angle: vec![f64::NAN],
+            rate: vec![0.0],
+            torque: None,
+        }),
+    };
+    let e = file.resolve(&m).unwrap_err();
+    assert_eq!(e.field, "hinges.angle");
+    assert!(e.message.contains("not a finite number"));
+}
+
+#[test]
+fn state_from_toml_table() {
+    // A scene's inline `[initial]` table uses the same keys.
+    let m = model();
+    let f: StateFile = toml::from_str("[hinges]\nangle = [1]\nrate = [0.5]\n").unwrap();
+    let s = f.resolve(&m).unwrap();
+    assert_eq!((s.q[7], s.v[6]), (1.0, 0.5));
+}
+
+#[test]
+fn model_file_inside_a_larger_document() {
+    // The scene reader embeds `ModelFile`: spans stay relative to the whole text.
+    #[derive(Deserialize)]
+    #[allow(dead_code)]
+    struct Scene {
+        duration: f64,
+        model: ModelFile,
+    }
+    let text = "duration = 1.0\n\n[model]\nbody = [{ name = \"a\", mass = -1, inertia = [[1,0,0],[0,1,0],[0,0,1]] }]\n";
+    let scene: Scene = toml::from_str(text).unwrap();
+    let e = scene
+        .model
+        .build()
+        .unwrap_err()
+        .in_file(text, Path::new("scene.toml"));
+    assert_eq!(e.to_string(), "scene.toml:4: body `a`: mass -1 is negative");
+}
+
+fn examples_dir() -> std::path::PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples")
+}
+
+#[test]
+fn example_files_load() {
+    let dir = examples_dir();
+    let m = read_model(dir.join("satellite.toml")).unwrap();
+    assert_eq!((m.nv(), m.n_bodies(), m.n_hinges()), (11, 6, 5));
+    let s = read_state(dir.join("state.json"), &m).unwrap();
+    assert_eq!(s.q.len(), 12);
+    assert_eq!(s.q[7..], [0.3, -0.2, 0.1, 1.2, -1.0]);
+    assert_eq!(s.v[..3], [0.001, -0.002, 0.0015]);
+    assert_eq!(s.tau[6..], [0.0, 0.0, 0.0, -0.5, 0.4]);
+}
