@@ -119,11 +119,12 @@ fn articulated<'d>(
         }
         let ia = data.ia[i];
         let u_col = ia.mul_motion(&joint.s);
-        let d = joint.s.dot(&u_col);
+        let d = joint.s.dot(&u_col) + joint.armature;
         let scale = ia.a.trace() + ia.c.trace() * joint.child_at.norm_squared();
         if !(d > SINGULAR_PIVOT_RELATIVE * scale) || !d.is_finite() {
             return Err(DynamicsError::SingularHinge {
                 hinge: model.hinge_names[joint.hinge].clone(),
+                through: massless_hinges_below(model, i),
                 pivot: d,
                 relative: if scale > 0.0 { d / scale } else { 0.0 },
             });
@@ -170,4 +171,22 @@ fn articulated<'d>(
         data.a[i] = a + joint.s * qdd;
     }
     Ok(&data.ddq)
+}
+
+/// The hinges reached from body `i` downwards through massless bodies: the other axes of a
+/// multi-axis hinge made of massless links (named in a singular-configuration error).
+fn massless_hinges_below(model: &Model, i: usize) -> Vec<String> {
+    let mut names = Vec::new();
+    let mut stack = vec![i];
+    while let Some(b) = stack.pop() {
+        if model.bodies[b].mass != 0.0 {
+            continue;
+        }
+        for c in model.children(b) {
+            let joint = model.joints[c].as_ref().expect("joint");
+            names.push(model.hinge_names[joint.hinge].clone());
+            stack.push(c);
+        }
+    }
+    names
 }

@@ -39,7 +39,7 @@ pub fn crba<'d>(
     for i in 1..n {
         let ji = model.joints[i].as_ref().expect("joint");
         let mut f = data.ic[i].mul_motion(&ji.s);
-        m[(ji.dof, ji.dof)] = ji.s.dot(&f);
+        m[(ji.dof, ji.dof)] = ji.s.dot(&f) + ji.armature;
         let mut j = i;
         while let Some(p) = model.parent[j] {
             f = data.xup[j].inv_apply_force(&f);

@@ -101,6 +101,14 @@ pub enum ModelError {
         /// The norm given.
         norm: f64,
     },
+    /// A negative hinge armature.
+    #[error("hinge `{hinge}`: armature {armature} is negative")]
+    NegativeArmature {
+        /// The hinge.
+        hinge: String,
+        /// The armature given.
+        armature: f64,
+    },
     /// A leaf body with zero mass and zero inertia: its hinge acceleration is undetermined.
     #[error(
         "body `{0}` is a leaf with zero mass and zero inertia: its hinge acceleration would be undetermined"
@@ -124,11 +132,15 @@ pub enum DynamicsError {
     /// The articulated inertia about a hinge axis vanished: the configuration is singular
     /// (for example the gimbal lock of a 3-DOF hinge made of massless links).
     #[error(
-        "singular configuration at hinge `{hinge}`: articulated inertia about its axis is {pivot:e} (relative {relative:e})"
+        "singular configuration at hinge `{hinge}`{}: articulated inertia about its axis is {pivot:e} (relative {relative:e}); a small hinge armature regularises it",
+        gimbal_note(.through)
     )]
     SingularHinge {
         /// The hinge.
         hinge: String,
+        /// The hinges below it reached through massless links (a multi-axis hinge in
+        /// gimbal lock), empty otherwise.
+        through: Vec<String>,
         /// The pivot `D = Sᵀ IA S`.
         pivot: f64,
         /// The pivot relative to the system's inertia scale.
@@ -148,4 +160,16 @@ pub enum DynamicsError {
     /// A non-finite number in the input.
     #[error("{0} contains a non-finite number")]
     NonFinite(&'static str),
+}
+
+fn gimbal_note(through: &[String]) -> String {
+    if through.is_empty() {
+        String::new()
+    } else {
+        let names: Vec<String> = through.iter().map(|h| format!("`{h}`")).collect();
+        format!(
+            " (gimbal lock with {} through massless links)",
+            names.join(", ")
+        )
+    }
 }

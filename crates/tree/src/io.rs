@@ -299,6 +299,10 @@ pub struct HingeFile {
     /// Child frame relative to the parent at zero angle, `[w, x, y, z]`, default identity.
     #[serde(default)]
     pub rotation: Option<Spanned<[f64; 4]>>,
+    /// Armature (kg m²), default zero: rotor inertia about the axis (an extension of the
+    /// contract, used to regularise a gimbal lock).
+    #[serde(default)]
+    pub armature: Option<Spanned<f64>>,
 }
 
 fn v3(a: &[f64; 3]) -> Vec3 {
@@ -401,7 +405,8 @@ impl ModelFile {
                 )
                 .at(at)
                 .child_at(child_at)
-                .rotation(rotation),
+                .rotation(rotation)
+                .armature(hinge.armature.as_ref().map_or(0.0, |a| *a.get_ref())),
             );
         }
         builder.build().map_err(|error| SpannedError::Model {
@@ -480,6 +485,12 @@ impl ModelFile {
                     .as_ref()
                     .map(|i| i.span())
                     .unwrap_or_else(|| b.name.span())
+            }),
+            ModelError::NegativeArmature { hinge, .. } => self.hinge_named(hinge, 0).map(|h| {
+                h.armature
+                    .as_ref()
+                    .map(|a| a.span())
+                    .unwrap_or_else(|| h.name.span())
             }),
             ModelError::AxisNorm { hinge, .. } => self.hinge_named(hinge, 0).map(|h| h.axis.span()),
             ModelError::RotationNorm { hinge, .. } => self.hinge_named(hinge, 0).map(|h| {

@@ -91,6 +91,10 @@ pub struct Hinge {
     /// Child frame relative to the parent frame at zero angle (maps child to parent
     /// coordinates); a Hamilton quaternion, normalised by the builder if within 1e-6 of unit.
     pub rotation: Quaternion<f64>,
+    /// Armature (kg m²): a rotor inertia about the hinge axis, added to the mass matrix's
+    /// diagonal (as a motor's reflected inertia is). Zero by default; a small value is the
+    /// documented regularisation of a gimbal lock of massless links.
+    pub armature: f64,
 }
 
 impl Hinge {
@@ -109,6 +113,7 @@ impl Hinge {
             at: Vec3::zeros(),
             child_at: Vec3::zeros(),
             rotation: Quaternion::identity(),
+            armature: 0.0,
         }
     }
     /// Sets the hinge point in the parent frame.
@@ -124,6 +129,11 @@ impl Hinge {
     /// Sets the fixed rotation (child to parent at zero angle).
     pub fn rotation(mut self, rotation: Quaternion<f64>) -> Self {
         self.rotation = rotation;
+        self
+    }
+    /// Sets the armature (kg m², `>= 0`).
+    pub fn armature(mut self, armature: f64) -> Self {
+        self.armature = armature;
         self
     }
 }
@@ -310,6 +320,7 @@ impl ModelBuilder {
                 child_at: h.child_at,
                 rot0,
                 s: Motion::new(s, h.child_at.cross(&s)),
+                armature: h.armature,
             });
         }
         Ok(Model {
@@ -377,6 +388,18 @@ fn check_hinge(h: &Hinge) -> Result<(Vec3, Mat3), ModelError> {
     finite3(&h.axis, || format!("hinge `{}`: axis", h.name))?;
     finite3(&h.at, || format!("hinge `{}`: at", h.name))?;
     finite3(&h.child_at, || format!("hinge `{}`: child_at", h.name))?;
+    if !h.armature.is_finite() {
+        return Err(ModelError::NonFinite(format!(
+            "hinge `{}`: armature",
+            h.name
+        )));
+    }
+    if h.armature < 0.0 {
+        return Err(ModelError::NegativeArmature {
+            hinge: h.name.clone(),
+            armature: h.armature,
+        });
+    }
     if !h.rotation.coords.iter().all(|x| x.is_finite()) {
         return Err(ModelError::NonFinite(format!(
             "hinge `{}`: rotation",
@@ -435,6 +458,8 @@ pub struct Joint {
     pub rot0: Mat3,
     /// Motion subspace `S` (constant, child coordinates).
     pub s: Motion,
+    /// Armature (kg m²) added to the hinge's diagonal entry of `M`.
+    pub armature: f64,
 }
 
 impl Joint {

@@ -51,7 +51,7 @@ pub fn rnea<'d>(
     }
     for i in (1..n).rev() {
         let joint = model.joints[i].as_ref().expect("joint");
-        data.tau[joint.dof] = joint.s.dot(&data.f[i]);
+        data.tau[joint.dof] = joint.s.dot(&data.f[i]) + joint.armature * a[joint.dof];
         let p = model.parent[i].expect("parent");
         let fp = data.xup[i].inv_apply_force(&data.f[i]);
         data.f[p] += fp;
