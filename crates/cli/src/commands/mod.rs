@@ -2,6 +2,8 @@
 
 pub mod bench;
 pub mod dynamics;
+pub mod preprint;
+
 
 use satsim_tree::io::FileError;
 use std::ffi::{OsStr, OsString};
@@ -104,7 +106,7 @@ pub fn dispatch(args: &[OsString]) -> Result<Output, CliError> {
         "-V" | "--version" | "version" => Ok(format!("satsim {}\n", env!("CARGO_PKG_VERSION"))),
         "dynamics" => dynamics::run(rest),
         "bench" => bench::run(rest),
-        "preprint" => not_yet("preprint"),
+        "preprint" => preprint::run(rest),
         "run" => not_yet("run"),
         "accuracy" => not_yet("accuracy"),
         other => Err(CliError::Usage {

@@ -1,0 +1,44 @@
+//! `satsim preprint --model MODEL.toml --state STATE.json` (contract section 4): the
+//! preprint's closed-form S and N (errata corrected, see docs/src/preprint/errata.md) beside
+//! the same matrices from the generic engine, and their largest absolute difference.
+
+use super::{CliError, Options, Output, json_array, json_number, usage_line};
+use satsim_satellite::preprint::compare;
+use satsim_tree::io::{read_model, read_state};
+
+const NAME: &str = "preprint";
+
+/// Runs the command.
+pub fn run(args: &[std::ffi::OsString]) -> Result<Output, CliError> {
+    let opts = Options::parse(NAME, args, &["model", "state"], 0)?;
+    if opts.help {
+        return Ok(format!("usage: {}\n", usage_line(Some(NAME))));
+    }
+    let model_path = opts.required_path(NAME, "model")?;
+    let state_path = opts.required_path(NAME, "state")?;
+    let model = read_model(&model_path)?;
+    let state = read_state(&state_path, &model)?;
+    let report = compare(&model, &state.q, &state.v, &state.tau)
+        .map_err(|e| CliError::Other(format!("{}: {e}", model_path.display())))?;
+    let matrix = |m: &nalgebra::DMatrix<f64>| {
+        let rows: Vec<String> = (0..m.nrows())
+            .map(|i| format!("    {}", json_array((0..m.ncols()).map(|j| m[(i, j)]))))
+            .collect();
+        format!("[\n{}\n  ]", rows.join(",\n"))
+    };
+    let all_finite = report.s_tree.iter().chain(report.s_closed_form.iter()).all(|x| x.is_finite());
+    if !all_finite {
+        return Err(CliError::Other(format!(
+            "{}: the dynamics of this state overflow (a non-finite result)",
+            state_path.display()
+        )));
+    }
+    Ok(format!(
+        "{{\n  \"S_closed_form\": {},\n  \"N_closed_form\": {},\n  \"S_tree\": {},\n  \"N_tree\": {},\n  \"max_abs_difference\": {}\n}}\n",
+        matrix(&report.s_closed_form),
+        json_array(report.n_closed_form.iter().copied()),
+        matrix(&report.s_tree),
+        json_array(report.n_tree.iter().copied()),
+        json_number(report.max_abs_difference)
+    ))
+}
