@@ -9,3 +9,13 @@
 pub use satsim_integrate as integrate;
 pub use satsim_satellite as satellite;
 pub use satsim_tree as tree;
+
+/// The Rust snippets of the book (docs/src) run as doc tests, so the guide cannot drift
+/// from the code.
+#[cfg(doctest)]
+mod book {
+    #[doc = include_str!("../docs/src/guide/building-a-tree.md")]
+    struct BuildingATree;
+    #[doc = include_str!("../docs/src/theory/floating-base.md")]
+    struct FloatingBase;
+}

@@ -11,7 +11,7 @@ use nalgebra::{DVector, Matrix6, Vector6};
 pub const SINGULAR_PIVOT_RELATIVE: f64 = 1e-13;
 
 /// Forward dynamics: the accelerations `q̈` produced by generalised forces `tau` and external
-/// body forces `fext` (conventions of [`crate::rnea`]), into `data.ddq`.
+/// body forces `fext` (conventions of [`crate::rnea()`]), into `data.ddq`.
 ///
 /// A free base's accelerations are the body-frame derivatives of `[ω; v]`. Fails with
 /// [`DynamicsError::SingularHinge`] where a hinge's articulated inertia vanishes (gimbal lock

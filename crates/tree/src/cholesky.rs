@@ -51,7 +51,7 @@ impl FaerWork {
     }
 }
 
-/// Forward dynamics by CRBA + RNEA + Cholesky, into `data.ddq` (conventions of [`crate::aba`]).
+/// Forward dynamics by CRBA + RNEA + Cholesky, into `data.ddq` (conventions of [`crate::aba()`]).
 ///
 /// ```
 /// use satsim_tree::{BaseKind, Body, Data, ModelBuilder, aba, crba_cholesky, spatial::{Mat3, Vec3}};

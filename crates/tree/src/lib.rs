@@ -5,8 +5,8 @@
 //!
 //! - [`ModelBuilder`] builds an immutable, validated [`Model`]; [`Data`] is its reusable
 //!   workspace: the per-call algorithms below allocate nothing.
-//! - One file per algorithm: [`forward_kinematics`], [`crba`] (mass matrix), [`rnea`]
-//!   (inverse dynamics, [`bias`]), [`aba`] (O(n) forward dynamics, the default),
+//! - One file per algorithm: [`forward_kinematics`], [`crba()`] (mass matrix), [`rnea()`]
+//!   (inverse dynamics, [`bias`]), [`aba()`] (O(n) forward dynamics, the default),
 //!   [`crba_cholesky`] (forward dynamics through the mass matrix), [`kinetic_energy`],
 //!   [`center_of_mass`], [`momentum`].
 //! - [`io`] reads the model TOML and state JSON files of the command-line contract.

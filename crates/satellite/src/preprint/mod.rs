@@ -5,7 +5,7 @@
 //!   [`build_model`], which lays them out as a [`satsim_tree::Model`];
 //! - [`layout`]: [`recognise`] finds the preprint's layout in any model (or says what is
 //!   wrong) and reads its parameters back;
-//! - [`table2`]: the rotation chain of Table 2 (`B_i`, `D_i`);
+//! - [`table2`](mod@table2): the rotation chain of Table 2 (`B_i`, `D_i`);
 //! - [`closed_form`]: every printed symbol of `S` and `N` (equation (19)) as a function,
 //!   printed and corrected where the text is wrong;
 //! - [`engine`]: `S` and `N` from the engine (Schur complement over the root's linear

@@ -46,7 +46,7 @@ pub struct PreprintParams {
     pub e: [Vec3; 5],
     /// Fixed rotation of each hinge's child frame relative to its parent frame at zero angle
     /// (maps child coordinates to parent coordinates; the model file's `rotation`). These are
-    /// the constant parts of the preprint's `B_i` and `D_i` (see [`crate::preprint::table2`]).
+    /// the constant parts of the preprint's `B_i` and `D_i` (see [`crate::preprint::table2`](mod@crate::preprint::table2)).
     pub rotation: [UnitQuaternion<f64>; 5],
 }
 
