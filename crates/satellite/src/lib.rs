@@ -5,4 +5,8 @@
 //! cross-checks the printed closed-form equations of motion (19) against it.
 #![warn(missing_docs)]
 
+pub mod effects;
+pub mod output;
 pub mod preprint;
+pub mod scene;
+pub mod simulation;

@@ -3,7 +3,7 @@
 pub mod bench;
 pub mod dynamics;
 pub mod preprint;
-
+pub mod run;
 
 use satsim_tree::io::FileError;
 use std::ffi::{OsStr, OsString};
@@ -107,7 +107,7 @@ pub fn dispatch(args: &[OsString]) -> Result<Output, CliError> {
         "dynamics" => dynamics::run(rest),
         "bench" => bench::run(rest),
         "preprint" => preprint::run(rest),
-        "run" => not_yet("run"),
+        "run" => run::run(rest),
         "accuracy" => not_yet("accuracy"),
         other => Err(CliError::Usage {
             command: None,

@@ -1,0 +1,120 @@
+//! Gravity gradient: the Earth's point-mass gravity on a spacecraft whose size is small
+//! against its orbit radius, in the frame falling with the centre of mass `O`.
+//!
+//! In that frame every body `i` (mass `m_i`, inertia `I_i` about its centre of mass,
+//! centre of mass `ρ_i` from `O`) feels its gravity minus the frame's acceleration
+//! `−μ r_O / r_O³`. Expanding `−μ m (r_O + ρ) / |r_O + ρ|³` in `ρ / r_O` and summing over the
+//! body's mass points gives, to first order in size/r (`E = r_O / r_O` the local vertical,
+//! `k = μ / r_O³`):
+//!
+//! - the couple about the body's centre of mass `M_iG = 3 k E × I_i E` (E in body axes);
+//! - the tidal force at its centre of mass `F_i = k m_i (3 (E·ρ_i) E − ρ_i)`.
+//!
+//! Two models:
+//!
+//! - [`GravityModel::Preprint`]: the preprint's section 2, per-body couples only, with the
+//!   sign corrected: the preprint prints `M_iG = −3 μ/r³ E × I_i E`, but the couple of a
+//!   brute-force sum of point masses is `+3 μ/r³ E × I_i E` (test `gravity_gradient_sign`
+//!   in `tests/physics.rs`); the printed sign would make the long-axis-vertical attitude
+//!   unstable. Its forces are the preprint's `F_i ≈ −μ m_i r_O / r_O³`, which cancel exactly
+//!   against the frame's acceleration.
+//! - [`GravityModel::Full`]: the couples plus the tidal forces `F_i`, applied at each body's
+//!   centre of mass. The preprint's approximation of `F_i` drops them, yet they are of the
+//!   same order as the couples it keeps: for a panel at distance `d` from `O`, `F_i` has a
+//!   moment about `O` of order `k m_i d²`, while the panel's own couple is of order
+//!   `k m_i l²` with `l` its size. For an array whose panels sit metres from the bus, the
+//!   dropped moment is the larger one. The tidal forces sum to zero (Σ m_i ρ_i = 0), so the
+//!   orbit is unaffected.
+//!
+//! The potential energy counted in the total energy is the same expansion:
+//! `V = Σ k/2 (3 E·I_i E − tr I_i)` (plus `−Σ k m_i/2 (3 (E·ρ_i)² − ρ_i²)` for `full`). In a
+//! rotating orbit it is not conserved on its own.
+
+use super::{Context, Effect, Forces, Needs};
+use satsim_integrate::SystemError;
+use satsim_tree::spatial::{Force, Vec3};
+
+/// Which gravity-gradient model.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum GravityModel {
+    /// Per-body couples only (the preprint, sign corrected).
+    #[default]
+    Preprint,
+    /// Couples plus each body's tidal force at its own centre of mass.
+    Full,
+}
+
+/// The gravity-gradient effect.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct GravityGradient {
+    /// The model.
+    pub model: GravityModel,
+}
+
+impl GravityGradient {
+    /// The effect with the given model.
+    pub fn new(model: GravityModel) -> Self {
+        Self { model }
+    }
+}
+
+impl Effect for GravityGradient {
+    fn name(&self) -> &str {
+        "gravity_gradient"
+    }
+    fn needs(&self) -> Needs {
+        Needs {
+            orbit: true,
+            free_base: true,
+            kinematics: true,
+            ..Needs::default()
+        }
+    }
+    fn apply(
+        &mut self,
+        ctx: &Context,
+        forces: &mut Forces,
+        _own: &[f64],
+        _own_dot: &mut [f64],
+    ) -> Result<(), SystemError> {
+        let orbit = ctx.orbit_or_err("gravity_gradient")?;
+        let r = orbit.r.norm();
+        let k = orbit.mu / (r * r * r);
+        let e = orbit.r / r;
+        for (i, body) in ctx.model.bodies.iter().enumerate() {
+            if body.mass == 0.0 && body.inertia_com.norm() == 0.0 {
+                continue;
+            }
+            let rot = &ctx.data.rotation[i];
+            let eb = rot.tr_mul(&e);
+            let mut ang = 3.0 * k * eb.cross(&(body.inertia_com * eb));
+            let mut lin = Vec3::zeros();
+            if self.model == GravityModel::Full && body.mass > 0.0 {
+                let rho = ctx.data.position[i] + rot * body.com - ctx.com;
+                let f = k * body.mass * (3.0 * e.dot(&rho) * e - rho);
+                lin = rot.tr_mul(&f);
+                ang += body.com.cross(&lin);
+            }
+            forces.add_wrench(i, Force::new(ang, lin));
+        }
+        Ok(())
+    }
+    fn potential_energy(&self, ctx: &Context, _own: &[f64]) -> f64 {
+        let Some(orbit) = ctx.orbit else { return 0.0 };
+        let r = orbit.r.norm();
+        let k = orbit.mu / (r * r * r);
+        let e = orbit.r / r;
+        let mut v = 0.0;
+        for (i, body) in ctx.model.bodies.iter().enumerate() {
+            let rot = &ctx.data.rotation[i];
+            let eb = rot.tr_mul(&e);
+            v += 0.5 * k * (3.0 * eb.dot(&(body.inertia_com * eb)) - body.inertia_com.trace());
+            if self.model == GravityModel::Full {
+                let rho = ctx.data.position[i] + rot * body.com - ctx.com;
+                let er = e.dot(&rho);
+                v -= 0.5 * k * body.mass * (3.0 * er * er - rho.norm_squared());
+            }
+        }
+        v
+    }
+}

@@ -1,0 +1,184 @@
+//! Hinge stops: a hinge reaching a stop angle either latches (a plastic impact, then the
+//! hinge is locked for the rest of the run) or rebounds with a coefficient of restitution.
+//!
+//! The impact instant is located by the integrator's event handling (zero crossing of
+//! `φ − lower` or `upper − φ`, falling). At the impact the simulation applies the impulse
+//! `λ` between the hinge's two bodies that gives the hinge the wanted rate: `Δv = M⁻¹ e_k λ`
+//! over the unlocked degrees of freedom, which conserves the system's linear and angular
+//! momentum (the impulse is internal). Latch: wanted rate 0, then the hinge is locked (the
+//! hybrid articulated-body algorithm makes it transmit rigidly). Rebound: wanted rate
+//! `−e φ̇`; a rebound slower than `min_rebound_rate` latches instead, so that a hinge pressed
+//! against its stop comes to rest rather than bouncing forever (Zeno).
+
+use super::{Context, Effect, Forces, Request};
+use satsim_integrate::{EventAction, EventDirection, SystemError};
+
+/// What a stop does.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum StopAction {
+    /// Plastic impact, then locked.
+    Latch,
+    /// Rebound with restitution `e` in `[0, 1]`.
+    Rebound {
+        /// Coefficient of restitution.
+        restitution: f64,
+    },
+}
+
+/// The stops of one hinge.
+#[derive(Clone, Debug, PartialEq)]
+pub struct HingeStop {
+    /// The hinge (model file order).
+    pub hinge: usize,
+    /// Lower stop angle (rad), if any.
+    pub lower: Option<f64>,
+    /// Upper stop angle (rad), if any.
+    pub upper: Option<f64>,
+    /// What happens at the stop.
+    pub action: StopAction,
+    /// A rebound slower than this latches (rad/s).
+    pub min_rebound_rate: f64,
+}
+
+/// The hinge-stops effect.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct HingeStops {
+    /// The stops.
+    pub stops: Vec<HingeStop>,
+    latched: Vec<bool>,
+    last: String,
+    /// Number of impacts so far.
+    pub impacts: usize,
+}
+
+impl HingeStops {
+    /// The effect for these stops.
+    pub fn new(stops: Vec<HingeStop>) -> Self {
+        let n = stops.len();
+        Self {
+            stops,
+            latched: vec![false; n],
+            last: String::new(),
+            impacts: 0,
+        }
+    }
+    /// Whether stop `s` has latched.
+    pub fn is_latched(&self, s: usize) -> bool {
+        self.latched[s]
+    }
+}
+
+impl Effect for HingeStops {
+    fn name(&self) -> &str {
+        "hinge_stops"
+    }
+    fn apply(
+        &mut self,
+        _ctx: &Context,
+        _forces: &mut Forces,
+        _own: &[f64],
+        _own_dot: &mut [f64],
+    ) -> Result<(), SystemError> {
+        Ok(())
+    }
+    fn start(
+        &mut self,
+        ctx: &Context,
+        _forces: &Forces,
+        _own: &[f64],
+        requests: &mut Vec<Request>,
+    ) -> Result<(), SystemError> {
+        for (s, stop) in self.stops.iter().enumerate() {
+            let phi = ctx.angles[stop.hinge];
+            let name = &ctx.model.hinge_names[stop.hinge];
+            let below = stop.lower.is_some_and(|l| phi < l);
+            let above = stop.upper.is_some_and(|u| phi > u);
+            if below || above {
+                return Err(SystemError::new(format!(
+                    "hinge_stops: hinge `{name}` starts at {phi} rad, beyond its stop"
+                )));
+            }
+            let on = stop.lower == Some(phi) || stop.upper == Some(phi);
+            if on && stop.action == StopAction::Latch {
+                self.latched[s] = true;
+                requests.push(Request::Lock(stop.hinge));
+            }
+        }
+        Ok(())
+    }
+    fn n_events(&self) -> usize {
+        2 * self.stops.len()
+    }
+    fn events(&self, ctx: &Context, _forces: &Forces, _own: &[f64], g: &mut [f64]) {
+        for (s, stop) in self.stops.iter().enumerate() {
+            let phi = ctx.angles[stop.hinge];
+            let free = !self.latched[s] && !ctx.locked[stop.hinge];
+            g[2 * s] = match stop.lower {
+                Some(l) if free => phi - l,
+                _ => 1.0,
+            };
+            g[2 * s + 1] = match stop.upper {
+                Some(u) if free => u - phi,
+                _ => 1.0,
+            };
+        }
+    }
+    fn event_direction(&self, _k: usize) -> EventDirection {
+        EventDirection::Falling
+    }
+    fn on_event(
+        &mut self,
+        k: usize,
+        ctx: &Context,
+        _forces: &Forces,
+        _own: &mut [f64],
+        requests: &mut Vec<Request>,
+    ) -> EventAction {
+        let s = k / 2;
+        let stop = &self.stops[s];
+        let h = stop.hinge;
+        let rate = ctx.rates[h];
+        let approaching = if k.is_multiple_of(2) {
+            rate < 0.0
+        } else {
+            rate > 0.0
+        };
+        if !approaching {
+            return EventAction::Continue;
+        }
+        self.impacts += 1;
+        let name = &ctx.model.hinge_names[h];
+        let side = if k.is_multiple_of(2) {
+            "lower"
+        } else {
+            "upper"
+        };
+        match stop.action {
+            StopAction::Latch => {
+                self.latched[s] = true;
+                requests.push(Request::Lock(h));
+                self.last = format!("hinge `{name}` latched at its {side} stop ({rate:.4} rad/s)");
+            }
+            StopAction::Rebound { restitution } => {
+                let after = -restitution * rate;
+                if after.abs() < stop.min_rebound_rate {
+                    self.latched[s] = true;
+                    requests.push(Request::Lock(h));
+                    self.last = format!("hinge `{name}` came to rest at its {side} stop");
+                } else {
+                    requests.push(Request::SetRate {
+                        hinge: h,
+                        rate: after,
+                    });
+                    self.last = format!(
+                        "hinge `{name}` rebounded at its {side} stop ({rate:.4} -> {after:.4} rad/s)"
+                    );
+                }
+            }
+        }
+        EventAction::Reset
+    }
+    fn describe_event(&self, _k: usize) -> String {
+        self.last.clone()
+    }
+}

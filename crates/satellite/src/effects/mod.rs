@@ -1,0 +1,319 @@
+//! Effects: the physics a scene may switch on, each a small module behind one trait,
+//! [`Effect`].
+//!
+//! A [`crate::simulation::Simulation`] holds only the effects a scene enables, in a fixed
+//! order ([`CANONICAL_ORDER`]); an effect that is off is never constructed, so it costs
+//! nothing and adds no state. At every right-hand-side evaluation the simulation
+//!
+//! 1. unpacks the state and runs the tree's forward kinematics,
+//! 2. builds a [`Context`] (time, kinematics, hinge angles and rates, orbit, bus attitude),
+//! 3. calls [`Effect::apply`] on each enabled effect, which adds hinge torques and body
+//!    wrenches to [`Forces`] and writes the derivatives of its own states,
+//! 4. runs the articulated-body algorithm (hybrid, when hinges are locked) and packs the
+//!    derivative.
+//!
+//! Effects with discontinuities (hinge stops, stiction) declare event functions; the
+//! integrator locates their zero crossings and the effect answers with [`Request`]s (lock a
+//! hinge, unlock it, set its rate by a momentum-conserving impulse) that the simulation
+//! carries out.
+//!
+//! Adding an effect: write a type implementing [`Effect`] (only `name` and `apply` are
+//! required), then construct it from the scene (see [`crate::scene`]) or push it with
+//! [`crate::simulation::SimulationBuilder::effect`].
+
+pub mod attitude_control;
+pub mod gravity_gradient;
+pub mod hinge_control;
+pub mod hinge_springs;
+pub mod hinge_stops;
+pub mod orbit;
+pub mod reaction_wheels;
+
+pub use attitude_control::{AttitudeControl, Target};
+pub use gravity_gradient::{GravityGradient, GravityModel};
+pub use hinge_control::{HingeControl, HingeProfile};
+pub use hinge_springs::HingeSprings;
+pub use hinge_stops::{HingeStop, HingeStops, StopAction};
+pub use orbit::{Elements, Orbit, OrbitModel};
+pub use reaction_wheels::{ReactionWheels, Wheel};
+
+use nalgebra::UnitQuaternion;
+use satsim_integrate::{EventAction, EventDirection, SystemError};
+use satsim_tree::spatial::{Force, Mat3, Vec3};
+use satsim_tree::{Data, Model};
+
+/// The order in which the simulation visits effects (by [`Effect::name`]); effects not in the
+/// list come last, in the order they were added. Attitude control runs before the wheels
+/// because it writes their torque commands.
+pub const CANONICAL_ORDER: [&str; 7] = [
+    "orbit",
+    "gravity_gradient",
+    "hinge_springs",
+    "hinge_control",
+    "hinge_stops",
+    "attitude_control",
+    "reaction_wheels",
+];
+
+/// What an effect requires of the rest of the scene. Unmet needs are scene errors that say
+/// what to add.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Needs {
+    /// An `[orbit]` (the effect reads the centre of mass' position).
+    pub orbit: bool,
+    /// `[effects.reaction_wheels]` (the effect commands the wheels).
+    pub wheels: bool,
+    /// A free-floating root (`[base] kind = "free"`).
+    pub free_base: bool,
+    /// Body poses in [`Context::data`] (forward kinematics is skipped when no enabled effect
+    /// needs it; without it `data.rotation`, `data.position` and [`Context::com`] are stale).
+    pub kinematics: bool,
+}
+
+/// An axisymmetric rotor body that an effect adds to the tree (a reaction wheel), hinged to
+/// the root about `axis`. Its dynamics do not depend on its angle, which is therefore not a
+/// state: its spin rate relative to the root is.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Rotor {
+    /// Body and hinge name (`wheel_<name>`).
+    pub name: String,
+    /// Unit spin axis, root-body axes.
+    pub axis: Vec3,
+    /// Centre of the rotor in the root body's frame (m).
+    pub at: Vec3,
+    /// Mass (kg, default 0: the wheel's mass is usually part of the bus).
+    pub mass: f64,
+    /// Moment of inertia about the spin axis (kg m²).
+    pub axial: f64,
+    /// Moment of inertia about any transverse axis through the centre (kg m²).
+    pub transverse: f64,
+}
+
+impl Rotor {
+    /// The rotor's inertia tensor about its centre, root-body axes (the rotor frame is
+    /// parallel to the root's at zero angle, and the tensor is invariant under spin).
+    pub fn inertia(&self) -> Mat3 {
+        let a = self.axis;
+        let aat = a * a.transpose();
+        aat * self.axial + (Mat3::identity() - aat) * self.transverse
+    }
+}
+
+/// The orbit of the system's centre of mass at the time of evaluation (inertial frame, SI).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct OrbitState {
+    /// Position of the centre of mass from the Earth's centre (m).
+    pub r: Vec3,
+    /// Its velocity (m/s).
+    pub v: Vec3,
+    /// Gravitational parameter μ (m³/s²).
+    pub mu: f64,
+}
+
+impl OrbitState {
+    /// The unit local vertical (from the Earth's centre to the satellite), inertial axes.
+    pub fn vertical(&self) -> Vec3 {
+        self.r.normalize()
+    }
+}
+
+/// Everything an effect may read during an evaluation.
+pub struct Context<'a> {
+    /// Time (s).
+    pub t: f64,
+    /// The tree (the scene's model plus any rotor bodies).
+    pub model: &'a Model,
+    /// Kinematics after `forward_kinematics`: `rotation[i]` (body to inertial),
+    /// `position[i]` (body origin, relative to the tree's reference point), `v[i]`.
+    pub data: &'a Data,
+    /// The tree's full position vector (attitude, position (zero), all hinge angles).
+    pub q: &'a [f64],
+    /// The tree's full velocity vector.
+    pub v: &'a [f64],
+    /// Number of the scene model's hinges (the rotors' hinges follow).
+    pub n_hinges: usize,
+    /// The model's hinge angles, file order (rad).
+    pub angles: &'a [f64],
+    /// The model's hinge rates, file order (rad/s).
+    pub rates: &'a [f64],
+    /// Which hinges (model hinges then rotors) are locked.
+    pub locked: &'a [bool],
+    /// The system's centre of mass, inertial axes, relative to the tree's reference point.
+    pub com: Vec3,
+    /// The orbit of the centre of mass, when the scene has one.
+    pub orbit: Option<OrbitState>,
+    /// Root (bus) attitude, bus to inertial.
+    pub attitude: UnitQuaternion<f64>,
+    /// Root angular velocity, bus axes (rad/s).
+    pub omega: Vec3,
+    /// Rotor spin rates relative to the bus (rad/s), one per rotor.
+    pub rotor_rates: &'a [f64],
+}
+
+impl Context<'_> {
+    /// Index (in the tree's hinge order) of rotor `j`'s hinge.
+    pub fn rotor_hinge(&self, j: usize) -> usize {
+        self.n_hinges + j
+    }
+    /// The orbit, or an error naming the effect that needed it.
+    pub fn orbit_or_err(&self, effect: &str) -> Result<OrbitState, SystemError> {
+        self.orbit
+            .ok_or_else(|| SystemError::new(format!("{effect} needs an orbit")))
+    }
+}
+
+/// What effects produce: generalised forces and commands.
+#[derive(Clone, Debug)]
+pub struct Forces {
+    /// Torque on each hinge (model hinges in file order, then rotors), N m, acting on the
+    /// child, reacting on the parent.
+    pub hinge_torque: Vec<f64>,
+    /// External wrench on each body (in `model.bodies` order), body coordinates, about the
+    /// body frame's origin.
+    pub body_wrench: Vec<Force>,
+    /// Whether any effect wrote a body wrench in this evaluation.
+    pub has_wrench: bool,
+    /// Motor torque commanded to each wheel (N m, on the rotor about its axis), written by a
+    /// controller before the wheels run.
+    pub wheel_command: Vec<f64>,
+}
+
+impl Forces {
+    /// Zeroed forces for `n_hinges` hinges, `n_bodies` bodies and `n_rotors` rotors.
+    pub fn new(n_hinges: usize, n_bodies: usize, n_rotors: usize) -> Self {
+        Self {
+            hinge_torque: vec![0.0; n_hinges],
+            body_wrench: vec![Force::zero(); n_bodies],
+            has_wrench: false,
+            wheel_command: vec![0.0; n_rotors],
+        }
+    }
+    /// Clears everything to zero.
+    pub fn clear(&mut self) {
+        self.hinge_torque.fill(0.0);
+        if self.has_wrench {
+            self.body_wrench.fill(Force::zero());
+            self.has_wrench = false;
+        }
+        self.wheel_command.fill(0.0);
+    }
+    /// Adds a wrench (body coordinates, about the body origin) on body `i`.
+    pub fn add_wrench(&mut self, i: usize, f: Force) {
+        self.body_wrench[i] += f;
+        self.has_wrench = true;
+    }
+}
+
+/// What an effect asks the simulation to do at one of its events.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Request {
+    /// Bring hinge `h` (tree order) to rest by a plastic, momentum-conserving impulse, then
+    /// lock it (it transmits rigidly until unlocked).
+    Lock(usize),
+    /// Release a locked hinge.
+    Unlock(usize),
+    /// Change hinge `h`'s rate to `rate` by a momentum-conserving impulse between its two
+    /// bodies (a rebound).
+    SetRate {
+        /// The hinge, tree order.
+        hinge: usize,
+        /// The rate after the impulse (rad/s).
+        rate: f64,
+    },
+}
+
+/// One piece of physics. Only [`Effect::name`] and [`Effect::apply`] are required.
+pub trait Effect: Send {
+    /// The scene's name for it (`hinge_springs`, ...).
+    fn name(&self) -> &str;
+    /// What it needs from the scene.
+    fn needs(&self) -> Needs {
+        Needs::default()
+    }
+    /// Number of its own states (orbit: 6, wheels: one per wheel).
+    fn n_states(&self) -> usize {
+        0
+    }
+    /// Names of its own states (for the state layout and output).
+    fn state_names(&self) -> Vec<String> {
+        Vec::new()
+    }
+    /// Its initial own states.
+    fn initial_state(&self, _own: &mut [f64]) {}
+    /// The centre of mass' orbit held in its own states, for an orbit effect.
+    fn orbit_state(&self, _own: &[f64]) -> Option<OrbitState> {
+        None
+    }
+    /// Rotor bodies it adds to the tree. An effect with rotors has exactly one own state per
+    /// rotor, its spin rate, whose derivative the dynamics provide (`apply` leaves it alone).
+    fn rotors(&self) -> Vec<Rotor> {
+        Vec::new()
+    }
+    /// Adds its hinge torques and body wrenches to `forces` and writes the derivatives of its
+    /// own states (`own`) into `own_dot`.
+    fn apply(
+        &mut self,
+        ctx: &Context,
+        forces: &mut Forces,
+        own: &[f64],
+        own_dot: &mut [f64],
+    ) -> Result<(), SystemError>;
+    /// Its potential energy (J), counted in the total energy.
+    fn potential_energy(&self, _ctx: &Context, _own: &[f64]) -> f64 {
+        0.0
+    }
+    /// Extra output columns.
+    fn output_columns(&self) -> Vec<String> {
+        Vec::new()
+    }
+    /// Values of [`Effect::output_columns`], appended to `row`.
+    fn output(&self, _ctx: &Context, _own: &[f64], _row: &mut Vec<f64>) {}
+    /// Called once before the run with the initial state: may lock hinges (a wheel at rest
+    /// under static friction, a hinge that starts on a latching stop).
+    fn start(
+        &mut self,
+        _ctx: &Context,
+        _forces: &Forces,
+        _own: &[f64],
+        _requests: &mut Vec<Request>,
+    ) -> Result<(), SystemError> {
+        Ok(())
+    }
+    /// Number of event functions (fixed for the run).
+    fn n_events(&self) -> usize {
+        0
+    }
+    /// Evaluates the event functions into `g` (after `apply` ran on the same state).
+    fn events(&self, _ctx: &Context, _forces: &Forces, _own: &[f64], _g: &mut [f64]) {}
+    /// Which sign changes of event `k` count.
+    fn event_direction(&self, _k: usize) -> EventDirection {
+        EventDirection::Both
+    }
+    /// Handles its event `k`: may change its own states and mode, and push requests.
+    /// Return [`EventAction::Reset`] when anything changed (the integrator restarts).
+    fn on_event(
+        &mut self,
+        _k: usize,
+        _ctx: &Context,
+        _forces: &Forces,
+        _own: &mut [f64],
+        _requests: &mut Vec<Request>,
+    ) -> EventAction {
+        EventAction::Continue
+    }
+    /// A short description of what happened at the last event (for the run summary).
+    fn describe_event(&self, _k: usize) -> String {
+        String::new()
+    }
+}
+
+/// Hamilton product of quaternions stored `[w, x, y, z]`.
+#[inline]
+pub fn quat_mul(a: &[f64; 4], b: &[f64; 4]) -> [f64; 4] {
+    [
+        a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3],
+        a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2],
+        a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1],
+        a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0],
+    ]
+}

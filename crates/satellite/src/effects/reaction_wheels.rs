@@ -1,0 +1,294 @@
+//! Reaction wheels, any number, as axisymmetric rotor bodies in the tree.
+//!
+//! Each wheel is a rotor hinged to the bus (the root) about its axis; its spin rate relative
+//! to the bus, `Ω`, is the wheel's state. Because a rotor is axisymmetric about its axis (and
+//! its centre of mass lies on it), the dynamics do not depend on its angle, which is not a
+//! state. The motor torque acts on the rotor about the axis and reacts on the bus, exactly
+//! like a hinge torque: the articulated-body algorithm then gives the exact coupled motion
+//! (the preprint's momentum-exchange form `M_rw = −Ḣ − ω × H` is what this reduces to when
+//! the rotors' transverse inertia is lumped into the bus), and the kinetic energy and
+//! angular momentum of the tree include the wheels with no special case.
+//!
+//! Friction (preprint section 2): `I dΩ/dt = τ − (α0 + α1 exp(−(Ω/Ω0)²)) sgn Ω − α2 Ω`.
+//! The sign discontinuity at `Ω = 0` is treated as stick/slip with events, not smoothed:
+//!
+//! - a slipping wheel whose speed crosses zero is stopped there (event `Ω = 0`); if the
+//!   motor torque magnitude is within the static friction `α0 + α1`, the wheel sticks: its
+//!   hinge is locked (a momentum-conserving impulse removes the residual rate, which is of
+//!   the size of the event tolerance) and it stays at rest, with no chattering;
+//! - a stuck wheel breaks free when `|τ|` exceeds `α0 + α1` (event `α0 + α1 − |τ| = 0`);
+//! - while slipping, `sgn Ω` is the sign of `Ω`, and at `Ω = 0` exactly the sign of `τ`
+//!   (the direction it is about to move).
+//!
+//! The stick test compares the motor torque with the static friction; the locked hinge's
+//! exact constraint torque also contains the rotor's inertial reaction `I_a a·ω̇_bus`, of
+//! relative size `I_a / I_bus`, which the test neglects. Wheels without Coulomb or Stribeck
+//! friction have no events.
+//!
+//! Limits: the command is clamped to `±max_torque`; a wheel at or beyond `max_speed` gets
+//! no torque that would speed it up further.
+
+use super::{Context, Effect, Forces, Request, Rotor};
+use satsim_integrate::{EventAction, SystemError};
+use satsim_tree::spatial::Vec3;
+
+/// One reaction wheel.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Wheel {
+    /// Name (the rotor body is `wheel_<name>`).
+    pub name: String,
+    /// Unit spin axis, bus axes.
+    pub axis: Vec3,
+    /// Centre of the rotor in the bus frame (m).
+    pub at: Vec3,
+    /// Rotor mass (kg; default 0, the wheel's mass being part of the bus).
+    pub mass: f64,
+    /// Axial moment of inertia (kg m², > 0).
+    pub inertia: f64,
+    /// Transverse moment of inertia (kg m²; `>= inertia / 2`).
+    pub transverse: f64,
+    /// Largest motor torque (N m).
+    pub max_torque: f64,
+    /// Largest speed the motor drives the wheel to (rad/s).
+    pub max_speed: f64,
+    /// Coulomb friction α0 (N m).
+    pub coulomb: f64,
+    /// Stribeck friction α1 (N m).
+    pub stribeck: f64,
+    /// Stribeck speed Ω0 (rad/s, > 0 when α1 > 0).
+    pub stribeck_speed: f64,
+    /// Viscous friction α2 (N m s/rad).
+    pub viscous: f64,
+    /// Initial speed relative to the bus (rad/s).
+    pub speed: f64,
+    /// Constant motor torque when no controller commands the wheel (N m).
+    pub torque: f64,
+}
+
+impl Wheel {
+    /// A frictionless, unlimited wheel at rest.
+    pub fn new(name: impl Into<String>, axis: Vec3, inertia: f64) -> Self {
+        Self {
+            name: name.into(),
+            axis: axis.normalize(),
+            at: Vec3::zeros(),
+            mass: 0.0,
+            inertia,
+            transverse: 0.5 * inertia,
+            max_torque: f64::INFINITY,
+            max_speed: f64::INFINITY,
+            coulomb: 0.0,
+            stribeck: 0.0,
+            stribeck_speed: 1.0,
+            viscous: 0.0,
+            speed: 0.0,
+            torque: 0.0,
+        }
+    }
+    /// Static friction `α0 + α1` (N m).
+    pub fn static_friction(&self) -> f64 {
+        self.coulomb + self.stribeck
+    }
+    /// The friction torque at speed `omega` while slipping, `dir` the sign used at 0.
+    pub fn friction(&self, omega: f64, dir: f64) -> f64 {
+        let s = if omega > 0.0 {
+            1.0
+        } else if omega < 0.0 {
+            -1.0
+        } else {
+            dir
+        };
+        let stribeck = if self.stribeck != 0.0 {
+            let x = omega / self.stribeck_speed;
+            self.stribeck * (-x * x).exp()
+        } else {
+            0.0
+        };
+        (self.coulomb + stribeck) * s + self.viscous * omega
+    }
+    /// The motor torque after the torque and speed limits.
+    pub fn limited(&self, command: f64, omega: f64) -> f64 {
+        let t = command.clamp(-self.max_torque, self.max_torque);
+        if omega.abs() >= self.max_speed && t * omega > 0.0 {
+            0.0
+        } else {
+            t
+        }
+    }
+}
+
+/// The reaction-wheel effect.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct ReactionWheels {
+    /// The wheels.
+    pub wheels: Vec<Wheel>,
+    /// Whether a controller writes the commands (otherwise each wheel's `torque`).
+    pub commanded: bool,
+    stuck: Vec<bool>,
+    motor: Vec<f64>,
+    last: String,
+}
+
+impl ReactionWheels {
+    /// The effect for these wheels.
+    pub fn new(wheels: Vec<Wheel>) -> Self {
+        let n = wheels.len();
+        Self {
+            wheels,
+            commanded: false,
+            stuck: vec![false; n],
+            motor: vec![0.0; n],
+            last: String::new(),
+        }
+    }
+    /// Whether wheel `j` is stuck (at rest under static friction).
+    pub fn is_stuck(&self, j: usize) -> bool {
+        self.stuck[j]
+    }
+    fn has_stiction(&self) -> bool {
+        self.wheels.iter().any(|w| w.static_friction() > 0.0)
+    }
+    fn command(&self, j: usize, forces: &Forces, omega: f64) -> f64 {
+        let c = if self.commanded {
+            forces.wheel_command[j]
+        } else {
+            self.wheels[j].torque
+        };
+        self.wheels[j].limited(c, omega)
+    }
+}
+
+impl Effect for ReactionWheels {
+    fn name(&self) -> &str {
+        "reaction_wheels"
+    }
+    fn n_states(&self) -> usize {
+        self.wheels.len()
+    }
+    fn state_names(&self) -> Vec<String> {
+        self.wheels
+            .iter()
+            .map(|w| format!("wheel_{}_speed", w.name))
+            .collect()
+    }
+    fn initial_state(&self, own: &mut [f64]) {
+        for (o, w) in own.iter_mut().zip(&self.wheels) {
+            *o = w.speed;
+        }
+    }
+    fn rotors(&self) -> Vec<Rotor> {
+        self.wheels
+            .iter()
+            .map(|w| Rotor {
+                name: format!("wheel_{}", w.name),
+                axis: w.axis,
+                at: w.at,
+                mass: w.mass,
+                axial: w.inertia,
+                transverse: w.transverse,
+            })
+            .collect()
+    }
+    fn apply(
+        &mut self,
+        ctx: &Context,
+        forces: &mut Forces,
+        own: &[f64],
+        _own_dot: &mut [f64],
+    ) -> Result<(), SystemError> {
+        for (j, w) in self.wheels.iter().enumerate() {
+            let omega = own[j];
+            let tau = self.command(j, forces, omega);
+            self.motor[j] = tau;
+            let h = ctx.rotor_hinge(j);
+            if !ctx.locked[h] {
+                let dir = if tau > 0.0 {
+                    1.0
+                } else if tau < 0.0 {
+                    -1.0
+                } else {
+                    0.0
+                };
+                forces.hinge_torque[h] += tau - w.friction(omega, dir);
+            }
+        }
+        Ok(())
+    }
+    fn output_columns(&self) -> Vec<String> {
+        self.wheels
+            .iter()
+            .map(|w| format!("wheel_{}_torque", w.name))
+            .collect()
+    }
+    fn output(&self, _ctx: &Context, _own: &[f64], row: &mut Vec<f64>) {
+        row.extend_from_slice(&self.motor);
+    }
+    fn start(
+        &mut self,
+        ctx: &Context,
+        forces: &Forces,
+        own: &[f64],
+        requests: &mut Vec<Request>,
+    ) -> Result<(), SystemError> {
+        for (j, &speed) in own.iter().enumerate().take(self.wheels.len()) {
+            let fs = self.wheels[j].static_friction();
+            if speed == 0.0 && fs > 0.0 && self.command(j, forces, 0.0).abs() <= fs {
+                self.stuck[j] = true;
+                requests.push(Request::Lock(ctx.rotor_hinge(j)));
+            }
+        }
+        Ok(())
+    }
+    fn n_events(&self) -> usize {
+        if self.has_stiction() {
+            self.wheels.len()
+        } else {
+            0
+        }
+    }
+    fn events(&self, _ctx: &Context, forces: &Forces, own: &[f64], g: &mut [f64]) {
+        for (j, w) in self.wheels.iter().enumerate() {
+            let fs = w.static_friction();
+            g[j] = if fs == 0.0 {
+                1.0
+            } else if self.stuck[j] {
+                fs - self.command(j, forces, 0.0).abs()
+            } else {
+                own[j]
+            };
+        }
+    }
+    fn on_event(
+        &mut self,
+        j: usize,
+        ctx: &Context,
+        forces: &Forces,
+        own: &mut [f64],
+        requests: &mut Vec<Request>,
+    ) -> EventAction {
+        let w = &self.wheels[j];
+        let fs = w.static_friction();
+        let tau = self.command(j, forces, 0.0);
+        let h = ctx.rotor_hinge(j);
+        if self.stuck[j] {
+            self.stuck[j] = false;
+            requests.push(Request::Unlock(h));
+            self.last = format!(
+                "wheel `{}` broke free (|torque| {:.4} N m)",
+                w.name,
+                tau.abs()
+            );
+        } else if tau.abs() <= fs {
+            self.stuck[j] = true;
+            own[j] = 0.0;
+            requests.push(Request::Lock(h));
+            self.last = format!("wheel `{}` stopped and stuck", w.name);
+        } else {
+            self.last = format!("wheel `{}` reversed through zero speed", w.name);
+        }
+        EventAction::Reset
+    }
+    fn describe_event(&self, _k: usize) -> String {
+        self.last.clone()
+    }
+}

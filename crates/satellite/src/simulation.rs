@@ -1,0 +1,1122 @@
+//! [`Simulation`]: a tree, the enabled effects and the state layout derived from them,
+//! implementing [`satsim_integrate::System`].
+//!
+//! # State layout
+//!
+//! `x = [attitude q (4), hinge angles (n), ω (3), root-origin velocity (3), hinge rates (n)]`
+//! followed by each enabled effect's own states, in the effects' order (orbit: `r, v`;
+//! reaction wheels: one speed per wheel). A fixed-base model has no attitude, `ω` or
+//! velocity. Nothing else: a disabled effect is never constructed, adds no state and is never
+//! visited. See [`StateLayout`].
+//!
+//! - `q` is the root (bus) attitude, root to inertial, Hamilton `[w, x, y, z]`;
+//!   `q̇ = ½ q ⊗ (0, ω)`; [`System::project`] renormalises it after every step.
+//! - `ω` and the velocity of the root frame's origin are in root axes. The root's position is
+//!   not a state: no effect depends on it (the dynamics are invariant under translation and
+//!   the gravity-gradient models use positions relative to the centre of mass). With an
+//!   orbit, velocities are relative to the frame that falls with the centre of mass, and the
+//!   initial root velocity is corrected so that the centre of mass is at rest in it (the
+//!   orbit carries the centre of mass' motion).
+//! - Reaction-wheel rotors are extra bodies of the tree, hinged to the root; their spin rates
+//!   are the wheel effect's states and their (irrelevant) angles are not states.
+//!
+//! # Right-hand side
+//!
+//! unpack `x` → forward kinematics (only when an effect needs it) → each enabled effect adds
+//! hinge torques, body wrenches and its own derivatives → ABA (hybrid ABA when hinges are
+//! locked) → pack `dx`.
+
+use crate::effects::{CANONICAL_ORDER, Context, Effect, Forces, OrbitState, Request, Rotor};
+use nalgebra::{DMatrix, DVector, Quaternion, UnitQuaternion};
+use satsim_integrate::{
+    EventAction, EventDirection, IntegrateError, Options, Output, Stats, System, SystemError,
+};
+use satsim_tree::spatial::{Mat3, Vec3};
+use satsim_tree::{
+    BaseKind, Body, Data, DynamicsError, Hinge, Model, ModelBuilder, ModelError, State, aba,
+    aba_hybrid, center_of_mass, crba, forward_kinematics, kinetic_energy, momentum,
+};
+use std::cell::RefCell;
+use std::ops::{ControlFlow, Range};
+use thiserror::Error;
+
+/// Why a simulation could not be set up.
+#[derive(Debug, Error)]
+pub enum SimError {
+    /// An effect's needs are not met, or effects conflict.
+    #[error("{0}")]
+    Needs(String),
+    /// The initial state does not fit the model.
+    #[error("initial state: {0}")]
+    State(String),
+    /// The model with the wheels' rotors added is invalid.
+    #[error("model with reaction-wheel rotors: {0}")]
+    Model(#[from] ModelError),
+    /// An effect rejected the initial state.
+    #[error("{0}")]
+    Start(SystemError),
+    /// The dynamics failed on the initial state.
+    #[error("initial state: {0}")]
+    Dynamics(#[from] DynamicsError),
+}
+
+/// Where each part of the state lives in `x`.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct StateLayout {
+    /// Free-floating root.
+    pub free: bool,
+    /// Number of the model's hinges.
+    pub n_hinges: usize,
+    /// Attitude quaternion (empty for a fixed base).
+    pub attitude: Range<usize>,
+    /// Hinge angles, file order.
+    pub angles: Range<usize>,
+    /// Root angular velocity, root axes (empty for a fixed base).
+    pub omega: Range<usize>,
+    /// Root origin velocity, root axes (empty for a fixed base).
+    pub velocity: Range<usize>,
+    /// Hinge rates, file order.
+    pub rates: Range<usize>,
+    /// Each enabled effect's own states, by name, in the effects' order.
+    pub effects: Vec<(String, Range<usize>)>,
+    /// Total length of the state.
+    pub len: usize,
+}
+
+impl StateLayout {
+    fn new(free: bool, n: usize, own: &[(String, usize)]) -> Self {
+        let b = if free { 4 } else { 0 };
+        let attitude = 0..b;
+        let angles = b..b + n;
+        let w = if free { 3 } else { 0 };
+        let omega = angles.end..angles.end + w;
+        let velocity = omega.end..omega.end + w;
+        let rates = velocity.end..velocity.end + n;
+        let mut at = rates.end;
+        let effects = own
+            .iter()
+            .map(|(name, k)| {
+                let r = at..at + k;
+                at += k;
+                (name.clone(), r)
+            })
+            .collect();
+        Self {
+            free,
+            n_hinges: n,
+            attitude,
+            angles,
+            omega,
+            velocity,
+            rates,
+            effects,
+            len: at,
+        }
+    }
+    /// The range of effect `name`'s states, if it is enabled and has any.
+    pub fn effect(&self, name: &str) -> Option<Range<usize>> {
+        self.effects
+            .iter()
+            .find(|(n, r)| n == name && !r.is_empty())
+            .map(|(_, r)| r.clone())
+    }
+}
+
+/// Builds a [`Simulation`] from a model, an initial state and effects.
+///
+/// ```
+/// use satsim_satellite::effects::HingeSprings;
+/// use satsim_satellite::simulation::Simulation;
+/// use satsim_tree::{State, samples::chain, BaseKind};
+/// let model = chain(3, BaseKind::Free);
+/// let mut state = State::rest(&model);
+/// state.q[7] = 0.1;
+/// let sim = Simulation::builder(model)
+///     .initial(state)
+///     .effect(HingeSprings::new(vec![5.0, 5.0]))
+///     .build()?;
+/// assert_eq!(sim.layout().len, 4 + 2 + 6 + 2); // no state for the springs
+/// # Ok::<(), satsim_satellite::simulation::SimError>(())
+/// ```
+pub struct SimulationBuilder {
+    model: Model,
+    state: Option<State>,
+    effects: Vec<Box<dyn Effect>>,
+    t0: f64,
+}
+
+impl SimulationBuilder {
+    /// The initial state (default: at rest, neutral).
+    pub fn initial(mut self, state: State) -> Self {
+        self.state = Some(state);
+        self
+    }
+    /// Adds an effect.
+    pub fn effect(mut self, e: impl Effect + 'static) -> Self {
+        self.effects.push(Box::new(e));
+        self
+    }
+    /// Adds a boxed effect.
+    pub fn boxed(mut self, e: Box<dyn Effect>) -> Self {
+        self.effects.push(e);
+        self
+    }
+    /// The initial time (default 0).
+    pub fn t0(mut self, t0: f64) -> Self {
+        self.t0 = t0;
+        self
+    }
+    /// Checks the effects' needs, adds rotor bodies, lays out the state and prepares the
+    /// initial state.
+    pub fn build(self) -> Result<Simulation, SimError> {
+        Simulation::new(self)
+    }
+}
+
+/// A scene ready to integrate: see the module documentation.
+pub struct Simulation {
+    model: Model,
+    data: Data,
+    layout: StateLayout,
+    effects: Vec<Box<dyn Effect>>,
+    own: Vec<Range<usize>>,
+    calls: Vec<u64>,
+    event_start: Vec<usize>,
+    n_events: usize,
+    n_user: usize,
+    n_rotors: usize,
+    rotor_effect: Option<usize>,
+    orbit_effect: Option<usize>,
+    needs_kinematics: bool,
+    base_tau: Vec<f64>,
+    locked: Vec<bool>,
+    n_locked: usize,
+    q: Vec<f64>,
+    v: Vec<f64>,
+    tau: Vec<f64>,
+    forces: Forces,
+    scratch: Vec<f64>,
+    requests: Vec<Request>,
+    x0: Vec<f64>,
+    t0: f64,
+    rhs_evals: u64,
+    log: Vec<(f64, String)>,
+}
+
+fn order_of(name: &str) -> usize {
+    CANONICAL_ORDER
+        .iter()
+        .position(|n| *n == name)
+        .unwrap_or(CANONICAL_ORDER.len())
+}
+
+/// The model plus rotor bodies hinged to its root (appended after its hinges).
+fn with_rotors(model: &Model, rotors: &[Rotor]) -> Result<Model, ModelError> {
+    let mut b = ModelBuilder::new(model.base);
+    for body in &model.bodies {
+        b.push_body(Body::new(body.name.clone(), body.mass, body.inertia_com).with_com(body.com));
+    }
+    for (k, name) in model.hinge_names.iter().enumerate() {
+        let i = model.hinge_body[k];
+        let j = model.joints[i].as_ref().expect("non-root body has a joint");
+        let p = model.parent[i].expect("non-root body has a parent");
+        let rot = UnitQuaternion::from_matrix(&j.rot0);
+        b.push_hinge(
+            Hinge::revolute(
+                name.clone(),
+                model.bodies[p].name.clone(),
+                model.bodies[i].name.clone(),
+                j.axis,
+            )
+            .at(j.at)
+            .child_at(j.child_at)
+            .rotation(*rot.quaternion()),
+        );
+    }
+    let root = model.bodies[0].name.clone();
+    for r in rotors {
+        b.push_body(Body::new(r.name.clone(), r.mass, r.inertia()));
+        b.push_hinge(
+            Hinge::revolute(r.name.clone(), root.clone(), r.name.clone(), r.axis).at(r.at),
+        );
+    }
+    b.build()
+}
+
+impl Simulation {
+    /// Starts building a simulation of `model`.
+    pub fn builder(model: Model) -> SimulationBuilder {
+        SimulationBuilder {
+            model,
+            state: None,
+            effects: Vec::new(),
+            t0: 0.0,
+        }
+    }
+
+    fn new(b: SimulationBuilder) -> Result<Self, SimError> {
+        let SimulationBuilder {
+            model: user,
+            state,
+            mut effects,
+            t0,
+        } = b;
+        let state = state.unwrap_or_else(|| State::rest(&user));
+        if state.q.len() != user.nq() || state.v.len() != user.nv() || state.tau.len() != user.nv()
+        {
+            return Err(SimError::State(format!(
+                "expected q, v, tau of lengths {}, {}, {}; got {}, {}, {}",
+                user.nq(),
+                user.nv(),
+                user.nv(),
+                state.q.len(),
+                state.v.len(),
+                state.tau.len()
+            )));
+        }
+        effects.sort_by_key(|e| order_of(e.name()));
+        for (i, e) in effects.iter().enumerate() {
+            if effects[..i].iter().any(|o| o.name() == e.name()) {
+                return Err(SimError::Needs(format!(
+                    "effect `{}` given twice",
+                    e.name()
+                )));
+            }
+        }
+        let free = user.base == BaseKind::Free;
+        let has = |n: &str| effects.iter().any(|e| e.name() == n);
+        for e in &effects {
+            let needs = e.needs();
+            if needs.orbit && !has("orbit") {
+                return Err(SimError::Needs(format!(
+                    "effects.{} needs an [orbit] table",
+                    e.name()
+                )));
+            }
+            if needs.wheels && !effects.iter().any(|o| !o.rotors().is_empty()) {
+                return Err(SimError::Needs(format!(
+                    "effects.{} needs [effects.reaction_wheels] with at least one [[effects.reaction_wheels.wheel]]",
+                    e.name()
+                )));
+            }
+            if needs.free_base && !free {
+                return Err(SimError::Needs(format!(
+                    "effects.{} needs a free-floating root (the model has [base] kind = \"fixed\")",
+                    e.name()
+                )));
+            }
+        }
+        let rotor_effects: Vec<usize> = (0..effects.len())
+            .filter(|&i| !effects[i].rotors().is_empty())
+            .collect();
+        if rotor_effects.len() > 1 {
+            return Err(SimError::Needs("only one effect may add rotors".into()));
+        }
+        let rotor_effect = rotor_effects.first().copied();
+        let rotors = rotor_effect
+            .map(|i| effects[i].rotors())
+            .unwrap_or_default();
+        if let Some(i) = rotor_effect
+            && effects[i].n_states() != rotors.len()
+        {
+            return Err(SimError::Needs(format!(
+                "effect `{}` must have one state per rotor",
+                effects[i].name()
+            )));
+        }
+        let orbit_effect = effects.iter().position(|e| e.name() == "orbit");
+        let model = if rotors.is_empty() {
+            user.clone()
+        } else {
+            with_rotors(&user, &rotors)?
+        };
+        let n_user = user.n_hinges();
+        let n_rotors = rotors.len();
+        let own_sizes: Vec<(String, usize)> = effects
+            .iter()
+            .map(|e| (e.name().to_owned(), e.n_states()))
+            .collect();
+        let layout = StateLayout::new(free, n_user, &own_sizes);
+        let own: Vec<Range<usize>> = layout.effects.iter().map(|(_, r)| r.clone()).collect();
+        let mut event_start = Vec::with_capacity(effects.len());
+        let mut n_events = 0;
+        for e in &effects {
+            event_start.push(n_events);
+            n_events += e.n_events();
+        }
+        let needs_kinematics = effects.iter().any(|e| e.needs().kinematics);
+        let nh = model.n_hinges();
+        let mut base_tau = vec![0.0; nh];
+        base_tau[..n_user].copy_from_slice(&state.tau[user.base_nv()..]);
+        let mut x0 = vec![0.0; layout.len];
+        if free {
+            x0[layout.attitude.clone()].copy_from_slice(&state.q[..4]);
+            x0[layout.omega.clone()].copy_from_slice(&state.v[..3]);
+            x0[layout.velocity.clone()].copy_from_slice(&state.v[3..6]);
+        }
+        x0[layout.angles.clone()].copy_from_slice(&state.q[user.base_nq()..]);
+        x0[layout.rates.clone()].copy_from_slice(&state.v[user.base_nv()..]);
+        for (e, r) in effects.iter().zip(&own) {
+            e.initial_state(&mut x0[r.clone()]);
+        }
+        let n_bodies = model.n_bodies();
+        let mut sim = Self {
+            data: Data::new(&model),
+            q: model.neutral(),
+            v: vec![0.0; model.nv()],
+            tau: vec![0.0; model.nv()],
+            forces: Forces::new(nh, n_bodies, n_rotors),
+            locked: vec![false; nh],
+            model,
+            layout,
+            calls: vec![0; effects.len()],
+            effects,
+            own,
+            event_start,
+            n_events,
+            n_user,
+            n_rotors,
+            rotor_effect,
+            orbit_effect,
+            needs_kinematics,
+            base_tau,
+            n_locked: 0,
+            scratch: vec![0.0; x0.len()],
+            requests: Vec::new(),
+            x0: Vec::new(),
+            t0,
+            rhs_evals: 0,
+            log: Vec::new(),
+        };
+        // With an orbit, put the centre of mass at rest in the orbit's frame.
+        if free && sim.orbit_effect.is_some() && sim.model.total_mass() > 0.0 {
+            sim.unpack(&x0);
+            forward_kinematics(&sim.model, &mut sim.data, &sim.q, &sim.v)?;
+            let (p, _) = momentum(&sim.model, &sim.data);
+            let du = sim.data.rotation[0].tr_mul(&p) / sim.model.total_mass();
+            for k in 0..3 {
+                x0[sim.layout.velocity.start + k] -= du[k];
+            }
+        }
+        // Effects' start hooks (initial locks).
+        sim.prepare(t0, &x0, true).map_err(SimError::Start)?;
+        {
+            let Self {
+                model,
+                data,
+                effects,
+                own,
+                forces,
+                requests,
+                q,
+                v,
+                locked,
+                layout,
+                n_user,
+                ..
+            } = &mut sim;
+            let ctx = make_ctx(model, data, q, v, locked, layout, *n_user, t0, &x0, true);
+            let ctx = Context {
+                orbit: orbit_of(effects, own, &x0),
+                ..ctx
+            };
+            for (e, r) in effects.iter_mut().zip(own.iter()) {
+                e.start(&ctx, forces, &x0[r.clone()], requests)
+                    .map_err(SimError::Start)?;
+            }
+        }
+        let reqs = std::mem::take(&mut sim.requests);
+        for r in reqs {
+            sim.apply_request(r, &mut x0)?;
+        }
+        sim.x0 = x0;
+        Ok(sim)
+    }
+
+    /// The state layout.
+    pub fn layout(&self) -> &StateLayout {
+        &self.layout
+    }
+    /// The tree (the scene's model plus rotor bodies).
+    pub fn model(&self) -> &Model {
+        &self.model
+    }
+    /// The initial state `x0`.
+    pub fn x0(&self) -> &[f64] {
+        &self.x0
+    }
+    /// The initial time.
+    pub fn t0(&self) -> f64 {
+        self.t0
+    }
+    /// Names of the enabled effects, in the order they are visited.
+    pub fn effect_names(&self) -> Vec<&str> {
+        self.effects.iter().map(|e| e.name()).collect()
+    }
+    /// How many times each enabled effect was applied by [`System::rhs`], in the order of
+    /// [`Simulation::effect_names`].
+    pub fn effect_calls(&self) -> &[u64] {
+        &self.calls
+    }
+    /// Right-hand-side evaluations so far.
+    pub fn rhs_evals(&self) -> u64 {
+        self.rhs_evals
+    }
+    /// Which hinges (model hinges, then rotors) are locked now.
+    pub fn locked(&self) -> &[bool] {
+        &self.locked
+    }
+    /// What happened at each handled event: `(t, description)`.
+    pub fn event_log(&self) -> &[(f64, String)] {
+        &self.log
+    }
+    /// The effect called `name`, if enabled.
+    pub fn effect(&self, name: &str) -> Option<&dyn Effect> {
+        self.effects
+            .iter()
+            .find(|e| e.name() == name)
+            .map(|e| e.as_ref())
+    }
+
+    /// `x` into the tree's `q` and `v`.
+    fn unpack(&mut self, x: &[f64]) {
+        let l = &self.layout;
+        let n = self.n_user;
+        if l.free {
+            self.q[..4].copy_from_slice(&x[l.attitude.clone()]);
+            self.q[7..7 + n].copy_from_slice(&x[l.angles.clone()]);
+            self.v[..3].copy_from_slice(&x[l.omega.clone()]);
+            self.v[3..6].copy_from_slice(&x[l.velocity.clone()]);
+            self.v[6..6 + n].copy_from_slice(&x[l.rates.clone()]);
+        } else {
+            self.q[..n].copy_from_slice(&x[l.angles.clone()]);
+            self.v[..n].copy_from_slice(&x[l.rates.clone()]);
+        }
+        if let Some(i) = self.rotor_effect {
+            let b = self.model.base_nv() + n;
+            self.v[b..b + self.n_rotors].copy_from_slice(&x[self.own[i].clone()]);
+        }
+    }
+
+    /// Unpacks, runs kinematics and every effect's `apply` (own derivatives into `scratch`).
+    fn prepare(&mut self, t: f64, x: &[f64], kinematics: bool) -> Result<(), SystemError> {
+        self.unpack(x);
+        let kin = kinematics || self.needs_kinematics;
+        if kin {
+            forward_kinematics(&self.model, &mut self.data, &self.q, &self.v)
+                .map_err(|e| SystemError::new(e.to_string()))?;
+        }
+        let Self {
+            model,
+            data,
+            effects,
+            own,
+            forces,
+            q,
+            v,
+            locked,
+            layout,
+            n_user,
+            base_tau,
+            scratch,
+            ..
+        } = self;
+        let orbit = orbit_of(effects, own, x);
+        let ctx = Context {
+            orbit,
+            ..make_ctx(model, data, q, v, locked, layout, *n_user, t, x, kin)
+        };
+        forces.clear();
+        forces.hinge_torque.copy_from_slice(base_tau);
+        for (e, r) in effects.iter_mut().zip(own.iter()) {
+            e.apply(&ctx, forces, &x[r.clone()], &mut scratch[r.clone()])?;
+        }
+        Ok(())
+    }
+
+    /// Applies one request to the state `x`.
+    fn apply_request(&mut self, r: Request, x: &mut [f64]) -> Result<(), SimError> {
+        match r {
+            Request::Unlock(h) => {
+                if self.locked[h] {
+                    self.locked[h] = false;
+                    self.n_locked -= 1;
+                }
+            }
+            Request::Lock(h) => {
+                self.impulse(h, 0.0, x)?;
+                if !self.locked[h] {
+                    self.locked[h] = true;
+                    self.n_locked += 1;
+                }
+            }
+            Request::SetRate { hinge, rate } => self.impulse(hinge, rate, x)?,
+        }
+        Ok(())
+    }
+
+    /// Index in `x` of tree hinge `h`'s rate.
+    fn rate_index(&self, h: usize) -> usize {
+        if h < self.n_user {
+            self.layout.rates.start + h
+        } else {
+            self.own[self.rotor_effect.expect("rotor hinge")].start + (h - self.n_user)
+        }
+    }
+
+    /// A momentum-conserving impulse on hinge `h` (between its two bodies) that sets its
+    /// rate to `target`, with the other locked hinges kept rigid.
+    fn impulse(&mut self, h: usize, target: f64, x: &mut [f64]) -> Result<(), SimError> {
+        self.unpack(x);
+        crba(&self.model, &mut self.data, &self.q)?;
+        let nb = self.model.base_nv();
+        let nv = self.model.nv();
+        let dof = nb + h;
+        let free: Vec<usize> = (0..nv)
+            .filter(|&d| d < nb || d == dof || !self.locked[d - nb])
+            .collect();
+        let m = DMatrix::from_fn(free.len(), free.len(), |r, c| {
+            self.data.mass_matrix[(free[r], free[c])]
+        });
+        let kk = free
+            .iter()
+            .position(|&d| d == dof)
+            .expect("hinge dof is free");
+        let mut e = DVector::zeros(free.len());
+        e[kk] = 1.0;
+        let col = m
+            .cholesky()
+            .ok_or_else(|| SimError::State("singular mass matrix at an impact".into()))?
+            .solve(&e);
+        let ri = self.rate_index(h);
+        let lambda = (target - x[ri]) / col[kk];
+        for (c, &d) in free.iter().enumerate() {
+            let dv = col[c] * lambda;
+            let idx = if d < nb {
+                if d < 3 {
+                    self.layout.omega.start + d
+                } else {
+                    self.layout.velocity.start + d - 3
+                }
+            } else {
+                self.rate_index(d - nb)
+            };
+            x[idx] += dv;
+        }
+        x[ri] = target;
+        Ok(())
+    }
+
+    /// Output column names: `t`, attitude, rates, hinge angles and rates, the effects'
+    /// columns, energies and angular momentum.
+    pub fn columns(&self) -> Vec<String> {
+        let mut c: Vec<String> = [
+            "t", "q_w", "q_x", "q_y", "q_z", "omega_x", "omega_y", "omega_z",
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+        for name in &self.model.hinge_names[..self.n_user] {
+            c.push(format!("angle_{name}"));
+        }
+        for name in &self.model.hinge_names[..self.n_user] {
+            c.push(format!("rate_{name}"));
+        }
+        for e in &self.effects {
+            if !e.rotors().is_empty() {
+                c.extend(e.state_names());
+            }
+            c.extend(e.output_columns());
+        }
+        c.extend(
+            [
+                "kinetic_energy",
+                "potential_energy",
+                "total_energy",
+                "h_x",
+                "h_y",
+                "h_z",
+                "h_norm",
+            ]
+            .iter()
+            .map(|s| s.to_string()),
+        );
+        c
+    }
+
+    /// One output row at `(t, x)` (see [`Simulation::columns`]).
+    pub fn row(&mut self, t: f64, x: &[f64], row: &mut Vec<f64>) -> Result<(), SystemError> {
+        row.clear();
+        self.prepare(t, x, true)?;
+        row.push(t);
+        let l = &self.layout;
+        if l.free {
+            row.extend_from_slice(&x[l.attitude.clone()]);
+            row.extend_from_slice(&x[l.omega.clone()]);
+        } else {
+            row.extend_from_slice(&[1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]);
+        }
+        row.extend_from_slice(&x[l.angles.clone()]);
+        row.extend_from_slice(&x[l.rates.clone()]);
+        let d = self.diagnostics_prepared(t, x, Some(row));
+        row.push(d.kinetic);
+        row.push(d.potential);
+        row.push(d.kinetic + d.potential);
+        row.extend_from_slice(d.h.as_slice());
+        row.push(d.h.norm());
+        Ok(())
+    }
+
+    /// Energies and momenta at `(t, x)`.
+    pub fn diagnostics(&mut self, t: f64, x: &[f64]) -> Result<Diagnostics, SystemError> {
+        self.prepare(t, x, true)?;
+        Ok(self.diagnostics_prepared(t, x, None))
+    }
+
+    fn diagnostics_prepared(
+        &mut self,
+        t: f64,
+        x: &[f64],
+        row: Option<&mut Vec<f64>>,
+    ) -> Diagnostics {
+        let Self {
+            model,
+            data,
+            effects,
+            own,
+            q,
+            v,
+            locked,
+            layout,
+            n_user,
+            ..
+        } = self;
+        let kinetic = kinetic_energy(model, data, q, v).unwrap_or(f64::NAN);
+        let (p, h) = momentum(model, data);
+        let ctx = Context {
+            orbit: orbit_of(effects, own, x),
+            ..make_ctx(model, data, q, v, locked, layout, *n_user, t, x, true)
+        };
+        let mut potential = 0.0;
+        for (e, r) in effects.iter().zip(own.iter()) {
+            potential += e.potential_energy(&ctx, &x[r.clone()]);
+        }
+        if let Some(row) = row {
+            for (e, r) in effects.iter().zip(own.iter()) {
+                if !e.rotors().is_empty() {
+                    row.extend_from_slice(&x[r.clone()]);
+                }
+                e.output(&ctx, &x[r.clone()], row);
+            }
+        }
+        Diagnostics {
+            kinetic,
+            potential,
+            h,
+            p,
+        }
+    }
+
+    /// Integrates from the initial state to `t_end`, calling `sink(t, row)` with an output
+    /// row (see [`Simulation::columns`]) at each output time. A sink error stops the run.
+    pub fn run<E>(
+        &mut self,
+        options: &Options,
+        t_end: f64,
+        output: &Output,
+        mut sink: impl FnMut(f64, &[f64]) -> Result<(), E>,
+    ) -> Result<Stats, RunError<E>> {
+        let x0 = self.x0.clone();
+        let t0 = self.t0;
+        let cell = RefCell::new(self);
+        let mut shared = Shared(&cell);
+        let mut row = Vec::new();
+        let mut failure: Option<RunError<E>> = None;
+        let result =
+            satsim_integrate::integrate(&mut shared, options, t0, &x0, t_end, output, |t, x| {
+                let mut sim = cell.borrow_mut();
+                if let Err(e) = sim.row(t, x, &mut row) {
+                    failure = Some(RunError::Integrate(IntegrateError::System { t, source: e }));
+                    return ControlFlow::Break(());
+                }
+                if let Err(e) = sink(t, &row) {
+                    failure = Some(RunError::Sink { t, error: e });
+                    return ControlFlow::Break(());
+                }
+                ControlFlow::Continue(())
+            });
+        match (result, failure) {
+            (_, Some(f)) => Err(f),
+            (Ok(stats), None) => Ok(stats),
+            (Err(e), None) => Err(RunError::Integrate(e)),
+        }
+    }
+}
+
+/// Why [`Simulation::run`] stopped early.
+#[derive(Debug, Error)]
+pub enum RunError<E> {
+    /// The integrator (or the dynamics) failed.
+    #[error("{0}")]
+    Integrate(IntegrateError),
+    /// The output sink failed at time `t`.
+    #[error("output failed at t = {t}: {error}")]
+    Sink {
+        /// Time of the row.
+        t: f64,
+        /// The sink's error.
+        error: E,
+    },
+}
+
+/// Energies (J) and momenta (inertial axes) of the tree, wheels included.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Diagnostics {
+    /// Kinetic energy (relative to the centre-of-mass frame when there is an orbit).
+    pub kinetic: f64,
+    /// Potential energy of the effects (springs, gravity gradient).
+    pub potential: f64,
+    /// Angular momentum about the centre of mass (N m s).
+    pub h: Vec3,
+    /// Linear momentum (N s).
+    pub p: Vec3,
+}
+
+struct Shared<'a, 'b>(&'a RefCell<&'b mut Simulation>);
+
+impl System for Shared<'_, '_> {
+    fn dim(&self) -> usize {
+        self.0.borrow().layout.len
+    }
+    fn rhs(&mut self, t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), SystemError> {
+        self.0.borrow_mut().rhs(t, x, dx)
+    }
+    fn project(&mut self, x: &mut [f64]) {
+        self.0.borrow_mut().project(x)
+    }
+    fn n_events(&self) -> usize {
+        self.0.borrow().n_events
+    }
+    fn events(&mut self, t: f64, x: &[f64], g: &mut [f64]) {
+        self.0.borrow_mut().events(t, x, g)
+    }
+    fn event_direction(&self, k: usize) -> EventDirection {
+        self.0.borrow().event_direction(k)
+    }
+    fn on_event(&mut self, k: usize, t: f64, x: &mut [f64]) -> EventAction {
+        self.0.borrow_mut().on_event(k, t, x)
+    }
+}
+
+fn orbit_of(effects: &[Box<dyn Effect>], own: &[Range<usize>], x: &[f64]) -> Option<OrbitState> {
+    effects
+        .iter()
+        .zip(own)
+        .find_map(|(e, r)| e.orbit_state(&x[r.clone()]))
+}
+
+#[allow(clippy::too_many_arguments)]
+fn make_ctx<'a>(
+    model: &'a Model,
+    data: &'a Data,
+    q: &'a [f64],
+    v: &'a [f64],
+    locked: &'a [bool],
+    layout: &StateLayout,
+    n_user: usize,
+    t: f64,
+    x: &'a [f64],
+    kin: bool,
+) -> Context<'a> {
+    let (attitude, omega) = if layout.free {
+        (
+            UnitQuaternion::new_unchecked(Quaternion::new(q[0], q[1], q[2], q[3])),
+            Vec3::new(v[0], v[1], v[2]),
+        )
+    } else {
+        (UnitQuaternion::identity(), Vec3::zeros())
+    };
+    let nb = model.base_nv();
+    Context {
+        t,
+        model,
+        data,
+        q,
+        v,
+        n_hinges: n_user,
+        angles: &x[layout.angles.clone()],
+        rates: &x[layout.rates.clone()],
+        locked,
+        com: if kin {
+            center_of_mass(model, data)
+        } else {
+            Vec3::zeros()
+        },
+        orbit: None,
+        attitude,
+        omega,
+        rotor_rates: &v[nb + n_user..],
+    }
+}
+
+impl System for Simulation {
+    fn dim(&self) -> usize {
+        self.layout.len
+    }
+
+    fn rhs(&mut self, t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), SystemError> {
+        self.rhs_evals += 1;
+        self.unpack(x);
+        if self.needs_kinematics {
+            forward_kinematics(&self.model, &mut self.data, &self.q, &self.v)
+                .map_err(|e| SystemError::new(e.to_string()))?;
+        }
+        {
+            let Self {
+                model,
+                data,
+                effects,
+                own,
+                forces,
+                q,
+                v,
+                locked,
+                layout,
+                n_user,
+                base_tau,
+                calls,
+                needs_kinematics,
+                ..
+            } = self;
+            let ctx = Context {
+                orbit: orbit_of(effects, own, x),
+                ..make_ctx(
+                    model,
+                    data,
+                    q,
+                    v,
+                    locked,
+                    layout,
+                    *n_user,
+                    t,
+                    x,
+                    *needs_kinematics,
+                )
+            };
+            forces.clear();
+            forces.hinge_torque.copy_from_slice(base_tau);
+            for ((e, r), c) in effects.iter_mut().zip(own.iter()).zip(calls.iter_mut()) {
+                *c += 1;
+                e.apply(&ctx, forces, &x[r.clone()], &mut dx[r.clone()])?;
+            }
+        }
+        let nb = self.model.base_nv();
+        self.tau[nb..].copy_from_slice(&self.forces.hinge_torque);
+        let fext = if self.forces.has_wrench {
+            Some(self.forces.body_wrench.as_slice())
+        } else {
+            None
+        };
+        let ddq = if self.n_locked > 0 {
+            aba_hybrid(
+                &self.model,
+                &mut self.data,
+                &self.q,
+                &self.v,
+                &self.tau,
+                fext,
+                &self.locked,
+            )
+        } else {
+            aba(
+                &self.model,
+                &mut self.data,
+                &self.q,
+                &self.v,
+                &self.tau,
+                fext,
+            )
+        }
+        .map_err(|e| SystemError::new(e.to_string()))?;
+        let l = &self.layout;
+        let n = self.n_user;
+        if l.free {
+            let (w, a) = (&x[l.omega.clone()], &x[l.attitude.clone()]);
+            // q̇ = ½ q ⊗ (0, ω)
+            let qd = crate::effects::quat_mul(&[a[0], a[1], a[2], a[3]], &[0.0, w[0], w[1], w[2]]);
+            for k in 0..4 {
+                dx[l.attitude.start + k] = 0.5 * qd[k];
+            }
+            for k in 0..3 {
+                dx[l.omega.start + k] = ddq[k];
+                dx[l.velocity.start + k] = ddq[3 + k];
+            }
+        }
+        dx[l.angles.clone()].copy_from_slice(&x[l.rates.clone()]);
+        dx[l.rates.clone()].copy_from_slice(&ddq.as_slice()[nb..nb + n]);
+        if let Some(i) = self.rotor_effect {
+            let r = self.own[i].clone();
+            dx[r].copy_from_slice(&ddq.as_slice()[nb + n..nb + n + self.n_rotors]);
+        }
+        Ok(())
+    }
+
+    fn project(&mut self, x: &mut [f64]) {
+        if self.layout.free {
+            let a = self.layout.attitude.clone();
+            let norm = x[a.clone()].iter().map(|v| v * v).sum::<f64>().sqrt();
+            if norm > 0.0 {
+                for v in &mut x[a] {
+                    *v /= norm;
+                }
+            }
+        }
+    }
+
+    fn n_events(&self) -> usize {
+        self.n_events
+    }
+
+    fn events(&mut self, t: f64, x: &[f64], g: &mut [f64]) {
+        if self.n_events == 0 {
+            return;
+        }
+        if self.prepare(t, x, false).is_err() {
+            g.fill(1.0);
+            return;
+        }
+        let Self {
+            model,
+            data,
+            effects,
+            own,
+            forces,
+            q,
+            v,
+            locked,
+            layout,
+            n_user,
+            event_start,
+            needs_kinematics,
+            ..
+        } = self;
+        let ctx = Context {
+            orbit: orbit_of(effects, own, x),
+            ..make_ctx(
+                model,
+                data,
+                q,
+                v,
+                locked,
+                layout,
+                *n_user,
+                t,
+                x,
+                *needs_kinematics,
+            )
+        };
+        for (i, (e, r)) in effects.iter().zip(own.iter()).enumerate() {
+            let s = event_start[i];
+            e.events(&ctx, forces, &x[r.clone()], &mut g[s..s + e.n_events()]);
+        }
+    }
+
+    fn event_direction(&self, k: usize) -> EventDirection {
+        let i = self.event_owner(k);
+        self.effects[i].event_direction(k - self.event_start[i])
+    }
+
+    fn on_event(&mut self, k: usize, t: f64, x: &mut [f64]) -> EventAction {
+        let i = self.event_owner(k);
+        let local = k - self.event_start[i];
+        if self.prepare(t, x, false).is_err() {
+            return EventAction::Stop;
+        }
+        let r = self.own[i].clone();
+        let mut own_state = x[r.clone()].to_vec();
+        let action = {
+            let Self {
+                model,
+                data,
+                effects,
+                own,
+                forces,
+                q,
+                v,
+                locked,
+                layout,
+                n_user,
+                requests,
+                needs_kinematics,
+                ..
+            } = self;
+            let xs: &[f64] = x;
+            let ctx = Context {
+                orbit: orbit_of(effects, own, xs),
+                ..make_ctx(
+                    model,
+                    data,
+                    q,
+                    v,
+                    locked,
+                    layout,
+                    *n_user,
+                    t,
+                    xs,
+                    *needs_kinematics,
+                )
+            };
+            effects[i].on_event(local, &ctx, forces, &mut own_state, requests)
+        };
+        x[r].copy_from_slice(&own_state);
+        let what = self.effects[i].describe_event(local);
+        if !what.is_empty() {
+            self.log.push((t, what));
+        }
+        let reqs = std::mem::take(&mut self.requests);
+        let changed = !reqs.is_empty();
+        for req in reqs {
+            if let Err(e) = self.apply_request(req, x) {
+                self.log.push((t, format!("impact failed: {e}")));
+                return EventAction::Stop;
+            }
+        }
+        if changed && action == EventAction::Continue {
+            EventAction::Reset
+        } else {
+            action
+        }
+    }
+}
+
+impl Simulation {
+    fn event_owner(&self, k: usize) -> usize {
+        (0..self.effects.len())
+            .rev()
+            .find(|&i| self.event_start[i] <= k && self.effects[i].n_events() > 0)
+            .unwrap_or(0)
+    }
+}
+
+/// The unit quaternion norm check used by tests: `|‖q‖ − 1|` of the attitude in `x`.
+pub fn attitude_norm_error(layout: &StateLayout, x: &[f64]) -> f64 {
+    let n = x[layout.attitude.clone()]
+        .iter()
+        .map(|v| v * v)
+        .sum::<f64>()
+        .sqrt();
+    (n - 1.0).abs()
+}
+
+/// Rotor inertia helper re-exported for examples.
+pub fn rotor_inertia(axis: Vec3, axial: f64, transverse: f64) -> Mat3 {
+    Rotor {
+        name: String::new(),
+        axis,
+        at: Vec3::zeros(),
+        mass: 0.0,
+        axial,
+        transverse,
+    }
+    .inertia()
+}
