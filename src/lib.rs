@@ -18,4 +18,6 @@ mod book {
     struct BuildingATree;
     #[doc = include_str!("../docs/src/theory/floating-base.md")]
     struct FloatingBase;
+    #[doc = include_str!("../docs/src/guide/adding-an-effect.md")]
+    struct AddingAnEffect;
 }
