@@ -2,8 +2,7 @@
 //! matrix, the bias forces, the forward-dynamics acceleration (ABA) and the kinetic energy
 //! of one state, as one JSON object with every number at full `f64` precision.
 
-use super::{CliError, Options, Output, json_array, json_number, usage_line};
-use satsim_tree::io::{read_model, read_state};
+use super::{CliError, ModelAndState, Options, Output, json_array, json_number, usage_line};
 use satsim_tree::{Data, aba, bias, crba, kinetic_energy};
 
 const NAME: &str = "dynamics";
@@ -14,10 +13,12 @@ pub fn run(args: &[std::ffi::OsString]) -> Result<Output, CliError> {
     if opts.help {
         return Ok(format!("usage: {}\n", usage_line(Some(NAME))));
     }
-    let model_path = opts.required_path(NAME, "model")?;
-    let state_path = opts.required_path(NAME, "state")?;
-    let model = read_model(&model_path)?;
-    let state = read_state(&state_path, &model)?;
+    let ModelAndState {
+        model_path,
+        state_path,
+        model,
+        state,
+    } = ModelAndState::read(NAME, &opts)?;
     let failed = |e: satsim_tree::DynamicsError| {
         CliError::Other(format!(
             "{}: {e} (model {})",

@@ -225,6 +225,34 @@ impl Options {
     }
 }
 
+/// A model and one of its states, read from `--model` and `--state` (both required).
+pub struct ModelAndState {
+    /// The model file's path.
+    pub model_path: PathBuf,
+    /// The state file's path.
+    pub state_path: PathBuf,
+    /// The model.
+    pub model: satsim_tree::Model,
+    /// The state.
+    pub state: satsim_tree::State,
+}
+
+impl ModelAndState {
+    /// Reads both files named by the options of `command`.
+    pub fn read(command: &'static str, opts: &Options) -> Result<Self, CliError> {
+        let model_path = opts.required_path(command, "model")?;
+        let state_path = opts.required_path(command, "state")?;
+        let model = satsim_tree::io::read_model(&model_path)?;
+        let state = satsim_tree::io::read_state(&state_path, &model)?;
+        Ok(Self {
+            model_path,
+            state_path,
+            model,
+            state,
+        })
+    }
+}
+
 /// The part of `--key=value` after the first `=` (a non-UTF-8 value is read lossily).
 fn split_value(arg: &OsStr) -> OsString {
     let text = arg.to_string_lossy();

@@ -2,9 +2,8 @@
 //! preprint's closed-form S and N (errata corrected, see docs/src/preprint/errata.md) beside
 //! the same matrices from the generic engine, and their largest absolute difference.
 
-use super::{CliError, Options, Output, json_array, json_number, usage_line};
+use super::{CliError, ModelAndState, Options, Output, json_array, json_number, usage_line};
 use satsim_satellite::preprint::compare;
-use satsim_tree::io::{read_model, read_state};
 
 const NAME: &str = "preprint";
 
@@ -14,10 +13,12 @@ pub fn run(args: &[std::ffi::OsString]) -> Result<Output, CliError> {
     if opts.help {
         return Ok(format!("usage: {}\n", usage_line(Some(NAME))));
     }
-    let model_path = opts.required_path(NAME, "model")?;
-    let state_path = opts.required_path(NAME, "state")?;
-    let model = read_model(&model_path)?;
-    let state = read_state(&state_path, &model)?;
+    let ModelAndState {
+        model_path,
+        state_path,
+        model,
+        state,
+    } = ModelAndState::read(NAME, &opts)?;
     let report = compare(&model, &state.q, &state.v, &state.tau)
         .map_err(|e| CliError::Other(format!("{}: {e}", model_path.display())))?;
     let matrix = |m: &nalgebra::DMatrix<f64>| {
@@ -26,7 +27,11 @@ pub fn run(args: &[std::ffi::OsString]) -> Result<Output, CliError> {
             .collect();
         format!("[\n{}\n  ]", rows.join(",\n"))
     };
-    let all_finite = report.s_tree.iter().chain(report.s_closed_form.iter()).all(|x| x.is_finite());
+    let all_finite = report
+        .s_tree
+        .iter()
+        .chain(report.s_closed_form.iter())
+        .all(|x| x.is_finite());
     if !all_finite {
         return Err(CliError::Other(format!(
             "{}: the dynamics of this state overflow (a non-finite result)",
