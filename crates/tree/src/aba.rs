@@ -5,7 +5,7 @@ use crate::error::DynamicsError;
 use crate::kinematics::{base_motion, check_len, update_transforms};
 use crate::model::{BaseKind, Model};
 use crate::spatial::{ArticulatedInertia, Force, Motion};
-use nalgebra::{DVector, Matrix6, Vector6};
+use nalgebra::DVector;
 
 /// Pivots `Dᵢ` below this fraction of the articulated inertia's scale are singular.
 pub const SINGULAR_PIVOT_RELATIVE: f64 = 1e-13;
@@ -143,16 +143,14 @@ fn articulated<'d>(
     // Pass 3, outward: accelerations.
     data.a[0] = match model.base {
         BaseKind::Free => {
-            let mut rhs = -data.pa[0].to_vector();
-            for (r, t) in tau[..6].iter().enumerate() {
-                rhs[r] += t;
+            // a₀ = IA₀⁻¹ (τ₀ − pA₀)
+            let a0 = data.ia[0]
+                .solve(&(Force::from_slice(&tau[..6]) - data.pa[0]))
+                .ok_or(DynamicsError::SingularBase)?;
+            for (r, x) in a0.to_array().into_iter().enumerate() {
+                data.ddq[r] = x;
             }
-            let m: Matrix6<f64> = data.ia[0].to_matrix();
-            let a0: Vector6<f64> = m.cholesky().ok_or(DynamicsError::SingularBase)?.solve(&rhs);
-            for r in 0..6 {
-                data.ddq[r] = a0[r];
-            }
-            Motion::from_slice(a0.as_slice())
+            a0
         }
         BaseKind::Fixed => Motion::zero(),
     };

@@ -4,7 +4,7 @@
 //! Small systems use an in-place factorisation written here (no allocation, no dispatch);
 //! from [`FAER_MIN_DOF`] degrees of freedom on, faer's blocked Cholesky takes over.
 
-use crate::crba::crba;
+use crate::crba::mass_matrix;
 use crate::data::Data;
 use crate::error::DynamicsError;
 use crate::model::Model;
@@ -17,8 +17,10 @@ use faer::linalg::cholesky::llt::factor::{
 use faer::{Mat, Par};
 use nalgebra::{DMatrix, DVector};
 
-/// From this many degrees of freedom on, the factorisation uses faer (see `docs/`: measured
-/// crossover of `crba_cholesky` with the in-house and the faer factorisation).
+/// From this many degrees of freedom on, the factorisation uses faer. Measured: with the
+/// in-house factorisation `crba_cholesky` is faster up to about 45 DOF, faer is faster from
+/// about 55-65 DOF on, and in between they are level within the noise (chains and binary
+/// trees; docs/src/results/performance.md, "Cholesky crossover").
 pub const FAER_MIN_DOF: usize = 48;
 
 /// faer's buffers, allocated once for large models.
@@ -41,7 +43,10 @@ impl Clone for FaerWork {
 }
 
 impl FaerWork {
-    pub(crate) fn new(n: usize) -> Self {
+    /// Buffers for `n` degrees of freedom. [`Data::new`] sets `Data::faer` from
+    /// [`FAER_MIN_DOF`]; setting it to `Some(FaerWork::new(nv))` or `None` by hand forces either
+    /// factorisation (how the crossover was measured).
+    pub fn new(n: usize) -> Self {
         let req = cholesky_in_place_scratch::<f64>(n, Par::Seq, Default::default());
         Self {
             l: Mat::zeros(n, n),
@@ -74,8 +79,8 @@ pub fn crba_cholesky<'d>(
     fext: Option<&[Force]>,
 ) -> Result<&'d DVector<f64>, DynamicsError> {
     crate::kinematics::check_len("tau", tau.len(), model.nv())?;
-    bias(model, data, q, v, fext)?;
-    crba(model, data, q)?;
+    bias(model, data, q, v, fext)?; // also computes `data.xup` for q
+    mass_matrix(model, data);
     for (r, t) in tau.iter().enumerate() {
         data.ddq[r] = t - data.bias[r];
     }

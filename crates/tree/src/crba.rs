@@ -26,6 +26,13 @@ pub fn crba<'d>(
     q: &[f64],
 ) -> Result<&'d nalgebra::DMatrix<f64>, DynamicsError> {
     update_transforms(model, data, q)?;
+    mass_matrix(model, data);
+    Ok(&data.mass_matrix)
+}
+
+/// CRBA proper, from the transforms already in `data.xup` (so that forward dynamics by the
+/// mass matrix computes them once).
+pub(crate) fn mass_matrix(model: &Model, data: &mut Data) {
     let n = model.n_bodies();
     for i in 0..n {
         data.ic[i] = model.bodies[i].inertia;
@@ -67,5 +74,4 @@ pub fn crba<'d>(
         let m6 = data.ic[0].to_matrix();
         m.fixed_view_mut::<6, 6>(0, 0).copy_from(&m6);
     }
-    Ok(&data.mass_matrix)
 }

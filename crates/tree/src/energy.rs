@@ -6,7 +6,9 @@ use crate::kinematics::forward_kinematics;
 use crate::model::Model;
 use crate::spatial::Vec3;
 
-/// Kinetic energy `½ Σ vᵢᵀ Iᵢ vᵢ` (J), running [`forward_kinematics`] first.
+/// Kinetic energy `½ Σ vᵢᵀ Iᵢ vᵢ + ½ Σₖ aₖ q̇ₖ²` (J), running [`forward_kinematics`] first:
+/// the bodies' energy plus that of the hinges' armatures `aₖ`, so that it is `½ vᵀ M v`
+/// with the mass matrix of [`crate::crba()`] (and is conserved with an armature).
 ///
 /// ```
 /// use satsim_tree::{BaseKind, Body, Data, ModelBuilder, kinetic_energy, spatial::Mat3};
@@ -23,9 +25,16 @@ pub fn kinetic_energy(
     v: &[f64],
 ) -> Result<f64, DynamicsError> {
     forward_kinematics(model, data, q, v)?;
-    Ok((0..model.n_bodies())
+    let bodies: f64 = (0..model.n_bodies())
         .map(|i| 0.5 * data.v[i].dot(&model.bodies[i].inertia.mul_motion(&data.v[i])))
-        .sum())
+        .sum();
+    let armatures: f64 = model
+        .joints
+        .iter()
+        .flatten()
+        .map(|j| 0.5 * j.armature * v[j.dof] * v[j.dof])
+        .sum();
+    Ok(bodies + armatures)
 }
 
 /// The system's centre of mass in inertial coordinates (m), from the poses of the last

@@ -25,9 +25,18 @@ use nalgebra::DVector;
 /// assert!(dv[6] > 0.0 && dv[2] < 0.0 && (10.0 * dv[2] + 1.0 * (dv[2] + dv[6])).abs() < 1e-12);
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
-pub fn hinge_impulse<'d>(model: &Model, data: &'d mut Data, q: &[f64], k: usize) -> Result<&'d DVector<f64>, DynamicsError> {
+pub fn hinge_impulse<'d>(
+    model: &Model,
+    data: &'d mut Data,
+    q: &[f64],
+    k: usize,
+) -> Result<&'d DVector<f64>, DynamicsError> {
     if k >= model.n_hinges() {
-        return Err(DynamicsError::Dimension { what: "hinge index", expected: model.n_hinges(), got: k });
+        return Err(DynamicsError::Dimension {
+            what: "hinge index",
+            expected: model.n_hinges(),
+            got: k,
+        });
     }
     crba(model, data, q)?;
     data.chol.copy_from(&data.mass_matrix);

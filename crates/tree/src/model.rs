@@ -466,8 +466,14 @@ impl Joint {
     /// `Xup`: the transform from the parent's coordinates to the child's at angle `phi`.
     #[inline]
     pub fn transform(&self, phi: f64) -> Transform {
-        // Eᵀ = Rot(axis, φ) · rot0 maps child to parent coordinates.
-        let et = rotation_about(&self.axis, phi) * self.rot0;
+        // Eᵀ = Rot(axis, φ) · rot0 maps child to parent coordinates. Most hinges have no
+        // fixed rotation: then the product is skipped.
+        let rot = rotation_about(&self.axis, phi);
+        let et = if self.rot0 == Mat3::identity() {
+            rot
+        } else {
+            rot * self.rot0
+        };
         Transform::new(et.transpose(), self.at - et * self.child_at)
     }
 }

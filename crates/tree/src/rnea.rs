@@ -2,7 +2,7 @@
 
 use crate::data::Data;
 use crate::error::DynamicsError;
-use crate::kinematics::{check_len, forward_kinematics_acc};
+use crate::kinematics::{base_motion, check_len, update_transforms};
 use crate::model::{BaseKind, Model};
 use crate::spatial::Force;
 use nalgebra::DVector;
@@ -39,9 +39,23 @@ pub fn rnea<'d>(
     if let Some(f) = fext {
         check_len("fext", f.len(), model.n_bodies())?;
     }
-    forward_kinematics_acc(model, data, q, v, a)?;
+    check_len("a", a.len(), model.nv())?;
+    check_len("v", v.len(), model.nv())?;
+    update_transforms(model, data, q)?;
     let n = model.n_bodies();
+    // Pass 1, outward: velocities, accelerations and the forces that produce them (the
+    // inertial poses of `forward_kinematics` are not needed).
+    data.v[0] = base_motion(model, v);
+    data.a[0] = base_motion(model, a);
     for i in 0..n {
+        if let Some(joint) = &model.joints[i] {
+            let p = model.parent[i].expect("parent");
+            let x = &data.xup[i];
+            let vj = joint.s * v[joint.dof];
+            data.v[i] = x.apply_motion(&data.v[p]) + vj;
+            data.a[i] =
+                x.apply_motion(&data.a[p]) + joint.s * a[joint.dof] + data.v[i].cross_motion(&vj);
+        }
         let inertia = &model.bodies[i].inertia;
         let vi = data.v[i];
         data.f[i] = inertia.mul_motion(&data.a[i]) + vi.cross_force(&inertia.mul_motion(&vi));
@@ -49,6 +63,7 @@ pub fn rnea<'d>(
             data.f[i] -= f[i];
         }
     }
+    // Pass 2, inward: hinge forces and torques.
     for i in (1..n).rev() {
         let joint = model.joints[i].as_ref().expect("joint");
         data.tau[joint.dof] = joint.s.dot(&data.f[i]) + joint.armature * a[joint.dof];

@@ -29,6 +29,16 @@ pub fn skew(a: &Vec3) -> Mat3 {
     Mat3::new(0.0, -a.z, a.y, a.z, 0.0, -a.x, -a.y, a.x, 0.0)
 }
 
+/// `[a]× M`, column by column: `a × mⱼ` (cheaper than the product with the matrix `[a]×`).
+#[inline]
+fn cross_columns(a: &Vec3, m: &Mat3) -> Mat3 {
+    Mat3::from_columns(&[
+        a.cross(&m.column(0)),
+        a.cross(&m.column(1)),
+        a.cross(&m.column(2)),
+    ])
+}
+
 /// A spatial motion vector (velocity, acceleration, motion subspace column): `[ω; v]`.
 ///
 /// ```
@@ -105,6 +115,12 @@ impl Motion {
     pub fn from_slice(s: &[f64]) -> Self {
         Self::new(Vec3::new(s[0], s[1], s[2]), Vec3::new(s[3], s[4], s[5]))
     }
+    /// As an array `[ω; v]`.
+    #[inline]
+    pub fn to_array(&self) -> [f64; 6] {
+        let (a, l) = (&self.ang, &self.lin);
+        [a.x, a.y, a.z, l.x, l.y, l.z]
+    }
 }
 
 impl Force {
@@ -123,6 +139,19 @@ impl Force {
         Vector6::new(
             self.ang.x, self.ang.y, self.ang.z, self.lin.x, self.lin.y, self.lin.z,
         )
+    }
+    /// As an array `[n; f]`.
+    #[inline]
+    pub fn to_array(&self) -> [f64; 6] {
+        let (a, l) = (&self.ang, &self.lin);
+        [a.x, a.y, a.z, l.x, l.y, l.z]
+    }
+    /// From the first six entries of a slice `[n; f]`.
+    ///
+    /// # Panics
+    /// If the slice has fewer than six entries (a programming error, not user data).
+    pub fn from_slice(s: &[f64]) -> Self {
+        Self::new(Vec3::new(s[0], s[1], s[2]), Vec3::new(s[3], s[4], s[5]))
     }
 }
 
@@ -317,12 +346,12 @@ impl RigidInertia {
     /// (moves a child's inertia to its parent; Featherstone eq. 2.66 in 3-D blocks).
     #[inline]
     pub fn inv_transform(&self, x: &Transform) -> RigidInertia {
-        let e = &x.rot;
-        let r = skew(&x.trans);
+        let (e, r) = (&x.rot, &x.trans);
         let h = e.tr_mul(&self.h);
-        let hx = skew(&h);
-        let hp = h + x.trans * self.mass;
-        let i = e.tr_mul(&(self.inertia * e)) - r * hx - skew(&hp) * r;
+        let hp = h + r * self.mass;
+        // Eᵀ I E − [r]×[h]× − [h']×[r]×, the skew products by [a]×[b]× = b aᵀ − (a·b) 1.
+        let i = e.tr_mul(&(self.inertia * e)) - h * r.transpose() - r * hp.transpose()
+            + Mat3::from_diagonal_element(r.dot(&h) + r.dot(&hp));
         RigidInertia {
             mass: self.mass,
             h: hp,
@@ -410,11 +439,28 @@ impl ArticulatedInertia {
         let a = e.tr_mul(&(self.a * e));
         let b = e.tr_mul(&(self.b * e));
         let c = e.tr_mul(&(self.c * e));
-        let r = skew(&x.trans);
-        // [1 [r]; 0 1] [A B; Bᵀ C] [1 0; -[r] 1]
-        let nb = b + r * c;
-        let na = a + r * b.transpose() - nb * r;
+        let r = &x.trans;
+        if *r == Vec3::zeros() {
+            // Coincident origins (a zero-length gimbal link): a pure rotation.
+            return ArticulatedInertia { a, b, c };
+        }
+        // [1 [r]×; 0 1] [A B; Bᵀ C] [1 0; −[r]× 1], with M [r]× = −([r]× Mᵀ)ᵀ.
+        let nb = b + cross_columns(r, &c);
+        let na =
+            a + cross_columns(r, &b.transpose()) + cross_columns(r, &nb.transpose()).transpose();
         ArticulatedInertia { a: na, b: nb, c }
+    }
+    /// `IA⁻¹ f`: the motion `[α; a]` with `IA [α; a] = f`, by the Schur complement
+    /// `S = A − B C⁻¹ Bᵀ` and two 3x3 Cholesky factorisations (no 6x6 matrix). `None` unless
+    /// `IA` is positive definite (then `C` and `S` are, and conversely).
+    #[inline]
+    pub fn solve(&self, f: &Force) -> Option<Motion> {
+        let c = self.c.cholesky()?;
+        let c_inv_bt = c.solve(&self.b.transpose());
+        let c_inv_f = c.solve(&f.lin);
+        let schur = self.a - self.b * c_inv_bt;
+        let ang = schur.cholesky()?.solve(&(f.ang - self.b * c_inv_f));
+        Some(Motion::new(ang, c_inv_f - c_inv_bt * ang))
     }
     /// The full 6x6 matrix.
     pub fn to_matrix(&self) -> Matrix6<f64> {
@@ -446,9 +492,21 @@ impl AddAssign for ArticulatedInertia {
 /// ```
 #[inline]
 pub fn rotation_about(axis: &Vec3, angle: f64) -> Mat3 {
+    // 1 + s [a]× + (1 − c) [a]×², with [a]×² = a aᵀ − 1 for a unit axis.
     let (s, c) = angle.sin_cos();
-    let k = skew(axis);
-    Mat3::identity() + k * s + k * k * (1.0 - c)
+    let (a, t) = (axis * s, axis * (1.0 - c));
+    let [x, y, z] = [axis.x, axis.y, axis.z];
+    Mat3::new(
+        c + t.x * x,
+        t.x * y - a.z,
+        t.x * z + a.y,
+        t.y * x + a.z,
+        c + t.y * y,
+        t.y * z - a.x,
+        t.z * x - a.y,
+        t.z * y + a.x,
+        c + t.z * z,
+    )
 }
 
 #[cfg(test)]
@@ -480,8 +538,30 @@ mod tests {
         assert!((i.mul_motion(&m).to_vector() - i.to_matrix() * m.to_vector()).norm() < 1e-13);
         let ip = i.inv_transform(&x).to_matrix();
         assert!((ip - xm.transpose() * i.to_matrix() * xm).norm() < 1e-12);
-        let ia = ArticulatedInertia::from(i).inv_transform(&x).to_matrix();
-        assert!((ia - ip).norm() < 1e-12);
+        let ia = ArticulatedInertia::from(i).inv_transform(&x);
+        assert!((ia.to_matrix() - ip).norm() < 1e-12);
+        let at_origin = Transform::new(x.rot, Vec3::zeros());
+        let ir = ArticulatedInertia::from(i)
+            .inv_transform(&at_origin)
+            .to_matrix();
+        let xr = at_origin.to_matrix();
+        assert!((ir - xr.transpose() * i.to_matrix() * xr).norm() < 1e-12);
+        let a = ia.solve(&f).unwrap();
+        assert!((ia.to_matrix() * a.to_vector() - f.to_vector()).norm() < 1e-12);
+        assert_eq!(ArticulatedInertia::default().solve(&f), None);
+    }
+
+    #[test]
+    fn rodrigues_matches_nalgebra() {
+        for (axis, angle) in [
+            (Vec3::new(1.0, 2.0, 2.0), 0.7),
+            (Vec3::new(-0.3, 0.1, 0.9), -2.9),
+        ] {
+            let axis = axis.normalize();
+            let r =
+                nalgebra::Rotation3::from_axis_angle(&nalgebra::Unit::new_unchecked(axis), angle);
+            assert!((rotation_about(&axis, angle) - r.matrix()).norm() < 1e-15);
+        }
     }
 
     #[test]

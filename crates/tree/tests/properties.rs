@@ -221,17 +221,28 @@ fn hybrid_dynamics_matches_the_reduced_mass_matrix_equations() {
         let c = case(n, free, true, seed);
         let mut d = Data::new(&c.model);
         let mut rng = SplitMix(seed);
-        let locked: Vec<bool> = (0..c.model.n_hinges()).map(|_| rng.next_f64() < 0.4).collect();
-        let ddq = aba_hybrid(&c.model, &mut d, &c.q, &c.v, &c.tau, None, &locked).unwrap().clone();
+        let locked: Vec<bool> = (0..c.model.n_hinges())
+            .map(|_| rng.next_f64() < 0.4)
+            .collect();
+        let ddq = aba_hybrid(&c.model, &mut d, &c.q, &c.v, &c.tau, None, &locked)
+            .unwrap()
+            .clone();
         let m = crba(&c.model, &mut d, &c.q).unwrap().clone();
         let b = bias(&c.model, &mut d, &c.q, &c.v, None).unwrap().clone();
         let nb = c.model.base_nv();
-        let free_idx: Vec<usize> = (0..c.model.nv()).filter(|&i| i < nb || !locked[i - nb]).collect();
-        let mff = DMatrix::from_fn(free_idx.len(), free_idx.len(), |r, s| m[(free_idx[r], free_idx[s])]);
+        let free_idx: Vec<usize> = (0..c.model.nv())
+            .filter(|&i| i < nb || !locked[i - nb])
+            .collect();
+        let mff = DMatrix::from_fn(free_idx.len(), free_idx.len(), |r, s| {
+            m[(free_idx[r], free_idx[s])]
+        });
         let rhs = DVector::from_fn(free_idx.len(), |r, _| c.tau[free_idx[r]] - b[free_idx[r]]);
         let expected = mff.cholesky().unwrap().solve(&rhs);
         for (r, &i) in free_idx.iter().enumerate() {
-            assert!((ddq[i] - expected[r]).abs() < 1e-9 * expected.amax().max(1.0), "seed {seed}: coordinate {i}");
+            assert!(
+                (ddq[i] - expected[r]).abs() < 1e-9 * expected.amax().max(1.0),
+                "seed {seed}: coordinate {i}"
+            );
         }
         for (k, &l) in locked.iter().enumerate() {
             if l {
@@ -248,20 +259,33 @@ fn hinge_impulse_conserves_momentum() {
     let c = case(12, true, true, 31);
     let mut d = Data::new(&c.model);
     for k in 0..c.model.n_hinges() {
-        let dv = impulse::hinge_impulse(&c.model, &mut d, &c.q, k).unwrap().clone();
+        let dv = impulse::hinge_impulse(&c.model, &mut d, &c.q, k)
+            .unwrap()
+            .clone();
         let m = crba(&c.model, &mut d, &c.q).unwrap().clone();
         // M Δv = e_k: zero generalised impulse on the base, i.e. no net external impulse.
         let mdv = &m * &dv;
         for r in 0..c.model.nv() {
             let expected = if r == 6 + k { 1.0 } else { 0.0 };
-            assert!((mdv[r] - expected).abs() < 1e-10, "hinge {k} row {r}: {}", mdv[r]);
+            assert!(
+                (mdv[r] - expected).abs() < 1e-10,
+                "hinge {k} row {r}: {}",
+                mdv[r]
+            );
         }
         let v0: Vec<f64> = c.v.clone();
-        let v1: Vec<f64> = c.v.iter().zip(dv.iter()).map(|(a, b)| a + 0.3 * b).collect();
+        let v1: Vec<f64> =
+            c.v.iter()
+                .zip(dv.iter())
+                .map(|(a, b)| a + 0.3 * b)
+                .collect();
         forward_kinematics(&c.model, &mut d, &c.q, &v0).unwrap();
         let (p0, h0) = momentum(&c.model, &d);
         forward_kinematics(&c.model, &mut d, &c.q, &v1).unwrap();
         let (p1, h1) = momentum(&c.model, &d);
-        assert!((p1 - p0).norm() < 1e-10 && (h1 - h0).norm() < 1e-10, "hinge {k}");
+        assert!(
+            (p1 - p0).norm() < 1e-10 && (h1 - h0).norm() < 1e-10,
+            "hinge {k}"
+        );
     }
 }
