@@ -237,7 +237,7 @@ fn usage_errors() {
     fails(&satsim(&["preprint"]), &["missing `--model`", "usage: satsim preprint"]);
     fails(
         &satsim(&["accuracy"]),
-        &["satsim accuracy: not available in this build yet"],
+        &["missing the scene file", "usage: satsim accuracy"],
     );
 }
 

@@ -5,6 +5,7 @@
 //! cross-checks the printed closed-form equations of motion (19) against it.
 #![warn(missing_docs)]
 
+pub mod accuracy;
 pub mod effects;
 pub mod output;
 pub mod preprint;

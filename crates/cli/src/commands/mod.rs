@@ -1,5 +1,6 @@
 //! Command dispatch, argument parsing and errors. One file per command.
 
+pub mod accuracy;
 pub mod bench;
 pub mod dynamics;
 pub mod preprint;
@@ -31,7 +32,8 @@ commands:
                       the preprint's closed-form S and N against the generic engine
   run SCENE.toml [--out DIR]
                       integrate a scene, write DIR/trajectory.csv
-  accuracy            accuracy report
+  accuracy SCENE.toml [--out DIR] [--repeats N] [--methods LIST] [--quick]
+                      work-precision sweep of the integrators: DIR/accuracy.{csv,svg,md}
   help [COMMAND]      this help, or a command's
   --version           the version
 
@@ -83,7 +85,9 @@ pub fn usage_line(command: Option<&str>) -> &'static str {
         Some("bench") => "satsim bench --model MODEL.toml [--state STATE.json] [--calls N]",
         Some("preprint") => "satsim preprint --model MODEL.toml --state STATE.json",
         Some("run") => "satsim run SCENE.toml [--out DIR]",
-        Some("accuracy") => "satsim accuracy",
+        Some("accuracy") => {
+            "satsim accuracy SCENE.toml [--out DIR] [--repeats N] [--methods rk4,dp54,dop853,radau5] [--quick]"
+        }
         _ => {
             "satsim <command> [options]   (commands: dynamics, bench, preprint, run, accuracy, help)"
         }
@@ -108,7 +112,7 @@ pub fn dispatch(args: &[OsString]) -> Result<Output, CliError> {
         "bench" => bench::run(rest),
         "preprint" => preprint::run(rest),
         "run" => run::run(rest),
-        "accuracy" => not_yet("accuracy"),
+        "accuracy" => accuracy::run(rest),
         other => Err(CliError::Usage {
             command: None,
             message: format!("unknown command `{other}`"),
@@ -129,12 +133,6 @@ fn help(rest: &[OsString]) -> Result<Output, CliError> {
             }),
         },
     }
-}
-
-fn not_yet(command: &str) -> Result<Output, CliError> {
-    Err(CliError::Other(format!(
-        "satsim {command}: not available in this build yet"
-    )))
 }
 
 /// Parsed options of one command: `--name VALUE` or `--name=VALUE` pairs, `--help`, and
