@@ -114,6 +114,10 @@ pub struct SceneFile {
     pub initial: Option<Spanned<StateSource>>,
     /// Duration (s, > 0).
     pub duration: Spanned<f64>,
+    /// Hinge armature (kg m², >= 0) replacing the model's: one number for every hinge, or one
+    /// per hinge (file order). The opt-in regularisation of a gimbal lock.
+    #[serde(default)]
+    pub armature: Option<Spanned<ArmatureFile>>,
     /// Integrator settings.
     #[serde(default)]
     pub integrator: Option<Spanned<IntegratorFile>>,
@@ -126,6 +130,16 @@ pub struct SceneFile {
     /// The effects.
     #[serde(default)]
     pub effects: Option<Spanned<EffectsFile>>,
+}
+
+/// `armature = 1e-3` (every hinge) or `armature = [1e-3, 1e-3, 1e-3, 0.0, 0.0]` (per hinge).
+#[derive(Clone, Debug, Deserialize)]
+#[serde(untagged, expecting = "a number or an array of numbers, one per hinge")]
+pub enum ArmatureFile {
+    /// The same armature for every hinge.
+    All(f64),
+    /// One armature per hinge, file order.
+    PerHinge(Vec<f64>),
 }
 
 /// `[integrator]`.
@@ -553,6 +567,31 @@ impl Parser<'_> {
         Ok(v)
     }
 
+    /// Every given value is finite (TOML accepts `nan` and `inf`), and those marked
+    /// non-negative are `>= 0`; the error names the key and the table's line.
+    fn check_numbers(
+        &self,
+        span: Range<usize>,
+        table: &str,
+        values: &[(&str, Option<f64>, bool)],
+    ) -> Result<(), FileError> {
+        for &(key, v, non_negative) in values {
+            let Some(v) = v else { continue };
+            if !v.is_finite() || (non_negative && v < 0.0) {
+                let what = if non_negative {
+                    "a finite number >= 0"
+                } else {
+                    "a finite number"
+                };
+                return Err(self.err(
+                    Some(span),
+                    format!("`{table}{key}` must be {what}, got {v}"),
+                ));
+            }
+        }
+        Ok(())
+    }
+
     fn scene(&self) -> Result<Scene, FileError> {
         let path = self.path.to_path_buf();
         if self.text.trim().is_empty() {
@@ -577,6 +616,10 @@ impl Parser<'_> {
         let model = match file.model.get_ref() {
             ModelSource::Path(p) => satsim_tree::read_model(dir.join(p))?,
             ModelSource::Inline(m) => m.build().map_err(|e| e.in_file(self.text, self.path))?,
+        };
+        let model = match &file.armature {
+            Some(a) => self.armature(model, a)?,
+            None => model,
         };
         let initial = match file.initial.as_ref().map(|s| (s.get_ref(), s.span())) {
             None => State::rest(&model),
@@ -622,6 +665,37 @@ impl Parser<'_> {
             .simulation()
             .map_err(|e| self.err(None, e.to_string()))?;
         Ok(scene)
+    }
+
+    /// The model with the scene's `armature` on its hinges.
+    fn armature(&self, mut model: Model, a: &Spanned<ArmatureFile>) -> Result<Model, FileError> {
+        let n = model.n_hinges();
+        let values = match a.get_ref() {
+            ArmatureFile::All(v) => vec![*v; n],
+            ArmatureFile::PerHinge(v) if v.len() == n => v.clone(),
+            ArmatureFile::PerHinge(v) => {
+                return Err(self.err(
+                    Some(a.span()),
+                    format!(
+                        "`armature`: expected {n} entries (one per hinge, file order), got {}",
+                        v.len()
+                    ),
+                ));
+            }
+        };
+        if let Some(v) = values.iter().find(|v| !(**v >= 0.0 && v.is_finite())) {
+            return Err(self.err(
+                Some(a.span()),
+                format!("`armature` must be finite numbers >= 0 (kg m²), got {v}"),
+            ));
+        }
+        for (k, v) in values.into_iter().enumerate() {
+            let i = model.hinge_body[k];
+            if let Some(j) = model.joints[i].as_mut() {
+                j.armature = v;
+            }
+        }
+        Ok(model)
     }
 
     fn integrator(&self, f: Option<&Spanned<IntegratorFile>>) -> Result<Options, FileError> {
@@ -692,6 +766,34 @@ impl Parser<'_> {
                 ));
             }
         };
+        let vec = |v: Option<[f64; 3]>, k: usize| v.map(|v| v[k]);
+        self.check_numbers(
+            o.span(),
+            "orbit.",
+            &[
+                ("inclination_deg", f.inclination_deg, false),
+                ("raan_deg", f.raan_deg, false),
+                ("arg_periapsis_deg", f.arg_periapsis_deg, false),
+                ("true_anomaly_deg", f.true_anomaly_deg, false),
+                ("j2", f.j2, false),
+                ("position", vec(f.position, 0), false),
+                ("position", vec(f.position, 1), false),
+                ("position", vec(f.position, 2), false),
+                ("velocity", vec(f.velocity, 0), false),
+                ("velocity", vec(f.velocity, 1), false),
+                ("velocity", vec(f.velocity, 2), false),
+            ],
+        )?;
+        for (key, v) in [("mu", f.mu), ("radius", f.radius)] {
+            if let Some(v) = v
+                && !(v > 0.0 && v.is_finite())
+            {
+                return Err(self.err(
+                    Some(o.span()),
+                    format!("`orbit.{key}` must be a finite number > 0, got {v}"),
+                ));
+            }
+        }
         let mut orbit = Orbit::new(model, Vec3::zeros(), Vec3::zeros());
         if let Some(mu) = f.mu {
             orbit.mu = mu;
@@ -847,6 +949,17 @@ impl Parser<'_> {
             for h in &c.get_ref().hinge {
                 let hf = h.get_ref();
                 let hinge = self.hinge_index(model, &hf.name)?;
+                self.check_numbers(
+                    h.span(),
+                    "effects.hinge_control.hinge.",
+                    &[
+                        ("start", Some(hf.start), false),
+                        ("end", Some(hf.end), false),
+                        ("t_start", hf.t_start, false),
+                        ("kp", Some(hf.kp), true),
+                        ("kd", hf.kd, true),
+                    ],
+                )?;
                 if hinges.iter().any(|p: &HingeProfile| p.hinge == hinge) {
                     return Err(self.err(
                         Some(h.span()),
@@ -875,6 +988,15 @@ impl Parser<'_> {
             for st in &s.get_ref().stop {
                 let sf = st.get_ref();
                 let hinge = self.hinge_index(model, &sf.hinge)?;
+                self.check_numbers(
+                    st.span(),
+                    "effects.hinge_stops.stop.",
+                    &[
+                        ("lower", sf.lower, false),
+                        ("upper", sf.upper, false),
+                        ("min_rebound_rate", sf.min_rebound_rate, true),
+                    ],
+                )?;
                 if sf.lower.is_none() && sf.upper.is_none() {
                     return Err(self.err(Some(st.span()), "a stop needs `lower`, `upper` or both"));
                 }
@@ -924,6 +1046,22 @@ impl Parser<'_> {
                 let span = Some(wf.span());
                 let f = wf.get_ref();
                 let name = f.name.get_ref().clone();
+                let at = |k: usize| f.at.map(|a| a[k]);
+                self.check_numbers(
+                    wf.span(),
+                    "effects.reaction_wheels.wheel.",
+                    &[
+                        ("transverse", f.transverse, true),
+                        ("at", at(0), false),
+                        ("at", at(1), false),
+                        ("at", at(2), false),
+                        ("coulomb", f.coulomb, true),
+                        ("stribeck", f.stribeck, true),
+                        ("viscous", f.viscous, true),
+                        ("speed", f.speed, false),
+                        ("torque", f.torque, false),
+                    ],
+                )?;
                 if wheels.iter().any(|o| o.name == name) {
                     return Err(self.err(
                         Some(f.name.span()),
@@ -962,8 +1100,8 @@ impl Parser<'_> {
                 wheel.stribeck = nn(f.stribeck, "stribeck", 0.0)?;
                 wheel.viscous = nn(f.viscous, "viscous", 0.0)?;
                 wheel.stribeck_speed = f.stribeck_speed.unwrap_or(1.0);
-                if wheel.stribeck_speed.is_nan() || wheel.stribeck_speed <= 0.0 {
-                    return Err(self.err(span, "`stribeck_speed` must be > 0"));
+                if !(wheel.stribeck_speed.is_finite() && wheel.stribeck_speed > 0.0) {
+                    return Err(self.err(span, "`stribeck_speed` must be a finite number > 0"));
                 }
                 wheel.speed = f.speed.unwrap_or(0.0);
                 wheel.torque = f.torque.unwrap_or(0.0);
@@ -980,11 +1118,16 @@ impl Parser<'_> {
             .filter(|a| on(a.get_ref().enabled))
         {
             let af = a.get_ref();
+            self.check_numbers(
+                a.span(),
+                "effects.attitude_control.",
+                &[("kp", Some(af.kp), true), ("kd", Some(af.kd), true)],
+            )?;
             let q = match &af.attitude {
                 Some(q) => {
                     let [w, x, y, z] = *q.get_ref();
                     let quat = Quaternion::new(w, x, y, z);
-                    if (quat.norm() - 1.0).abs() > 1e-6 {
+                    if (quat.norm() - 1.0).abs().is_nan() || (quat.norm() - 1.0).abs() > 1e-6 {
                         return Err(self.err(
                             Some(q.span()),
                             format!("`attitude`: quaternion norm {} is not 1", quat.norm()),

@@ -29,7 +29,8 @@
 use crate::effects::{CANONICAL_ORDER, Context, Effect, Forces, OrbitState, Request, Rotor};
 use nalgebra::{DMatrix, DVector, Quaternion, UnitQuaternion};
 use satsim_integrate::{
-    EventAction, EventDirection, IntegrateError, Options, Output, Stats, System, SystemError,
+    EventAction, EventDirection, IntegrateError, Options, Output, Stats, StopReason, System,
+    SystemError,
 };
 use satsim_tree::spatial::{Mat3, Vec3};
 use satsim_tree::{
@@ -201,6 +202,8 @@ pub struct Simulation {
     t0: f64,
     rhs_evals: u64,
     log: Vec<(f64, String)>,
+    /// Why an event handler stopped the run (an impact that could not be solved).
+    event_failure: Option<String>,
 }
 
 fn order_of(name: &str) -> usize {
@@ -230,7 +233,8 @@ fn with_rotors(model: &Model, rotors: &[Rotor]) -> Result<Model, ModelError> {
             )
             .at(j.at)
             .child_at(j.child_at)
-            .rotation(*rot.quaternion()),
+            .rotation(*rot.quaternion())
+            .armature(j.armature),
         );
     }
     let root = model.bodies[0].name.clone();
@@ -387,6 +391,7 @@ impl Simulation {
             t0,
             rhs_evals: 0,
             log: Vec::new(),
+            event_failure: None,
         };
         // With an orbit, put the centre of mass at rest in the orbit's frame.
         if free && sim.orbit_effect.is_some() && sim.model.total_mass() > 0.0 {
@@ -745,8 +750,21 @@ impl Simulation {
                 }
                 ControlFlow::Continue(())
             });
+        let sim = cell.into_inner();
         match (result, failure) {
             (_, Some(f)) => Err(f),
+            // A failed event (an impact whose impulse cannot be solved) is an error, not an
+            // early success.
+            (Ok(stats), None)
+                if matches!(stats.stop, StopReason::Event { .. })
+                    && sim.event_failure.is_some() =>
+            {
+                let why = sim.event_failure.take().unwrap_or_default();
+                Err(RunError::Integrate(IntegrateError::System {
+                    t: stats.t_final,
+                    source: SystemError::new(why),
+                }))
+            }
             (Ok(stats), None) => Ok(stats),
             (Err(e), None) => Err(RunError::Integrate(e)),
         }
@@ -1029,7 +1047,10 @@ impl System for Simulation {
     fn on_event(&mut self, k: usize, t: f64, x: &mut [f64]) -> EventAction {
         let i = self.event_owner(k);
         let local = k - self.event_start[i];
-        if self.prepare(t, x, false).is_err() {
+        if let Err(e) = self.prepare(t, x, false) {
+            let why = format!("event handling failed: {e}");
+            self.log.push((t, why.clone()));
+            self.event_failure = Some(why);
             return EventAction::Stop;
         }
         let r = self.own[i].clone();
@@ -1077,7 +1098,9 @@ impl System for Simulation {
         let changed = !reqs.is_empty();
         for req in reqs {
             if let Err(e) = self.apply_request(req, x) {
-                self.log.push((t, format!("impact failed: {e}")));
+                let why = format!("impact failed: {e}");
+                self.log.push((t, why.clone()));
+                self.event_failure = Some(why);
                 return EventAction::Stop;
             }
         }

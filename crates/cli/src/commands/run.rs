@@ -4,7 +4,10 @@
 //! standard error when it is a terminal, and prints a short summary on standard output.
 //!
 //! Exit status: 0 on success, 2 for bad input (the scene, its model or state, the command
-//! line), 1 for a run that fails part-way (the message says when and why).
+//! line), 1 for a run that fails part-way (the message says when and why), 130 for a run
+//! interrupted by Ctrl-C (SIGINT): the run stops at the next output row, the CSV holds every
+//! row up to it and standard error says `interrupted at t = … s; N rows written to …`. A
+//! second Ctrl-C kills the process at once.
 //! `satsim` with no arguments runs the default scene `examples/scenes/deploy.toml`.
 
 use super::{CliError, Options, Output, usage_line};
@@ -23,6 +26,9 @@ const NAME: &str = "run";
 /// The exit status of a run that failed part-way.
 pub const EXIT_RUN_FAILED: u8 = 1;
 
+/// The exit status of a run interrupted by Ctrl-C (128 + SIGINT, as shells report it).
+pub const EXIT_INTERRUPTED: u8 = 130;
+
 /// Why `satsim run` failed.
 #[derive(Debug)]
 pub enum Failure {
@@ -30,6 +36,8 @@ pub enum Failure {
     BadInput(CliError),
     /// The run failed part-way (exit status 1).
     Run(String),
+    /// The run was interrupted by Ctrl-C (exit status 130); the message says where.
+    Interrupted(String),
 }
 
 impl From<CliError> for Failure {
@@ -44,6 +52,7 @@ impl Failure {
         match self {
             Failure::BadInput(_) => super::EXIT_BAD_INPUT,
             Failure::Run(_) => EXIT_RUN_FAILED,
+            Failure::Interrupted(_) => EXIT_INTERRUPTED,
         }
     }
 }
@@ -53,6 +62,7 @@ impl std::fmt::Display for Failure {
         match self {
             Failure::BadInput(e) => write!(f, "{e}"),
             Failure::Run(m) => write!(f, "error: {m}"),
+            Failure::Interrupted(m) => write!(f, "{m}"),
         }
     }
 }
@@ -75,7 +85,7 @@ pub fn default_scene() -> PathBuf {
 pub fn run(args: &[OsString]) -> Result<Output, CliError> {
     command(args).map_err(|f| match f {
         Failure::BadInput(e) => e,
-        Failure::Run(m) => CliError::Other(m),
+        Failure::Run(m) | Failure::Interrupted(m) => CliError::Other(m),
     })
 }
 
@@ -123,16 +133,21 @@ pub fn run_scene(scene_path: &Path, out: Option<PathBuf>) -> Result<Output, Fail
     let started = Instant::now();
     let mut last_draw = started;
     let mut rows: Vec<Vec<f64>> = Vec::new();
+    interrupt::install();
     let result = sim.run(
         &scene.options,
         t_end,
         &Times::Interval(scene.every),
-        |t, row| -> std::io::Result<()> {
-            csv.row(row)?;
+        |t, row| -> Result<(), Stop> {
+            csv.row(row).map_err(Stop::Write)?;
             rows.push(row.to_vec());
             if progress && (last_draw.elapsed().as_millis() >= 100 || t >= t_end) {
                 last_draw = Instant::now();
                 draw_progress((t - t0) / (t_end - t0), t);
+            }
+            // Checked after the row is written, so the CSV ends with a complete row.
+            if interrupt::requested() {
+                return Err(Stop::Interrupted);
             }
             Ok(())
         },
@@ -144,6 +159,16 @@ pub fn run_scene(scene_path: &Path, out: Option<PathBuf>) -> Result<Output, Fail
     let last_t = rows.last().map(|r| r[0]);
     let stats = match result {
         Ok(stats) => stats,
+        Err(RunError::Sink {
+            t,
+            error: Stop::Interrupted,
+        }) => {
+            return Err(Failure::Interrupted(format!(
+                "interrupted at t = {t} s; {} rows written to {}",
+                rows.len(),
+                csv_path.display()
+            )));
+        }
         Err(e) => {
             let why = match e {
                 RunError::Integrate(e) => e.to_string(),
@@ -255,4 +280,56 @@ fn draw_progress(frac: f64, t: f64) {
         100.0 * frac
     );
     let _ = err.flush();
+}
+
+/// Why the output sink stopped the run.
+#[derive(Debug)]
+enum Stop {
+    /// Writing the CSV failed.
+    Write(std::io::Error),
+    /// Ctrl-C.
+    Interrupted,
+}
+
+impl std::fmt::Display for Stop {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Stop::Write(e) => write!(f, "{e}"),
+            Stop::Interrupted => f.write_str("interrupted"),
+        }
+    }
+}
+
+/// Ctrl-C: a SIGINT handler that only sets a flag (async-signal-safe) and restores the
+/// default action, so that a second Ctrl-C kills the process at once.
+mod interrupt {
+    use std::sync::atomic::{AtomicBool, Ordering};
+
+    static REQUESTED: AtomicBool = AtomicBool::new(false);
+
+    /// Whether Ctrl-C was pressed since [`install`].
+    pub fn requested() -> bool {
+        REQUESTED.load(Ordering::Relaxed)
+    }
+
+    #[cfg(unix)]
+    extern "C" fn on_sigint(_: libc::c_int) {
+        REQUESTED.store(true, Ordering::Relaxed);
+        // SAFETY: `signal` is async-signal-safe; SIG_DFL is a valid disposition.
+        unsafe {
+            libc::signal(libc::SIGINT, libc::SIG_DFL);
+        }
+    }
+
+    /// Installs the handler (a no-op where signals are not supported).
+    pub fn install() {
+        REQUESTED.store(false, Ordering::Relaxed);
+        #[cfg(unix)]
+        // SAFETY: the handler only touches an atomic and calls `signal`, both
+        // async-signal-safe.
+        unsafe {
+            let handler: extern "C" fn(libc::c_int) = on_sigint;
+            libc::signal(libc::SIGINT, handler as libc::sighandler_t);
+        }
+    }
 }

@@ -247,6 +247,10 @@ impl Effect for ReactionWheels {
         }
     }
     fn events(&self, _ctx: &Context, forces: &Forces, own: &[f64], g: &mut [f64]) {
+        // Without stiction the wheels have no events (and `g` is empty).
+        if !self.has_stiction() {
+            return;
+        }
         for (j, w) in self.wheels.iter().enumerate() {
             let fs = w.static_friction();
             g[j] = if fs == 0.0 {

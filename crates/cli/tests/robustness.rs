@@ -1,0 +1,710 @@
+//! `satsim run` on bad input and hard cases (docs/src/results/hard-cases.md): every bad
+//! scene exits 2 with one message naming the file and the line or field, prints nothing on
+//! standard output and never panics; a scene driven into gimbal lock exits 1 naming the
+//! hinges and the time and keeps its CSV; Ctrl-C stops a run cleanly with exit status 130.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+fn satsim_in(dir: &Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_satsim"))
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .expect("run satsim")
+}
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn setup(test: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("satsim-robust-{}-{test}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    for f in ["satellite.toml", "state.json"] {
+        std::fs::copy(root().join("examples").join(f), dir.join(f)).unwrap();
+    }
+    dir
+}
+
+/// Every row has every column and parses; returns (header, rows).
+fn csv(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
+    let text = std::fs::read_to_string(path).unwrap();
+    assert!(text.ends_with('\n'), "the last row is complete");
+    let mut lines = text.lines();
+    let header: Vec<String> = lines.next().unwrap().split(',').map(String::from).collect();
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| {
+            let r: Vec<f64> = l
+                .split(',')
+                .map(|v| {
+                    v.parse::<f64>()
+                        .unwrap_or_else(|_| panic!("bad number in {l}"))
+                })
+                .collect();
+            assert_eq!(r.len(), header.len(), "{l}");
+            r
+        })
+        .collect();
+    (header, rows)
+}
+
+/// A valid scene: lines are numbered in the comments the cases below rely on.
+const SCENE: &str = r#"model = "satellite.toml"
+initial = "state.json"
+duration = 2.0
+[integrator]
+method = "rk4"
+step = 0.01
+[output]
+every = 1.0
+plots = false
+[effects.hinge_springs]
+stiffness = [50.0, 50.0, 50.0, 2.0, 2.0]
+damping = [1.0, 1.0, 1.0, 0.5, 0.5]
+"#;
+
+const WHEEL: &str = "[effects.reaction_wheels]\n[[effects.reaction_wheels.wheel]]\nname = \"x\"\naxis = [1.0, 0.0, 0.0]\ninertia = 0.1\n";
+
+/// `(case, scene text, extra files, what the message must contain)`.
+type Case = (
+    &'static str,
+    String,
+    Vec<(&'static str, String)>,
+    Vec<&'static str>,
+);
+
+fn cases() -> Vec<Case> {
+    let s = |from: &str, to: &str| {
+        assert!(SCENE.contains(from), "{from}");
+        SCENE.replace(from, to)
+    };
+    let add = |extra: &str| format!("{SCENE}{extra}");
+    let model = std::fs::read_to_string(root().join("examples/satellite.toml")).unwrap();
+    let no_file = Vec::new;
+    vec![
+        // Syntax.
+        (
+            "syntax",
+            s("duration = 2.0", "duration = = 2.0"),
+            no_file(),
+            vec!["bad.toml:3"],
+        ),
+        ("empty", String::new(), no_file(), vec!["bad.toml", "empty"]),
+        (
+            "wrong type",
+            s("duration = 2.0", "duration = \"two\""),
+            no_file(),
+            vec!["bad.toml:3", "duration"],
+        ),
+        (
+            "missing key",
+            s("duration = 2.0\n", ""),
+            no_file(),
+            vec!["bad.toml", "missing required key `duration`"],
+        ),
+        // Unknown keys at every level.
+        (
+            "unknown top key",
+            format!("colour = 1\n{SCENE}"),
+            no_file(),
+            vec!["bad.toml:1", "unknown key `colour`"],
+        ),
+        (
+            "unknown integrator key",
+            s("step = 0.01", "stpe = 0.01"),
+            no_file(),
+            vec!["bad.toml:6", "unknown key `stpe`"],
+        ),
+        (
+            "unknown output key",
+            s("every = 1.0", "evry = 1.0"),
+            no_file(),
+            vec!["bad.toml:8", "unknown key `evry`"],
+        ),
+        (
+            "unknown effect",
+            add("[effects.magnets]\n"),
+            no_file(),
+            vec!["bad.toml:13", "unknown key `magnets`"],
+        ),
+        (
+            "unknown springs key",
+            s("damping =", "dampin ="),
+            no_file(),
+            vec!["bad.toml:12", "unknown key `dampin`"],
+        ),
+        (
+            "unknown orbit key",
+            add("[orbit]\naltitude = 5e5\nheight = 1\n"),
+            no_file(),
+            vec!["bad.toml:15", "unknown key `height`"],
+        ),
+        (
+            "unknown stop key",
+            add(
+                "[effects.hinge_stops]\n[[effects.hinge_stops.stop]]\nhinge = \"h4\"\nlower = 0.0\nlatch = true\n",
+            ),
+            no_file(),
+            vec!["bad.toml:17", "unknown key `latch`"],
+        ),
+        (
+            "unknown wheel key",
+            add(&format!("{WHEEL}spin = 3.0\n")),
+            no_file(),
+            vec!["bad.toml:18", "unknown key `spin`"],
+        ),
+        (
+            "unknown control key",
+            add(
+                "[effects.hinge_control]\n[[effects.hinge_control.hinge]]\nname = \"h4\"\nstart = 0.0\nend = 1.0\nduration = 1.0\nkp = 1.0\nki = 2.0\n",
+            ),
+            no_file(),
+            vec!["bad.toml:20", "unknown key `ki`"],
+        ),
+        (
+            "unknown attitude key",
+            add(&format!(
+                "{WHEEL}[effects.attitude_control]\nkp = 1.0\nkd = 1.0\nki = 1.0\n"
+            )),
+            no_file(),
+            vec!["bad.toml:21", "unknown key `ki`"],
+        ),
+        (
+            "unknown gravity key",
+            add("[orbit]\naltitude = 5e5\n[effects.gravity_gradient]\norder = 2\n"),
+            no_file(),
+            vec!["bad.toml:16", "unknown key `order`"],
+        ),
+        (
+            "unknown initial key",
+            s("initial = \"state.json\"", "initial = { spin = 1.0 }"),
+            no_file(),
+            vec!["bad.toml:2", "unknown key `spin`"],
+        ),
+        (
+            "unknown inline model key",
+            "duration = 1.0\n[model]\n[[model.body]]\nname = \"b\"\nmass = 1.0\ninertia = [[1, 0, 0], [0, 1, 0], [0, 0, 1]]\ncolour = \"red\"\n"
+                .to_string(),
+            no_file(),
+            vec!["bad.toml:7", "unknown key `colour`"],
+        ),
+        // Unknown names.
+        (
+            "unknown hinge in stops",
+            add(
+                "[effects.hinge_stops]\n[[effects.hinge_stops.stop]]\nhinge = \"h9\"\nlower = 0.0\n",
+            ),
+            no_file(),
+            vec!["bad.toml:15", "unknown hinge `h9`"],
+        ),
+        (
+            "unknown hinge in control",
+            add(
+                "[effects.hinge_control]\n[[effects.hinge_control.hinge]]\nname = \"wing\"\nstart = 0.0\nend = 1.0\nduration = 1.0\nkp = 1.0\n",
+            ),
+            no_file(),
+            vec!["bad.toml:15", "unknown hinge `wing`"],
+        ),
+        (
+            "bad integrator",
+            s("\"rk4\"", "\"euler\""),
+            no_file(),
+            vec!["bad.toml:5", "unknown integration method `euler`"],
+        ),
+        (
+            "bad orbit model",
+            add("[orbit]\nmodel = \"newton\"\naltitude = 5e5\n"),
+            no_file(),
+            vec!["bad.toml:14", "orbit.model"],
+        ),
+        (
+            "bad stop action",
+            add(
+                "[effects.hinge_stops]\n[[effects.hinge_stops.stop]]\nhinge = \"h4\"\nlower = 0.0\naction = \"stick\"\n",
+            ),
+            no_file(),
+            vec!["bad.toml:17", "`action`"],
+        ),
+        // Wrong lengths.
+        (
+            "stiffness length",
+            s(
+                "stiffness = [50.0, 50.0, 50.0, 2.0, 2.0]",
+                "stiffness = [50.0]",
+            ),
+            no_file(),
+            vec!["bad.toml:11", "expected 5 entries"],
+        ),
+        (
+            "damping length",
+            s(
+                "damping = [1.0, 1.0, 1.0, 0.5, 0.5]",
+                "damping = [1.0, 1.0]",
+            ),
+            no_file(),
+            vec!["bad.toml:12", "expected 5 entries"],
+        ),
+        (
+            "reference length",
+            add("reference = [0.0]\n"),
+            no_file(),
+            vec![
+                "bad.toml:13",
+                "effects.hinge_springs.reference",
+                "expected 5",
+            ],
+        ),
+        (
+            "armature length",
+            s("duration = 2.0", "duration = 2.0\narmature = [1e-3, 1e-3]"),
+            no_file(),
+            vec!["bad.toml:4", "`armature`: expected 5 entries"],
+        ),
+        (
+            "initial angles length",
+            s(
+                "initial = \"state.json\"",
+                "initial = { hinges = { angle = [0.0], rate = [0.0] } }",
+            ),
+            no_file(),
+            vec!["bad.toml:2", "initial.hinges.angle", "expected 5"],
+        ),
+        (
+            "wheel axis length",
+            add(
+                "[effects.reaction_wheels]\n[[effects.reaction_wheels.wheel]]\nname = \"x\"\naxis = [1.0, 0.0]\ninertia = 0.1\n",
+            ),
+            no_file(),
+            vec!["bad.toml:16", "axis"],
+        ),
+        // Negative or zero durations, steps, tolerances, intervals.
+        (
+            "negative duration",
+            s("duration = 2.0", "duration = -2.0"),
+            no_file(),
+            vec!["bad.toml:3", "`duration` must be"],
+        ),
+        (
+            "zero duration",
+            s("duration = 2.0", "duration = 0.0"),
+            no_file(),
+            vec!["bad.toml:3", "`duration` must be"],
+        ),
+        (
+            "negative step",
+            s("step = 0.01", "step = -0.01"),
+            no_file(),
+            vec!["bad.toml:6", "`integrator.step`"],
+        ),
+        (
+            "zero step",
+            s("step = 0.01", "step = 0.0"),
+            no_file(),
+            vec!["bad.toml:6", "`integrator.step`"],
+        ),
+        (
+            "negative rtol",
+            s("step = 0.01", "step = 0.01\nrtol = -1e-9"),
+            no_file(),
+            vec!["bad.toml:7", "`integrator.rtol`"],
+        ),
+        (
+            "negative atol",
+            s("step = 0.01", "step = 0.01\natol = -1e-9"),
+            no_file(),
+            vec!["bad.toml:7", "`integrator.atol`"],
+        ),
+        (
+            "zero tolerances",
+            s("step = 0.01", "step = 0.01\nrtol = 0.0\natol = 0.0"),
+            no_file(),
+            vec!["bad.toml:4", "cannot both be 0"],
+        ),
+        (
+            "negative max_step",
+            s("step = 0.01", "step = 0.01\nmax_step = -1.0"),
+            no_file(),
+            vec!["bad.toml:7", "`integrator.max_step`"],
+        ),
+        (
+            "zero max_steps",
+            s("step = 0.01", "step = 0.01\nmax_steps = 0"),
+            no_file(),
+            vec!["bad.toml:7", "`integrator.max_steps`"],
+        ),
+        (
+            "rk4 without step",
+            s("step = 0.01\n", ""),
+            no_file(),
+            vec!["bad.toml:4", "`integrator.step` is required"],
+        ),
+        (
+            "negative output interval",
+            s("every = 1.0", "every = -1.0"),
+            no_file(),
+            vec!["bad.toml:8", "`output.every`"],
+        ),
+        // Non-finite numbers (TOML has nan and inf).
+        (
+            "nan duration",
+            s("duration = 2.0", "duration = nan"),
+            no_file(),
+            vec!["bad.toml:3", "`duration`"],
+        ),
+        (
+            "inf step",
+            s("step = 0.01", "step = inf"),
+            no_file(),
+            vec!["bad.toml:6", "`integrator.step`"],
+        ),
+        (
+            "inf stiffness",
+            s(
+                "stiffness = [50.0, 50.0, 50.0, 2.0, 2.0]",
+                "stiffness = [50.0, 50.0, inf, 2.0, 2.0]",
+            ),
+            no_file(),
+            vec!["bad.toml:11", "finite"],
+        ),
+        (
+            "nan armature",
+            s("duration = 2.0", "duration = 2.0\narmature = nan"),
+            no_file(),
+            vec!["bad.toml:4", "`armature`"],
+        ),
+        (
+            "negative armature",
+            s("duration = 2.0", "duration = 2.0\narmature = -1e-3"),
+            no_file(),
+            vec!["bad.toml:4", "`armature`"],
+        ),
+        (
+            "nan control gain",
+            add(
+                "[effects.hinge_control]\n[[effects.hinge_control.hinge]]\nname = \"h4\"\nstart = 0.0\nend = 1.0\nduration = 1.0\nkp = nan\n",
+            ),
+            no_file(),
+            vec!["bad.toml:14", "kp"],
+        ),
+        (
+            "inf stop",
+            add(
+                "[effects.hinge_stops]\n[[effects.hinge_stops.stop]]\nhinge = \"h4\"\nlower = -inf\n",
+            ),
+            no_file(),
+            vec!["bad.toml:14", "lower"],
+        ),
+        (
+            "inf wheel speed",
+            add(&format!("{WHEEL}speed = inf\n")),
+            no_file(),
+            vec!["bad.toml:14", "speed"],
+        ),
+        (
+            "nan wheel friction",
+            add(&format!("{WHEEL}coulomb = nan\n")),
+            no_file(),
+            vec!["bad.toml:14", "coulomb"],
+        ),
+        (
+            "nan orbit angle",
+            add("[orbit]\naltitude = 5e5\ninclination_deg = nan\n"),
+            no_file(),
+            vec!["bad.toml:13", "inclination_deg"],
+        ),
+        (
+            "nan attitude",
+            add(&format!(
+                "{WHEEL}[effects.attitude_control]\nkp = 1.0\nkd = 1.0\nattitude = [nan, 0.0, 0.0, 0.0]\n"
+            )),
+            no_file(),
+            vec!["bad.toml:21", "attitude"],
+        ),
+        (
+            "nan attitude gain",
+            add(&format!(
+                "{WHEEL}[effects.attitude_control]\nkp = 1.0\nkd = nan\n"
+            )),
+            no_file(),
+            vec!["bad.toml:18", "kd"],
+        ),
+        (
+            "nan initial rate",
+            s(
+                "initial = \"state.json\"",
+                "initial = { base = { angular_velocity = [nan, 0.0, 0.0] } }",
+            ),
+            no_file(),
+            vec!["bad.toml:2", "initial.base.angular_velocity"],
+        ),
+        // Non-physical values.
+        (
+            "restitution above 1",
+            add(
+                "[effects.hinge_stops]\n[[effects.hinge_stops.stop]]\nhinge = \"h4\"\nlower = 0.0\naction = \"rebound\"\nrestitution = 2.0\n",
+            ),
+            no_file(),
+            vec!["bad.toml:18", "restitution"],
+        ),
+        (
+            "stops crossed",
+            add(
+                "[effects.hinge_stops]\n[[effects.hinge_stops.stop]]\nhinge = \"h4\"\nlower = 1.0\nupper = 0.0\n",
+            ),
+            no_file(),
+            vec!["bad.toml:14", "`lower` must be below `upper`"],
+        ),
+        (
+            "zero wheel inertia",
+            add(
+                "[effects.reaction_wheels]\n[[effects.reaction_wheels.wheel]]\nname = \"x\"\naxis = [1.0, 0.0, 0.0]\ninertia = 0.0\n",
+            ),
+            no_file(),
+            vec!["bad.toml:17", "inertia"],
+        ),
+        (
+            "duplicate wheel",
+            add(&format!(
+                "{WHEEL}[[effects.reaction_wheels.wheel]]\nname = \"x\"\naxis = [0.0, 1.0, 0.0]\ninertia = 0.1\n"
+            )),
+            no_file(),
+            vec!["bad.toml:19", "duplicate wheel name `x`"],
+        ),
+        (
+            "orbit inside the Earth",
+            add("[orbit]\naltitude = 5e5\neccentricity = 0.9\n"),
+            no_file(),
+            vec!["bad.toml:13", "inside the Earth"],
+        ),
+        // Unmet needs.
+        (
+            "gravity without orbit",
+            add("[effects.gravity_gradient]\n"),
+            no_file(),
+            vec!["bad.toml:13", "needs an [orbit] table"],
+        ),
+        (
+            "control without wheels",
+            add("[effects.attitude_control]\nkp = 1.0\nkd = 1.0\n"),
+            no_file(),
+            vec!["bad.toml:13", "needs [effects.reaction_wheels]"],
+        ),
+        (
+            "orbital target without orbit",
+            add(&format!(
+                "{WHEEL}[effects.attitude_control]\ntarget = \"orbital\"\nkp = 1.0\nkd = 1.0\n"
+            )),
+            no_file(),
+            vec!["bad.toml:18", "needs an [orbit] table"],
+        ),
+        (
+            "wheels without a wheel",
+            add("[effects.reaction_wheels]\n"),
+            no_file(),
+            vec!["bad.toml:13", "needs at least one"],
+        ),
+        // The model and state files a scene names: their own file and line.
+        (
+            "missing model",
+            s("model = \"satellite.toml\"", "model = \"nope.toml\""),
+            no_file(),
+            vec!["nope.toml", "cannot read"],
+        ),
+        (
+            "model cycle",
+            String::from(SCENE),
+            vec![(
+                "satellite.toml",
+                model.replace(
+                    "parent = \"bus\"\nchild = \"link1\"",
+                    "parent = \"panel1\"\nchild = \"link1\"",
+                ),
+            )],
+            vec!["satellite.toml", "cycle"],
+        ),
+        (
+            "negative mass",
+            String::from(SCENE),
+            vec![(
+                "satellite.toml",
+                model.replace("mass = 800.0", "mass = -800.0"),
+            )],
+            vec!["satellite.toml:9", "negative"],
+        ),
+        (
+            "non-finite inertia",
+            String::from(SCENE),
+            vec![("satellite.toml", model.replace("[[900.0,", "[[nan,"))],
+            vec!["satellite.toml:10", "not finite"],
+        ),
+        (
+            "state length",
+            String::from(SCENE),
+            vec![(
+                "state.json",
+                "{\"hinges\": {\"angle\": [0.0], \"rate\": [0.0]}}".into(),
+            )],
+            vec!["state.json", "hinges.angle", "expected 5"],
+        ),
+        (
+            "state syntax",
+            String::from(SCENE),
+            vec![("state.json", "{\"hinges\": ".into())],
+            vec!["state.json:1"],
+        ),
+    ]
+}
+
+/// Every bad scene: exit status 2, one message on standard error naming the file and the
+/// line or the field, nothing on standard output, no panic.
+#[test]
+fn every_bad_scene_exits_2_with_the_file_and_line_or_field() {
+    let dir = setup("bad");
+    let mut failures = Vec::new();
+    let cases = cases();
+    for (case, text, files, needles) in &cases {
+        for f in ["satellite.toml", "state.json"] {
+            std::fs::copy(root().join("examples").join(f), dir.join(f)).unwrap();
+        }
+        for (name, content) in files {
+            std::fs::write(dir.join(name), content).unwrap();
+        }
+        std::fs::write(dir.join("bad.toml"), text).unwrap();
+        let o = satsim_in(&dir, &["run", "bad.toml"]);
+        let err = String::from_utf8_lossy(&o.stderr).into_owned();
+        println!("{case}: {}", err.trim_end());
+        let mut why = Vec::new();
+        if o.status.code() != Some(2) {
+            why.push(format!("exit status {:?}", o.status.code()));
+        }
+        if !o.stdout.is_empty() {
+            why.push("standard output is not empty".into());
+        }
+        if err.contains("internal error") || err.contains("panicked") {
+            why.push("panic".into());
+        }
+        if err.trim_end().lines().count() != 1 {
+            why.push("not one line".into());
+        }
+        for n in needles {
+            if !err.contains(n) {
+                why.push(format!("no `{n}`"));
+            }
+        }
+        if !why.is_empty() {
+            failures.push(format!(
+                "{case}: {}\n    {}",
+                why.join(", "),
+                err.trim_end()
+            ));
+        }
+    }
+    assert!(
+        failures.is_empty(),
+        "{} of {} cases:\n{}",
+        failures.len(),
+        cases.len(),
+        failures.join("\n")
+    );
+}
+
+/// The preprint satellite's middle gimbal hinge latching at 90°: gimbal lock.
+const LOCK: &str = r#"model = "satellite.toml"
+duration = 4.0
+[initial]
+hinges = { angle = [0.0, 0.0, 0.0, 0.0, 0.0], rate = [0.0, 1.0, 0.0, 0.0, 0.0] }
+[integrator]
+method = "dp54"
+[output]
+every = 0.1
+plots = false
+[effects.hinge_stops]
+[[effects.hinge_stops.stop]]
+hinge = "h2"
+upper = 1.5707963267948966
+"#;
+
+/// A scene driven into gimbal lock fails (exit 1) with the hinges and the time and keeps its
+/// rows; the same scene with the scene key `armature` (one number for every hinge) runs
+/// through (exit 0).
+#[test]
+fn gimbal_lock_is_refused_with_hinges_and_time_and_armature_runs_through() {
+    let dir = setup("lock");
+    std::fs::write(dir.join("lock.toml"), LOCK).unwrap();
+    let o = satsim_in(&dir, &["run", "lock.toml"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(o.stdout.is_empty());
+    assert!(
+        err.contains("lock.toml: the run failed: system error at t = 1.65")
+            && err.contains("singular configuration at hinge `h1` (gimbal lock with `h2`, `h3`")
+            && err.contains("holds the rows up to t = 1.6 s"),
+        "{err}"
+    );
+    let (_, rows) = csv(&dir.join("out/lock/trajectory.csv"));
+    assert_eq!(rows.len(), 17);
+
+    let fixed = LOCK.replace("duration = 4.0", "duration = 4.0\narmature = 1e-3");
+    std::fs::write(dir.join("lock.toml"), fixed).unwrap();
+    let o = satsim_in(&dir, &["run", "lock.toml"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (_, rows) = csv(&dir.join("out/lock/trajectory.csv"));
+    assert_eq!(rows.len(), 41);
+}
+
+/// Ctrl-C: `satsim run` on a long scene, SIGINT after a second: exit status 130, the message
+/// says where it stopped and how many rows it wrote, and the CSV holds exactly those rows,
+/// each complete.
+#[cfg(unix)]
+#[test]
+fn ctrl_c_stops_cleanly_and_keeps_the_csv() {
+    let dir = setup("sigint");
+    std::fs::write(
+        dir.join("long.toml"),
+        SCENE
+            .replace("duration = 2.0", "duration = 1e7")
+            .replace("every = 1.0", "every = 0.05"),
+    )
+    .unwrap();
+    let child = Command::new(env!("CARGO_BIN_EXE_satsim"))
+        .args(["run", "long.toml"])
+        .current_dir(&dir)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Wait until rows are being written, then interrupt.
+    let csv_path = dir.join("out/long/trajectory.csv");
+    let start = Instant::now();
+    while std::fs::read_to_string(&csv_path).map_or(0, |t| t.lines().count()) < 5 {
+        assert!(start.elapsed() < Duration::from_secs(60), "no rows written");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let status = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let o = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(130), "{err}");
+    assert!(o.stdout.is_empty());
+    let (_, rows) = csv(&csv_path);
+    let last = rows.last().unwrap()[0];
+    let expected = format!(
+        "interrupted at t = {last} s; {} rows written to out/long/trajectory.csv",
+        rows.len()
+    );
+    assert_eq!(err.trim_end(), expected);
+    // Every row up to the last is there, in order.
+    for (k, r) in rows.iter().enumerate() {
+        assert!(
+            (r[0] - 0.05 * k as f64).abs() < 1e-9,
+            "row {k}: t = {}",
+            r[0]
+        );
+    }
+}
