@@ -234,7 +234,10 @@ fn usage_errors() {
     );
     fails(&satsim(&["frobnicate"]), &["unknown command `frobnicate`"]);
     fails(&satsim(&["bench"]), &["missing `--model`"]);
-    fails(&satsim(&["preprint"]), &["missing `--model`", "usage: satsim preprint"]);
+    fails(
+        &satsim(&["preprint"]),
+        &["missing `--model`", "usage: satsim preprint"],
+    );
     fails(
         &satsim(&["accuracy"]),
         &["missing the scene file", "usage: satsim accuracy"],
@@ -568,24 +571,48 @@ fn state_file_errors() {
 #[test]
 fn preprint_on_the_examples_and_a_refusal() {
     for (model, state) in [
-        (root().join("examples/satellite.toml"), root().join("examples/state.json")),
-        (fixtures().join("satellite_rotated.model.toml"), fixtures().join("satellite_rotated.state.json")),
+        (
+            root().join("examples/satellite.toml"),
+            root().join("examples/state.json"),
+        ),
+        (
+            fixtures().join("satellite_rotated.model.toml"),
+            fixtures().join("satellite_rotated.state.json"),
+        ),
     ] {
-        let o = satsim(&["preprint", "--model", model.to_str().unwrap(), "--state", state.to_str().unwrap()]);
+        let o = satsim(&[
+            "preprint",
+            "--model",
+            model.to_str().unwrap(),
+            "--state",
+            state.to_str().unwrap(),
+        ]);
         assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
         let v: Value = serde_json::from_str(&stdout(&o)).unwrap();
         let keys: Vec<&str> = v.as_object().unwrap().keys().map(|k| k.as_str()).collect();
-        for k in ["S_closed_form", "N_closed_form", "S_tree", "N_tree", "max_abs_difference"] {
+        for k in [
+            "S_closed_form",
+            "N_closed_form",
+            "S_tree",
+            "N_tree",
+            "max_abs_difference",
+        ] {
             assert!(keys.contains(&k), "missing {k}");
         }
         let s_cf = matrix(&v["S_closed_form"]);
         let s_tree = matrix(&v["S_tree"]);
-        assert_eq!((s_cf.len(), s_cf[0].len(), numbers(&v["N_tree"]).len()), (8, 8, 8));
+        assert_eq!(
+            (s_cf.len(), s_cf[0].len(), numbers(&v["N_tree"]).len()),
+            (8, 8, 8)
+        );
         let mut worst = 0.0f64;
         for (a, b) in s_cf.iter().flatten().zip(s_tree.iter().flatten()) {
             worst = worst.max((a - b).abs());
         }
-        for (a, b) in numbers(&v["N_closed_form"]).iter().zip(numbers(&v["N_tree"])) {
+        for (a, b) in numbers(&v["N_closed_form"])
+            .iter()
+            .zip(numbers(&v["N_tree"]))
+        {
             worst = worst.max((a - b).abs());
         }
         let reported = v["max_abs_difference"].as_f64().unwrap();

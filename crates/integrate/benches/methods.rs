@@ -25,7 +25,9 @@ impl System for Chain {
 }
 
 fn bench(c: &mut Criterion) {
-    let x0: Vec<f64> = (0..20).map(|i| if i < 10 { (i as f64 * 0.3).sin() } else { 0.0 }).collect();
+    let x0: Vec<f64> = (0..20)
+        .map(|i| if i < 10 { (i as f64 * 0.3).sin() } else { 0.0 })
+        .collect();
     let mut group = c.benchmark_group("chain20_t10");
     for method in Method::ALL {
         let opts = match method {
@@ -34,10 +36,18 @@ fn bench(c: &mut Criterion) {
         };
         group.bench_function(method.name(), |b| {
             b.iter(|| {
-                integrate(&mut Chain, &opts, 0.0, black_box(&x0), 10.0, &Output::Interval(0.1), |_, x| {
-                    black_box(x);
-                    ControlFlow::Continue(())
-                })
+                integrate(
+                    &mut Chain,
+                    &opts,
+                    0.0,
+                    black_box(&x0),
+                    10.0,
+                    &Output::Interval(0.1),
+                    |_, x| {
+                        black_box(x);
+                        ControlFlow::Continue(())
+                    },
+                )
                 .unwrap()
             })
         });

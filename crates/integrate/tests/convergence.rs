@@ -7,17 +7,24 @@ use satsim_integrate::{Method, Options};
 
 /// Error at t_end for fixed steps h = t_end / n.
 fn error(method: Method, t_end: f64, n: usize) -> f64 {
-    let opts = Options::new(method).with_fixed_step(t_end / n as f64).with_tolerances(1e-12, 1e-14);
+    let opts = Options::new(method)
+        .with_fixed_step(t_end / n as f64)
+        .with_tolerances(1e-12, 1e-14);
     let stats = run(&mut Smooth, &opts, &Smooth::X0, 0.0, t_end).unwrap();
-    assert_eq!(stats.steps_accepted, n, "fixed steps must land exactly on t_end");
+    assert_eq!(
+        stats.steps_accepted, n,
+        "fixed steps must land exactly on t_end"
+    );
     assert_eq!(stats.t_final, t_end);
     max_err(&stats.x_final, &Smooth::exact(t_end))
 }
 
 /// Least-squares slope of log(err) against log(h) over a step sweep.
 fn measured_order(method: Method, t_end: f64, ns: &[usize]) -> f64 {
-    let pts: Vec<(f64, f64)> =
-        ns.iter().map(|&n| ((t_end / n as f64).ln(), error(method, t_end, n).ln())).collect();
+    let pts: Vec<(f64, f64)> = ns
+        .iter()
+        .map(|&n| ((t_end / n as f64).ln(), error(method, t_end, n).ln()))
+        .collect();
     let m = pts.len() as f64;
     let (sx, sy) = pts.iter().fold((0.0, 0.0), |(a, b), (x, y)| (a + x, b + y));
     let (mx, my) = (sx / m, sy / m);
@@ -62,7 +69,10 @@ fn adaptive_error_tracks_tolerance() {
             let opts = Options::new(method).with_tolerances(tol, tol);
             let stats = run(&mut Smooth, &opts, &Smooth::X0, 0.0, 10.0).unwrap();
             let err = max_err(&stats.x_final, &Smooth::exact(10.0));
-            println!("{method} tol {tol:e}: err {err:e}, {} evals", stats.rhs_evals);
+            println!(
+                "{method} tol {tol:e}: err {err:e}, {} evals",
+                stats.rhs_evals
+            );
             assert!(err < 100.0 * tol, "{method} tol {tol}: err {err}");
             assert!(err < last, "{method}: error must decrease with tolerance");
             last = err;

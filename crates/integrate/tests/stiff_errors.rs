@@ -44,7 +44,12 @@ impl System for VanDerPol {
         Ok(())
     }
     fn jacobian(&mut self, _t: f64, x: &[f64], jac: &mut [f64]) -> Result<bool, SystemError> {
-        jac.copy_from_slice(&[0.0, 1.0, -2.0 * MU * x[0] * x[1] - 1.0, MU * (1.0 - x[0] * x[0])]);
+        jac.copy_from_slice(&[
+            0.0,
+            1.0,
+            -2.0 * MU * x[0] * x[1] - 1.0,
+            MU * (1.0 - x[0] * x[0]),
+        ]);
         Ok(true)
     }
 }
@@ -74,7 +79,10 @@ fn radau5_far_cheaper_than_dp54_when_stiff() {
     let opts = |m| Options::new(m).with_tolerances(1e-6, 1e-8);
     let radau = run(&mut StiffScalar, &opts(Method::Radau5), &[0.0], 0.0, 0.1).unwrap();
     let dp = run(&mut StiffScalar, &opts(Method::Dp54), &[0.0], 0.0, 0.1).unwrap();
-    println!("t_end 0.1: radau5 {} evals, dp54 {} evals", radau.rhs_evals, dp.rhs_evals);
+    println!(
+        "t_end 0.1: radau5 {} evals, dp54 {} evals",
+        radau.rhs_evals, dp.rhs_evals
+    );
     assert!(10 * radau.rhs_evals < dp.rhs_evals);
     assert!((radau.x_final[0] - dp.x_final[0]).abs() < 1e-5);
 }
@@ -98,7 +106,10 @@ fn radau5_van_der_pol_with_analytic_jacobian() {
     let stats = run(&mut VanDerPol, &opts, &[2.0, 0.0], 0.0, 3000.0).unwrap();
     println!("vdp: {stats:?}");
     assert!(stats.steps_accepted < 2000);
-    assert!(stats.jacobian_evals < stats.steps_accepted, "Jacobian reused across steps");
+    assert!(
+        stats.jacobian_evals < stats.steps_accepted,
+        "Jacobian reused across steps"
+    );
     assert!(stats.x_final[0].abs() < 2.1);
     // Same run with a finite-difference Jacobian agrees.
     struct VdpFd;
@@ -127,7 +138,10 @@ fn invalid_options_are_rejected() {
     ];
     for opts in bad {
         assert!(
-            matches!(run(&mut Smooth, &opts, &Smooth::X0, 0.0, 1.0), Err(IntegrateError::InvalidOptions(_))),
+            matches!(
+                run(&mut Smooth, &opts, &Smooth::X0, 0.0, 1.0),
+                Err(IntegrateError::InvalidOptions(_))
+            ),
             "{opts:?}"
         );
     }
@@ -143,10 +157,18 @@ fn invalid_options_are_rejected() {
     ];
     for (t_end, x0, out) in cases {
         let r = integrate(&mut Smooth, &ok, 0.0, x0, t_end, &out, cont);
-        assert!(matches!(r, Err(IntegrateError::InvalidOptions(_))), "{t_end} {x0:?} {out:?}: {r:?}");
+        assert!(
+            matches!(r, Err(IntegrateError::InvalidOptions(_))),
+            "{t_end} {x0:?} {out:?}: {r:?}"
+        );
     }
     let err = "euler".parse::<Method>().unwrap_err().to_string();
-    assert!(err.contains("rk4") && err.contains("dp54") && err.contains("dop853") && err.contains("radau5"));
+    assert!(
+        err.contains("rk4")
+            && err.contains("dp54")
+            && err.contains("dop853")
+            && err.contains("radau5")
+    );
     for m in Method::ALL {
         assert_eq!(m.name().parse::<Method>().unwrap(), m);
     }
@@ -175,14 +197,28 @@ impl System for Faulty {
 
 fn options_for(method: Method) -> Options {
     let o = Options::new(method);
-    if method == Method::Rk4 { o.with_fixed_step(0.01) } else { o }
+    if method == Method::Rk4 {
+        o.with_fixed_step(0.01)
+    } else {
+        o
+    }
 }
 
 #[test]
 fn non_finite_rhs_is_reported() {
     for method in Method::ALL {
-        match run(&mut Faulty { fail_with_error: false }, &options_for(method), &[0.0], 0.0, 1.0) {
-            Err(IntegrateError::NonFinite { t }) => assert!(t > 0.5 && t <= 1.0, "{method}: t = {t}"),
+        match run(
+            &mut Faulty {
+                fail_with_error: false,
+            },
+            &options_for(method),
+            &[0.0],
+            0.0,
+            1.0,
+        ) {
+            Err(IntegrateError::NonFinite { t }) => {
+                assert!(t > 0.5 && t <= 1.0, "{method}: t = {t}")
+            }
             other => panic!("{method}: expected NonFinite, got {other:?}"),
         }
     }
@@ -191,7 +227,15 @@ fn non_finite_rhs_is_reported() {
 #[test]
 fn system_error_propagates_with_time() {
     for method in Method::ALL {
-        match run(&mut Faulty { fail_with_error: true }, &options_for(method), &[0.0], 0.0, 1.0) {
+        match run(
+            &mut Faulty {
+                fail_with_error: true,
+            },
+            &options_for(method),
+            &[0.0],
+            0.0,
+            1.0,
+        ) {
             Err(IntegrateError::System { t, source }) => {
                 assert!(t > 0.5 && t <= 1.0);
                 assert!(source.to_string().contains("singular"));

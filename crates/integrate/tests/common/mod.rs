@@ -13,7 +13,11 @@ impl Smooth {
     pub const X0: [f64; 3] = [1.0, 0.0, 1.0];
     pub fn exact(t: f64) -> [f64; 3] {
         // y = (sin t - cos t)/2 + (3/2) e^{-t} satisfies y(0) = 1.
-        [t.cos(), -t.sin(), 0.5 * (t.sin() - t.cos()) + 1.5 * (-t).exp()]
+        [
+            t.cos(),
+            -t.sin(),
+            0.5 * (t.sin() - t.cos()) + 1.5 * (-t).exp(),
+        ]
     }
 }
 
@@ -30,12 +34,23 @@ impl System for Smooth {
 }
 
 pub fn max_err(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max)
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f64::max)
 }
 
 /// Runs to `t_end` without outputs.
-pub fn run<S: System>(sys: &mut S, opts: &Options, x0: &[f64], t0: f64, t_end: f64) -> Result<Stats, IntegrateError> {
-    integrate(sys, opts, t0, x0, t_end, &Output::Times(vec![]), |_, _| ControlFlow::Continue(()))
+pub fn run<S: System>(
+    sys: &mut S,
+    opts: &Options,
+    x0: &[f64],
+    t0: f64,
+    t_end: f64,
+) -> Result<Stats, IntegrateError> {
+    integrate(sys, opts, t0, x0, t_end, &Output::Times(vec![]), |_, _| {
+        ControlFlow::Continue(())
+    })
 }
 
 /// Every `(t, x)` passed to the observer.
