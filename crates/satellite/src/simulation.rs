@@ -35,7 +35,7 @@ use satsim_integrate::{
 use satsim_tree::spatial::{Mat3, Vec3};
 use satsim_tree::{
     BaseKind, Body, Data, DynamicsError, Hinge, Model, ModelBuilder, ModelError, State, aba,
-    aba_hybrid, center_of_mass, crba, forward_kinematics, kinetic_energy, momentum,
+    aba_hybrid, center_of_mass, crba, forward_kinematics, kinetic_energy, momentum, rnea,
 };
 use std::cell::RefCell;
 use std::ops::{ControlFlow, Range};
@@ -198,6 +198,11 @@ pub struct Simulation {
     forces: Forces,
     scratch: Vec<f64>,
     requests: Vec<Request>,
+    /// Hold torques (see [`Context::hold_torque`]) and their work buffers.
+    needs_hold: bool,
+    hold: Vec<f64>,
+    hold_mask: Vec<bool>,
+    hold_ddq: Vec<f64>,
     x0: Vec<f64>,
     t0: f64,
     rhs_evals: u64,
@@ -349,6 +354,8 @@ impl Simulation {
             n_events += e.n_events();
         }
         let needs_kinematics = effects.iter().any(|e| e.needs().kinematics);
+        let needs_hold = effects.iter().any(|e| e.needs().hold_torques);
+        let (n_tree_hinges, n_tree_nv) = (model.n_hinges(), model.nv());
         let nh = model.n_hinges();
         let mut base_tau = vec![0.0; nh];
         base_tau[..n_user].copy_from_slice(&state.tau[user.base_nv()..]);
@@ -387,6 +394,10 @@ impl Simulation {
             n_locked: 0,
             scratch: vec![0.0; x0.len()],
             requests: Vec::new(),
+            needs_hold,
+            hold: vec![f64::NAN; n_tree_hinges],
+            hold_mask: vec![false; n_tree_hinges],
+            hold_ddq: vec![0.0; n_tree_nv],
             x0: Vec::new(),
             t0,
             rhs_evals: 0,
@@ -404,7 +415,8 @@ impl Simulation {
             }
         }
         // Effects' start hooks (initial locks).
-        sim.prepare(t0, &x0, true).map_err(SimError::Start)?;
+        sim.prepare_with(t0, &x0, true, Hold::All)
+            .map_err(SimError::Start)?;
         {
             let Self {
                 model,
@@ -418,9 +430,12 @@ impl Simulation {
                 locked,
                 layout,
                 n_user,
+                hold,
                 ..
             } = &mut sim;
-            let ctx = make_ctx(model, data, q, v, locked, layout, *n_user, t0, &x0, true);
+            let ctx = make_ctx(
+                model, data, q, v, locked, layout, *n_user, t0, &x0, true, hold,
+            );
             let ctx = Context {
                 orbit: orbit_of(effects, own, &x0),
                 ..ctx
@@ -505,6 +520,86 @@ impl Simulation {
 
     /// Unpacks, runs kinematics and every effect's `apply` (own derivatives into `scratch`).
     fn prepare(&mut self, t: f64, x: &[f64], kinematics: bool) -> Result<(), SystemError> {
+        self.prepare_with(t, x, kinematics, Hold::None)
+    }
+
+    /// As [`Self::prepare`], then fills the hold torques for the hinges `hold` asks for.
+    fn prepare_with(
+        &mut self,
+        t: f64,
+        x: &[f64],
+        kinematics: bool,
+        hold: Hold,
+    ) -> Result<(), SystemError> {
+        self.apply_effects(t, x, kinematics)?;
+        self.hold.fill(f64::NAN);
+        if !self.needs_hold {
+            return Ok(());
+        }
+        let nb = self.model.base_nv();
+        self.tau[nb..].copy_from_slice(&self.forces.hinge_torque);
+        if self.n_locked > 0 {
+            self.hold_mask.copy_from_slice(&self.locked);
+            self.solve_hold(None)?;
+        }
+        if hold == Hold::All {
+            for k in 0..self.locked.len() {
+                if !self.locked[k] {
+                    self.hold_mask.copy_from_slice(&self.locked);
+                    self.hold_mask[k] = true;
+                    self.solve_hold(Some(k))?;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Hybrid dynamics with `hold_mask` locked, then RNEA for the torques the locked hinges
+    /// must receive: all of them (`only` = None) or hinge `only`.
+    fn solve_hold(&mut self, only: Option<usize>) -> Result<(), SystemError> {
+        let nb = self.model.base_nv();
+        let fext = if self.forces.has_wrench {
+            Some(self.forces.body_wrench.as_slice())
+        } else {
+            None
+        };
+        let err = |e: satsim_tree::DynamicsError| SystemError::new(e.to_string());
+        let ddq = aba_hybrid(
+            &self.model,
+            &mut self.data,
+            &self.q,
+            &self.v,
+            &self.tau,
+            fext,
+            &self.hold_mask,
+        )
+        .map_err(err)?;
+        self.hold_ddq.copy_from_slice(ddq.as_slice());
+        let need = rnea(
+            &self.model,
+            &mut self.data,
+            &self.q,
+            &self.v,
+            &self.hold_ddq,
+            fext,
+        )
+        .map_err(err)?;
+        match only {
+            Some(k) => self.hold[k] = need[nb + k],
+            None => {
+                for (k, h) in self.hold.iter_mut().enumerate() {
+                    if self.hold_mask[k] {
+                        *h = need[nb + k];
+                    }
+                }
+            }
+        }
+        // ABA and RNEA leave the poses of the last forward kinematics as they were.
+        Ok(())
+    }
+
+    /// Unpacks, runs kinematics and every effect's `apply` (own derivatives into `scratch`).
+    fn apply_effects(&mut self, t: f64, x: &[f64], kinematics: bool) -> Result<(), SystemError> {
         self.unpack(x);
         let kin = kinematics || self.needs_kinematics;
         if kin {
@@ -524,12 +619,13 @@ impl Simulation {
             n_user,
             base_tau,
             scratch,
+            hold,
             ..
         } = self;
         let orbit = orbit_of(effects, own, x);
         let ctx = Context {
             orbit,
-            ..make_ctx(model, data, q, v, locked, layout, *n_user, t, x, kin)
+            ..make_ctx(model, data, q, v, locked, layout, *n_user, t, x, kin, hold)
         };
         forces.clear();
         forces.hinge_torque.copy_from_slice(base_tau);
@@ -694,13 +790,14 @@ impl Simulation {
             locked,
             layout,
             n_user,
+            hold,
             ..
         } = self;
         let kinetic = kinetic_energy(model, data, q, v).unwrap_or(f64::NAN);
         let (p, h) = momentum(model, data);
         let ctx = Context {
             orbit: orbit_of(effects, own, x),
-            ..make_ctx(model, data, q, v, locked, layout, *n_user, t, x, true)
+            ..make_ctx(model, data, q, v, locked, layout, *n_user, t, x, true, hold)
         };
         let mut potential = 0.0;
         for (e, r) in effects.iter().zip(own.iter()) {
@@ -834,6 +931,17 @@ fn orbit_of(effects: &[Box<dyn Effect>], own: &[Range<usize>], x: &[f64]) -> Opt
 }
 
 #[allow(clippy::too_many_arguments)]
+/// Which hold torques [`Simulation::prepare_with`] computes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Hold {
+    /// None.
+    None,
+    /// The locked hinges' (one hybrid solve).
+    Locked,
+    /// Every hinge's (one hybrid solve per unlocked hinge): at events and at the start.
+    All,
+}
+
 fn make_ctx<'a>(
     model: &'a Model,
     data: &'a Data,
@@ -845,6 +953,7 @@ fn make_ctx<'a>(
     t: f64,
     x: &'a [f64],
     kin: bool,
+    hold: &'a [f64],
 ) -> Context<'a> {
     let (attitude, omega) = if layout.free {
         (
@@ -874,6 +983,7 @@ fn make_ctx<'a>(
         attitude,
         omega,
         rotor_rates: &v[nb + n_user..],
+        hold_torque: hold,
     }
 }
 
@@ -904,6 +1014,7 @@ impl System for Simulation {
                 base_tau,
                 calls,
                 needs_kinematics,
+                hold,
                 ..
             } = self;
             let ctx = Context {
@@ -919,6 +1030,7 @@ impl System for Simulation {
                     t,
                     x,
                     *needs_kinematics,
+                    hold,
                 )
             };
             forces.clear();
@@ -999,7 +1111,7 @@ impl System for Simulation {
         if self.n_events == 0 {
             return;
         }
-        if self.prepare(t, x, false).is_err() {
+        if self.prepare_with(t, x, false, Hold::Locked).is_err() {
             g.fill(1.0);
             return;
         }
@@ -1016,6 +1128,7 @@ impl System for Simulation {
             n_user,
             event_start,
             needs_kinematics,
+            hold,
             ..
         } = self;
         let ctx = Context {
@@ -1031,6 +1144,7 @@ impl System for Simulation {
                 t,
                 x,
                 *needs_kinematics,
+                hold,
             )
         };
         for (i, (e, r)) in effects.iter().zip(own.iter()).enumerate() {
@@ -1047,7 +1161,7 @@ impl System for Simulation {
     fn on_event(&mut self, k: usize, t: f64, x: &mut [f64]) -> EventAction {
         let i = self.event_owner(k);
         let local = k - self.event_start[i];
-        if let Err(e) = self.prepare(t, x, false) {
+        if let Err(e) = self.prepare_with(t, x, false, Hold::All) {
             let why = format!("event handling failed: {e}");
             self.log.push((t, why.clone()));
             self.event_failure = Some(why);
@@ -1069,6 +1183,7 @@ impl System for Simulation {
                 n_user,
                 requests,
                 needs_kinematics,
+                hold,
                 ..
             } = self;
             let xs: &[f64] = x;
@@ -1085,6 +1200,7 @@ impl System for Simulation {
                     t,
                     xs,
                     *needs_kinematics,
+                    hold,
                 )
             };
             effects[i].on_event(local, &ctx, forces, &mut own_state, requests)

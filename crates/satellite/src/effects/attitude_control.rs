@@ -94,6 +94,7 @@ impl Effect for AttitudeControl {
             free_base: true,
             orbit: matches!(self.target, Target::Orbital(_)),
             kinematics: false,
+            ..Needs::default()
         }
     }
     fn apply(

@@ -68,6 +68,9 @@ pub struct Needs {
     /// Body poses in [`Context::data`] (forward kinematics is skipped when no enabled effect
     /// needs it; without it `data.rotation`, `data.position` and [`Context::com`] are stale).
     pub kinematics: bool,
+    /// [`Context::hold_torque`] in `events`, `on_event` and `start` (stick/slip decisions).
+    /// It costs a hybrid-dynamics solve and an RNEA per evaluation, never in the rhs.
+    pub hold_torques: bool,
 }
 
 /// An axisymmetric rotor body that an effect adds to the tree (a reaction wheel), hinged to
@@ -148,6 +151,13 @@ pub struct Context<'a> {
     pub omega: Vec3,
     /// Rotor spin rates relative to the bus (rad/s), one per rotor.
     pub rotor_rates: &'a [f64],
+    /// Per hinge (model hinges then rotors): the total torque the hinge must receive to have
+    /// zero acceleration, everything else as now (the locked hinges locked): `(M q̈ + C −
+    /// Jᵀfext)_k` with `q̈` from hybrid dynamics. A hinge held by friction sticks while the
+    /// friction it needs, `hold − motor`, is within its static friction. Filled for locked
+    /// hinges in `events`, for every hinge in `on_event` and `start`, and only when an effect
+    /// sets [`Needs::hold_torques`]; NaN where not computed.
+    pub hold_torque: &'a [f64],
 }
 
 impl Context<'_> {

@@ -10,26 +10,32 @@
 //! angular momentum of the tree include the wheels with no special case.
 //!
 //! Friction (preprint section 2): `I dΩ/dt = τ − (α0 + α1 exp(−(Ω/Ω0)²)) sgn Ω − α2 Ω`.
-//! The sign discontinuity at `Ω = 0` is treated as stick/slip with events, not smoothed:
+//! The sign discontinuity at `Ω = 0` is treated as stick/slip with events (Karnopp's
+//! model made exact), not smoothed:
 //!
-//! - a slipping wheel whose speed crosses zero is stopped there (event `Ω = 0`); if the
-//!   motor torque magnitude is within the static friction `α0 + α1`, the wheel sticks: its
-//!   hinge is locked (a momentum-conserving impulse removes the residual rate, which is of
-//!   the size of the event tolerance) and it stays at rest, with no chattering;
-//! - a stuck wheel breaks free when `|τ|` exceeds `α0 + α1` (event `α0 + α1 − |τ| = 0`);
-//! - while slipping, `sgn Ω` is the sign of `Ω`, and at `Ω = 0` exactly the sign of `τ`
-//!   (the direction it is about to move).
+//! - while a wheel slips, `sgn Ω` is replaced by its **slip direction** `d = ±1`, held
+//!   constant between events, so that the right-hand side is smooth inside a slip phase and
+//!   the integrators keep their order (a sign that flips inside a step would cost them it);
+//! - a slipping wheel whose speed crosses zero against `d` (event `d·Ω = 0`, falling) is
+//!   examined there: the **hold torque** `H`, the total torque its hinge must receive to stay
+//!   at rest with everything else moving as it does (hybrid dynamics + RNEA, see
+//!   [`Context::hold_torque`]), gives the friction needed to stick, `H − τ`. If
+//!   `|H − τ| ≤ α0 + α1` the wheel sticks: its hinge is locked (a momentum-conserving
+//!   impulse removes the residual rate, of the size of the event tolerance) and it stays at
+//!   rest; otherwise it slips on with `d = sgn(τ − H)`;
+//! - a stuck wheel breaks free when the friction it needs exceeds the static friction
+//!   (event `α0 + α1 − |H − τ| = 0`), and slips in the direction `sgn(τ − H)`.
 //!
-//! The stick test compares the motor torque with the static friction; the locked hinge's
-//! exact constraint torque also contains the rotor's inertial reaction `I_a a·ω̇_bus`, of
-//! relative size `I_a / I_bus`, which the test neglects. Wheels without Coulomb or Stribeck
-//! friction have no events.
+//! The hold torque includes the rotor's inertial reaction to the bus's motion, so neither
+//! decision is fooled by it (comparing `τ` alone with the static friction is not enough: a
+//! wheel released with `|τ|` barely above it can be driven backwards by the bus and would
+//! chatter about zero speed). Wheels without Coulomb or Stribeck friction have no events.
 //!
 //! Limits: the command is clamped to `±max_torque`; a wheel at or beyond `max_speed` gets
 //! no torque that would speed it up further.
 
-use super::{Context, Effect, Forces, Request, Rotor};
-use satsim_integrate::{EventAction, SystemError};
+use super::{Context, Effect, Forces, Needs, Request, Rotor};
+use satsim_integrate::{EventAction, EventDirection, SystemError};
 use satsim_tree::spatial::Vec3;
 
 /// One reaction wheel.
@@ -89,15 +95,10 @@ impl Wheel {
     pub fn static_friction(&self) -> f64 {
         self.coulomb + self.stribeck
     }
-    /// The friction torque at speed `omega` while slipping, `dir` the sign used at 0.
+    /// The friction torque at speed `omega` while slipping in direction `dir` (±1; it takes
+    /// the place of `sgn Ω`, see the module's documentation).
     pub fn friction(&self, omega: f64, dir: f64) -> f64 {
-        let s = if omega > 0.0 {
-            1.0
-        } else if omega < 0.0 {
-            -1.0
-        } else {
-            dir
-        };
+        let s = dir;
         let stribeck = if self.stribeck != 0.0 {
             let x = omega / self.stribeck_speed;
             self.stribeck * (-x * x).exp()
@@ -125,6 +126,8 @@ pub struct ReactionWheels {
     /// Whether a controller writes the commands (otherwise each wheel's `torque`).
     pub commanded: bool,
     stuck: Vec<bool>,
+    /// Slip direction of each slipping wheel (±1).
+    dir: Vec<f64>,
     motor: Vec<f64>,
     last: String,
 }
@@ -137,6 +140,7 @@ impl ReactionWheels {
             wheels,
             commanded: false,
             stuck: vec![false; n],
+            dir: vec![1.0; n],
             motor: vec![0.0; n],
             last: String::new(),
         }
@@ -147,6 +151,11 @@ impl ReactionWheels {
     }
     fn has_stiction(&self) -> bool {
         self.wheels.iter().any(|w| w.static_friction() > 0.0)
+    }
+    /// The friction wheel `j` needs to stay at rest, `H − τ` (NaN if the hold torque is
+    /// unknown).
+    fn needed_friction(&self, j: usize, ctx: &Context, forces: &Forces) -> f64 {
+        ctx.hold_torque[ctx.rotor_hinge(j)] - self.command(j, forces, 0.0)
     }
     fn command(&self, j: usize, forces: &Forces, omega: f64) -> f64 {
         let c = if self.commanded {
@@ -161,6 +170,12 @@ impl ReactionWheels {
 impl Effect for ReactionWheels {
     fn name(&self) -> &str {
         "reaction_wheels"
+    }
+    fn needs(&self) -> Needs {
+        Needs {
+            hold_torques: self.has_stiction(),
+            ..Needs::default()
+        }
     }
     fn n_states(&self) -> usize {
         self.wheels.len()
@@ -202,14 +217,7 @@ impl Effect for ReactionWheels {
             self.motor[j] = tau;
             let h = ctx.rotor_hinge(j);
             if !ctx.locked[h] {
-                let dir = if tau > 0.0 {
-                    1.0
-                } else if tau < 0.0 {
-                    -1.0
-                } else {
-                    0.0
-                };
-                forces.hinge_torque[h] += tau - w.friction(omega, dir);
+                forces.hinge_torque[h] += tau - w.friction(omega, self.dir[j]);
             }
         }
         Ok(())
@@ -232,9 +240,19 @@ impl Effect for ReactionWheels {
     ) -> Result<(), SystemError> {
         for (j, &speed) in own.iter().enumerate().take(self.wheels.len()) {
             let fs = self.wheels[j].static_friction();
-            if speed == 0.0 && fs > 0.0 && self.command(j, forces, 0.0).abs() <= fs {
+            if speed != 0.0 {
+                self.dir[j] = speed.signum();
+                continue;
+            }
+            if fs == 0.0 {
+                continue;
+            }
+            let need = self.needed_friction(j, ctx, forces);
+            if need.abs() <= fs {
                 self.stuck[j] = true;
                 requests.push(Request::Lock(ctx.rotor_hinge(j)));
+            } else {
+                self.dir[j] = (-need).signum();
             }
         }
         Ok(())
@@ -246,7 +264,7 @@ impl Effect for ReactionWheels {
             0
         }
     }
-    fn events(&self, _ctx: &Context, forces: &Forces, own: &[f64], g: &mut [f64]) {
+    fn events(&self, ctx: &Context, forces: &Forces, own: &[f64], g: &mut [f64]) {
         // Without stiction the wheels have no events (and `g` is empty).
         if !self.has_stiction() {
             return;
@@ -256,9 +274,9 @@ impl Effect for ReactionWheels {
             g[j] = if fs == 0.0 {
                 1.0
             } else if self.stuck[j] {
-                fs - self.command(j, forces, 0.0).abs()
+                fs - self.needed_friction(j, ctx, forces).abs()
             } else {
-                own[j]
+                self.dir[j] * own[j]
             };
         }
     }
@@ -270,27 +288,37 @@ impl Effect for ReactionWheels {
         own: &mut [f64],
         requests: &mut Vec<Request>,
     ) -> EventAction {
-        let w = &self.wheels[j];
-        let fs = w.static_friction();
-        let tau = self.command(j, forces, 0.0);
+        let fs = self.wheels[j].static_friction();
+        let need = self.needed_friction(j, ctx, forces);
         let h = ctx.rotor_hinge(j);
+        let name = &self.wheels[j].name;
         if self.stuck[j] {
             self.stuck[j] = false;
+            self.dir[j] = (-need).signum();
             requests.push(Request::Unlock(h));
             self.last = format!(
-                "wheel `{}` broke free (|torque| {:.4} N m)",
-                w.name,
-                tau.abs()
+                "wheel `{name}` broke free (needs {:.4} N m of friction, static {fs:.4})",
+                need.abs()
             );
-        } else if tau.abs() <= fs {
+        } else if need.abs() <= fs {
             self.stuck[j] = true;
             own[j] = 0.0;
             requests.push(Request::Lock(h));
-            self.last = format!("wheel `{}` stopped and stuck", w.name);
+            self.last = format!("wheel `{name}` stopped and stuck");
         } else {
-            self.last = format!("wheel `{}` reversed through zero speed", w.name);
+            let dir = (-need).signum();
+            self.last = if dir == self.dir[j] {
+                format!("wheel `{name}` touched zero speed and slips on")
+            } else {
+                format!("wheel `{name}` reversed through zero speed")
+            };
+            self.dir[j] = dir;
         }
         EventAction::Reset
+    }
+    fn event_direction(&self, _k: usize) -> EventDirection {
+        // Stuck: the needed friction grows past the static one; slipping: d·Ω falls through 0.
+        EventDirection::Falling
     }
     fn describe_event(&self, _k: usize) -> String {
         self.last.clone()
