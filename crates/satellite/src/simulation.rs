@@ -417,34 +417,13 @@ impl Simulation {
         // Effects' start hooks (initial locks).
         sim.prepare_with(t0, &x0, true, Hold::All)
             .map_err(SimError::Start)?;
-        {
-            let Self {
-                model,
-                data,
-                effects,
-                own,
-                forces,
-                requests,
-                q,
-                v,
-                locked,
-                layout,
-                n_user,
-                hold,
-                ..
-            } = &mut sim;
-            let ctx = make_ctx(
-                model, data, q, v, locked, layout, *n_user, t0, &x0, true, hold,
-            );
-            let ctx = Context {
-                orbit: orbit_of(effects, own, &x0),
-                ..ctx
-            };
-            for (e, r) in effects.iter_mut().zip(own.iter()) {
-                e.start(&ctx, forces, &x0[r.clone()], requests)
+        sim.with_context(t0, &x0, true, |ctx, h| {
+            for (e, r) in h.effects.iter_mut().zip(h.own) {
+                e.start(ctx, h.forces, &x0[r.clone()], h.requests)
                     .map_err(SimError::Start)?;
             }
-        }
+            Ok::<(), SimError>(())
+        })?;
         let reqs = std::mem::take(&mut sim.requests);
         for r in reqs {
             sim.apply_request(r, &mut x0)?;
@@ -606,33 +585,14 @@ impl Simulation {
             forward_kinematics(&self.model, &mut self.data, &self.q, &self.v)
                 .map_err(|e| SystemError::new(e.to_string()))?;
         }
-        let Self {
-            model,
-            data,
-            effects,
-            own,
-            forces,
-            q,
-            v,
-            locked,
-            layout,
-            n_user,
-            base_tau,
-            scratch,
-            hold,
-            ..
-        } = self;
-        let orbit = orbit_of(effects, own, x);
-        let ctx = Context {
-            orbit,
-            ..make_ctx(model, data, q, v, locked, layout, *n_user, t, x, kin, hold)
-        };
-        forces.clear();
-        forces.hinge_torque.copy_from_slice(base_tau);
-        for (e, r) in effects.iter_mut().zip(own.iter()) {
-            e.apply(&ctx, forces, &x[r.clone()], &mut scratch[r.clone()])?;
-        }
-        Ok(())
+        self.with_context(t, x, kin, |ctx, h| {
+            h.forces.clear();
+            h.forces.hinge_torque.copy_from_slice(h.base_tau);
+            for (e, r) in h.effects.iter_mut().zip(h.own) {
+                e.apply(ctx, h.forces, &x[r.clone()], &mut h.scratch[r.clone()])?;
+            }
+            Ok(())
+        })
     }
 
     /// Applies one request to the state `x`.
@@ -780,37 +740,24 @@ impl Simulation {
         x: &[f64],
         row: Option<&mut Vec<f64>>,
     ) -> Diagnostics {
-        let Self {
-            model,
-            data,
-            effects,
-            own,
-            q,
-            v,
-            locked,
-            layout,
-            n_user,
-            hold,
-            ..
-        } = self;
-        let kinetic = kinetic_energy(model, data, q, v).unwrap_or(f64::NAN);
-        let (p, h) = momentum(model, data);
-        let ctx = Context {
-            orbit: orbit_of(effects, own, x),
-            ..make_ctx(model, data, q, v, locked, layout, *n_user, t, x, true, hold)
-        };
-        let mut potential = 0.0;
-        for (e, r) in effects.iter().zip(own.iter()) {
-            potential += e.potential_energy(&ctx, &x[r.clone()]);
-        }
-        if let Some(row) = row {
-            for (e, r) in effects.iter().zip(own.iter()) {
-                if !e.rotors().is_empty() {
-                    row.extend_from_slice(&x[r.clone()]);
-                }
-                e.output(&ctx, &x[r.clone()], row);
+        let kinetic =
+            kinetic_energy(&self.model, &mut self.data, &self.q, &self.v).unwrap_or(f64::NAN);
+        let (p, h) = momentum(&self.model, &self.data);
+        let potential = self.with_context(t, x, true, |ctx, hooks| {
+            let mut potential = 0.0;
+            for (e, r) in hooks.effects.iter().zip(hooks.own) {
+                potential += e.potential_energy(ctx, &x[r.clone()]);
             }
-        }
+            if let Some(row) = row {
+                for (e, r) in hooks.effects.iter().zip(hooks.own) {
+                    if !e.rotors().is_empty() {
+                        row.extend_from_slice(&x[r.clone()]);
+                    }
+                    e.output(ctx, &x[r.clone()], row);
+                }
+            }
+            potential
+        });
         Diagnostics {
             kinetic,
             potential,
@@ -931,6 +878,68 @@ fn orbit_of(effects: &[Box<dyn Effect>], own: &[Range<usize>], x: &[f64]) -> Opt
 }
 
 #[allow(clippy::too_many_arguments)]
+/// The parts of a simulation that the effects' hooks write, beside the read-only
+/// [`Context`] (see [`Simulation::with_context`]).
+struct Hooks<'a> {
+    effects: &'a mut [Box<dyn Effect>],
+    own: &'a [Range<usize>],
+    forces: &'a mut Forces,
+    requests: &'a mut Vec<Request>,
+    calls: &'a mut [u64],
+    scratch: &'a mut [f64],
+    base_tau: &'a [f64],
+    event_start: &'a [usize],
+}
+
+impl Simulation {
+    /// Splits the simulation, once for every hook, into the [`Context`] of time `t` and state
+    /// `x` (`kin`: whether the poses are current) and the mutable [`Hooks`], and runs `f`.
+    fn with_context<R>(
+        &mut self,
+        t: f64,
+        x: &[f64],
+        kin: bool,
+        f: impl FnOnce(&Context, Hooks) -> R,
+    ) -> R {
+        let Self {
+            model,
+            data,
+            effects,
+            own,
+            forces,
+            requests,
+            calls,
+            scratch,
+            base_tau,
+            event_start,
+            q,
+            v,
+            locked,
+            layout,
+            n_user,
+            hold,
+            ..
+        } = self;
+        let ctx = Context {
+            orbit: orbit_of(effects, own, x),
+            ..make_ctx(model, data, q, v, locked, layout, *n_user, t, x, kin, hold)
+        };
+        f(
+            &ctx,
+            Hooks {
+                effects,
+                own,
+                forces,
+                requests,
+                calls,
+                scratch,
+                base_tau,
+                event_start,
+            },
+        )
+    }
+}
+
 /// Which hold torques [`Simulation::prepare_with`] computes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Hold {
@@ -999,47 +1008,16 @@ impl System for Simulation {
             forward_kinematics(&self.model, &mut self.data, &self.q, &self.v)
                 .map_err(|e| SystemError::new(e.to_string()))?;
         }
-        {
-            let Self {
-                model,
-                data,
-                effects,
-                own,
-                forces,
-                q,
-                v,
-                locked,
-                layout,
-                n_user,
-                base_tau,
-                calls,
-                needs_kinematics,
-                hold,
-                ..
-            } = self;
-            let ctx = Context {
-                orbit: orbit_of(effects, own, x),
-                ..make_ctx(
-                    model,
-                    data,
-                    q,
-                    v,
-                    locked,
-                    layout,
-                    *n_user,
-                    t,
-                    x,
-                    *needs_kinematics,
-                    hold,
-                )
-            };
-            forces.clear();
-            forces.hinge_torque.copy_from_slice(base_tau);
-            for ((e, r), c) in effects.iter_mut().zip(own.iter()).zip(calls.iter_mut()) {
+        let kin = self.needs_kinematics;
+        self.with_context(t, x, kin, |ctx, h| {
+            h.forces.clear();
+            h.forces.hinge_torque.copy_from_slice(h.base_tau);
+            for ((e, r), c) in h.effects.iter_mut().zip(h.own).zip(h.calls.iter_mut()) {
                 *c += 1;
-                e.apply(&ctx, forces, &x[r.clone()], &mut dx[r.clone()])?;
+                e.apply(ctx, h.forces, &x[r.clone()], &mut dx[r.clone()])?;
             }
-        }
+            Ok::<(), SystemError>(())
+        })?;
         let nb = self.model.base_nv();
         self.tau[nb..].copy_from_slice(&self.forces.hinge_torque);
         let fext = if self.forces.has_wrench {
@@ -1115,42 +1093,13 @@ impl System for Simulation {
             g.fill(1.0);
             return;
         }
-        let Self {
-            model,
-            data,
-            effects,
-            own,
-            forces,
-            q,
-            v,
-            locked,
-            layout,
-            n_user,
-            event_start,
-            needs_kinematics,
-            hold,
-            ..
-        } = self;
-        let ctx = Context {
-            orbit: orbit_of(effects, own, x),
-            ..make_ctx(
-                model,
-                data,
-                q,
-                v,
-                locked,
-                layout,
-                *n_user,
-                t,
-                x,
-                *needs_kinematics,
-                hold,
-            )
-        };
-        for (i, (e, r)) in effects.iter().zip(own.iter()).enumerate() {
-            let s = event_start[i];
-            e.events(&ctx, forces, &x[r.clone()], &mut g[s..s + e.n_events()]);
-        }
+        let kin = self.needs_kinematics;
+        self.with_context(t, x, kin, |ctx, h| {
+            for (i, (e, r)) in h.effects.iter().zip(h.own).enumerate() {
+                let s = h.event_start[i];
+                e.events(ctx, h.forces, &x[r.clone()], &mut g[s..s + e.n_events()]);
+            }
+        });
     }
 
     fn event_direction(&self, k: usize) -> EventDirection {
@@ -1169,42 +1118,10 @@ impl System for Simulation {
         }
         let r = self.own[i].clone();
         let mut own_state = x[r.clone()].to_vec();
-        let action = {
-            let Self {
-                model,
-                data,
-                effects,
-                own,
-                forces,
-                q,
-                v,
-                locked,
-                layout,
-                n_user,
-                requests,
-                needs_kinematics,
-                hold,
-                ..
-            } = self;
-            let xs: &[f64] = x;
-            let ctx = Context {
-                orbit: orbit_of(effects, own, xs),
-                ..make_ctx(
-                    model,
-                    data,
-                    q,
-                    v,
-                    locked,
-                    layout,
-                    *n_user,
-                    t,
-                    xs,
-                    *needs_kinematics,
-                    hold,
-                )
-            };
-            effects[i].on_event(local, &ctx, forces, &mut own_state, requests)
-        };
+        let kin = self.needs_kinematics;
+        let action = self.with_context(t, x, kin, |ctx, h| {
+            h.effects[i].on_event(local, ctx, h.forces, &mut own_state, h.requests)
+        });
         x[r].copy_from_slice(&own_state);
         let what = self.effects[i].describe_event(local);
         if !what.is_empty() {
