@@ -920,9 +920,35 @@ impl Simulation {
             hold,
             ..
         } = self;
+        let (attitude, omega) = if layout.free {
+            (
+                UnitQuaternion::new_unchecked(Quaternion::new(q[0], q[1], q[2], q[3])),
+                Vec3::new(v[0], v[1], v[2]),
+            )
+        } else {
+            (UnitQuaternion::identity(), Vec3::zeros())
+        };
+        let nb = model.base_nv();
         let ctx = Context {
+            t,
+            model,
+            data,
+            q,
+            v,
+            n_hinges: *n_user,
+            angles: &x[layout.angles.clone()],
+            rates: &x[layout.rates.clone()],
+            locked,
+            com: if kin {
+                center_of_mass(model, data)
+            } else {
+                Vec3::zeros()
+            },
             orbit: orbit_of(effects, own, x),
-            ..make_ctx(model, data, q, v, locked, layout, *n_user, t, x, kin, hold)
+            attitude,
+            omega,
+            rotor_rates: &v[nb + *n_user..],
+            hold_torque: hold,
         };
         f(
             &ctx,
@@ -949,51 +975,6 @@ enum Hold {
     Locked,
     /// Every hinge's (one hybrid solve per unlocked hinge): at events and at the start.
     All,
-}
-
-fn make_ctx<'a>(
-    model: &'a Model,
-    data: &'a Data,
-    q: &'a [f64],
-    v: &'a [f64],
-    locked: &'a [bool],
-    layout: &StateLayout,
-    n_user: usize,
-    t: f64,
-    x: &'a [f64],
-    kin: bool,
-    hold: &'a [f64],
-) -> Context<'a> {
-    let (attitude, omega) = if layout.free {
-        (
-            UnitQuaternion::new_unchecked(Quaternion::new(q[0], q[1], q[2], q[3])),
-            Vec3::new(v[0], v[1], v[2]),
-        )
-    } else {
-        (UnitQuaternion::identity(), Vec3::zeros())
-    };
-    let nb = model.base_nv();
-    Context {
-        t,
-        model,
-        data,
-        q,
-        v,
-        n_hinges: n_user,
-        angles: &x[layout.angles.clone()],
-        rates: &x[layout.rates.clone()],
-        locked,
-        com: if kin {
-            center_of_mass(model, data)
-        } else {
-            Vec3::zeros()
-        },
-        orbit: None,
-        attitude,
-        omega,
-        rotor_rates: &v[nb + n_user..],
-        hold_torque: hold,
-    }
 }
 
 impl System for Simulation {

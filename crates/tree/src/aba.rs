@@ -121,7 +121,9 @@ fn articulated<'d>(
         let u_col = ia.mul_motion(&joint.s);
         let d = joint.s.dot(&u_col) + joint.armature;
         let scale = ia.a.trace() + ia.c.trace() * joint.child_at.norm_squared();
-        if !(d > SINGULAR_PIVOT_RELATIVE * scale) || !d.is_finite() {
+        // Written so that a NaN pivot counts as singular too.
+        let regular = d.is_finite() && d > SINGULAR_PIVOT_RELATIVE * scale;
+        if !regular {
             return Err(DynamicsError::SingularHinge {
                 hinge: model.hinge_names[joint.hinge].clone(),
                 through: massless_hinges_below(model, i),

@@ -93,12 +93,12 @@ pub fn crba_cholesky<'d>(
                 }
                 work.rhs[(j, 0)] = data.ddq[j];
             }
-            let mut stack = MemStack::new(&mut work.stack);
+            let stack = MemStack::new(&mut work.stack);
             cholesky_in_place(
                 work.l.as_mut(),
                 LltRegularization::default(),
                 Par::Seq,
-                &mut stack,
+                stack,
                 Default::default(),
             )
             .map_err(|LltError::NonPositivePivot { index }| {
@@ -138,7 +138,7 @@ pub fn llt_in_place(a: &mut DMatrix<f64>) -> Result<(), DynamicsError> {
         for k in 0..j {
             d -= a[(j, k)] * a[(j, k)];
         }
-        if !(d > 0.0) {
+        if d.is_nan() || d <= 0.0 {
             return Err(DynamicsError::NotPositiveDefinite { index: j, pivot: d });
         }
         let ljj = d.sqrt();
