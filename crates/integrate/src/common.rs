@@ -85,6 +85,28 @@ impl Ctx {
         scaled_norm(e, x0, x1, &self.weights, self.wsum, self.rtol, self.atol)
     }
 
+    /// Starts an explicit method of order `order` at `(t, x)`: evaluates `f(t, x)` into
+    /// `k[0]` (the stage the next step begins with) and returns the first step, the fixed
+    /// step if there is one, otherwise [`Ctx::initial_step`]'s (with `k[1]`, `k[2]` as scratch).
+    pub fn start_explicit<S: System + ?Sized>(
+        &mut self,
+        sys: &mut S,
+        order: usize,
+        t: f64,
+        x: &[f64],
+        k: &mut [Vec<f64>],
+    ) -> Result<f64, IntegrateError> {
+        self.eval(sys, t, x, &mut k[0])?;
+        match self.fixed {
+            Some(h) => Ok(h),
+            None => {
+                let (f0, rest) = k.split_at_mut(1);
+                let (a, b) = rest.split_at_mut(1);
+                self.initial_step(sys, order, t, x, &f0[0], &mut a[0], &mut b[0])
+            }
+        }
+    }
+
     /// Hairer's starting step (HINIT in DOPRI5) for a method of order `order`;
     /// `f0 = f(t, x)`, `x1` and `f1` are scratch. Respects `h0`, `h_max` and
     /// the distance to `t_end`.

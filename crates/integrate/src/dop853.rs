@@ -233,16 +233,8 @@ impl Stepper for Dop853 {
         self.ctrl.reset();
         self.fsal_pending = false;
         self.dense_ready = false;
-        ctx.eval(sys, t, x, &mut self.k[0])?;
+        self.h = ctx.start_explicit(sys, 8, t, x, &mut self.k)?;
         self.f_valid = true;
-        self.h = match ctx.fixed {
-            Some(h) => h,
-            None => {
-                let (f0, rest) = self.k.split_at_mut(1);
-                let (a, b) = rest.split_at_mut(1);
-                ctx.initial_step(sys, 8, t, x, &f0[0], &mut a[0], &mut b[0])?
-            }
-        };
         Ok(())
     }
 

@@ -112,16 +112,8 @@ impl Stepper for Dp54 {
         self.t_old = t;
         self.x.copy_from_slice(x);
         self.ctrl.reset();
-        ctx.eval(sys, t, x, &mut self.k[0])?;
+        self.h = ctx.start_explicit(sys, 5, t, x, &mut self.k)?;
         self.fsal_valid = true;
-        self.h = match ctx.fixed {
-            Some(h) => h,
-            None => {
-                let (f0, rest) = self.k.split_at_mut(1);
-                let (a, b) = rest.split_at_mut(1);
-                ctx.initial_step(sys, 5, t, x, &f0[0], &mut a[0], &mut b[0])?
-            }
-        };
         Ok(())
     }
 
