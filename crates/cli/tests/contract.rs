@@ -244,27 +244,9 @@ fn usage_errors() {
     );
 }
 
+/// `tests/fixtures/two_body.toml` (shared with the model reader's unit tests).
 /// Line numbers: 4 bus, 9 panel, 14 hinge (name 15, parent 16, child 17, axis 18, at 19).
-const MODEL: &str = r#"[base]
-kind = "free"
-
-[[body]]
-name = "bus"
-mass = 500
-inertia = [[40, 0, 0], [0, 40, 0], [0, 0, 30]]
-
-[[body]]
-name = "panel"
-mass = 20.0
-inertia = [[1.7, 0, 0], [0, 6.7, 0], [0, 0, 8.3]]
-
-[[hinge]]
-name = "h"
-parent = "bus"
-child = "panel"
-axis = [1, 0, 0]
-at = [0, 1, 0]
-"#;
+const MODEL: &str = include_str!("../../../tests/fixtures/two_body.toml");
 
 const STATE: &str = r#"{
   "base": {"attitude": [1, 0, 0, 0], "angular_velocity": [0.1, 0, 0], "velocity": [0, 0, 0]},

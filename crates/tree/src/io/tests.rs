@@ -1,27 +1,9 @@
 use super::*;
 
-/// A valid two-body model: the bad inputs below are small edits of it.
+/// A valid two-body model (`tests/fixtures/two_body.toml`, shared with the CLI's contract
+/// tests): the bad inputs below are small edits of it.
 /// Line numbers: 1 `[base]`, 4 `[[body]]` bus, 9 `[[body]]` panel, 14 `[[hinge]]`.
-const GOOD: &str = r#"[base]
-kind = "free"
-
-[[body]]
-name = "bus"
-mass = 500
-inertia = [[40, 0, 0], [0, 40, 0], [0, 0, 30]]
-
-[[body]]
-name = "panel"
-mass = 20.0
-inertia = [[1.7, 0, 0], [0, 6.7, 0], [0, 0, 8.3]]
-
-[[hinge]]
-name = "h"
-parent = "bus"
-child = "panel"
-axis = [1, 0, 0]
-at = [0, 1, 0]
-"#;
+const GOOD: &str = include_str!("../../../../tests/fixtures/two_body.toml");
 
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Kind {
