@@ -7,6 +7,8 @@
 
 pub mod accuracy;
 pub mod effects;
+pub mod linearize;
+pub mod modes;
 pub mod output;
 pub mod preprint;
 pub mod scene;
