@@ -56,11 +56,20 @@
 //! step. The tests check the result against analytic Jacobians (`−M⁻¹K` from the mass
 //! matrix of CRBA, a second algorithm) and analytic frequencies.
 //!
+//! # Locks and friction
+//!
+//! A hinge that is locked at the initial state (latched on a stop) is rigid: the rows and
+//! columns of its angle and rate in `A`, and its rows in `B`, are zero, and [`crate::modes`]
+//! leaves it out. A reaction wheel held at rest by static friction is released instead
+//! (listed in [`Linearization::released`]): strictly, a perturbation small enough for a
+//! linear model would leave it stuck and the attitude controller without an actuator, which
+//! is not the model a controller is designed with. Released, it slips; Coulomb friction is
+//! then a constant of zero slope and the Stribeck term has zero slope at zero speed, so the
+//! wheel's friction enters `A` through its viscous term only.
+//!
 //! # Limits
 //!
-//! A hinge that is locked at the initial state (latched on a stop) and a stuck wheel are
-//! rigid: the rows and columns of their angle and rate (their speed) in `A`, and their rows
-//! in `B`, are zero, and [`crate::modes`] leaves them out. Non-smooth effects (torque and
+//! Non-smooth effects (torque and
 //! speed limits, the direction of wheel friction) are linearised on the side the initial
 //! state is on: the finite-difference steps are small against any sensible limit, but a
 //! state sitting exactly on a limit gets a one-sided slope averaged with the other.
@@ -108,13 +117,16 @@ pub struct Linearization {
     pub a: DMatrix<f64>,
     /// `B` (`states × inputs`).
     pub b: DMatrix<f64>,
-    /// Which states are frozen (a locked hinge's angle and rate, a stuck wheel's speed).
+    /// Which states are frozen (a locked hinge's angle and rate).
     pub frozen: Vec<bool>,
     /// Largest difference between the extrapolated and the plain central difference over
     /// the entries of `A` and `B`: an upper bound on their error.
     pub error_estimate: f64,
-    /// Names of the hinges (and wheels, `wheel_<name>`) locked at the initial state.
+    /// Names of the hinges locked at the initial state (latched on a stop), left rigid.
     pub locked: Vec<String>,
+    /// Wheels (`wheel_<name>`) stuck by static friction at the initial state, released for
+    /// the linearisation (see the module documentation).
+    pub released: Vec<String>,
 }
 
 impl Linearization {
@@ -167,6 +179,13 @@ pub fn linearize_simulation(sim: &mut Simulation) -> Result<Linearization, Linea
     let t0 = sim.t0();
     let n_user = layout.n_hinges;
     let n_rotors = model.n_hinges() - n_user;
+    let mut released = Vec::new();
+    for j in 0..n_rotors {
+        if sim.locked()[n_user + j] {
+            sim.release(n_user + j);
+            released.push(model.hinge_names[n_user + j].clone());
+        }
+    }
     let locked = sim.locked().to_vec();
     let hinge_names = &model.hinge_names;
 
@@ -358,6 +377,7 @@ pub fn linearize_simulation(sim: &mut Simulation) -> Result<Linearization, Linea
         frozen,
         error_estimate,
         locked: locked_names,
+        released,
     })
 }
 

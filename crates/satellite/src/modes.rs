@@ -20,6 +20,8 @@
 //! holds the real parts, [`Mode::shape_imag`] the imaginary parts (zero for undamped or
 //! proportionally damped structures), both by state name.
 //!
+//! Locked hinges are left out and stuck wheels released, as [`crate::linearize`] says.
+//!
 //! Eigenvalues come from faer's real Schur decomposition (`Mat::eigen`).
 
 use crate::linearize::{Linearization, LinearizeError, linearize};
@@ -72,8 +74,10 @@ pub struct Modes {
     pub modes: Vec<Mode>,
     /// The non-zero real eigenvalues (1/s), ascending.
     pub real_eigenvalues: Vec<f64>,
-    /// Hinges (and wheels) locked at the initial state, left out of the analysis.
+    /// Hinges locked at the initial state, left out of the analysis.
     pub locked: Vec<String>,
+    /// Wheels stuck at the initial state, released for the analysis.
+    pub released: Vec<String>,
 }
 
 /// Linearises `scene` at its initial state and returns its modes.
@@ -153,7 +157,8 @@ pub fn modes_of(lin: &Linearization) -> Result<Modes, ModesError> {
             }
             modes.push(Mode {
                 frequency_hz: im / (2.0 * std::f64::consts::PI),
-                damping_ratio: -re / modulus,
+                // `+ 0.0` turns the −0 of an undamped mode into 0.
+                damping_ratio: -re / modulus + 0.0,
                 eigenvalue: (re, im),
                 shape,
                 shape_imag,
@@ -173,6 +178,7 @@ pub fn modes_of(lin: &Linearization) -> Result<Modes, ModesError> {
         modes,
         real_eigenvalues: real,
         locked: lin.locked.clone(),
+        released: lin.released.clone(),
     })
 }
 

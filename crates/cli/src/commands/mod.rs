@@ -3,6 +3,8 @@
 pub mod accuracy;
 pub mod bench;
 pub mod dynamics;
+pub mod linearize;
+pub mod modes;
 pub mod preprint;
 pub mod run;
 
@@ -34,6 +36,11 @@ commands:
                       integrate a scene, write DIR/trajectory.csv
   accuracy SCENE.toml [--out DIR] [--repeats N] [--methods LIST] [--quick]
                       work-precision sweep of the integrators: DIR/accuracy.{csv,svg,md}
+  linearize SCENE.toml
+                      the linear model (A, B) at the scene's initial state (JSON)
+  modes SCENE.toml [--along HINGE=FROM:TO:N[,HINGE=FROM:TO]] [--plot FILE.svg]
+                      structural frequencies, damping ratios and shapes (JSON); --along
+                      sweeps hinge angles and plots the frequencies
   help [COMMAND]      this help, or a command's
   --version           the version
 
@@ -85,11 +92,15 @@ pub fn usage_line(command: Option<&str>) -> &'static str {
         Some("bench") => "satsim bench --model MODEL.toml [--state STATE.json] [--calls N]",
         Some("preprint") => "satsim preprint --model MODEL.toml --state STATE.json",
         Some("run") => "satsim run SCENE.toml [--out DIR]",
+        Some("linearize") => "satsim linearize SCENE.toml",
+        Some("modes") => {
+            "satsim modes SCENE.toml [--along HINGE=FROM:TO:N[,HINGE=FROM:TO]] [--plot FILE.svg]"
+        }
         Some("accuracy") => {
             "satsim accuracy SCENE.toml [--out DIR] [--repeats N] [--methods rk4,dp54,dop853,radau5] [--quick]"
         }
         _ => {
-            "satsim <command> [options]   (commands: dynamics, bench, preprint, run, accuracy, help)"
+            "satsim <command> [options]   (commands: dynamics, bench, preprint, run, accuracy, linearize, modes, help)"
         }
     }
 }
@@ -113,6 +124,8 @@ pub fn dispatch(args: &[OsString]) -> Result<Output, CliError> {
         "preprint" => preprint::run(rest),
         "run" => run::run(rest),
         "accuracy" => accuracy::run(rest),
+        "linearize" => linearize::run(rest),
+        "modes" => modes::run(rest),
         other => Err(CliError::Usage {
             command: None,
             message: format!("unknown command `{other}`"),
@@ -124,7 +137,7 @@ fn help(rest: &[OsString]) -> Result<Output, CliError> {
     match rest.first().map(|a| a.to_string_lossy()) {
         None => Ok(USAGE.to_owned()),
         Some(c) => match c.as_ref() {
-            "dynamics" | "bench" | "preprint" | "run" | "accuracy" => {
+            "dynamics" | "bench" | "preprint" | "run" | "accuracy" | "linearize" | "modes" => {
                 Ok(format!("usage: {}\n", usage_line(Some(&c))))
             }
             other => Err(CliError::Usage {
