@@ -460,3 +460,57 @@ fn sweep_moves_the_hinges_and_rejects_an_unknown_one() {
     assert!(Along::parse("h=0").is_err());
     assert!(Along::parse("h=a:1").is_err());
 }
+
+#[test]
+fn attitude_controller_through_stuck_wheels_is_in_the_linear_model() {
+    // A bus held by a PD controller through three wheels with static friction, all at rest:
+    // the wheels start stuck, are released for the linearisation, and each axis is the
+    // closed loop I ω² = kp with damping ratio kd / (2 sqrt(kp I)). The effective inertia
+    // about x is the bus's plus the transverse inertias of the y and z rotors (the x rotor's
+    // axial inertia spins freely relative to the bus, transmitting only the motor torque).
+    let text = r#"
+duration = 1.0
+[model]
+[[model.body]]
+name = "bus"
+mass = 100.0
+inertia = [[30.0, 0.0, 0.0], [0.0, 40.0, 0.0], [0.0, 0.0, 50.0]]
+[effects.reaction_wheels]
+[[effects.reaction_wheels.wheel]]
+name = "x"
+axis = [1.0, 0.0, 0.0]
+inertia = 0.2
+coulomb = 0.002
+[[effects.reaction_wheels.wheel]]
+name = "y"
+axis = [0.0, 1.0, 0.0]
+inertia = 0.2
+coulomb = 0.002
+[[effects.reaction_wheels.wheel]]
+name = "z"
+axis = [0.0, 0.0, 1.0]
+inertia = 0.2
+coulomb = 0.002
+[effects.attitude_control]
+kp = 2.0
+kd = 6.0
+"#;
+    let s = scene(text);
+    let md = modes(&s).unwrap();
+    assert_eq!(md.released, ["wheel_x", "wheel_y", "wheel_z"]);
+    assert!(md.locked.is_empty());
+    let (kp, kd) = (2.0f64, 6.0f64);
+    for (axis, ib) in [("x", 30.0), ("y", 40.0), ("z", 50.0)] {
+        let i = ib + 2.0 * 0.1;
+        let wn = (kp / i).sqrt();
+        let zeta = kd / (2.0 * (kp * i).sqrt());
+        let f = wn * (1.0 - zeta * zeta).sqrt() / (2.0 * PI);
+        let found = md
+            .modes
+            .iter()
+            .any(|m| rel(m.frequency_hz, f) < 1e-7 && rel(m.damping_ratio, zeta) < 1e-7);
+        assert!(found, "axis {axis}: {f} Hz, zeta {zeta} not in {md:?}");
+    }
+    // Velocity (3) and the wheel speeds (3) are free integrators.
+    assert_eq!(md.rigid_modes, 6);
+}
