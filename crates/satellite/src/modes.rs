@@ -229,7 +229,12 @@ pub struct SweepPoint {
 
 /// The modes of `scene` with the hinges of `along` moved together, in `steps` equal steps
 /// (`steps >= 2` configurations, ends included), every other part of the initial state as
-/// in the scene. A configuration the scene rejects (a hinge beyond its stop) is an error.
+/// in the scene. Each configuration is held: the swept hinges' spring references
+/// (`[effects.hinge_springs] reference`) move with them, so that a configuration at rest is
+/// an equilibrium, as a deployment that paused there would be (linearised about a
+/// configuration its springs are pulling out of, the model would describe the start of
+/// that motion, not vibrations about it). A configuration the scene rejects (a hinge
+/// beyond its stop) is an error.
 pub fn sweep(scene: &Scene, along: &[Along], steps: usize) -> Result<Vec<SweepPoint>, ModesError> {
     if along.is_empty() {
         return Err(ModesError::Sweep("no hinge to sweep".into()));
@@ -268,6 +273,9 @@ pub fn sweep(scene: &Scene, along: &[Along], steps: usize) -> Result<Vec<SweepPo
         let angles: Vec<f64> = along.iter().map(|a| a.from + f * (a.to - a.from)).collect();
         for (&k, &angle) in index.iter().zip(&angles) {
             sc.initial.q[nq0 + k] = angle;
+            if let Some(springs) = sc.effects.hinge_springs.as_mut() {
+                springs.reference[k] = angle;
+            }
         }
         let m = modes(&sc).map_err(|e| {
             let at: Vec<String> = along

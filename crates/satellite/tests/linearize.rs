@@ -459,6 +459,16 @@ fn sweep_moves_the_hinges_and_rejects_an_unknown_one() {
     assert!(sweep(&s, &bad, 3).unwrap_err().to_string().contains("nope"));
     assert!(Along::parse("h=0").is_err());
     assert!(Along::parse("h=a:1").is_err());
+    // The spring's reference moves with the hinge: every configuration is an equilibrium
+    // (on a free bus, a deflected spring would make the linearisation that of the start of
+    // a motion; held, the two-body mode stays oscillatory and undamped).
+    let s = scene(&free_bus_panel(""));
+    let pts = sweep(&s, &[Along::parse("h=0:2").unwrap()], 3).unwrap();
+    for p in &pts {
+        assert_eq!(p.modes.frequencies_hz.len(), 1, "{p:?}");
+        assert!(p.modes.damping_ratios[0].abs() < 1e-9, "{p:?}");
+        assert!(p.modes.real_eigenvalues.is_empty(), "{p:?}");
+    }
 }
 
 #[test]
