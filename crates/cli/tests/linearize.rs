@@ -191,6 +191,21 @@ fn bad_input_exits_2_naming_the_file() {
         );
         fails(&satsim_in(&dir, &[cmd]), &["missing the scene file"]);
     }
+    // A gimbal lock (h2 = 90 degrees through massless links): a clear error, no numbers.
+    std::fs::write(
+        dir.join("locked.toml"),
+        SCENE.replace(
+            "angle = [0.0, 0.0, 0.0,",
+            "angle = [0.0, 1.5707963267948966, 0.0,",
+        ),
+    )
+    .unwrap();
+    for cmd in ["linearize", "modes"] {
+        fails(
+            &satsim_in(&dir, &[cmd, "locked.toml"]),
+            &["locked.toml", "singular configuration"],
+        );
+    }
     fails(
         &satsim_in(&dir, &["modes", "springs.toml", "--along", "h9=0:1:3"]),
         &["springs.toml", "h9"],
