@@ -435,7 +435,7 @@ stiffness = [50.0, 50.0, 50.0, 2.0, 2.0]
         let half = (crossings.last().unwrap() - crossings[0]) / (crossings.len() - 1) as f64;
         let f_run = 1.0 / (2.0 * half);
         assert!(
-            rel(f_run, f) < 1e-4,
+            rel(f_run, f) < 1e-6,
             "mode {which}: run {f_run} Hz vs linear {f} Hz"
         );
     }
