@@ -171,7 +171,9 @@ pub fn linearize(scene: &Scene) -> Result<Linearization, LinearizeError> {
     linearize_simulation(&mut sim)
 }
 
-/// Linearises a built simulation at its initial state and time.
+/// Linearises a freshly built simulation at its initial state and time. Wheels stuck at the
+/// start are released on `sim` (see the module documentation); the constant hinge torques
+/// are left as they were.
 pub fn linearize_simulation(sim: &mut Simulation) -> Result<Linearization, LinearizeError> {
     let layout = sim.layout().clone();
     let model = sim.model().clone();
