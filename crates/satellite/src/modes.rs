@@ -1,8 +1,8 @@
 //! Structural modes: the eigenvalues and eigenvectors of the linearised scene (contract
 //! section 9, `satsim modes`), and their sweep over a deployment (`satsim modes --along`).
 //!
-//! From `A` of [`crate::linearize`] (the frozen states of locked hinges and stuck wheels
-//! left out), the eigenvalues `λ` of the remaining matrix are sorted into
+//! From `A` of [`crate::linearize`] (the frozen states of locked hinges left out), the
+//! eigenvalues `λ` of the remaining matrix are sorted into
 //!
 //! - **rigid**: `|λ| ≤ 10⁻⁶ · max |λ|` (all of them when `A` is zero). A free body has
 //!   three double zeros (attitude and angular velocity) and three simple ones (velocity);
@@ -20,7 +20,9 @@
 //! holds the real parts, [`Mode::shape_imag`] the imaginary parts (zero for undamped or
 //! proportionally damped structures), both by state name.
 //!
-//! Locked hinges are left out and stuck wheels released, as [`crate::linearize`] says.
+//! Locked hinges are left out of the decomposition and stuck wheels released, as
+//! [`crate::linearize`] says; the zero rows of a locked hinge's angle and rate are two
+//! eigenvalues of `A` at zero, counted in [`Modes::rigid_modes`].
 //!
 //! Eigenvalues come from faer's real Schur decomposition (`Mat::eigen`).
 
@@ -68,7 +70,7 @@ pub struct Modes {
     pub frequencies_hz: Vec<f64>,
     /// Their damping ratios, same order.
     pub damping_ratios: Vec<f64>,
-    /// Number of eigenvalues at zero.
+    /// Number of eigenvalues of `A` at zero (a locked hinge's angle and rate count two).
     pub rigid_modes: usize,
     /// The oscillatory modes, same order.
     pub modes: Vec<Mode>,
@@ -110,7 +112,9 @@ pub fn modes_of(lin: &Linearization) -> Result<Modes, ModesError> {
         .map(|(re, im)| re.hypot(*im))
         .fold(0.0f64, f64::max);
     let zero = RIGID_TOLERANCE * largest;
-    let mut rigid = 0;
+    // The frozen states' rows of `A` are zero: each is an eigenvalue at zero of the printed
+    // `A`, counted as such.
+    let mut rigid = lin.states.len() - n;
     let mut real = Vec::new();
     let mut modes = Vec::new();
     let angle_rows: Vec<usize> = (0..n)

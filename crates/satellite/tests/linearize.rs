@@ -524,3 +524,62 @@ kd = 6.0
     // Velocity (3) and the wheel speeds (3) are free integrators.
     assert_eq!(md.rigid_modes, 6);
 }
+
+#[test]
+fn a_hinge_latched_at_the_start_is_rigid() {
+    // Two panels in a chain on a fixed base; the first starts on its latching stop.
+    let text = r#"
+duration = 1.0
+[model]
+base = { kind = "fixed" }
+[[model.body]]
+name = "base"
+mass = 10.0
+inertia = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+[[model.body]]
+name = "p1"
+mass = 2.0
+inertia = [[0.5, 0.0, 0.0], [0.0, 0.5, 0.0], [0.0, 0.0, 0.5]]
+[[model.body]]
+name = "p2"
+mass = 3.0
+inertia = [[0.7, 0.0, 0.0], [0.0, 0.7, 0.0], [0.0, 0.0, 0.7]]
+[[model.hinge]]
+name = "a"
+parent = "base"
+child = "p1"
+axis = [0.0, 0.0, 1.0]
+child_at = [-0.5, 0.0, 0.0]
+[[model.hinge]]
+name = "b"
+parent = "p1"
+child = "p2"
+axis = [0.0, 0.0, 1.0]
+at = [0.5, 0.0, 0.0]
+child_at = [-0.4, 0.0, 0.0]
+[effects.hinge_springs]
+stiffness = [5.0, 6.0]
+[effects.hinge_stops]
+[[effects.hinge_stops.stop]]
+hinge = "a"
+lower = 0.0
+action = "latch"
+"#;
+    let s = scene(text);
+    let lin = linearize(&s).unwrap();
+    assert_eq!(lin.locked, ["a"]);
+    let (ia, ra) = (lin.state("angle_a").unwrap(), lin.state("rate_a").unwrap());
+    for k in 0..4 {
+        assert_eq!(lin.a[(ia, k)], 0.0);
+        assert_eq!(lin.a[(ra, k)], 0.0);
+        assert_eq!(lin.a[(k, ra)], 0.0);
+    }
+    // Hinge a rigid, p2 swings about b alone: I = Ic + m d².
+    let md = modes(&s).unwrap();
+    let i: f64 = 0.7 + 3.0 * 0.4 * 0.4;
+    assert_eq!(md.frequencies_hz.len(), 1, "{md:?}");
+    assert!(rel(md.frequencies_hz[0], (6.0 / i).sqrt() / (2.0 * PI)) < 1e-8);
+    // The locked angle and rate are two zero eigenvalues of the printed A.
+    assert_eq!(md.rigid_modes, 2);
+    assert_eq!(md.locked, ["a"]);
+}
