@@ -603,3 +603,81 @@ pub fn run_campaign(
         finished,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn example() -> PathBuf {
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/scenes/deploy_campaign.toml")
+    }
+
+    #[test]
+    fn the_example_campaign_reads_and_every_draw_is_a_valid_scene() {
+        let c = Campaign::read(example()).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!((c.runs, c.seed), (64, 2015));
+        let columns: Vec<&str> = c.dispersed.iter().map(|d| d.column.as_str()).collect();
+        assert_eq!(
+            columns,
+            [
+                "effects.hinge_springs.stiffness[3]",
+                "effects.hinge_springs.stiffness[4]",
+                "effects.hinge_springs.damping[3]",
+                "effects.hinge_springs.damping[4]",
+                "initial.hinges.angle[3]",
+                "initial.hinges.angle[4]",
+                "model.body.4.mass",
+                "model.body.5.mass",
+                "effects.reaction_wheels.wheel.0.coulomb",
+                "effects.reaction_wheels.wheel.1.coulomb",
+                "effects.reaction_wheels.wheel.2.coulomb",
+            ]
+        );
+        // The nominal values are those written in the scene and its model file.
+        let nominal: Vec<f64> = c.dispersed.iter().map(|d| d.nominal).collect();
+        assert_eq!(
+            nominal,
+            [
+                2.0, 2.0, 4.0, 4.0, 3.14159, -3.14159, 20.0, 20.0, 0.002, 0.002, 0.002
+            ]
+        );
+        for k in 0..16 {
+            let values = c.draw(k);
+            let scene = Scene::parse(&c.scene_text(&values), &c.path).unwrap();
+            // The substituted numbers arrive where the keys point.
+            let springs = scene.effects.hinge_springs.as_ref().unwrap();
+            assert_eq!(springs.stiffness[3], values[0]);
+            assert_eq!(springs.damping[4], values[3]);
+            assert_eq!(scene.initial.q[7 + 3], values[4]);
+            assert_eq!(scene.model.bodies[4].mass, values[6]);
+            let wheels = scene.effects.reaction_wheels.as_ref().unwrap();
+            assert_eq!(wheels.wheels[2].coulomb, values[10]);
+            // Untouched numbers stay as written.
+            assert_eq!(springs.stiffness[0], 50.0);
+            assert_eq!(scene.model.bodies[3].mass, 20.0);
+        }
+    }
+
+    #[test]
+    fn with_nothing_dispersed_a_run_is_the_nominal_scene() {
+        let text = std::fs::read_to_string(example()).unwrap();
+        let cut = text.find("[[campaign.disperse]]").unwrap();
+        let text = text[..cut].replace("duration = 60.0", "duration = 2.0");
+        let c = Campaign::parse(&text, &example()).unwrap();
+        let r = c.run_one(3);
+        let stats = r.outcome.unwrap();
+        let mut sim = c.nominal.simulation().unwrap();
+        let mut last = Vec::new();
+        sim.run(
+            &c.nominal.options,
+            c.nominal.duration,
+            &Times::Interval(c.nominal.every),
+            |_, row| {
+                last = row.to_vec();
+                Ok::<(), ()>(())
+            },
+        )
+        .unwrap();
+        assert_eq!(stats.last, last[1..]);
+    }
+}
