@@ -124,9 +124,10 @@ pub fn run(args: &[OsString]) -> Result<Output, CliError> {
     let _ = writeln!(s, "shard      {} ({})", choice.shard, choice.source);
     let _ = writeln!(
         s,
-        "ran        {} runs in {secs:.2} s ({:.2} runs/s) on {threads_used} threads{}",
+        "ran        {} runs in {secs:.2} s ({:.2} runs/s) on {threads_used} thread{}{}",
         report.ran,
         report.ran as f64 / secs.max(1e-9),
+        if threads_used == 1 { "" } else { "s" },
         if report.skipped > 0 {
             format!("; {} already in runs.csv (--resume)", report.skipped)
         } else {
@@ -150,7 +151,19 @@ fn summary_lines(s: &mut String, dir: &Path, f: &Finished) {
             String::new()
         }
     );
-    let _ = writeln!(s, "wrote      {}/{{{}}}", dir.display(), f.files.join(", "));
+    let plots = f.files.iter().filter(|n| n.ends_with(".svg")).count();
+    let data: Vec<&str> = f
+        .files
+        .iter()
+        .filter(|n| !n.ends_with(".svg"))
+        .map(String::as_str)
+        .collect();
+    let _ = writeln!(
+        s,
+        "wrote      {}: {} and {plots} plots",
+        dir.display(),
+        data.join(", ")
+    );
 }
 
 fn merge(args: &[OsString]) -> Result<Output, CliError> {
