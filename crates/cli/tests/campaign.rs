@@ -185,6 +185,8 @@ fn threads_and_shards_do_not_change_a_byte_of_runs_csv() {
             .collect();
         assert_eq!(ks, (0..12).filter(|k| k % 3 == i).collect::<Vec<u64>>());
     }
+    // `satsim run` of a campaign scene runs the nominal scene.
+    ok(&satsim(&dir, &["run", "scene.toml", "--out", "nominal"]));
     // Shards merged in any order.
     ok(&satsim(
         &dir,
