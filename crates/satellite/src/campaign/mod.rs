@@ -302,7 +302,9 @@ impl Campaign {
     /// Runs `k`.
     pub fn run_one(&self, k: u64) -> RunRecord {
         let values = self.draw(k);
-        let mut trace = vec![Vec::new(); self.trace_columns.len()];
+        // Sized for the nominal output times, so the sink does not reallocate as rows come.
+        let rows = (self.nominal.duration / self.nominal.every).floor() as usize + 1;
+        let mut trace = vec![Vec::with_capacity(rows / self.stride + 1); self.trace_columns.len()];
         let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
             self.integrate(&values, &mut trace)
         }))
