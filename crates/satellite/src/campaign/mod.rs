@@ -635,12 +635,14 @@ mod tests {
                 "effects.reaction_wheels.wheel.2.coulomb",
             ]
         );
-        // The nominal values are those written in the scene and its model file.
+        // The nominal values are those written in the scene and its model file (the stowed
+        // fold angles are written as 3.14159, not pi).
+        let folded: f64 = "3.14159".parse().unwrap();
         let nominal: Vec<f64> = c.dispersed.iter().map(|d| d.nominal).collect();
         assert_eq!(
             nominal,
             [
-                2.0, 2.0, 4.0, 4.0, 3.14159, -3.14159, 20.0, 20.0, 0.002, 0.002, 0.002
+                2.0, 2.0, 4.0, 4.0, folded, -folded, 20.0, 20.0, 0.002, 0.002, 0.002
             ]
         );
         for k in 0..16 {
