@@ -2,6 +2,7 @@
 
 pub mod accuracy;
 pub mod bench;
+pub mod campaign;
 pub mod dynamics;
 pub mod linearize;
 pub mod modes;
@@ -41,6 +42,11 @@ commands:
   modes SCENE.toml [--along HINGE=FROM:TO:N[,HINGE=FROM:TO]] [--plot FILE.svg]
                       structural frequencies, damping ratios and shapes (JSON); --along
                       sweeps hinge angles and plots the frequencies
+  campaign SCENE.toml [--out DIR] [--threads T] [--shard I/N] [--shards N] [--resume]
+                      Monte Carlo campaign of a scene's [campaign] table: DIR/runs.csv,
+                      summary.json, plots
+  campaign merge DIR... --out DIR
+                      merge the shards of a campaign into one folder
   help [COMMAND]      this help, or a command's
   --version           the version
 
@@ -96,11 +102,14 @@ pub fn usage_line(command: Option<&str>) -> &'static str {
         Some("modes") => {
             "satsim modes SCENE.toml [--along HINGE=FROM:TO:N[,HINGE=FROM:TO]] [--plot FILE.svg]"
         }
+        Some("campaign") => {
+            "satsim campaign SCENE.toml [--out DIR] [--threads T] [--shard I/N] [--shards N] [--resume]\n       satsim campaign merge DIR... --out DIR"
+        }
         Some("accuracy") => {
             "satsim accuracy SCENE.toml [--out DIR] [--repeats N] [--methods rk4,dp54,dop853,radau5] [--quick]"
         }
         _ => {
-            "satsim <command> [options]   (commands: dynamics, bench, preprint, run, accuracy, linearize, modes, help)"
+            "satsim <command> [options]   (commands: dynamics, bench, preprint, run, accuracy, campaign, linearize, modes, help)"
         }
     }
 }
@@ -126,6 +135,7 @@ pub fn dispatch(args: &[OsString]) -> Result<Output, CliError> {
         "accuracy" => accuracy::run(rest),
         "linearize" => linearize::run(rest),
         "modes" => modes::run(rest),
+        "campaign" => campaign::run(rest),
         other => Err(CliError::Usage {
             command: None,
             message: format!("unknown command `{other}`"),
@@ -137,9 +147,8 @@ fn help(rest: &[OsString]) -> Result<Output, CliError> {
     match rest.first().map(|a| a.to_string_lossy()) {
         None => Ok(USAGE.to_owned()),
         Some(c) => match c.as_ref() {
-            "dynamics" | "bench" | "preprint" | "run" | "accuracy" | "linearize" | "modes" => {
-                Ok(format!("usage: {}\n", usage_line(Some(&c))))
-            }
+            "dynamics" | "bench" | "preprint" | "run" | "accuracy" | "campaign" | "linearize"
+            | "modes" => Ok(format!("usage: {}\n", usage_line(Some(&c)))),
             other => Err(CliError::Usage {
                 command: Some("help"),
                 message: format!("unknown command `{other}`"),
