@@ -27,7 +27,8 @@ use satsim_integrate::{Method, Options, System, SystemError};
 struct Arenstorf;
 const MU: f64 = 0.012277471;
 const ARENSTORF_T: f64 = 17.065_216_560_157_962_558_891_720_624_9;
-const ARENSTORF_Y0: [f64; 4] = [0.994, 0.0, 0.0, -2.001_585_106_379_082_522_405_378_622_24];
+/// `y2'(0) = −2.00158510637908252240537862224` (HNW I), rounded to the nearest double.
+const ARENSTORF_Y0: [f64; 4] = [0.994, 0.0, 0.0, -2.001_585_106_379_082_4];
 impl System for Arenstorf {
     fn dim(&self) -> usize {
         4
@@ -84,7 +85,7 @@ impl System for Rober {
 const ROBER_REF: [f64; 3] = [
     0.208_334_014_970_125_5e-7,
     0.833_336_077_033_471_3e-13,
-    0.999_999_979_166_505_0,
+    0.999_999_979_166_505,
 ];
 
 /// Largest error relative to `atol + rtol |ref|` (the test set's scaled error).
