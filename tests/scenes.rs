@@ -1,28 +1,56 @@
-//! Snapshot tests of the example scenes (`examples/scenes/*.toml`): a few columns, rounded to
-//! 6 significant digits, at a few instants of each run. Regenerate with
-//! `INSTA_UPDATE=always cargo test -p satsim --test scenes` and review the diff.
+//! The example scenes (`examples/scenes/*.toml`) run to their end and obey the physics they
+//! were written to show: conservation laws, analytic periods and rates, latched hinges that
+//! stay latched, the order of events, and the rest they end in. Nothing here freezes a
+//! computed number: every expected value is derived from the scene's parameters (or from the
+//! run's own initial state), so a correct change of integrator or step passes and a wrong
+//! force, sign or impulse fails.
 
 use satsim::integrate::Output;
 use satsim::satellite::scene::Scene;
-use std::fmt::Write as _;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
-/// `x` to 6 significant digits; values below 1e-7 in magnitude (rounding noise around zero,
-/// such as the angular momentum of a torque-free scene started at rest) print as 0.
-fn round6(x: f64) -> String {
-    if x.abs() < 1e-7 {
-        return "0".into();
-    }
-    let s = format!("{x:.5e}");
-    // Normalise "-0.00000e0" and keep a stable exponent form.
-    s.replace("e0", "")
+/// A finished run: the columns, every output row and the event log.
+struct Run {
+    columns: Vec<String>,
+    rows: Vec<Vec<f64>>,
+    events: Vec<(f64, String)>,
 }
 
-fn snapshot(name: &str, times: &[f64], columns: &[&str]) -> String {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("examples/scenes/{name}.toml"));
-    let scene = Scene::read(&path).unwrap_or_else(|e| panic!("{e}"));
-    let mut sim = scene.simulation().unwrap();
-    let all = sim.columns();
+impl Run {
+    fn col(&self, name: &str) -> usize {
+        self.columns
+            .iter()
+            .position(|c| c == name)
+            .unwrap_or_else(|| panic!("no column {name}"))
+    }
+    /// `(t, value)` of one column over the run.
+    fn series(&self, name: &str) -> Vec<(f64, f64)> {
+        let i = self.col(name);
+        self.rows.iter().map(|r| (r[0], r[i])).collect()
+    }
+    fn last(&self, name: &str) -> f64 {
+        self.rows.last().unwrap()[self.col(name)]
+    }
+    fn vec3(&self, row: &[f64], prefix: &str) -> [f64; 3] {
+        ["x", "y", "z"].map(|a| row[self.col(&format!("{prefix}_{a}"))])
+    }
+    /// The events whose text contains `what`, with their times.
+    fn events_with(&self, what: &str) -> Vec<f64> {
+        self.events
+            .iter()
+            .filter(|(_, e)| e.contains(what))
+            .map(|(t, _)| *t)
+            .collect()
+    }
+}
+
+fn scene_path(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("examples/scenes/{name}.toml"))
+}
+
+fn run_scene(scene: &Scene) -> Run {
+    let mut sim = scene.simulation().unwrap_or_else(|e| panic!("{e}"));
+    let columns = sim.columns();
     let mut rows: Vec<Vec<f64>> = Vec::new();
     sim.run(
         &scene.options,
@@ -34,99 +62,375 @@ fn snapshot(name: &str, times: &[f64], columns: &[&str]) -> String {
         },
     )
     .unwrap();
-    let idx: Vec<usize> = columns
-        .iter()
-        .map(|c| {
-            all.iter()
-                .position(|a| a == c)
-                .unwrap_or_else(|| panic!("no column {c}"))
-        })
-        .collect();
-    let mut out = String::new();
-    let _ = writeln!(out, "effects: {}", sim.effect_names().join(", "));
-    let _ = writeln!(out, "state length: {}", sim.layout().len);
-    for (t, what) in sim.event_log() {
-        let _ = writeln!(out, "event t={}: {what}", round6(*t));
+    assert!(
+        (rows.last().unwrap()[0] - scene.duration).abs() < 1e-9,
+        "the run did not reach its end"
+    );
+    for r in &rows {
+        assert!(
+            r.iter().all(|x| x.is_finite()),
+            "non-finite output at t = {}",
+            r[0]
+        );
     }
-    for &t in times {
-        let row = rows
-            .iter()
-            .find(|r| (r[0] - t).abs() < 1e-9)
-            .unwrap_or_else(|| panic!("no row at t = {t}"));
-        let _ = writeln!(out, "t = {t}");
-        for (c, &i) in columns.iter().zip(&idx) {
-            let _ = writeln!(out, "  {c} = {}", round6(row[i]));
-        }
+    Run {
+        columns,
+        rows,
+        events: sim.event_log().to_vec(),
     }
-    out
 }
 
-const ATTITUDE: [&str; 7] = ["q_w", "q_x", "q_y", "q_z", "omega_x", "omega_y", "omega_z"];
+fn run(name: &str) -> Run {
+    run_scene(&Scene::read(scene_path(name)).unwrap_or_else(|e| panic!("{e}")))
+}
 
-fn with(extra: &[&'static str]) -> Vec<&'static str> {
-    ATTITUDE
-        .iter()
-        .copied()
-        .chain(extra.iter().copied())
+/// The same scene file with some of its text removed (each piece must be there).
+fn run_without(name: &str, pieces: &[&str]) -> Run {
+    let path = scene_path(name);
+    let mut text = std::fs::read_to_string(&path).unwrap();
+    for p in pieces {
+        assert!(text.contains(p), "{name}: no {p:?} to remove");
+        text = text.replace(p, "");
+    }
+    run_scene(&Scene::parse(&text, &path).unwrap_or_else(|e| panic!("{e}")))
+}
+
+/// After `t_latch`, the hinge's rate is exactly zero and its angle exactly constant, at the
+/// stop (0 in these scenes) to within the event location's precision.
+fn assert_latched(r: &Run, hinge: &str, t_latch: f64) {
+    let (a, w) = (
+        r.col(&format!("angle_{hinge}")),
+        r.col(&format!("rate_{hinge}")),
+    );
+    let after: Vec<&Vec<f64>> = r.rows.iter().filter(|row| row[0] > t_latch).collect();
+    assert!(!after.is_empty());
+    let held = after[0][a];
+    assert!(
+        held.abs() < 1e-9,
+        "{hinge} latched at {held}, not at its stop"
+    );
+    for row in after {
+        assert_eq!(row[w], 0.0, "{hinge} moves at t = {}", row[0]);
+        assert_eq!(row[a], held, "{hinge} moved at t = {}", row[0]);
+    }
+}
+
+fn norm(v: [f64; 3]) -> f64 {
+    v.iter().map(|x| x * x).sum::<f64>().sqrt()
+}
+
+fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
+    norm([a[0] - b[0], a[1] - b[1], a[2] - b[2]])
+}
+
+/// Times where a sampled series changes sign, by linear interpolation.
+fn sign_changes(s: &[(f64, f64)]) -> Vec<f64> {
+    s.windows(2)
+        .filter(|w| w[0].1 * w[1].1 < 0.0)
+        .map(|w| w[0].0 - w[0].1 * (w[1].0 - w[0].0) / (w[1].1 - w[0].1))
         .collect()
 }
 
-#[test]
-fn deploy() {
-    let cols = with(&[
-        "angle_h1",
-        "angle_h2",
-        "angle_h3",
-        "angle_h4",
-        "angle_h5",
-        "wheel_x_speed",
-        "wheel_y_speed",
-        "wheel_z_speed",
-        "kinetic_energy",
-        "total_energy",
-        "h_norm",
-    ]);
-    insta::assert_snapshot!(snapshot("deploy", &[0.0, 5.0, 20.0, 100.0, 300.0], &cols));
+/// Complete elliptic integral of the first kind `K(k)`, given `k' ^ 2 = 1 - k ^ 2`
+/// (arithmetic-geometric mean).
+fn elliptic_k(kc2: f64) -> f64 {
+    let (mut a, mut b) = (1.0f64, kc2.sqrt());
+    // Quadratic convergence: 30 iterations are far more than double precision needs.
+    for _ in 0..30 {
+        (a, b) = (0.5 * (a + b), (a * b).sqrt());
+    }
+    std::f64::consts::PI / (2.0 * a)
 }
 
+/// Torque-free rigid body spun near its intermediate axis: kinetic energy and angular
+/// momentum constant, and the spin axis flips with the period of Euler's equations
+/// (Landau & Lifshitz §37: `omega_y` is proportional to `sn(lambda t, k)`, so it changes sign
+/// every `2 K(k) / lambda`).
 #[test]
-fn tumbling() {
-    let cols = with(&["kinetic_energy", "h_x", "h_y", "h_z"]);
-    insta::assert_snapshot!(snapshot("tumbling", &[0.0, 100.0, 300.0, 600.0], &cols));
+fn tumbling_conserves_energy_and_momentum_and_flips_on_time() {
+    let r = run("tumbling");
+    // Principal moments of examples/scenes/tumbling.toml (x, y, z).
+    let inertia = [900.0, 800.0, 600.0];
+    let t0 = r.rows[0][r.col("kinetic_energy")];
+    let h0 = r.vec3(&r.rows[0], "h");
+    let (mut de, mut dh, mut dt_own) = (0.0f64, 0.0f64, 0.0f64);
+    for row in &r.rows {
+        let w = r.vec3(row, "omega");
+        let t = row[r.col("kinetic_energy")];
+        // The kinetic energy from the body rates and the principal moments, by hand.
+        let own = 0.5 * (0..3).map(|i| inertia[i] * w[i] * w[i]).sum::<f64>();
+        de = de.max((t - t0).abs() / t0);
+        dh = dh.max(dist(r.vec3(row, "h"), h0) / norm(h0));
+        dt_own = dt_own.max((own - t).abs() / t);
+    }
+    assert!(de < 1e-10, "kinetic energy drifts by {de:e} (relative)");
+    assert!(dh < 1e-10, "angular momentum drifts by {dh:e} (relative)");
+    assert!(
+        dt_own < 1e-12,
+        "kinetic energy column against 1/2 w.Iw: {dt_own:e}"
+    );
+
+    // Landau's formulas with I1 < I2 < I3; here M^2 < 2 E I2, so I1 and I3 swap roles.
+    let w0 = r.vec3(&r.rows[0], "omega");
+    let m2: f64 = (0..3).map(|i| (inertia[i] * w0[i]).powi(2)).sum();
+    let e2: f64 = (0..3).map(|i| inertia[i] * w0[i] * w0[i]).sum();
+    let (i1, i2, i3) = (inertia[0], inertia[1], inertia[2]);
+    assert!(m2 < e2 * i2);
+    let lambda = ((i3 - i2) * (m2 - e2 * i1) / (i1 * i2 * i3)).sqrt();
+    let denom = (i3 - i2) * (m2 - e2 * i1);
+    let kc2 = (denom - (i2 - i1) * (e2 * i3 - m2)) / denom;
+    let half_period = 2.0 * elliptic_k(kc2) / lambda;
+    let flips = sign_changes(&r.series("omega_y"));
+    assert!(
+        flips.len() >= 2,
+        "the spin axis should flip over and back: {flips:?}"
+    );
+    for w in flips.windows(2) {
+        let got = w[1] - w[0];
+        assert!(
+            (got - half_period).abs() < 1e-4 * half_period,
+            "time between flips {got} s, Euler's equations {half_period} s"
+        );
+    }
 }
 
+/// Gravity-gradient pitch libration on a circular orbit: with the pitch `theta` measured from
+/// the orbital frame, `theta'' = -(3 n^2 (Ix - Iz) / Iy) sin theta cos theta`, a pendulum in
+/// `2 theta` of period `4 K(sin theta0) / w0`; the pitch rate is `omega_y + n` (the body's y
+/// axis is opposite to the orbit normal) and peaks at `w0 sin theta0`; roll and yaw stay zero.
 #[test]
-fn libration() {
-    let cols = with(&["orbit_radius", "total_energy"]);
-    insta::assert_snapshot!(snapshot(
-        "libration",
-        &[0.0, 1000.0, 4000.0, 12000.0],
-        &cols
-    ));
+fn libration_has_the_pendulum_period_and_amplitude() {
+    let r = run("libration");
+    let (ix, iy, iz) = (110.0f64, 120.0f64, 20.0f64);
+    let theta0 = 0.1f64;
+    // Mean motion of the 500 km circular orbit (the scene's own initial rate is -n).
+    let n = -r.rows[0][r.col("omega_y")];
+    let mu = 3.986004418e14;
+    let radius = r.rows[0][r.col("orbit_radius")];
+    assert!(
+        (n - (mu / radius.powi(3)).sqrt()).abs() < 1e-9 * n,
+        "the scene's initial rate is not the orbit's mean motion"
+    );
+    let w0 = n * (3.0 * (ix - iz) / iy).sqrt();
+    let k = theta0.sin(); // modulus for the pendulum in 2 theta of amplitude 2 theta0
+    let period = 4.0 * elliptic_k(1.0 - k * k) / w0;
+
+    let rate: Vec<(f64, f64)> = r
+        .series("omega_y")
+        .iter()
+        .map(|&(t, w)| (t, w + n))
+        .collect();
+    let turns = sign_changes(&rate);
+    assert!(turns.len() >= 5, "expected several librations: {turns:?}");
+    for w in turns.windows(2) {
+        let got = 2.0 * (w[1] - w[0]);
+        assert!(
+            (got - period).abs() < 1e-4 * period,
+            "libration period {got} s, pendulum {period} s"
+        );
+    }
+    let peak = rate.iter().fold(0.0f64, |m, &(_, w)| m.max(w.abs()));
+    let expected = w0 * theta0.sin();
+    assert!(
+        (peak - expected).abs() < 1e-3 * expected,
+        "peak pitch rate {peak}, pendulum {expected}"
+    );
+    let off_plane = r.rows.iter().fold(0.0f64, |m, row| {
+        m.max(row[r.col("omega_x")].abs())
+            .max(row[r.col("omega_z")].abs())
+    });
+    assert!(
+        off_plane < 1e-12,
+        "roll/yaw rate {off_plane:e}: the motion left the orbit plane"
+    );
+    for (_, rad) in r.series("orbit_radius") {
+        assert!(
+            (rad - radius).abs() < 1e-6 * radius,
+            "circular orbit radius {rad}"
+        );
+    }
 }
 
+/// Wheel spin-down on a free bus: friction is internal, so the angular momentum is constant;
+/// the wheel stops at the time the friction law gives (relative rate obeys
+/// `dOmega/dt = -f(Omega) (1/Iw + 1/Ib)`, integrated here by quadrature), sticks and stays
+/// stuck, and the bus ends up turning at `h / (Ib + Iw)`.
 #[test]
-fn spin_down() {
-    let cols = with(&["wheel_z_speed", "kinetic_energy", "h_z"]);
-    insta::assert_snapshot!(snapshot("spin_down", &[0.0, 300.0, 1000.0, 1200.0], &cols));
+fn spin_down_stops_on_time_and_hands_its_momentum_to_the_bus() {
+    let r = run("spin_down");
+    // examples/scenes/spin_down.toml
+    let (ib, iw, omega_start) = (40.0, 0.1, 300.0);
+    let (a0, a1, omega0, a2) = (0.02, 0.01, 20.0, 5e-5);
+    let friction = |w: f64| a0 + a1 * (-(w / omega0) * (w / omega0)).exp() + a2 * w;
+
+    let h0 = r.vec3(&r.rows[0], "h");
+    assert!(
+        (norm(h0) - iw * omega_start).abs() < 1e-12 * iw * omega_start,
+        "initial momentum {h0:?}"
+    );
+    let mut dh = 0.0f64;
+    let mut last_ke = f64::INFINITY;
+    for row in &r.rows {
+        dh = dh.max(dist(r.vec3(row, "h"), h0) / norm(h0));
+        let ke = row[r.col("kinetic_energy")];
+        assert!(
+            ke <= last_ke + 1e-12,
+            "friction gave energy at t = {}",
+            row[0]
+        );
+        last_ke = ke;
+    }
+    assert!(dh < 1e-10, "angular momentum drifts by {dh:e} (relative)");
+
+    // Simpson's rule for t_stop = integral of dOmega / (f(Omega) (1/Iw + 1/Ib)).
+    let m = 200_000;
+    let step = omega_start / m as f64;
+    let g = |w: f64| 1.0 / (friction(w) * (1.0 / iw + 1.0 / ib));
+    let mut sum = g(0.0) + g(omega_start);
+    for i in 1..m {
+        sum += g(i as f64 * step) * if i % 2 == 1 { 4.0 } else { 2.0 };
+    }
+    let t_stop = sum * step / 3.0;
+    let stuck = r.events_with("stopped and stuck");
+    assert_eq!(stuck.len(), 1, "events: {:?}", r.events);
+    assert!(
+        (stuck[0] - t_stop).abs() < 1e-6 * t_stop,
+        "the wheel stopped at {} s, the friction law says {t_stop} s",
+        stuck[0]
+    );
+    assert!(
+        r.events_with("broke free").is_empty(),
+        "events: {:?}",
+        r.events
+    );
+    for (t, w) in r.series("wheel_z_speed") {
+        if t > stuck[0] {
+            assert_eq!(w, 0.0, "the stuck wheel moved at t = {t}");
+        }
+    }
+    let spin = r.last("omega_z");
+    let expected = norm(h0) / (ib + iw);
+    assert!(
+        (spin - expected).abs() < 1e-9 * expected,
+        "final bus rate {spin}, momentum / inertia {expected}"
+    );
+    assert!(r.last("omega_x").abs() < 1e-12 && r.last("omega_y").abs() < 1e-12);
 }
 
+/// The deployment: each folded panel latches once at its deployed stop (the outer hinge h5
+/// first, then h4) and stays exactly there; the controller brings the bus back to rest at its target
+/// attitude, and the gimbal springs the gimbal back to zero.
 #[test]
-fn two_wings() {
-    let cols = with(&[
-        "angle_left_root",
-        "angle_left_fold",
-        "angle_right_root",
-        "angle_right_fold",
-        "angle_boom_root",
-        "angle_boom_elbow",
-        "kinetic_energy",
-        "total_energy",
-        "h_norm",
-    ]);
-    insta::assert_snapshot!(snapshot(
-        "two_wings",
-        &[0.0, 10.0, 50.0, 100.0, 200.0],
-        &cols
-    ));
+fn deploy_latches_both_panels_and_ends_at_rest() {
+    let r = run("deploy");
+    let h5 = r.events_with("hinge `h5` latched at its upper stop");
+    let h4 = r.events_with("hinge `h4` latched at its lower stop");
+    assert_eq!((h5.len(), h4.len()), (1, 1), "events: {:?}", r.events);
+    assert!(h5[0] < h4[0], "events: {:?}", r.events);
+    let hinge_events = r.events_with("hinge `");
+    assert_eq!(hinge_events.len(), 2, "events: {:?}", r.events);
+    for (hinge, t_latch) in [("h4", h4[0]), ("h5", h5[0])] {
+        assert_latched(&r, hinge, t_latch);
+    }
+    // Final rest: the bus at its (identity) target, the gimbal at zero.
+    let last = r.rows.last().unwrap();
+    let q_vec = [r.last("q_x"), r.last("q_y"), r.last("q_z")];
+    assert!(2.0 * norm(q_vec) < 1e-3, "attitude error {q_vec:?}");
+    assert!(norm(r.vec3(last, "omega")) < 1e-4, "bus still turning");
+    for h in ["h1", "h2", "h3"] {
+        assert!(
+            r.last(&format!("angle_{h}")).abs() < 1e-4,
+            "gimbal {h} not back"
+        );
+        assert!(
+            r.last(&format!("rate_{h}")).abs() < 1e-5,
+            "gimbal {h} moving"
+        );
+    }
+}
+
+/// The deployment with no external torque (no orbit, no gravity gradient): springs, dampers,
+/// latches (impulses), wheel friction and motor torques are all internal, so the angular
+/// momentum, zero at the start, stays zero through every event.
+#[test]
+fn deploy_without_gravity_conserves_angular_momentum() {
+    let r = run_without(
+        "deploy",
+        &[
+            "[orbit]\nmodel = \"kepler\"\naltitude = 500e3          # m, circular\ninclination_deg = 51.6\n",
+            "[effects.gravity_gradient]\nmodel = \"full\"\n",
+        ],
+    );
+    assert!(r.columns.iter().all(|c| c != "orbit_radius"));
+    // Scale: the largest wheel momentum of the run.
+    let scale = ["x", "y", "z"]
+        .iter()
+        .flat_map(|w| r.series(&format!("wheel_{w}_speed")))
+        .fold(0.0f64, |m, (_, s)| m.max(0.1 * s.abs()));
+    assert!(scale > 1.0, "the wheels should work hard: {scale}");
+    let worst = r
+        .rows
+        .iter()
+        .fold(0.0f64, |m, row| m.max(norm(r.vec3(row, "h"))));
+    assert!(
+        worst < 1e-9 * scale,
+        "angular momentum reached {worst:e} N m s (wheel momentum {scale} N m s)"
+    );
+    assert_eq!(r.events_with("latched").len(), 2, "events: {:?}", r.events);
+}
+
+/// Two wings and a boom, torque-free from rest: the angular momentum stays zero; both wing
+/// roots latch once and stay latched; the elbow rebounds off its stop; the boom follows its
+/// profile to 0; everything ends at rest.
+#[test]
+fn two_wings_latch_rebound_and_settle_with_zero_momentum() {
+    let r = run("two_wings");
+    // Scale: the momentum the bus (225 kg m^2 about every axis) takes in reaction to the
+    // wings and the boom, which theirs must cancel.
+    let scale = r
+        .rows
+        .iter()
+        .fold(0.0f64, |m, row| m.max(225.0 * norm(r.vec3(row, "omega"))));
+    let worst = r
+        .rows
+        .iter()
+        .fold(0.0f64, |m, row| m.max(norm(r.vec3(row, "h"))));
+    assert!(scale > 0.1, "the bus should react: {scale}");
+    assert!(
+        worst < 1e-8 * scale,
+        "angular momentum reached {worst:e} N m s (bus momentum {scale} N m s)"
+    );
+    for (hinge, side) in [("left_root", "lower"), ("right_root", "upper")] {
+        let t = r.events_with(&format!("hinge `{hinge}` latched at its {side} stop"));
+        assert_eq!(t.len(), 1, "{hinge}: events {:?}", r.events);
+        assert_latched(&r, hinge, t[0]);
+    }
+    assert!(
+        !r.events_with("hinge `boom_elbow` rebounded at its upper stop")
+            .is_empty(),
+        "events: {:?}",
+        r.events
+    );
+    // The boom root's profile ends at 0 at t = 80 s; at 200 s everything is at rest.
+    assert!(r.last("angle_boom_root").abs() < 1e-3);
+    let last = r.rows.last().unwrap();
+    for c in r.columns.iter().filter(|c| c.starts_with("rate_")) {
+        assert!(last[r.col(c)].abs() < 1e-3, "{c} = {}", last[r.col(c)]);
+    }
+    assert!(norm(r.vec3(last, "omega")) < 1e-4);
+}
+
+/// The boom elbow's stop holds: the angle never goes past it. FAILS today: after the run of
+/// ever smaller rebounds near t = 7.09 s the elbow passes through its stop (0.26 rad at
+/// t = 8 s, 1.4 rad at 13 s) and rebounds at it again from below at 32 s. The likely cause:
+/// a rebound is located slightly past the stop, so the event function (`upper - angle`)
+/// restarts negative and never changes sign again while the hinge creeps back the wrong way
+/// (crates/satellite/src/effects/hinge_stops.rs). Run with `--ignored` once that is fixed.
+#[test]
+#[ignore = "known bug: a hinge can creep through a rebound stop after tiny rebounds"]
+fn two_wings_boom_elbow_never_passes_its_stop() {
+    let r = run("two_wings");
+    for (t, a) in r.series("angle_boom_elbow") {
+        assert!(a <= 1e-9, "boom elbow at {a} past its stop at t = {t}");
+    }
 }

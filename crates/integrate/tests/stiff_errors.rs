@@ -310,9 +310,9 @@ fn projection_called_after_each_accepted_step() {
         }
         let mut sys = Spinner { projections: 0 };
         let stats = run(&mut sys, &opts, &[1.0, 0.0, 0.0], 0.0, 50.0).unwrap();
+        // (The norm of the final state is not asserted: `project` itself normalises, so it
+        // could not fail. The count is what proves the projection runs after every step.)
         assert_eq!(sys.projections, stats.steps_accepted, "{method}");
-        let norm = stats.x_final.iter().map(|v| v * v).sum::<f64>().sqrt();
-        assert!((norm - 1.0).abs() < 1e-15, "{method}: norm {norm}");
     }
 }
 
