@@ -7,6 +7,7 @@
 
 pub mod accuracy;
 pub mod api;
+pub mod campaign;
 pub mod effects;
 pub mod output;
 pub mod preprint;

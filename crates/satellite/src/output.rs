@@ -272,3 +272,243 @@ pub fn write_plots(dir: &Path, columns: &[String], data: &[Vec<f64>]) -> io::Res
     }
     Ok(written)
 }
+
+/// The axes, grid, title and axis label of a plot on `[x0, x1] x [y0, y1]`; returns the
+/// SVG so far and the maps from data to pixels.
+#[allow(clippy::type_complexity)]
+fn frame(
+    title: &str,
+    xlabel: &str,
+    (x0, x1): (f64, f64),
+    (y0, y1): (f64, f64),
+) -> (String, Box<dyn Fn(f64) -> f64>, Box<dyn Fn(f64) -> f64>) {
+    let (w, h) = (720.0, 400.0);
+    let (ml, mr, mt, mb) = (80.0, 150.0, 36.0, 48.0);
+    let (pw, ph) = (w - ml - mr, h - mt - mb);
+    let sx = move |v: f64| ml + (v - x0) / (x1 - x0) * pw;
+    let sy = move |v: f64| mt + ph - (v - y0) / (y1 - y0) * ph;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" viewBox="0 0 {w} {h}" font-family="sans-serif" font-size="12">"#
+    );
+    let _ = writeln!(s, r#"<rect width="{w}" height="{h}" fill="white"/>"#);
+    let _ = writeln!(
+        s,
+        r#"<text x="{}" y="22" text-anchor="middle" font-size="15">{}</text>"#,
+        ml + pw / 2.0,
+        esc(title)
+    );
+    for t in nice_ticks(x0, x1, 8) {
+        let px = sx(t);
+        let _ = writeln!(
+            s,
+            r##"<line x1="{px:.1}" y1="{mt}" x2="{px:.1}" y2="{:.1}" stroke="#e5e5e5"/><text x="{px:.1}" y="{:.1}" text-anchor="middle">{}</text>"##,
+            mt + ph,
+            mt + ph + 16.0,
+            fmt_tick(t)
+        );
+    }
+    for t in nice_ticks(y0, y1, 6) {
+        let py = sy(t);
+        let _ = writeln!(
+            s,
+            r##"<line x1="{ml}" y1="{py:.1}" x2="{:.1}" y2="{py:.1}" stroke="#e5e5e5"/><text x="{:.1}" y="{:.1}" text-anchor="end">{}</text>"##,
+            ml + pw,
+            ml - 6.0,
+            py + 4.0,
+            fmt_tick(t)
+        );
+    }
+    let _ = writeln!(
+        s,
+        r#"<rect x="{ml}" y="{mt}" width="{pw}" height="{ph}" fill="none" stroke="black"/>"#
+    );
+    let _ = writeln!(
+        s,
+        r#"<text x="{:.1}" y="{:.1}" text-anchor="middle">{}</text>"#,
+        ml + pw / 2.0,
+        h - 10.0,
+        esc(xlabel)
+    );
+    (s, Box::new(sx), Box::new(sy))
+}
+
+/// The finite range of `values`, padded by 5 % (or widened when flat).
+fn padded_range<'a>(values: impl Iterator<Item = &'a f64>) -> (f64, f64) {
+    let (mut lo, mut hi) = values
+        .filter(|v| v.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        });
+    if !lo.is_finite() {
+        (lo, hi) = (-1.0, 1.0);
+    }
+    if hi - lo <= 1e-12 * lo.abs().max(hi.abs()).max(1e-300) {
+        let pad = if lo == 0.0 { 1.0 } else { 0.1 * lo.abs() };
+        (lo - pad, hi + pad)
+    } else {
+        let pad = 0.05 * (hi - lo);
+        (lo - pad, hi + pad)
+    }
+}
+
+/// One shaded band of a [`band_plot`]: `lower` to `upper` at each x.
+pub struct Band<'a> {
+    /// Legend label.
+    pub label: &'a str,
+    /// Lower edge (one per x).
+    pub lower: &'a [f64],
+    /// Upper edge (one per x).
+    pub upper: &'a [f64],
+}
+
+/// An SVG plot of nested shaded bands (drawn widest first, each darker than the last) and a
+/// centre line, against `x`: a percentile envelope. Non-finite points are skipped.
+///
+/// ```
+/// use satsim_satellite::output::{Band, band_plot};
+/// let x = [0.0, 1.0];
+/// let svg = band_plot("env", "t (s)", &x, &[Band { label: "p5-p95", lower: &[0.0, 1.0], upper: &[1.0, 2.0] }], ("p50", &[0.5, 1.5]));
+/// assert!(svg.contains("<polygon") && svg.contains("polyline"));
+/// ```
+pub fn band_plot(
+    title: &str,
+    xlabel: &str,
+    x: &[f64],
+    bands: &[Band],
+    (centre_label, centre): (&str, &[f64]),
+) -> String {
+    let (x0, x1) = {
+        let (a, b) = x
+            .iter()
+            .filter(|v| v.is_finite())
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+                (a.min(v), b.max(v))
+            });
+        if !a.is_finite() || b <= a {
+            (0.0, a.max(0.0) + 1.0)
+        } else {
+            (a, b)
+        }
+    };
+    let (y0, y1) = padded_range(
+        bands
+            .iter()
+            .flat_map(|b| b.lower.iter().chain(b.upper))
+            .chain(centre),
+    );
+    let (mut s, sx, sy) = frame(title, xlabel, (x0, x1), (y0, y1));
+    let ml_pw = 720.0 - 150.0;
+    let n = bands.len().max(1) as f64;
+    for (k, b) in bands.iter().enumerate() {
+        let mut pts = String::new();
+        for (xv, yv) in x.iter().zip(b.upper) {
+            if xv.is_finite() && yv.is_finite() {
+                let _ = write!(pts, "{:.2},{:.2} ", sx(*xv), sy(*yv));
+            }
+        }
+        for (xv, yv) in x.iter().zip(b.lower).rev() {
+            if xv.is_finite() && yv.is_finite() {
+                let _ = write!(pts, "{:.2},{:.2} ", sx(*xv), sy(*yv));
+            }
+        }
+        let opacity = 0.2 + 0.3 * k as f64 / n;
+        let _ = writeln!(
+            s,
+            r##"<polygon fill="#1f77b4" fill-opacity="{opacity:.2}" stroke="none" points="{}"/>"##,
+            pts.trim_end()
+        );
+        let ly = 36.0 + 10.0 + 18.0 * k as f64;
+        let _ = writeln!(
+            s,
+            r##"<rect x="{:.1}" y="{:.1}" width="20" height="10" fill="#1f77b4" fill-opacity="{opacity:.2}"/><text x="{:.1}" y="{:.1}">{}</text>"##,
+            ml_pw + 10.0,
+            ly - 5.0,
+            ml_pw + 36.0,
+            ly + 4.0,
+            esc(b.label)
+        );
+    }
+    let mut pts = String::new();
+    for (xv, yv) in x.iter().zip(centre) {
+        if xv.is_finite() && yv.is_finite() {
+            let _ = write!(pts, "{:.2},{:.2} ", sx(*xv), sy(*yv));
+        }
+    }
+    let _ = writeln!(
+        s,
+        r##"<polyline fill="none" stroke="#d62728" stroke-width="1.5" points="{}"/>"##,
+        pts.trim_end()
+    );
+    let ly = 36.0 + 10.0 + 18.0 * bands.len() as f64;
+    let _ = writeln!(
+        s,
+        r##"<line x1="{:.1}" y1="{ly:.1}" x2="{:.1}" y2="{ly:.1}" stroke="#d62728" stroke-width="2"/><text x="{:.1}" y="{:.1}">{}</text>"##,
+        ml_pw + 10.0,
+        ml_pw + 30.0,
+        ml_pw + 36.0,
+        ly + 4.0,
+        esc(centre_label)
+    );
+    s.push_str("</svg>\n");
+    s
+}
+
+/// An SVG histogram of the finite `values` in `bins` equal bins, with a note under the
+/// legend (such as how many runs failed and are not shown).
+///
+/// ```
+/// use satsim_satellite::output::histogram_plot;
+/// let svg = histogram_plot("h", "x", &[1.0, 2.0, 2.5, 3.0], 3, "0 failed");
+/// assert_eq!(svg.matches("<rect class=\"bin\"").count(), 3);
+/// ```
+pub fn histogram_plot(
+    title: &str,
+    xlabel: &str,
+    values: &[f64],
+    bins: usize,
+    note: &str,
+) -> String {
+    let bins = bins.max(1);
+    let finite: Vec<f64> = values.iter().copied().filter(|v| v.is_finite()).collect();
+    let (mut lo, mut hi) = finite
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        });
+    if !lo.is_finite() {
+        (lo, hi) = (0.0, 1.0);
+    }
+    if hi - lo <= 1e-12 * lo.abs().max(hi.abs()).max(1e-300) {
+        let pad = if lo == 0.0 { 0.5 } else { 0.05 * lo.abs() };
+        (lo, hi) = (lo - pad, hi + pad);
+    }
+    let width = (hi - lo) / bins as f64;
+    let mut counts = vec![0usize; bins];
+    for v in &finite {
+        let b = (((v - lo) / width).floor() as usize).min(bins - 1);
+        counts[b] += 1;
+    }
+    let top = counts.iter().copied().max().unwrap_or(0).max(1) as f64 * 1.05;
+    let (mut s, sx, sy) = frame(title, xlabel, (lo, hi), (0.0, top));
+    for (b, &c) in counts.iter().enumerate() {
+        let (xa, xb) = (sx(lo + b as f64 * width), sx(lo + (b + 1) as f64 * width));
+        let (ya, yb) = (sy(c as f64), sy(0.0));
+        let _ = writeln!(
+            s,
+            r##"<rect class="bin" x="{xa:.2}" y="{ya:.2}" width="{:.2}" height="{:.2}" fill="#1f77b4" stroke="white"/>"##,
+            (xb - xa).max(0.0),
+            (yb - ya).max(0.0)
+        );
+    }
+    let lx = 720.0 - 150.0 + 10.0;
+    let _ = writeln!(
+        s,
+        r#"<text x="{lx:.1}" y="50">{} runs</text><text x="{lx:.1}" y="68">{}</text>"#,
+        finite.len(),
+        esc(note)
+    );
+    s.push_str("</svg>\n");
+    s
+}

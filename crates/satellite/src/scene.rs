@@ -130,6 +130,10 @@ pub struct SceneFile {
     /// The effects.
     #[serde(default)]
     pub effects: Option<Spanned<EffectsFile>>,
+    /// `[campaign]`: read by `satsim campaign` ([`crate::campaign`]); a single run ignores it
+    /// and runs the nominal scene.
+    #[serde(default)]
+    pub campaign: Option<toml::Value>,
 }
 
 /// `armature = 1e-3` (every hinge) or `armature = [1e-3, 1e-3, 1e-3, 0.0, 0.0]` (per hinge).

@@ -2,6 +2,7 @@
 
 pub mod accuracy;
 pub mod bench;
+pub mod campaign;
 pub mod dynamics;
 pub mod preprint;
 pub mod run;
@@ -34,6 +35,11 @@ commands:
                       integrate a scene, write DIR/trajectory.csv
   accuracy SCENE.toml [--out DIR] [--repeats N] [--methods LIST] [--quick]
                       work-precision sweep of the integrators: DIR/accuracy.{csv,svg,md}
+  campaign SCENE.toml [--out DIR] [--threads T] [--shard I/N] [--shards N] [--resume]
+                      Monte Carlo campaign of a scene's [campaign] table: DIR/runs.csv,
+                      summary.json, plots
+  campaign merge DIR... --out DIR
+                      merge the shards of a campaign into one folder
   help [COMMAND]      this help, or a command's
   --version           the version
 
@@ -85,11 +91,14 @@ pub fn usage_line(command: Option<&str>) -> &'static str {
         Some("bench") => "satsim bench --model MODEL.toml [--state STATE.json] [--calls N]",
         Some("preprint") => "satsim preprint --model MODEL.toml --state STATE.json",
         Some("run") => "satsim run SCENE.toml [--out DIR]",
+        Some("campaign") => {
+            "satsim campaign SCENE.toml [--out DIR] [--threads T] [--shard I/N] [--shards N] [--resume]\n       satsim campaign merge DIR... --out DIR"
+        }
         Some("accuracy") => {
             "satsim accuracy SCENE.toml [--out DIR] [--repeats N] [--methods rk4,dp54,dop853,radau5] [--quick]"
         }
         _ => {
-            "satsim <command> [options]   (commands: dynamics, bench, preprint, run, accuracy, help)"
+            "satsim <command> [options]   (commands: dynamics, bench, preprint, run, accuracy, campaign, help)"
         }
     }
 }
@@ -113,6 +122,7 @@ pub fn dispatch(args: &[OsString]) -> Result<Output, CliError> {
         "preprint" => preprint::run(rest),
         "run" => run::run(rest),
         "accuracy" => accuracy::run(rest),
+        "campaign" => campaign::run(rest),
         other => Err(CliError::Usage {
             command: None,
             message: format!("unknown command `{other}`"),
@@ -124,7 +134,7 @@ fn help(rest: &[OsString]) -> Result<Output, CliError> {
     match rest.first().map(|a| a.to_string_lossy()) {
         None => Ok(USAGE.to_owned()),
         Some(c) => match c.as_ref() {
-            "dynamics" | "bench" | "preprint" | "run" | "accuracy" => {
+            "dynamics" | "bench" | "preprint" | "run" | "accuracy" | "campaign" => {
                 Ok(format!("usage: {}\n", usage_line(Some(&c))))
             }
             other => Err(CliError::Usage {

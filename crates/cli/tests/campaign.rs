@@ -1,0 +1,591 @@
+//! `satsim campaign` (contract section 8): reproducibility across threads and shards, rows
+//! equal to `satsim run` of the substituted scene, failed runs, resume, scheduler
+//! environments, bad input.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+const SCHEDULER_VARS: [&str; 6] = [
+    "SLURM_ARRAY_TASK_ID",
+    "SLURM_ARRAY_TASK_COUNT",
+    "SLURM_ARRAY_TASK_MIN",
+    "JOB_COMPLETION_INDEX",
+    "AWS_BATCH_JOB_ARRAY_INDEX",
+    "AWS_BATCH_JOB_ARRAY_SIZE",
+];
+
+fn satsim_env(dir: &Path, args: &[&str], env: &[(&str, &str)]) -> Output {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_satsim"));
+    c.args(args).current_dir(dir);
+    for v in SCHEDULER_VARS {
+        c.env_remove(v);
+    }
+    for (k, v) in env {
+        c.env(k, v);
+    }
+    c.output().expect("run satsim")
+}
+
+fn satsim(dir: &Path, args: &[&str]) -> Output {
+    satsim_env(dir, args, &[])
+}
+
+fn ok(o: &Output) -> String {
+    assert!(
+        o.status.success(),
+        "status {:?}\nstdout: {}\nstderr: {}",
+        o.status,
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn temp_dir(test: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("satsim-campaign-{}-{test}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::copy(
+        root().join("examples/satellite.toml"),
+        dir.join("satellite.toml"),
+    )
+    .unwrap();
+    dir
+}
+
+/// The scene of most tests, with `{placeholders}` for the dispersed numbers; `nominal`
+/// fills them with the values as written.
+const TEMPLATE: &str = r#"model = "{model}"
+duration = 3.0
+
+[initial]
+base = { attitude = [1.0, 0.0, 0.0, 0.0], angular_velocity = [0.001, -0.002, 0.0015] }
+hinges = { angle = [0.3, -0.2, 0.1, {a3}, -1.0], rate = [0.01, 0.02, -0.01, 0.05, -0.04] }
+
+[integrator]
+method = "rk4"
+step = 0.01
+
+[output]
+every = 0.25
+plots = false
+
+[effects.hinge_springs]
+stiffness = [{k0}, {k1}, {k2}, {k3}, {k4}]
+damping = [1.0, 1.0, 1.0, 0.5, 0.5]
+"#;
+
+const CAMPAIGN: &str = r#"
+[campaign]
+runs = 12
+seed = 42
+
+[[campaign.disperse]]
+key = "effects.hinge_springs.stiffness"
+scale = { sigma = 0.1 }
+
+[[campaign.disperse]]
+key = "initial.hinges.angle"
+index = 3
+normal = { sigma = 0.05 }
+
+[[campaign.disperse]]
+key = "model.body.3.mass"
+uniform = { low = -2.0, high = 2.0 }
+"#;
+
+const NOMINAL: [(&str, &str); 6] = [
+    ("{a3}", "1.2"),
+    ("{k0}", "50.0"),
+    ("{k1}", "50.0"),
+    ("{k2}", "50.0"),
+    ("{k3}", "2.0"),
+    ("{k4}", "2.0"),
+];
+
+fn fill(template: &str, values: &[(&str, &str)]) -> String {
+    let mut s = template.to_owned();
+    for (k, v) in values {
+        s = s.replace(k, v);
+    }
+    s
+}
+
+fn write_campaign(dir: &Path, extra: &str) -> PathBuf {
+    let text = fill(TEMPLATE, &NOMINAL).replace("{model}", "satellite.toml") + extra;
+    let p = dir.join("scene.toml");
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+fn read(p: &Path) -> String {
+    std::fs::read_to_string(p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
+}
+
+/// Splits a CSV line (quoted fields allowed).
+fn fields(line: &str) -> Vec<String> {
+    let mut out = vec![String::new()];
+    let mut quoted = false;
+    let mut chars = line.chars().peekable();
+    while let Some(c) = chars.next() {
+        match (quoted, c) {
+            (true, '"') if chars.peek() == Some(&'"') => {
+                out.last_mut().unwrap().push('"');
+                chars.next();
+            }
+            (true, '"') => quoted = false,
+            (false, '"') => quoted = true,
+            (false, ',') => out.push(String::new()),
+            (_, c) => out.last_mut().unwrap().push(c),
+        }
+    }
+    out
+}
+
+#[test]
+fn threads_and_shards_do_not_change_a_byte_of_runs_csv() {
+    let dir = temp_dir("threads");
+    write_campaign(&dir, CAMPAIGN);
+    ok(&satsim(
+        &dir,
+        &["campaign", "scene.toml", "--out", "t1", "--threads", "1"],
+    ));
+    ok(&satsim(
+        &dir,
+        &["campaign", "scene.toml", "--out", "t2", "--threads", "2"],
+    ));
+    for i in 0..3 {
+        let shard = format!("{i}/3");
+        let out = format!("s{i}");
+        let o = satsim(
+            &dir,
+            &[
+                "campaign",
+                "scene.toml",
+                "--out",
+                &out,
+                "--shard",
+                &shard,
+                "--threads",
+                "2",
+            ],
+        );
+        ok(&o);
+        assert!(String::from_utf8_lossy(&o.stderr).contains("--shard"));
+        // A shard holds exactly its runs.
+        let text = read(&dir.join(&out).join("runs.csv"));
+        let ks: Vec<u64> = text
+            .lines()
+            .skip(1)
+            .map(|l| l.split(',').next().unwrap().parse().unwrap())
+            .collect();
+        assert_eq!(ks, (0..12).filter(|k| k % 3 == i).collect::<Vec<u64>>());
+    }
+    // Shards merged in any order.
+    ok(&satsim(
+        &dir,
+        &["campaign", "merge", "s2", "s0", "s1", "--out", "merged"],
+    ));
+
+    let one = read(&dir.join("t1/runs.csv"));
+    assert_eq!(one, read(&dir.join("t2/runs.csv")));
+    assert_eq!(one, read(&dir.join("merged/runs.csv")));
+    assert_eq!(
+        read(&dir.join("t1/summary.json")),
+        read(&dir.join("merged/summary.json"))
+    );
+
+    // Columns: run, the dispersed values, status, message, then final/min/max of every
+    // trajectory column but t, in the trajectory's order.
+    let header = fields(one.lines().next().unwrap());
+    let expected_start = [
+        "run",
+        "effects.hinge_springs.stiffness[0]",
+        "effects.hinge_springs.stiffness[1]",
+        "effects.hinge_springs.stiffness[2]",
+        "effects.hinge_springs.stiffness[3]",
+        "effects.hinge_springs.stiffness[4]",
+        "initial.hinges.angle[3]",
+        "model.body.3.mass",
+        "status",
+        "message",
+        "final_q_w",
+        "min_q_w",
+        "max_q_w",
+        "final_q_x",
+    ];
+    assert_eq!(header[..expected_start.len()], expected_start);
+    for c in ["angle_h4", "rate_h5", "kinetic_energy", "h_x", "h_y", "h_z"] {
+        for s in ["final_", "min_", "max_"] {
+            assert!(header.contains(&format!("{s}{c}")), "{s}{c}");
+        }
+    }
+    let rows: Vec<Vec<String>> = one.lines().skip(1).map(fields).collect();
+    assert_eq!(rows.len(), 12);
+    for (k, r) in rows.iter().enumerate() {
+        assert_eq!(r[0], k.to_string());
+        assert_eq!(r.len(), header.len());
+        assert_eq!(r[8], "ok", "run {k}: {}", r[9]);
+    }
+    // The draws differ between runs and stay near their nominal values.
+    let mass: Vec<f64> = rows.iter().map(|r| r[7].parse().unwrap()).collect();
+    assert!(mass.iter().all(|m| (18.0..22.0).contains(m)));
+    assert!(mass.windows(2).all(|w| w[0] != w[1]));
+
+    // summary.json: counts and the statistics of every stat column.
+    let s: serde_json::Value = serde_json::from_str(&read(&dir.join("t1/summary.json"))).unwrap();
+    assert_eq!(s["runs"], 12);
+    assert_eq!(s["ok"], 12);
+    assert_eq!(s["failed"], 0);
+    let col = |name: &str| -> Vec<f64> {
+        let c = header.iter().position(|h| h == name).unwrap();
+        rows.iter().map(|r| r[c].parse().unwrap()).collect()
+    };
+    for name in &header[10..] {
+        let st = &s[name.as_str()];
+        for p in ["p1", "p5", "p50", "p95", "p99", "mean", "std"] {
+            assert!(st[p].is_f64(), "{name}.{p}");
+        }
+        let v = col(name);
+        let mean = v.iter().sum::<f64>() / v.len() as f64;
+        assert!((st["mean"].as_f64().unwrap() - mean).abs() <= 1e-12 * mean.abs().max(1e-300));
+        let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let p = |k: &str| st[k].as_f64().unwrap();
+        assert!(lo <= p("p1") && p("p1") <= p("p5") && p("p5") <= p("p50"));
+        assert!(p("p50") <= p("p95") && p("p95") <= p("p99") && p("p99") <= hi);
+    }
+    // Plots: envelopes of hinge angles and bus rates, histograms of chosen finals.
+    for f in [
+        "envelope_angle_h4.svg",
+        "envelope_omega_z.svg",
+        "histogram_final_angle_h4.svg",
+    ] {
+        assert!(read(&dir.join("t1").join(f)).starts_with("<svg"), "{f}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Final, minimum and maximum of every column but `t` of a trajectory CSV.
+fn trajectory_stats(path: &Path) -> (Vec<String>, Vec<[f64; 3]>) {
+    let text = read(path);
+    let mut lines = text.lines();
+    let header: Vec<String> = lines.next().unwrap().split(',').map(String::from).collect();
+    let mut stats = vec![[f64::NAN, f64::INFINITY, f64::NEG_INFINITY]; header.len() - 1];
+    for l in lines {
+        for (c, v) in l.split(',').skip(1).enumerate() {
+            let v: f64 = v.parse().unwrap();
+            stats[c] = [v, stats[c][1].min(v), stats[c][2].max(v)];
+        }
+    }
+    (header[1..].to_vec(), stats)
+}
+
+#[test]
+fn a_row_equals_satsim_run_of_the_scene_with_its_drawn_values() {
+    let dir = temp_dir("equals-run");
+    write_campaign(&dir, CAMPAIGN);
+    ok(&satsim(
+        &dir,
+        &["campaign", "scene.toml", "--out", "c", "--threads", "2"],
+    ));
+    let text = read(&dir.join("c/runs.csv"));
+    let header = fields(text.lines().next().unwrap());
+    let model = read(&dir.join("satellite.toml"));
+    let panel = model.find("name = \"panel1\"").unwrap();
+    let mass_at = panel + model[panel..].find("mass = 20.0").unwrap();
+    for line in text.lines().skip(1).take(3) {
+        let r = fields(line);
+        let k = &r[0];
+        // The scene with this run's values written in by hand (not by the campaign code).
+        let m = format!(
+            "{}mass = {}{}",
+            &model[..mass_at],
+            r[7],
+            &model[mass_at + "mass = 20.0".len()..]
+        );
+        std::fs::write(dir.join(format!("model{k}.toml")), m).unwrap();
+        let values = [
+            ("{k0}", r[1].as_str()),
+            ("{k1}", &r[2]),
+            ("{k2}", &r[3]),
+            ("{k3}", &r[4]),
+            ("{k4}", &r[5]),
+            ("{a3}", &r[6]),
+        ];
+        let scene = fill(TEMPLATE, &values).replace("{model}", &format!("model{k}.toml"));
+        let scene_path = format!("run{k}.toml");
+        std::fs::write(dir.join(&scene_path), scene).unwrap();
+        let out = format!("run{k}");
+        ok(&satsim(&dir, &["run", &scene_path, "--out", &out]));
+        let (cols, stats) = trajectory_stats(&dir.join(&out).join("trajectory.csv"));
+        for (c, name) in cols.iter().enumerate() {
+            for (s, prefix) in ["final_", "min_", "max_"].iter().enumerate() {
+                let h = format!("{prefix}{name}");
+                let i = header.iter().position(|x| *x == h).unwrap();
+                let campaign: f64 = r[i].parse().unwrap();
+                assert_eq!(
+                    campaign.to_bits(),
+                    stats[c][s].to_bits(),
+                    "run {k} {h}: campaign {campaign}, satsim run {}",
+                    stats[c][s]
+                );
+            }
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn failed_runs_are_rows_with_their_message() {
+    let dir = temp_dir("failed");
+    // Masses drawn negative make invalid scenes; long durations exceed max_steps.
+    let extra = r#"
+[campaign]
+runs = 16
+seed = 3
+
+[[campaign.disperse]]
+key = "model.body.3.mass"
+normal = { sigma = 25.0 }
+
+[[campaign.disperse]]
+key = "duration"
+uniform = { low = -2.0, high = 2.0 }
+"#;
+    let scene = write_campaign(&dir, extra);
+    let text = read(&scene).replace("step = 0.01", "step = 0.01\nmax_steps = 300");
+    std::fs::write(&scene, text).unwrap();
+    let out = satsim(&dir, &["campaign", "scene.toml", "--out", "c"]);
+    let stdout = ok(&out);
+    let text = read(&dir.join("c/runs.csv"));
+    let header = fields(text.lines().next().unwrap());
+    let rows: Vec<Vec<String>> = text.lines().skip(1).map(fields).collect();
+    assert_eq!(rows.len(), 16);
+    let (mut bad_mass, mut too_long, mut fine) = (0, 0, 0);
+    for r in &rows {
+        let mass: f64 = r[1].parse().unwrap();
+        let duration: f64 = r[2].parse().unwrap();
+        if mass < 0.0 {
+            assert_eq!(r[3], "failed");
+            assert!(r[4].contains("mass"), "{}", r[4]);
+            bad_mass += 1;
+        } else if duration > 3.0 + 1e-9 {
+            assert_eq!(r[3], "failed", "duration {duration}");
+            assert!(r[4].contains("step"), "{}", r[4]);
+            too_long += 1;
+        } else {
+            assert_eq!(r[3], "ok", "{}", r[4]);
+            fine += 1;
+            continue;
+        }
+        // A failed run keeps its drawn values and leaves the statistics empty.
+        assert!(r[5..].iter().all(String::is_empty));
+        assert_eq!(r.len(), header.len());
+    }
+    assert!(
+        bad_mass > 0 && too_long > 0 && fine > 0,
+        "{bad_mass} {too_long} {fine}"
+    );
+    let s: serde_json::Value = serde_json::from_str(&read(&dir.join("c/summary.json"))).unwrap();
+    assert_eq!(s["runs"], 16);
+    assert_eq!(s["failed"], bad_mass + too_long);
+    assert_eq!(s["ok"], fine);
+    assert!(stdout.contains(&format!("{} failed", bad_mass + too_long)));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn resume_skips_the_runs_already_in_runs_csv() {
+    let dir = temp_dir("resume");
+    write_campaign(&dir, &CAMPAIGN.replace("runs = 12", "runs = 6"));
+    ok(&satsim(&dir, &["campaign", "scene.toml", "--out", "full"]));
+    let full = read(&dir.join("full/runs.csv"));
+    // A campaign killed part-way: two finished runs in completion order, then half a row.
+    let lines: Vec<&str> = full.lines().collect();
+    std::fs::create_dir_all(dir.join("part")).unwrap();
+    std::fs::copy(
+        dir.join("full/campaign.json"),
+        dir.join("part/campaign.json"),
+    )
+    .unwrap();
+    let cut = &lines[2][..lines[2].len() / 2];
+    std::fs::write(
+        dir.join("part/runs.csv"),
+        format!("{}\n{}\n{}\n{cut}", lines[0], lines[4], lines[2]),
+    )
+    .unwrap();
+    let out = ok(&satsim(
+        &dir,
+        &["campaign", "scene.toml", "--out", "part", "--resume"],
+    ));
+    assert!(out.contains("ran        4 runs"), "{out}");
+    assert!(out.contains("2 already in runs.csv"), "{out}");
+    assert_eq!(read(&dir.join("part/runs.csv")), full);
+    // Resuming a finished campaign runs nothing and changes nothing.
+    let out = ok(&satsim(
+        &dir,
+        &["campaign", "scene.toml", "--out", "part", "--resume"],
+    ));
+    assert!(out.contains("ran        0 runs"), "{out}");
+    assert_eq!(read(&dir.join("part/runs.csv")), full);
+    // Another seed does not resume this folder.
+    let scene = read(&dir.join("scene.toml")).replace("seed = 42", "seed = 43");
+    std::fs::write(dir.join("scene.toml"), scene).unwrap();
+    let o = satsim(
+        &dir,
+        &["campaign", "scene.toml", "--out", "part", "--resume"],
+    );
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("other drawn values"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn the_shard_comes_from_the_scheduler_environment() {
+    let dir = temp_dir("env");
+    write_campaign(&dir, &CAMPAIGN.replace("runs = 12", "runs = 5"));
+    let ks = |out: &str| -> Vec<u64> {
+        read(&dir.join(out).join("runs.csv"))
+            .lines()
+            .skip(1)
+            .map(|l| l.split(',').next().unwrap().parse().unwrap())
+            .collect()
+    };
+    for (env, args, expect, says) in [
+        (
+            vec![
+                ("SLURM_ARRAY_TASK_ID", "1"),
+                ("SLURM_ARRAY_TASK_COUNT", "2"),
+            ],
+            vec![],
+            vec![1, 3],
+            "SLURM_ARRAY_TASK_ID=1",
+        ),
+        (
+            vec![("JOB_COMPLETION_INDEX", "2")],
+            vec!["--shards", "3"],
+            vec![2],
+            "JOB_COMPLETION_INDEX=2",
+        ),
+        (
+            vec![
+                ("AWS_BATCH_JOB_ARRAY_INDEX", "0"),
+                ("AWS_BATCH_JOB_ARRAY_SIZE", "2"),
+            ],
+            vec![],
+            vec![0, 2, 4],
+            "AWS_BATCH_JOB_ARRAY_INDEX=0",
+        ),
+    ] {
+        let mut a = vec!["campaign", "scene.toml", "--out", "e"];
+        a.extend(args);
+        let o = satsim_env(&dir, &a, &env);
+        ok(&o);
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert!(stderr.contains(says), "{stderr}");
+        assert_eq!(ks("e"), expect);
+    }
+    // An indexed Job without the shard count is bad input.
+    let o = satsim_env(
+        &dir,
+        &["campaign", "scene.toml", "--out", "e"],
+        &[("JOB_COMPLETION_INDEX", "0")],
+    );
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--shards"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn bad_campaign_input_exits_2_naming_the_key() {
+    let dir = temp_dir("bad");
+    let disperse =
+        |body: &str| format!("\n[campaign]\nruns = 3\n\n[[campaign.disperse]]\n{body}\n");
+    for (extra, needles) in [
+        (
+            "\n[campaign]\nruns = 3\nrnus = 4\n".to_owned(),
+            vec!["rnus", "scene.toml:22:"],
+        ),
+        ("\n[campaign]\nruns = 0\n".to_owned(), vec!["campaign.runs"]),
+        ("\nduration = 1.0\n".to_owned(), vec!["[campaign]"]),
+        (
+            disperse("key = \"initial.hinges.angle\"\nindex = 5\nnormal = { sigma = 0.1 }"),
+            vec![
+                "initial.hinges.angle",
+                "index 5 is out of range",
+                "scene.toml:2",
+            ],
+        ),
+        (
+            disperse("key = \"effects.hinge_springs.damping\"\nnormal = { sigma = -0.1 }"),
+            vec!["effects.hinge_springs.damping", "sigma"],
+        ),
+        (
+            disperse("key = \"duration\"\nuniform = { low = 1.0, high = -1.0 }"),
+            vec!["duration", "above"],
+        ),
+        (
+            disperse("key = \"effects.hinge_springs.stifness\"\nscale = { sigma = 0.1 }"),
+            vec!["effects.hinge_springs.stifness", "stifness"],
+        ),
+        (
+            disperse("key = \"integrator.method\"\nnormal = { sigma = 0.1 }"),
+            vec!["integrator.method", "not a number"],
+        ),
+        (
+            disperse("key = \"model.body.6.mass\"\nnormal = { sigma = 0.1 }"),
+            vec!["model.body.6.mass", "out of range"],
+        ),
+        (
+            disperse("key = \"duration\"\nnormal = { sigma = 0.1 }\nscale = { sigma = 0.1 }"),
+            vec!["duration", "exactly one law"],
+        ),
+        (
+            disperse("key = \"duration\"\nnormal = { sigma = 0.1, mean = 2.0 }"),
+            vec!["mean"],
+        ),
+    ] {
+        let scene = write_campaign(&dir, "");
+        let text = read(&scene).replace("duration = 3.0\n", "");
+        let text = if extra.contains("duration = 1.0") {
+            format!("duration = 3.0\n{text}")
+        } else {
+            format!("duration = 3.0\n{text}{extra}")
+        };
+        std::fs::write(&scene, text).unwrap();
+        let o = satsim(&dir, &["campaign", "scene.toml", "--out", "c"]);
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{extra}: {stderr}");
+        assert!(stderr.contains("scene.toml"), "{stderr}");
+        for n in needles {
+            assert!(stderr.contains(n), "{extra}: `{n}` not in {stderr}");
+        }
+        assert_eq!(stderr.trim_end().lines().count(), 1, "{stderr}");
+    }
+    for (args, needle) in [
+        (
+            vec!["campaign", "scene.toml", "--shard", "3/3"],
+            "out of range",
+        ),
+        (
+            vec!["campaign", "scene.toml", "--threads", "0"],
+            "--threads",
+        ),
+        (vec!["campaign", "merge", "--out", "m"], "folders"),
+        (
+            vec!["campaign", "merge", "nowhere", "--out", "m"],
+            "nowhere",
+        ),
+    ] {
+        let o = satsim(&dir, &args);
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {stderr}");
+        assert!(stderr.contains(needle), "{args:?}: {stderr}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
