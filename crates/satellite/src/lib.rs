@@ -9,6 +9,8 @@ pub mod accuracy;
 pub mod api;
 pub mod campaign;
 pub mod effects;
+pub mod linearize;
+pub mod modes;
 pub mod output;
 pub mod preprint;
 pub mod scene;

@@ -465,6 +465,20 @@ impl Simulation {
     pub fn locked(&self) -> &[bool] {
         &self.locked
     }
+    /// The constant hinge torques every evaluation starts from before the effects add
+    /// theirs (N m, tree hinge order: the model's hinges, then the rotors): the initial
+    /// state's `torque`, zero on the rotors. [`crate::linearize`] perturbs them to form `B`.
+    pub fn constant_torques_mut(&mut self) -> &mut [f64] {
+        &mut self.base_tau
+    }
+    /// Unlocks hinge `h` (tree order) as if its effect had released it (a no-op when it is
+    /// not locked). [`crate::linearize`] frees wheels held by static friction this way.
+    pub fn release(&mut self, h: usize) {
+        if self.locked.get(h).copied().unwrap_or(false) {
+            self.locked[h] = false;
+            self.n_locked -= 1;
+        }
+    }
     /// What happened at each handled event: `(t, description)`.
     pub fn event_log(&self) -> &[(f64, String)] {
         &self.log

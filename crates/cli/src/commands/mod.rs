@@ -4,6 +4,8 @@ pub mod accuracy;
 pub mod bench;
 pub mod campaign;
 pub mod dynamics;
+pub mod linearize;
+pub mod modes;
 pub mod preprint;
 pub mod run;
 
@@ -40,6 +42,11 @@ commands:
                       summary.json, plots
   campaign merge DIR... --out DIR
                       merge the shards of a campaign into one folder
+  linearize SCENE.toml
+                      the linear model (A, B) at the scene's initial state (JSON)
+  modes SCENE.toml [--along HINGE=FROM:TO:N[,HINGE=FROM:TO]] [--plot FILE.svg]
+                      structural frequencies, damping ratios and shapes (JSON); --along
+                      sweeps hinge angles and plots the frequencies
   help [COMMAND]      this help, or a command's
   --version           the version
 
@@ -94,11 +101,15 @@ pub fn usage_line(command: Option<&str>) -> &'static str {
         Some("campaign") => {
             "satsim campaign SCENE.toml [--out DIR] [--threads T] [--shard I/N] [--shards N] [--resume]\n       satsim campaign merge DIR... --out DIR"
         }
+        Some("linearize") => "satsim linearize SCENE.toml",
+        Some("modes") => {
+            "satsim modes SCENE.toml [--along HINGE=FROM:TO:N[,HINGE=FROM:TO]] [--plot FILE.svg]"
+        }
         Some("accuracy") => {
             "satsim accuracy SCENE.toml [--out DIR] [--repeats N] [--methods rk4,dp54,dop853,radau5] [--quick]"
         }
         _ => {
-            "satsim <command> [options]   (commands: dynamics, bench, preprint, run, accuracy, campaign, help)"
+            "satsim <command> [options]   (commands: dynamics, bench, preprint, run, accuracy, campaign, linearize, modes, help)"
         }
     }
 }
@@ -123,6 +134,8 @@ pub fn dispatch(args: &[OsString]) -> Result<Output, CliError> {
         "run" => run::run(rest),
         "accuracy" => accuracy::run(rest),
         "campaign" => campaign::run(rest),
+        "linearize" => linearize::run(rest),
+        "modes" => modes::run(rest),
         other => Err(CliError::Usage {
             command: None,
             message: format!("unknown command `{other}`"),
@@ -134,9 +147,8 @@ fn help(rest: &[OsString]) -> Result<Output, CliError> {
     match rest.first().map(|a| a.to_string_lossy()) {
         None => Ok(USAGE.to_owned()),
         Some(c) => match c.as_ref() {
-            "dynamics" | "bench" | "preprint" | "run" | "accuracy" | "campaign" => {
-                Ok(format!("usage: {}\n", usage_line(Some(&c))))
-            }
+            "dynamics" | "bench" | "preprint" | "run" | "accuracy" | "campaign" | "linearize"
+            | "modes" => Ok(format!("usage: {}\n", usage_line(Some(&c)))),
             other => Err(CliError::Usage {
                 command: Some("help"),
                 message: format!("unknown command `{other}`"),
