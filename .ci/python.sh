@@ -9,7 +9,7 @@ venv=$(mktemp -d "${TMPDIR:-/tmp}/satsim-venv.XXXXXX")
 trap 'rm -rf "$venv"' EXIT
 python3 -m venv "$venv"
 export PIP_DISABLE_PIP_VERSION_CHECK=1
-"$venv/bin/pip" install --quiet ./python pytest numpy pandas
+"$venv/bin/pip" install --quiet ./python pytest numpy pandas dask distributed matplotlib
 export SATSIM_BIN="$root/target/release/satsim"
 if [ ! -x "$SATSIM_BIN" ]; then cargo build --release -p satsim-cli; fi
 # From the workspace root, so that `import satsim` finds the installed package (python/satsim

@@ -59,7 +59,7 @@ def same(a: Shard, b: Shard) -> bool:
 
 def main(argv: List[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("scene", nargs="?", default=str(ROOT / "examples/scenes/campaign.toml"))
+    ap.add_argument("scene", nargs="?", default=str(ROOT / "examples/scenes/deploy_campaign.toml"))
     ap.add_argument("--shards", type=int, default=4)
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--scheduler", help="address of a running Dask scheduler")

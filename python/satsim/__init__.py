@@ -9,6 +9,8 @@ every number equals the command line's to the last bit::
     d["mass_matrix"], d["bias"], d["acceleration"], d["kinetic_energy"], d["dof"]
     r = satsim.run("scene.toml")                  # nothing written to disk
     r.columns, r.data, r["angle_h4"], r.to_pandas()
+    c = satsim.campaign("campaign.toml")          # runs.csv in memory: c.columns, c.data, c.status
+    satsim.modes("scene.toml"), satsim.linearize("scene.toml")   # dicts, numpy arrays
 
 Conventions (the contract's): SI units; quaternions Hamilton ``[w, x, y, z]``; the
 generalised velocity of a free base is ``[angular_velocity (3), velocity (3), hinge rates]``
@@ -33,6 +35,7 @@ from . import _satsim
 from ._satsim import SatsimError
 
 __all__ = [
+    "CampaignResult",
     "Model",
     "SatsimError",
     "Trajectory",
@@ -255,43 +258,156 @@ def run(
     :class:`Trajectory` up to the failure. Ctrl-C stops a run (``KeyboardInterrupt``).
     """
     out_path = None if out is None else os.fspath(out)
+    origin, text = _scene_args(scene, base_dir)
     try:
-        if isinstance(scene, str) and _is_scene_text(scene):
-            origin = SCENE_TEXT if base_dir is None else os.path.join(os.fspath(base_dir), SCENE_TEXT)
-            columns, data = _satsim.run_text(scene, origin, out_path)
-        elif isinstance(scene, (str, os.PathLike)):
-            columns, data = _satsim.run_file(os.fspath(scene), out_path)
+        if text is not None:
+            columns, data = _satsim.run_text(text, origin, out_path)
         else:
-            raise TypeError(f"scene must be a path or a scene's text, got {type(scene).__name__}")
+            columns, data = _satsim.run_file(origin, out_path)
     except SatsimError as e:
         raise _run_partial(e) from None
     return Trajectory(columns, data)
 
 
-def _not_available(what: str, command: str) -> SatsimError:
-    return SatsimError(
-        f"satsim.{what} is not available yet: this build of satsim has no `satsim {command}` "
-        "(contract sections 8 and 9); it will call the same library code once that lands"
-    )
+def _scene_args(scene: PathLike, base_dir: Optional[PathLike]) -> "tuple[str, Optional[str]]":
+    """``(origin, text)`` for the native functions: a path and no text, or the text and the
+    name that stands for it (in ``base_dir``, which anchors its relative paths)."""
+    if isinstance(scene, str) and _is_scene_text(scene):
+        origin = SCENE_TEXT if base_dir is None else os.path.join(os.fspath(base_dir), SCENE_TEXT)
+        return origin, scene
+    if isinstance(scene, (str, os.PathLike)):
+        return os.fspath(scene), None
+    raise TypeError(f"scene must be a path or a scene's text, got {type(scene).__name__}")
+
+
+class CampaignResult:
+    """A campaign's ``runs.csv`` (contract section 8), in memory: one row per run, sorted by
+    the run number ``run``.
+
+    ``columns`` is ``runs.csv``'s header; ``data`` (2-D float64) holds its numbers bit for bit,
+    with the two text columns encoded: ``status`` is 1.0 (``ok``) or 0.0 (``failed``) and
+    ``message`` is NaN. A failed run's statistics are NaN. The texts are in ``status`` and
+    ``messages`` (lists of str); ``c["status"]`` and ``c["message"]`` return them as arrays of
+    str, any other ``c["final_angle_h4"]`` a column of ``data``.
+    """
+
+    __slots__ = ("columns", "data", "status", "messages", "_index")
+
+    def __init__(
+        self, columns: List[str], data: np.ndarray, status: List[str], messages: List[str]
+    ) -> None:
+        data = np.asarray(data, dtype=np.float64)
+        if data.ndim != 2 or data.shape != (len(status), len(columns)) or len(messages) != len(status):
+            raise ValueError("the columns, data, status and messages do not fit together")
+        self.columns: List[str] = list(columns)
+        self.data: np.ndarray = data
+        self.status: List[str] = list(status)
+        self.messages: List[str] = list(messages)
+        self._index = {c: i for i, c in enumerate(self.columns)}
+
+    def __getitem__(self, column: str) -> np.ndarray:
+        """One column, by name: an array of str for ``status`` and ``message``, a 1-D float
+        array (a view of ``data``) for any other."""
+        if column == "status":
+            return np.array(self.status, dtype=str)
+        if column == "message":
+            return np.array(self.messages, dtype=str)
+        try:
+            return self.data[:, self._index[column]]
+        except KeyError:
+            raise KeyError(
+                f"no column {column!r}; the columns are {', '.join(self.columns)}"
+            ) from None
+
+    def __contains__(self, column: object) -> bool:
+        return column in self._index
+
+    def __len__(self) -> int:
+        """The number of runs."""
+        return len(self.status)
+
+    def __iter__(self) -> Iterator[str]:
+        """The column names."""
+        return iter(self.columns)
+
+    def keys(self) -> List[str]:
+        """The column names."""
+        return list(self.columns)
+
+    @property
+    def ok(self) -> np.ndarray:
+        """A boolean mask of the runs that finished."""
+        return np.array([s == "ok" for s in self.status], dtype=bool)
+
+    def to_pandas(self) -> Any:
+        """The table as a ``pandas.DataFrame``, as ``runs.csv`` reads (``run`` as integers,
+        ``status`` and ``message`` as text); needs pandas."""
+        try:
+            import pandas as pd
+        except ImportError as e:  # pragma: no cover - depends on the environment
+            raise ImportError("to_pandas() needs pandas: pip install pandas") from e
+        df = pd.DataFrame(self.data, columns=self.columns)
+        df["run"] = df["run"].astype("int64")
+        df["status"] = self.status
+        df["message"] = self.messages
+        return df
+
+    def __repr__(self) -> str:
+        n_ok = self.status.count("ok")
+        return (
+            f"satsim.CampaignResult({len(self)} runs: {n_ok} ok, {len(self) - n_ok} failed; "
+            f"{len(self.columns)} columns)"
+        )
+
+
+def _shard(shard: Any) -> Optional["tuple[int, int]"]:
+    """``None``, ``(i, n)`` or ``"i/n"`` as ``(i, n)``."""
+    if shard is None:
+        return None
+    if isinstance(shard, str):
+        i, sep, n = shard.partition("/")
+        try:
+            return int(i), int(n)
+        except ValueError:
+            raise SatsimError(f"shard: expected I/N (such as 0/4), got {shard!r}") from None
+    i, n = shard
+    return int(i), int(n)
 
 
 def campaign(
     scene: PathLike,
     threads: Optional[int] = None,
-    shard: Optional[Any] = None,
-) -> Any:
-    """A Monte Carlo campaign (contract section 8). Not available in this build: raises
-    :class:`SatsimError`."""
-    raise _not_available("campaign", "campaign")
+    shard: Optional[Union[str, "tuple[int, int]"]] = None,
+    *,
+    base_dir: Optional[PathLike] = None,
+) -> CampaignResult:
+    """A Monte Carlo campaign (contract section 8), as ``satsim campaign`` runs it, in memory.
+
+    ``scene`` is the path or the text of a scene with a ``[campaign]`` table. ``threads``:
+    worker threads (default every core). ``shard``: ``(i, n)`` or ``"i/n"`` runs only the runs
+    ``k`` with ``k % n == i``; the shards' rows together are the whole campaign's, whatever
+    the threads and the sharding (run ``k`` depends on ``(seed, k)`` alone).
+
+    Nothing is written to disk (``satsim campaign`` writes the folder, summary and plots). A
+    run that fails is a row with status ``failed``, not an error; bad input raises
+    :class:`SatsimError` with the command line's message.
+    """
+    origin, text = _scene_args(scene, base_dir)
+    columns, data, status, messages = _satsim.campaign(origin, text, threads, _shard(shard))
+    return CampaignResult(columns, data, status, messages)
 
 
-def modes(scene: PathLike) -> Dict[str, Any]:
-    """The scene's linear modes (contract section 9). Not available in this build: raises
-    :class:`SatsimError`."""
-    raise _not_available("modes", "modes")
+def modes(scene: PathLike, *, base_dir: Optional[PathLike] = None) -> Dict[str, Any]:
+    """The structural modes of a scene at its initial state, as ``satsim modes`` (contract
+    section 9): a dict with ``frequencies_hz`` (ascending) and ``damping_ratios`` (numpy
+    arrays), ``rigid_modes`` (int), ``modes`` (a list of dicts: ``frequency_hz``,
+    ``damping_ratio``, ``eigenvalue`` ``[re, im]``, ``shape`` and ``shape_imag``
+    ``{state name: value}``), ``real_eigenvalues``, ``locked`` and ``released``."""
+    return _satsim.modes(*_scene_args(scene, base_dir))
 
 
-def linearize(scene: PathLike) -> Dict[str, Any]:
-    """The scene's linearisation ``A``, ``B`` (contract section 9). Not available in this
-    build: raises :class:`SatsimError`."""
-    raise _not_available("linearize", "linearize")
+def linearize(scene: PathLike, *, base_dir: Optional[PathLike] = None) -> Dict[str, Any]:
+    """The linear model ``dz/dt = A z + B u`` of a scene at its initial state, as ``satsim
+    linearize`` (contract section 9): a dict with ``states`` and ``inputs`` (lists of str),
+    ``A`` and ``B`` (2-D numpy arrays), ``error_estimate``, ``locked`` and ``released``."""
+    return _satsim.linearize(*_scene_args(scene, base_dir))

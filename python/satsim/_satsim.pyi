@@ -2,7 +2,7 @@
 ``satsim`` instead: it takes paths, texts and dicts and returns friendlier objects."""
 
 from os import PathLike
-from typing import List, Optional, Tuple, Union
+from typing import Any, Dict, List, Optional, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -47,3 +47,11 @@ def run_file(path: _Path, out: Optional[_Path] = None) -> Tuple[List[str], _F64_
 def run_text(
     text: str, origin: _Path, out: Optional[_Path] = None
 ) -> Tuple[List[str], _F64_2D]: ...
+def campaign(
+    origin: _Path,
+    text: Optional[str] = None,
+    threads: Optional[int] = None,
+    shard: Optional[Tuple[int, int]] = None,
+) -> Tuple[List[str], _F64_2D, List[str], List[str]]: ...
+def linearize(origin: _Path, text: Optional[str] = None) -> Dict[str, Any]: ...
+def modes(origin: _Path, text: Optional[str] = None) -> Dict[str, Any]: ...

@@ -14,7 +14,11 @@
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
+use pyo3::types::PyDict;
 use satsim_satellite::api::{self, DynamicsFailure, RunFailure, Trajectory};
+use satsim_satellite::campaign::{Campaign, Shard};
+use satsim_satellite::linearize::linearize as linearize_scene;
+use satsim_satellite::modes::{Mode, modes as modes_of_scene};
 use satsim_satellite::output::{CsvWriter, write_plots};
 use satsim_satellite::scene::Scene;
 use satsim_tree::io::{self as tio, FileError};
@@ -314,6 +318,146 @@ fn run_text<'py>(
     run_scene(py, SceneSource::Text(text, origin), out)
 }
 
+/// Reads the scene file at `origin`, or parses `text` (named `origin`) when given.
+fn read_scene(origin: &Path, text: Option<&str>) -> Result<Scene, String> {
+    match text {
+        Some(t) => Scene::parse(t, origin),
+        None => Scene::read(origin),
+    }
+    .map_err(|e| e.to_string())
+}
+
+/// A campaign's `runs.csv` in memory: `(columns, data, status, messages)`; see
+/// [`api::campaign_table`] for the encoding of the text columns in `data`.
+type CampaignOut<'py> = (
+    Vec<String>,
+    Bound<'py, PyArray2<f64>>,
+    Vec<String>,
+    Vec<String>,
+);
+
+/// Runs a campaign (the scene file `origin`, or `text` named `origin`) in memory, on
+/// `threads` threads (default every core), the shard `(index, count)` (default all).
+#[pyfunction]
+#[pyo3(signature = (origin, text=None, threads=None, shard=None))]
+fn campaign<'py>(
+    py: Python<'py>,
+    origin: PathBuf,
+    text: Option<String>,
+    threads: Option<usize>,
+    shard: Option<(u64, u64)>,
+) -> PyResult<CampaignOut<'py>> {
+    if threads == Some(0) {
+        return Err(err("threads must be at least 1 (or None: every core)"));
+    }
+    let shard = match shard {
+        Some((i, n)) => Shard::new(i, n).map_err(|e| err(format!("shard: {e}")))?,
+        None => Shard::ALL,
+    };
+    let table = py
+        .detach(|| {
+            let c = match &text {
+                Some(t) => Campaign::parse(t, &origin),
+                None => Campaign::read(&origin),
+            }
+            .map_err(|e| e.to_string())?;
+            api::campaign_table(&c, threads, shard).map_err(|e| e.to_string())
+        })
+        .map_err(err)?;
+    let (n, w) = (table.n_rows(), table.columns.len());
+    let data = table.values.into_pyarray(py).reshape([n, w])?;
+    Ok((table.columns, data, table.status, table.messages))
+}
+
+/// `satsim linearize`: a dict `states`, `inputs`, `A`, `B` (numpy), `error_estimate`,
+/// `locked`, `released`.
+#[pyfunction]
+#[pyo3(signature = (origin, text=None))]
+fn linearize<'py>(
+    py: Python<'py>,
+    origin: PathBuf,
+    text: Option<String>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let lin = py
+        .detach(|| {
+            let scene = read_scene(&origin, text.as_deref())?;
+            linearize_scene(&scene).map_err(|e| format!("{}: {e}", origin.display()))
+        })
+        .map_err(err)?;
+    let d = PyDict::new(py);
+    d.set_item("states", &lin.states)?;
+    d.set_item("inputs", &lin.inputs)?;
+    d.set_item("A", matrix(py, &lin.a)?)?;
+    d.set_item("B", matrix(py, &lin.b)?)?;
+    d.set_item("error_estimate", lin.error_estimate)?;
+    d.set_item("locked", &lin.locked)?;
+    d.set_item("released", &lin.released)?;
+    Ok(d)
+}
+
+/// `satsim modes`: a dict `frequencies_hz`, `damping_ratios` (numpy), `rigid_modes`, `modes`
+/// (a list of dicts: `frequency_hz`, `damping_ratio`, `eigenvalue` `[re, im]`, `shape` and
+/// `shape_imag` as `{state name: value}`), `real_eigenvalues`, `locked`, `released`.
+#[pyfunction]
+#[pyo3(signature = (origin, text=None))]
+fn modes<'py>(
+    py: Python<'py>,
+    origin: PathBuf,
+    text: Option<String>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let m = py
+        .detach(|| {
+            let scene = read_scene(&origin, text.as_deref())?;
+            modes_of_scene(&scene).map_err(|e| format!("{}: {e}", origin.display()))
+        })
+        .map_err(err)?;
+    let d = PyDict::new(py);
+    d.set_item("frequencies_hz", m.frequencies_hz.clone().into_pyarray(py))?;
+    d.set_item("damping_ratios", m.damping_ratios.clone().into_pyarray(py))?;
+    d.set_item("rigid_modes", m.rigid_modes)?;
+    let list: Vec<Bound<'py, PyDict>> = m
+        .modes
+        .iter()
+        .map(|x| mode_dict(py, x))
+        .collect::<PyResult<_>>()?;
+    d.set_item("modes", list)?;
+    d.set_item(
+        "real_eigenvalues",
+        m.real_eigenvalues.clone().into_pyarray(py),
+    )?;
+    d.set_item("locked", &m.locked)?;
+    d.set_item("released", &m.released)?;
+    Ok(d)
+}
+
+fn mode_dict<'py>(py: Python<'py>, m: &Mode) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("frequency_hz", m.frequency_hz)?;
+    d.set_item("damping_ratio", m.damping_ratio)?;
+    d.set_item(
+        "eigenvalue",
+        vec![m.eigenvalue.0, m.eigenvalue.1].into_pyarray(py),
+    )?;
+    for (key, shape) in [("shape", &m.shape), ("shape_imag", &m.shape_imag)] {
+        let s = PyDict::new(py);
+        for (name, v) in shape {
+            s.set_item(name, *v)?;
+        }
+        d.set_item(key, s)?;
+    }
+    Ok(d)
+}
+
+/// A matrix as a row-major numpy array.
+fn matrix<'py>(py: Python<'py>, m: &nalgebra::DMatrix<f64>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let (r, c) = m.shape();
+    let rows: Vec<f64> = (0..r)
+        .flat_map(|i| (0..c).map(move |j| (i, j)))
+        .map(|(i, j)| m[(i, j)])
+        .collect();
+    rows.into_pyarray(py).reshape([r, c])
+}
+
 /// The native module.
 #[pymodule]
 fn _satsim(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -321,6 +465,9 @@ fn _satsim(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<NativeModel>()?;
     m.add_function(wrap_pyfunction!(run_file, m)?)?;
     m.add_function(wrap_pyfunction!(run_text, m)?)?;
+    m.add_function(wrap_pyfunction!(campaign, m)?)?;
+    m.add_function(wrap_pyfunction!(linearize, m)?)?;
+    m.add_function(wrap_pyfunction!(modes, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

@@ -95,13 +95,3 @@ def test_wrong_argument_types_are_type_errors():
         m.dynamics(3.0)
     with pytest.raises(TypeError):
         satsim.run(42)
-
-
-@pytest.mark.parametrize("call", [
-    lambda: satsim.campaign(SCENES / "deploy.toml"),
-    lambda: satsim.modes(SCENES / "deploy.toml"),
-    lambda: satsim.linearize(SCENES / "deploy.toml"),
-])
-def test_commands_not_built_yet_raise_clearly(call):
-    with pytest.raises(satsim.SatsimError, match="not available yet"):
-        call()

@@ -138,3 +138,26 @@ def test_ctrl_c_stops_a_run(tmp_path):
     finally:
         timer.cancel()
     assert not (tmp_path / "out" / "trajectory.csv").exists()
+
+
+def test_a_run_that_fails_part_way_keeps_its_rows(cli, tmp_path):
+    # A step limit stops the run part-way: the command line exits 1 with the rows up to the
+    # failure in its CSV; Python raises SatsimError with the same rows in `partial`.
+    (tmp_path / "m.toml").write_text((EXAMPLES / "satellite.toml").read_text())
+    scene = tmp_path / "s.toml"
+    scene.write_text(
+        'model = "m.toml"\nduration = 100.0\n[integrator]\nmethod = "dp54"\nmax_steps = 40\n'
+        "[output]\nevery = 0.5\nplots = false\n"
+        "[initial]\nbase = { angular_velocity = [0.0, 0.02, 0.01] }\n"
+        "hinges = { angle = [0.0, 0.0, 0.0, 0.5, -0.5], rate = [0.1, 0.0, 0.0, 0.2, 0.3] }\n"
+        "[effects.hinge_springs]\nstiffness = [50.0, 50.0, 50.0, 2.0, 2.0]\n")
+    p = subprocess.run([cli, "run", scene, "--out", tmp_path / "cli"], capture_output=True)
+    assert p.returncode == 1, p
+    columns, data = read_csv(tmp_path / "cli" / "trajectory.csv")
+    assert 0 < len(data) < 201
+    with pytest.raises(satsim.SatsimError, match=r"the run failed: .*rows up to t = ") as e:
+        satsim.run(scene)
+    partial = e.value.partial
+    assert isinstance(partial, satsim.Trajectory)
+    assert partial.columns == columns
+    np.testing.assert_array_equal(bits(partial.data), bits(data))

@@ -2,7 +2,11 @@
 //! dynamics of one state (`satsim dynamics`, contract section 3) and a scene's whole
 //! trajectory (`satsim run`, contract section 7) as columns and rows instead of a CSV file.
 //!
-//! Both call exactly the code the command line calls ([`crba`], [`bias`], [`aba`],
+//! [`campaign_table`] is `satsim campaign`'s `runs.csv` (contract section 8) in memory. The
+//! linear model and the modes (section 9) need nothing more than [`crate::linearize`] and
+//! [`crate::modes`].
+//!
+//! These call exactly the code the command line calls ([`crba`], [`bias`], [`aba`],
 //! [`kinetic_energy`]; [`Scene::simulation`], [`Simulation::run`], [`Simulation::columns`]),
 //! so their numbers equal the command line's to the last bit.
 //!
@@ -12,9 +16,11 @@
 //!
 //! [`Simulation::columns`]: crate::simulation::Simulation::columns
 
+use crate::campaign::{Campaign, CampaignError, RunRecord, Shard};
 use crate::scene::Scene;
 use crate::simulation::{RunError, SimError};
 use nalgebra::{DMatrix, DVector};
+use rayon::prelude::*;
 use satsim_integrate::Output as Times;
 use satsim_tree::{Data, DynamicsError, Model, State, aba, bias, crba, kinetic_energy};
 use std::fmt;
@@ -179,6 +185,85 @@ pub fn run_scene(scene: &Scene, mut stop: impl FnMut() -> bool) -> Result<Trajec
     }
 }
 
+/// `runs.csv` of a campaign (contract section 8) in memory: one row per run of the shard,
+/// sorted by the run number `k`.
+///
+/// `columns` is `runs.csv`'s header ([`Campaign::header`]); every row of `values` holds the
+/// same numbers as the line `satsim campaign` writes, bit for bit, except in the two text
+/// columns: `status` holds 1 (`ok`) or 0 (`failed`) and `message` holds NaN (the texts are in
+/// [`CampaignTable::status`] and [`CampaignTable::messages`]). A failed run's statistics are
+/// NaN (empty in the CSV).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct CampaignTable {
+    /// `runs.csv`'s header.
+    pub columns: Vec<String>,
+    /// The rows, one after the other (row-major, `columns.len()` values per row).
+    pub values: Vec<f64>,
+    /// `ok` or `failed`, per row.
+    pub status: Vec<String>,
+    /// Why a run failed (empty for a run that finished), per row.
+    pub messages: Vec<String>,
+}
+
+impl CampaignTable {
+    /// Number of rows (runs).
+    pub fn n_rows(&self) -> usize {
+        self.status.len()
+    }
+}
+
+/// Runs the shard `shard` of `campaign` on `threads` worker threads (`None`: every core) with
+/// [`Campaign::run_one`], as `satsim campaign` does, and returns its `runs.csv` in memory
+/// (nothing is written). The rows depend on `k` alone, not on the threads or the shard.
+pub fn campaign_table(
+    campaign: &Campaign,
+    threads: Option<usize>,
+    shard: Shard,
+) -> Result<CampaignTable, CampaignError> {
+    let todo: Vec<u64> = (0..campaign.runs).filter(|k| shard.contains(*k)).collect();
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads.unwrap_or(0))
+        .build()
+        .map_err(|e| CampaignError::Other(format!("cannot start the thread pool: {e}")))?;
+    // `collect` keeps the order of `todo`: sorted by k.
+    let records: Vec<RunRecord> = pool.install(|| {
+        todo.par_iter()
+            .with_max_len(1)
+            .map(|&k| campaign.run_one(k))
+            .collect()
+    });
+    let columns = campaign.header();
+    let n_stats = 3 * (campaign.columns.len() - 1);
+    let mut out = CampaignTable {
+        values: Vec::with_capacity(records.len() * columns.len()),
+        columns,
+        ..CampaignTable::default()
+    };
+    for r in &records {
+        out.values.push(r.k as f64);
+        out.values.extend_from_slice(&r.values);
+        match &r.outcome {
+            Ok(st) => {
+                out.values.extend_from_slice(&[1.0, f64::NAN]);
+                for c in 0..st.last.len() {
+                    out.values
+                        .extend_from_slice(&[st.last[c], st.min[c], st.max[c]]);
+                }
+                out.status.push("ok".into());
+                out.messages.push(String::new());
+            }
+            Err(m) => {
+                out.values.extend_from_slice(&[0.0, f64::NAN]);
+                out.values.extend(std::iter::repeat_n(f64::NAN, n_stats));
+                out.status.push("failed".into());
+                out.messages.push(m.clone());
+            }
+        }
+    }
+    debug_assert_eq!(out.values.len(), out.n_rows() * out.columns.len());
+    Ok(out)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -279,6 +364,51 @@ at = [0.6, 0.0, 0.0]
                 assert_eq!(partial.last_t(), Some(0.5));
             }
             other => panic!("{other}"),
+        }
+    }
+
+    fn campaign() -> Campaign {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../examples/scenes/deploy_campaign.toml");
+        let text = std::fs::read_to_string(&path)
+            .unwrap()
+            .replace("duration = 60.0", "duration = 1.0")
+            .replace("runs = 64", "runs = 5");
+        Campaign::parse(&text, &path).unwrap()
+    }
+
+    #[test]
+    fn campaign_table_holds_the_csv_rows_and_ignores_threads_and_shards() {
+        let c = campaign();
+        let all = campaign_table(&c, Some(2), Shard::ALL).unwrap();
+        assert_eq!(all.columns, c.header());
+        assert_eq!(all.n_rows(), 5);
+        let w = all.columns.len();
+        for (k, row) in all.values.chunks_exact(w).enumerate() {
+            // The CSV line of the same run, field by field.
+            let record = c.run_one(k as u64);
+            let line = c.csv_row(&record);
+            let fields: Vec<&str> = line.trim_end().split(',').collect();
+            assert_eq!(fields.len(), w);
+            for (j, (f, v)) in fields.iter().zip(row).enumerate() {
+                match all.columns[j].as_str() {
+                    "status" => assert_eq!(*v, if *f == "ok" { 1.0 } else { 0.0 }),
+                    "message" => assert!(v.is_nan()),
+                    _ if f.is_empty() => assert!(v.is_nan()),
+                    _ => assert_eq!(f.parse::<f64>().unwrap().to_bits(), v.to_bits()),
+                }
+            }
+            assert_eq!(all.status[k], fields[w - 3 * (c.columns.len() - 1) - 2]);
+        }
+        // Two shards on one thread each hold the same rows.
+        let even = campaign_table(&c, Some(1), Shard::new(0, 2).unwrap()).unwrap();
+        let odd = campaign_table(&c, Some(1), Shard::new(1, 2).unwrap()).unwrap();
+        assert_eq!((even.n_rows(), odd.n_rows()), (3, 2));
+        for (k, row) in all.values.chunks_exact(w).enumerate() {
+            let shard = if k % 2 == 0 { &even } else { &odd };
+            let got = &shard.values[(k / 2) * w..(k / 2 + 1) * w];
+            let same = got.iter().zip(row).all(|(a, b)| a.to_bits() == b.to_bits());
+            assert!(same, "run {k}");
         }
     }
 }
