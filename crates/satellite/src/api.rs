@@ -6,14 +6,15 @@
 //! linear model and the modes (section 9) need nothing more than [`crate::linearize`] and
 //! [`crate::modes`].
 //!
-//! These call exactly the code the command line calls ([`crba`], [`bias`], [`aba`],
-//! [`kinetic_energy`]; [`Scene::simulation`], [`Simulation::run`], [`Simulation::columns`]),
-//! so their numbers equal the command line's to the last bit.
+//! These call exactly the code the command line calls ([`crba()`], [`bias()`], [`aba()`],
+//! [`kinetic_energy()`]; [`Scene::simulation`], [`Simulation::run`], [`Simulation::columns`];
+//! [`Campaign::run_one`]), so their numbers equal the command line's to the last bit.
 //!
 //! Conventions are the contract's: generalised velocities `[ω (3), v (3), hinge rates]` for a
 //! free base (root-body axes, Featherstone's angular-then-linear order), `[hinge rates]` for
 //! a fixed base; SI units; quaternions Hamilton `[w, x, y, z]`.
 //!
+//! [`Simulation::run`]: crate::simulation::Simulation::run
 //! [`Simulation::columns`]: crate::simulation::Simulation::columns
 
 use crate::campaign::{Campaign, CampaignError, RunRecord, Shard};
