@@ -6,6 +6,7 @@
 #![warn(missing_docs)]
 
 pub mod accuracy;
+pub mod api;
 pub mod campaign;
 pub mod effects;
 pub mod linearize;

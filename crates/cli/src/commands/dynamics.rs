@@ -3,7 +3,7 @@
 //! of one state, as one JSON object with every number at full `f64` precision.
 
 use super::{CliError, ModelAndState, Options, Output, json_array, json_number, usage_line};
-use satsim_tree::{Data, aba, bias, crba, kinetic_energy};
+use satsim_satellite::api::{Dynamics, DynamicsFailure, dynamics};
 
 const NAME: &str = "dynamics";
 
@@ -19,36 +19,20 @@ pub fn run(args: &[std::ffi::OsString]) -> Result<Output, CliError> {
         model,
         state,
     } = ModelAndState::read(NAME, &opts)?;
-    let failed = |e: satsim_tree::DynamicsError| {
-        CliError::Other(format!(
+    let Dynamics {
+        dof: n,
+        mass_matrix: m,
+        bias: b,
+        acceleration: a,
+        kinetic_energy: ke,
+    } = dynamics(&model, &state).map_err(|e| match e {
+        DynamicsFailure::Engine(e) => CliError::Other(format!(
             "{}: {e} (model {})",
             state_path.display(),
             model_path.display()
-        ))
-    };
-
-    let n = model.nv();
-    let mut data = Data::new(&model);
-    let m = crba(&model, &mut data, &state.q).map_err(failed)?.clone();
-    let b = bias(&model, &mut data, &state.q, &state.v, None)
-        .map_err(failed)?
-        .clone();
-    let a = aba(&model, &mut data, &state.q, &state.v, &state.tau, None)
-        .map_err(failed)?
-        .clone();
-    let ke = kinetic_energy(&model, &mut data, &state.q, &state.v).map_err(failed)?;
-    let finite = m
-        .iter()
-        .chain(b.iter())
-        .chain(a.iter())
-        .all(|x| x.is_finite())
-        && ke.is_finite();
-    if !finite {
-        return Err(CliError::Other(format!(
-            "{}: the dynamics of this state overflow (a non-finite result)",
-            state_path.display()
-        )));
-    }
+        )),
+        DynamicsFailure::NonFinite => CliError::Other(format!("{}: {e}", state_path.display())),
+    })?;
 
     let rows: Vec<String> = (0..n)
         .map(|i| format!("    {}", json_array((0..n).map(|j| m[(i, j)]))))

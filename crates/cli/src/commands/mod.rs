@@ -37,16 +37,16 @@ commands:
                       integrate a scene, write DIR/trajectory.csv
   accuracy SCENE.toml [--out DIR] [--repeats N] [--methods LIST] [--quick]
                       work-precision sweep of the integrators: DIR/accuracy.{csv,svg,md}
-  linearize SCENE.toml
-                      the linear model (A, B) at the scene's initial state (JSON)
-  modes SCENE.toml [--along HINGE=FROM:TO:N[,HINGE=FROM:TO]] [--plot FILE.svg]
-                      structural frequencies, damping ratios and shapes (JSON); --along
-                      sweeps hinge angles and plots the frequencies
   campaign SCENE.toml [--out DIR] [--threads T] [--shard I/N] [--shards N] [--resume]
                       Monte Carlo campaign of a scene's [campaign] table: DIR/runs.csv,
                       summary.json, plots
   campaign merge DIR... --out DIR
                       merge the shards of a campaign into one folder
+  linearize SCENE.toml
+                      the linear model (A, B) at the scene's initial state (JSON)
+  modes SCENE.toml [--along HINGE=FROM:TO:N[,HINGE=FROM:TO]] [--plot FILE.svg]
+                      structural frequencies, damping ratios and shapes (JSON); --along
+                      sweeps hinge angles and plots the frequencies
   help [COMMAND]      this help, or a command's
   --version           the version
 
@@ -98,12 +98,12 @@ pub fn usage_line(command: Option<&str>) -> &'static str {
         Some("bench") => "satsim bench --model MODEL.toml [--state STATE.json] [--calls N]",
         Some("preprint") => "satsim preprint --model MODEL.toml --state STATE.json",
         Some("run") => "satsim run SCENE.toml [--out DIR]",
+        Some("campaign") => {
+            "satsim campaign SCENE.toml [--out DIR] [--threads T] [--shard I/N] [--shards N] [--resume]\n       satsim campaign merge DIR... --out DIR"
+        }
         Some("linearize") => "satsim linearize SCENE.toml",
         Some("modes") => {
             "satsim modes SCENE.toml [--along HINGE=FROM:TO:N[,HINGE=FROM:TO]] [--plot FILE.svg]"
-        }
-        Some("campaign") => {
-            "satsim campaign SCENE.toml [--out DIR] [--threads T] [--shard I/N] [--shards N] [--resume]\n       satsim campaign merge DIR... --out DIR"
         }
         Some("accuracy") => {
             "satsim accuracy SCENE.toml [--out DIR] [--repeats N] [--methods rk4,dp54,dop853,radau5] [--quick]"
@@ -133,9 +133,9 @@ pub fn dispatch(args: &[OsString]) -> Result<Output, CliError> {
         "preprint" => preprint::run(rest),
         "run" => run::run(rest),
         "accuracy" => accuracy::run(rest),
+        "campaign" => campaign::run(rest),
         "linearize" => linearize::run(rest),
         "modes" => modes::run(rest),
-        "campaign" => campaign::run(rest),
         other => Err(CliError::Usage {
             command: None,
             message: format!("unknown command `{other}`"),

@@ -1,0 +1,413 @@
+"""satsim: attitude dynamics of hinged spacecraft, from Python.
+
+The same engine and the same code as the ``satsim`` command line (contract section 10), so
+every number equals the command line's to the last bit::
+
+    import satsim
+    m = satsim.Model.from_file("model.toml")      # bad input raises satsim.SatsimError
+    d = m.dynamics("state.json")                  # or JSON text, or a dict
+    d["mass_matrix"], d["bias"], d["acceleration"], d["kinetic_energy"], d["dof"]
+    r = satsim.run("scene.toml")                  # nothing written to disk
+    r.columns, r.data, r["angle_h4"], r.to_pandas()
+    c = satsim.campaign("campaign.toml")          # runs.csv in memory: c.columns, c.data, c.status
+    satsim.modes("scene.toml"), satsim.linearize("scene.toml")   # dicts, numpy arrays
+
+Conventions (the contract's): SI units; quaternions Hamilton ``[w, x, y, z]``; the
+generalised velocity of a free base is ``[angular_velocity (3), velocity (3), hinge rates]``
+in root-body axes (Featherstone's angular-then-linear order), of a fixed base ``[hinge
+rates]``; hinge arrays follow the model file's ``[[hinge]]`` order; ``mass_matrix @
+acceleration + bias == tau`` with ``tau`` zero on the base and the hinge torques on the hinges.
+
+The module releases the GIL while it reads files and computes: several Python threads can
+run scenes at once.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+from typing import Any, Dict, Iterator, List, Mapping, Optional, Union
+
+import numpy as np
+
+from . import _satsim
+from ._satsim import SatsimError
+
+__all__ = [
+    "CampaignResult",
+    "Model",
+    "SatsimError",
+    "Trajectory",
+    "campaign",
+    "linearize",
+    "modes",
+    "run",
+]
+
+__version__: str = _satsim.__version__
+
+#: A file path: ``str`` or ``os.PathLike``.
+PathLike = Union[str, "os.PathLike[str]"]
+
+#: The names that label inputs given as text in error messages.
+MODEL_TEXT = "<model text>"
+STATE_TEXT = "<state text>"
+STATE_DICT = "<state dict>"
+SCENE_TEXT = "<scene text>"
+
+
+def _json_default(x: Any) -> Any:
+    """Lets ``json.dumps`` write numpy arrays and scalars (exactly: ``repr`` round-trips)."""
+    if isinstance(x, np.ndarray):
+        return x.tolist()
+    if isinstance(x, np.generic):
+        return x.item()
+    raise TypeError(f"{type(x).__name__} is not a number or an array of numbers")
+
+
+def _is_scene_text(scene: str) -> bool:
+    """A string is a scene's text when it has a line break, or names no file and has a ``=``."""
+    return "\n" in scene or ("=" in scene and not os.path.isfile(scene))
+
+
+class Model:
+    """A hinged tree (contract section 1), read and checked. Immutable.
+
+    Build it with :meth:`from_file` or :meth:`from_toml`; bad input raises
+    :class:`SatsimError` with the command line's message (file, line, key).
+    """
+
+    __slots__ = ("_native",)
+
+    def __init__(self, native: _satsim.NativeModel) -> None:
+        """Internal: use :meth:`from_file` or :meth:`from_toml`."""
+        if not isinstance(native, _satsim.NativeModel):
+            raise TypeError("use satsim.Model.from_file(path) or satsim.Model.from_toml(text)")
+        self._native = native
+
+    @classmethod
+    def from_file(cls, path: PathLike) -> "Model":
+        """Reads the model file (TOML, contract section 1) at ``path``."""
+        return cls(_satsim.NativeModel.from_file(os.fspath(path)))
+
+    @classmethod
+    def from_toml(cls, text: str, name: str = MODEL_TEXT) -> "Model":
+        """Parses a model file's text; ``name`` stands for the file in error messages."""
+        if not isinstance(text, str):
+            raise TypeError(f"the model text must be a str, got {type(text).__name__}")
+        return cls(_satsim.NativeModel.from_toml(text, name))
+
+    @property
+    def dof(self) -> int:
+        """Degrees of freedom: 6 + hinges for a free base, the hinges for a fixed one."""
+        return self._native.dof
+
+    @property
+    def base(self) -> str:
+        """``"free"`` or ``"fixed"``."""
+        return self._native.base
+
+    @property
+    def body_names(self) -> List[str]:
+        """Body names, the root first (parents before children)."""
+        return self._native.body_names
+
+    @property
+    def hinge_names(self) -> List[str]:
+        """Hinge names in the model file's order (the order of every hinge array)."""
+        return self._native.hinge_names
+
+    @property
+    def total_mass(self) -> float:
+        """Total mass (kg)."""
+        return self._native.total_mass
+
+    @property
+    def origin(self) -> str:
+        """The model file's path, or ``<model text>``."""
+        return os.fspath(self._native.origin)
+
+    def dynamics(self, state: Union[PathLike, str, Mapping[str, Any]]) -> Dict[str, Any]:
+        """The dynamics of one state, as ``satsim dynamics`` (contract section 3).
+
+        ``state`` is a state file's path, a state file's JSON text (a string starting with
+        ``{``) or a dict with the state file's keys (lists or numpy arrays), for example
+        ``{"hinges": {"angle": [...], "rate": [...]}}``.
+
+        Returns a dict: ``dof`` (int), ``mass_matrix`` (``dof x dof`` float64 array),
+        ``bias`` and ``acceleration`` (float64 arrays of length ``dof``) and
+        ``kinetic_energy`` (float, J), with ``mass_matrix @ acceleration + bias == tau``.
+        """
+        if isinstance(state, Mapping):
+            text = json.dumps(state, default=_json_default)
+            out = self._native.dynamics_json(text, STATE_DICT)
+        elif isinstance(state, str) and state.lstrip().startswith("{"):
+            out = self._native.dynamics_json(state, STATE_TEXT)
+        elif isinstance(state, (str, os.PathLike)):
+            out = self._native.dynamics_file(os.fspath(state))
+        else:
+            raise TypeError(
+                "state must be a path, a state file's JSON text or a dict, "
+                f"got {type(state).__name__}"
+            )
+        dof, mass_matrix, bias, acceleration, kinetic_energy = out
+        return {
+            "dof": dof,
+            "mass_matrix": mass_matrix,
+            "bias": bias,
+            "acceleration": acceleration,
+            "kinetic_energy": kinetic_energy,
+        }
+
+    def __repr__(self) -> str:
+        return (
+            f"satsim.Model({self.origin!r}: {self.base} base, {len(self.body_names)} bodies, "
+            f"{len(self.hinge_names)} hinges, {self.dof} dof)"
+        )
+
+
+class Trajectory:
+    """A run's output: the trajectory CSV's header and values (contract section 7).
+
+    ``columns`` is the header (a list of str), ``data`` the values (a 2-D float64 array, one
+    row per output time); ``r["angle_h4"]`` is one column as a 1-D array (a view of ``data``).
+    """
+
+    __slots__ = ("columns", "data", "_index")
+
+    def __init__(self, columns: List[str], data: np.ndarray) -> None:
+        data = np.asarray(data, dtype=np.float64)
+        if data.ndim != 2 or data.shape[1] != len(columns):
+            raise ValueError(
+                f"data of shape {data.shape} does not fit {len(columns)} columns"
+            )
+        self.columns: List[str] = list(columns)
+        self.data: np.ndarray = data
+        self._index = {c: i for i, c in enumerate(self.columns)}
+
+    def __getitem__(self, column: str) -> np.ndarray:
+        """One column, by name, as a 1-D array."""
+        try:
+            return self.data[:, self._index[column]]
+        except KeyError:
+            raise KeyError(
+                f"no column {column!r}; the columns are {', '.join(self.columns)}"
+            ) from None
+
+    def __contains__(self, column: object) -> bool:
+        return column in self._index
+
+    def __len__(self) -> int:
+        """The number of rows."""
+        return int(self.data.shape[0])
+
+    def __iter__(self) -> Iterator[str]:
+        """The column names (as a dict's keys)."""
+        return iter(self.columns)
+
+    def keys(self) -> List[str]:
+        """The column names."""
+        return list(self.columns)
+
+    @property
+    def t(self) -> np.ndarray:
+        """The output times (s), the ``t`` column."""
+        return self["t"]
+
+    def to_pandas(self) -> Any:
+        """The trajectory as a ``pandas.DataFrame`` (needs pandas)."""
+        try:
+            import pandas as pd
+        except ImportError as e:  # pragma: no cover - depends on the environment
+            raise ImportError("to_pandas() needs pandas: pip install pandas") from e
+        return pd.DataFrame(self.data, columns=self.columns)
+
+    def __repr__(self) -> str:
+        span = ""
+        if len(self) and "t" in self:
+            span = f", t = {self.t[0]} .. {self.t[-1]} s"
+        return f"satsim.Trajectory({len(self)} rows x {len(self.columns)} columns{span})"
+
+
+def _run_partial(e: SatsimError) -> SatsimError:
+    """Turns the native ``(columns, data)`` of a failed run into a :class:`Trajectory`."""
+    partial = getattr(e, "partial", None)
+    if isinstance(partial, tuple):
+        e.partial = Trajectory(*partial)  # type: ignore[attr-defined]
+    return e
+
+
+def run(
+    scene: PathLike,
+    out: Optional[PathLike] = None,
+    *,
+    base_dir: Optional[PathLike] = None,
+) -> Trajectory:
+    """Runs a scene (contract section 7) exactly as ``satsim run`` does.
+
+    ``scene`` is a scene file's path or the scene's TOML text (a string with a line break, or
+    with a ``=`` and naming no file). The relative paths in a scene's text (``model = ...``)
+    are taken from ``base_dir`` (default: the current directory).
+
+    ``out=None`` writes nothing; ``out=DIR`` also writes ``DIR/trajectory.csv`` (and the
+    plots the scene asks for), as the command line does.
+
+    Bad input raises :class:`SatsimError` with the command line's message. A run that fails
+    part-way raises :class:`SatsimError` too; its ``partial`` attribute is the
+    :class:`Trajectory` up to the failure. Ctrl-C stops a run (``KeyboardInterrupt``).
+    """
+    out_path = None if out is None else os.fspath(out)
+    origin, text = _scene_args(scene, base_dir)
+    try:
+        if text is not None:
+            columns, data = _satsim.run_text(text, origin, out_path)
+        else:
+            columns, data = _satsim.run_file(origin, out_path)
+    except SatsimError as e:
+        raise _run_partial(e) from None
+    return Trajectory(columns, data)
+
+
+def _scene_args(scene: PathLike, base_dir: Optional[PathLike]) -> "tuple[str, Optional[str]]":
+    """``(origin, text)`` for the native functions: a path and no text, or the text and the
+    name that stands for it (in ``base_dir``, which anchors its relative paths)."""
+    if isinstance(scene, str) and _is_scene_text(scene):
+        origin = SCENE_TEXT if base_dir is None else os.path.join(os.fspath(base_dir), SCENE_TEXT)
+        return origin, scene
+    if isinstance(scene, (str, os.PathLike)):
+        return os.fspath(scene), None
+    raise TypeError(f"scene must be a path or a scene's text, got {type(scene).__name__}")
+
+
+class CampaignResult:
+    """A campaign's ``runs.csv`` (contract section 8), in memory: one row per run, sorted by
+    the run number ``run``.
+
+    ``columns`` is ``runs.csv``'s header; ``data`` (2-D float64) holds its numbers bit for bit,
+    with the two text columns encoded: ``status`` is 1.0 (``ok``) or 0.0 (``failed``) and
+    ``message`` is NaN. A failed run's statistics are NaN. The texts are in ``status`` and
+    ``messages`` (lists of str); ``c["status"]`` and ``c["message"]`` return them as arrays of
+    str, any other ``c["final_angle_h4"]`` a column of ``data``.
+    """
+
+    __slots__ = ("columns", "data", "status", "messages", "_index")
+
+    def __init__(
+        self, columns: List[str], data: np.ndarray, status: List[str], messages: List[str]
+    ) -> None:
+        data = np.asarray(data, dtype=np.float64)
+        if data.ndim != 2 or data.shape != (len(status), len(columns)) or len(messages) != len(status):
+            raise ValueError("the columns, data, status and messages do not fit together")
+        self.columns: List[str] = list(columns)
+        self.data: np.ndarray = data
+        self.status: List[str] = list(status)
+        self.messages: List[str] = list(messages)
+        self._index = {c: i for i, c in enumerate(self.columns)}
+
+    def __getitem__(self, column: str) -> np.ndarray:
+        """One column, by name: an array of str for ``status`` and ``message``, a 1-D float
+        array (a view of ``data``) for any other."""
+        if column == "status":
+            return np.array(self.status, dtype=str)
+        if column == "message":
+            return np.array(self.messages, dtype=str)
+        try:
+            return self.data[:, self._index[column]]
+        except KeyError:
+            raise KeyError(
+                f"no column {column!r}; the columns are {', '.join(self.columns)}"
+            ) from None
+
+    def __contains__(self, column: object) -> bool:
+        return column in self._index
+
+    def __len__(self) -> int:
+        """The number of runs."""
+        return len(self.status)
+
+    def __iter__(self) -> Iterator[str]:
+        """The column names."""
+        return iter(self.columns)
+
+    def keys(self) -> List[str]:
+        """The column names."""
+        return list(self.columns)
+
+    @property
+    def ok(self) -> np.ndarray:
+        """A boolean mask of the runs that finished."""
+        return np.array([s == "ok" for s in self.status], dtype=bool)
+
+    def to_pandas(self) -> Any:
+        """The table as a ``pandas.DataFrame``, as ``runs.csv`` reads (``run`` as integers,
+        ``status`` and ``message`` as text); needs pandas."""
+        try:
+            import pandas as pd
+        except ImportError as e:  # pragma: no cover - depends on the environment
+            raise ImportError("to_pandas() needs pandas: pip install pandas") from e
+        df = pd.DataFrame(self.data, columns=self.columns)
+        df["run"] = df["run"].astype("int64")
+        df["status"] = self.status
+        df["message"] = self.messages
+        return df
+
+    def __repr__(self) -> str:
+        n_ok = self.status.count("ok")
+        return (
+            f"satsim.CampaignResult({len(self)} runs: {n_ok} ok, {len(self) - n_ok} failed; "
+            f"{len(self.columns)} columns)"
+        )
+
+
+def _shard(shard: Any) -> Optional["tuple[int, int]"]:
+    """``None``, ``(i, n)`` or ``"i/n"`` as ``(i, n)``."""
+    if shard is None:
+        return None
+    if isinstance(shard, str):
+        i, sep, n = shard.partition("/")
+        try:
+            return int(i), int(n)
+        except ValueError:
+            raise SatsimError(f"shard: expected I/N (such as 0/4), got {shard!r}") from None
+    i, n = shard
+    return int(i), int(n)
+
+
+def campaign(
+    scene: PathLike,
+    threads: Optional[int] = None,
+    shard: Optional[Union[str, "tuple[int, int]"]] = None,
+    *,
+    base_dir: Optional[PathLike] = None,
+) -> CampaignResult:
+    """A Monte Carlo campaign (contract section 8), as ``satsim campaign`` runs it, in memory.
+
+    ``scene`` is the path or the text of a scene with a ``[campaign]`` table. ``threads``:
+    worker threads (default every core). ``shard``: ``(i, n)`` or ``"i/n"`` runs only the runs
+    ``k`` with ``k % n == i``; the shards' rows together are the whole campaign's, whatever
+    the threads and the sharding (run ``k`` depends on ``(seed, k)`` alone).
+
+    Nothing is written to disk (``satsim campaign`` writes the folder, summary and plots). A
+    run that fails is a row with status ``failed``, not an error; bad input raises
+    :class:`SatsimError` with the command line's message.
+    """
+    origin, text = _scene_args(scene, base_dir)
+    columns, data, status, messages = _satsim.campaign(origin, text, threads, _shard(shard))
+    return CampaignResult(columns, data, status, messages)
+
+
+def modes(scene: PathLike, *, base_dir: Optional[PathLike] = None) -> Dict[str, Any]:
+    """The structural modes of a scene at its initial state, as ``satsim modes`` (contract
+    section 9): a dict with ``frequencies_hz`` (ascending) and ``damping_ratios`` (numpy
+    arrays), ``rigid_modes`` (int), ``modes`` (a list of dicts: ``frequency_hz``,
+    ``damping_ratio``, ``eigenvalue`` ``[re, im]``, ``shape`` and ``shape_imag``
+    ``{state name: value}``), ``real_eigenvalues``, ``locked`` and ``released``."""
+    return _satsim.modes(*_scene_args(scene, base_dir))
+
+
+def linearize(scene: PathLike, *, base_dir: Optional[PathLike] = None) -> Dict[str, Any]:
+    """The linear model ``dz/dt = A z + B u`` of a scene at its initial state, as ``satsim
+    linearize`` (contract section 9): a dict with ``states`` and ``inputs`` (lists of str),
+    ``A`` and ``B`` (2-D numpy arrays), ``error_estimate``, ``locked`` and ``released``."""
+    return _satsim.linearize(*_scene_args(scene, base_dir))

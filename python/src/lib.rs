@@ -1,0 +1,473 @@
+//! `satsim._satsim`: the native half of the Python package `satsim` (contract section 10).
+//!
+//! Every function here reads its input with the same readers as the `satsim` command line and
+//! computes with the same library functions ([`satsim_satellite::api`]), so the numbers are
+//! the command line's to the last bit. The GIL is released ([`Python::detach`]) while a
+//! file is read and parsed and while anything is computed; a long run re-attaches about five
+//! times a second only to let Ctrl-C (`KeyboardInterrupt`) stop it.
+//!
+//! Errors are `satsim.SatsimError` (a `ValueError`) carrying the command line's message
+//! without its `error: ` prefix: the file (or `<...>` for text and dicts), the line or the
+//! field, and what is wrong. The friendly argument handling (a path, a text or a dict) lives in
+//! `python/satsim/__init__.py`.
+
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use satsim_satellite::api::{self, DynamicsFailure, RunFailure, Trajectory};
+use satsim_satellite::campaign::{Campaign, Shard};
+use satsim_satellite::linearize::linearize as linearize_scene;
+use satsim_satellite::modes::{Mode, modes as modes_of_scene};
+use satsim_satellite::output::{CsvWriter, write_plots};
+use satsim_satellite::scene::Scene;
+use satsim_tree::io::{self as tio, FileError};
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+pyo3::create_exception!(
+    _satsim,
+    SatsimError,
+    PyValueError,
+    "Bad input or a failed computation; the message is the `satsim` command line's (file, line or field, what is wrong)."
+);
+
+fn err(message: impl Into<String>) -> PyErr {
+    SatsimError::new_err(message.into())
+}
+
+fn file_err(e: FileError) -> PyErr {
+    err(e.to_string())
+}
+
+/// A model (contract section 1), read and checked.
+#[pyclass(module = "satsim._satsim", name = "NativeModel", frozen)]
+struct NativeModel {
+    model: satsim_tree::Model,
+    origin: PathBuf,
+}
+
+#[pymethods]
+impl NativeModel {
+    /// Reads the model file at `path`.
+    #[staticmethod]
+    fn from_file(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
+        let model = py.detach(|| tio::read_model(&path)).map_err(file_err)?;
+        Ok(Self {
+            model,
+            origin: path,
+        })
+    }
+
+    /// Parses a model file's text; `origin` names it in messages.
+    #[staticmethod]
+    fn from_toml(py: Python<'_>, text: String, origin: PathBuf) -> PyResult<Self> {
+        let model = py
+            .detach(|| tio::parse_model(&text, &origin))
+            .map_err(file_err)?
+            .0;
+        Ok(Self { model, origin })
+    }
+
+    /// Where the model came from (a path, or `<model text>`).
+    #[getter]
+    fn origin(&self) -> String {
+        self.origin.display().to_string()
+    }
+
+    /// `"free"` or `"fixed"`.
+    #[getter]
+    fn base(&self) -> &'static str {
+        match self.model.base {
+            satsim_tree::BaseKind::Free => "free",
+            satsim_tree::BaseKind::Fixed => "fixed",
+        }
+    }
+
+    /// Degrees of freedom (the length of the generalised velocity).
+    #[getter]
+    fn dof(&self) -> usize {
+        self.model.nv()
+    }
+
+    /// Body names, the root first (the engine's order: parents before children).
+    #[getter]
+    fn body_names(&self) -> Vec<String> {
+        self.model.bodies.iter().map(|b| b.name.clone()).collect()
+    }
+
+    /// Hinge names in the model file's order (the order of the state's arrays).
+    #[getter]
+    fn hinge_names(&self) -> Vec<String> {
+        self.model.hinge_names.clone()
+    }
+
+    /// Total mass (kg).
+    #[getter]
+    fn total_mass(&self) -> f64 {
+        self.model.total_mass()
+    }
+
+    /// The dynamics of the state file at `path`.
+    fn dynamics_file<'py>(&self, py: Python<'py>, path: PathBuf) -> PyResult<DynamicsOut<'py>> {
+        let result = py.detach(|| {
+            let state = tio::read_state(&path, &self.model).map_err(|e| e.to_string())?;
+            self.compute(&state, &path)
+        });
+        dynamics_out(py, result.map_err(err)?)
+    }
+
+    /// The dynamics of a state given as JSON text; `origin` names it in messages.
+    fn dynamics_json<'py>(
+        &self,
+        py: Python<'py>,
+        text: String,
+        origin: PathBuf,
+    ) -> PyResult<DynamicsOut<'py>> {
+        let result = py.detach(|| {
+            let state = tio::parse_state(&text, &origin, &self.model).map_err(|e| e.to_string())?;
+            self.compute(&state, &origin)
+        });
+        dynamics_out(py, result.map_err(err)?)
+    }
+}
+
+impl NativeModel {
+    /// `satsim dynamics`' computation and messages.
+    fn compute(
+        &self,
+        state: &satsim_tree::State,
+        state_origin: &Path,
+    ) -> Result<api::Dynamics, String> {
+        api::dynamics(&self.model, state).map_err(|e| match e {
+            DynamicsFailure::Engine(e) => format!(
+                "{}: {e} (model {})",
+                state_origin.display(),
+                self.origin.display()
+            ),
+            DynamicsFailure::NonFinite => format!("{}: {e}", state_origin.display()),
+        })
+    }
+}
+
+/// `(dof, mass_matrix, bias, acceleration, kinetic_energy)`.
+type DynamicsOut<'py> = (
+    usize,
+    Bound<'py, PyArray2<f64>>,
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray1<f64>>,
+    f64,
+);
+
+/// numpy arrays of a [`api::Dynamics`].
+fn dynamics_out(py: Python<'_>, d: api::Dynamics) -> PyResult<DynamicsOut<'_>> {
+    {
+        let n = d.dof;
+        // nalgebra is column-major; numpy's default is row-major: copy by rows.
+        let rows: Vec<f64> = (0..n)
+            .flat_map(|i| (0..n).map(move |j| (i, j)))
+            .map(|(i, j)| d.mass_matrix[(i, j)])
+            .collect();
+        let m = rows.into_pyarray(py).reshape([n, n])?;
+        Ok((
+            n,
+            m,
+            d.bias.as_slice().to_vec().into_pyarray(py),
+            d.acceleration.as_slice().to_vec().into_pyarray(py),
+            d.kinetic_energy,
+        ))
+    }
+}
+
+/// How often a run re-attaches to Python to check for Ctrl-C.
+const SIGNAL_CHECK: Duration = Duration::from_millis(200);
+
+/// A run's result handed to Python: `(columns, data)` with `data` of shape `(rows, columns)`.
+type RunOut<'py> = (Vec<String>, Bound<'py, PyArray2<f64>>);
+
+fn to_python<'py>(py: Python<'py>, t: Trajectory) -> PyResult<RunOut<'py>> {
+    let (n, c) = (t.n_rows(), t.columns.len());
+    let data = t.values.into_pyarray(py).reshape([n, c])?;
+    Ok((t.columns, data))
+}
+
+/// What a run left: the trajectory, or the failure.
+enum Ran {
+    Done(Trajectory),
+    /// A message and the rows before the failure.
+    Failed(String, Trajectory),
+    /// Python raised (Ctrl-C) while the run was checking for signals.
+    Interrupted(PyErr),
+}
+
+/// Reads (a path) or parses (a text) a scene, runs it with the GIL released, writes
+/// `out/trajectory.csv` and the plots when `out` is given, and returns `(columns, data)`.
+fn run_scene<'py>(
+    py: Python<'py>,
+    source: SceneSource,
+    out: Option<PathBuf>,
+) -> PyResult<RunOut<'py>> {
+    let ran = py.detach(|| -> Result<Ran, String> {
+        let scene = match &source {
+            SceneSource::File(path) => Scene::read(path),
+            SceneSource::Text(text, origin) => Scene::parse(text, origin),
+        }
+        .map_err(|e| e.to_string())?;
+        let mut interrupted: Option<PyErr> = None;
+        let mut last_check = Instant::now();
+        let result = api::run_scene(&scene, || {
+            if last_check.elapsed() < SIGNAL_CHECK {
+                return false;
+            }
+            last_check = Instant::now();
+            match Python::attach(|py| py.check_signals()) {
+                Ok(()) => false,
+                Err(e) => {
+                    interrupted = Some(e);
+                    true
+                }
+            }
+        });
+        let path = source.origin().display().to_string();
+        let ran = match result {
+            Ok(t) => Ran::Done(t),
+            Err(RunFailure::Setup(e)) => return Err(format!("{path}: {e}")),
+            Err(RunFailure::Stopped { partial }) => match interrupted {
+                Some(e) => Ran::Interrupted(e),
+                None => Ran::Failed(format!("{path}: stopped"), partial),
+            },
+            Err(RunFailure::Failed { why, partial }) => {
+                let kept = match partial.last_t() {
+                    Some(t) => format!("the rows up to t = {t} s are kept"),
+                    None => "no row was produced".to_owned(),
+                };
+                Ran::Failed(format!("{path}: the run failed: {why}; {kept}"), partial)
+            }
+        };
+        if let (Some(dir), Ran::Done(t) | Ran::Failed(_, t)) = (&out, &ran) {
+            write_output(dir, t, scene.plots)?;
+        }
+        Ok(ran)
+    });
+    match ran.map_err(err)? {
+        Ran::Done(t) => to_python(py, t),
+        Ran::Interrupted(e) => Err(e),
+        Ran::Failed(message, partial) => {
+            let e = err(message);
+            e.value(py).setattr("partial", to_python(py, partial)?)?;
+            Err(e)
+        }
+    }
+}
+
+/// `DIR/trajectory.csv` (the same writer as `satsim run`) and, when the scene asks for them,
+/// the plots.
+fn write_output(dir: &Path, t: &Trajectory, plots: bool) -> Result<(), String> {
+    std::fs::create_dir_all(dir)
+        .map_err(|e| format!("cannot create the output folder {}: {e}", dir.display()))?;
+    let csv_path = dir.join("trajectory.csv");
+    let write = || -> std::io::Result<()> {
+        let mut csv = CsvWriter::create(&csv_path, &t.columns)?;
+        for row in t.rows() {
+            csv.row(row)?;
+        }
+        Ok(())
+    };
+    write().map_err(|e| format!("cannot write {}: {e}", csv_path.display()))?;
+    if plots && t.n_rows() > 0 {
+        let rows: Vec<Vec<f64>> = t.rows().map(<[f64]>::to_vec).collect();
+        write_plots(dir, &t.columns, &rows)
+            .map_err(|e| format!("cannot write the plots in {}: {e}", dir.display()))?;
+    }
+    Ok(())
+}
+
+/// A scene file, or a scene's text and the path that names it (and anchors its relative
+/// paths).
+enum SceneSource {
+    File(PathBuf),
+    Text(String, PathBuf),
+}
+
+impl SceneSource {
+    fn origin(&self) -> &Path {
+        match self {
+            SceneSource::File(p) | SceneSource::Text(_, p) => p,
+        }
+    }
+}
+
+/// Runs the scene file at `path`; writes `out/trajectory.csv` (and the plots) when `out` is
+/// given. Returns `(columns, data)`.
+#[pyfunction]
+#[pyo3(signature = (path, out=None))]
+fn run_file<'py>(py: Python<'py>, path: PathBuf, out: Option<PathBuf>) -> PyResult<RunOut<'py>> {
+    run_scene(py, SceneSource::File(path), out)
+}
+
+/// Runs a scene given as TOML text; `origin` names it in messages and its folder anchors
+/// the scene's relative paths.
+#[pyfunction]
+#[pyo3(signature = (text, origin, out=None))]
+fn run_text<'py>(
+    py: Python<'py>,
+    text: String,
+    origin: PathBuf,
+    out: Option<PathBuf>,
+) -> PyResult<RunOut<'py>> {
+    run_scene(py, SceneSource::Text(text, origin), out)
+}
+
+/// Reads the scene file at `origin`, or parses `text` (named `origin`) when given.
+fn read_scene(origin: &Path, text: Option<&str>) -> Result<Scene, String> {
+    match text {
+        Some(t) => Scene::parse(t, origin),
+        None => Scene::read(origin),
+    }
+    .map_err(|e| e.to_string())
+}
+
+/// A campaign's `runs.csv` in memory: `(columns, data, status, messages)`; see
+/// [`api::campaign_table`] for the encoding of the text columns in `data`.
+type CampaignOut<'py> = (
+    Vec<String>,
+    Bound<'py, PyArray2<f64>>,
+    Vec<String>,
+    Vec<String>,
+);
+
+/// Runs a campaign (the scene file `origin`, or `text` named `origin`) in memory, on
+/// `threads` threads (default every core), the shard `(index, count)` (default all).
+#[pyfunction]
+#[pyo3(signature = (origin, text=None, threads=None, shard=None))]
+fn campaign<'py>(
+    py: Python<'py>,
+    origin: PathBuf,
+    text: Option<String>,
+    threads: Option<usize>,
+    shard: Option<(u64, u64)>,
+) -> PyResult<CampaignOut<'py>> {
+    if threads == Some(0) {
+        return Err(err("threads must be at least 1 (or None: every core)"));
+    }
+    let shard = match shard {
+        Some((i, n)) => Shard::new(i, n).map_err(|e| err(format!("shard: {e}")))?,
+        None => Shard::ALL,
+    };
+    let table = py
+        .detach(|| {
+            let c = match &text {
+                Some(t) => Campaign::parse(t, &origin),
+                None => Campaign::read(&origin),
+            }
+            .map_err(|e| e.to_string())?;
+            api::campaign_table(&c, threads, shard).map_err(|e| e.to_string())
+        })
+        .map_err(err)?;
+    let (n, w) = (table.n_rows(), table.columns.len());
+    let data = table.values.into_pyarray(py).reshape([n, w])?;
+    Ok((table.columns, data, table.status, table.messages))
+}
+
+/// `satsim linearize`: a dict `states`, `inputs`, `A`, `B` (numpy), `error_estimate`,
+/// `locked`, `released`.
+#[pyfunction]
+#[pyo3(signature = (origin, text=None))]
+fn linearize<'py>(
+    py: Python<'py>,
+    origin: PathBuf,
+    text: Option<String>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let lin = py
+        .detach(|| {
+            let scene = read_scene(&origin, text.as_deref())?;
+            linearize_scene(&scene).map_err(|e| format!("{}: {e}", origin.display()))
+        })
+        .map_err(err)?;
+    let d = PyDict::new(py);
+    d.set_item("states", &lin.states)?;
+    d.set_item("inputs", &lin.inputs)?;
+    d.set_item("A", matrix(py, &lin.a)?)?;
+    d.set_item("B", matrix(py, &lin.b)?)?;
+    d.set_item("error_estimate", lin.error_estimate)?;
+    d.set_item("locked", &lin.locked)?;
+    d.set_item("released", &lin.released)?;
+    Ok(d)
+}
+
+/// `satsim modes`: a dict `frequencies_hz`, `damping_ratios` (numpy), `rigid_modes`, `modes`
+/// (a list of dicts: `frequency_hz`, `damping_ratio`, `eigenvalue` `[re, im]`, `shape` and
+/// `shape_imag` as `{state name: value}`), `real_eigenvalues`, `locked`, `released`.
+#[pyfunction]
+#[pyo3(signature = (origin, text=None))]
+fn modes<'py>(
+    py: Python<'py>,
+    origin: PathBuf,
+    text: Option<String>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let m = py
+        .detach(|| {
+            let scene = read_scene(&origin, text.as_deref())?;
+            modes_of_scene(&scene).map_err(|e| format!("{}: {e}", origin.display()))
+        })
+        .map_err(err)?;
+    let d = PyDict::new(py);
+    d.set_item("frequencies_hz", m.frequencies_hz.clone().into_pyarray(py))?;
+    d.set_item("damping_ratios", m.damping_ratios.clone().into_pyarray(py))?;
+    d.set_item("rigid_modes", m.rigid_modes)?;
+    let list: Vec<Bound<'py, PyDict>> = m
+        .modes
+        .iter()
+        .map(|x| mode_dict(py, x))
+        .collect::<PyResult<_>>()?;
+    d.set_item("modes", list)?;
+    d.set_item(
+        "real_eigenvalues",
+        m.real_eigenvalues.clone().into_pyarray(py),
+    )?;
+    d.set_item("locked", &m.locked)?;
+    d.set_item("released", &m.released)?;
+    Ok(d)
+}
+
+fn mode_dict<'py>(py: Python<'py>, m: &Mode) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("frequency_hz", m.frequency_hz)?;
+    d.set_item("damping_ratio", m.damping_ratio)?;
+    d.set_item(
+        "eigenvalue",
+        vec![m.eigenvalue.0, m.eigenvalue.1].into_pyarray(py),
+    )?;
+    for (key, shape) in [("shape", &m.shape), ("shape_imag", &m.shape_imag)] {
+        let s = PyDict::new(py);
+        for (name, v) in shape {
+            s.set_item(name, *v)?;
+        }
+        d.set_item(key, s)?;
+    }
+    Ok(d)
+}
+
+/// A matrix as a row-major numpy array.
+fn matrix<'py>(py: Python<'py>, m: &nalgebra::DMatrix<f64>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let (r, c) = m.shape();
+    let rows: Vec<f64> = (0..r)
+        .flat_map(|i| (0..c).map(move |j| (i, j)))
+        .map(|(i, j)| m[(i, j)])
+        .collect();
+    rows.into_pyarray(py).reshape([r, c])
+}
+
+/// The native module.
+#[pymodule]
+fn _satsim(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add("SatsimError", m.py().get_type::<SatsimError>())?;
+    m.add_class::<NativeModel>()?;
+    m.add_function(wrap_pyfunction!(run_file, m)?)?;
+    m.add_function(wrap_pyfunction!(run_text, m)?)?;
+    m.add_function(wrap_pyfunction!(campaign, m)?)?;
+    m.add_function(wrap_pyfunction!(linearize, m)?)?;
+    m.add_function(wrap_pyfunction!(modes, m)?)?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    Ok(())
+}
