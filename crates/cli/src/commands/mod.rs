@@ -5,6 +5,7 @@ pub mod bench;
 pub mod dynamics;
 pub mod preprint;
 pub mod run;
+pub mod view;
 
 use satsim_tree::io::FileError;
 use std::ffi::{OsStr, OsString};
@@ -34,6 +35,8 @@ commands:
                       integrate a scene, write DIR/trajectory.csv
   accuracy SCENE.toml [--out DIR] [--repeats N] [--methods LIST] [--quick]
                       work-precision sweep of the integrators: DIR/accuracy.{csv,svg,md}
+  view DIR [--out FILE]
+                      re-create a run's 3-D playback DIR/view.html from its kept poses
   help [COMMAND]      this help, or a command's
   --version           the version
 
@@ -85,11 +88,12 @@ pub fn usage_line(command: Option<&str>) -> &'static str {
         Some("bench") => "satsim bench --model MODEL.toml [--state STATE.json] [--calls N]",
         Some("preprint") => "satsim preprint --model MODEL.toml --state STATE.json",
         Some("run") => "satsim run SCENE.toml [--out DIR]",
+        Some("view") => "satsim view DIR [--out FILE]",
         Some("accuracy") => {
             "satsim accuracy SCENE.toml [--out DIR] [--repeats N] [--methods rk4,dp54,dop853,radau5] [--quick]"
         }
         _ => {
-            "satsim <command> [options]   (commands: dynamics, bench, preprint, run, accuracy, help)"
+            "satsim <command> [options]   (commands: dynamics, bench, preprint, run, accuracy, view, help)"
         }
     }
 }
@@ -113,6 +117,7 @@ pub fn dispatch(args: &[OsString]) -> Result<Output, CliError> {
         "preprint" => preprint::run(rest),
         "run" => run::run(rest),
         "accuracy" => accuracy::run(rest),
+        "view" => view::run(rest),
         other => Err(CliError::Usage {
             command: None,
             message: format!("unknown command `{other}`"),
@@ -124,7 +129,7 @@ fn help(rest: &[OsString]) -> Result<Output, CliError> {
     match rest.first().map(|a| a.to_string_lossy()) {
         None => Ok(USAGE.to_owned()),
         Some(c) => match c.as_ref() {
-            "dynamics" | "bench" | "preprint" | "run" | "accuracy" => {
+            "dynamics" | "bench" | "preprint" | "run" | "accuracy" | "view" => {
                 Ok(format!("usage: {}\n", usage_line(Some(&c))))
             }
             other => Err(CliError::Usage {
