@@ -402,7 +402,10 @@ fn the_page_plays_the_run_in_a_real_browser() {
     let (header, rows) = csv(&dir.join("out/trajectory.csv"));
     let model_text = std::fs::read_to_string(dir.join("satellite.toml")).unwrap();
     let picks = [0, 5, rows.len() - 1];
-    let times: Vec<String> = picks.iter().map(|&k| rows[k][0].to_string()).collect();
+    let mut times: Vec<String> = picks.iter().map(|&k| rows[k][0].to_string()).collect();
+    // And half-way between rows 5 and 6: the page interpolates positions linearly.
+    let mid = 0.5 * (rows[5][0] + rows[6][0]);
+    times.push(mid.to_string());
     let report = selftest(
         &chromium,
         &work,
@@ -435,6 +438,23 @@ fn the_page_plays_the_run_in_a_real_browser() {
                 expected[name]
             );
         }
+    }
+    let (p5, p6) = (
+        body_positions(&model_text, &rows[5], &header),
+        body_positions(&model_text, &rows[6], &header),
+    );
+    for (i, name) in names.iter().enumerate() {
+        let p = &report["positions"][3][i];
+        let page_p = V3::new(
+            p[0].as_f64().unwrap(),
+            p[1].as_f64().unwrap(),
+            p[2].as_f64().unwrap(),
+        );
+        let lerp = 0.5 * (p5[name] + p6[name]);
+        assert!(
+            (page_p - lerp).norm() < 1e-6,
+            "{name} at t = {mid}: {page_p:?}, {lerp:?}"
+        );
     }
     // The panels really moved (the comparison is not of frozen poses).
     let at = |j: usize, name: &str| {

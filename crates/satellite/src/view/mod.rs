@@ -580,18 +580,17 @@ impl PoseRecorder {
             let n = -r / r.norm();
             f.extend_from_slice(&[n.x, n.y, n.z]);
         }
-        if !f.iter().all(|x| x.is_finite()) {
-            return Err(ViewError::Record(format!(
-                "a non-finite pose at t = {}",
-                row[0]
-            )));
-        }
         Ok(())
     }
 
-    /// Records one output row (at output times, in order).
+    /// Records one output row (at output times, in order). A row whose poses are not all
+    /// finite is not kept (the run reports such a state itself); the view shows the rows
+    /// before it.
     pub fn record(&mut self, row: &[f64]) -> Result<(), ViewError> {
         self.pose(row)?;
+        if !self.frame.iter().all(|x| x.is_finite()) {
+            return Ok(());
+        }
         let w = self.width;
         if self.seen.is_multiple_of(self.stride) && self.frames.len() / w == self.max_frames {
             // Full: keep every other frame (in place), record every other row from now on.

@@ -231,6 +231,17 @@ fn long_runs_are_decimated_keeping_both_ends() {
 }
 
 #[test]
+fn non_finite_rows_are_not_kept() {
+    let model = arm();
+    let mut rec = PoseRecorder::new(&model, &cols(&["t", "angle_h"]), "arm").unwrap();
+    rec.record(&[0.0, 0.1]).unwrap();
+    rec.record(&[1.0, f64::NAN]).unwrap();
+    let view = rec.finish(&[]);
+    assert_eq!(view.frames.len(), 1);
+    assert!(view.frames.data.iter().all(|x| x.is_finite()));
+}
+
+#[test]
 fn the_recorder_needs_the_attitude_of_a_free_base() {
     let model = chain(2, BaseKind::Free);
     let e = PoseRecorder::new(&model, &cols(&["t", "angle_h1"]), "x")
