@@ -44,6 +44,12 @@ fn to_toml(m: &Model) -> String {
             i[(2, 2)]
         )
         .unwrap();
+        if let Some(shape) = &b.shape {
+            let at = shape
+                .at
+                .map_or(String::new(), |a| format!(", at = {}", v3(&a)));
+            writeln!(s, "shape = {{ box = {}{at} }}", v3(&shape.size)).unwrap();
+        }
     }
     for (k, name) in m.hinge_names.iter().enumerate() {
         let i = m.hinge_body[k];

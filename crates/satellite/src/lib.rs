@@ -15,3 +15,4 @@ pub mod output;
 pub mod preprint;
 pub mod scene;
 pub mod simulation;
+pub mod view;

@@ -180,6 +180,9 @@ pub struct OutputFile {
     /// Draw SVG plots at the end (default true).
     #[serde(default)]
     pub plots: Option<bool>,
+    /// Write the 3-D playback `view.html` and its kept poses (default true).
+    #[serde(default)]
+    pub view: Option<bool>,
 }
 
 /// `[orbit]`.
@@ -467,6 +470,8 @@ pub struct Scene {
     pub every: f64,
     /// Draw SVG plots.
     pub plots: bool,
+    /// Write the 3-D playback `view.html` (and `poses.csv`, `view.json`): see [`crate::view`].
+    pub view: bool,
     /// The enabled effects.
     pub effects: EffectSet,
 }
@@ -485,6 +490,7 @@ impl Scene {
                 .with_max_steps(10_000_000),
             every: duration / 100.0,
             plots: true,
+            view: true,
             effects: EffectSet::default(),
         }
     }
@@ -635,15 +641,15 @@ impl Parser<'_> {
 
         let duration = self.positive(&file.duration, "duration")?;
         let options = self.integrator(file.integrator.as_ref())?;
-        let (every, plots) = match &file.output {
-            None => (duration / 100.0, true),
+        let (every, plots, view) = match &file.output {
+            None => (duration / 100.0, true, true),
             Some(o) => {
                 let o = o.get_ref();
                 let every = match &o.every {
                     Some(e) => self.positive(e, "output.every")?,
                     None => duration / 100.0,
                 };
-                (every, o.plots.unwrap_or(true))
+                (every, o.plots.unwrap_or(true), o.view.unwrap_or(true))
             }
         };
         let mut effects = EffectSet::default();
@@ -662,6 +668,7 @@ impl Parser<'_> {
             options,
             every,
             plots,
+            view,
             effects,
         };
         // Build once to surface any remaining setup error with the scene's name.

@@ -222,7 +222,9 @@ fn order_of(name: &str) -> usize {
 fn with_rotors(model: &Model, rotors: &[Rotor]) -> Result<Model, ModelError> {
     let mut b = ModelBuilder::new(model.base);
     for body in &model.bodies {
-        b.push_body(Body::new(body.name.clone(), body.mass, body.inertia_com).with_com(body.com));
+        let mut copy = Body::new(body.name.clone(), body.mass, body.inertia_com).with_com(body.com);
+        copy.shape = body.shape;
+        b.push_body(copy);
     }
     for (k, name) in model.hinge_names.iter().enumerate() {
         let i = model.hinge_body[k];

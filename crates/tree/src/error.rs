@@ -109,6 +109,14 @@ pub enum ModelError {
         /// The armature given.
         armature: f64,
     },
+    /// A body's `shape` box with an edge length that is not positive.
+    #[error("body `{body}`: shape box sizes {size:?} must all be positive")]
+    ShapeSize {
+        /// The body.
+        body: String,
+        /// The sizes given.
+        size: [f64; 3],
+    },
     /// A leaf body with zero mass and zero inertia: its hinge acceleration is undetermined.
     #[error(
         "body `{0}` is a leaf with zero mass and zero inertia: its hinge acceleration would be undetermined"

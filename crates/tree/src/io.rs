@@ -42,7 +42,7 @@
 //! ```
 
 use crate::error::ModelError;
-use crate::model::{BaseKind, Body, Hinge, Model, ModelBuilder, UNIT_NORM_TOLERANCE};
+use crate::model::{BaseKind, Body, BoxShape, Hinge, Model, ModelBuilder, UNIT_NORM_TOLERANCE};
 use crate::spatial::{Mat3, Vec3};
 use nalgebra::Quaternion;
 use serde::Deserialize;
@@ -276,6 +276,23 @@ pub struct BodyFile {
     /// is 0 (then zero by default).
     #[serde(default)]
     pub inertia: Option<Spanned<[[f64; 3]; 3]>>,
+    /// `shape = { box = [lx, ly, lz], at = [x, y, z] }`: how to draw the body (optional;
+    /// no algorithm reads it).
+    #[serde(default)]
+    pub shape: Option<Spanned<ShapeFile>>,
+}
+
+/// A body's `shape`: a box of edge lengths `box` (m, body axes, each positive) centred at
+/// `at` (m, body frame; default the body's `com`). For drawing only.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ShapeFile {
+    /// Edge lengths along the body's x, y, z axes (m).
+    #[serde(rename = "box")]
+    pub size: Spanned<[f64; 3]>,
+    /// The box's centre in the body frame (m), default the centre of mass.
+    #[serde(default)]
+    pub at: Option<Spanned<[f64; 3]>>,
 }
 
 /// A `[[hinge]]` entry.
@@ -367,7 +384,22 @@ impl ModelFile {
                 }
                 None => Vec3::zeros(),
             };
-            builder.push_body(Body::new(name.clone(), mass, inertia).with_com(com));
+            let mut entry = Body::new(name.clone(), mass, inertia).with_com(com);
+            if let Some(shape) = &body.shape {
+                let shape = shape.get_ref();
+                if !shape.size.get_ref().iter().all(|x| x.is_finite()) {
+                    return Err(nonfinite("shape.box", span_of(&shape.size)));
+                }
+                let mut drawn = BoxShape::new(v3(shape.size.get_ref()));
+                if let Some(at) = &shape.at {
+                    if !at.get_ref().iter().all(|x| x.is_finite()) {
+                        return Err(nonfinite("shape.at", span_of(at)));
+                    }
+                    drawn = drawn.at(v3(at.get_ref()));
+                }
+                entry = entry.with_shape(drawn);
+            }
+            builder.push_body(entry);
         }
         for h in &self.hinge {
             let hinge = h.get_ref();
@@ -484,6 +516,12 @@ impl ModelFile {
                 b.inertia
                     .as_ref()
                     .map(|i| i.span())
+                    .unwrap_or_else(|| b.name.span())
+            }),
+            ModelError::ShapeSize { body, .. } => self.body_named(body, 0).map(|b| {
+                b.shape
+                    .as_ref()
+                    .map(|s| s.get_ref().size.span())
                     .unwrap_or_else(|| b.name.span())
             }),
             ModelError::NegativeArmature { hinge, .. } => self.hinge_named(hinge, 0).map(|h| {

@@ -44,6 +44,42 @@ pub struct Body {
     pub com: Vec3,
     /// Inertia tensor about the centre of mass, body axes (kg m²).
     pub inertia: Mat3,
+    /// How to draw the body (the model file's optional `shape`); no algorithm reads it.
+    pub shape: Option<BoxShape>,
+}
+
+/// A box drawn for a body (the model file's `shape = { box = [lx, ly, lz], at = [x, y, z] }`).
+/// For drawing only: no algorithm reads it.
+///
+/// ```
+/// use satsim_tree::{Body, BoxShape, spatial::{Mat3, Vec3}};
+/// let panel = Body::new("panel", 20.0, Mat3::identity())
+///     .with_com(Vec3::new(0.0, 1.0, 0.0))
+///     .with_shape(BoxShape::new(Vec3::new(0.02, 2.0, 1.0)));
+/// assert_eq!(panel.shape.unwrap().centre(&panel.com), Vec3::new(0.0, 1.0, 0.0));
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BoxShape {
+    /// Edge lengths along the body's x, y, z axes (m), each positive and finite.
+    pub size: Vec3,
+    /// The box's centre in the body frame (m); `None` puts it at the body's centre of mass.
+    pub at: Option<Vec3>,
+}
+
+impl BoxShape {
+    /// A box of edge lengths `size` (body axes, m) centred on the body's centre of mass.
+    pub fn new(size: Vec3) -> Self {
+        Self { size, at: None }
+    }
+    /// Places the box's centre at `at` (body frame, m).
+    pub fn at(mut self, at: Vec3) -> Self {
+        self.at = Some(at);
+        self
+    }
+    /// The box's centre in the body frame: `at`, or the centre of mass `com` by default.
+    pub fn centre(&self, com: &Vec3) -> Vec3 {
+        self.at.unwrap_or(*com)
+    }
 }
 
 impl Body {
@@ -54,6 +90,7 @@ impl Body {
             mass,
             com: Vec3::zeros(),
             inertia,
+            shape: None,
         }
     }
     /// A massless, inertia-free link (to build multi-axis hinges from 1-DOF hinges).
@@ -63,6 +100,11 @@ impl Body {
     /// Sets the centre of mass (body frame, m).
     pub fn with_com(mut self, com: Vec3) -> Self {
         self.com = com;
+        self
+    }
+    /// Sets the box drawn for the body (drawing only).
+    pub fn with_shape(mut self, shape: BoxShape) -> Self {
+        self.shape = Some(shape);
         self
     }
 }
@@ -297,6 +339,7 @@ impl ModelBuilder {
                     com: body.com,
                     inertia_com: body.inertia,
                     inertia: RigidInertia::from_com(body.mass, body.com, body.inertia),
+                    shape: body.shape,
                 }
             })
             .collect();
@@ -356,6 +399,18 @@ fn check_body(b: &Body) -> Result<(), ModelError> {
     finite3(&b.com, || format!("body `{}`: com", b.name))?;
     if !b.inertia.iter().all(|x| x.is_finite()) {
         return Err(ModelError::NonFinite(format!("body `{}`: inertia", b.name)));
+    }
+    if let Some(shape) = &b.shape {
+        finite3(&shape.size, || format!("body `{}`: shape.box", b.name))?;
+        if let Some(at) = &shape.at {
+            finite3(at, || format!("body `{}`: shape.at", b.name))?;
+        }
+        if shape.size.iter().any(|&x| x <= 0.0) {
+            return Err(ModelError::ShapeSize {
+                body: b.name.clone(),
+                size: [shape.size.x, shape.size.y, shape.size.z],
+            });
+        }
     }
     let i = &b.inertia;
     let scale = i.abs().max().max(f64::MIN_POSITIVE);
@@ -439,6 +494,8 @@ pub struct BodyInfo {
     pub inertia_com: Mat3,
     /// Spatial inertia about the body frame's origin.
     pub inertia: RigidInertia,
+    /// The box drawn for the body, if the model gave one (drawing only).
+    pub shape: Option<BoxShape>,
 }
 
 /// The revolute hinge that joins body `i` to its parent `λ(i)`.

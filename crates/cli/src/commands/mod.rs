@@ -8,6 +8,7 @@ pub mod linearize;
 pub mod modes;
 pub mod preprint;
 pub mod run;
+pub mod view;
 
 use satsim_tree::io::FileError;
 use std::ffi::{OsStr, OsString};
@@ -47,6 +48,8 @@ commands:
   modes SCENE.toml [--along HINGE=FROM:TO:N[,HINGE=FROM:TO]] [--plot FILE.svg]
                       structural frequencies, damping ratios and shapes (JSON); --along
                       sweeps hinge angles and plots the frequencies
+  view DIR [--out FILE]
+                      re-create a run's 3-D playback DIR/view.html from its kept poses
   help [COMMAND]      this help, or a command's
   --version           the version
 
@@ -105,11 +108,12 @@ pub fn usage_line(command: Option<&str>) -> &'static str {
         Some("modes") => {
             "satsim modes SCENE.toml [--along HINGE=FROM:TO:N[,HINGE=FROM:TO]] [--plot FILE.svg]"
         }
+        Some("view") => "satsim view DIR [--out FILE]",
         Some("accuracy") => {
             "satsim accuracy SCENE.toml [--out DIR] [--repeats N] [--methods rk4,dp54,dop853,radau5] [--quick]"
         }
         _ => {
-            "satsim <command> [options]   (commands: dynamics, bench, preprint, run, accuracy, campaign, linearize, modes, help)"
+            "satsim <command> [options]   (commands: dynamics, bench, preprint, run, accuracy, campaign, linearize, modes, view, help)"
         }
     }
 }
@@ -136,6 +140,7 @@ pub fn dispatch(args: &[OsString]) -> Result<Output, CliError> {
         "campaign" => campaign::run(rest),
         "linearize" => linearize::run(rest),
         "modes" => modes::run(rest),
+        "view" => view::run(rest),
         other => Err(CliError::Usage {
             command: None,
             message: format!("unknown command `{other}`"),
@@ -148,7 +153,7 @@ fn help(rest: &[OsString]) -> Result<Output, CliError> {
         None => Ok(USAGE.to_owned()),
         Some(c) => match c.as_ref() {
             "dynamics" | "bench" | "preprint" | "run" | "accuracy" | "campaign" | "linearize"
-            | "modes" => Ok(format!("usage: {}\n", usage_line(Some(&c)))),
+            | "modes" | "view" => Ok(format!("usage: {}\n", usage_line(Some(&c)))),
             other => Err(CliError::Usage {
                 command: Some("help"),
                 message: format!("unknown command `{other}`"),

@@ -15,6 +15,7 @@ use satsim_integrate::Output as Times;
 use satsim_satellite::output::{CsvWriter, write_plots};
 use satsim_satellite::scene::Scene;
 use satsim_satellite::simulation::RunError;
+use satsim_satellite::view::{PoseRecorder, ViewError};
 use std::ffi::OsString;
 use std::fmt::Write as _;
 use std::io::{IsTerminal, Write};
@@ -128,6 +129,18 @@ pub fn run_scene(scene_path: &Path, out: Option<PathBuf>) -> Result<Output, Fail
     let mut csv = CsvWriter::create(&csv_path, &columns)
         .map_err(|e| CliError::Other(format!("cannot write {}: {e}", csv_path.display())))?;
 
+    // The 3-D playback (`view.html`, contract section 11): poses recorded at every row.
+    let title = scene_path
+        .file_name()
+        .map_or(stem.clone(), |n| n.to_string_lossy().into());
+    let mut poses = match scene.view {
+        true => Some(
+            PoseRecorder::new(sim.model(), &columns, &title)
+                .map_err(|e| CliError::Other(e.to_string()))?,
+        ),
+        false => None,
+    };
+
     let progress = std::io::stderr().is_terminal();
     let (t0, t_end) = (sim.t0(), sim.t0() + scene.duration);
     let started = Instant::now();
@@ -140,6 +153,9 @@ pub fn run_scene(scene_path: &Path, out: Option<PathBuf>) -> Result<Output, Fail
         &Times::Interval(scene.every),
         |t, row| -> Result<(), Stop> {
             csv.row(row).map_err(Stop::Write)?;
+            if let Some(p) = poses.as_mut() {
+                p.record(row).map_err(Stop::View)?;
+            }
             rows.push(row.to_vec());
             if progress && (last_draw.elapsed().as_millis() >= 100 || t >= t_end) {
                 last_draw = Instant::now();
@@ -172,6 +188,10 @@ pub fn run_scene(scene_path: &Path, out: Option<PathBuf>) -> Result<Output, Fail
         Err(e) => {
             let why = match e {
                 RunError::Integrate(e) => e.to_string(),
+                RunError::Sink {
+                    t,
+                    error: Stop::View(e),
+                } => format!("at t = {t} s: {e}"),
                 RunError::Sink { t, error } => {
                     format!("cannot write {} at t = {t} s: {error}", csv_path.display())
                 }
@@ -193,6 +213,15 @@ pub fn run_scene(scene_path: &Path, out: Option<PathBuf>) -> Result<Output, Fail
         })?
     } else {
         Vec::new()
+    };
+
+    let view = match poses {
+        Some(p) => Some(
+            p.finish(sim.event_log())
+                .write(&dir)
+                .map_err(|e| Failure::Run(format!("cannot write the 3-D view: {e}")))?,
+        ),
+        None => None,
     };
 
     // Summary.
@@ -264,6 +293,9 @@ pub fn run_scene(scene_path: &Path, out: Option<PathBuf>) -> Result<Output, Fail
             format!(" and {} plots ({})", plots.len(), plots.join(", "))
         }
     );
+    if let Some(v) = view {
+        let _ = writeln!(s, "view       {}", v.display());
+    }
     Ok(s)
 }
 
@@ -289,6 +321,8 @@ enum Stop {
     Write(std::io::Error),
     /// Ctrl-C.
     Interrupted,
+    /// Recording the poses of the 3-D view failed.
+    View(ViewError),
 }
 
 impl std::fmt::Display for Stop {
@@ -296,6 +330,7 @@ impl std::fmt::Display for Stop {
         match self {
             Stop::Write(e) => write!(f, "{e}"),
             Stop::Interrupted => f.write_str("interrupted"),
+            Stop::View(e) => write!(f, "{e}"),
         }
     }
 }

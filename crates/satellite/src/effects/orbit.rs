@@ -178,9 +178,15 @@ impl Effect for Orbit {
         Ok(())
     }
     fn output_columns(&self) -> Vec<String> {
-        vec!["orbit_radius".into()]
+        vec![
+            "orbit_radius".into(),
+            "orbit_r_x".into(),
+            "orbit_r_y".into(),
+            "orbit_r_z".into(),
+        ]
     }
     fn output(&self, _ctx: &Context, own: &[f64], row: &mut Vec<f64>) {
         row.push(Vec3::new(own[0], own[1], own[2]).norm());
+        row.extend_from_slice(&own[..3]);
     }
 }

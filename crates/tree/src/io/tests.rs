@@ -39,6 +39,40 @@ fn good_model_builds() {
     assert_eq!(line_of(GOOD, f.hinge[0].span().start), 14);
 }
 
+/// `GOOD` with `line` added after the panel's inertia (as line 13).
+fn with_shape(line: &str) -> String {
+    GOOD.replace(
+        "inertia = [[1.7, 0, 0], [0, 6.7, 0], [0, 0, 8.3]]",
+        &format!("inertia = [[1.7, 0, 0], [0, 6.7, 0], [0, 0, 8.3]]\n{line}"),
+    )
+}
+
+#[test]
+fn shapes_are_read_and_default_to_the_com() {
+    let text = with_shape("com = [0, 1, 0]\nshape = { box = [0.02, 2, 1] }").replace(
+        "inertia = [[40, 0, 0], [0, 40, 0], [0, 0, 30]]",
+        "inertia = [[40, 0, 0], [0, 40, 0], [0, 0, 30]]\nshape = { box = [1.5, 1.5, 1], at = [0, 0, 0.25] }",
+    );
+    let (m, _) = parse_model(&text, Path::new("ok.toml")).unwrap();
+    let bus = m.bodies[0].shape.unwrap();
+    assert_eq!(bus.size, Vec3::new(1.5, 1.5, 1.0));
+    assert_eq!(bus.centre(&m.bodies[0].com), Vec3::new(0.0, 0.0, 0.25));
+    let panel = &m.bodies[1];
+    let shape = panel.shape.unwrap();
+    assert_eq!(shape.size, Vec3::new(0.02, 2.0, 1.0));
+    assert_eq!(shape.at, None);
+    assert_eq!(shape.centre(&panel.com), Vec3::new(0.0, 1.0, 0.0));
+    // Drawing only: the dynamics are those of the model without shapes.
+    let plain = parse_model(&text.replace("shape = ", "# shape = "), Path::new("p.toml"))
+        .unwrap()
+        .0;
+    assert!(plain.bodies.iter().all(|b| b.shape.is_none()));
+    assert_eq!(plain.bodies[1].inertia, panel.inertia);
+    assert_eq!(plain.joints, m.joints);
+    // A body without `shape` has none.
+    assert!(model().bodies.iter().all(|b| b.shape.is_none()));
+}
+
 #[test]
 fn model_error_table() {
     // (description, edited text, kind, line, substring of the message)
@@ -253,6 +287,62 @@ fn model_error_table() {
             Kind::Model,
             Some(19),
             "rotation quaternion norm",
+        ),
+        (
+            "shape with a zero size",
+            with_shape("shape = { box = [0.02, 0, 1] }"),
+            Kind::Model,
+            Some(13),
+            "body `panel`: shape box sizes [0.02, 0.0, 1.0] must all be positive",
+        ),
+        (
+            "shape with a negative size",
+            with_shape("shape = { box = [0.02, -2, 1], at = [0, 1, 0] }"),
+            Kind::Model,
+            Some(13),
+            "must all be positive",
+        ),
+        (
+            "shape with an unknown key",
+            with_shape("shape = { box = [0.02, 2, 1], colour = \"red\" }"),
+            Kind::Schema,
+            Some(13),
+            "unknown key `colour`",
+        ),
+        (
+            "shape table with an unknown key on its own line",
+            format!("{GOOD}\n[body.shape]\nbox = [0.02, 2, 1]\nsphere = 1.0\n"),
+            Kind::Schema,
+            Some(23),
+            "unknown key `sphere`",
+        ),
+        (
+            "shape without box",
+            with_shape("shape = { at = [0, 1, 0] }"),
+            Kind::Schema,
+            Some(13),
+            "missing required key `box`",
+        ),
+        (
+            "shape box of two numbers",
+            with_shape("shape = { box = [0.02, 2] }"),
+            Kind::Schema,
+            Some(13),
+            "shape",
+        ),
+        (
+            "shape at not finite",
+            with_shape("shape = { box = [0.02, 2, 1], at = [0, nan, 0] }"),
+            Kind::Model,
+            Some(13),
+            "body `panel`: shape.at: value is not finite",
+        ),
+        (
+            "shape box not finite",
+            with_shape("shape = { box = [0.02, inf, 1] }"),
+            Kind::Model,
+            Some(13),
+            "body `panel`: shape.box: value is not finite",
         ),
         (
             "massless leaf",
