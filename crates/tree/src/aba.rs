@@ -41,7 +41,11 @@ pub fn aba<'d>(
     tau: &[f64],
     fext: Option<&[Force]>,
 ) -> Result<&'d DVector<f64>, DynamicsError> {
-    articulated(model, data, q, v, tau, fext, None)
+    if model.gyrostats.is_empty() {
+        articulated::<false>(model, data, q, v, tau, fext, None)
+    } else {
+        articulated::<true>(model, data, q, v, tau, fext, None)
+    }
 }
 
 /// Hybrid dynamics (Featherstone §9.2) with locked hinges: as [`aba`], except that a hinge
@@ -72,10 +76,12 @@ pub fn aba_hybrid<'d>(
     locked: &[bool],
 ) -> Result<&'d DVector<f64>, DynamicsError> {
     check_len("locked", locked.len(), model.n_hinges())?;
-    articulated(model, data, q, v, tau, fext, Some(locked))
+    articulated::<false>(model, data, q, v, tau, fext, Some(locked))
 }
 
-fn articulated<'d>(
+/// ABA proper; `GYRO`: the gyrostat form (a separate instance, so that the plain form has no
+/// branches for it).
+fn articulated<'d, const GYRO: bool>(
     model: &Model,
     data: &'d mut Data,
     q: &[f64],
@@ -91,7 +97,7 @@ fn articulated<'d>(
     }
     // Gyrostat form (plain ABA only; hybrid dynamics keeps every rotor a body so that a
     // rotor can be locked): balanced rotors ride on their parents, see `Gyrostat`.
-    let gyro = locked.is_none() && !model.gyrostats.is_empty();
+    let gyro = GYRO;
     let n = model.n_bodies();
     if gyro {
         check_len("q", q.len(), model.nq())?;
