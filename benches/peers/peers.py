@@ -11,7 +11,8 @@ side by side in alternating rounds (issue 11). Not run by cargo or CI: see run.s
    integration alone as it reports it), MuJoCo (`mj_step(m, d, nstep=59260)`: the C loop of
    the Python package, one call, no Python per step; the timer callback `mjcb_time` set to
    None so no profiling timers run), Basilisk (`ExecuteSimulation` only, if `bsk` imports;
-   see bsk_scene.py). Medians over rounds and the ratios.
+   see bsk_scene.py), and, with SATSIM_BEFORE=path, a second satsim binary. Medians over
+   rounds and the ratios.
 """
 
 import math
@@ -34,6 +35,8 @@ import mjcf  # noqa: E402
 SCENE = HERE / "orbit.toml"
 ROOT = HERE.parent.parent
 SATSIM = Path(os.environ.get("SATSIM", ROOT / "target" / "release" / "satsim"))
+# Optional: another satsim binary (e.g. built from main) timed in the same rounds.
+BEFORE = os.environ.get("SATSIM_BEFORE")
 ROUNDS = int(os.environ.get("ROUNDS", "5"))
 VAL_DT = float(os.environ.get("VAL_DT", "0.005"))
 VAL_T = 600.0
@@ -53,10 +56,10 @@ def scene_variant(tmp, duration, step, every):
     return p
 
 
-def satsim_run(scene, out):
+def satsim_run(scene, out, exe=None):
     """(whole-process seconds, integration seconds as reported, trajectory rows)."""
     t0 = time.perf_counter()
-    r = subprocess.run([str(SATSIM), "run", str(scene), "--out", str(out)], capture_output=True, text=True)
+    r = subprocess.run([str(exe or SATSIM), "run", str(scene), "--out", str(out)], capture_output=True, text=True)
     wall = time.perf_counter() - t0
     if r.returncode != 0:
         sys.exit(f"satsim run failed: {r.stderr}")
@@ -146,7 +149,11 @@ def main():
         res = {"satsim (process)": [], "satsim (integration)": [], "MuJoCo": []}
         if bsk is not None:
             res["Basilisk"] = []
+        if BEFORE:
+            res["satsim before (process)"] = []
         for r in range(ROUNDS):
+            if BEFORE:
+                res["satsim before (process)"].append(satsim_run(orbit, Path(tmp) / "before", BEFORE)[0])
             wall, inner, _ = satsim_run(orbit, Path(tmp) / "orbit")
             res["satsim (process)"].append(wall)
             res["satsim (integration)"].append(inner)
