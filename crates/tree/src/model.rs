@@ -609,9 +609,9 @@ impl Model {
         for p in self.parent.iter().flatten() {
             has_child[*p] = true;
         }
-        for i in 1..n {
+        for (i, &parent_of_others) in has_child.iter().enumerate().skip(1) {
             let joint = self.joints[i].as_ref().expect("non-root body has a joint");
-            if has_child[i] || joint.armature != 0.0 {
+            if parent_of_others || joint.armature != 0.0 {
                 continue;
             }
             let body = &self.bodies[i];
