@@ -13,7 +13,12 @@ pub const SINGULAR_PIVOT_RELATIVE: f64 = 1e-13;
 /// Forward dynamics: the accelerations `q̈` produced by generalised forces `tau` and external
 /// body forces `fext` (conventions of [`crate::rnea()`]), into `data.ddq`.
 ///
-/// A free base's accelerations are the body-frame derivatives of `[ω; v]`. Fails with
+/// A free base's accelerations are the body-frame derivatives of `[ω; v]`.
+///
+/// Balanced axisymmetric rotors ([`crate::Gyrostat`], e.g. reaction wheels) are not processed
+/// as bodies but as gyrostat terms of their carriers (same accelerations to round-off, a third
+/// less work for a bus with three wheels); their `data.xup`, `data.v`, `data.a` are then left
+/// as they were. [`Model::without_gyrostats`] gives the plain tree form. Fails with
 /// [`DynamicsError::SingularHinge`] where a hinge's articulated inertia vanishes (gimbal lock
 /// of massless links).
 ///
@@ -36,7 +41,11 @@ pub fn aba<'d>(
     tau: &[f64],
     fext: Option<&[Force]>,
 ) -> Result<&'d DVector<f64>, DynamicsError> {
-    articulated(model, data, q, v, tau, fext, None)
+    if model.gyrostats.is_empty() {
+        articulated::<false>(model, data, q, v, tau, fext, None)
+    } else {
+        articulated::<true>(model, data, q, v, tau, fext, None)
+    }
 }
 
 /// Hybrid dynamics (Featherstone §9.2) with locked hinges: as [`aba`], except that a hinge
@@ -67,10 +76,12 @@ pub fn aba_hybrid<'d>(
     locked: &[bool],
 ) -> Result<&'d DVector<f64>, DynamicsError> {
     check_len("locked", locked.len(), model.n_hinges())?;
-    articulated(model, data, q, v, tau, fext, Some(locked))
+    articulated::<false>(model, data, q, v, tau, fext, Some(locked))
 }
 
-fn articulated<'d>(
+/// ABA proper; `GYRO`: the gyrostat form (a separate instance, so that the plain form has no
+/// branches for it).
+fn articulated<'d, const GYRO: bool>(
     model: &Model,
     data: &'d mut Data,
     q: &[f64],
@@ -84,28 +95,75 @@ fn articulated<'d>(
     if let Some(f) = fext {
         check_len("fext", f.len(), model.n_bodies())?;
     }
-    update_transforms(model, data, q)?;
+    // Gyrostat form (plain ABA only; hybrid dynamics keeps every rotor a body so that a
+    // rotor can be locked): balanced rotors ride on their parents, see `Gyrostat`.
+    let gyro = GYRO;
     let n = model.n_bodies();
+    if gyro {
+        check_len("q", q.len(), model.nq())?;
+        for i in 1..n {
+            if !model.is_gyrostat[i] {
+                let joint = model.joints[i].as_ref().expect("non-root body has a joint");
+                data.xup[i] = joint.transform(model.angle(q, joint));
+            }
+        }
+    } else {
+        update_transforms(model, data, q)?;
+    }
     // Pass 1, outward: velocities, velocity-product accelerations, rigid inertias, bias forces.
     data.v[0] = base_motion(model, v);
     data.c[0] = Motion::zero();
     for i in 0..n {
+        if gyro && model.is_gyrostat[i] {
+            continue;
+        }
         if let Some(joint) = &model.joints[i] {
             let p = model.parent[i].expect("parent");
             let vj = joint.s * v[joint.dof];
             data.v[i] = data.xup[i].apply_motion(&data.v[p]) + vj;
             data.c[i] = data.v[i].cross_motion(&vj);
         }
-        let inertia = &model.bodies[i].inertia;
-        data.ia[i] = ArticulatedInertia::from(*inertia);
         let vi = data.v[i];
+        let inertia = if gyro {
+            data.ia[i] = model.carrier_ia[i];
+            &model.carrier_inertia[i]
+        } else {
+            let inertia = &model.bodies[i].inertia;
+            data.ia[i] = ArticulatedInertia::from(*inertia);
+            inertia
+        };
         data.pa[i] = vi.cross_force(&inertia.mul_motion(&vi));
         if let Some(f) = fext {
             data.pa[i] -= f[i];
         }
     }
+    if gyro {
+        // Each rotor adds to its carrier's bias the gyroscopic couple of its spin momentum,
+        // ω × (J Ω a), and the reaction a τ of its axial torque (the carrier's articulated
+        // inertia already lacks J a aᵀ: the rotor is free about its axis).
+        for g in &model.gyrostats {
+            let joint = model.joints[g.body].as_ref().expect("joint");
+            let mut tau_axial = tau[joint.dof];
+            if let Some(f) = fext {
+                // An external wrench on the rotor: its axial moment drives the spin, the
+                // rest acts on the carrier through the bearing.
+                let fr = f[g.body];
+                tau_axial += joint.s.dot(&fr);
+                let x = joint.transform(model.angle(q, joint));
+                data.pa[g.parent] -= x.inv_apply_force(&fr);
+            }
+            let w = data.v[g.parent].ang;
+            let spin = w.cross(&g.axis) * (g.axial * v[joint.dof]) + g.axis * tau_axial;
+            data.pa[g.parent].ang += spin;
+            data.u[g.body] = tau_axial;
+            data.d[g.body] = g.axial;
+        }
+    }
     // Pass 2, inward: articulated inertias and bias forces.
     for i in (1..n).rev() {
+        if gyro && model.is_gyrostat[i] {
+            continue;
+        }
         let joint = model.joints[i].as_ref().expect("joint");
         let p = model.parent[i].expect("parent");
         let x = data.xup[i];
@@ -159,6 +217,11 @@ fn articulated<'d>(
     for i in 1..n {
         let joint = model.joints[i].as_ref().expect("joint");
         let p = model.parent[i].expect("parent");
+        if gyro && model.is_gyrostat[i] {
+            // Ω̇ = τ / J − a · α_parent (the rotor's axial equation; a in parent coordinates).
+            data.ddq[joint.dof] = data.u[i] / data.d[i] - joint.axis.dot(&data.a[p].ang);
+            continue;
+        }
         let a = data.xup[i].apply_motion(&data.a[p]) + data.c[i];
         if locked.is_some_and(|l| l[joint.hinge]) {
             data.ddq[joint.dof] = 0.0;

@@ -12,7 +12,9 @@
 //! which they were added (the model file's order), whatever the tree's shape.
 
 use crate::error::ModelError;
-use crate::spatial::{Mat3, Motion, RigidInertia, Transform, Vec3, rotation_about};
+use crate::spatial::{
+    ArticulatedInertia, Mat3, Motion, RigidInertia, Transform, Vec3, rotation_about,
+};
 use nalgebra::{Quaternion, SymmetricEigen, UnitQuaternion};
 use std::collections::HashMap;
 
@@ -195,7 +197,7 @@ impl Hinge {
 #[derive(Clone, Debug, Default)]
 pub struct ModelBuilder {
     base: BaseKind,
-    bodies: Vec<Body>,
+    pub(crate) bodies: Vec<Body>,
     hinges: Vec<Hinge>,
 }
 
@@ -366,7 +368,7 @@ impl ModelBuilder {
                 armature: h.armature,
             });
         }
-        Ok(Model {
+        let mut model = Model {
             base: self.base,
             bodies,
             parent,
@@ -374,8 +376,39 @@ impl ModelBuilder {
             hinge_names: self.hinges.iter().map(|h| h.name.clone()).collect(),
             hinge_body,
             base_nv,
-        })
+            gyrostats: Vec::new(),
+            is_gyrostat: Vec::new(),
+            carrier_inertia: Vec::new(),
+            carrier_ia: Vec::new(),
+        };
+        model.find_gyrostats();
+        Ok(model)
     }
+}
+
+/// Relative tolerance of the tests that make a leaf body a [`Gyrostat`]: its inertia must be
+/// axisymmetric about the hinge axis and its centre of mass on that axis to within this
+/// fraction of the body's scale (i.e. to round-off).
+pub const GYROSTAT_TOLERANCE: f64 = 1e-14;
+
+/// A balanced axisymmetric rotor: a leaf body on a hinge without armature whose centre of
+/// mass lies on the hinge axis and whose inertia about it is `J a aᵀ + Iₜ (1 − a aᵀ)`.
+///
+/// Its inertia seen from the parent does not depend on the rotor angle, so the
+/// articulated-body algorithm ([`crate::aba()`]) folds it into its parent as a gyrostat: the
+/// rotor, locked, is part of the parent's rigid inertia, and its spin adds the momentum
+/// `J Ω a` and the axial coupling. Exact for such rotors (same result as the rotor as a tree
+/// body, to round-off); the other algorithms keep the rotor as a body.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Gyrostat {
+    /// The rotor body.
+    pub body: usize,
+    /// Its parent (the carrier).
+    pub parent: usize,
+    /// Unit spin axis, parent coordinates.
+    pub axis: Vec3,
+    /// Moment of inertia about the spin axis, `J` (kg m², > 0).
+    pub axial: f64,
 }
 
 fn finite3(v: &Vec3, what: impl FnOnce() -> String) -> Result<(), ModelError> {
@@ -552,6 +585,15 @@ pub struct Model {
     /// For hinge `k` (order of addition), the body it moves.
     pub hinge_body: Vec<usize>,
     base_nv: usize,
+    /// Rotors that ABA treats as gyrostats of their parents (see [`Gyrostat`]).
+    pub gyrostats: Vec<Gyrostat>,
+    /// Per body: whether it is a [`Gyrostat`] rotor.
+    pub(crate) is_gyrostat: Vec<bool>,
+    /// Per body: its rigid inertia with its gyrostat rotors locked on (ABA's gyrostat form).
+    pub(crate) carrier_inertia: Vec<RigidInertia>,
+    /// Per body: the articulated inertia ABA starts from in the gyrostat form, the carrier
+    /// inertia less `J a aᵀ` (angular block) for each rotor.
+    pub(crate) carrier_ia: Vec<ArticulatedInertia>,
 }
 
 impl Model {
@@ -603,6 +645,69 @@ impl Model {
         }
         q
     }
+    /// The same model with every rotor kept as a plain tree body in ABA (no gyrostat terms):
+    /// the reference form against which the gyrostat form is checked.
+    pub fn without_gyrostats(&self) -> Model {
+        let mut m = self.clone();
+        m.gyrostats.clear();
+        m.is_gyrostat = vec![false; m.n_bodies()];
+        m.carrier_inertia = m.bodies.iter().map(|b| b.inertia).collect();
+        m.carrier_ia = m.carrier_inertia.iter().map(|&i| i.into()).collect();
+        m
+    }
+
+    /// Recognises the balanced axisymmetric leaf rotors (see [`Gyrostat`]).
+    fn find_gyrostats(&mut self) {
+        let n = self.n_bodies();
+        self.gyrostats.clear();
+        self.is_gyrostat = vec![false; n];
+        self.carrier_inertia = self.bodies.iter().map(|b| b.inertia).collect();
+        let mut has_child = vec![false; n];
+        for p in self.parent.iter().flatten() {
+            has_child[*p] = true;
+        }
+        for (i, &parent_of_others) in has_child.iter().enumerate().skip(1) {
+            let joint = self.joints[i].as_ref().expect("non-root body has a joint");
+            if parent_of_others || joint.armature != 0.0 {
+                continue;
+            }
+            let body = &self.bodies[i];
+            let a = joint.s.ang; // unit axis, child coordinates
+            let ic = &body.inertia_com;
+            let j = a.dot(&(ic * a));
+            let scale = ic.abs().max();
+            if !(j > 0.0 && j.is_finite()) {
+                continue;
+            }
+            let it = 0.5 * (ic.trace() - j);
+            let aat = a * a.transpose();
+            let sym = aat * j + (Mat3::identity() - aat) * it;
+            if (ic - sym).abs().max() > GYROSTAT_TOLERANCE * scale {
+                continue;
+            }
+            // The centre of mass on the axis through the hinge point.
+            let off = (body.com - joint.child_at).cross(&a);
+            let len = body.com.norm() + joint.child_at.norm();
+            if off.norm() > GYROSTAT_TOLERANCE * len.max(f64::MIN_POSITIVE) {
+                continue;
+            }
+            let p = self.parent[i].expect("parent");
+            let locked = body.inertia.inv_transform(&joint.transform(0.0));
+            self.carrier_inertia[p] += locked;
+            self.is_gyrostat[i] = true;
+            self.gyrostats.push(Gyrostat {
+                body: i,
+                parent: p,
+                axis: joint.axis,
+                axial: j,
+            });
+        }
+        self.carrier_ia = self.carrier_inertia.iter().map(|&i| i.into()).collect();
+        for g in &self.gyrostats {
+            self.carrier_ia[g.parent].a -= g.axis * g.axis.transpose() * g.axial;
+        }
+    }
+
     /// The hinge angle of body `i`'s joint in `q`.
     #[inline]
     pub(crate) fn angle(&self, q: &[f64], joint: &Joint) -> f64 {

@@ -116,6 +116,64 @@ pub fn random_inertia(rng: &mut SplitMix, scale: f64) -> Mat3 {
 /// assert_eq!(m.n_bodies(), 20);
 /// ```
 pub fn random_tree(n: usize, base: BaseKind, massless_links: bool, seed: u64) -> Model {
+    random_builder(n, base, massless_links, seed)
+        .0
+        .build()
+        .expect("random trees are built valid")
+}
+
+/// [`random_tree`] plus `rotors` balanced axisymmetric rotors on random bodies (random spin
+/// axis, hinge point, mass (zero for every other rotor), axial and transverse inertia, centre
+/// of mass on the axis): the leaves that ABA treats as gyrostats ([`crate::Gyrostat`]).
+///
+/// ```
+/// let m = satsim_tree::samples::random_tree_with_rotors(8, satsim_tree::BaseKind::Free, true, 3, 7);
+/// assert_eq!(m.gyrostats.len(), 3);
+/// ```
+pub fn random_tree_with_rotors(
+    n: usize,
+    base: BaseKind,
+    massless_links: bool,
+    rotors: usize,
+    seed: u64,
+) -> Model {
+    let (mut b, mut rng) = random_builder(n, base, massless_links, seed);
+    for k in 0..rotors {
+        // Carriers: any body with mass (a rotor on a massless link would be a massless leaf
+        // chain's end, which is fine too, but keep the carriers ordinary).
+        let p = loop {
+            let p = (rng.next_f64() * n as f64) as usize;
+            if b.bodies[p].mass > 0.0 {
+                break p;
+            }
+        };
+        let axis = rng.unit();
+        let j = rng.range(0.01, 0.2);
+        let it = rng.range(0.55 * j, 2.0 * j); // J ≤ 2 Iₜ: a physical rotor
+        let aat = axis * axis.transpose();
+        let inertia = aat * j + (Mat3::identity() - aat) * it;
+        let mass = if k % 2 == 0 { rng.range(0.1, 3.0) } else { 0.0 };
+        // The centre of mass on the axis, away from the body origin; the hinge point on the
+        // axis too.
+        let com = rng.vec3(0.3);
+        let child_at = com + axis * rng.range(-0.2, 0.2);
+        let name = format!("rotor{k}");
+        b.push_body(Body::new(name.clone(), mass, inertia).with_com(com));
+        b.push_hinge(
+            Hinge::revolute(name.clone(), b.bodies[p].name.clone(), name, axis)
+                .at(rng.vec3(0.5))
+                .child_at(child_at),
+        );
+    }
+    b.build().expect("random trees with rotors are built valid")
+}
+
+fn random_builder(
+    n: usize,
+    base: BaseKind,
+    massless_links: bool,
+    seed: u64,
+) -> (ModelBuilder, SplitMix) {
     let mut rng = SplitMix(seed);
     let parents: Vec<usize> = (0..n)
         .map(|i| {
@@ -183,5 +241,5 @@ pub fn random_tree(n: usize, base: BaseKind, massless_links: bool, seed: u64) ->
     for h in hinges {
         b.push_hinge(h);
     }
-    b.build().expect("random trees are built valid")
+    (b, rng)
 }

@@ -1,6 +1,6 @@
 //! The per-call algorithms allocate nothing once `Data` exists (Pinocchio's Model/Data rule).
 
-use satsim_tree::samples::{chain, random_tree};
+use satsim_tree::samples::{chain, random_tree, random_tree_with_rotors};
 use satsim_tree::*;
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -27,9 +27,11 @@ static GLOBAL: Counting = Counting;
 
 #[test]
 fn per_call_algorithms_do_not_allocate() {
-    // One small model (in-house Cholesky) and one large enough for faer's path.
+    // One small model (in-house Cholesky), one with gyrostat rotors (ABA's gyrostat form)
+    // and one large enough for faer's path.
     for model in [
         random_tree(12, BaseKind::Free, true, 5),
+        random_tree_with_rotors(8, BaseKind::Free, true, 3, 5),
         chain(80, BaseKind::Free),
     ] {
         let mut data = Data::new(&model);
@@ -50,6 +52,7 @@ fn per_call_algorithms_do_not_allocate() {
             rnea(&model, &mut data, &q, &v, &tau, Some(&fext)).unwrap();
             bias(&model, &mut data, &q, &v, None).unwrap();
             aba(&model, &mut data, &q, &v, &tau, Some(&fext)).unwrap();
+            aba(&model, &mut data, &q, &v, &tau, None).unwrap();
             crba_cholesky(&model, &mut data, &q, &v, &tau, None).unwrap();
             kinetic_energy(&model, &mut data, &q, &v).unwrap();
             momentum(&model, &data);
