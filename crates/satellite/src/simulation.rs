@@ -422,6 +422,17 @@ impl Simulation {
         })?;
         let reqs = std::mem::take(&mut sim.requests);
         sim.apply_requests(&reqs, &mut x0)?;
+        // Every output quantity of the initial state must be finite (an energy or a momentum
+        // can overflow while the state itself is finite).
+        let mut row = Vec::new();
+        sim.row(t0, &x0, &mut row).map_err(SimError::Start)?;
+        if let Some(c) = row.iter().position(|v| !v.is_finite()) {
+            return Err(SimError::State(format!(
+                "`{}` is not finite at the start: the computation overflows (rates, masses or \
+                 inertias too extreme for f64)",
+                sim.columns()[c]
+            )));
+        }
         sim.x0 = x0;
         Ok(sim)
     }
@@ -802,6 +813,8 @@ impl Simulation {
 
     /// Integrates from the initial state to `t_end`, calling `sink(t, row)` with an output
     /// row (see [`Simulation::columns`]) at each output time. A sink error stops the run.
+    /// Every row passed to `sink` is finite: a row with a non-finite entry stops the run with
+    /// an error naming the column.
     pub fn run<E>(
         &mut self,
         options: &Options,
@@ -811,6 +824,7 @@ impl Simulation {
     ) -> Result<Stats, RunError<E>> {
         let x0 = self.x0.clone();
         let t0 = self.t0;
+        let columns = self.columns();
         let cell = RefCell::new(self);
         let mut shared = Shared(&cell);
         let mut row = Vec::new();
@@ -820,6 +834,15 @@ impl Simulation {
                 let mut sim = cell.borrow_mut();
                 if let Err(e) = sim.row(t, x, &mut row) {
                     failure = Some(RunError::Integrate(IntegrateError::System { t, source: e }));
+                    return ControlFlow::Break(());
+                }
+                // A non-finite quantity is never presented as a result.
+                if let Some(c) = row.iter().position(|v| !v.is_finite()) {
+                    let why = format!("`{}` is not finite: the computation overflowed", columns[c]);
+                    failure = Some(RunError::Integrate(IntegrateError::System {
+                        t,
+                        source: SystemError::new(why),
+                    }));
                     return ControlFlow::Break(());
                 }
                 if let Err(e) = sink(t, &row) {
