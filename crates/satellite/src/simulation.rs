@@ -330,6 +330,17 @@ impl Simulation {
                 effects[i].name()
             )));
         }
+        for e in &effects {
+            if let Some(k) = e.wheel_commands()
+                && k != rotors.len()
+            {
+                return Err(SimError::Needs(format!(
+                    "effects.{} commands {k} wheels, but [effects.reaction_wheels] has {}",
+                    e.name(),
+                    rotors.len()
+                )));
+            }
+        }
         let orbit_effect = effects.iter().position(|e| e.name() == "orbit");
         let model = if rotors.is_empty() {
             user.clone()
@@ -788,14 +799,16 @@ impl Simulation {
         let kinetic =
             kinetic_energy(&self.model, &mut self.data, &self.q, &self.v).unwrap_or(f64::NAN);
         let (p, h) = momentum(&self.model, &self.data);
+        let rotor_effect = self.rotor_effect;
         let potential = self.with_context(t, x, true, |ctx, hooks| {
             let mut potential = 0.0;
             for (e, r) in hooks.effects.iter().zip(hooks.own) {
                 potential += e.potential_energy(ctx, &x[r.clone()]);
             }
             if let Some(row) = row {
-                for (e, r) in hooks.effects.iter().zip(hooks.own) {
-                    if !e.rotors().is_empty() {
+                for (i, (e, r)) in hooks.effects.iter().zip(hooks.own).enumerate() {
+                    // The wheel speeds (no call to `rotors()`, which allocates).
+                    if rotor_effect == Some(i) {
                         row.extend_from_slice(&x[r.clone()]);
                     }
                     e.output(ctx, &x[r.clone()], row);

@@ -6,8 +6,9 @@
 //! Exit status: 0 on success, 2 for bad input (the scene, its model or state, the command
 //! line), 1 for a run that fails part-way (the message says when and why), 130 for a run
 //! interrupted by Ctrl-C (SIGINT): the run stops at the next output row, the CSV holds every
-//! row up to it and standard error says `interrupted at t = … s; N rows written to …`. A
-//! second Ctrl-C kills the process at once.
+//! row up to it and standard error says `interrupted at t = … s; N rows written to …`.
+//! Further Ctrl-Cs within 2 s of the first are ignored (the clean stop is finishing); one
+//! after that kills the process at once.
 //! `satsim` with no arguments runs the default scene `examples/scenes/deploy.toml`.
 
 use super::{CliError, Options, Output, usage_line};
@@ -300,24 +301,55 @@ impl std::fmt::Display for Stop {
     }
 }
 
-/// Ctrl-C: a SIGINT handler that only sets a flag (async-signal-safe) and restores the
-/// default action, so that a second Ctrl-C kills the process at once.
+/// Ctrl-C: a SIGINT handler that only sets a flag (async-signal-safe). The first SIGINT starts
+/// the clean stop (the run stops at its next row, the CSV is completed, the message printed).
+/// Further SIGINTs within [`interrupt::GRACE_NS`] of it are ignored, so that a burst (a
+/// process group signalled twice, a double key press) cannot lose what the first one is
+/// finishing; a SIGINT after the grace period kills the process at once.
 mod interrupt {
-    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+
+    /// How long after the first SIGINT further ones are ignored (2 s, in ns).
+    pub const GRACE_NS: u64 = 2_000_000_000;
 
     static REQUESTED: AtomicBool = AtomicBool::new(false);
+    static FIRST_NS: AtomicU64 = AtomicU64::new(0);
 
     /// Whether Ctrl-C was pressed since [`install`].
     pub fn requested() -> bool {
         REQUESTED.load(Ordering::Relaxed)
     }
 
+    /// Monotonic clock in ns (`clock_gettime` is async-signal-safe).
+    #[cfg(unix)]
+    fn now_ns() -> u64 {
+        let mut ts = libc::timespec {
+            tv_sec: 0,
+            tv_nsec: 0,
+        };
+        // SAFETY: `ts` is a valid timespec; CLOCK_MONOTONIC always exists.
+        unsafe {
+            libc::clock_gettime(libc::CLOCK_MONOTONIC, &mut ts);
+        }
+        (ts.tv_sec as u64)
+            .saturating_mul(1_000_000_000)
+            .saturating_add(ts.tv_nsec as u64)
+    }
+
     #[cfg(unix)]
     extern "C" fn on_sigint(_: libc::c_int) {
-        REQUESTED.store(true, Ordering::Relaxed);
-        // SAFETY: `signal` is async-signal-safe; SIG_DFL is a valid disposition.
+        let now = now_ns();
+        if !REQUESTED.swap(true, Ordering::SeqCst) {
+            FIRST_NS.store(now, Ordering::SeqCst);
+            return;
+        }
+        if now.saturating_sub(FIRST_NS.load(Ordering::SeqCst)) < GRACE_NS {
+            return;
+        }
+        // SAFETY: `signal` and `raise` are async-signal-safe; SIG_DFL is a valid disposition.
         unsafe {
             libc::signal(libc::SIGINT, libc::SIG_DFL);
+            libc::raise(libc::SIGINT);
         }
     }
 
@@ -325,8 +357,8 @@ mod interrupt {
     pub fn install() {
         REQUESTED.store(false, Ordering::Relaxed);
         #[cfg(unix)]
-        // SAFETY: the handler only touches an atomic and calls `signal`, both
-        // async-signal-safe.
+        // SAFETY: the handler only touches atomics and calls `clock_gettime`, `signal` and
+        // `raise`, all async-signal-safe.
         unsafe {
             let handler: extern "C" fn(libc::c_int) = on_sigint;
             libc::signal(libc::SIGINT, handler as libc::sighandler_t);
