@@ -1,6 +1,8 @@
 //! `satsim run SCENE.toml [--out DIR]` (contract section 7): integrates a scene, streams
-//! `DIR/trajectory.csv` row by row (flushed, so a failed run leaves a valid file up to its
-//! last row), draws SVG plots of the main quantities at the end, shows a progress bar on
+//! `DIR/trajectory.csv` row by row (in blocks, flushed on success, failure and interrupt, so
+//! a stopped run leaves a valid file up to its last row), draws SVG plots of the main
+//! quantities at the end from a bounded min/max decimation (memory does not grow with the
+//! number of rows), shows a progress bar on
 //! standard error when it is a terminal, and prints a short summary on standard output.
 //!
 //! Exit status: 0 on success, 2 for bad input (the scene, its model or state, the command
@@ -13,7 +15,7 @@
 
 use super::{CliError, Options, Output, usage_line};
 use satsim_integrate::Output as Times;
-use satsim_satellite::output::{CsvWriter, write_plots};
+use satsim_satellite::output::{CsvWriter, PlotRecorder};
 use satsim_satellite::scene::Scene;
 use satsim_satellite::simulation::RunError;
 use std::ffi::OsString;
@@ -133,7 +135,10 @@ pub fn run_scene(scene_path: &Path, out: Option<PathBuf>) -> Result<Output, Fail
     let (t0, t_end) = (sim.t0(), sim.t0() + scene.duration);
     let started = Instant::now();
     let mut last_draw = started;
-    let mut rows: Vec<Vec<f64>> = Vec::new();
+    // Bounded memory: rows go to the CSV and to the plots' decimation, never into a list.
+    let mut plots = PlotRecorder::new(&columns);
+    let mut first_row: Option<Vec<f64>> = None;
+    let mut last_row: Vec<f64> = Vec::new();
     interrupt::install();
     let result = sim.run(
         &scene.options,
@@ -141,7 +146,12 @@ pub fn run_scene(scene_path: &Path, out: Option<PathBuf>) -> Result<Output, Fail
         &Times::Interval(scene.every),
         |t, row| -> Result<(), Stop> {
             csv.row(row).map_err(Stop::Write)?;
-            rows.push(row.to_vec());
+            plots.push(row);
+            if first_row.is_none() {
+                first_row = Some(row.to_vec());
+            }
+            last_row.clear();
+            last_row.extend_from_slice(row);
             if progress && (last_draw.elapsed().as_millis() >= 100 || t >= t_end) {
                 last_draw = Instant::now();
                 draw_progress((t - t0) / (t_end - t0), t);
@@ -157,16 +167,29 @@ pub fn run_scene(scene_path: &Path, out: Option<PathBuf>) -> Result<Output, Fail
         eprint!("\r{:60}\r", "");
     }
     let elapsed = started.elapsed().as_secs_f64();
-    let last_t = rows.last().map(|r| r[0]);
+    let n_rows = plots.rows();
+    let last_t = last_row.first().copied();
+    // Every row written reaches the file, whatever happened.
+    let flushed = csv.flush();
+    let draw = |plots: &PlotRecorder| {
+        if scene.plots {
+            plots.write(&dir).map_err(|e| {
+                Failure::Run(format!("cannot write the plots in {}: {e}", dir.display()))
+            })
+        } else {
+            Ok(Vec::new())
+        }
+    };
     let stats = match result {
         Ok(stats) => stats,
         Err(RunError::Sink {
             t,
             error: Stop::Interrupted,
         }) => {
+            // The plots of what ran, then the message.
+            draw(&plots)?;
             return Err(Failure::Interrupted(format!(
-                "interrupted at t = {t} s; {} rows written to {}",
-                rows.len(),
+                "interrupted at t = {t} s; {n_rows} rows written to {}",
                 csv_path.display()
             )));
         }
@@ -188,13 +211,8 @@ pub fn run_scene(scene_path: &Path, out: Option<PathBuf>) -> Result<Output, Fail
         }
     };
 
-    let plots = if scene.plots && !rows.is_empty() {
-        write_plots(&dir, &columns, &rows).map_err(|e| {
-            Failure::Run(format!("cannot write the plots in {}: {e}", dir.display()))
-        })?
-    } else {
-        Vec::new()
-    };
+    flushed.map_err(|e| Failure::Run(format!("cannot write {}: {e}", csv_path.display())))?;
+    let plots = draw(&plots)?;
 
     // Summary.
     let model = sim.model();
@@ -244,7 +262,10 @@ pub fn run_scene(scene_path: &Path, out: Option<PathBuf>) -> Result<Output, Fail
     if sim.event_log().len() > 10 {
         let _ = writeln!(s, "  ...      {} more events", sim.event_log().len() - 10);
     }
-    if let (Some(first), Some(last)) = (rows.first(), rows.last()) {
+    if let (Some(first), Some(last)) = (
+        first_row.as_ref(),
+        Some(&last_row).filter(|r| !r.is_empty()),
+    ) {
         let col = |name: &str| columns.iter().position(|c| c == name);
         if let (Some(e), Some(h)) = (col("total_energy"), col("h_norm")) {
             let _ = writeln!(
@@ -258,7 +279,7 @@ pub fn run_scene(scene_path: &Path, out: Option<PathBuf>) -> Result<Output, Fail
         s,
         "wrote      {} ({} rows){}",
         csv_path.display(),
-        rows.len(),
+        n_rows,
         if plots.is_empty() {
             String::new()
         } else {
