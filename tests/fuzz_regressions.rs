@@ -40,7 +40,7 @@ fn scene_reader(text: &str) {
     let mut dx = vec![0.0; x0.len()];
     let _ = sim.rhs(0.0, &x0, &mut dx);
     let mut g = vec![0.0; sim.n_events()];
-    sim.events(0.0, &x0, &mut g);
+    let _ = sim.events(0.0, &x0, &mut g);
     let mut row = Vec::new();
     let _ = sim.row(0.0, &x0, &mut row);
     let options = scene.options.clone().with_max_steps(20);

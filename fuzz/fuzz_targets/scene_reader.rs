@@ -49,7 +49,7 @@ fuzz_target!(|bytes: &[u8]| {
         sim.project(&mut x);
     }
     let mut g = vec![0.0; sim.n_events()];
-    sim.events(0.0, &x0, &mut g);
+    let _ = sim.events(0.0, &x0, &mut g);
     let mut row = Vec::new();
     let _ = sim.row(0.0, &x0, &mut row);
     // A few steps of the scene's own integrator.

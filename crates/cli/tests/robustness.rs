@@ -708,3 +708,56 @@ fn ctrl_c_stops_cleanly_and_keeps_the_csv() {
         );
     }
 }
+
+/// Two SIGINTs in a row (as `timeout -s INT` or a double key press sends): the first starts
+/// the clean stop, the second (within the grace period) must not kill the process before the
+/// message and the complete CSV are out.
+#[cfg(unix)]
+#[test]
+fn two_ctrl_c_in_a_row_still_stop_cleanly() {
+    let dir = setup("sigint2");
+    std::fs::write(
+        dir.join("long.toml"),
+        SCENE
+            .replace("duration = 2.0", "duration = 1e7")
+            .replace("every = 1.0", "every = 500.0"),
+    )
+    .unwrap();
+    let child = Command::new(env!("CARGO_BIN_EXE_satsim"))
+        .args(["run", "long.toml"])
+        .current_dir(&dir)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let csv_path = dir.join("out/long/trajectory.csv");
+    let start = Instant::now();
+    // Rows far apart (about 0.25 s of work each), so that the second signal arrives while the
+    // first is still waiting for its row.
+    while std::fs::read_to_string(&csv_path).map_or(0, |t| t.lines().count()) < 3 {
+        assert!(start.elapsed() < Duration::from_secs(60), "no rows written");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    // Two signals 30 ms apart (back to back they could merge into one pending signal).
+    let pid = child.id().to_string();
+    let status = Command::new("sh")
+        .args([
+            "-c",
+            &format!("kill -INT {pid}; sleep 0.03; kill -INT {pid}"),
+        ])
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let o = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(130), "{err} ({:?})", o.status);
+    let (_, rows) = csv(&csv_path);
+    let last = rows.last().unwrap()[0];
+    assert_eq!(
+        err.trim_end(),
+        format!(
+            "interrupted at t = {last} s; {} rows written to out/long/trajectory.csv",
+            rows.len()
+        )
+    );
+}

@@ -20,7 +20,8 @@ use crate::{
 pub enum StopReason {
     /// `t_end` was reached.
     Finished,
-    /// [`System::on_event`] returned [`EventAction::Stop`] for event `k`.
+    /// [`System::on_events`] returned [`EventAction::Stop`] for a group of
+    /// simultaneous events whose first (lowest index) is `k`.
     Event {
         /// Index of the event.
         k: usize,
@@ -57,7 +58,10 @@ pub struct Stats {
 ///
 /// Adaptive methods produce outputs by dense output (they do not shorten
 /// steps for them); fixed-step runs land steps exactly on output times.
-/// Outputs up to an event are emitted before [`System::on_event`] is called.
+/// Outputs up to an event are emitted before [`System::on_events`] is called.
+/// Every event whose function changes sign within a step is handled, in time
+/// order; events that coincide to within `Options::event_tol` are handled
+/// together at one instant (see [`System::on_events`]).
 /// The observer may return `ControlFlow::Break(())` to stop cleanly: the run
 /// then returns `Ok` with [`StopReason::Observer`] and every output before
 /// the break has been delivered.
@@ -150,6 +154,13 @@ struct Run<'a, S: ?Sized, St, F> {
     g_left: Vec<f64>,
     g_right: Vec<f64>,
     g_mid: Vec<f64>,
+    /// Event function values after a reset at an event (chain detection).
+    g_post: Vec<f64>,
+    /// Located crossing time of each event in the unprocessed interval (NaN: none).
+    t_loc: Vec<f64>,
+    /// The events handled together at one instant, and the next such group.
+    group: Vec<usize>,
+    next_group: Vec<usize>,
     /// Interpolated state for outputs, root finding and events.
     buf: Vec<f64>,
     x_ev: Vec<f64>,
@@ -188,6 +199,10 @@ where
             g_left: vec![0.0; ne],
             g_right: vec![0.0; ne],
             g_mid: vec![0.0; ne],
+            g_post: vec![0.0; ne],
+            t_loc: vec![f64::NAN; ne],
+            group: Vec::with_capacity(ne),
+            next_group: Vec::with_capacity(ne),
             buf: vec![0.0; n],
             x_ev: vec![0.0; n],
         }
@@ -221,7 +236,7 @@ where
             return Ok(self.finish(t0, x0, StopReason::Observer));
         }
         if has_events {
-            self.sys.events(t0, x0, &mut self.g_left);
+            Self::eval_events(self.sys, t0, x0, &mut self.g_left)?;
         }
         while self.st.t() < t_end {
             let limit = match self.outs.peek() {
@@ -284,26 +299,38 @@ where
         Ok(None)
     }
 
-    /// Finds and handles event crossings in the last step, in time order.
+    /// Evaluates the event functions at `(t, x)` into `g`.
+    fn eval_events(sys: &mut S, t: f64, x: &[f64], g: &mut [f64]) -> Result<(), IntegrateError> {
+        sys.events(t, x, g)
+            .map_err(|source| IntegrateError::System { t, source })
+    }
+
+    /// Finds and handles every event crossing in the last step, in time order.
+    ///
+    /// The earliest crossing time `t_ev` is located; every event that has crossed by
+    /// `t_ev`, or whose own crossing lies within `event_tol` of it, belongs to the same
+    /// group and is handed to [`System::on_events`] together. When the group resets the
+    /// state, events whose functions the reset itself made cross (a chain: one impulse
+    /// triggering another event) are handled at the same instant, as further groups.
+    /// Handled events restart from `g = 0`, so they do not fire twice for one crossing.
     fn handle_events(&mut self) -> Result<Next, IntegrateError> {
         let (mut t_left, t_right) = (self.st.t_old(), self.st.t());
-        self.sys.events(t_right, self.st.x(), &mut self.g_right);
+        Self::eval_events(self.sys, t_right, self.st.x(), &mut self.g_right)?;
         let ne = self.g_left.len();
         loop {
-            let crossing = |k: usize, sys: &S, gl: &[f64], gr: &[f64]| {
-                sys.event_direction(k).crosses(gl[k], gr[k])
-            };
-            if !(0..ne).any(|k| crossing(k, self.sys, &self.g_left, &self.g_right)) {
-                return Ok(Next::Proceed);
-            }
-            self.st.prepare_dense(self.sys, &mut self.ctx)?;
-            // Earliest crossing among the candidates.
-            let mut first: Option<(f64, usize)> = None;
+            // Locate every candidate; t_loc[k] is NaN where event k does not cross.
+            let mut t_ev = f64::INFINITY;
+            let mut prepared = false;
             for k in 0..ne {
-                if !crossing(k, self.sys, &self.g_left, &self.g_right) {
+                self.t_loc[k] = f64::NAN;
+                let dir = self.sys.event_direction(k);
+                if !dir.crosses(self.g_left[k], self.g_right[k]) {
                     continue;
                 }
-                let dir = self.sys.event_direction(k);
+                if !prepared {
+                    self.st.prepare_dense(self.sys, &mut self.ctx)?;
+                    prepared = true;
+                }
                 let (sys, st, buf, g) = (&mut *self.sys, &self.st, &mut self.buf, &mut self.g_mid);
                 let tk = locate(
                     dir,
@@ -318,44 +345,53 @@ where
                         } else {
                             st.dense(t, buf);
                         }
-                        sys.events(t, buf, g);
-                        g[k]
+                        sys.events(t, buf, g)
+                            .map_err(|source| IntegrateError::System { t, source })?;
+                        Ok::<f64, IntegrateError>(g[k])
                     },
-                );
-                if first.is_none_or(|(tf, _)| tk < tf) {
-                    first = Some((tk, k));
-                }
+                )?;
+                self.t_loc[k] = tk;
+                t_ev = t_ev.min(tk);
             }
-            let (t_ev, k_first) = first.expect("a crossing was detected");
+            if t_ev == f64::INFINITY {
+                return Ok(Next::Proceed);
+            }
             self.interpolate(t_ev)?;
             self.x_ev.copy_from_slice(&self.buf);
-            self.sys.events(t_ev, &self.x_ev, &mut self.g_mid);
+            Self::eval_events(self.sys, t_ev, &self.x_ev, &mut self.g_mid)?;
             if let Some(stats) = self.emit_until(t_ev)? {
                 return Ok(Next::Done(stats));
             }
-            // Every event that has crossed by t_ev fires now, in index order
-            // (they coincide to within the location tolerance).
+            self.group.clear();
             for k in 0..ne {
-                if !(k == k_first || crossing(k, self.sys, &self.g_left, &self.g_mid)) {
-                    continue;
+                let dir = self.sys.event_direction(k);
+                if self.t_loc[k] <= t_ev + self.event_tol
+                    || dir.crosses(self.g_left[k], self.g_mid[k])
+                {
+                    self.group.push(k);
                 }
-                self.events.push((t_ev, k));
-                match self.sys.on_event(k, t_ev, &mut self.x_ev) {
+            }
+            // The group, then any chain of events its resets trigger at the same instant.
+            // Each round fires only events not yet fired (they are zeroed), so there are at
+            // most `ne` rounds.
+            let mut reset = false;
+            loop {
+                for &k in &self.group {
+                    self.events.push((t_ev, k));
+                }
+                // `buf` keeps the state before this round (a `Continue` must not change it).
+                self.buf.copy_from_slice(&self.x_ev);
+                let action = self
+                    .sys
+                    .on_events(&self.group, t_ev, &mut self.x_ev)
+                    .map_err(|source| IntegrateError::System { t: t_ev, source })?;
+                match action {
                     EventAction::Continue => {
-                        // Modifications are not allowed to stick without a reset.
                         self.x_ev.copy_from_slice(&self.buf);
-                    }
-                    EventAction::Reset => {
-                        if !all_finite(&self.x_ev) {
-                            return Err(IntegrateError::NonFinite { t: t_ev });
+                        for &k in &self.group {
+                            self.g_mid[k] = 0.0;
                         }
-                        self.st.restart(self.sys, &mut self.ctx, t_ev, &self.x_ev)?;
-                        if self.outs.every_step() && (self.observer)(t_ev, &self.x_ev).is_break() {
-                            let x = self.x_ev.clone();
-                            return Ok(Next::Done(self.finish(t_ev, &x, StopReason::Observer)));
-                        }
-                        self.sys.events(t_ev, &self.x_ev, &mut self.g_left);
-                        return Ok(Next::Restarted);
+                        break;
                     }
                     EventAction::Stop => {
                         let x = self.x_ev.clone();
@@ -363,9 +399,43 @@ where
                             // The stop point is the last "step" of the run.
                             let _ = (self.observer)(t_ev, &x);
                         }
+                        let k = self.group[0];
                         return Ok(Next::Done(self.finish(t_ev, &x, StopReason::Event { k })));
                     }
+                    EventAction::Reset => {
+                        if !all_finite(&self.x_ev) {
+                            return Err(IntegrateError::NonFinite { t: t_ev });
+                        }
+                        reset = true;
+                        Self::eval_events(self.sys, t_ev, &self.x_ev, &mut self.g_post)?;
+                        self.next_group.clear();
+                        for k in 0..ne {
+                            let dir = self.sys.event_direction(k);
+                            if self.group.binary_search(&k).is_err()
+                                && dir.crosses(self.g_mid[k], self.g_post[k])
+                            {
+                                self.next_group.push(k);
+                            }
+                        }
+                        for &k in &self.group {
+                            self.g_post[k] = 0.0;
+                        }
+                        std::mem::swap(&mut self.g_mid, &mut self.g_post);
+                        std::mem::swap(&mut self.group, &mut self.next_group);
+                        if self.group.is_empty() {
+                            break;
+                        }
+                    }
                 }
+            }
+            if reset {
+                self.st.restart(self.sys, &mut self.ctx, t_ev, &self.x_ev)?;
+                if self.outs.every_step() && (self.observer)(t_ev, &self.x_ev).is_break() {
+                    let x = self.x_ev.clone();
+                    return Ok(Next::Done(self.finish(t_ev, &x, StopReason::Observer)));
+                }
+                std::mem::swap(&mut self.g_left, &mut self.g_mid);
+                return Ok(Next::Restarted);
             }
             t_left = t_ev;
             std::mem::swap(&mut self.g_left, &mut self.g_mid);

@@ -8,16 +8,17 @@ use crate::system::EventDirection;
 /// event does not fire again when integration resumes from there).
 ///
 /// Illinois (modified regula falsi): superlinear on smooth `g`, with a
-/// bisection fallback that guarantees the bracket shrinks.
-pub(crate) fn locate(
+/// bisection fallback that guarantees the bracket shrinks. An error from `g`
+/// (the system could not evaluate its event functions) is passed on.
+pub(crate) fn locate<E>(
     dir: EventDirection,
     mut ta: f64,
     mut ga: f64,
     mut tb: f64,
     mut gb: f64,
     tol: f64,
-    mut g: impl FnMut(f64) -> f64,
-) -> f64 {
+    mut g: impl FnMut(f64) -> Result<f64, E>,
+) -> Result<f64, E> {
     // Which end was kept last time (-1 left, +1 right), for the Illinois halving.
     let mut kept = 0i8;
     let mut iter = 0;
@@ -35,7 +36,7 @@ pub(crate) fn locate(
         if !(tm > ta + margin && tm < tb - margin) || iter > 60 {
             tm = 0.5 * (ta + tb);
         }
-        let gm = g(tm);
+        let gm = g(tm)?;
         if dir.crosses(ga, gm) {
             tb = tm;
             gb = gm;
@@ -55,5 +56,5 @@ pub(crate) fn locate(
             break;
         }
     }
-    tb
+    Ok(tb)
 }

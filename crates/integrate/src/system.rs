@@ -137,7 +137,13 @@ pub trait System {
     }
 
     /// Evaluates the event functions `g_k(t, x)` into `g` (`g.len() == n_events()`).
-    fn events(&mut self, _t: f64, _x: &[f64], _g: &mut [f64]) {}
+    ///
+    /// Returning `Err` (the state could not be evaluated) stops the integration
+    /// with [`IntegrateError::System`](crate::IntegrateError::System): an event
+    /// is never skipped silently.
+    fn events(&mut self, _t: f64, _x: &[f64], _g: &mut [f64]) -> Result<(), SystemError> {
+        Ok(())
+    }
 
     /// Direction of sign change that triggers event `k`. Default: both.
     fn event_direction(&self, _k: usize) -> EventDirection {
@@ -148,6 +154,44 @@ pub trait System {
     /// For [`EventAction::Reset`] the system modifies `x` in place. Default: stop.
     fn on_event(&mut self, _k: usize, _t: f64, _x: &mut [f64]) -> EventAction {
         EventAction::Stop
+    }
+
+    /// Called once for every group of events that fall together: `ks` (in
+    /// increasing index order, never empty) crossed at the same instant `t`, to
+    /// within the event tolerance. All of them are handled, whatever each one
+    /// answers: the group's action is [`EventAction::Stop`] if any handler
+    /// stops, else [`EventAction::Reset`] if any resets, else
+    /// [`EventAction::Continue`].
+    ///
+    /// The default calls [`System::on_event`] for each `k` in turn (each sees
+    /// the state as the previous ones left it). A system whose events interact
+    /// (simultaneous impacts) overrides this to resolve them together.
+    /// Returning `Err` stops the integration with
+    /// [`IntegrateError::System`](crate::IntegrateError::System).
+    fn on_events(
+        &mut self,
+        ks: &[usize],
+        t: f64,
+        x: &mut [f64],
+    ) -> Result<EventAction, SystemError> {
+        let mut action = EventAction::Continue;
+        for &k in ks {
+            action = action.combine(self.on_event(k, t, x));
+        }
+        Ok(action)
+    }
+}
+
+impl EventAction {
+    /// The action of a group of events: `Stop` wins over `Reset`, which wins
+    /// over `Continue`.
+    pub fn combine(self, other: Self) -> Self {
+        use EventAction::*;
+        match (self, other) {
+            (Stop, _) | (_, Stop) => Stop,
+            (Reset, _) | (_, Reset) => Reset,
+            _ => Continue,
+        }
     }
 }
 
@@ -170,7 +214,7 @@ impl<S: System + ?Sized> System for &mut S {
     fn n_events(&self) -> usize {
         (**self).n_events()
     }
-    fn events(&mut self, t: f64, x: &[f64], g: &mut [f64]) {
+    fn events(&mut self, t: f64, x: &[f64], g: &mut [f64]) -> Result<(), SystemError> {
         (**self).events(t, x, g)
     }
     fn event_direction(&self, k: usize) -> EventDirection {
@@ -178,5 +222,13 @@ impl<S: System + ?Sized> System for &mut S {
     }
     fn on_event(&mut self, k: usize, t: f64, x: &mut [f64]) -> EventAction {
         (**self).on_event(k, t, x)
+    }
+    fn on_events(
+        &mut self,
+        ks: &[usize],
+        t: f64,
+        x: &mut [f64],
+    ) -> Result<EventAction, SystemError> {
+        (**self).on_events(ks, t, x)
     }
 }

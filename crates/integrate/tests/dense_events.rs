@@ -121,8 +121,9 @@ impl System for Ball {
     fn n_events(&self) -> usize {
         1
     }
-    fn events(&mut self, _t: f64, x: &[f64], g: &mut [f64]) {
+    fn events(&mut self, _t: f64, x: &[f64], g: &mut [f64]) -> Result<(), SystemError> {
         g[0] = x[0];
+        Ok(())
     }
     fn event_direction(&self, _k: usize) -> EventDirection {
         EventDirection::Falling
@@ -219,9 +220,10 @@ fn continue_action_records_all_crossings() {
         fn n_events(&self) -> usize {
             2
         }
-        fn events(&mut self, _t: f64, x: &[f64], g: &mut [f64]) {
+        fn events(&mut self, _t: f64, x: &[f64], g: &mut [f64]) -> Result<(), SystemError> {
             g[0] = x[0]; // cos t: zero at pi/2 + k pi
             g[1] = x[1]; // -sin t: zero at k pi
+            Ok(())
         }
         fn event_direction(&self, k: usize) -> EventDirection {
             if k == 0 {

@@ -265,7 +265,8 @@ pub struct ErrorMetrics {
     pub max_over_time: f64,
 }
 
-/// Compares two trajectories saved at the same times.
+/// Compares two trajectories saved at the same times. Every metric returned is finite (an
+/// overflowing difference is an error).
 pub fn compare(
     layout: &StateLayout,
     reference: &Trajectory,
@@ -295,12 +296,21 @@ pub fn compare(
         sum += e * e;
         worst = if e.is_nan() { f64::NAN } else { worst.max(e) };
     }
-    Ok(ErrorMetrics {
+    let m = ErrorMetrics {
         at_end,
         final_max: at_end.max(),
         rms: (sum / run.states.len() as f64).sqrt(),
         max_over_time: worst,
-    })
+    };
+    // A non-finite error is never reported as a measurement.
+    if [m.final_max, m.rms, m.max_over_time]
+        .iter()
+        .all(|e| e.is_finite())
+    {
+        Ok(m)
+    } else {
+        Err("the error against the reference is not finite (the states overflow)".into())
+    }
 }
 
 /// A measured point.

@@ -1,30 +1,42 @@
 //! Output sinks of a run: a streamed CSV trajectory and small SVG line plots (written here,
-//! no plotting crate).
+//! no plotting crate), both in bounded memory whatever the number of rows.
 
 use std::fmt::Write as _;
 use std::fs::File;
 use std::io::{self, BufWriter, Write};
 use std::path::Path;
+use std::time::{Duration, Instant};
 
-/// A CSV file written row by row and flushed after each row, so that a run that fails
-/// leaves a valid file up to its last row.
+/// Size of the CSV writer's block (bytes).
+const CSV_BLOCK: usize = 64 * 1024;
+/// The CSV is also flushed when this long has passed since the last flush, so that a file
+/// being watched grows while a slow run goes on.
+const CSV_FLUSH_EVERY: Duration = Duration::from_millis(500);
+
+/// A CSV file written row by row in blocks of 64 KiB (and at least every 0.5 s). A block
+/// holds whole rows only, so the file always ends with a complete row; call
+/// [`CsvWriter::flush`] when the run ends, fails or is interrupted (dropping the writer
+/// flushes too, ignoring errors).
 pub struct CsvWriter {
     out: BufWriter<File>,
     line: String,
+    flushed: Instant,
 }
 
 impl CsvWriter {
     /// Creates `path` and writes the header.
     pub fn create(path: &Path, columns: &[String]) -> io::Result<Self> {
-        let mut out = BufWriter::new(File::create(path)?);
+        let mut out = BufWriter::with_capacity(CSV_BLOCK, File::create(path)?);
         writeln!(out, "{}", columns.join(","))?;
         out.flush()?;
         Ok(Self {
             out,
             line: String::new(),
+            flushed: Instant::now(),
         })
     }
-    /// Appends one row (shortest round-trip formatting) and flushes it.
+    /// Appends one row (shortest round-trip formatting). It reaches the file when its block
+    /// is full, 0.5 s after the last flush, or at [`CsvWriter::flush`].
     pub fn row(&mut self, values: &[f64]) -> io::Result<()> {
         self.line.clear();
         for (i, v) in values.iter().enumerate() {
@@ -34,7 +46,17 @@ impl CsvWriter {
             let _ = write!(self.line, "{v}");
         }
         self.line.push('\n');
+        // `BufWriter` writes its buffer out before a line that does not fit: blocks end on
+        // row boundaries.
         self.out.write_all(self.line.as_bytes())?;
+        if self.flushed.elapsed() >= CSV_FLUSH_EVERY {
+            self.flush()?;
+        }
+        Ok(())
+    }
+    /// Writes every buffered row to the file.
+    pub fn flush(&mut self) -> io::Result<()> {
+        self.flushed = Instant::now();
         self.out.flush()
     }
 }
@@ -87,7 +109,8 @@ fn esc(s: &str) -> String {
 }
 
 /// An SVG line plot of `series` against `x`, with axes, ticks, a title and a legend.
-/// Non-finite values are skipped.
+/// Non-finite values are skipped. Every point is drawn: decimate long series first (see
+/// [`PlotRecorder`]).
 ///
 /// ```
 /// use satsim_satellite::output::{Series, line_plot};
@@ -96,23 +119,36 @@ fn esc(s: &str) -> String {
 /// assert!(svg.starts_with("<svg") && svg.contains("polyline"));
 /// ```
 pub fn line_plot(title: &str, xlabel: &str, x: &[f64], series: &[Series]) -> String {
+    let curves: Vec<(&str, Vec<(f64, f64)>)> = series
+        .iter()
+        .map(|s| {
+            (
+                s.label,
+                x.iter().copied().zip(s.y.iter().copied()).collect(),
+            )
+        })
+        .collect();
+    plot_xy(title, xlabel, &curves)
+}
+
+/// Width of a plot's drawing area in pixels.
+pub const PLOT_WIDTH_PX: usize = 490;
+
+/// As [`line_plot`], each curve with its own points `(x, y)`.
+fn plot_xy(title: &str, xlabel: &str, curves: &[(&str, Vec<(f64, f64)>)]) -> String {
     let (w, h) = (720.0, 400.0);
     let (ml, mr, mt, mb) = (80.0, 150.0, 36.0, 48.0);
     let (pw, ph) = (w - ml - mr, h - mt - mb);
-    let finite = |v: &&f64| v.is_finite();
-    let (mut x0, mut x1) = x
-        .iter()
-        .filter(finite)
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
-            (a.min(v), b.max(v))
-        });
-    let (mut y0, mut y1) = series
-        .iter()
-        .flat_map(|s| s.y.iter())
-        .filter(finite)
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
-            (a.min(v), b.max(v))
-        });
+    debug_assert_eq!(pw as usize, PLOT_WIDTH_PX);
+    let finite = |v: &f64| v.is_finite();
+    let range = |vals: &mut dyn Iterator<Item = f64>| {
+        vals.filter(finite)
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+                (a.min(v), b.max(v))
+            })
+    };
+    let (mut x0, mut x1) = range(&mut curves.iter().flat_map(|c| c.1.iter().map(|p| p.0)));
+    let (mut y0, mut y1) = range(&mut curves.iter().flat_map(|c| c.1.iter().map(|p| p.1)));
     if !x0.is_finite() {
         (x0, x1) = (0.0, 1.0);
     }
@@ -177,10 +213,10 @@ pub fn line_plot(title: &str, xlabel: &str, x: &[f64], series: &[Series]) -> Str
         h - 10.0,
         esc(xlabel)
     );
-    for (k, ser) in series.iter().enumerate() {
+    for (k, (label, points)) in curves.iter().enumerate() {
         let colour = COLOURS[k % COLOURS.len()];
         let mut pts = String::new();
-        for (xv, yv) in x.iter().zip(ser.y) {
+        for (xv, yv) in points {
             if xv.is_finite() && yv.is_finite() {
                 let _ = write!(pts, "{:.2},{:.2} ", sx(*xv), sy(*yv));
             }
@@ -198,7 +234,7 @@ pub fn line_plot(title: &str, xlabel: &str, x: &[f64], series: &[Series]) -> Str
             ml + pw + 30.0,
             ml + pw + 36.0,
             ly + 4.0,
-            esc(ser.label)
+            esc(label)
         );
     }
     s.push_str("</svg>\n");
@@ -243,34 +279,197 @@ fn matches(pattern: &str, name: &str) -> bool {
     }
 }
 
-/// Writes the [`PLOT_GROUPS`] plots of a trajectory (`columns`, rows `data`, first column
-/// the time) into `dir`; returns the files written.
-pub fn write_plots(dir: &Path, columns: &[String], data: &[Vec<f64>]) -> io::Result<Vec<String>> {
-    let t: Vec<f64> = data.iter().map(|r| r[0]).collect();
-    let mut written = Vec::new();
-    for (file, title, patterns) in PLOT_GROUPS {
-        let idx: Vec<usize> = (0..columns.len())
-            .filter(|&c| patterns.iter().any(|p| matches(p, &columns[c])))
-            .collect();
-        if idx.is_empty() {
-            continue;
+/// One curve's bounded decimation: the time axis is cut into at most [`Decimated::BINS`]
+/// bins of equal width starting at the first row's time, and each bin keeps its first, last,
+/// smallest and largest point (M4 decimation). Drawn as a polyline, these points cover the
+/// same pixels as the full data as long as a bin is no wider than a pixel column. When a row
+/// falls beyond the last bin, neighbouring bins merge pairwise (the width doubles), so at
+/// least `BINS / 2` bins are always in use.
+#[derive(Clone, Debug)]
+struct Decimated {
+    t0: f64,
+    width: f64,
+    /// Per bin: first, last, min, max points `(t, y)`; `None` where no row fell.
+    bins: Vec<Option<[(f64, f64); 4]>>,
+}
+
+impl Decimated {
+    /// Bins kept: twice the plot's pixel width, so that every pixel column has a bin.
+    const BINS: usize = 2 * PLOT_WIDTH_PX;
+
+    fn new() -> Self {
+        Self {
+            t0: f64::NAN,
+            width: 0.0,
+            bins: Vec::new(),
         }
-        let ys: Vec<Vec<f64>> = idx
-            .iter()
-            .map(|&c| data.iter().map(|r| r[c]).collect())
-            .collect();
-        let series: Vec<Series> = idx
-            .iter()
-            .zip(&ys)
-            .map(|(&c, y)| Series {
-                label: &columns[c],
-                y,
-            })
-            .collect();
-        std::fs::write(dir.join(file), line_plot(title, "t (s)", &t, &series))?;
-        written.push(file.to_owned());
     }
-    Ok(written)
+
+    fn merge(a: [(f64, f64); 4], b: [(f64, f64); 4]) -> [(f64, f64); 4] {
+        let min = if b[2].1 < a[2].1 { b[2] } else { a[2] };
+        let max = if b[3].1 > a[3].1 { b[3] } else { a[3] };
+        [a[0], b[1], min, max]
+    }
+
+    fn push(&mut self, t: f64, y: f64) {
+        if !(t.is_finite() && y.is_finite()) {
+            return;
+        }
+        if self.bins.is_empty() {
+            self.t0 = t;
+            self.width = 0.0;
+            self.bins.push(Some([(t, y); 4]));
+            return;
+        }
+        if self.width == 0.0 {
+            // Second distinct time: the first width spreads the run so far over the bins.
+            if t <= self.t0 {
+                let b = self.bins[0].get_or_insert([(t, y); 4]);
+                *b = Self::merge(*b, [(t, y); 4]);
+                return;
+            }
+            self.width = (t - self.t0) / 4.0;
+        }
+        let mut k = ((t - self.t0) / self.width).floor().max(0.0) as usize;
+        while k >= Self::BINS {
+            // Merge pairs: bin j of the new width is bins 2j and 2j + 1 of the old.
+            let old = std::mem::take(&mut self.bins);
+            for pair in old.chunks(2) {
+                let merged = match (pair[0], pair.get(1).copied().flatten()) {
+                    (Some(a), Some(b)) => Some(Self::merge(a, b)),
+                    (a, b) => a.or(b),
+                };
+                self.bins.push(merged);
+            }
+            self.width *= 2.0;
+            k = ((t - self.t0) / self.width).floor().max(0.0) as usize;
+        }
+        if self.bins.len() <= k {
+            self.bins.resize(k + 1, None);
+        }
+        let p = [(t, y); 4];
+        self.bins[k] = Some(match self.bins[k] {
+            Some(b) => Self::merge(b, p),
+            None => p,
+        });
+    }
+
+    /// The kept points in time order (duplicates removed).
+    fn points(&self) -> Vec<(f64, f64)> {
+        let mut out: Vec<(f64, f64)> = Vec::with_capacity(4 * self.bins.len());
+        for b in self.bins.iter().flatten() {
+            let mut four = *b;
+            four.sort_by(|p, q| p.0.total_cmp(&q.0));
+            for p in four {
+                if out.last() != Some(&p) {
+                    out.push(p);
+                }
+            }
+        }
+        out
+    }
+}
+
+/// The [`PLOT_GROUPS`] plots of a run, built while it runs in bounded memory: each plotted
+/// column keeps a min/max-per-bin decimation (at least one bin per pixel column, see
+/// [`PLOT_WIDTH_PX`]) instead of its rows, so a plot of 10⁶ rows looks like the full data and
+/// weighs a few tens of kilobytes per curve.
+///
+/// ```
+/// use satsim_satellite::output::PlotRecorder;
+/// let columns: Vec<String> = ["t", "q_w"].iter().map(|s| s.to_string()).collect();
+/// let mut plots = PlotRecorder::new(&columns);
+/// for k in 0..100_000 {
+///     let t = k as f64 * 1e-3;
+///     plots.push(&[t, t.sin()]);
+/// }
+/// assert_eq!(plots.rows(), 100_000);
+/// assert!(plots.kept_points() <= 4 * 980);
+/// ```
+#[derive(Clone, Debug)]
+pub struct PlotRecorder {
+    columns: Vec<String>,
+    /// `(file, title, column indices)` of the groups present.
+    groups: Vec<(&'static str, &'static str, Vec<usize>)>,
+    /// One decimation per column (empty for columns no plot uses).
+    curves: Vec<Option<Decimated>>,
+    rows: usize,
+}
+
+impl PlotRecorder {
+    /// A recorder for rows with these `columns` (the first is the time).
+    pub fn new(columns: &[String]) -> Self {
+        let mut curves = vec![None; columns.len()];
+        let mut groups = Vec::new();
+        for (file, title, patterns) in PLOT_GROUPS {
+            let idx: Vec<usize> = (0..columns.len())
+                .filter(|&c| patterns.iter().any(|p| matches(p, &columns[c])))
+                .collect();
+            if idx.is_empty() {
+                continue;
+            }
+            for &c in &idx {
+                curves[c] = Some(Decimated::new());
+            }
+            groups.push((file, title, idx));
+        }
+        Self {
+            columns: columns.to_vec(),
+            groups,
+            curves,
+            rows: 0,
+        }
+    }
+    /// Records one row (`row[0]` the time). Rows must come in increasing time.
+    pub fn push(&mut self, row: &[f64]) {
+        let Some(&t) = row.first() else {
+            return;
+        };
+        self.rows += 1;
+        for (c, curve) in self.curves.iter_mut().enumerate() {
+            if let (Some(d), Some(&y)) = (curve, row.get(c)) {
+                d.push(t, y);
+            }
+        }
+    }
+    /// Rows recorded.
+    pub fn rows(&self) -> usize {
+        self.rows
+    }
+    /// Points kept over all curves (bounded whatever the number of rows).
+    pub fn kept_points(&self) -> usize {
+        self.curves.iter().flatten().map(|d| d.points().len()).sum()
+    }
+    /// Writes the plots into `dir`; returns the files written (none without rows).
+    pub fn write(&self, dir: &Path) -> io::Result<Vec<String>> {
+        let mut written = Vec::new();
+        if self.rows == 0 {
+            return Ok(written);
+        }
+        for (file, title, idx) in &self.groups {
+            let curves: Vec<(&str, Vec<(f64, f64)>)> = idx
+                .iter()
+                .filter_map(|&c| {
+                    let d = self.curves[c].as_ref()?;
+                    Some((self.columns[c].as_str(), d.points()))
+                })
+                .collect();
+            std::fs::write(dir.join(file), plot_xy(title, "t (s)", &curves))?;
+            written.push((*file).to_owned());
+        }
+        Ok(written)
+    }
+}
+
+/// Writes the [`PLOT_GROUPS`] plots of a trajectory (`columns`, rows `data`, first column
+/// the time) into `dir`; returns the files written. The same as feeding the rows to a
+/// [`PlotRecorder`].
+pub fn write_plots(dir: &Path, columns: &[String], data: &[Vec<f64>]) -> io::Result<Vec<String>> {
+    let mut plots = PlotRecorder::new(columns);
+    for row in data {
+        plots.push(row);
+    }
+    plots.write(dir)
 }
 
 /// The axes, grid, title and axis label of a plot on `[x0, x1] x [y0, y1]`; returns the

@@ -29,8 +29,7 @@
 use crate::effects::{CANONICAL_ORDER, Context, Effect, Forces, OrbitState, Request, Rotor};
 use nalgebra::{DMatrix, DVector, Quaternion, UnitQuaternion};
 use satsim_integrate::{
-    EventAction, EventDirection, IntegrateError, Options, Output, Stats, StopReason, System,
-    SystemError,
+    EventAction, EventDirection, IntegrateError, Options, Output, Stats, System, SystemError,
 };
 use satsim_tree::spatial::{Mat3, Vec3};
 use satsim_tree::{
@@ -207,8 +206,6 @@ pub struct Simulation {
     t0: f64,
     rhs_evals: u64,
     log: Vec<(f64, String)>,
-    /// Why an event handler stopped the run (an impact that could not be solved).
-    event_failure: Option<String>,
 }
 
 fn order_of(name: &str) -> usize {
@@ -335,6 +332,17 @@ impl Simulation {
                 effects[i].name()
             )));
         }
+        for e in &effects {
+            if let Some(k) = e.wheel_commands()
+                && k != rotors.len()
+            {
+                return Err(SimError::Needs(format!(
+                    "effects.{} commands {k} wheels, but [effects.reaction_wheels] has {}",
+                    e.name(),
+                    rotors.len()
+                )));
+            }
+        }
         let orbit_effect = effects.iter().position(|e| e.name() == "orbit");
         let model = if rotors.is_empty() {
             user.clone()
@@ -404,7 +412,6 @@ impl Simulation {
             t0,
             rhs_evals: 0,
             log: Vec::new(),
-            event_failure: None,
         };
         // With an orbit, put the centre of mass at rest in the orbit's frame.
         if free && sim.orbit_effect.is_some() && sim.model.total_mass() > 0.0 {
@@ -427,8 +434,17 @@ impl Simulation {
             Ok::<(), SimError>(())
         })?;
         let reqs = std::mem::take(&mut sim.requests);
-        for r in reqs {
-            sim.apply_request(r, &mut x0)?;
+        sim.apply_requests(&reqs, &mut x0)?;
+        // Every output quantity of the initial state must be finite (an energy or a momentum
+        // can overflow while the state itself is finite).
+        let mut row = Vec::new();
+        sim.row(t0, &x0, &mut row).map_err(SimError::Start)?;
+        if let Some(c) = row.iter().position(|v| !v.is_finite()) {
+            return Err(SimError::State(format!(
+                "`{}` is not finite at the start: the computation overflows (rates, masses or \
+                 inertias too extreme for f64)",
+                sim.columns()[c]
+            )));
         }
         sim.x0 = x0;
         Ok(sim)
@@ -611,64 +627,99 @@ impl Simulation {
         })
     }
 
-    /// Applies one request to the state `x`.
-    fn apply_request(&mut self, r: Request, x: &mut [f64]) -> Result<(), SimError> {
-        match r {
-            Request::Unlock(h) => {
-                if self.locked[h] {
-                    self.locked[h] = false;
-                    self.n_locked -= 1;
+    /// Carries out requests made together (at one event instant, or at the start) on the
+    /// state `x`: unlocks first, then one momentum-conserving impulse solve for every hinge
+    /// whose rate must change (a `Lock` wants rate 0, a `SetRate` its rate; a `Lock` wins
+    /// when one hinge gets both), then the locks.
+    pub(crate) fn apply_requests(
+        &mut self,
+        reqs: &[Request],
+        x: &mut [f64],
+    ) -> Result<(), SimError> {
+        let mut targets: Vec<(usize, f64)> = Vec::new();
+        let mut locks: Vec<usize> = Vec::new();
+        for r in reqs {
+            match *r {
+                Request::Unlock(h) => {
+                    if self.locked[h] {
+                        self.locked[h] = false;
+                        self.n_locked -= 1;
+                    }
+                }
+                Request::Lock(h) => {
+                    locks.push(h);
+                    targets.retain(|&(g, _)| g != h);
+                    targets.push((h, 0.0));
+                }
+                Request::SetRate { hinge, rate } => {
+                    if !locks.contains(&hinge) {
+                        targets.retain(|&(g, _)| g != hinge);
+                        targets.push((hinge, rate));
+                    }
                 }
             }
-            Request::Lock(h) => {
-                self.impulse(h, 0.0, x)?;
-                if !self.locked[h] {
-                    self.locked[h] = true;
-                    self.n_locked += 1;
-                }
+        }
+        if !targets.is_empty() {
+            self.impulses(&targets, x)?;
+        }
+        for h in locks {
+            if !self.locked[h] {
+                self.locked[h] = true;
+                self.n_locked += 1;
             }
-            Request::SetRate { hinge, rate } => self.impulse(hinge, rate, x)?,
         }
         Ok(())
     }
 
     /// Index in `x` of tree hinge `h`'s rate.
     fn rate_index(&self, h: usize) -> usize {
-        if h < self.n_user {
-            self.layout.rates.start + h
-        } else {
-            self.own[self.rotor_effect.expect("rotor hinge")].start + (h - self.n_user)
+        match self.rotor_effect {
+            Some(i) if h >= self.n_user => self.own[i].start + (h - self.n_user),
+            _ => self.layout.rates.start + h,
         }
     }
 
-    /// A momentum-conserving impulse on hinge `h` (between its two bodies) that sets its
-    /// rate to `target`, with the other locked hinges kept rigid.
-    fn impulse(&mut self, h: usize, target: f64, x: &mut [f64]) -> Result<(), SimError> {
+    /// One momentum-conserving impulse solve that sets each hinge `h` of `targets` to its
+    /// rate: impulses `λ_j` between each target hinge's two bodies, over the free degrees of
+    /// freedom (base, unlocked hinges and the targets; other locked hinges stay rigid):
+    /// `Δv = M_ff⁻¹ E λ` with `(Eᵀ M_ff⁻¹ E) λ = target − v_E`. Simultaneous impacts are
+    /// thus resolved together, symmetric ones symmetrically.
+    fn impulses(&mut self, targets: &[(usize, f64)], x: &mut [f64]) -> Result<(), SimError> {
         self.unpack(x);
         crba(&self.model, &mut self.data, &self.q)?;
         let nb = self.model.base_nv();
         let nv = self.model.nv();
-        let dof = nb + h;
+        let is_target = |d: usize| d >= nb && targets.iter().any(|&(h, _)| h == d - nb);
         let free: Vec<usize> = (0..nv)
-            .filter(|&d| d < nb || d == dof || !self.locked[d - nb])
+            .filter(|&d| d < nb || is_target(d) || !self.locked[d - nb])
             .collect();
         let m = DMatrix::from_fn(free.len(), free.len(), |r, c| {
             self.data.mass_matrix[(free[r], free[c])]
         });
-        let kk = free
+        let singular = || SimError::State("singular mass matrix at an impact".into());
+        let chol = m.cholesky().ok_or_else(singular)?;
+        // Positions of the targets among the free dofs.
+        let pos: Vec<usize> = targets
             .iter()
-            .position(|&d| d == dof)
-            .expect("hinge dof is free");
-        let mut e = DVector::zeros(free.len());
-        e[kk] = 1.0;
-        let col = m
-            .cholesky()
-            .ok_or_else(|| SimError::State("singular mass matrix at an impact".into()))?
-            .solve(&e);
-        let ri = self.rate_index(h);
-        let lambda = (target - x[ri]) / col[kk];
+            .map(|&(h, _)| free.iter().position(|&d| d == nb + h).unwrap_or(0))
+            .collect();
+        let mut e = DMatrix::zeros(free.len(), targets.len());
+        for (j, &p) in pos.iter().enumerate() {
+            e[(p, j)] = 1.0;
+        }
+        let col = chol.solve(&e);
+        let a = DMatrix::from_fn(targets.len(), targets.len(), |r, c| col[(pos[r], c)]);
+        let b = DVector::from_fn(targets.len(), |r, _| {
+            targets[r].1 - x[self.rate_index(targets[r].0)]
+        });
+        let lambda = a.cholesky().ok_or_else(singular)?.solve(&b);
+        let dv = &col * &lambda;
+        if !dv.iter().all(|v| v.is_finite()) {
+            return Err(SimError::State(
+                "an impact produced non-finite velocities".into(),
+            ));
+        }
         for (c, &d) in free.iter().enumerate() {
-            let dv = col[c] * lambda;
             let idx = if d < nb {
                 if d < 3 {
                     self.layout.omega.start + d
@@ -678,9 +729,11 @@ impl Simulation {
             } else {
                 self.rate_index(d - nb)
             };
-            x[idx] += dv;
+            x[idx] += dv[c];
         }
-        x[ri] = target;
+        for &(h, target) in targets {
+            x[self.rate_index(h)] = target;
+        }
         Ok(())
     }
 
@@ -722,7 +775,9 @@ impl Simulation {
     }
 
     /// One output row at `(t, x)` (see [`Simulation::columns`]).
+    /// A state of the wrong length is an error.
     pub fn row(&mut self, t: f64, x: &[f64], row: &mut Vec<f64>) -> Result<(), SystemError> {
+        self.check_len(x.len(), "row")?;
         row.clear();
         self.prepare(t, x, true)?;
         row.push(t);
@@ -746,6 +801,7 @@ impl Simulation {
 
     /// Energies and momenta at `(t, x)`.
     pub fn diagnostics(&mut self, t: f64, x: &[f64]) -> Result<Diagnostics, SystemError> {
+        self.check_len(x.len(), "diagnostics")?;
         self.prepare(t, x, true)?;
         Ok(self.diagnostics_prepared(t, x, None))
     }
@@ -759,14 +815,16 @@ impl Simulation {
         let kinetic =
             kinetic_energy(&self.model, &mut self.data, &self.q, &self.v).unwrap_or(f64::NAN);
         let (p, h) = momentum(&self.model, &self.data);
+        let rotor_effect = self.rotor_effect;
         let potential = self.with_context(t, x, true, |ctx, hooks| {
             let mut potential = 0.0;
             for (e, r) in hooks.effects.iter().zip(hooks.own) {
                 potential += e.potential_energy(ctx, &x[r.clone()]);
             }
             if let Some(row) = row {
-                for (e, r) in hooks.effects.iter().zip(hooks.own) {
-                    if !e.rotors().is_empty() {
+                for (i, (e, r)) in hooks.effects.iter().zip(hooks.own).enumerate() {
+                    // The wheel speeds (no call to `rotors()`, which allocates).
+                    if rotor_effect == Some(i) {
                         row.extend_from_slice(&x[r.clone()]);
                     }
                     e.output(ctx, &x[r.clone()], row);
@@ -784,6 +842,8 @@ impl Simulation {
 
     /// Integrates from the initial state to `t_end`, calling `sink(t, row)` with an output
     /// row (see [`Simulation::columns`]) at each output time. A sink error stops the run.
+    /// Every row passed to `sink` is finite: a row with a non-finite entry stops the run with
+    /// an error naming the column.
     pub fn run<E>(
         &mut self,
         options: &Options,
@@ -793,6 +853,7 @@ impl Simulation {
     ) -> Result<Stats, RunError<E>> {
         let x0 = self.x0.clone();
         let t0 = self.t0;
+        let columns = self.columns();
         let cell = RefCell::new(self);
         let mut shared = Shared(&cell);
         let mut row = Vec::new();
@@ -804,27 +865,23 @@ impl Simulation {
                     failure = Some(RunError::Integrate(IntegrateError::System { t, source: e }));
                     return ControlFlow::Break(());
                 }
+                // A non-finite quantity is never presented as a result.
+                if let Some(c) = row.iter().position(|v| !v.is_finite()) {
+                    let why = format!("`{}` is not finite: the computation overflowed", columns[c]);
+                    failure = Some(RunError::Integrate(IntegrateError::System {
+                        t,
+                        source: SystemError::new(why),
+                    }));
+                    return ControlFlow::Break(());
+                }
                 if let Err(e) = sink(t, &row) {
                     failure = Some(RunError::Sink { t, error: e });
                     return ControlFlow::Break(());
                 }
                 ControlFlow::Continue(())
             });
-        let sim = cell.into_inner();
         match (result, failure) {
             (_, Some(f)) => Err(f),
-            // A failed event (an impact whose impulse cannot be solved) is an error, not an
-            // early success.
-            (Ok(stats), None)
-                if matches!(stats.stop, StopReason::Event { .. })
-                    && sim.event_failure.is_some() =>
-            {
-                let why = sim.event_failure.take().unwrap_or_default();
-                Err(RunError::Integrate(IntegrateError::System {
-                    t: stats.t_final,
-                    source: SystemError::new(why),
-                }))
-            }
             (Ok(stats), None) => Ok(stats),
             (Err(e), None) => Err(RunError::Integrate(e)),
         }
@@ -875,7 +932,7 @@ impl System for Shared<'_, '_> {
     fn n_events(&self) -> usize {
         self.0.borrow().n_events
     }
-    fn events(&mut self, t: f64, x: &[f64], g: &mut [f64]) {
+    fn events(&mut self, t: f64, x: &[f64], g: &mut [f64]) -> Result<(), SystemError> {
         self.0.borrow_mut().events(t, x, g)
     }
     fn event_direction(&self, k: usize) -> EventDirection {
@@ -883,6 +940,14 @@ impl System for Shared<'_, '_> {
     }
     fn on_event(&mut self, k: usize, t: f64, x: &mut [f64]) -> EventAction {
         self.0.borrow_mut().on_event(k, t, x)
+    }
+    fn on_events(
+        &mut self,
+        ks: &[usize],
+        t: f64,
+        x: &mut [f64],
+    ) -> Result<EventAction, SystemError> {
+        self.0.borrow_mut().on_events(ks, t, x)
     }
 }
 
@@ -998,7 +1063,10 @@ impl System for Simulation {
         self.layout.len
     }
 
+    /// `dx = f(t, x)`; slices of the wrong length are an error, not a panic.
     fn rhs(&mut self, t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), SystemError> {
+        self.check_len(x.len(), "rhs")?;
+        self.check_len(dx.len(), "rhs (derivative)")?;
         self.rhs_evals += 1;
         self.unpack(x);
         if self.needs_kinematics {
@@ -1082,14 +1150,22 @@ impl System for Simulation {
         self.n_events
     }
 
-    fn events(&mut self, t: f64, x: &[f64], g: &mut [f64]) {
+    /// The effects' event functions. A state on which the effects or the hold torques
+    /// cannot be evaluated is an error (an event is never skipped silently).
+    fn events(&mut self, t: f64, x: &[f64], g: &mut [f64]) -> Result<(), SystemError> {
         if self.n_events == 0 {
-            return;
+            return Ok(());
         }
-        if self.prepare_with(t, x, false, Hold::Locked).is_err() {
-            g.fill(1.0);
-            return;
+        self.check_len(x.len(), "events")?;
+        if g.len() != self.n_events {
+            return Err(SystemError::new(format!(
+                "events: g has length {} but the simulation has {} event functions",
+                g.len(),
+                self.n_events
+            )));
         }
+        self.prepare_with(t, x, false, Hold::Locked)
+            .map_err(|e| SystemError::new(format!("event functions: {e}")))?;
         let kin = self.needs_kinematics;
         self.with_context(t, x, kin, |ctx, h| {
             for (i, (e, r)) in h.effects.iter().zip(h.own).enumerate() {
@@ -1097,6 +1173,7 @@ impl System for Simulation {
                 e.events(ctx, h.forces, &x[r.clone()], &mut g[s..s + e.n_events()]);
             }
         });
+        Ok(())
     }
 
     fn event_direction(&self, k: usize) -> EventDirection {
@@ -1105,44 +1182,78 @@ impl System for Simulation {
     }
 
     fn on_event(&mut self, k: usize, t: f64, x: &mut [f64]) -> EventAction {
-        let i = self.event_owner(k);
-        let local = k - self.event_start[i];
+        match self.on_events(&[k], t, x) {
+            Ok(a) => a,
+            Err(_) => EventAction::Stop,
+        }
+    }
+
+    /// Handles simultaneous events together: every owning effect's `on_event` sees the same
+    /// state (the one at the event), then all their requests are carried out at once, with
+    /// one impulse solve for all the impacts (see [`Simulation::apply_requests`]), so that a
+    /// symmetric pair of impacts stays symmetric to round-off.
+    fn on_events(
+        &mut self,
+        ks: &[usize],
+        t: f64,
+        x: &mut [f64],
+    ) -> Result<EventAction, SystemError> {
+        self.check_len(x.len(), "on_events")?;
         if let Err(e) = self.prepare_with(t, x, false, Hold::All) {
             let why = format!("event handling failed: {e}");
             self.log.push((t, why.clone()));
-            self.event_failure = Some(why);
-            return EventAction::Stop;
+            return Err(SystemError::new(why));
         }
-        let r = self.own[i].clone();
-        let mut own_state = x[r.clone()].to_vec();
         let kin = self.needs_kinematics;
-        let action = self.with_context(t, x, kin, |ctx, h| {
-            h.effects[i].on_event(local, ctx, h.forces, &mut own_state, h.requests)
-        });
-        x[r].copy_from_slice(&own_state);
-        let what = self.effects[i].describe_event(local);
-        if !what.is_empty() {
-            self.log.push((t, what));
+        let mut action = EventAction::Continue;
+        let mut own_state = Vec::new();
+        for &k in ks {
+            let i = self.event_owner(k);
+            let local = k - self.event_start[i];
+            let r = self.own[i].clone();
+            own_state.clear();
+            own_state.extend_from_slice(&x[r.clone()]);
+            let a = self.with_context(t, x, kin, |ctx, h| {
+                h.effects[i].on_event(local, ctx, h.forces, &mut own_state, h.requests)
+            });
+            x[r].copy_from_slice(&own_state);
+            action = action.combine(a);
+            let what = self.effects[i].describe_event(local);
+            if !what.is_empty() {
+                self.log.push((t, what));
+            }
         }
         let reqs = std::mem::take(&mut self.requests);
         let changed = !reqs.is_empty();
-        for req in reqs {
-            if let Err(e) = self.apply_request(req, x) {
-                let why = format!("impact failed: {e}");
-                self.log.push((t, why.clone()));
-                self.event_failure = Some(why);
-                return EventAction::Stop;
-            }
+        let result = self.apply_requests(&reqs, x);
+        self.requests = reqs;
+        self.requests.clear();
+        if let Err(e) = result {
+            let why = format!("impact failed: {e}");
+            self.log.push((t, why.clone()));
+            return Err(SystemError::new(why));
         }
-        if changed && action == EventAction::Continue {
-            EventAction::Reset
+        Ok(if changed {
+            action.combine(EventAction::Reset)
         } else {
             action
-        }
+        })
     }
 }
 
 impl Simulation {
+    /// An error unless a state slice has the layout's length (`what` names the caller).
+    fn check_len(&self, got: usize, what: &str) -> Result<(), SystemError> {
+        if got == self.layout.len {
+            Ok(())
+        } else {
+            Err(SystemError::new(format!(
+                "{what}: state has length {got}, expected {}",
+                self.layout.len
+            )))
+        }
+    }
+
     fn event_owner(&self, k: usize) -> usize {
         (0..self.effects.len())
             .rev()

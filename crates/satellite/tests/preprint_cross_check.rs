@@ -61,11 +61,15 @@ fn check_random(seed: u64, with_couples: bool) -> Result<(), TestCaseError> {
     let model = random_model(&mut rng);
     let (q, v, tau) = random_state(&mut rng, 1.0);
     let layout = recognise(&model).map_err(|e| TestCaseError::fail(e.to_string()))?;
-    let mut state = state_from_engine(&q, &v, &tau);
+    let mut state = state_from_engine(&q, &v, &tau).unwrap();
     if with_couples {
         state.m_ext = [rng.vec3(3.0), rng.vec3(3.0), rng.vec3(3.0), rng.vec3(3.0)];
     }
-    let fext = couples(&model, [1, 2, 3, 4].map(|i| layout.body(i)), &state.m_ext);
+    let fext = couples(
+        &model,
+        [1, 2, 3, 4].map(|i| layout.body(i).unwrap()),
+        &state.m_ext,
+    );
     let sy = Symbols::new(&layout.params, &state);
     let mut data = Data::new(&model);
     let s_t = s_tree(&model, &mut data, &q).unwrap();
@@ -178,7 +182,7 @@ fn over_random(f: impl Fn(&Symbols, &DMatrix<f64>, &DVector<f64>, f64) -> f64) -
         let model = random_model(&mut rng);
         let (q, v, tau) = random_state(&mut rng, 1.0);
         let layout = recognise(&model).unwrap();
-        let sy = Symbols::new(&layout.params, &state_from_engine(&q, &v, &tau));
+        let sy = Symbols::new(&layout.params, &state_from_engine(&q, &v, &tau).unwrap());
         let mut data = Data::new(&model);
         let s = s_tree(&model, &mut data, &q).unwrap();
         let n = n_tree(&model, &mut data, &q, &v, &tau, None).unwrap();
@@ -192,7 +196,7 @@ fn realistic_report(d: Deployment, scale: f64) -> (Symbols, PreprintReport) {
     let (model, q, v, tau) = realistic(d, scale);
     let sy = Symbols::new(
         &recognise(&model).unwrap().params,
-        &state_from_engine(&q, &v, &tau),
+        &state_from_engine(&q, &v, &tau).unwrap(),
     );
     (sy, compare(&model, &q, &v, &tau).unwrap())
 }
@@ -290,7 +294,7 @@ fn erratum_e0_eq19_psi_dot() {
         let model = random_model(&mut rng);
         let (q, v, tau) = random_state(&mut rng, 1.0);
         let layout = recognise(&model).unwrap();
-        let sy = Symbols::new(&layout.params, &state_from_engine(&q, &v, &tau));
+        let sy = Symbols::new(&layout.params, &state_from_engine(&q, &v, &tau).unwrap());
         let mut data = Data::new(&model);
         let a = aba(&model, &mut data, &q, &v, &tau, None).unwrap().clone();
         let s = dm(&sy.S());

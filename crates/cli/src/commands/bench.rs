@@ -73,13 +73,38 @@ pub fn run(args: &[std::ffi::OsString]) -> Result<Output, CliError> {
     let (q, v, tau) = (&state.q, &state.v, &state.tau);
 
     // Check every algorithm once: the timed loops ignore results.
-    let check = |r: Result<(), satsim_tree::DynamicsError>| {
-        r.map_err(|e| CliError::Other(format!("{where_}: {e}")))
+    let err = |e: satsim_tree::DynamicsError| CliError::Other(format!("{where_}: {e}"));
+    // A state whose dynamics overflow is refused: the timings would be of NaN arithmetic.
+    let finite = |what: &str, x: &[f64]| {
+        if x.iter().all(|v| v.is_finite()) {
+            Ok(())
+        } else {
+            Err(CliError::Other(format!(
+                "{where_}: the {what} of this state is not finite (the computation overflows)"
+            )))
+        }
     };
-    check(crba(&model, &mut data, q).map(|_| ()))?;
-    check(rnea(&model, &mut data, q, v, &acc, None).map(|_| ()))?;
-    check(aba(&model, &mut data, q, v, tau, None).map(|_| ()))?;
-    check(crba_cholesky(&model, &mut data, q, v, tau, None).map(|_| ()))?;
+    let m: Vec<f64> = crba(&model, &mut data, q)
+        .map_err(err)?
+        .iter()
+        .copied()
+        .collect();
+    finite("mass matrix (crba)", &m)?;
+    let b = rnea(&model, &mut data, q, v, &acc, None)
+        .map_err(err)?
+        .as_slice()
+        .to_vec();
+    finite("inverse dynamics (rnea)", &b)?;
+    let a = aba(&model, &mut data, q, v, tau, None)
+        .map_err(err)?
+        .as_slice()
+        .to_vec();
+    finite("forward dynamics (aba)", &a)?;
+    let c = crba_cholesky(&model, &mut data, q, v, tau, None)
+        .map_err(err)?
+        .as_slice()
+        .to_vec();
+    finite("forward dynamics (crba_cholesky)", &c)?;
 
     let mut algorithms: [(&str, Timed<'_>); 4] = [
         (

@@ -1,18 +1,21 @@
 //! `satsim run SCENE.toml [--out DIR]` (contract section 7): integrates a scene, streams
-//! `DIR/trajectory.csv` row by row (flushed, so a failed run leaves a valid file up to its
-//! last row), draws SVG plots of the main quantities at the end, shows a progress bar on
+//! `DIR/trajectory.csv` row by row (in blocks, flushed on success, failure and interrupt, so
+//! a stopped run leaves a valid file up to its last row), draws SVG plots of the main
+//! quantities at the end from a bounded min/max decimation (memory does not grow with the
+//! number of rows), shows a progress bar on
 //! standard error when it is a terminal, and prints a short summary on standard output.
 //!
 //! Exit status: 0 on success, 2 for bad input (the scene, its model or state, the command
 //! line), 1 for a run that fails part-way (the message says when and why), 130 for a run
 //! interrupted by Ctrl-C (SIGINT): the run stops at the next output row, the CSV holds every
-//! row up to it and standard error says `interrupted at t = … s; N rows written to …`. A
-//! second Ctrl-C kills the process at once.
+//! row up to it and standard error says `interrupted at t = … s; N rows written to …`.
+//! Further Ctrl-Cs within 2 s of the first are ignored (the clean stop is finishing); one
+//! after that kills the process at once.
 //! `satsim` with no arguments runs the default scene `examples/scenes/deploy.toml`.
 
 use super::{CliError, Options, Output, usage_line};
 use satsim_integrate::Output as Times;
-use satsim_satellite::output::{CsvWriter, write_plots};
+use satsim_satellite::output::{CsvWriter, PlotRecorder};
 use satsim_satellite::scene::Scene;
 use satsim_satellite::simulation::RunError;
 use satsim_satellite::view::{PoseRecorder, ViewError};
@@ -145,7 +148,10 @@ pub fn run_scene(scene_path: &Path, out: Option<PathBuf>) -> Result<Output, Fail
     let (t0, t_end) = (sim.t0(), sim.t0() + scene.duration);
     let started = Instant::now();
     let mut last_draw = started;
-    let mut rows: Vec<Vec<f64>> = Vec::new();
+    // Bounded memory: rows go to the CSV and to the plots' decimation, never into a list.
+    let mut plots = PlotRecorder::new(&columns);
+    let mut first_row: Option<Vec<f64>> = None;
+    let mut last_row: Vec<f64> = Vec::new();
     interrupt::install();
     let result = sim.run(
         &scene.options,
@@ -156,7 +162,12 @@ pub fn run_scene(scene_path: &Path, out: Option<PathBuf>) -> Result<Output, Fail
             if let Some(p) = poses.as_mut() {
                 p.record(row).map_err(Stop::View)?;
             }
-            rows.push(row.to_vec());
+            plots.push(row);
+            if first_row.is_none() {
+                first_row = Some(row.to_vec());
+            }
+            last_row.clear();
+            last_row.extend_from_slice(row);
             if progress && (last_draw.elapsed().as_millis() >= 100 || t >= t_end) {
                 last_draw = Instant::now();
                 draw_progress((t - t0) / (t_end - t0), t);
@@ -172,16 +183,29 @@ pub fn run_scene(scene_path: &Path, out: Option<PathBuf>) -> Result<Output, Fail
         eprint!("\r{:60}\r", "");
     }
     let elapsed = started.elapsed().as_secs_f64();
-    let last_t = rows.last().map(|r| r[0]);
+    let n_rows = plots.rows();
+    let last_t = last_row.first().copied();
+    // Every row written reaches the file, whatever happened.
+    let flushed = csv.flush();
+    let draw = |plots: &PlotRecorder| {
+        if scene.plots {
+            plots.write(&dir).map_err(|e| {
+                Failure::Run(format!("cannot write the plots in {}: {e}", dir.display()))
+            })
+        } else {
+            Ok(Vec::new())
+        }
+    };
     let stats = match result {
         Ok(stats) => stats,
         Err(RunError::Sink {
             t,
             error: Stop::Interrupted,
         }) => {
+            // The plots of what ran, then the message.
+            draw(&plots)?;
             return Err(Failure::Interrupted(format!(
-                "interrupted at t = {t} s; {} rows written to {}",
-                rows.len(),
+                "interrupted at t = {t} s; {n_rows} rows written to {}",
                 csv_path.display()
             )));
         }
@@ -207,13 +231,8 @@ pub fn run_scene(scene_path: &Path, out: Option<PathBuf>) -> Result<Output, Fail
         }
     };
 
-    let plots = if scene.plots && !rows.is_empty() {
-        write_plots(&dir, &columns, &rows).map_err(|e| {
-            Failure::Run(format!("cannot write the plots in {}: {e}", dir.display()))
-        })?
-    } else {
-        Vec::new()
-    };
+    flushed.map_err(|e| Failure::Run(format!("cannot write {}: {e}", csv_path.display())))?;
+    let plots = draw(&plots)?;
 
     let view = match poses {
         Some(p) => Some(
@@ -272,7 +291,10 @@ pub fn run_scene(scene_path: &Path, out: Option<PathBuf>) -> Result<Output, Fail
     if sim.event_log().len() > 10 {
         let _ = writeln!(s, "  ...      {} more events", sim.event_log().len() - 10);
     }
-    if let (Some(first), Some(last)) = (rows.first(), rows.last()) {
+    if let (Some(first), Some(last)) = (
+        first_row.as_ref(),
+        Some(&last_row).filter(|r| !r.is_empty()),
+    ) {
         let col = |name: &str| columns.iter().position(|c| c == name);
         if let (Some(e), Some(h)) = (col("total_energy"), col("h_norm")) {
             let _ = writeln!(
@@ -286,7 +308,7 @@ pub fn run_scene(scene_path: &Path, out: Option<PathBuf>) -> Result<Output, Fail
         s,
         "wrote      {} ({} rows){}",
         csv_path.display(),
-        rows.len(),
+        n_rows,
         if plots.is_empty() {
             String::new()
         } else {
@@ -335,24 +357,55 @@ impl std::fmt::Display for Stop {
     }
 }
 
-/// Ctrl-C: a SIGINT handler that only sets a flag (async-signal-safe) and restores the
-/// default action, so that a second Ctrl-C kills the process at once.
+/// Ctrl-C: a SIGINT handler that only sets a flag (async-signal-safe). The first SIGINT starts
+/// the clean stop (the run stops at its next row, the CSV is completed, the message printed).
+/// Further SIGINTs within [`interrupt::GRACE_NS`] of it are ignored, so that a burst (a
+/// process group signalled twice, a double key press) cannot lose what the first one is
+/// finishing; a SIGINT after the grace period kills the process at once.
 mod interrupt {
-    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+
+    /// How long after the first SIGINT further ones are ignored (2 s, in ns).
+    pub const GRACE_NS: u64 = 2_000_000_000;
 
     static REQUESTED: AtomicBool = AtomicBool::new(false);
+    static FIRST_NS: AtomicU64 = AtomicU64::new(0);
 
     /// Whether Ctrl-C was pressed since [`install`].
     pub fn requested() -> bool {
         REQUESTED.load(Ordering::Relaxed)
     }
 
+    /// Monotonic clock in ns (`clock_gettime` is async-signal-safe).
+    #[cfg(unix)]
+    fn now_ns() -> u64 {
+        let mut ts = libc::timespec {
+            tv_sec: 0,
+            tv_nsec: 0,
+        };
+        // SAFETY: `ts` is a valid timespec; CLOCK_MONOTONIC always exists.
+        unsafe {
+            libc::clock_gettime(libc::CLOCK_MONOTONIC, &mut ts);
+        }
+        (ts.tv_sec as u64)
+            .saturating_mul(1_000_000_000)
+            .saturating_add(ts.tv_nsec as u64)
+    }
+
     #[cfg(unix)]
     extern "C" fn on_sigint(_: libc::c_int) {
-        REQUESTED.store(true, Ordering::Relaxed);
-        // SAFETY: `signal` is async-signal-safe; SIG_DFL is a valid disposition.
+        let now = now_ns();
+        if !REQUESTED.swap(true, Ordering::SeqCst) {
+            FIRST_NS.store(now, Ordering::SeqCst);
+            return;
+        }
+        if now.saturating_sub(FIRST_NS.load(Ordering::SeqCst)) < GRACE_NS {
+            return;
+        }
+        // SAFETY: `signal` and `raise` are async-signal-safe; SIG_DFL is a valid disposition.
         unsafe {
             libc::signal(libc::SIGINT, libc::SIG_DFL);
+            libc::raise(libc::SIGINT);
         }
     }
 
@@ -360,8 +413,8 @@ mod interrupt {
     pub fn install() {
         REQUESTED.store(false, Ordering::Relaxed);
         #[cfg(unix)]
-        // SAFETY: the handler only touches an atomic and calls `signal`, both
-        // async-signal-safe.
+        // SAFETY: the handler only touches atomics and calls `clock_gettime`, `signal` and
+        // `raise`, all async-signal-safe.
         unsafe {
             let handler: extern "C" fn(libc::c_int) = on_sigint;
             libc::signal(libc::SIGINT, handler as libc::sighandler_t);

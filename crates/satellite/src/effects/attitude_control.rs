@@ -42,7 +42,9 @@ pub struct AttitudeControl {
 }
 
 impl AttitudeControl {
-    /// A controller for wheels with these axes (bus frame).
+    /// A controller for wheels with these axes (bus frame), one per wheel of the scene's
+    /// reaction wheels, in their order: building a simulation whose wheels differ in number
+    /// is an error ([`crate::simulation::SimError::Needs`]).
     pub fn new(target: Target, kp: f64, kd: f64, axes: &[Vec3]) -> Self {
         let a = DMatrix::from_fn(3, axes.len(), |r, c| axes[c][r]);
         let allocation = if axes.is_empty() {
@@ -104,12 +106,22 @@ impl Effect for AttitudeControl {
         _own: &[f64],
         _own_dot: &mut [f64],
     ) -> Result<(), SystemError> {
+        if forces.wheel_command.len() != self.allocation.nrows() {
+            return Err(SystemError::new(format!(
+                "attitude_control: gains for {} wheels, but there are {}",
+                self.allocation.nrows(),
+                forces.wheel_command.len()
+            )));
+        }
         let u = self.torque(ctx)?;
         for (j, c) in forces.wheel_command.iter_mut().enumerate() {
             let row = self.allocation.row(j);
             *c = -(row[0] * u.x + row[1] * u.y + row[2] * u.z);
         }
         Ok(())
+    }
+    fn wheel_commands(&self) -> Option<usize> {
+        Some(self.allocation.nrows())
     }
     fn output_columns(&self) -> Vec<String> {
         vec!["pointing_error_deg".into()]

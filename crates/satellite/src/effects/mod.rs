@@ -259,6 +259,11 @@ pub trait Effect: Send {
     fn rotors(&self) -> Vec<Rotor> {
         Vec::new()
     }
+    /// How many wheel motor commands it writes into [`Forces::wheel_command`], if any. The
+    /// simulation refuses to build when this differs from the number of wheels (rotors).
+    fn wheel_commands(&self) -> Option<usize> {
+        None
+    }
     /// Adds its hinge torques and body wrenches to `forces` and writes the derivatives of its
     /// own states (`own`) into `own_dot`.
     fn apply(

@@ -27,28 +27,38 @@ fn kept(model: &Model) -> Vec<usize> {
     (0..3).chain(6..model.nv()).collect()
 }
 
-fn m_ll_inv(m: &DMatrix<f64>) -> Matrix3<f64> {
+/// `M_ll⁻¹`, the inverse of the linear-velocity block (`m·1` rotated, `m` the total mass).
+/// Solved by Cholesky (no determinant, which underflows for tiny masses); a block that is not
+/// positive definite (a massless tree) is [`DynamicsError::SingularBase`].
+fn m_ll_inv(m: &DMatrix<f64>) -> Result<Matrix3<f64>, DynamicsError> {
     let m_ll: Matrix3<f64> = m.fixed_view::<3, 3>(3, 3).into_owned();
-    m_ll.try_inverse()
-        .expect("the linear block m·1 of a free tree with mass is invertible")
+    let inv = m_ll
+        .cholesky()
+        .ok_or(DynamicsError::SingularBase)?
+        .inverse();
+    if inv.iter().all(|x| x.is_finite()) {
+        Ok(inv)
+    } else {
+        Err(DynamicsError::SingularBase)
+    }
 }
 
 /// `S_tree`: the Schur complement of the linear-velocity block of the free-base mass matrix,
 /// `(3 + n) x (3 + n)`, rows `(ω, hinges in file order)`.
 pub fn s_tree(model: &Model, data: &mut Data, q: &[f64]) -> Result<DMatrix<f64>, DynamicsError> {
     let m = crba(model, data, q)?.clone();
-    Ok(schur(&m, &kept(model)))
+    schur(&m, &kept(model))
 }
 
-fn schur(m: &DMatrix<f64>, r: &[usize]) -> DMatrix<f64> {
-    let inv = m_ll_inv(m);
+fn schur(m: &DMatrix<f64>, r: &[usize]) -> Result<DMatrix<f64>, DynamicsError> {
+    let inv = m_ll_inv(m)?;
     let n = r.len();
     let m_rl = DMatrix::from_fn(n, 3, |i, j| m[(r[i], 3 + j)]);
     let m_rr = DMatrix::from_fn(n, n, |i, j| m[(r[i], r[j])]);
     let inv = DMatrix::from_fn(3, 3, |i, j| inv[(i, j)]);
     let s = &m_rr - &m_rl * inv * m_rl.transpose();
     // Symmetric in exact arithmetic.
-    (&s + s.transpose()) * 0.5
+    Ok((&s + s.transpose()) * 0.5)
 }
 
 /// `N_tree = τ_r − b_r − M_rl M_ll⁻¹ (τ_l − b_l)`, with `b` from the engine's RNEA (`bias`)
@@ -72,7 +82,7 @@ pub fn n_tree(
     let m = crba(model, data, q)?.clone();
     let b = bias(model, data, q, v, fext)?.clone();
     let r = kept(model);
-    let inv = m_ll_inv(&m);
+    let inv = m_ll_inv(&m)?;
     let rhs_l = nalgebra::Vector3::new(tau[3] - b[3], tau[4] - b[4], tau[5] - b[5]);
     let y = inv * rhs_l;
     Ok(DVector::from_fn(r.len(), |i, _| {

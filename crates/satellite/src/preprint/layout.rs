@@ -97,12 +97,13 @@ pub struct Layout {
 }
 
 impl Layout {
-    /// Model body index of the preprint's body `i` (1 = bus, 2..4 = panels 1..3).
-    pub fn body(&self, i: usize) -> usize {
+    /// Model body index of the preprint's body `i` (1 = bus, 2..4 = panels 1..3); `None` for
+    /// any other `i` (the preprint has bodies 1 to 4).
+    pub fn body(&self, i: usize) -> Option<usize> {
         match i {
-            1 => self.bodies[0],
-            2..=4 => self.bodies[i + 1],
-            _ => panic!("the preprint has bodies 1 to 4, not {i}"),
+            1 => Some(self.bodies[0]),
+            2..=4 => Some(self.bodies[i + 1]),
+            _ => None,
         }
     }
 }

@@ -62,9 +62,19 @@ pub enum PreprintError {
         "tau on the free base must be zero (the preprint has no external force or torque on the bus), found {0:?}"
     )]
     BaseForce([f64; 6]),
-    /// The engine failed.
+    /// The engine failed (e.g. a massless tree: the linear block of the mass matrix is
+    /// singular).
     #[error(transparent)]
     Dynamics(#[from] DynamicsError),
+    /// A result overflowed: the state's rates or torques (or the model's masses) are too
+    /// large or too small for `f64`. `what` names the quantity (`S_tree`, `N_closed_form`…).
+    #[error(
+        "{what} is not finite: the computation overflowed (rates, torques or masses too extreme for f64)"
+    )]
+    Overflow {
+        /// The quantity.
+        what: &'static str,
+    },
 }
 
 /// What `satsim preprint` prints: `S` and `N` of equation (19) from the corrected closed form
@@ -118,15 +128,41 @@ fn check(what: &'static str, x: &[f64], expected: usize) -> Result<(), PreprintE
 }
 
 /// The preprint state at engine coordinates `q, v, tau` of a model with the preprint's layout
-/// (hinges 1..5 are the model's hinges in file order), with no external couples.
-pub fn state_from_engine(q: &[f64], v: &[f64], tau: &[f64]) -> PreprintState {
+/// (hinges 1..5 are the model's hinges in file order), with no external couples. `q` needs
+/// 12 entries, `v` and `tau` 11 each: shorter slices are a [`PreprintError::Dimension`].
+pub fn state_from_engine(
+    q: &[f64],
+    v: &[f64],
+    tau: &[f64],
+) -> Result<PreprintState, PreprintError> {
+    for (what, x, expected) in [("q", q, 12), ("v", v, 11), ("tau", tau, 11)] {
+        if x.len() < expected {
+            return Err(PreprintError::Dimension {
+                what,
+                expected,
+                got: x.len(),
+            });
+        }
+    }
     let five = |s: &[f64]| -> [f64; 5] { [s[0], s[1], s[2], s[3], s[4]] };
-    PreprintState {
+    Ok(PreprintState {
         phi: five(&q[7..12]),
         omega1: Vec3::new(v[0], v[1], v[2]),
         psi: five(&v[6..11]),
         m_u: five(&tau[6..11]),
         m_ext: [Vec3::zeros(); 4],
+    })
+}
+
+/// `Err(Overflow { what })` unless every entry of `x` is finite.
+fn finite<'a>(
+    what: &'static str,
+    x: impl IntoIterator<Item = &'a f64>,
+) -> Result<(), PreprintError> {
+    if x.into_iter().all(|v| v.is_finite()) {
+        Ok(())
+    } else {
+        Err(PreprintError::Overflow { what })
     }
 }
 
@@ -134,6 +170,9 @@ pub fn state_from_engine(q: &[f64], v: &[f64], tau: &[f64]) -> PreprintState {
 /// the engine, for a model with the preprint's layout at engine coordinates `q`
 /// (`[attitude w x y z, position, φ1..φ5]`), `v` (`[ω1, root origin velocity, ψ1..ψ5]`) and
 /// `tau` (zero on the base, `M_u1..M_u5` on the hinges). No external torques.
+///
+/// Every number of the report is finite: a result that overflows is
+/// [`PreprintError::Overflow`] naming it, a massless tree a [`PreprintError::Dynamics`].
 ///
 /// ```
 /// use satsim_satellite::preprint::{build_model, compare, PreprintParams};
@@ -161,7 +200,7 @@ pub fn compare(
             tau[0], tau[1], tau[2], tau[3], tau[4], tau[5],
         ]));
     }
-    let symbols = Symbols::new(&layout.params, &state_from_engine(q, v, tau));
+    let symbols = Symbols::new(&layout.params, &state_from_engine(q, v, tau)?);
     let s_cf = symbols.S();
     let n_cf = symbols.N(Variant::Corrected);
     let s_closed_form = DMatrix::from_fn(8, 8, |i, j| s_cf[(i, j)]);
@@ -169,9 +208,15 @@ pub fn compare(
     let mut data = Data::new(model);
     let s_tree = s_tree(model, &mut data, q)?;
     let n_tree = n_tree(model, &mut data, q, v, tau, None)?;
+    // Every result finite (`amax` would skip a NaN), so the difference means something.
+    finite("S_closed_form", s_closed_form.iter())?;
+    finite("N_closed_form", n_closed_form.iter())?;
+    finite("S_tree", s_tree.iter())?;
+    finite("N_tree", n_tree.iter())?;
     let max_abs_difference = (&s_closed_form - &s_tree)
         .amax()
         .max((&n_closed_form - &n_tree).amax());
+    finite("max_abs_difference", [&max_abs_difference])?;
     Ok(PreprintReport {
         s_closed_form,
         n_closed_form,
