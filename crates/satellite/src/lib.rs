@@ -13,4 +13,5 @@ pub mod modes;
 pub mod output;
 pub mod preprint;
 pub mod scene;
+pub mod scene_keys;
 pub mod simulation;

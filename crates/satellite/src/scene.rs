@@ -28,6 +28,7 @@ use crate::effects::{
     HingeSprings, HingeStop, HingeStops, Orbit, OrbitModel, ReactionWheels, StopAction, Target,
     Wheel,
 };
+use crate::scene_keys::{self, Override};
 use crate::simulation::{SimError, Simulation};
 use nalgebra::{Quaternion, UnitQuaternion};
 use satsim_integrate::{Method, Options};
@@ -528,6 +529,22 @@ impl Scene {
         Scene::parse(&text, path)
     }
 
+    /// Reads the scene file at `path` with `overrides` (`--set KEY=VALUE`, see
+    /// [`crate::scene_keys`]) applied in order. With overrides, an error found in the
+    /// rewritten scene names the scene file and says which overrides were applied.
+    pub fn read_with(path: impl AsRef<Path>, overrides: &[Override]) -> Result<Scene, FileError> {
+        let path = path.as_ref();
+        if overrides.is_empty() {
+            return Scene::read(path);
+        }
+        let text = std::fs::read_to_string(path).map_err(|source| FileError::Read {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let rewritten = scene_keys::overridden_text(&text, path, overrides)?;
+        Scene::parse(&rewritten, path).map_err(|e| scene_keys::after_overrides(e, path, overrides))
+    }
+
     /// Parses a scene's text; `path` names it in errors and anchors its relative paths.
     pub fn parse(text: &str, path: &Path) -> Result<Scene, FileError> {
         let p = Parser { text, path };
@@ -546,6 +563,28 @@ impl Parser<'_> {
             path: self.path.to_path_buf(),
             line: span.map(|s| line_of(self.text, s.start)),
             message: message.into(),
+        }
+    }
+
+    /// `dir/written`, which must exist: else an error at the scene's line of `key`.
+    fn existing(
+        &self,
+        dir: &Path,
+        written: &str,
+        span: Range<usize>,
+        key: &str,
+    ) -> Result<PathBuf, FileError> {
+        let file = dir.join(written);
+        if file.is_file() {
+            Ok(file)
+        } else {
+            Err(scene_keys::missing_source(
+                self.path,
+                Some(line_of(self.text, span.start)),
+                key,
+                written,
+                &file,
+            ))
         }
     }
 
@@ -618,7 +657,9 @@ impl Parser<'_> {
 
         // Model and initial state.
         let model = match file.model.get_ref() {
-            ModelSource::Path(p) => satsim_tree::read_model(dir.join(p))?,
+            ModelSource::Path(p) => {
+                satsim_tree::read_model(self.existing(&dir, p, file.model.span(), "model")?)?
+            }
             ModelSource::Inline(m) => m.build().map_err(|e| e.in_file(self.text, self.path))?,
         };
         let model = match &file.armature {
@@ -627,7 +668,9 @@ impl Parser<'_> {
         };
         let initial = match file.initial.as_ref().map(|s| (s.get_ref(), s.span())) {
             None => State::rest(&model),
-            Some((StateSource::Path(p), _)) => satsim_tree::read_state(dir.join(p), &model)?,
+            Some((StateSource::Path(p), span)) => {
+                satsim_tree::read_state(self.existing(&dir, p, span, "initial")?, &model)?
+            }
             Some((StateSource::Inline(s), span)) => s
                 .resolve(&model)
                 .map_err(|e| self.err(Some(span), format!("initial.{}: {}", e.field, e.message)))?,

@@ -207,6 +207,8 @@ pub struct Simulation {
     t0: f64,
     rhs_evals: u64,
     log: Vec<(f64, String)>,
+    /// The effect (index into `effects`) of each `log` entry.
+    log_effect: Vec<usize>,
     /// Why an event handler stopped the run (an impact that could not be solved).
     event_failure: Option<String>,
 }
@@ -402,6 +404,7 @@ impl Simulation {
             t0,
             rhs_evals: 0,
             log: Vec::new(),
+            log_effect: Vec::new(),
             event_failure: None,
         };
         // With an orbit, put the centre of mass at rest in the orbit's frame.
@@ -482,6 +485,14 @@ impl Simulation {
     /// What happened at each handled event: `(t, description)`.
     pub fn event_log(&self) -> &[(f64, String)] {
         &self.log
+    }
+    /// Every handled event as `(t, effect name, description)`, in order (the
+    /// [`event_log`](Self::event_log) with the effect whose event it was).
+    pub fn event_records(&self) -> impl Iterator<Item = (f64, &str, &str)> {
+        self.log
+            .iter()
+            .zip(&self.log_effect)
+            .map(|((t, what), &i)| (*t, self.effects[i].name(), what.as_str()))
     }
     /// The effect called `name`, if enabled.
     pub fn effect(&self, name: &str) -> Option<&dyn Effect> {
@@ -1108,6 +1119,7 @@ impl System for Simulation {
         if let Err(e) = self.prepare_with(t, x, false, Hold::All) {
             let why = format!("event handling failed: {e}");
             self.log.push((t, why.clone()));
+            self.log_effect.push(i);
             self.event_failure = Some(why);
             return EventAction::Stop;
         }
@@ -1121,6 +1133,7 @@ impl System for Simulation {
         let what = self.effects[i].describe_event(local);
         if !what.is_empty() {
             self.log.push((t, what));
+            self.log_effect.push(i);
         }
         let reqs = std::mem::take(&mut self.requests);
         let changed = !reqs.is_empty();
@@ -1128,6 +1141,7 @@ impl System for Simulation {
             if let Err(e) = self.apply_request(req, x) {
                 let why = format!("impact failed: {e}");
                 self.log.push((t, why.clone()));
+                self.log_effect.push(i);
                 self.event_failure = Some(why);
                 return EventAction::Stop;
             }

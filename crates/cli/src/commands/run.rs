@@ -1,6 +1,8 @@
-//! `satsim run SCENE.toml [--out DIR]` (contract section 7): integrates a scene, streams
+//! `satsim run SCENE.toml [--out DIR] [--set KEY=VALUE]...` (contract section 7): integrates a
+//! scene (with `--set` overrides, see [`satsim_satellite::scene_keys`]), streams
 //! `DIR/trajectory.csv` row by row (flushed, so a failed run leaves a valid file up to its
-//! last row), draws SVG plots of the main quantities at the end, shows a progress bar on
+//! last row), writes every event to `DIR/events.csv`, draws SVG plots of the main quantities
+//! at the end, shows a progress bar on
 //! standard error when it is a terminal, and prints a short summary on standard output.
 //!
 //! Exit status: 0 on success, 2 for bad input (the scene, its model or state, the command
@@ -12,8 +14,9 @@
 
 use super::{CliError, Options, Output, usage_line};
 use satsim_integrate::Output as Times;
-use satsim_satellite::output::{CsvWriter, write_plots};
+use satsim_satellite::output::{CsvWriter, write_events, write_plots};
 use satsim_satellite::scene::Scene;
+use satsim_satellite::scene_keys::Override;
 use satsim_satellite::simulation::RunError;
 use std::ffi::OsString;
 use std::fmt::Write as _;
@@ -91,7 +94,7 @@ pub fn run(args: &[OsString]) -> Result<Output, CliError> {
 
 /// Runs `satsim run ARGS`.
 pub fn command(args: &[OsString]) -> Result<Output, Failure> {
-    let opts = Options::parse(NAME, args, &["out"], 1)?;
+    let opts = Options::parse(NAME, args, &["out", "set"], 1)?;
     if opts.help {
         return Ok(format!("usage: {}\n", usage_line(Some(NAME))));
     }
@@ -103,12 +106,21 @@ pub fn command(args: &[OsString]) -> Result<Output, Failure> {
             command: Some(NAME),
             message: "missing the scene file".into(),
         })?;
-    run_scene(&scene_path, opts.path("out"))
+    run_scene_with(&scene_path, opts.path("out"), &opts.overrides(NAME)?)
 }
 
 /// Runs the scene at `scene_path`, writing into `out` (default `out/<scene stem>`).
 pub fn run_scene(scene_path: &Path, out: Option<PathBuf>) -> Result<Output, Failure> {
-    let scene = Scene::read(scene_path).map_err(CliError::File)?;
+    run_scene_with(scene_path, out, &[])
+}
+
+/// [`run_scene`] with `--set KEY=VALUE` overrides applied to the scene.
+pub fn run_scene_with(
+    scene_path: &Path,
+    out: Option<PathBuf>,
+    overrides: &[Override],
+) -> Result<Output, Failure> {
+    let scene = Scene::read_with(scene_path, overrides).map_err(CliError::File)?;
     let mut sim = scene
         .simulation()
         .map_err(|e| CliError::Other(format!("{}: {e}", scene_path.display())))?;
@@ -157,6 +169,10 @@ pub fn run_scene(scene_path: &Path, out: Option<PathBuf>) -> Result<Output, Fail
     }
     let elapsed = started.elapsed().as_secs_f64();
     let last_t = rows.last().map(|r| r[0]);
+    // Every event, not only the ten in the summary (also for a run that failed or was interrupted).
+    let events_path = dir.join("events.csv");
+    let n_events = write_events(&events_path, sim.event_records())
+        .map_err(|e| Failure::Run(format!("cannot write {}: {e}", events_path.display())))?;
     let stats = match result {
         Ok(stats) => stats,
         Err(RunError::Sink {
@@ -242,6 +258,9 @@ pub fn run_scene(scene_path: &Path, out: Option<PathBuf>) -> Result<Output, Fail
     }
     if sim.event_log().len() > 10 {
         let _ = writeln!(s, "  ...      {} more events", sim.event_log().len() - 10);
+    }
+    if n_events > 0 {
+        let _ = writeln!(s, "events     {n_events} in {}", events_path.display());
     }
     if let (Some(first), Some(last)) = (rows.first(), rows.last()) {
         let col = |name: &str| columns.iter().position(|c| c == name);
