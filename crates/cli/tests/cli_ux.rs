@@ -245,3 +245,51 @@ fn a_missing_model_file_is_reported_at_the_scene_line() {
     );
     assert!(err.contains("bad2.toml:2:"), "{err}");
 }
+
+#[test]
+fn an_orbit_below_100_km_is_refused_with_a_units_hint() {
+    let dir = setup("altitude");
+    let orbit = |o: &str| format!("{SCENE}[orbit]\n{o}\n");
+    // Line 13 is the first line of [orbit]; line 14 its first key.
+    for (name, o, at, hint) in [
+        (
+            "km.toml",
+            "altitude = 500",
+            "km.toml:14:",
+            "altitude = 500e3",
+        ),
+        (
+            "low.toml",
+            "altitude = 99e3",
+            "low.toml:14:",
+            "below 100 km",
+        ),
+        (
+            "sma.toml",
+            "semi_major_axis = 6400e3",
+            "sma.toml:13:",
+            "in metres",
+        ),
+        (
+            "pos.toml",
+            "position = [6400e3, 0, 0]\nvelocity = [0, 7.8e3, 0]",
+            "pos.toml:13:",
+            "in metres",
+        ),
+    ] {
+        std::fs::write(dir.join(name), orbit(o)).unwrap();
+        let out = satsim_in(&dir, &["run", name]);
+        let err = stderr(&out);
+        assert_eq!(out.status.code(), Some(2), "{name}: {err}");
+        assert!(err.contains(at) && err.contains(hint), "{name}: {err}");
+        assert!(err.contains("100 km"), "{name}: {err}");
+    }
+    // 100 km itself and the usual 500 km are fine.
+    std::fs::write(
+        dir.join("ok.toml"),
+        orbit("altitude = 100e3").replace("duration = 4.0", "duration = 1.0"),
+    )
+    .unwrap();
+    let out = satsim_in(&dir, &["run", "ok.toml"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+}

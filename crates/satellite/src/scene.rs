@@ -552,6 +552,10 @@ impl Scene {
     }
 }
 
+/// The lowest orbit altitude a scene accepts (m): below it the atmosphere ends an orbit
+/// within hours, and a smaller number is almost always kilometres written as metres.
+pub const MIN_ALTITUDE: f64 = 100e3;
+
 struct Parser<'a> {
     text: &'a str,
     path: &'a Path,
@@ -859,10 +863,30 @@ impl Parser<'_> {
                 if orbit.r0.norm().is_nan() || orbit.r0.norm() <= orbit.radius * 0.5 {
                     return Err(self.err(span, "`orbit.position` is inside the Earth"));
                 }
+                let h = orbit.r0.norm() - orbit.radius;
+                if h < MIN_ALTITUDE {
+                    return Err(self.err(
+                        span,
+                        format!(
+                            "`orbit.position` is {h:.0} m above `radius`, below 100 km (no orbit lasts there); positions are in metres (7e6, not 7000)"
+                        ),
+                    ));
+                }
             }
             (true, None, None) => {
                 let a = match (&f.altitude, &f.semi_major_axis) {
-                    (Some(h), None) => orbit.radius + self.positive(h, "orbit.altitude")?,
+                    (Some(h), None) => {
+                        let v = self.positive(h, "orbit.altitude")?;
+                        if v < MIN_ALTITUDE {
+                            return Err(self.err(
+                                Some(h.span()),
+                                format!(
+                                    "`orbit.altitude` is {v} m, below 100 km (no orbit lasts there); altitudes are in metres: for {v} km write `altitude = {v}e3`"
+                                ),
+                            ));
+                        }
+                        orbit.radius + v
+                    }
                     (None, Some(a)) => self.positive(a, "orbit.semi_major_axis")?,
                     _ => {
                         return Err(self.err(
@@ -897,6 +921,15 @@ impl Parser<'_> {
                         format!(
                             "the orbit's periapsis ({:.0} m) is inside the Earth",
                             a * (1.0 - e)
+                        ),
+                    ));
+                }
+                let hp = a * (1.0 - e) - orbit.radius;
+                if hp < MIN_ALTITUDE {
+                    return Err(self.err(
+                        span,
+                        format!(
+                            "the orbit's periapsis altitude ({hp:.0} m) is below 100 km (no orbit lasts there); lengths are in metres (`semi_major_axis = 6878e3` for 500 km)"
                         ),
                     ));
                 }
