@@ -293,3 +293,43 @@ fn an_orbit_below_100_km_is_refused_with_a_units_hint() {
     let out = satsim_in(&dir, &["run", "ok.toml"]);
     assert!(out.status.success(), "{}", stderr(&out));
 }
+
+#[test]
+fn a_nearly_unit_attitude_is_normalised_with_a_warning() {
+    let dir = setup("quat");
+    let state = |q: &str| {
+        format!(
+            "{{\"base\": {{\"attitude\": {q}}}, \"hinges\": {{\"angle\": [0, 0, 0, 0, 0], \"rate\": [0, 0, 0, 0, 0]}}}}"
+        )
+    };
+    std::fs::write(dir.join("state.json"), state("[1.0005, 0, 0, 0]")).unwrap();
+    let o = satsim_in(&dir, &["run", "scene.toml"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        err.contains("warning:") && err.contains("state.json") && err.contains("normalised"),
+        "{err}"
+    );
+    // With --set the state is read into the scene: the warning names the scene, no line.
+    let o = satsim_in(
+        &dir,
+        &["run", "scene.toml", "--set", "duration=1.0", "--out", "s"],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        err.contains("warning: scene.toml (with --set): initial.base.attitude"),
+        "{err}"
+    );
+    let (header, row) = last_row(&dir.join("out/scene/trajectory.csv"));
+    let q: Vec<f64> = ["q_w", "q_x", "q_y", "q_z"]
+        .iter()
+        .map(|c| row[header.iter().position(|h| h == c).unwrap()])
+        .collect();
+    let norm = q.iter().map(|x| x * x).sum::<f64>().sqrt();
+    assert!((norm - 1.0).abs() < 1e-9, "{norm}");
+    std::fs::write(dir.join("state.json"), state("[1.01, 0, 0, 0]")).unwrap();
+    let o = satsim_in(&dir, &["run", "scene.toml"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("within 1e-3"), "{}", stderr(&o));
+}

@@ -470,6 +470,10 @@ pub struct Scene {
     pub plots: bool,
     /// The enabled effects.
     pub effects: EffectSet,
+    /// What the reader accepted but the user should hear about (a nearly unit attitude
+    /// quaternion normalised…), each naming the file; the command line prints them on
+    /// standard error.
+    pub warnings: Vec<String>,
 }
 
 impl Scene {
@@ -487,6 +491,7 @@ impl Scene {
             every: duration / 100.0,
             plots: true,
             effects: EffectSet::default(),
+            warnings: Vec::new(),
         }
     }
 
@@ -542,7 +547,19 @@ impl Scene {
             source,
         })?;
         let rewritten = scene_keys::overridden_text(&text, path, overrides)?;
-        Scene::parse(&rewritten, path).map_err(|e| scene_keys::after_overrides(e, path, overrides))
+        let mut scene = Scene::parse(&rewritten, path)
+            .map_err(|e| scene_keys::after_overrides(e, path, overrides))?;
+        // A line of the rewritten text means nothing to the user: drop it.
+        let prefix = format!("{}:", path.display());
+        for w in &mut scene.warnings {
+            if let Some(rest) = w.strip_prefix(&prefix)
+                && let Some((line, msg)) = rest.split_once(':')
+                && line.parse::<usize>().is_ok()
+            {
+                *w = format!("{} (with --set):{msg}", path.display());
+            }
+        }
+        Ok(scene)
     }
 
     /// Parses a scene's text; `path` names it in errors and anchors its relative paths.
@@ -670,14 +687,36 @@ impl Parser<'_> {
             Some(a) => self.armature(model, a)?,
             None => model,
         };
+        let mut warnings = Vec::new();
         let initial = match file.initial.as_ref().map(|s| (s.get_ref(), s.span())) {
             None => State::rest(&model),
             Some((StateSource::Path(p), span)) => {
-                satsim_tree::read_state(self.existing(&dir, p, span, "initial")?, &model)?
+                let state_path = self.existing(&dir, p, span, "initial")?;
+                let text =
+                    std::fs::read_to_string(&state_path).map_err(|source| FileError::Read {
+                        path: state_path.clone(),
+                        source,
+                    })?;
+                let sf = satsim_tree::io::parse_state_file(&text, &state_path)?;
+                warnings.extend(
+                    sf.warnings()
+                        .into_iter()
+                        .map(|w| format!("{}: {w}", state_path.display())),
+                );
+                sf.resolve(&model).map_err(|e| e.in_file(&state_path))?
             }
-            Some((StateSource::Inline(s), span)) => s
-                .resolve(&model)
-                .map_err(|e| self.err(Some(span), format!("initial.{}: {}", e.field, e.message)))?,
+            Some((StateSource::Inline(s), span)) => {
+                warnings.extend(s.warnings().into_iter().map(|w| {
+                    format!(
+                        "{}:{}: initial.{w}",
+                        self.path.display(),
+                        line_of(self.text, span.start)
+                    )
+                }));
+                s.resolve(&model).map_err(|e| {
+                    self.err(Some(span), format!("initial.{}: {}", e.field, e.message))
+                })?
+            }
         };
 
         let duration = self.positive(&file.duration, "duration")?;
@@ -710,6 +749,7 @@ impl Parser<'_> {
             every,
             plots,
             effects,
+            warnings,
         };
         // Build once to surface any remaining setup error with the scene's name.
         scene

@@ -121,6 +121,9 @@ pub fn run_scene_with(
     overrides: &[Override],
 ) -> Result<Output, Failure> {
     let scene = Scene::read_with(scene_path, overrides).map_err(CliError::File)?;
+    for w in &scene.warnings {
+        eprintln!("warning: {w}");
+    }
     let mut sim = scene
         .simulation()
         .map_err(|e| CliError::Other(format!("{}: {e}", scene_path.display())))?;
