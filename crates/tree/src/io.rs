@@ -726,7 +726,7 @@ impl StateFile {
             if let Some(a) = &base.attitude {
                 check_array("base.attitude", a, 4, "a quaternion [w, x, y, z]")?;
                 let norm = a.iter().map(|x| x * x).sum::<f64>().sqrt();
-                if !((norm - 1.0).abs() <= STATE_ATTITUDE_TOLERANCE) {
+                if (norm - 1.0).abs() > STATE_ATTITUDE_TOLERANCE {
                     return Err(FieldError::new(
                         "base.attitude",
                         format!("quaternion norm {norm} is not 1 (within 1e-3)"),
