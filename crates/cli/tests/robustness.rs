@@ -511,7 +511,7 @@ fn cases() -> Vec<Case> {
             "missing model",
             s("model = \"satellite.toml\"", "model = \"nope.toml\""),
             no_file(),
-            vec!["nope.toml", "cannot read"],
+            vec!["bad.toml:1", "nope.toml", "does not exist"],
         ),
         (
             "model cycle",

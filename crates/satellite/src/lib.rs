@@ -14,5 +14,6 @@ pub mod modes;
 pub mod output;
 pub mod preprint;
 pub mod scene;
+pub mod scene_keys;
 pub mod simulation;
 pub mod view;

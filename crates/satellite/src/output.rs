@@ -61,6 +61,30 @@ impl CsvWriter {
     }
 }
 
+/// The events file of a run: the header `t,effect,event`, then one line per event in the
+/// order they happened (`t` in seconds, shortest round-trip form; the effect's scene name;
+/// what happened, CSV-quoted when it holds a comma or a quote). `satsim run` writes it as
+/// `DIR/events.csv`.
+pub fn write_events<'a>(
+    path: &Path,
+    events: impl IntoIterator<Item = (f64, &'a str, &'a str)>,
+) -> io::Result<usize> {
+    let mut out = BufWriter::new(File::create(path)?);
+    writeln!(out, "t,effect,event")?;
+    let mut n = 0;
+    for (t, effect, what) in events {
+        writeln!(
+            out,
+            "{t},{},{}",
+            crate::campaign::files::quote(effect),
+            crate::campaign::files::quote(what)
+        )?;
+        n += 1;
+    }
+    out.flush()?;
+    Ok(n)
+}
+
 /// One curve of a plot.
 pub struct Series<'a> {
     /// Legend label.
@@ -710,4 +734,31 @@ pub fn histogram_plot(
     );
     s.push_str("</svg>\n");
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn events_file_has_one_quoted_line_per_event() {
+        let dir = std::env::temp_dir().join(format!("satsim-events-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("events.csv");
+        let n = write_events(
+            &path,
+            [
+                (0.5, "hinge_stops", "hinge a latched"),
+                (1.25, "reaction_wheels", "wheel 1, saturated \"hard\""),
+            ],
+        )
+        .unwrap();
+        assert_eq!(n, 2);
+        let text = std::fs::read_to_string(&path).unwrap();
+        assert_eq!(
+            text,
+            "t,effect,event\n0.5,hinge_stops,hinge a latched\n1.25,reaction_wheels,\"wheel 1, saturated \"\"hard\"\"\"\n"
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 }

@@ -28,6 +28,7 @@ use crate::effects::{
     HingeSprings, HingeStop, HingeStops, Orbit, OrbitModel, ReactionWheels, StopAction, Target,
     Wheel,
 };
+use crate::scene_keys::{self, Override};
 use crate::simulation::{SimError, Simulation};
 use nalgebra::{Quaternion, UnitQuaternion};
 use satsim_integrate::{Method, Options};
@@ -474,6 +475,10 @@ pub struct Scene {
     pub view: bool,
     /// The enabled effects.
     pub effects: EffectSet,
+    /// What the reader accepted but the user should hear about (a nearly unit attitude
+    /// quaternion normalised…), each naming the file; the command line prints them on
+    /// standard error.
+    pub warnings: Vec<String>,
 }
 
 impl Scene {
@@ -492,6 +497,7 @@ impl Scene {
             plots: true,
             view: true,
             effects: EffectSet::default(),
+            warnings: Vec::new(),
         }
     }
 
@@ -534,12 +540,44 @@ impl Scene {
         Scene::parse(&text, path)
     }
 
+    /// Reads the scene file at `path` with `overrides` (`--set KEY=VALUE`, see
+    /// [`crate::scene_keys`]) applied in order. With overrides, an error found in the
+    /// rewritten scene names the scene file and says which overrides were applied.
+    pub fn read_with(path: impl AsRef<Path>, overrides: &[Override]) -> Result<Scene, FileError> {
+        let path = path.as_ref();
+        if overrides.is_empty() {
+            return Scene::read(path);
+        }
+        let text = std::fs::read_to_string(path).map_err(|source| FileError::Read {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let rewritten = scene_keys::overridden_text(&text, path, overrides)?;
+        let mut scene = Scene::parse(&rewritten, path)
+            .map_err(|e| scene_keys::after_overrides(e, path, overrides))?;
+        // A line of the rewritten text means nothing to the user: drop it.
+        let prefix = format!("{}:", path.display());
+        for w in &mut scene.warnings {
+            if let Some(rest) = w.strip_prefix(&prefix)
+                && let Some((line, msg)) = rest.split_once(':')
+                && line.parse::<usize>().is_ok()
+            {
+                *w = format!("{} (with --set):{msg}", path.display());
+            }
+        }
+        Ok(scene)
+    }
+
     /// Parses a scene's text; `path` names it in errors and anchors its relative paths.
     pub fn parse(text: &str, path: &Path) -> Result<Scene, FileError> {
         let p = Parser { text, path };
         p.scene()
     }
 }
+
+/// The lowest orbit altitude a scene accepts (m): below it the atmosphere ends an orbit
+/// within hours, and a smaller number is almost always kilometres written as metres.
+pub const MIN_ALTITUDE: f64 = 100e3;
 
 struct Parser<'a> {
     text: &'a str,
@@ -552,6 +590,28 @@ impl Parser<'_> {
             path: self.path.to_path_buf(),
             line: span.map(|s| line_of(self.text, s.start)),
             message: message.into(),
+        }
+    }
+
+    /// `dir/written`, which must exist: else an error at the scene's line of `key`.
+    fn existing(
+        &self,
+        dir: &Path,
+        written: &str,
+        span: Range<usize>,
+        key: &str,
+    ) -> Result<PathBuf, FileError> {
+        let file = dir.join(written);
+        if file.is_file() {
+            Ok(file)
+        } else {
+            Err(scene_keys::missing_source(
+                self.path,
+                Some(line_of(self.text, span.start)),
+                key,
+                written,
+                &file,
+            ))
         }
     }
 
@@ -624,19 +684,45 @@ impl Parser<'_> {
 
         // Model and initial state.
         let model = match file.model.get_ref() {
-            ModelSource::Path(p) => satsim_tree::read_model(dir.join(p))?,
+            ModelSource::Path(p) => {
+                satsim_tree::read_model(self.existing(&dir, p, file.model.span(), "model")?)?
+            }
             ModelSource::Inline(m) => m.build().map_err(|e| e.in_file(self.text, self.path))?,
         };
         let model = match &file.armature {
             Some(a) => self.armature(model, a)?,
             None => model,
         };
+        let mut warnings = Vec::new();
         let initial = match file.initial.as_ref().map(|s| (s.get_ref(), s.span())) {
             None => State::rest(&model),
-            Some((StateSource::Path(p), _)) => satsim_tree::read_state(dir.join(p), &model)?,
-            Some((StateSource::Inline(s), span)) => s
-                .resolve(&model)
-                .map_err(|e| self.err(Some(span), format!("initial.{}: {}", e.field, e.message)))?,
+            Some((StateSource::Path(p), span)) => {
+                let state_path = self.existing(&dir, p, span, "initial")?;
+                let text =
+                    std::fs::read_to_string(&state_path).map_err(|source| FileError::Read {
+                        path: state_path.clone(),
+                        source,
+                    })?;
+                let sf = satsim_tree::io::parse_state_file(&text, &state_path)?;
+                warnings.extend(
+                    sf.warnings()
+                        .into_iter()
+                        .map(|w| format!("{}: {w}", state_path.display())),
+                );
+                sf.resolve(&model).map_err(|e| e.in_file(&state_path))?
+            }
+            Some((StateSource::Inline(s), span)) => {
+                warnings.extend(s.warnings().into_iter().map(|w| {
+                    format!(
+                        "{}:{}: initial.{w}",
+                        self.path.display(),
+                        line_of(self.text, span.start)
+                    )
+                }));
+                s.resolve(&model).map_err(|e| {
+                    self.err(Some(span), format!("initial.{}: {}", e.field, e.message))
+                })?
+            }
         };
 
         let duration = self.positive(&file.duration, "duration")?;
@@ -670,6 +756,7 @@ impl Parser<'_> {
             plots,
             view,
             effects,
+            warnings,
         };
         // Build once to surface any remaining setup error with the scene's name.
         scene
@@ -823,10 +910,30 @@ impl Parser<'_> {
                 if orbit.r0.norm().is_nan() || orbit.r0.norm() <= orbit.radius * 0.5 {
                     return Err(self.err(span, "`orbit.position` is inside the Earth"));
                 }
+                let h = orbit.r0.norm() - orbit.radius;
+                if h < MIN_ALTITUDE {
+                    return Err(self.err(
+                        span,
+                        format!(
+                            "`orbit.position` is {h:.0} m above `radius`, below 100 km (no orbit lasts there); positions are in metres (7e6, not 7000)"
+                        ),
+                    ));
+                }
             }
             (true, None, None) => {
                 let a = match (&f.altitude, &f.semi_major_axis) {
-                    (Some(h), None) => orbit.radius + self.positive(h, "orbit.altitude")?,
+                    (Some(h), None) => {
+                        let v = self.positive(h, "orbit.altitude")?;
+                        if v < MIN_ALTITUDE {
+                            return Err(self.err(
+                                Some(h.span()),
+                                format!(
+                                    "`orbit.altitude` is {v} m, below 100 km (no orbit lasts there); altitudes are in metres: for {v} km write `altitude = {v}e3`"
+                                ),
+                            ));
+                        }
+                        orbit.radius + v
+                    }
                     (None, Some(a)) => self.positive(a, "orbit.semi_major_axis")?,
                     _ => {
                         return Err(self.err(
@@ -861,6 +968,15 @@ impl Parser<'_> {
                         format!(
                             "the orbit's periapsis ({:.0} m) is inside the Earth",
                             a * (1.0 - e)
+                        ),
+                    ));
+                }
+                let hp = a * (1.0 - e) - orbit.radius;
+                if hp < MIN_ALTITUDE {
+                    return Err(self.err(
+                        span,
+                        format!(
+                            "the orbit's periapsis altitude ({hp:.0} m) is below 100 km (no orbit lasts there); lengths are in metres (`semi_major_axis = 6878e3` for 500 km)"
                         ),
                     ));
                 }

@@ -206,6 +206,8 @@ pub struct Simulation {
     t0: f64,
     rhs_evals: u64,
     log: Vec<(f64, String)>,
+    /// The effect (index into `effects`) of each `log` entry.
+    log_effect: Vec<usize>,
 }
 
 fn order_of(name: &str) -> usize {
@@ -412,6 +414,7 @@ impl Simulation {
             t0,
             rhs_evals: 0,
             log: Vec::new(),
+            log_effect: Vec::new(),
         };
         // With an orbit, put the centre of mass at rest in the orbit's frame.
         if free && sim.orbit_effect.is_some() && sim.model.total_mass() > 0.0 {
@@ -500,6 +503,14 @@ impl Simulation {
     /// What happened at each handled event: `(t, description)`.
     pub fn event_log(&self) -> &[(f64, String)] {
         &self.log
+    }
+    /// Every handled event as `(t, effect name, description)`, in order (the
+    /// [`event_log`](Self::event_log) with the effect whose event it was).
+    pub fn event_records(&self) -> impl Iterator<Item = (f64, &str, &str)> {
+        self.log
+            .iter()
+            .zip(&self.log_effect)
+            .map(|((t, what), &i)| (*t, self.effects[i].name(), what.as_str()))
     }
     /// The effect called `name`, if enabled.
     pub fn effect(&self, name: &str) -> Option<&dyn Effect> {
@@ -1202,6 +1213,8 @@ impl System for Simulation {
         if let Err(e) = self.prepare_with(t, x, false, Hold::All) {
             let why = format!("event handling failed: {e}");
             self.log.push((t, why.clone()));
+            self.log_effect
+                .push(ks.first().map_or(0, |&k| self.event_owner(k)));
             return Err(SystemError::new(why));
         }
         let kin = self.needs_kinematics;
@@ -1221,6 +1234,7 @@ impl System for Simulation {
             let what = self.effects[i].describe_event(local);
             if !what.is_empty() {
                 self.log.push((t, what));
+                self.log_effect.push(i);
             }
         }
         let reqs = std::mem::take(&mut self.requests);
@@ -1231,6 +1245,8 @@ impl System for Simulation {
         if let Err(e) = result {
             let why = format!("impact failed: {e}");
             self.log.push((t, why.clone()));
+            self.log_effect
+                .push(ks.first().map_or(0, |&k| self.event_owner(k)));
             return Err(SystemError::new(why));
         }
         Ok(if changed {

@@ -731,7 +731,29 @@ fn check_array(field: &str, x: &[f64], n: usize, what: &str) -> Result<(), Field
     Ok(())
 }
 
+/// How far from unit norm a state's attitude quaternion may be: it is normalised, silently
+/// within [`UNIT_NORM_TOLERANCE`] (rounding), with a warning ([`StateFile::warnings`]) up to
+/// this (a quaternion typed with a few digits), and refused beyond.
+pub const STATE_ATTITUDE_TOLERANCE: f64 = 1e-3;
+
 impl StateFile {
+    /// What [`StateFile::resolve`] accepts but a user should hear about: an attitude
+    /// quaternion normalised from a norm more than [`UNIT_NORM_TOLERANCE`] away from 1.
+    pub fn warnings(&self) -> Vec<String> {
+        let mut out = Vec::new();
+        if let Some(a) = self.base.as_ref().and_then(|b| b.attitude.as_ref()) {
+            let norm = a.iter().map(|x| x * x).sum::<f64>().sqrt();
+            if (norm - 1.0).abs() > UNIT_NORM_TOLERANCE
+                && (norm - 1.0).abs() <= STATE_ATTITUDE_TOLERANCE
+            {
+                out.push(format!(
+                    "base.attitude: quaternion norm {norm} is not 1; normalised"
+                ));
+            }
+        }
+        out
+    }
+
     /// Checks the state against `model` and lays it out as the engine's `q`, `v`, `tau`.
     pub fn resolve(&self, model: &Model) -> Result<State, FieldError> {
         let mut state = State::rest(model);
@@ -742,10 +764,10 @@ impl StateFile {
             if let Some(a) = &base.attitude {
                 check_array("base.attitude", a, 4, "a quaternion [w, x, y, z]")?;
                 let norm = a.iter().map(|x| x * x).sum::<f64>().sqrt();
-                if (norm - 1.0).abs() > UNIT_NORM_TOLERANCE {
+                if (norm - 1.0).abs() > STATE_ATTITUDE_TOLERANCE {
                     return Err(FieldError::new(
                         "base.attitude",
-                        format!("quaternion norm {norm} is not 1 (within 1e-6)"),
+                        format!("quaternion norm {norm} is not 1 (within 1e-3)"),
                     ));
                 }
                 for (k, x) in a.iter().enumerate() {

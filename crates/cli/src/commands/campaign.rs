@@ -42,7 +42,12 @@ pub fn run(args: &[OsString]) -> Result<Output, CliError> {
     }
     let resume = args.iter().any(|a| a == "--resume");
     let rest: Vec<OsString> = args.iter().filter(|a| *a != "--resume").cloned().collect();
-    let opts = Options::parse(NAME, &rest, &["out", "threads", "shard", "shards"], 1)?;
+    let opts = Options::parse(
+        NAME,
+        &rest,
+        &["out", "threads", "shard", "shards", "set"],
+        1,
+    )?;
     if opts.help {
         return Ok(format!("usage: {}\n", usage_line(Some(NAME))));
     }
@@ -79,7 +84,7 @@ pub fn run(args: &[OsString]) -> Result<Output, CliError> {
         .transpose()?;
     let choice = choose_shard(flag, shards, |n| std::env::var(n).ok()).map_err(usage)?;
 
-    let c = Campaign::read(&scene_path)?;
+    let c = Campaign::read_with(&scene_path, &opts.overrides(NAME)?)?;
     let stem = scene_path
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())

@@ -100,9 +100,9 @@ pub fn usage_line(command: Option<&str>) -> &'static str {
         Some("dynamics") => "satsim dynamics --model MODEL.toml --state STATE.json",
         Some("bench") => "satsim bench --model MODEL.toml [--state STATE.json] [--calls N]",
         Some("preprint") => "satsim preprint --model MODEL.toml --state STATE.json",
-        Some("run") => "satsim run SCENE.toml [--out DIR]",
+        Some("run") => "satsim run SCENE.toml [--out DIR] [--set KEY=VALUE]...",
         Some("campaign") => {
-            "satsim campaign SCENE.toml [--out DIR] [--threads T] [--shard I/N] [--shards N] [--resume]\n       satsim campaign merge DIR... --out DIR"
+            "satsim campaign SCENE.toml [--out DIR] [--threads T] [--shard I/N] [--shards N] [--resume] [--set KEY=VALUE]...\n       satsim campaign merge DIR... --out DIR"
         }
         Some("linearize") => "satsim linearize SCENE.toml",
         Some("modes") => {
@@ -202,7 +202,7 @@ impl Options {
                 let Some(&name) = names.iter().find(|n| **n == key) else {
                     return Err(usage(format!("unknown option `--{key}`")));
                 };
-                if out.values.iter().any(|(n, _)| *n == name) {
+                if name != "set" && out.values.iter().any(|(n, _)| *n == name) {
                     return Err(usage(format!("`--{name}` given twice")));
                 }
                 let value = match inline {
@@ -234,6 +234,31 @@ impl Options {
             .iter()
             .find(|(n, _)| *n == name)
             .map(|(_, v)| v.as_os_str())
+    }
+
+    /// Every value of the repeatable `--name` (only `--set` repeats), in order.
+    pub fn all(&self, name: &str) -> impl Iterator<Item = &OsStr> {
+        self.values
+            .iter()
+            .filter(move |(n, _)| *n == name)
+            .map(|(_, v)| v.as_os_str())
+    }
+
+    /// The `--set KEY=VALUE` overrides, in order.
+    pub fn overrides(
+        &self,
+        command: &'static str,
+    ) -> Result<Vec<satsim_satellite::scene_keys::Override>, CliError> {
+        self.all("set")
+            .map(|s| {
+                satsim_satellite::scene_keys::Override::parse(&s.to_string_lossy()).map_err(|e| {
+                    CliError::Usage {
+                        command: Some(command),
+                        message: format!("--set {e}"),
+                    }
+                })
+            })
+            .collect()
     }
 
     /// The value of `--name` as a path, if given.

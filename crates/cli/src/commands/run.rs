@@ -1,8 +1,9 @@
-//! `satsim run SCENE.toml [--out DIR]` (contract section 7): integrates a scene, streams
+//! `satsim run SCENE.toml [--out DIR] [--set KEY=VALUE]...` (contract section 7): integrates a
+//! scene (with `--set` overrides, see [`satsim_satellite::scene_keys`]), streams
 //! `DIR/trajectory.csv` row by row (in blocks, flushed on success, failure and interrupt, so
-//! a stopped run leaves a valid file up to its last row), draws SVG plots of the main
-//! quantities at the end from a bounded min/max decimation (memory does not grow with the
-//! number of rows), shows a progress bar on
+//! a stopped run leaves a valid file up to its last row), writes every event to
+//! `DIR/events.csv`, draws SVG plots of the main quantities at the end from a bounded min/max
+//! decimation (memory does not grow with the number of rows), shows a progress bar on
 //! standard error when it is a terminal, and prints a short summary on standard output.
 //!
 //! Exit status: 0 on success, 2 for bad input (the scene, its model or state, the command
@@ -15,8 +16,9 @@
 
 use super::{CliError, Options, Output, usage_line};
 use satsim_integrate::Output as Times;
-use satsim_satellite::output::{CsvWriter, PlotRecorder};
+use satsim_satellite::output::{CsvWriter, PlotRecorder, write_events};
 use satsim_satellite::scene::Scene;
+use satsim_satellite::scene_keys::Override;
 use satsim_satellite::simulation::RunError;
 use satsim_satellite::view::{PoseRecorder, ViewError};
 use std::ffi::OsString;
@@ -95,7 +97,7 @@ pub fn run(args: &[OsString]) -> Result<Output, CliError> {
 
 /// Runs `satsim run ARGS`.
 pub fn command(args: &[OsString]) -> Result<Output, Failure> {
-    let opts = Options::parse(NAME, args, &["out"], 1)?;
+    let opts = Options::parse(NAME, args, &["out", "set"], 1)?;
     if opts.help {
         return Ok(format!("usage: {}\n", usage_line(Some(NAME))));
     }
@@ -107,12 +109,24 @@ pub fn command(args: &[OsString]) -> Result<Output, Failure> {
             command: Some(NAME),
             message: "missing the scene file".into(),
         })?;
-    run_scene(&scene_path, opts.path("out"))
+    run_scene_with(&scene_path, opts.path("out"), &opts.overrides(NAME)?)
 }
 
 /// Runs the scene at `scene_path`, writing into `out` (default `out/<scene stem>`).
 pub fn run_scene(scene_path: &Path, out: Option<PathBuf>) -> Result<Output, Failure> {
-    let scene = Scene::read(scene_path).map_err(CliError::File)?;
+    run_scene_with(scene_path, out, &[])
+}
+
+/// [`run_scene`] with `--set KEY=VALUE` overrides applied to the scene.
+pub fn run_scene_with(
+    scene_path: &Path,
+    out: Option<PathBuf>,
+    overrides: &[Override],
+) -> Result<Output, Failure> {
+    let scene = Scene::read_with(scene_path, overrides).map_err(CliError::File)?;
+    for w in &scene.warnings {
+        eprintln!("warning: {w}");
+    }
     let mut sim = scene
         .simulation()
         .map_err(|e| CliError::Other(format!("{}: {e}", scene_path.display())))?;
@@ -196,6 +210,10 @@ pub fn run_scene(scene_path: &Path, out: Option<PathBuf>) -> Result<Output, Fail
             Ok(Vec::new())
         }
     };
+    // Every event, not only the ten in the summary (also for a run that failed or was interrupted).
+    let events_path = dir.join("events.csv");
+    let n_events = write_events(&events_path, sim.event_records())
+        .map_err(|e| Failure::Run(format!("cannot write {}: {e}", events_path.display())))?;
     let stats = match result {
         Ok(stats) => stats,
         Err(RunError::Sink {
@@ -290,6 +308,9 @@ pub fn run_scene(scene_path: &Path, out: Option<PathBuf>) -> Result<Output, Fail
     }
     if sim.event_log().len() > 10 {
         let _ = writeln!(s, "  ...      {} more events", sim.event_log().len() - 10);
+    }
+    if n_events > 0 {
+        let _ = writeln!(s, "events     {n_events} in {}", events_path.display());
     }
     if let (Some(first), Some(last)) = (
         first_row.as_ref(),

@@ -35,17 +35,18 @@ pub use shard::{Shard, ShardChoice, choose_shard};
 pub use spec::{Dispersed, Law, Segment, draw, run_rng};
 
 use crate::scene::Scene;
+use crate::scene_keys::{KeyError, Override, inline_sources};
 use rayon::prelude::*;
 use satsim_integrate::Output as Times;
 use satsim_tree::io::{FileError, line_of, with_key};
 use serde::Deserialize;
-use spec::{CampaignFile, KeyError};
+use spec::CampaignFile;
 use std::collections::HashSet;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 use thiserror::Error;
-use toml::{Spanned, Table, Value};
+use toml::{Spanned, Table};
 
 /// Why a campaign could not run (bad input or unusable output folder; exit status 2). A run
 /// that fails is not an error: it is a failed row.
@@ -156,6 +157,25 @@ impl Campaign {
         Campaign::parse(&text, path)
     }
 
+    /// Reads the scene file at `path` with `overrides` (`--set KEY=VALUE`, see
+    /// [`crate::scene_keys`]; `campaign.runs` and the like included) applied in order.
+    pub fn read_with(
+        path: impl AsRef<Path>,
+        overrides: &[Override],
+    ) -> Result<Campaign, FileError> {
+        let path = path.as_ref();
+        if overrides.is_empty() {
+            return Campaign::read(path);
+        }
+        let text = std::fs::read_to_string(path).map_err(|source| FileError::Read {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let rewritten = crate::scene_keys::overridden_text(&text, path, overrides)?;
+        Campaign::parse(&rewritten, path)
+            .map_err(|e| crate::scene_keys::after_overrides(e, path, overrides))
+    }
+
     /// Parses a campaign scene's text; `path` names it in errors and anchors relative paths.
     pub fn parse(text: &str, path: &Path) -> Result<Campaign, FileError> {
         let nominal = Scene::parse(text, path)?;
@@ -205,8 +225,7 @@ impl Campaign {
                 message: e.message().trim_end().to_owned(),
             })?;
         base.remove("campaign");
-        let dir = path.parent().unwrap_or(Path::new(""));
-        inline_sources(&mut base, dir)?;
+        inline_sources(&mut base, text, path)?;
 
         let mut dispersed: Vec<Dispersed> = Vec::new();
         for (i, d) in file.disperse.iter().enumerate() {
@@ -435,62 +454,6 @@ pub fn stat_columns(columns: &[String]) -> Vec<String> {
 /// Whether a trajectory column gets an envelope plot: hinge angles and bus rates.
 pub fn is_trace_column(c: &str) -> bool {
     c.starts_with("angle_") || c.starts_with("omega_")
-}
-
-/// Replaces `model = "file"` and `initial = "file"` by the files' contents, as tables.
-fn inline_sources(base: &mut Table, dir: &Path) -> Result<(), FileError> {
-    if let Some(Value::String(p)) = base.get("model") {
-        let path = dir.join(p);
-        let text = std::fs::read_to_string(&path).map_err(|source| FileError::Read {
-            path: path.clone(),
-            source,
-        })?;
-        let t: Table = text
-            .parse()
-            .map_err(|e: toml::de::Error| FileError::Syntax {
-                line: e.span().map(|s| line_of(&text, s.start)),
-                message: e.message().trim_end().to_owned(),
-                path: path.clone(),
-            })?;
-        base.insert("model".into(), Value::Table(t));
-    }
-    if let Some(Value::String(p)) = base.get("initial") {
-        let path = dir.join(p);
-        let text = std::fs::read_to_string(&path).map_err(|source| FileError::Read {
-            path: path.clone(),
-            source,
-        })?;
-        let json: serde_json::Value =
-            serde_json::from_str(&text).map_err(|e| FileError::Syntax {
-                path: path.clone(),
-                line: Some(e.line()),
-                message: e.to_string(),
-            })?;
-        let v = json_to_toml(&json).map_err(|m| FileError::Schema {
-            path: path.clone(),
-            line: None,
-            message: m,
-        })?;
-        base.insert("initial".into(), v);
-    }
-    Ok(())
-}
-
-/// A JSON value as TOML (numbers as floats, as the state reader reads them).
-fn json_to_toml(v: &serde_json::Value) -> Result<Value, String> {
-    use serde_json::Value as J;
-    Ok(match v {
-        J::Null => return Err("`null` has no TOML form".into()),
-        J::Bool(b) => Value::Boolean(*b),
-        J::Number(n) => Value::Float(n.as_f64().ok_or("a number out of range")?),
-        J::String(s) => Value::String(s.clone()),
-        J::Array(a) => Value::Array(a.iter().map(json_to_toml).collect::<Result<_, _>>()?),
-        J::Object(o) => Value::Table(
-            o.iter()
-                .map(|(k, v)| Ok((k.clone(), json_to_toml(v)?)))
-                .collect::<Result<Table, String>>()?,
-        ),
-    })
 }
 
 /// How to run a campaign.

@@ -3,11 +3,10 @@
 //!
 //! # Addressing
 //!
-//! A `key` is a dotted path into the scene's TOML tree after an external `model` file (TOML)
-//! or `initial` file (JSON) has been read in as if it were an inline table. A segment names a
-//! table key, or, in an array (of tables or of numbers), a 0-based position:
-//! `model.body.2.mass`, `effects.hinge_springs.stiffness`, `initial.hinges.angle`. The value
-//! at the end must be a number or an array of numbers; `index` picks one element of an array.
+//! A `key` is a dotted path into the scene's TOML tree ([`crate::scene_keys`], shared with
+//! `--set`): `model.body.2.mass`, `effects.hinge_springs.stiffness`, `initial.hinges.angle`.
+//! The value at the end must be a number or an array of numbers; `index` picks one element
+//! of an array.
 //!
 //! # Draws
 //!
@@ -22,11 +21,12 @@
 //! - `uniform = { low, high }`: `nominal + low + (high - low) * u`, `u` uniform in `[0, 1)`;
 //! - `scale = { sigma }`: `nominal * (1 + sigma * z)`.
 
+use crate::scene_keys::{self, kind, walk};
+pub use crate::scene_keys::{KeyError, Segment};
 use chacha20::ChaCha12Rng;
 use rand_core::SeedableRng;
 use rand_distr::{Distribution, StandardNormal, StandardUniform};
 use serde::Deserialize;
-use std::fmt;
 use toml::{Spanned, Table, Value};
 
 /// `[campaign]` as written.
@@ -113,15 +113,6 @@ impl Law {
     }
 }
 
-/// One step of a path into the scene's tree.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub enum Segment {
-    /// A table key.
-    Key(String),
-    /// A position in an array.
-    Index(usize),
-}
-
 /// One dispersed number of the scene.
 #[derive(Clone, Debug)]
 pub struct Dispersed {
@@ -153,28 +144,6 @@ pub fn draw(dispersed: &[Dispersed], seed: u64, k: u64) -> Vec<f64> {
         .collect()
 }
 
-/// Why a key does not address a number.
-#[derive(Debug)]
-pub(crate) struct KeyError(pub String);
-
-impl fmt::Display for KeyError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(&self.0)
-    }
-}
-
-fn kind(v: &Value) -> &'static str {
-    match v {
-        Value::String(_) => "a string",
-        Value::Integer(_) => "an integer",
-        Value::Float(_) => "a number",
-        Value::Boolean(_) => "a boolean",
-        Value::Datetime(_) => "a date",
-        Value::Array(_) => "an array",
-        Value::Table(_) => "a table",
-    }
-}
-
 fn number(v: &Value) -> Option<f64> {
     match v {
         Value::Integer(i) => Some(*i as f64),
@@ -191,55 +160,7 @@ pub(crate) fn resolve(
     index: Option<i64>,
     law: Law,
 ) -> Result<Vec<Dispersed>, KeyError> {
-    if key.is_empty() {
-        return Err(KeyError("the key is empty".into()));
-    }
-    let mut path = Vec::new();
-    let mut here: Option<&Value> = None;
-    let mut walked = String::new();
-    for seg in key.split('.') {
-        if seg.is_empty() {
-            return Err(KeyError(format!("`{key}` has an empty segment")));
-        }
-        let next = match here {
-            None => {
-                path.push(Segment::Key(seg.to_owned()));
-                root.get(seg)
-                    .ok_or_else(|| KeyError(format!("the scene has no `{seg}`")))?
-            }
-            Some(Value::Table(t)) => {
-                path.push(Segment::Key(seg.to_owned()));
-                t.get(seg)
-                    .ok_or_else(|| KeyError(format!("`{walked}` has no key `{seg}`")))?
-            }
-            Some(Value::Array(a)) => {
-                let i: usize = seg.parse().map_err(|_| {
-                    KeyError(format!(
-                        "`{walked}` is an array: expected a position (0-based), got `{seg}`"
-                    ))
-                })?;
-                path.push(Segment::Index(i));
-                a.get(i).ok_or_else(|| {
-                    KeyError(format!(
-                        "position {i} is out of range: `{walked}` has {} entries",
-                        a.len()
-                    ))
-                })?
-            }
-            Some(other) => {
-                return Err(KeyError(format!(
-                    "`{walked}` is {}, not a table or an array",
-                    kind(other)
-                )));
-            }
-        };
-        if !walked.is_empty() {
-            walked.push('.');
-        }
-        walked.push_str(seg);
-        here = Some(next);
-    }
-    let target = here.expect("a non-empty key has a value");
+    let (path, target) = walk(root, key)?;
     let element = |i: usize, v: &Value| -> Result<Dispersed, KeyError> {
         let nominal = number(v)
             .ok_or_else(|| KeyError(format!("`{key}[{i}]` is {}, not a number", kind(v))))?;
@@ -289,19 +210,7 @@ pub(crate) fn resolve(
 
 /// Sets the number at `path` in `root` (which [`resolve`] found there).
 pub(crate) fn set(root: &mut Table, path: &[Segment], value: f64) {
-    let (first, rest) = path.split_first().expect("a resolved path is not empty");
-    let Segment::Key(k) = first else {
-        unreachable!("a path starts with a key")
-    };
-    let mut here = root.get_mut(k).expect("resolved path");
-    for seg in rest {
-        here = match (here, seg) {
-            (Value::Table(t), Segment::Key(k)) => t.get_mut(k).expect("resolved path"),
-            (Value::Array(a), Segment::Index(i)) => a.get_mut(*i).expect("resolved path"),
-            _ => unreachable!("the tree changed under a resolved path"),
-        };
-    }
-    *here = Value::Float(value);
+    scene_keys::set(root, path, Value::Float(value));
 }
 
 /// The law of a `[[campaign.disperse]]` entry, checked.

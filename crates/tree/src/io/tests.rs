@@ -558,7 +558,7 @@ fn state_error_table() {
         ),
         (
             "attitude norm",
-            "{\"base\": {\"attitude\": [1, 0, 0, 0.01]}, \"hinges\": {\"angle\": [0], \"rate\": [0]}}",
+            "{\"base\": {\"attitude\": [1, 0, 0, 0.1]}, \"hinges\": {\"angle\": [0], \"rate\": [0]}}",
             K::State,
             "s/bad.json: base.attitude: quaternion norm",
         ),
@@ -645,4 +645,29 @@ fn example_files_load() {
     assert_eq!(s.q[7..], [0.3, -0.2, 0.1, 1.2, -1.0]);
     assert_eq!(s.v[..3], [0.001, -0.002, 0.0015]);
     assert_eq!(s.tau[6..], [0.0, 0.0, 0.0, -0.5, 0.4]);
+}
+
+#[test]
+fn a_nearly_unit_attitude_is_normalised_with_a_warning() {
+    let model = crate::samples::chain(2, BaseKind::Free);
+    let f = |q: &str| {
+        parse_state_file(
+            &format!(
+                "{{\"base\": {{\"attitude\": {q}}}, \"hinges\": {{\"angle\": [0], \"rate\": [0]}}}}"
+            ),
+            Path::new("s.json"),
+        )
+        .unwrap()
+    };
+    // Norm 1.0005: normalised, with a warning.
+    let s = f("[1.0005, 0, 0, 0]");
+    assert_eq!(s.warnings().len(), 1);
+    assert!(s.warnings()[0].contains("normalised"));
+    let st = s.resolve(&model).unwrap();
+    assert_eq!(st.q[0], 1.0);
+    // Rounding only: no warning.
+    assert!(f("[1.0000001, 0, 0, 0]").warnings().is_empty());
+    // Beyond 1e-3: refused.
+    let e = f("[1.002, 0, 0, 0]").resolve(&model).unwrap_err();
+    assert!(e.message.contains("within 1e-3"), "{e}");
 }

@@ -1,0 +1,335 @@
+//! Command-line conveniences of issue 12 item 4: `--set KEY=VALUE` on `run` and `campaign`,
+//! `DIR/events.csv`, a missing `model` file reported at the scene's line.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn satsim_in(dir: &Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_satsim"))
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .expect("run satsim")
+}
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn setup(test: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("satsim-cliux-{}-{test}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    for f in ["satellite.toml", "state.json"] {
+        std::fs::copy(root().join("examples").join(f), dir.join(f)).unwrap();
+    }
+    std::fs::write(dir.join("scene.toml"), SCENE).unwrap();
+    dir
+}
+
+const SCENE: &str = r#"model = "satellite.toml"
+initial = "state.json"
+duration = 4.0
+[integrator]
+method = "rk4"
+step = 0.01
+[output]
+every = 1.0
+plots = false
+[effects.hinge_springs]
+stiffness = [50.0, 50.0, 50.0, 2.0, 2.0]
+damping = [1.0, 1.0, 1.0, 0.5, 0.5]
+"#;
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn last_row(path: &Path) -> (Vec<String>, Vec<f64>) {
+    let text = std::fs::read_to_string(path).unwrap();
+    let header = text.lines().next().unwrap().split(',').map(String::from);
+    let last = text.lines().last().unwrap();
+    (
+        header.collect(),
+        last.split(',').map(|v| v.parse().unwrap()).collect(),
+    )
+}
+
+#[test]
+fn set_overrides_scene_model_and_state_values() {
+    let dir = setup("set");
+    let base = satsim_in(&dir, &["run", "scene.toml", "--out", "base"]);
+    assert!(base.status.success(), "{}", stderr(&base));
+    let (header, b) = last_row(&dir.join("base/trajectory.csv"));
+    assert_eq!(b[0], 4.0);
+    let o = satsim_in(
+        &dir,
+        &[
+            "run",
+            "scene.toml",
+            "--out",
+            "set",
+            "--set",
+            "duration=2",
+            "--set=effects.hinge_springs.stiffness.0=500.0",
+            "--set",
+            "model.body.1.mass=40.0",
+            "--set",
+            "integrator.method=dp54",
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (_, s) = last_row(&dir.join("set/trajectory.csv"));
+    // `duration` (an integer given for a number) took effect.
+    assert_eq!(s[0], 2.0);
+    // The same scene run to 2 s without the spring, mass and method overrides differs.
+    let plain = satsim_in(
+        &dir,
+        &[
+            "run",
+            "scene.toml",
+            "--out",
+            "plain",
+            "--set",
+            "duration=2.0",
+        ],
+    );
+    assert!(plain.status.success(), "{}", stderr(&plain));
+    let (_, p) = last_row(&dir.join("plain/trajectory.csv"));
+    let a1 = header.iter().position(|c| c == "angle_1").unwrap_or(1);
+    assert!(
+        (s[a1] - p[a1]).abs() > 1e-6,
+        "overrides changed nothing: {} vs {}",
+        s[a1],
+        p[a1]
+    );
+}
+
+#[test]
+fn bad_set_exits_2_naming_the_key() {
+    let dir = setup("badset");
+    for (arg, why) in [
+        (
+            "effects.hinge_springs.stifness=3.0",
+            "has no key `stifness`",
+        ),
+        ("model.body.99.mass=1.0", "out of range"),
+        ("duration=\"long\"", "wrong type"),
+        ("effects.hinge_springs.stiffness=5.0", "wrong type"),
+        ("integrator.step=fast", "not a TOML value"),
+    ] {
+        let o = satsim_in(&dir, &["run", "scene.toml", "--set", arg]);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{arg}: {err}");
+        assert!(err.contains(why), "{arg}: {err}");
+        let key = arg.split_once('=').unwrap().0;
+        assert!(err.contains(key), "{arg}: {err} does not name the key");
+        assert!(err.contains("scene.toml"), "{arg}: {err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    }
+    // Not KEY=VALUE.
+    let o = satsim_in(&dir, &["run", "scene.toml", "--set", "duration"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("KEY=VALUE"), "{}", stderr(&o));
+    // A value the scene reader refuses names the scene file and the override.
+    let o = satsim_in(&dir, &["run", "scene.toml", "--set", "duration=-1.0"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        err.contains("duration") && err.contains("--set duration=-1.0"),
+        "{err}"
+    );
+}
+
+#[test]
+fn campaign_takes_set_too() {
+    let dir = setup("campaign");
+    let scene = format!(
+        "{SCENE}[campaign]\nruns = 5\nseed = 3\n[[campaign.disperse]]\nkey = \"model.body.1.mass\"\nscale = {{ sigma = 0.05 }}\n"
+    );
+    std::fs::write(dir.join("c.toml"), scene).unwrap();
+    let o = satsim_in(
+        &dir,
+        &[
+            "campaign",
+            "c.toml",
+            "--out",
+            "camp",
+            "--threads",
+            "1",
+            "--set",
+            "campaign.runs=2",
+            "--set",
+            "duration=1.0",
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let runs = std::fs::read_to_string(dir.join("camp/runs.csv")).unwrap();
+    assert_eq!(runs.lines().count(), 3, "{runs}");
+    let o = satsim_in(&dir, &["campaign", "c.toml", "--set", "campaign.run=2"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("campaign.run"), "{}", stderr(&o));
+}
+
+#[test]
+fn every_event_goes_to_events_csv() {
+    // two_wings.toml has more events than the ten the summary prints.
+    let dir = setup("events");
+    let scene = root().join("examples/scenes/two_wings.toml");
+    let o = satsim_in(&dir, &["run", scene.to_str().unwrap(), "--out", "ev"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    let shown = out.lines().filter(|l| l.starts_with("  event ")).count();
+    let more: usize = out
+        .lines()
+        .find_map(|l| {
+            l.trim()
+                .strip_prefix("...")?
+                .trim()
+                .strip_suffix(" more events")
+        })
+        .map_or(0, |n| n.parse().unwrap());
+    assert_eq!(shown, 10, "{out}");
+    assert!(more > 0, "{out}");
+    let text = std::fs::read_to_string(dir.join("ev/events.csv")).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(lines.next(), Some("t,effect,event"));
+    let rows: Vec<&str> = lines.collect();
+    assert_eq!(rows.len(), shown + more, "{text}");
+    let mut last_t = f64::NEG_INFINITY;
+    for r in &rows {
+        let (t, rest) = r.split_once(',').unwrap();
+        let t: f64 = t.parse().unwrap();
+        assert!(t >= last_t, "events out of order: {text}");
+        last_t = t;
+        let effect = rest.split_once(',').unwrap().0;
+        assert!(
+            ["hinge_stops", "reaction_wheels"].contains(&effect),
+            "{effect} in {text}"
+        );
+    }
+    // The first ten match the summary.
+    for (line, row) in out.lines().filter(|l| l.starts_with("  event ")).zip(&rows) {
+        let what = line.split_once(" s: ").unwrap().1;
+        assert!(row.contains(what.trim_matches('"')), "{line} vs {row}");
+    }
+}
+
+#[test]
+fn a_missing_model_file_is_reported_at_the_scene_line() {
+    let dir = setup("missing");
+    std::fs::write(
+        dir.join("bad.toml"),
+        SCENE.replace("model = \"satellite.toml\"", "model = \"satelite.toml\""),
+    )
+    .unwrap();
+    let o = satsim_in(&dir, &["run", "bad.toml"]);
+    assert_eq!(o.status.code(), Some(2));
+    let err = stderr(&o);
+    assert!(err.contains("bad.toml:1:"), "{err}");
+    assert!(
+        err.contains("satelite.toml") && err.contains("does not exist"),
+        "{err}"
+    );
+    std::fs::write(
+        dir.join("bad2.toml"),
+        SCENE.replace("initial = \"state.json\"", "initial = \"nostate.json\""),
+    )
+    .unwrap();
+    let o = satsim_in(&dir, &["run", "bad2.toml", "--set", "duration=1.0"]);
+    assert_eq!(o.status.code(), Some(2));
+    let err = stderr(&o);
+    assert!(
+        err.contains("nostate.json") && err.contains("does not exist"),
+        "{err}"
+    );
+    assert!(err.contains("bad2.toml:2:"), "{err}");
+}
+
+#[test]
+fn an_orbit_below_100_km_is_refused_with_a_units_hint() {
+    let dir = setup("altitude");
+    let orbit = |o: &str| format!("{SCENE}[orbit]\n{o}\n");
+    // Line 13 is the first line of [orbit]; line 14 its first key.
+    for (name, o, at, hint) in [
+        (
+            "km.toml",
+            "altitude = 500",
+            "km.toml:14:",
+            "altitude = 500e3",
+        ),
+        (
+            "low.toml",
+            "altitude = 99e3",
+            "low.toml:14:",
+            "below 100 km",
+        ),
+        (
+            "sma.toml",
+            "semi_major_axis = 6400e3",
+            "sma.toml:13:",
+            "in metres",
+        ),
+        (
+            "pos.toml",
+            "position = [6400e3, 0, 0]\nvelocity = [0, 7.8e3, 0]",
+            "pos.toml:13:",
+            "in metres",
+        ),
+    ] {
+        std::fs::write(dir.join(name), orbit(o)).unwrap();
+        let out = satsim_in(&dir, &["run", name]);
+        let err = stderr(&out);
+        assert_eq!(out.status.code(), Some(2), "{name}: {err}");
+        assert!(err.contains(at) && err.contains(hint), "{name}: {err}");
+        assert!(err.contains("100 km"), "{name}: {err}");
+    }
+    // 100 km itself and the usual 500 km are fine.
+    std::fs::write(
+        dir.join("ok.toml"),
+        orbit("altitude = 100e3").replace("duration = 4.0", "duration = 1.0"),
+    )
+    .unwrap();
+    let out = satsim_in(&dir, &["run", "ok.toml"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+}
+
+#[test]
+fn a_nearly_unit_attitude_is_normalised_with_a_warning() {
+    let dir = setup("quat");
+    let state = |q: &str| {
+        format!(
+            "{{\"base\": {{\"attitude\": {q}}}, \"hinges\": {{\"angle\": [0, 0, 0, 0, 0], \"rate\": [0, 0, 0, 0, 0]}}}}"
+        )
+    };
+    std::fs::write(dir.join("state.json"), state("[1.0005, 0, 0, 0]")).unwrap();
+    let o = satsim_in(&dir, &["run", "scene.toml"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        err.contains("warning:") && err.contains("state.json") && err.contains("normalised"),
+        "{err}"
+    );
+    // With --set the state is read into the scene: the warning names the scene, no line.
+    let o = satsim_in(
+        &dir,
+        &["run", "scene.toml", "--set", "duration=1.0", "--out", "s"],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        err.contains("warning: scene.toml (with --set): initial.base.attitude"),
+        "{err}"
+    );
+    let (header, row) = last_row(&dir.join("out/scene/trajectory.csv"));
+    let q: Vec<f64> = ["q_w", "q_x", "q_y", "q_z"]
+        .iter()
+        .map(|c| row[header.iter().position(|h| h == c).unwrap()])
+        .collect();
+    let norm = q.iter().map(|x| x * x).sum::<f64>().sqrt();
+    assert!((norm - 1.0).abs() < 1e-9, "{norm}");
+    std::fs::write(dir.join("state.json"), state("[1.01, 0, 0, 0]")).unwrap();
+    let o = satsim_in(&dir, &["run", "scene.toml"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("within 1e-3"), "{}", stderr(&o));
+}

@@ -1,0 +1,423 @@
+//! Dotted keys into a scene (contract section 8) and `--set KEY=VALUE` overrides.
+//!
+//! A key is a dotted path into the scene's TOML tree after an external `model` file (TOML)
+//! or `initial` file (JSON) has been read in as if it were an inline table. A segment names a
+//! table key, or, in an array (of tables or of numbers), a 0-based position:
+//! `model.body.2.mass`, `effects.hinge_springs.stiffness`, `initial.hinges.angle`,
+//! `orbit.altitude`. `satsim campaign` disperses the numbers such keys address; `satsim run
+//! --set` and `satsim campaign --set` replace any value by one written as a TOML value.
+//!
+//! An override may only replace a value that the scene (or its model or state file) already
+//! gives, by one of the same kind: a number by a number (an integer by an integer), a string
+//! by a string, a boolean by a boolean, an array by an array, a table by an inline table. A
+//! value that is not valid TOML replaces a string as that string (so `--set
+//! integrator.method=rk4` needs no quotes).
+
+use satsim_tree::io::{FileError, line_of};
+use serde::Deserialize;
+use std::fmt;
+use std::path::Path;
+use toml::{Spanned, Table, Value};
+
+/// One step of a path into the scene's tree.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Segment {
+    /// A table key.
+    Key(String),
+    /// A position in an array.
+    Index(usize),
+}
+
+/// Why a key does not address a value (or a value cannot go there).
+#[derive(Debug, Clone, PartialEq)]
+pub struct KeyError(pub String);
+
+impl fmt::Display for KeyError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for KeyError {}
+
+/// The kind of a TOML value, for messages ("a number", "a table"…).
+pub fn kind(v: &Value) -> &'static str {
+    match v {
+        Value::String(_) => "a string",
+        Value::Integer(_) => "an integer",
+        Value::Float(_) => "a number",
+        Value::Boolean(_) => "a boolean",
+        Value::Datetime(_) => "a date",
+        Value::Array(_) => "an array",
+        Value::Table(_) => "a table",
+    }
+}
+
+/// Walks the dotted `key` in `root`: the path to the value and the value.
+pub fn walk<'a>(root: &'a Table, key: &str) -> Result<(Vec<Segment>, &'a Value), KeyError> {
+    if key.is_empty() {
+        return Err(KeyError("the key is empty".into()));
+    }
+    let mut path = Vec::new();
+    let mut here: Option<&Value> = None;
+    let mut walked = String::new();
+    for seg in key.split('.') {
+        if seg.is_empty() {
+            return Err(KeyError(format!("`{key}` has an empty segment")));
+        }
+        let next = match here {
+            None => {
+                path.push(Segment::Key(seg.to_owned()));
+                root.get(seg)
+                    .ok_or_else(|| KeyError(format!("the scene has no `{seg}`")))?
+            }
+            Some(Value::Table(t)) => {
+                path.push(Segment::Key(seg.to_owned()));
+                t.get(seg)
+                    .ok_or_else(|| KeyError(format!("`{walked}` has no key `{seg}`")))?
+            }
+            Some(Value::Array(a)) => {
+                let i: usize = seg.parse().map_err(|_| {
+                    KeyError(format!(
+                        "`{walked}` is an array: expected a position (0-based), got `{seg}`"
+                    ))
+                })?;
+                path.push(Segment::Index(i));
+                a.get(i).ok_or_else(|| {
+                    KeyError(format!(
+                        "position {i} is out of range: `{walked}` has {} entries",
+                        a.len()
+                    ))
+                })?
+            }
+            Some(other) => {
+                return Err(KeyError(format!(
+                    "`{walked}` is {}, not a table or an array",
+                    kind(other)
+                )));
+            }
+        };
+        if !walked.is_empty() {
+            walked.push('.');
+        }
+        walked.push_str(seg);
+        here = Some(next);
+    }
+    Ok((path, here.expect("a non-empty key has a value")))
+}
+
+/// Replaces the value at `path` in `root` (which [`walk`] found there) by `value`.
+pub fn set(root: &mut Table, path: &[Segment], value: Value) {
+    let (first, rest) = path.split_first().expect("a resolved path is not empty");
+    let Segment::Key(k) = first else {
+        unreachable!("a path starts with a key")
+    };
+    let mut here = root.get_mut(k).expect("resolved path");
+    for seg in rest {
+        here = match (here, seg) {
+            (Value::Table(t), Segment::Key(k)) => t.get_mut(k).expect("resolved path"),
+            (Value::Array(a), Segment::Index(i)) => a.get_mut(*i).expect("resolved path"),
+            _ => unreachable!("the tree changed under a resolved path"),
+        };
+    }
+    *here = value;
+}
+
+/// One `--set KEY=VALUE`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Override {
+    /// The dotted key.
+    pub key: String,
+    /// The value as written after `=`.
+    pub text: String,
+}
+
+impl Override {
+    /// Splits `KEY=VALUE` at its first `=`.
+    pub fn parse(s: &str) -> Result<Override, KeyError> {
+        let (key, text) = s.split_once('=').ok_or_else(|| {
+            KeyError(format!(
+                "`{s}`: expected KEY=VALUE (a dotted key, e.g. `model.body.2.mass=3.5`)"
+            ))
+        })?;
+        let key = key.trim();
+        if key.is_empty() {
+            return Err(KeyError(format!("`{s}`: the key is empty")));
+        }
+        Ok(Override {
+            key: key.to_owned(),
+            text: text.trim().to_owned(),
+        })
+    }
+
+    /// The value, parsed as a TOML value; a string target takes text that is not TOML as is.
+    fn value_for(&self, target: &Value) -> Result<Value, KeyError> {
+        let parsed = format!("v = {}", self.text)
+            .parse::<Table>()
+            .ok()
+            .and_then(|mut t| t.remove("v"));
+        match (parsed, target) {
+            (Some(v), _) => Ok(v),
+            (None, Value::String(_)) if !self.text.is_empty() => {
+                Ok(Value::String(self.text.clone()))
+            }
+            (None, _) => Err(KeyError(format!(
+                "`{}`: `{}` is not a TOML value (a number, \"string\", true/false, [array] or {{ table }})",
+                self.key, self.text
+            ))),
+        }
+    }
+
+    /// Replaces the addressed value of `root` by this override's value, of the same kind.
+    pub fn apply(&self, root: &mut Table) -> Result<(), KeyError> {
+        let (path, target) = walk(root, &self.key)
+            .map_err(|KeyError(m)| KeyError(format!("`--set {}`: unknown key: {m}", self.key)))?;
+        let value = self.value_for(target)?;
+        let value = match (target, value) {
+            (Value::Float(_), Value::Integer(i)) => Value::Float(i as f64),
+            (Value::Float(_), v @ Value::Float(_))
+            | (Value::Integer(_), v @ Value::Integer(_))
+            | (Value::String(_), v @ Value::String(_))
+            | (Value::Boolean(_), v @ Value::Boolean(_))
+            | (Value::Array(_), v @ Value::Array(_))
+            | (Value::Table(_), v @ Value::Table(_))
+            | (Value::Datetime(_), v @ Value::Datetime(_)) => v,
+            (t, v) => {
+                return Err(KeyError(format!(
+                    "`--set {}`: wrong type: the scene has {} there, got {}",
+                    self.key,
+                    kind(t),
+                    kind(&v)
+                )));
+            }
+        };
+        set(root, &path, value);
+        Ok(())
+    }
+}
+
+#[derive(Deserialize)]
+struct Sources {
+    #[serde(default)]
+    model: Option<Spanned<Value>>,
+    #[serde(default)]
+    initial: Option<Spanned<Value>>,
+}
+
+/// Replaces `model = "file"` and `initial = "file"` of the scene `base` (whose text is
+/// `text`, at `path`) by the files' contents, as tables (the JSON state's numbers as floats,
+/// as the state reader reads them). A file that does not exist is reported at the scene's
+/// line.
+pub fn inline_sources(base: &mut Table, text: &str, path: &Path) -> Result<(), FileError> {
+    let dir = path.parent().unwrap_or(Path::new(""));
+    let spans: Option<Sources> = toml::from_str(text).ok();
+    let line_of_key = |key: &str| {
+        spans.as_ref().and_then(|s| {
+            let v = if key == "model" {
+                s.model.as_ref()
+            } else {
+                s.initial.as_ref()
+            };
+            v.map(|v| line_of(text, v.span().start))
+        })
+    };
+    for key in ["model", "initial"] {
+        let Some(Value::String(p)) = base.get(key) else {
+            continue;
+        };
+        let file = dir.join(p);
+        if !file.is_file() {
+            return Err(missing_source(path, line_of_key(key), key, p, &file));
+        }
+        let source = std::fs::read_to_string(&file).map_err(|source| FileError::Read {
+            path: file.clone(),
+            source,
+        })?;
+        let v = if key == "model" {
+            let t: Table = source
+                .parse()
+                .map_err(|e: toml::de::Error| FileError::Syntax {
+                    line: e.span().map(|s| line_of(&source, s.start)),
+                    message: e.message().trim_end().to_owned(),
+                    path: file.clone(),
+                })?;
+            Value::Table(t)
+        } else {
+            let json: serde_json::Value =
+                serde_json::from_str(&source).map_err(|e| FileError::Syntax {
+                    path: file.clone(),
+                    line: Some(e.line()),
+                    message: e.to_string(),
+                })?;
+            json_to_toml(&json).map_err(|m| FileError::Schema {
+                path: file.clone(),
+                line: None,
+                message: m,
+            })?
+        };
+        base.insert(key.into(), v);
+    }
+    Ok(())
+}
+
+/// The error for a `model` or `initial` file that does not exist, at the scene's line.
+pub fn missing_source(
+    scene: &Path,
+    line: Option<usize>,
+    key: &str,
+    written: &str,
+    resolved: &Path,
+) -> FileError {
+    FileError::Schema {
+        path: scene.to_path_buf(),
+        line,
+        message: format!(
+            "`{key}`: the file \"{written}\" does not exist (looked for {}; a relative path is relative to the scene file's folder)",
+            resolved.display()
+        ),
+    }
+}
+
+/// A JSON value as TOML (numbers as floats, as the state reader reads them).
+pub fn json_to_toml(v: &serde_json::Value) -> Result<Value, String> {
+    use serde_json::Value as J;
+    Ok(match v {
+        J::Null => return Err("`null` has no TOML form".into()),
+        J::Bool(b) => Value::Boolean(*b),
+        J::Number(n) => Value::Float(n.as_f64().ok_or("a number out of range")?),
+        J::String(s) => Value::String(s.clone()),
+        J::Array(a) => Value::Array(a.iter().map(json_to_toml).collect::<Result<_, _>>()?),
+        J::Object(o) => Value::Table(
+            o.iter()
+                .map(|(k, v)| Ok((k.clone(), json_to_toml(v)?)))
+                .collect::<Result<Table, String>>()?,
+        ),
+    })
+}
+
+/// The scene text at `path` with `overrides` applied: its `model` and `initial` files read
+/// in as tables, each override applied in order, written back as TOML. An override that
+/// does not apply is a [`FileError::Schema`] of the scene file naming the key.
+pub fn overridden_text(
+    text: &str,
+    path: &Path,
+    overrides: &[Override],
+) -> Result<String, FileError> {
+    let mut base: Table = text
+        .parse()
+        .map_err(|e: toml::de::Error| FileError::Syntax {
+            path: path.to_path_buf(),
+            line: e.span().map(|s| line_of(text, s.start)),
+            message: e.message().trim_end().to_owned(),
+        })?;
+    inline_sources(&mut base, text, path)?;
+    for o in overrides {
+        o.apply(&mut base)
+            .map_err(|KeyError(m)| FileError::Schema {
+                path: path.to_path_buf(),
+                line: None,
+                message: m,
+            })?;
+    }
+    Ok(toml::to_string(&base).expect("a TOML table serialises"))
+}
+
+/// An error found in the overridden text of the scene at `path`: its line is one of the
+/// rewritten text, so it is dropped, and the message says the overrides were applied.
+pub fn after_overrides(e: FileError, path: &Path, overrides: &[Override]) -> FileError {
+    let note = |m: String| {
+        let list: Vec<String> = overrides
+            .iter()
+            .map(|o| format!("{}={}", o.key, o.text))
+            .collect();
+        format!("{m} (with --set {})", list.join(", --set "))
+    };
+    match e {
+        FileError::Schema {
+            path: p, message, ..
+        } if p == path => FileError::Schema {
+            path: p,
+            line: None,
+            message: note(message),
+        },
+        FileError::Syntax {
+            path: p, message, ..
+        } if p == path => FileError::Syntax {
+            path: p,
+            line: None,
+            message: note(message),
+        },
+        other => other,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn root() -> Table {
+        toml::from_str(
+            "[model]\n[[model.body]]\nmass = 1.0\n[[model.body]]\nmass = 2.5\n[x]\nname = \"a\"\nn = 3\nv = [1.0, 2.0]\non = true\n",
+        )
+        .unwrap()
+    }
+
+    fn set_one(r: &mut Table, s: &str) -> Result<(), KeyError> {
+        Override::parse(s)?.apply(r)
+    }
+
+    #[test]
+    fn overrides_replace_values_of_the_same_kind() {
+        let mut r = root();
+        set_one(&mut r, "model.body.1.mass=4").unwrap();
+        assert_eq!(r["model"]["body"][1]["mass"].as_float(), Some(4.0));
+        set_one(&mut r, "x.v.0 = -0.5").unwrap();
+        assert_eq!(r["x"]["v"][0].as_float(), Some(-0.5));
+        set_one(&mut r, "x.v=[3.0, 4.0, 5.0]").unwrap();
+        assert_eq!(r["x"]["v"].as_array().unwrap().len(), 3);
+        set_one(&mut r, "x.name=\"b c\"").unwrap();
+        assert_eq!(r["x"]["name"].as_str(), Some("b c"));
+        set_one(&mut r, "x.name=rk4").unwrap();
+        assert_eq!(r["x"]["name"].as_str(), Some("rk4"));
+        set_one(&mut r, "x.on=false").unwrap();
+        assert_eq!(r["x"]["on"].as_bool(), Some(false));
+        set_one(&mut r, "x.n=7").unwrap();
+        assert_eq!(r["x"]["n"].as_integer(), Some(7));
+        // An `=` in the value stays in the value.
+        set_one(&mut r, "x.name=a=b").unwrap();
+        assert_eq!(r["x"]["name"].as_str(), Some("a=b"));
+    }
+
+    #[test]
+    fn bad_overrides_name_the_key() {
+        let mut r = root();
+        for (s, why) in [
+            ("model.body.2.mass=1", "out of range"),
+            ("x.w=1", "has no key `w`"),
+            ("y=1", "no `y`"),
+            ("x.name.z=1", "not a table or an array"),
+            (
+                "x.v=1.0",
+                "wrong type: the scene has an array there, got a number",
+            ),
+            (
+                "x.n=1.5",
+                "wrong type: the scene has an integer there, got a number",
+            ),
+            ("x.on=yes", "not a TOML value"),
+            ("model.body.0.mass=\"heavy\"", "wrong type"),
+            ("x.v", "expected KEY=VALUE"),
+            ("=3", "the key is empty"),
+        ] {
+            let e = set_one(&mut r, s).unwrap_err().0;
+            assert!(e.contains(why), "{s}: {e}");
+            if let Some((key, _)) = s.split_once('=')
+                && !key.is_empty()
+            {
+                assert!(e.contains(key.trim()), "{s}: {e} does not name the key");
+            }
+        }
+        // Nothing was changed by the refused overrides.
+        assert_eq!(r, root());
+    }
+}
