@@ -92,7 +92,7 @@ fn corrected_n_satisfies_lagranges_equations_on_random_models() {
         let model = random_model(&mut rng);
         let (q, v, tau) = random_state(&mut rng, 1.0);
         let layout = recognise(&model).unwrap();
-        let state = state_from_engine(&q, &v, &tau);
+        let state = state_from_engine(&q, &v, &tau).unwrap();
         worst = worst.max(compare(&layout.params, &state, Variant::Corrected));
         printed_best = printed_best.min(compare(&layout.params, &state, Variant::Printed));
     }
@@ -113,7 +113,7 @@ fn corrected_n_satisfies_lagranges_equations_on_the_realistic_satellite() {
         for rate_scale in [1.0, 30.0] {
             let (model, q, v, tau) = realistic(d, rate_scale);
             let layout = recognise(&model).unwrap();
-            let state = state_from_engine(&q, &v, &tau);
+            let state = state_from_engine(&q, &v, &tau).unwrap();
             let err = compare(&layout.params, &state, Variant::Corrected);
             assert!(err < 1e-9, "{d:?} x{rate_scale}: {err:e}");
             let printed = compare(&layout.params, &state, Variant::Printed);
