@@ -1201,7 +1201,7 @@ impl System for Simulation {
 
     /// Handles simultaneous events together: every owning effect's `on_event` sees the same
     /// state (the one at the event), then all their requests are carried out at once, with
-    /// one impulse solve for all the impacts (see [`Simulation::apply_requests`]), so that a
+    /// one impulse solve for all the impacts (see `Simulation::apply_requests`), so that a
     /// symmetric pair of impacts stays symmetric to round-off.
     fn on_events(
         &mut self,
