@@ -1,20 +1,10 @@
 //! `satsim accuracy`: the work-precision sweep writes its CSV, SVG diagrams and markdown
 //! table; bad input exits with status 2.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn satsim_in(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_satsim"))
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("run satsim")
-}
-
-fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
+mod common;
+use common::{root, satsim_in};
+use std::path::PathBuf;
+use std::process::Output;
 
 fn temp_dir(test: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("satsim-accuracy-{}-{test}", std::process::id()));

@@ -2,6 +2,8 @@
 //! equal to `satsim run` of the substituted scene, failed runs, resume, scheduler
 //! environments, bad input.
 
+mod common;
+use common::root;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -39,10 +41,6 @@ fn ok(o: &Output) -> String {
         String::from_utf8_lossy(&o.stderr)
     );
     String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
 }
 
 fn temp_dir(test: &str) -> PathBuf {

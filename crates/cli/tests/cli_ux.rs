@@ -1,20 +1,10 @@
 //! Command-line conveniences of issue 12 item 4: `--set KEY=VALUE` on `run` and `campaign`,
 //! `DIR/events.csv`, a missing `model` file reported at the scene's line.
 
+mod common;
+use common::{root, satsim_in};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn satsim_in(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_satsim"))
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("run satsim")
-}
-
-fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
+use std::process::Output;
 
 fn setup(test: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("satsim-cliux-{}-{test}", std::process::id()));

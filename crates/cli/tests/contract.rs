@@ -1,6 +1,8 @@
 //! The command-line contract (`cli-contract.md` sections 3, 5 and 6), driven through the
 //! built `satsim` binary.
 
+mod common;
+use common::root;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -10,10 +12,6 @@ fn satsim(args: &[&str]) -> Output {
         .args(args)
         .output()
         .expect("run satsim")
-}
-
-fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
 }
 
 fn fixtures() -> PathBuf {

@@ -1,21 +1,11 @@
 //! `satsim linearize` and `satsim modes` (contract section 9): the JSON keys, shapes and
 //! normalisation, the `--along` sweep, and exit status 2 on bad input.
 
+mod common;
+use common::{root, satsim_in};
 use serde_json::Value;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn satsim_in(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_satsim"))
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("run satsim")
-}
-
-fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
+use std::path::PathBuf;
+use std::process::Output;
 
 fn setup(test: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("satsim-lin-{}-{test}", std::process::id()));

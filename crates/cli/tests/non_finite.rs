@@ -2,20 +2,10 @@
 //! masses (1e-120 kg) either give finite output or exit 2 with one message naming the file
 //! and the quantity that overflowed, never `null`, never a panic.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
-
-fn satsim_in(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_satsim"))
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("run satsim")
-}
+mod common;
+use common::{root, satsim_in};
+use std::path::PathBuf;
+use std::process::Output;
 
 /// A folder with the example model and a state whose hinge rates are `rate`, and a model
 /// whose masses are scaled by `mass_scale` (`tiny.toml`).

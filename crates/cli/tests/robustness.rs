@@ -3,21 +3,11 @@
 //! standard output and never panics; a scene driven into gimbal lock exits 1 naming the
 //! hinges and the time and keeps its CSV; Ctrl-C stops a run cleanly with exit status 130.
 
+mod common;
+use common::{root, satsim_in};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
+use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
-
-fn satsim_in(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_satsim"))
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("run satsim")
-}
-
-fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
 
 fn setup(test: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("satsim-robust-{}-{test}", std::process::id()));

@@ -1,19 +1,8 @@
 //! `satsim run` (contract section 7): the trajectory CSV, plots, exit statuses.
 
+mod common;
+use common::{root, satsim_in};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn satsim_in(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_satsim"))
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("run satsim")
-}
-
-fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
 
 fn temp_dir(test: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("satsim-run-{}-{test}", std::process::id()));

@@ -8,26 +8,16 @@
 //! skipped with a note otherwise. `SATSIM_CHROMIUM` names the browser's binary if it is not
 //! `chromium` (or `chromium-browser`, `google-chrome`) on the `PATH`.
 
+mod common;
+use common::{root, satsim_in};
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 use satsim_tree::io::parse_model_file;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
+use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 type V3 = Vector3<f64>;
-
-fn satsim_in(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_satsim"))
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("run satsim")
-}
-
-fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
 
 fn temp_dir(test: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("satsim-view-{}-{test}", std::process::id()));
