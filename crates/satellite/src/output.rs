@@ -286,8 +286,14 @@ pub const PLOT_GROUPS: [(&str, &str, &[&str]); 6] = [
     ),
     (
         "energy.svg",
-        "Energy (J)",
-        &["kinetic_energy", "potential_energy", "total_energy"],
+        "Energy (J): the budget T + V − W + D stays flat",
+        &[
+            "kinetic_energy",
+            "potential_energy",
+            "work_actuators",
+            "energy_dissipated",
+            "energy_budget",
+        ],
     ),
     (
         "momentum.svg",

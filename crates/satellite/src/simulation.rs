@@ -25,8 +25,28 @@
 //! unpack `x` → forward kinematics (only when an effect needs it) → each enabled effect adds
 //! hinge torques, body wrenches and its own derivatives → ABA (hybrid ABA when hinges are
 //! locked) → pack `dx`.
+//!
+//! # Energy budget
+//!
+//! `T + V` (kinetic energy of the tree, wheels included, plus the effects'
+//! [`Effect::potential_energy`]) changes by the work of the non-conservative forces. Two more
+//! states (after the effects' own, unless [`SimulationBuilder::energy_budget`] turns them
+//! off) integrate that work, exactly to the integrator's order: `W`, the work of the
+//! actuators (the constant hinge torques, and each effect's [`Power::actuator`]), and `D`, the
+//! energy dissipated (each effect's [`Power::dissipated`]). Each effect's forces are measured
+//! by the simulation, `Σ Δτ_k q̇_k + Σ Δf_i · v_i` over what its `apply` added, and the effect
+//! splits that power in [`Effect::power`] (by default all of it is an actuator's), so a new
+//! effect needs no special case. A jump of `T + V` at an event (a latching or rebounding
+//! impact's impulse) is booked at the event: a loss into `D`, a gain into `W`. Then
+//!
+//! `energy_budget = T + V − W + D`
+//!
+//! is constant up to the integration error. `W` and `D` have zero weight in the error norm
+//! ([`System::error_weights`]), so tracking them leaves every other state as it was.
 
-use crate::effects::{CANONICAL_ORDER, Context, Effect, Forces, OrbitState, Request, Rotor};
+use crate::effects::{
+    CANONICAL_ORDER, Context, Effect, Forces, OrbitState, Power, Request, Rotor,
+};
 use nalgebra::{DMatrix, DVector, Quaternion, UnitQuaternion};
 use satsim_integrate::{
     EventAction, EventDirection, IntegrateError, Options, Output, Stats, System, SystemError,
@@ -135,7 +155,8 @@ impl StateLayout {
 ///     .initial(state)
 ///     .effect(HingeSprings::new(vec![5.0, 5.0]))
 ///     .build()?;
-/// assert_eq!(sim.layout().len, 4 + 2 + 6 + 2); // no state for the springs
+/// // no state for the springs; two for the energy budget
+/// assert_eq!(sim.layout().len, 4 + 2 + 6 + 2 + 2);
 /// # Ok::<(), satsim_satellite::simulation::SimError>(())
 /// ```
 pub struct SimulationBuilder {
@@ -143,6 +164,7 @@ pub struct SimulationBuilder {
     state: Option<State>,
     effects: Vec<Box<dyn Effect>>,
     t0: f64,
+    energy_budget: bool,
 }
 
 impl SimulationBuilder {
@@ -164,6 +186,13 @@ impl SimulationBuilder {
     /// The initial time (default 0).
     pub fn t0(mut self, t0: f64) -> Self {
         self.t0 = t0;
+        self
+    }
+    /// Whether to integrate the energy budget's work states (default true; see
+    /// [the module documentation](self#energy-budget)). Without them the output has no
+    /// `work_actuators`, `energy_dissipated`, `energy_budget` columns.
+    pub fn energy_budget(mut self, on: bool) -> Self {
+        self.energy_budget = on;
         self
     }
     /// Checks the effects' needs, adds rotor bodies, lays out the state and prepares the
@@ -208,6 +237,9 @@ pub struct Simulation {
     log: Vec<(f64, String)>,
     /// The effect (index into `effects`) of each `log` entry.
     log_effect: Vec<usize>,
+    /// The energy budget's states in `x`: `[actuator work, dissipated energy]` (J), or
+    /// empty when not tracked.
+    work: Range<usize>,
 }
 
 fn order_of(name: &str) -> usize {
@@ -261,6 +293,7 @@ impl Simulation {
             state: None,
             effects: Vec::new(),
             t0: 0.0,
+            energy_budget: true,
         }
     }
 
@@ -270,6 +303,7 @@ impl Simulation {
             state,
             mut effects,
             t0,
+            energy_budget,
         } = b;
         let state = state.unwrap_or_else(|| State::rest(&user));
         if state.q.len() != user.nq() || state.v.len() != user.nv() || state.tau.len() != user.nv()
@@ -357,7 +391,9 @@ impl Simulation {
             .iter()
             .map(|e| (e.name().to_owned(), e.n_states()))
             .collect();
-        let layout = StateLayout::new(free, n_user, &own_sizes);
+        let mut layout = StateLayout::new(free, n_user, &own_sizes);
+        let work = layout.len..layout.len + if energy_budget { 2 } else { 0 };
+        layout.len = work.end;
         let own: Vec<Range<usize>> = layout.effects.iter().map(|(_, r)| r.clone()).collect();
         let mut event_start = Vec::with_capacity(effects.len());
         let mut n_events = 0;
@@ -415,6 +451,7 @@ impl Simulation {
             rhs_evals: 0,
             log: Vec::new(),
             log_effect: Vec::new(),
+            work,
         };
         // With an orbit, put the centre of mass at rest in the orbit's frame.
         if free && sim.orbit_effect.is_some() && sim.model.total_mass() > 0.0 {
@@ -437,7 +474,10 @@ impl Simulation {
             Ok::<(), SimError>(())
         })?;
         let reqs = std::mem::take(&mut sim.requests);
+        let before = sim.mechanical_energy(t0, &x0).map_err(SimError::Start)?;
         sim.apply_requests(&reqs, &mut x0)?;
+        sim.book_jump(t0, &mut x0, before)
+            .map_err(SimError::Start)?;
         // Every output quantity of the initial state must be finite (an energy or a momentum
         // can overflow while the state itself is finite).
         let mut row = Vec::new();
@@ -782,6 +822,13 @@ impl Simulation {
             .iter()
             .map(|s| s.to_string()),
         );
+        if !self.work.is_empty() {
+            c.extend(
+                ["work_actuators", "energy_dissipated", "energy_budget"]
+                    .iter()
+                    .map(|s| s.to_string()),
+            );
+        }
         c
     }
 
@@ -807,6 +854,12 @@ impl Simulation {
         row.push(d.kinetic + d.potential);
         row.extend_from_slice(d.h.as_slice());
         row.push(d.h.norm());
+        if !self.work.is_empty() {
+            let (work, lost) = (x[self.work.start], x[self.work.start + 1]);
+            row.push(work);
+            row.push(lost);
+            row.push(d.kinetic + d.potential - work + lost);
+        }
         Ok(())
     }
 
@@ -939,6 +992,9 @@ impl System for Shared<'_, '_> {
     }
     fn project(&mut self, x: &mut [f64]) {
         self.0.borrow_mut().project(x)
+    }
+    fn error_weights(&self, w: &mut [f64]) {
+        self.0.borrow().error_weights(w)
     }
     fn n_events(&self) -> usize {
         self.0.borrow().n_events
@@ -1085,16 +1141,51 @@ impl System for Simulation {
                 .map_err(|e| SystemError::new(e.to_string()))?;
         }
         let kin = self.needs_kinematics;
-        self.with_context(t, x, kin, |ctx, h| {
+        let track = !self.work.is_empty();
+        let nb = self.model.base_nv();
+        let power = self.with_context(t, x, kin, |ctx, h| {
             h.forces.clear();
             h.forces.hinge_torque.copy_from_slice(h.base_tau);
+            // Energy budget: the constant torques are an actuator's; each effect's forces
+            // are measured by the change of the total power it makes.
+            let mut hinges = if track {
+                h.forces.hinge_power(ctx.v, nb)
+            } else {
+                0.0
+            };
+            let (mut wrenches, mut added) = (0.0, 0);
+            let mut power = Power::actuator(hinges);
             for ((e, r), c) in h.effects.iter_mut().zip(h.own).zip(h.calls.iter_mut()) {
                 *c += 1;
                 e.apply(ctx, h.forces, &x[r.clone()], &mut dx[r.clone()])?;
+                if track {
+                    let now = h.forces.hinge_power(ctx.v, nb);
+                    let mut applied = now - hinges;
+                    hinges = now;
+                    if h.forces.wrenches_added() != added {
+                        added = h.forces.wrenches_added();
+                        let now = h.forces.wrench_power(&ctx.data.v);
+                        applied += now - wrenches;
+                        wrenches = now;
+                    }
+                    let p = e.power(ctx, &x[r.clone()], applied);
+                    power.actuator += p.actuator;
+                    power.dissipated += p.dissipated;
+                }
             }
-            Ok::<(), SystemError>(())
+            Ok::<Power, SystemError>(power)
         })?;
-        let nb = self.model.base_nv();
+        if track && !kin && self.forces.has_wrench {
+            // A wrench's power needs the bodies' velocities: an effect wrote one without
+            // asking for kinematics, so they are computed from now on (this evaluation again).
+            self.needs_kinematics = true;
+            self.rhs_evals -= 1;
+            return self.rhs(t, x, dx);
+        }
+        if track {
+            dx[self.work.start] = power.actuator;
+            dx[self.work.start + 1] = power.dissipated;
+        }
         self.tau[nb..].copy_from_slice(&self.forces.hinge_torque);
         let fext = if self.forces.has_wrench {
             Some(self.forces.body_wrench.as_slice())
@@ -1143,6 +1234,13 @@ impl System for Simulation {
             dx[r].copy_from_slice(&ddq.as_slice()[nb + n..nb + n + self.n_rotors]);
         }
         Ok(())
+    }
+
+    /// The energy budget's work states are bookkeeping: they stay out of the error control,
+    /// so that tracking them leaves the steps (and every other state) as they were.
+    fn error_weights(&self, w: &mut [f64]) {
+        w.fill(1.0);
+        w[self.work.clone()].fill(0.0);
     }
 
     fn project(&mut self, x: &mut [f64]) {
@@ -1210,6 +1308,7 @@ impl System for Simulation {
         x: &mut [f64],
     ) -> Result<EventAction, SystemError> {
         self.check_len(x.len(), "on_events")?;
+        let before = self.mechanical_energy(t, x)?;
         if let Err(e) = self.prepare_with(t, x, false, Hold::All) {
             let why = format!("event handling failed: {e}");
             self.log.push((t, why.clone()));
@@ -1249,6 +1348,7 @@ impl System for Simulation {
                 .push(ks.first().map_or(0, |&k| self.event_owner(k)));
             return Err(SystemError::new(why));
         }
+        self.book_jump(t, x, before)?;
         Ok(if changed {
             action.combine(EventAction::Reset)
         } else {
@@ -1268,6 +1368,31 @@ impl Simulation {
                 self.layout.len
             )))
         }
+    }
+
+    /// `T + V` at `(t, x)` (0 when the energy budget is not tracked).
+    fn mechanical_energy(&mut self, t: f64, x: &[f64]) -> Result<f64, SystemError> {
+        if self.work.is_empty() {
+            return Ok(0.0);
+        }
+        let d = self.diagnostics(t, x)?;
+        Ok(d.kinetic + d.potential)
+    }
+
+    /// Books the jump of `T + V` from `before` to its value at `(t, x)` (an impact's
+    /// impulse, an effect's own reset) into the energy budget's states: a loss as
+    /// dissipated, a gain as actuator work.
+    fn book_jump(&mut self, t: f64, x: &mut [f64], before: f64) -> Result<(), SystemError> {
+        if self.work.is_empty() {
+            return Ok(());
+        }
+        let jump = self.mechanical_energy(t, x)? - before;
+        if jump < 0.0 {
+            x[self.work.start + 1] -= jump;
+        } else {
+            x[self.work.start] += jump;
+        }
+        Ok(())
     }
 
     fn event_owner(&self, k: usize) -> usize {

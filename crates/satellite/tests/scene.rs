@@ -50,7 +50,7 @@ fn scene(parts: &[&str]) -> Scene {
 
 #[test]
 fn the_state_holds_only_the_enabled_effects_states() {
-    // [attitude 4, angles 5, ω 3, velocity 3, rates 5] = 20
+    // [attitude 4, angles 5, ω 3, velocity 3, rates 5] = 20, then the effects' states
     let cases: [(&[&str], usize, &[&str]); 6] = [
         (&[], 20, &[]),
         (&[SPRINGS], 20, &["hinge_springs"]),
@@ -74,6 +74,8 @@ fn the_state_holds_only_the_enabled_effects_states() {
         ),
     ];
     for (parts, len, names) in cases {
+        // Plus the energy budget's two work states, whatever the effects.
+        let len = len + 2;
         let sim = scene(parts).simulation().unwrap();
         assert_eq!(sim.layout().len, len, "{names:?}");
         assert_eq!(sim.x0().len(), len);
@@ -88,7 +90,7 @@ fn a_disabled_effect_adds_no_state_and_is_never_visited() {
     assert!(s.effects.gravity_gradient.is_none() && s.effects.hinge_springs.is_none());
     let mut sim = s.simulation().unwrap();
     assert_eq!(sim.effect_names(), ["orbit"]);
-    assert_eq!(sim.layout().len, 26);
+    assert_eq!(sim.layout().len, 26 + 2); // + the energy budget's work states
     let stats = sim
         .run(&s.options, s.duration, &Output::Interval(1.0), |_, _| {
             Ok::<(), ()>(())
@@ -286,5 +288,5 @@ fn an_inline_model_reports_lines_in_the_scene() {
     let ok = text.replace("bsu", "bus");
     let s = parse(&ok).unwrap();
     assert_eq!(s.model.nv(), 7);
-    assert_eq!(s.simulation().unwrap().layout().len, 4 + 1 + 6 + 1);
+    assert_eq!(s.simulation().unwrap().layout().len, 4 + 1 + 6 + 1 + 2);
 }

@@ -28,9 +28,13 @@
 //!
 //! The potential energy counted in the total energy is the same expansion:
 //! `V = Σ k/2 (3 E·I_i E − tr I_i)` (plus `−Σ k m_i/2 (3 (E·ρ_i)² − ρ_i²)` for `full`). In a
-//! rotating orbit it is not conserved on its own.
+//! rotating orbit it is not conserved on its own: the field turns with the local vertical
+//! `E` and its strength `k` changes along an eccentric orbit, so the forces also do the work
+//! `∫ ∂V/∂t dt` (`V`'s rate of change at fixed attitude and shape, with `Ė = (v − (E·v) E)/r`,
+//! `k̇ = −3 k (E·v)/r`), which the energy budget counts as actuator work (see
+//! [`Effect::power`]).
 
-use super::{Context, Effect, Forces, Needs};
+use super::{Context, Effect, Forces, Needs, Power};
 use satsim_integrate::SystemError;
 use satsim_tree::spatial::{Force, Vec3};
 
@@ -49,12 +53,17 @@ pub enum GravityModel {
 pub struct GravityGradient {
     /// The model.
     pub model: GravityModel,
+    /// `∂V/∂t` at the last `apply` (W), computed there from the same per-body terms.
+    field_power: f64,
 }
 
 impl GravityGradient {
     /// The effect with the given model.
     pub fn new(model: GravityModel) -> Self {
-        Self { model }
+        Self {
+            model,
+            field_power: 0.0,
+        }
     }
 }
 
@@ -81,23 +90,42 @@ impl Effect for GravityGradient {
         let r = orbit.r.norm();
         let k = orbit.mu / (r * r * r);
         let e = orbit.r / r;
+        // For the energy budget, ∂V/∂t (see `power`): Ė = (v − (E·v) E)/r, k̇ = −3 k (E·v)/r.
+        let ev = e.dot(&orbit.v);
+        let e_dot = (orbit.v - ev * e) / r;
+        let k_dot = -3.0 * k * ev / r;
+        let mut field_power = 0.0;
         for (i, body) in ctx.model.bodies.iter().enumerate() {
             if body.mass == 0.0 && body.inertia_com.norm() == 0.0 {
                 continue;
             }
             let rot = &ctx.data.rotation[i];
             let eb = rot.tr_mul(&e);
-            let mut ang = 3.0 * k * eb.cross(&(body.inertia_com * eb));
+            let ie = body.inertia_com * eb;
+            let mut ang = 3.0 * k * eb.cross(&ie);
+            field_power += 0.5 * k_dot * (3.0 * eb.dot(&ie) - body.inertia_com.trace())
+                + 3.0 * k * rot.tr_mul(&e_dot).dot(&ie);
             let mut lin = Vec3::zeros();
             if self.model == GravityModel::Full && body.mass > 0.0 {
                 let rho = ctx.data.position[i] + rot * body.com - ctx.com;
-                let f = k * body.mass * (3.0 * e.dot(&rho) * e - rho);
+                let er = e.dot(&rho);
+                let f = k * body.mass * (3.0 * er * e - rho);
                 lin = rot.tr_mul(&f);
                 ang += body.com.cross(&lin);
+                field_power -= 0.5
+                    * body.mass
+                    * (k_dot * (3.0 * er * er - rho.norm_squared())
+                        + 6.0 * k * er * e_dot.dot(&rho));
             }
             forces.add_wrench(i, Force::new(ang, lin));
         }
+        self.field_power = field_power;
         Ok(())
+    }
+    /// `∂V/∂t`: the work rate of the field turning with the orbit (the rest of the forces'
+    /// power is `−dV/dt` at fixed time, counted in the potential), computed by `apply`.
+    fn power(&self, _ctx: &Context, _own: &[f64], _applied: f64) -> Power {
+        Power::actuator(self.field_power)
     }
     fn potential_energy(&self, ctx: &Context, _own: &[f64]) -> f64 {
         let Some(orbit) = ctx.orbit else { return 0.0 };

@@ -1,7 +1,8 @@
 //! Hinge spring-dampers (preprint section 2): `M_ui = −δ_i ψ_i − λ_i (φ_i − φ_ref,i)` on each
-//! of the model's hinges, in file order. Potential energy `Σ ½ λ_i (φ_i − φ_ref,i)²`.
+//! of the model's hinges, in file order. Potential energy `Σ ½ λ_i (φ_i − φ_ref,i)²`; the
+//! dampers dissipate `Σ δ_i ψ_i²` (W).
 
-use super::{Context, Effect, Forces};
+use super::{Context, Effect, Forces, Power};
 use satsim_integrate::SystemError;
 
 /// The spring-damper effect; one entry per model hinge, file order.
@@ -43,6 +44,15 @@ impl Effect for HingeSprings {
                 - self.stiffness[k] * (ctx.angles[k] - self.reference[k]);
         }
         Ok(())
+    }
+    /// The springs are conservative (their work is the potential's change); the dampers
+    /// dissipate `Σ δ_i ψ_i²`.
+    fn power(&self, ctx: &Context, _own: &[f64], _applied: f64) -> Power {
+        Power::dissipated(
+            (0..self.damping.len())
+                .map(|k| self.damping[k] * ctx.rates[k] * ctx.rates[k])
+                .sum(),
+        )
     }
     fn potential_energy(&self, ctx: &Context, _own: &[f64]) -> f64 {
         (0..self.stiffness.len())

@@ -39,7 +39,7 @@ pub use reaction_wheels::{ReactionWheels, Wheel};
 
 use nalgebra::UnitQuaternion;
 use satsim_integrate::{EventAction, EventDirection, SystemError};
-use satsim_tree::spatial::{Force, Mat3, Vec3};
+use satsim_tree::spatial::{Force, Mat3, Motion, Vec3};
 use satsim_tree::{Data, Model};
 
 /// The order in which the simulation visits effects (by [`Effect::name`]); effects not in the
@@ -118,6 +118,17 @@ impl OrbitState {
     pub fn vertical(&self) -> Vec3 {
         self.r.normalize()
     }
+    /// The local orbital frame (LVLH), orbital to inertial: z towards the Earth's centre
+    /// (nadir), y along the negative orbit normal `−r × v`, x = y × z completing the triad
+    /// (along the velocity on a circular orbit). The frame turns at `r × v / r²`.
+    pub fn orbital_frame(&self) -> UnitQuaternion<f64> {
+        let z = -self.r.normalize();
+        let y = -self.r.cross(&self.v).normalize();
+        let x = y.cross(&z);
+        UnitQuaternion::from_rotation_matrix(&nalgebra::Rotation3::from_matrix_unchecked(
+            Mat3::from_columns(&[x, y, z]),
+        ))
+    }
 }
 
 /// Everything an effect may read during an evaluation.
@@ -183,6 +194,9 @@ pub struct Forces {
     pub body_wrench: Vec<Force>,
     /// Whether any effect wrote a body wrench in this evaluation.
     pub has_wrench: bool,
+    /// How many wrenches were added in this evaluation (the energy budget measures the
+    /// wrenches' power only after an effect that added one).
+    wrenches_added: u32,
     /// Motor torque commanded to each wheel (N m, on the rotor about its axis), written by a
     /// controller before the wheels run.
     pub wheel_command: Vec<f64>,
@@ -195,6 +209,7 @@ impl Forces {
             hinge_torque: vec![0.0; n_hinges],
             body_wrench: vec![Force::zero(); n_bodies],
             has_wrench: false,
+            wrenches_added: 0,
             wheel_command: vec![0.0; n_rotors],
         }
     }
@@ -205,12 +220,69 @@ impl Forces {
             self.body_wrench.fill(Force::zero());
             self.has_wrench = false;
         }
+        self.wrenches_added = 0;
         self.wheel_command.fill(0.0);
+    }
+    /// The power (W) of the hinge torques, `Σ_k τ_k q̇_k`, with `v` the tree's velocity
+    /// vector (its first `n_base` entries the root's). The wheel commands are not forces
+    /// and do not count.
+    pub fn hinge_power(&self, v: &[f64], n_base: usize) -> f64 {
+        self.hinge_torque
+            .iter()
+            .zip(&v[n_base..])
+            .map(|(t, r)| t * r)
+            .sum()
+    }
+    /// The power (W) of the body wrenches, `Σ_i f_i · v_i`, with `body_v` the bodies'
+    /// spatial velocities in body coordinates (not read when no wrench was added).
+    pub fn wrench_power(&self, body_v: &[Motion]) -> f64 {
+        if !self.has_wrench {
+            return 0.0;
+        }
+        self.body_wrench
+            .iter()
+            .zip(body_v)
+            .map(|(f, m)| m.dot(f))
+            .sum()
+    }
+    /// How many wrenches [`Forces::add_wrench`] added since the last [`Forces::clear`].
+    pub fn wrenches_added(&self) -> u32 {
+        self.wrenches_added
     }
     /// Adds a wrench (body coordinates, about the body origin) on body `i`.
     pub fn add_wrench(&mut self, i: usize, f: Force) {
         self.body_wrench[i] += f;
         self.has_wrench = true;
+        self.wrenches_added = self.wrenches_added.wrapping_add(1);
+    }
+}
+
+/// The non-conservative power of an effect's forces at one evaluation (W), split by where
+/// the energy goes: see [`Effect::power`] and the energy budget in
+/// [`crate::simulation`].
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Power {
+    /// Power that actuators (motors, controllers) and other non-conservative driving forces
+    /// (a field that moves with the orbit) feed into the system; negative when they brake it.
+    pub actuator: f64,
+    /// Power lost to dissipation (dampers, friction); `>= 0` for a passive element.
+    pub dissipated: f64,
+}
+
+impl Power {
+    /// All of `p` is an actuator's.
+    pub fn actuator(p: f64) -> Self {
+        Self {
+            actuator: p,
+            dissipated: 0.0,
+        }
+    }
+    /// All of `p` is dissipated.
+    pub fn dissipated(p: f64) -> Self {
+        Self {
+            actuator: 0.0,
+            dissipated: p,
+        }
     }
 }
 
@@ -276,6 +348,17 @@ pub trait Effect: Send {
     /// Its potential energy (J), counted in the total energy.
     fn potential_energy(&self, _ctx: &Context, _own: &[f64]) -> f64 {
         0.0
+    }
+    /// The non-conservative power of the forces it added in its last [`Effect::apply`] (on
+    /// the same state), for the energy budget. `applied` is the power of those forces, which
+    /// the simulation measures: `Σ_k Δτ_k q̇_k + Σ_i Δf_i · v_i` over the hinge torques and
+    /// body wrenches it added. An effect with a [`Effect::potential_energy`] must leave out
+    /// the conservative part, `−dV/dt` at fixed time (it is counted in the potential); what
+    /// remains it splits into actuator work and dissipation. The default counts all of
+    /// `applied` as an actuator's: right for an effect that has neither a potential nor
+    /// losses (a motor, a controller).
+    fn power(&self, _ctx: &Context, _own: &[f64], applied: f64) -> Power {
+        Power::actuator(applied)
     }
     /// Extra output columns.
     fn output_columns(&self) -> Vec<String> {

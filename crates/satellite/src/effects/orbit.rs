@@ -6,9 +6,15 @@
 //! of mass (free-falling, not rotating); the orbit effect carries that frame's motion. To the
 //! first order in size/r that the gravity-gradient models keep, the two motions decouple: the
 //! tidal forces sum to zero, so the centre of mass follows eq. (17) or (18) exactly.
+//!
+//! Output: the orbit's radius and position, and the bus' `roll`, `pitch`, `yaw` (rad)
+//! relative to the local orbital frame (LVLH, [`OrbitState::orbital_frame`]: z to nadir,
+//! y along the negative orbit normal, x completing the triad, along-track on a circular
+//! orbit), sequence z-y'-x'' (yaw, then pitch, then roll).
 
 use super::{Context, Effect, Forces, OrbitState};
 use satsim_integrate::SystemError;
+use nalgebra::UnitQuaternion;
 use satsim_tree::spatial::Vec3;
 
 /// Earth's gravitational parameter μ (m³/s², EGM96/WGS-84).
@@ -129,6 +135,23 @@ impl Orbit {
         }
         a
     }
+    /// Roll, pitch and yaw (rad) of `attitude` (bus to inertial) relative to the local
+    /// orbital frame of the orbit state `own` (see [`Effect::output_columns`]).
+    ///
+    /// ```
+    /// use nalgebra::UnitQuaternion;
+    /// use satsim_satellite::effects::orbit::{Elements, Orbit, OrbitModel};
+    /// let orbit = Orbit::from_elements(OrbitModel::Kepler, &Elements::circular(7.0e6, 0.3));
+    /// let own = [orbit.r0.x, orbit.r0.y, orbit.r0.z, orbit.v0.x, orbit.v0.y, orbit.v0.z];
+    /// let lvlh = orbit.state(&own).orbital_frame();
+    /// let bus = lvlh * UnitQuaternion::from_euler_angles(0.1, -0.2, 0.3);
+    /// let (roll, pitch, yaw) = orbit.attitude_in_orbit(bus, &own);
+    /// assert!((roll - 0.1).abs() < 1e-12 && (pitch + 0.2).abs() < 1e-12 && (yaw - 0.3).abs() < 1e-12);
+    /// ```
+    pub fn attitude_in_orbit(&self, attitude: UnitQuaternion<f64>, own: &[f64]) -> (f64, f64, f64) {
+        // nalgebra's Euler angles are those of Rz(yaw) Ry(pitch) Rx(roll): z-y'-x''.
+        (self.state(own).orbital_frame().inverse() * attitude).euler_angles()
+    }
     /// The state of the orbit held in `own` (`[r, v]`).
     pub fn state(&self, own: &[f64]) -> OrbitState {
         OrbitState {
@@ -177,16 +200,20 @@ impl Effect for Orbit {
         own_dot[3..].copy_from_slice(a.as_slice());
         Ok(())
     }
+    /// The radius, the position, and the bus' roll, pitch and yaw (rad) relative to the
+    /// local orbital frame ([`OrbitState::orbital_frame`]), sequence z-y'-x'': the bus is the
+    /// orbital frame turned by yaw about its z, then pitch about the new y, then roll about
+    /// the newest x.
     fn output_columns(&self) -> Vec<String> {
-        vec![
-            "orbit_radius".into(),
-            "orbit_r_x".into(),
-            "orbit_r_y".into(),
-            "orbit_r_z".into(),
-        ]
+        ["orbit_radius", "orbit_r_x", "orbit_r_y", "orbit_r_z", "roll", "pitch", "yaw"]
+            .iter()
+            .map(|s| s.to_string())
+            .collect()
     }
-    fn output(&self, _ctx: &Context, own: &[f64], row: &mut Vec<f64>) {
+    fn output(&self, ctx: &Context, own: &[f64], row: &mut Vec<f64>) {
         row.push(Vec3::new(own[0], own[1], own[2]).norm());
         row.extend_from_slice(&own[..3]);
+        let (roll, pitch, yaw) = self.attitude_in_orbit(ctx.attitude, own);
+        row.extend_from_slice(&[roll, pitch, yaw]);
     }
 }

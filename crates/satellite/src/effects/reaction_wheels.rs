@@ -34,7 +34,7 @@
 //! Limits: the command is clamped to `±max_torque`; a wheel at or beyond `max_speed` gets
 //! no torque that would speed it up further.
 
-use super::{Context, Effect, Forces, Needs, Request, Rotor};
+use super::{Context, Effect, Forces, Needs, Power, Request, Rotor};
 use satsim_integrate::{EventAction, EventDirection, SystemError};
 use satsim_tree::spatial::Vec3;
 
@@ -221,6 +221,19 @@ impl Effect for ReactionWheels {
             }
         }
         Ok(())
+    }
+    /// The motors' power `τ Ω` is an actuator's, the friction's `f Ω` is dissipated (a
+    /// stuck wheel gets neither).
+    fn power(&self, ctx: &Context, own: &[f64], _applied: f64) -> Power {
+        let mut p = Power::default();
+        for (j, w) in self.wheels.iter().enumerate() {
+            if !ctx.locked[ctx.rotor_hinge(j)] {
+                let omega = own[j];
+                p.actuator += self.motor[j] * omega;
+                p.dissipated += w.friction(omega, self.dir[j]) * omega;
+            }
+        }
+        p
     }
     fn output_columns(&self) -> Vec<String> {
         self.wheels
