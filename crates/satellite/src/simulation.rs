@@ -44,9 +44,7 @@
 //! is constant up to the integration error. `W` and `D` have zero weight in the error norm
 //! ([`System::error_weights`]), so tracking them leaves every other state as it was.
 
-use crate::effects::{
-    CANONICAL_ORDER, Context, Effect, Forces, OrbitState, Power, Request, Rotor,
-};
+use crate::effects::{CANONICAL_ORDER, Context, Effect, Forces, OrbitState, Power, Request, Rotor};
 use nalgebra::{DMatrix, DVector, Quaternion, UnitQuaternion};
 use satsim_integrate::{
     EventAction, EventDirection, IntegrateError, Options, Output, Stats, System, SystemError,

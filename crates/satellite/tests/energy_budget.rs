@@ -21,8 +21,8 @@ use satsim_integrate::{EventAction, EventDirection, Method, Options, Output, Sys
 use satsim_satellite::effects::orbit::{Elements, R_EARTH};
 use satsim_satellite::effects::{
     AttitudeControl, Context, Effect, Forces, GravityGradient, GravityModel, HingeControl,
-    HingeProfile, HingeSprings, HingeStop, HingeStops, Needs, Orbit, OrbitModel, OrbitState,
-    Power, ReactionWheels, Request, Rotor, StopAction, Target, Wheel,
+    HingeProfile, HingeSprings, HingeStop, HingeStops, Needs, Orbit, OrbitModel, OrbitState, Power,
+    ReactionWheels, Request, Rotor, StopAction, Target, Wheel,
 };
 use satsim_satellite::scene::Scene;
 use satsim_satellite::simulation::Simulation;
@@ -95,8 +95,14 @@ fn measure(sim: &mut Simulation, options: &Options, t_end: f64) -> Budget {
 }
 
 fn assert_flat(what: &str, b: &Budget) {
-    println!("{what}: drift {:.3e} J of {:.3e} J exchanged (ratio {:.2e}), W {:.4e} J, D {:.4e} J",
-        b.drift, b.scale, b.ratio(), b.work, b.dissipated);
+    println!(
+        "{what}: drift {:.3e} J of {:.3e} J exchanged (ratio {:.2e}), W {:.4e} J, D {:.4e} J",
+        b.drift,
+        b.scale,
+        b.ratio(),
+        b.work,
+        b.dissipated
+    );
     assert!(b.scale > 0.0, "{what}: nothing exchanged");
     assert!(b.ratio() < RATIO, "{what}: the budget drifts: {b:?}");
 }
@@ -373,7 +379,12 @@ fn attitude_control_works_through_the_wheels() {
                 .collect(),
         );
         wheels.commanded = true;
-        let control = AttitudeControl::new(Target::Orbital(UnitQuaternion::identity()), 5.0, 50.0, &axes);
+        let control = AttitudeControl::new(
+            Target::Orbital(UnitQuaternion::identity()),
+            5.0,
+            50.0,
+            &axes,
+        );
         vec![
             Box::new(orbit()) as Box<dyn Effect>,
             Box::new(GravityGradient::new(GravityModel::Full)),
@@ -481,7 +492,10 @@ fn impacts_lose_energy_at_the_event() {
         .count();
     assert!(impacts >= 2, "{:?}", sim.event_log());
     // Left out, the impacts' losses would be the drift: far beyond the bound.
-    assert!(b.dissipated > 1e3 * RATIO * b.scale && b.work == 0.0, "{b:?}");
+    assert!(
+        b.dissipated > 1e3 * RATIO * b.scale && b.work == 0.0,
+        "{b:?}"
+    );
 }
 
 #[test]
@@ -521,7 +535,10 @@ impl Effect for Thruster {
         _own: &[f64],
         _own_dot: &mut [f64],
     ) -> Result<(), SystemError> {
-        forces.add_wrench(self.body, Force::new(self.at.cross(&self.force), self.force));
+        forces.add_wrench(
+            self.body,
+            Force::new(self.at.cross(&self.force), self.force),
+        );
         Ok(())
     }
 }

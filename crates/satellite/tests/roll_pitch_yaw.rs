@@ -64,10 +64,15 @@ inertia = [[50.0, 0.0, 0.0], [0.0, 50.0, 0.0], [0.0, 0.0, 50.0]]
         ..Options::default()
     };
     let mut rows = Vec::new();
-    sim.run(&options, period, &Output::Interval(period / 50.0), |_, row| {
-        rows.push([row[r], row[p], row[y]]);
-        Ok::<(), ()>(())
-    })
+    sim.run(
+        &options,
+        period,
+        &Output::Interval(period / 50.0),
+        |_, row| {
+            rows.push([row[r], row[p], row[y]]);
+            Ok::<(), ()>(())
+        },
+    )
     .expect("runs");
     assert_eq!(rows.len(), 51);
     rows
@@ -103,15 +108,22 @@ fn the_libration_scene_starts_at_its_pitch_offset_and_librates_in_pitch() {
     let at = |n: &str| cols.iter().position(|c| c == n).expect(n);
     let (r, p, y) = (at("roll"), at("pitch"), at("yaw"));
     let mut rows = Vec::new();
-    sim.run(&scene.options, scene.duration, &Output::Interval(scene.every), |_, row| {
-        rows.push([row[r], row[p], row[y]]);
-        Ok::<(), ()>(())
-    })
+    sim.run(
+        &scene.options,
+        scene.duration,
+        &Output::Interval(scene.every),
+        |_, row| {
+            rows.push([row[r], row[p], row[y]]);
+            Ok::<(), ()>(())
+        },
+    )
     .expect("runs");
     assert!((rows[0][1] - 0.1).abs() < 1e-9, "{:?}", rows[0]);
     let (lo, hi) = rows
         .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), x| (l.min(x[1]), h.max(x[1])));
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), x| {
+            (l.min(x[1]), h.max(x[1]))
+        });
     // It swings to about −0.1 and back (energy is conserved in the rotating frame).
     assert!(lo < -0.09 && hi <= 0.1 + 1e-6, "pitch within [{lo}, {hi}]");
     for x in &rows {

@@ -13,8 +13,8 @@
 //! orbit), sequence z-y'-x'' (yaw, then pitch, then roll).
 
 use super::{Context, Effect, Forces, OrbitState};
-use satsim_integrate::SystemError;
 use nalgebra::UnitQuaternion;
+use satsim_integrate::SystemError;
 use satsim_tree::spatial::Vec3;
 
 /// Earth's gravitational parameter μ (m³/s², EGM96/WGS-84).
@@ -205,10 +205,18 @@ impl Effect for Orbit {
     /// orbital frame turned by yaw about its z, then pitch about the new y, then roll about
     /// the newest x.
     fn output_columns(&self) -> Vec<String> {
-        ["orbit_radius", "orbit_r_x", "orbit_r_y", "orbit_r_z", "roll", "pitch", "yaw"]
-            .iter()
-            .map(|s| s.to_string())
-            .collect()
+        [
+            "orbit_radius",
+            "orbit_r_x",
+            "orbit_r_y",
+            "orbit_r_z",
+            "roll",
+            "pitch",
+            "yaw",
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .collect()
     }
     fn output(&self, ctx: &Context, own: &[f64], row: &mut Vec<f64>) {
         row.push(Vec3::new(own[0], own[1], own[2]).norm());
