@@ -88,12 +88,13 @@ pub fn write_events<'a>(
 
 // Plots. Every plot of satsim (a run's, `satsim plot`'s, a campaign's envelopes and
 // histograms, the accuracy sweep's log-log diagram, the modes sweep) is drawn by the one
-// in-house SVG writer [`Figure`]. Why not `plotters` (SVG backend): on the six plots of a
-// 10⁶-row run, both drawing the same decimated points, plotters rounds every point to a whole
-// pixel (the M4 decimation's extremes move by up to half a pixel, and the decimation tests'
-// sub-pixel checks cannot hold), writes one `<text>` element per glyph run with inline
-// styles, and brings 6 more crates; the in-house writer is about 150 lines, writes smaller
-// files and is as fast (numbers in docs/src/reference/cli.md, "Plots").
+// in-house SVG writer [`Figure`]. Measured against `plotters` (SVG backend) on the five plots
+// of a 10⁶-row, 15-column run, both drawing the same decimated points: plotters writes them in
+// 16 ms and 426 kB, this writer in 20 ms and 564 kB, while the decimation itself takes 470 ms;
+// plotters rounds every point to a whole pixel (so the decimation's exact extremes, which the
+// tests locate to 0.02 px, move by up to half a pixel) and adds three crates (plotters,
+// plotters-backend, plotters-svg). Either is fine for a user; the in-house writer is kept for
+// exact coordinates, no dependency, and one look for log axes, bands and histograms too.
 
 /// One curve of a plot.
 pub struct Series<'a> {
