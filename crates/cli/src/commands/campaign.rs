@@ -63,8 +63,8 @@ pub enum Merge {
 /// The flags of `satsim campaign merge`.
 #[derive(Debug, clap::Args)]
 pub struct MergeArgs {
-    /// The shards' output folders
-    #[arg(value_name = "DIR", required = true)]
+    /// The shards' output folders (each written by `satsim campaign ... --shard I/N`)
+    #[arg(value_name = "SHARD_DIR", required = true)]
     pub dirs: Vec<PathBuf>,
     /// The merged folder
     #[arg(long, value_name = "DIR")]
