@@ -7,6 +7,10 @@
 //! 1 for a run that fails part-way and 130 for Ctrl-C); a panic (a bug) is caught and reported
 //! the same way.
 
+// The flags' doc comments are their `--help` text, written for a terminal (`out/<scene stem>`),
+// not for HTML.
+#![allow(rustdoc::invalid_html_tags)]
+
 mod commands;
 
 use clap::Parser;
