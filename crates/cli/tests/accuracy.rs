@@ -137,6 +137,9 @@ fn bad_input_exits_with_status_2() {
         &satsim_in(&dir, &["accuracy", "short.toml", "--methods", "euler"]),
         &["unknown integration method `euler`"],
     );
-    fails(&satsim_in(&dir, &["accuracy"]), &["missing the scene file"]);
+    fails(
+        &satsim_in(&dir, &["accuracy"]),
+        &["required arguments were not provided", "<SCENE.toml>"],
+    );
     assert!(!dir.join("out").exists(), "nothing written on bad input");
 }

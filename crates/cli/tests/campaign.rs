@@ -576,7 +576,7 @@ fn bad_campaign_input_exits_2_naming_the_key() {
             vec!["campaign", "scene.toml", "--threads", "0"],
             "--threads",
         ),
-        (vec!["campaign", "merge", "--out", "m"], "folders"),
+        (vec!["campaign", "merge", "--out", "m"], "<SHARD_DIR>..."),
         (
             vec!["campaign", "merge", "nowhere", "--out", "m"],
             "nowhere",

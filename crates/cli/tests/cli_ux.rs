@@ -323,3 +323,297 @@ fn a_nearly_unit_attitude_is_normalised_with_a_warning() {
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("within 1e-3"), "{}", stderr(&o));
 }
+
+/// `--help` for every command lists each of its flags (with a value name and, where there is
+/// one, the default); `satsim help COMMAND` says the same; `--version` the version.
+#[test]
+fn every_command_has_a_complete_help() {
+    let dir = setup("help");
+    for (command, needles) in [
+        (
+            "dynamics",
+            &["--model <MODEL.toml>", "--state <STATE.json>"][..],
+        ),
+        (
+            "bench",
+            &[
+                "--model <MODEL.toml>",
+                "--state <STATE.json>",
+                "--calls <N>",
+                "about 1.5 s",
+            ][..],
+        ),
+        (
+            "preprint",
+            &["--model <MODEL.toml>", "--state <STATE.json>"][..],
+        ),
+        (
+            "run",
+            &[
+                "<SCENE.toml>",
+                "--out <DIR>",
+                "[default: out/<scene stem>]",
+                "--set <KEY=VALUE>",
+            ][..],
+        ),
+        (
+            "accuracy",
+            &[
+                "<SCENE.toml>",
+                "--out <DIR>",
+                "--repeats <N>",
+                "--methods <LIST>",
+                "--quick",
+            ][..],
+        ),
+        (
+            "campaign",
+            &[
+                "<SCENE.toml>",
+                "--threads <T>",
+                "[default: all cores]",
+                "--shard <I/N>",
+                "--shards <N>",
+                "--resume",
+                "--set <KEY=VALUE>",
+                "merge",
+            ][..],
+        ),
+        ("linearize", &["<SCENE.toml>"][..]),
+        (
+            "modes",
+            &[
+                "<SCENE.toml>",
+                "--along <HINGE=FROM:TO[:N][,...]>",
+                "--plot <FILE.svg>",
+            ][..],
+        ),
+        (
+            "view",
+            &["<DIR>", "--out <FILE>", "[default: DIR/view.html]"][..],
+        ),
+        (
+            "plot",
+            &[
+                "<CSV>",
+                "--columns <A,B,...>",
+                "--from <T>",
+                "--to <T>",
+                "-o, --out <OUT.svg>",
+            ][..],
+        ),
+        ("completions", &["<SHELL>", "bash", "zsh", "fish"][..]),
+    ] {
+        let o = satsim_in(&dir, &[command, "--help"]);
+        assert!(o.status.success(), "{command}: {}", stderr(&o));
+        let out = String::from_utf8_lossy(&o.stdout);
+        assert!(out.contains(&format!("Usage: satsim {command}")), "{out}");
+        for n in needles {
+            assert!(
+                out.contains(n),
+                "`satsim {command} --help` lacks `{n}`:\n{out}"
+            );
+        }
+        let o = satsim_in(&dir, &["help", command]);
+        assert!(o.status.success());
+        assert_eq!(String::from_utf8_lossy(&o.stdout), out, "{command}");
+    }
+    let o = satsim_in(&dir, &["campaign", "merge", "--help"]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        out.contains("Usage: satsim campaign merge") && out.contains("--out <DIR>"),
+        "{out}"
+    );
+    let o = satsim_in(&dir, &["--help"]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    for c in [
+        "plot",
+        "completions",
+        "campaign",
+        "modes",
+        "view",
+        "accuracy",
+    ] {
+        assert!(out.contains(c), "{out}");
+    }
+    let o = satsim_in(&dir, &["--version"]);
+    assert_eq!(
+        String::from_utf8_lossy(&o.stdout),
+        format!("satsim {}\n", env!("CARGO_PKG_VERSION"))
+    );
+}
+
+#[test]
+fn completions_cover_every_command() {
+    let dir = setup("completions");
+    for shell in ["bash", "zsh", "fish", "elvish", "powershell"] {
+        let o = satsim_in(&dir, &["completions", shell]);
+        assert!(o.status.success(), "{shell}: {}", stderr(&o));
+        let script = String::from_utf8_lossy(&o.stdout);
+        for c in [
+            "dynamics", "campaign", "merge", "plot",
+            // Flags by name: fish writes `-l columns`, the others `--columns`.
+            "columns", "set", "along",
+        ] {
+            assert!(script.contains(c), "{shell} completions lack `{c}`");
+        }
+    }
+    let o = satsim_in(&dir, &["completions", "tcsh"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("invalid value 'tcsh'"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+/// The polylines of an SVG written by satsim: each a list of pixel points.
+fn polylines(svg: &str) -> Vec<Vec<(f64, f64)>> {
+    svg.lines()
+        .filter(|l| l.starts_with("<polyline"))
+        .map(|l| {
+            l.split("points=\"")
+                .nth(1)
+                .unwrap()
+                .trim_end_matches("\"/>")
+                .split(' ')
+                .map(|p| {
+                    let (a, b) = p.split_once(',').unwrap();
+                    (a.parse().unwrap(), b.parse().unwrap())
+                })
+                .collect()
+        })
+        .collect()
+}
+
+#[test]
+fn plot_redraws_chosen_columns_of_a_run() {
+    let dir = setup("plot");
+    let o = satsim_in(&dir, &["run", "scene.toml", "--set", "duration=20.0"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let csv = "out/scene/trajectory.csv";
+    let o = satsim_in(&dir, &["plot", csv, "--columns", "angle_*,kinetic_energy"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        out.contains("out/scene/trajectory-plot.svg") && out.contains("21 rows"),
+        "{out}"
+    );
+    let svg = std::fs::read_to_string(dir.join("out/scene/trajectory-plot.svg")).unwrap();
+    let header = std::fs::read_to_string(dir.join(csv)).unwrap();
+    let angles = header
+        .lines()
+        .next()
+        .unwrap()
+        .split(',')
+        .filter(|c| c.starts_with("angle_"))
+        .count();
+    assert_eq!(angles, 5);
+    // One curve per angle plus the energy, each through every one of the 21 rows, spanning
+    // the plot from its left edge (80 px) to its right (570 px).
+    let lines = polylines(&svg);
+    assert_eq!(lines.len(), angles + 1, "{svg}");
+    for l in &lines {
+        assert_eq!(l.len(), 21);
+        assert!(
+            (l[0].0 - 80.0).abs() < 0.01 && (l[20].0 - 570.0).abs() < 0.01,
+            "{l:?}"
+        );
+    }
+    assert!(svg.contains(">kinetic_energy</text>"), "{svg}");
+
+    // A window: 5 s to 10 s holds rows 5..=10.
+    let o = satsim_in(
+        &dir,
+        &[
+            "plot",
+            csv,
+            "--columns",
+            "h_x",
+            "--from",
+            "5",
+            "--to",
+            "10",
+            "-o",
+            "h.svg",
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("6 rows, t = 5 .. 10 s"));
+    let lines = polylines(&std::fs::read_to_string(dir.join("h.svg")).unwrap());
+    assert_eq!(lines.len(), 1);
+    assert_eq!(lines[0].len(), 6);
+}
+
+#[test]
+fn plot_refuses_bad_input_naming_it() {
+    let dir = setup("plotbad");
+    std::fs::write(dir.join("a.csv"), "t,x,y\n0,1,2\n1,2,3\n2,3,oops\n").unwrap();
+    std::fs::write(dir.join("empty.csv"), "").unwrap();
+    std::fs::write(dir.join("no_t.csv"), "time,x\n0,1\n").unwrap();
+    let fails = |args: &[&str], needles: &[&str]| {
+        let o = satsim_in(&dir, args);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(o.stdout.is_empty());
+        for n in needles {
+            assert!(err.contains(n), "{args:?}: `{err}` lacks `{n}`");
+        }
+    };
+    // A missing column lists the available ones.
+    fails(
+        &["plot", "a.csv", "--columns", "x,z"],
+        &["a.csv:1", "no column `z`", "the columns are: t, x, y"],
+    );
+    fails(
+        &[
+            "plot",
+            "a.csv",
+            "--columns",
+            "x",
+            "--from",
+            "2",
+            "--to",
+            "1",
+        ],
+        &["--from 2", "--to 1"],
+    );
+    fails(
+        &["plot", "a.csv", "--columns", "x", "--from", "5"],
+        &["a.csv", "no rows between t = 5"],
+    );
+    fails(
+        &["plot", "a.csv", "--columns", "x", "--to", "abc"],
+        &["'--to <T>'"],
+    );
+    fails(
+        &["plot", "a.csv", "--columns", "y"],
+        &["a.csv:4", "`oops`", "column `y`"],
+    );
+    fails(&["plot", "missing.csv", "--columns", "x"], &["missing.csv"]);
+    fails(
+        &["plot", "empty.csv", "--columns", "x"],
+        &["empty.csv", "empty"],
+    );
+    fails(
+        &["plot", "no_t.csv", "--columns", "x"],
+        &["no_t.csv:1", "no time column `t`"],
+    );
+    fails(&["plot", "a.csv"], &["--columns <A,B,...>"]);
+    // Negative times are times, not flags.
+    let o = satsim_in(
+        &dir,
+        &[
+            "plot",
+            "a.csv",
+            "--columns",
+            "x",
+            "--from",
+            "-1",
+            "--to",
+            "1.5",
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("2 rows"));
+}

@@ -220,25 +220,44 @@ fn fails(o: &Output, needles: &[&str]) {
 
 #[test]
 fn usage_errors() {
-    // `satsim` alone runs the default scene (tests/run.rs).
+    // `satsim` alone runs the default scene (tests/run.rs). The messages are clap's: the
+    // problem naming the flag or command, then the command's usage.
     fails(
         &satsim(&["dynamics", "--state", "state.json"]),
-        &["missing `--model`", "usage: satsim dynamics"],
+        &[
+            "required arguments were not provided",
+            "--model <MODEL.toml>",
+            "Usage: satsim dynamics",
+        ],
     );
-    fails(&satsim(&["dynamics", "--model"]), &["needs a value"]);
+    fails(
+        &satsim(&["dynamics", "--model"]),
+        &["a value is required for '--model <MODEL.toml>'"],
+    );
     fails(
         &satsim(&["dynamics", "--modle", "x"]),
-        &["unknown option `--modle`"],
+        &["unexpected argument '--modle'", "'--model'"],
     );
-    fails(&satsim(&["frobnicate"]), &["unknown command `frobnicate`"]);
-    fails(&satsim(&["bench"]), &["missing `--model`"]);
+    fails(
+        &satsim(&["frobnicate"]),
+        &["unrecognized subcommand 'frobnicate'"],
+    );
+    fails(&satsim(&["bench"]), &["--model <MODEL.toml>"]);
+    fails(
+        &satsim(&["bench", "--model", "m.toml", "--calls", "0"]),
+        &["'--calls <N>'", "must be a whole number >= 1"],
+    );
     fails(
         &satsim(&["preprint"]),
-        &["missing `--model`", "usage: satsim preprint"],
+        &["--model <MODEL.toml>", "Usage: satsim preprint"],
     );
     fails(
         &satsim(&["accuracy"]),
-        &["missing the scene file", "usage: satsim accuracy"],
+        &["<SCENE.toml>", "Usage: satsim accuracy"],
+    );
+    fails(
+        &satsim(&["run", "a.toml", "--out", "x", "--out", "y"]),
+        &["'--out <DIR>' cannot be used multiple times"],
     );
 }
 

@@ -179,7 +179,10 @@ fn bad_input_exits_2_naming_the_file() {
             &satsim_in(&dir, &[cmd, "needs.toml"]),
             &["needs.toml", "orbit"],
         );
-        fails(&satsim_in(&dir, &[cmd]), &["missing the scene file"]);
+        fails(
+            &satsim_in(&dir, &[cmd]),
+            &["required arguments were not provided", "<SCENE.toml>"],
+        );
     }
     // A gimbal lock (h2 = 90 degrees through massless links): a clear error, no numbers.
     std::fs::write(

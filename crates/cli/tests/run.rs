@@ -136,7 +136,7 @@ fn bad_scenes_exit_2_with_the_line() {
     assert_eq!(o.status.code(), Some(2));
     let o = satsim_in(&dir, &["run"]);
     assert_eq!(o.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&o.stderr).contains("missing the scene file"));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("<SCENE.toml>"));
 }
 
 #[test]

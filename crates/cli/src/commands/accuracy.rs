@@ -4,91 +4,78 @@
 //! `DIR/accuracy_rhs.svg` (against right-hand-side evaluations) and `DIR/accuracy.md`, and
 //! prints a short summary. `DIR` defaults to `out/<scene stem>-accuracy`.
 
-use super::{CliError, Options, Output, usage_line};
+use super::{CliError, Output, at_least_one, stem};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use satsim_integrate::Method;
 use satsim_satellite::accuracy::{Cost, Sweep, fmt_seconds, method_label, sweep};
 use satsim_satellite::scene::Scene;
-use std::ffi::OsString;
 use std::fmt::Write as _;
-use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 
-const NAME: &str = "accuracy";
-
-fn usage(message: impl Into<String>) -> CliError {
-    CliError::Usage {
-        command: Some(NAME),
-        message: message.into(),
-    }
+/// The flags of `satsim accuracy`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// The scene file (TOML, cli-contract section 7)
+    #[arg(value_name = "SCENE.toml")]
+    pub scene: PathBuf,
+    /// Output folder [default: out/<scene stem>-accuracy]
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+    /// Timed repetitions of each setting (the fastest counts) [default: 3, 1 with --quick]
+    #[arg(long, value_name = "N", value_parser = at_least_one)]
+    pub repeats: Option<usize>,
+    /// The integrators to sweep, comma-separated: rk4, dp54, dop853, radau5 [default: all]
+    #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = parse_method)]
+    pub methods: Vec<Method>,
+    /// A short sweep (fewer settings): a quick look rather than the full figure
+    #[arg(long)]
+    pub quick: bool,
 }
 
-/// Runs `satsim accuracy ARGS`.
-pub fn run(args: &[OsString]) -> Result<Output, CliError> {
-    // `--quick` is a flag (no value); the shared parser only knows value options.
-    let quick = args.iter().any(|a| a == "--quick");
-    let rest: Vec<OsString> = args.iter().filter(|a| *a != "--quick").cloned().collect();
-    let opts = Options::parse(NAME, &rest, &["out", "repeats", "methods"], 1)?;
-    if opts.help {
-        return Ok(format!("usage: {}\n", usage_line(Some(NAME))));
-    }
-    let scene_path = opts
-        .positional
-        .first()
-        .map(PathBuf::from)
-        .ok_or_else(|| usage("missing the scene file"))?;
-    let scene = Scene::read(&scene_path)?;
-    let mut plan = if quick {
+fn parse_method(s: &str) -> Result<Method, String> {
+    s.parse::<Method>().map_err(|e| e.to_string())
+}
+
+/// Runs `satsim accuracy`.
+pub fn run(args: &Args) -> Result<Output, CliError> {
+    let scene_path = &args.scene;
+    let scene = Scene::read(scene_path)?;
+    let mut plan = if args.quick {
         Sweep::quick(&scene)
     } else {
         Sweep::full(&scene)
     };
-    if let Some(r) = opts.get("repeats") {
-        let text = r.to_string_lossy();
-        plan.repeats = match text.parse::<usize>() {
-            Ok(n) if n > 0 => n,
-            _ => {
-                return Err(usage(format!(
-                    "`--repeats` must be a whole number > 0, got `{text}`"
-                )));
-            }
-        };
+    if let Some(n) = args.repeats {
+        plan.repeats = n;
     }
-    if let Some(m) = opts.get("methods") {
-        let text = m.to_string_lossy();
+    if !args.methods.is_empty() {
         let mut methods = Vec::new();
-        for name in text.split(',') {
-            let method = name
-                .parse::<Method>()
-                .map_err(|e| usage(format!("`--methods`: {e}")))?;
-            if !methods.contains(&method) {
-                methods.push(method);
+        for &m in &args.methods {
+            if !methods.contains(&m) {
+                methods.push(m);
             }
         }
         plan.methods = methods;
     }
-    let stem = scene_path
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "scene".into());
-    let dir = opts
-        .path("out")
-        .unwrap_or_else(|| Path::new("out").join(format!("{stem}-accuracy")));
+    let dir = args
+        .out
+        .clone()
+        .unwrap_or_else(|| Path::new("out").join(format!("{}-accuracy", stem(scene_path))));
 
-    let progress = std::io::stderr().is_terminal();
-    let total = plan.settings().len() + 2;
-    let mut done = 0usize;
+    // Progress on standard error (drawn only when it is a terminal).
+    let total = plan.settings().len() as u64 + 2;
+    let bar = ProgressBar::with_draw_target(Some(total), ProgressDrawTarget::stderr());
+    bar.set_style(
+        ProgressStyle::with_template("[{bar:30}] {pos}/{len}  {elapsed} elapsed  {msg}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar())
+            .progress_chars("#> "),
+    );
     let report = sweep(&scene, &plan, |what| {
-        if progress {
-            done += 1;
-            let mut err = std::io::stderr().lock();
-            let _ = write!(err, "\r[{done}/{total}] {what:<40}");
-            let _ = err.flush();
-        }
+        bar.set_message(what.to_string());
+        bar.inc(1);
     })
     .map_err(|e| CliError::Other(format!("{}: {e}", scene_path.display())))?;
-    if progress {
-        eprint!("\r{:60}\r", "");
-    }
+    bar.finish_and_clear();
 
     std::fs::create_dir_all(&dir).map_err(|e| {
         CliError::Other(format!(

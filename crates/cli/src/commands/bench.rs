@@ -6,13 +6,47 @@
 //! `--calls`, a short calibration picks a round number of calls that makes the whole
 //! benchmark take about [`TARGET_SECONDS`].
 
-use super::{CliError, Options, Output, json_number, usage_line};
+use super::{CliError, Output, at_least_one, to_json};
 use satsim_tree::io::{State, read_model, read_state};
 use satsim_tree::{Data, Model, aba, crba, crba_cholesky, rnea};
+use serde::Serialize;
 use std::hint::black_box;
+use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
-const NAME: &str = "bench";
+/// The flags of `satsim bench`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// The model file (TOML, cli-contract section 1)
+    #[arg(long, value_name = "MODEL.toml")]
+    pub model: PathBuf,
+    /// The state to time the algorithms at (JSON, cli-contract section 2) [default: zero
+    /// angles, small non-zero rates, no torque]
+    #[arg(long, value_name = "STATE.json")]
+    pub state: Option<PathBuf>,
+    /// Calls per timed repetition (7 repetitions, the median printed) [default: calibrated
+    /// so that the whole benchmark takes about 1.5 s]
+    #[arg(long, value_name = "N", value_parser = at_least_one)]
+    pub calls: Option<usize>,
+}
+
+/// The printed object.
+#[derive(Serialize)]
+struct Json {
+    dof: usize,
+    calls: usize,
+    repetitions: usize,
+    ns_per_call: NsPerCall,
+}
+
+/// Median ns per call of each algorithm.
+#[derive(Serialize)]
+struct NsPerCall {
+    crba: f64,
+    rnea: f64,
+    aba: f64,
+    crba_cholesky: f64,
+}
 
 /// One timed algorithm: a call on the workspace.
 type Timed<'a> = Box<dyn FnMut(&mut Data) + 'a>;
@@ -38,34 +72,16 @@ pub fn default_state(model: &Model) -> State {
 }
 
 /// Runs the command.
-pub fn run(args: &[std::ffi::OsString]) -> Result<Output, CliError> {
-    let opts = Options::parse(NAME, args, &["model", "state", "calls"], 0)?;
-    if opts.help {
-        return Ok(format!("usage: {}\n", usage_line(Some(NAME))));
-    }
-    let model_path = opts.required_path(NAME, "model")?;
-    let calls = match opts.get("calls") {
-        None => None,
-        Some(c) => {
-            let text = c.to_string_lossy();
-            match text.parse::<usize>() {
-                Ok(n) if n > 0 => Some(n),
-                _ => {
-                    return Err(CliError::Usage {
-                        command: Some(NAME),
-                        message: format!("`--calls` must be a positive integer, got `{text}`"),
-                    });
-                }
-            }
-        }
-    };
-    let model = read_model(&model_path)?;
-    let state_path = opts.path("state");
-    let state = match &state_path {
+pub fn run(args: &Args) -> Result<Output, CliError> {
+    let model_path = &args.model;
+    let calls = args.calls;
+    let model = read_model(model_path)?;
+    let state_path = args.state.as_ref();
+    let state = match state_path {
         Some(p) => read_state(p, &model)?,
         None => default_state(&model),
     };
-    let where_ = state_path.as_ref().unwrap_or(&model_path).display();
+    let where_ = state_path.unwrap_or(model_path).display();
     let n = model.nv();
     let mut data = Data::new(&model);
     // RNEA's accelerations: small, non-zero.
@@ -177,8 +193,9 @@ pub fn run(args: &[std::ffi::OsString]) -> Result<Output, CliError> {
         }
     };
 
-    let mut figures = Vec::with_capacity(4);
-    for (name, f) in algorithms.iter_mut() {
+    // Medians in the order of `algorithms`: crba, rnea, aba, crba_cholesky.
+    let mut medians = [0.0; 4];
+    for ((_, f), median) in algorithms.iter_mut().zip(&mut medians) {
         for _ in 0..calls {
             f(&mut data);
         }
@@ -192,15 +209,20 @@ pub fn run(args: &[std::ffi::OsString]) -> Result<Output, CliError> {
             })
             .collect();
         means.sort_by(f64::total_cmp);
-        figures.push(format!(
-            "\"{name}\": {}",
-            json_number(means[REPETITIONS / 2])
-        ));
+        *median = means[REPETITIONS / 2];
     }
-    Ok(format!(
-        "{{\"dof\": {n}, \"calls\": {calls}, \"repetitions\": {REPETITIONS}, \"ns_per_call\": {{{}}}}}\n",
-        figures.join(", ")
-    ))
+    let [crba, rnea, aba, crba_cholesky] = medians;
+    to_json(&Json {
+        dof: n,
+        calls,
+        repetitions: REPETITIONS,
+        ns_per_call: NsPerCall {
+            crba,
+            rnea,
+            aba,
+            crba_cholesky,
+        },
+    })
 }
 
 /// Mean ns per call of `f`, calling it for about `budget`.

@@ -8,24 +8,71 @@
 //! on standard error when it is a terminal. Exit status 0 when the campaign could run, even
 //! with failed runs; 2 for bad input.
 
-use super::{CliError, Options, Output, usage_line};
+use super::{CliError, Output, at_least_one, stem, usage};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use satsim_satellite::campaign::{
     self, Campaign, CampaignError, Finished, Progress, RunOptions, Shard, choose_shard,
 };
-use std::ffi::OsString;
+use satsim_satellite::scene_keys::Override;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
-const NAME: &str = "campaign";
+/// The flags of `satsim campaign`.
+#[derive(Debug, clap::Args)]
+#[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
+pub struct Args {
+    /// `satsim campaign merge`
+    #[command(subcommand)]
+    pub merge: Option<Merge>,
+    /// The scene file with a [campaign] table (TOML, cli-contract sections 7 and 8)
+    #[arg(value_name = "SCENE.toml", required = true)]
+    pub scene: Option<PathBuf>,
+    /// Output folder [default: out/<scene stem>-campaign]
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+    /// Worker threads [default: all cores]
+    #[arg(long, value_name = "T", value_parser = at_least_one)]
+    pub threads: Option<usize>,
+    /// Run only the runs k with k % N == I (0 <= I < N) [default: from the scheduler's
+    /// environment (Slurm, Kubernetes indexed Job, AWS Batch), else 0/1]
+    #[arg(long, value_name = "I/N", value_parser = parse_shard)]
+    pub shard: Option<Shard>,
+    /// The shard count of a Kubernetes indexed Job (its index comes from
+    /// JOB_COMPLETION_INDEX)
+    #[arg(long, value_name = "N", value_parser = at_least_one)]
+    pub shards: Option<usize>,
+    /// Keep the runs already in DIR/runs.csv and run only the missing ones
+    #[arg(long)]
+    pub resume: bool,
+    /// Override a scene value by its dotted path before the runs are drawn, e.g.
+    /// `--set campaign.runs=20` (repeatable)
+    #[arg(long = "set", value_name = "KEY=VALUE", value_parser = super::run::parse_override)]
+    pub set: Vec<Override>,
+}
 
-fn usage(message: impl Into<String>) -> CliError {
-    CliError::Usage {
-        command: Some(NAME),
-        message: message.into(),
-    }
+/// The subcommand of `satsim campaign`.
+#[derive(Debug, clap::Subcommand)]
+pub enum Merge {
+    /// Merge the shards' output folders into the one a single machine would have written
+    /// (byte-identical runs.csv)
+    Merge(MergeArgs),
+}
+
+/// The flags of `satsim campaign merge`.
+#[derive(Debug, clap::Args)]
+pub struct MergeArgs {
+    /// The shards' output folders (each written by `satsim campaign ... --shard I/N`)
+    #[arg(value_name = "SHARD_DIR", required = true)]
+    pub dirs: Vec<PathBuf>,
+    /// The merged folder
+    #[arg(long, value_name = "DIR")]
+    pub out: PathBuf,
+}
+
+fn parse_shard(s: &str) -> Result<Shard, String> {
+    s.parse::<Shard>().map_err(|e| e.to_string())
 }
 
 fn from(e: CampaignError) -> CliError {
@@ -35,68 +82,28 @@ fn from(e: CampaignError) -> CliError {
     }
 }
 
-/// Runs `satsim campaign ARGS`.
-pub fn run(args: &[OsString]) -> Result<Output, CliError> {
-    if args.first().is_some_and(|a| a == "merge") {
-        return merge(&args[1..]);
-    }
-    let resume = args.iter().any(|a| a == "--resume");
-    let rest: Vec<OsString> = args.iter().filter(|a| *a != "--resume").cloned().collect();
-    let opts = Options::parse(
-        NAME,
-        &rest,
-        &["out", "threads", "shard", "shards", "set"],
-        1,
-    )?;
-    if opts.help {
-        return Ok(format!("usage: {}\n", usage_line(Some(NAME))));
-    }
-    let scene_path = opts
-        .positional
-        .first()
-        .map(PathBuf::from)
-        .ok_or_else(|| usage("missing the scene file"))?;
-    let number = |name: &str| -> Result<Option<u64>, CliError> {
-        opts.get(name)
-            .map(|v| {
-                v.to_string_lossy()
-                    .parse::<u64>()
-                    .ok()
-                    .filter(|n| *n >= 1)
-                    .ok_or_else(|| {
-                        usage(format!(
-                            "`--{name}` must be a whole number >= 1, got `{}`",
-                            v.to_string_lossy()
-                        ))
-                    })
-            })
-            .transpose()
+/// Runs `satsim campaign`.
+pub fn run(args: &Args) -> Result<Output, CliError> {
+    let scene_path = match (&args.merge, &args.scene) {
+        (Some(Merge::Merge(m)), _) => return merge(m),
+        (None, Some(scene)) => scene,
+        // clap requires one or the other.
+        (None, None) => return Err(usage(&["campaign"], "missing the scene file")),
     };
-    let threads = number("threads")?.map(|t| t as usize);
-    let shards = number("shards")?;
-    let flag = opts
-        .get("shard")
-        .map(|s| {
-            s.to_string_lossy()
-                .parse::<Shard>()
-                .map_err(|e| usage(format!("`--shard`: {e}")))
-        })
-        .transpose()?;
-    let choice = choose_shard(flag, shards, |n| std::env::var(n).ok()).map_err(usage)?;
-
-    let c = Campaign::read_with(&scene_path, &opts.overrides(NAME)?)?;
-    let stem = scene_path
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "scene".into());
-    let dir = opts
-        .path("out")
-        .unwrap_or_else(|| Path::new("out").join(format!("{stem}-campaign")));
+    let choice = choose_shard(args.shard, args.shards.map(|n| n as u64), |n| {
+        std::env::var(n).ok()
+    })
+    .map_err(|e| usage(&["campaign"], e))?;
+    let c = Campaign::read_with(scene_path, &args.set)?;
+    let dir = args
+        .out
+        .clone()
+        .unwrap_or_else(|| Path::new("out").join(format!("{}-campaign", stem(scene_path))));
     eprintln!(
         "satsim campaign: shard {} ({})",
         choice.shard, choice.source
     );
-    let threads_used = threads.unwrap_or_else(|| {
+    let threads_used = args.threads.unwrap_or_else(|| {
         std::thread::available_parallelism()
             .map(|n| n.get())
             .unwrap_or(1)
@@ -107,9 +114,9 @@ pub fn run(args: &[OsString]) -> Result<Output, CliError> {
         &c,
         &dir,
         &RunOptions {
-            threads,
+            threads: args.threads,
             shard: choice.shard,
-            resume,
+            resume: args.resume,
         },
         &bar,
     )
@@ -171,20 +178,12 @@ fn summary_lines(s: &mut String, dir: &Path, f: &Finished) {
     );
 }
 
-fn merge(args: &[OsString]) -> Result<Output, CliError> {
-    let opts = Options::parse(NAME, args, &["out"], usize::MAX)?;
-    if opts.help {
-        return Ok(format!("usage: {}\n", usage_line(Some(NAME))));
-    }
-    let out = opts.required_path(NAME, "out")?;
-    if opts.positional.is_empty() {
-        return Err(usage("`merge` needs the campaign folders to merge"));
-    }
-    let dirs: Vec<PathBuf> = opts.positional.iter().map(PathBuf::from).collect();
-    let f = campaign::merge(&dirs, &out).map_err(from)?;
+fn merge(args: &MergeArgs) -> Result<Output, CliError> {
+    let (dirs, out) = (&args.dirs, &args.out);
+    let f = campaign::merge(dirs, out).map_err(from)?;
     let mut s = String::new();
     let _ = writeln!(s, "merged     {} folders", dirs.len());
-    summary_lines(&mut s, &out, &f);
+    summary_lines(&mut s, out, &f);
     Ok(s)
 }
 

@@ -2,29 +2,37 @@
 //! matrix, the bias forces, the forward-dynamics acceleration (ABA) and the kinetic energy
 //! of one state, as one JSON object with every number at full `f64` precision.
 
-use super::{CliError, ModelAndState, Options, Output, json_array, json_number, usage_line};
+use super::{CliError, ModelAndState, ModelStateArgs, Output, rows, to_json};
 use satsim_satellite::api::{Dynamics, DynamicsFailure, dynamics};
+use serde::Serialize;
 
-const NAME: &str = "dynamics";
+/// The flags of `satsim dynamics`.
+pub type Args = ModelStateArgs;
+
+/// The printed object, in the contract's key order.
+#[derive(Serialize)]
+struct Json {
+    dof: usize,
+    mass_matrix: Vec<Vec<f64>>,
+    bias: Vec<f64>,
+    acceleration: Vec<f64>,
+    kinetic_energy: f64,
+}
 
 /// Runs the command.
-pub fn run(args: &[std::ffi::OsString]) -> Result<Output, CliError> {
-    let opts = Options::parse(NAME, args, &["model", "state"], 0)?;
-    if opts.help {
-        return Ok(format!("usage: {}\n", usage_line(Some(NAME))));
-    }
+pub fn run(args: &Args) -> Result<Output, CliError> {
     let ModelAndState {
         model_path,
         state_path,
         model,
         state,
-    } = ModelAndState::read(NAME, &opts)?;
+    } = ModelAndState::read(args)?;
     let Dynamics {
-        dof: n,
-        mass_matrix: m,
-        bias: b,
-        acceleration: a,
-        kinetic_energy: ke,
+        dof,
+        mass_matrix,
+        bias,
+        acceleration,
+        kinetic_energy,
     } = dynamics(&model, &state).map_err(|e| match e {
         DynamicsFailure::Engine(e) => CliError::Other(format!(
             "{}: {e} (model {})",
@@ -33,19 +41,11 @@ pub fn run(args: &[std::ffi::OsString]) -> Result<Output, CliError> {
         )),
         DynamicsFailure::NonFinite => CliError::Other(format!("{}: {e}", state_path.display())),
     })?;
-
-    let rows: Vec<String> = (0..n)
-        .map(|i| format!("    {}", json_array((0..n).map(|j| m[(i, j)]))))
-        .collect();
-    let matrix = if n == 0 {
-        "[]".to_owned()
-    } else {
-        format!("[\n{}\n  ]", rows.join(",\n"))
-    };
-    Ok(format!(
-        "{{\n  \"dof\": {n},\n  \"mass_matrix\": {matrix},\n  \"bias\": {},\n  \"acceleration\": {},\n  \"kinetic_energy\": {}\n}}\n",
-        json_array(b.iter().copied()),
-        json_array(a.iter().copied()),
-        json_number(ke)
-    ))
+    to_json(&Json {
+        dof,
+        mass_matrix: rows(&mass_matrix),
+        bias: bias.iter().copied().collect(),
+        acceleration: acceleration.iter().copied().collect(),
+        kinetic_energy,
+    })
 }

@@ -13,24 +13,30 @@
 //! `damping_ratios`, `rigid_modes`, `locked`; `plot`) and draws the frequencies against
 //! the first hinge's angle into `--plot` (default `out/<scene stem>-modes.svg`).
 
-use super::linearize::{json_string, json_strings, scene_error, scene_path};
-use super::{CliError, Options, Output, json_array, json_number, usage_line};
+use super::linearize::scene_error;
+use super::{CliError, Output, stem, to_json, usage};
 use satsim_satellite::modes::{Along, Mode, Modes, modes, sweep, sweep_plot};
 use satsim_satellite::scene::Scene;
-use std::ffi::OsString;
-use std::fmt::Write as _;
+use serde::ser::{Serialize, SerializeMap, Serializer};
 use std::path::{Path, PathBuf};
-
-const NAME: &str = "modes";
 
 /// Configurations of a sweep when `--along` gives no `N`.
 pub const DEFAULT_STEPS: usize = 21;
 
-fn usage(message: impl Into<String>) -> CliError {
-    CliError::Usage {
-        command: Some(NAME),
-        message: message.into(),
-    }
+/// The flags of `satsim modes`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// The scene file (TOML, cli-contract section 7)
+    #[arg(value_name = "SCENE.toml")]
+    pub scene: PathBuf,
+    /// Sweep hinge angles (rad, ends included) in N configurations (default 21) and print the
+    /// modes at each; comma-separated hinges move together, e.g. `h4=3.1:0:31,h5=-3.1:0`
+    #[arg(long, value_name = "HINGE=FROM:TO[:N][,...]")]
+    pub along: Option<String>,
+    /// Where to draw the swept frequencies against the first hinge's angle (needs `--along`)
+    /// [default: out/<scene stem>-modes.svg]
+    #[arg(long, value_name = "FILE.svg", requires = "along")]
+    pub plot: Option<PathBuf>,
 }
 
 /// Parses `HINGE=FROM:TO[:N]` items separated by commas: the hinges and the number of
@@ -65,69 +71,45 @@ pub fn parse_along(text: &str) -> Result<(Vec<Along>, usize), String> {
     Ok((along, steps.unwrap_or(DEFAULT_STEPS)))
 }
 
-/// Runs `satsim modes ARGS`.
-pub fn run(args: &[OsString]) -> Result<Output, CliError> {
-    let opts = Options::parse(NAME, args, &["along", "plot"], 1)?;
-    if opts.help {
-        return Ok(format!("usage: {}\n", usage_line(Some(NAME))));
-    }
-    let path = scene_path(NAME, &opts)?;
-    let along = match opts.get("along") {
-        Some(a) => {
-            Some(parse_along(&a.to_string_lossy()).map_err(|e| usage(format!("`--along` {e}")))?)
-        }
-        None => {
-            if opts.get("plot").is_some() {
-                return Err(usage("`--plot` needs `--along`"));
-            }
-            None
-        }
+/// Runs `satsim modes`.
+pub fn run(args: &Args) -> Result<Output, CliError> {
+    let path = &args.scene;
+    let along = args
+        .along
+        .as_deref()
+        .map(|a| parse_along(a).map_err(|e| usage(&["modes"], format!("`--along` {e}"))))
+        .transpose()?;
+    let scene = Scene::read(path)?;
+    let Some((along, steps)) = along else {
+        let m = modes(&scene).map_err(|e| scene_error(path, e))?;
+        return to_json(&ModesJson(&m));
     };
-    let scene = Scene::read(&path)?;
-    match along {
-        None => {
-            let m = modes(&scene).map_err(|e| scene_error(&path, e))?;
-            Ok(modes_json(&m))
-        }
-        Some((along, steps)) => {
-            let points = sweep(&scene, &along, steps).map_err(|e| scene_error(&path, e))?;
-            let plot = opts.path("plot").unwrap_or_else(|| {
-                let stem = path
-                    .file_stem()
-                    .map(|s| s.to_string_lossy().into_owned())
-                    .unwrap_or_else(|| "scene".into());
-                Path::new("out").join(format!("{stem}-modes.svg"))
-            });
-            let title = format!(
-                "frequencies of {} over the sweep",
-                path.file_name()
-                    .map(|s| s.to_string_lossy())
-                    .unwrap_or_default()
-            );
-            let svg = sweep_plot(&points, &along, &title);
-            write_plot(&plot, &svg)?;
-            let mut out = String::from("{\n");
-            let names: Vec<String> = along.iter().map(|a| a.hinge.clone()).collect();
-            let _ = writeln!(out, "  \"along\": {},", json_strings(&names));
-            out.push_str("  \"points\": [\n");
-            for (i, p) in points.iter().enumerate() {
-                let _ = writeln!(
-                    out,
-                    "    {{\"angles\": {}, \"frequencies_hz\": {}, \"damping_ratios\": {}, \"rigid_modes\": {}, \"locked\": {}}}{}",
-                    json_array(p.angles.iter().copied()),
-                    json_array(p.modes.frequencies_hz.iter().copied()),
-                    json_array(p.modes.damping_ratios.iter().copied()),
-                    p.modes.rigid_modes,
-                    json_strings(&p.modes.locked),
-                    if i + 1 < points.len() { "," } else { "" }
-                );
-            }
-            out.push_str("  ],\n");
-            let _ = writeln!(out, "  \"plot\": {}", json_string(&plot.to_string_lossy()));
-            out.push_str("}\n");
-            Ok(out)
-        }
-    }
+    let points = sweep(&scene, &along, steps).map_err(|e| scene_error(path, e))?;
+    let plot = args
+        .plot
+        .clone()
+        .unwrap_or_else(|| Path::new("out").join(format!("{}-modes.svg", stem(path))));
+    let title = format!(
+        "frequencies of {} over the sweep",
+        path.file_name()
+            .map(|s| s.to_string_lossy())
+            .unwrap_or_default()
+    );
+    write_plot(&plot, &sweep_plot(&points, &along, &title))?;
+    to_json(&SweepJson {
+        along: along.iter().map(|a| a.hinge.as_str()).collect(),
+        points: points
+            .iter()
+            .map(|p| PointJson {
+                angles: &p.angles,
+                frequencies_hz: &p.modes.frequencies_hz,
+                damping_ratios: &p.modes.damping_ratios,
+                rigid_modes: p.modes.rigid_modes,
+                locked: &p.modes.locked,
+            })
+            .collect(),
+        plot: plot.to_string_lossy().into_owned(),
+    })
 }
 
 fn write_plot(path: &PathBuf, svg: &str) -> Result<(), CliError> {
@@ -139,36 +121,68 @@ fn write_plot(path: &PathBuf, svg: &str) -> Result<(), CliError> {
         .map_err(|e| CliError::Other(format!("cannot write {}: {e}", path.display())))
 }
 
-fn shape_json(shape: &[(String, f64)]) -> String {
-    let items: Vec<String> = shape
-        .iter()
-        .map(|(k, v)| format!("{}: {}", json_string(k), json_number(*v)))
-        .collect();
-    format!("{{{}}}", items.join(", "))
+/// `--along`'s output.
+#[derive(serde::Serialize)]
+struct SweepJson<'a> {
+    along: Vec<&'a str>,
+    points: Vec<PointJson<'a>>,
+    plot: String,
 }
 
-fn mode_json(m: &Mode) -> String {
-    format!(
-        "{{\"frequency_hz\": {}, \"damping_ratio\": {}, \"eigenvalue\": {},\n     \"shape\": {},\n     \"shape_imag\": {}}}",
-        json_number(m.frequency_hz),
-        json_number(m.damping_ratio),
-        json_array([m.eigenvalue.0, m.eigenvalue.1]),
-        shape_json(&m.shape),
-        shape_json(&m.shape_imag),
-    )
+/// One configuration of a sweep.
+#[derive(serde::Serialize)]
+struct PointJson<'a> {
+    angles: &'a [f64],
+    frequencies_hz: &'a [f64],
+    damping_ratios: &'a [f64],
+    rigid_modes: usize,
+    locked: &'a [String],
+}
+
+/// A mode shape: an object from state name to value, in the linear model's state order.
+struct Shape<'a>(&'a [(String, f64)]);
+
+impl Serialize for Shape<'_> {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let mut map = s.serialize_map(Some(self.0.len()))?;
+        for (k, v) in self.0 {
+            map.serialize_entry(k, v)?;
+        }
+        map.end()
+    }
+}
+
+/// One mode of the contract's object.
+struct ModeJson<'a>(&'a Mode);
+
+impl Serialize for ModeJson<'_> {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let m = self.0;
+        let mut map = s.serialize_map(Some(5))?;
+        map.serialize_entry("frequency_hz", &m.frequency_hz)?;
+        map.serialize_entry("damping_ratio", &m.damping_ratio)?;
+        map.serialize_entry("eigenvalue", &[m.eigenvalue.0, m.eigenvalue.1])?;
+        map.serialize_entry("shape", &Shape(&m.shape))?;
+        map.serialize_entry("shape_imag", &Shape(&m.shape_imag))?;
+        map.end()
+    }
 }
 
 /// The modes as the contract's JSON object.
-pub fn modes_json(m: &Modes) -> String {
-    let modes: Vec<String> = m.modes.iter().map(mode_json).collect();
-    format!(
-        "{{\n  \"frequencies_hz\": {},\n  \"damping_ratios\": {},\n  \"rigid_modes\": {},\n  \"modes\": [\n    {}\n  ],\n  \"real_eigenvalues\": {},\n  \"locked\": {},\n  \"released\": {}\n}}\n",
-        json_array(m.frequencies_hz.iter().copied()),
-        json_array(m.damping_ratios.iter().copied()),
-        m.rigid_modes,
-        modes.join(",\n    "),
-        json_array(m.real_eigenvalues.iter().copied()),
-        json_strings(&m.locked),
-        json_strings(&m.released),
-    )
+struct ModesJson<'a>(&'a Modes);
+
+impl Serialize for ModesJson<'_> {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let m = self.0;
+        let modes: Vec<ModeJson> = m.modes.iter().map(ModeJson).collect();
+        let mut map = s.serialize_map(Some(7))?;
+        map.serialize_entry("frequencies_hz", &m.frequencies_hz)?;
+        map.serialize_entry("damping_ratios", &m.damping_ratios)?;
+        map.serialize_entry("rigid_modes", &m.rigid_modes)?;
+        map.serialize_entry("modes", &modes)?;
+        map.serialize_entry("real_eigenvalues", &m.real_eigenvalues)?;
+        map.serialize_entry("locked", &m.locked)?;
+        map.serialize_entry("released", &m.released)?;
+        map.end()
+    }
 }

@@ -2,23 +2,32 @@
 //! preprint's closed-form S and N (errata corrected, see docs/src/preprint/errata.md) beside
 //! the same matrices from the generic engine, and their largest absolute difference.
 
-use super::{CliError, ModelAndState, Options, Output, json_array, json_number, usage_line};
+use super::{CliError, ModelAndState, ModelStateArgs, Output, rows, to_json};
 use satsim_satellite::preprint::{PreprintError, compare};
+use serde::Serialize;
 
-const NAME: &str = "preprint";
+/// The flags of `satsim preprint`.
+pub type Args = ModelStateArgs;
+
+/// The printed object, in the contract's key order.
+#[derive(Serialize)]
+#[allow(non_snake_case)] // the contract's keys
+struct Json {
+    S_closed_form: Vec<Vec<f64>>,
+    N_closed_form: Vec<f64>,
+    S_tree: Vec<Vec<f64>>,
+    N_tree: Vec<f64>,
+    max_abs_difference: f64,
+}
 
 /// Runs the command.
-pub fn run(args: &[std::ffi::OsString]) -> Result<Output, CliError> {
-    let opts = Options::parse(NAME, args, &["model", "state"], 0)?;
-    if opts.help {
-        return Ok(format!("usage: {}\n", usage_line(Some(NAME))));
-    }
+pub fn run(args: &Args) -> Result<Output, CliError> {
     let ModelAndState {
         model_path,
         state_path,
         model,
         state,
-    } = ModelAndState::read(NAME, &opts)?;
+    } = ModelAndState::read(args)?;
     // Every number printed is finite: an overflow is an error naming the quantity (and the
     // state file), a singular (massless) model one naming the model file.
     let report = compare(&model, &state.q, &state.v, &state.tau).map_err(|e| {
@@ -28,18 +37,11 @@ pub fn run(args: &[std::ffi::OsString]) -> Result<Output, CliError> {
         };
         CliError::Other(format!("{}: {e}", file.display()))
     })?;
-    let matrix = |m: &nalgebra::DMatrix<f64>| {
-        let rows: Vec<String> = (0..m.nrows())
-            .map(|i| format!("    {}", json_array((0..m.ncols()).map(|j| m[(i, j)]))))
-            .collect();
-        format!("[\n{}\n  ]", rows.join(",\n"))
-    };
-    Ok(format!(
-        "{{\n  \"S_closed_form\": {},\n  \"N_closed_form\": {},\n  \"S_tree\": {},\n  \"N_tree\": {},\n  \"max_abs_difference\": {}\n}}\n",
-        matrix(&report.s_closed_form),
-        json_array(report.n_closed_form.iter().copied()),
-        matrix(&report.s_tree),
-        json_array(report.n_tree.iter().copied()),
-        json_number(report.max_abs_difference)
-    ))
+    to_json(&Json {
+        S_closed_form: rows(&report.s_closed_form),
+        N_closed_form: report.n_closed_form.iter().copied().collect(),
+        S_tree: rows(&report.s_tree),
+        N_tree: report.n_tree.iter().copied().collect(),
+        max_abs_difference: report.max_abs_difference,
+    })
 }

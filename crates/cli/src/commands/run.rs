@@ -4,30 +4,50 @@
 //! a stopped run leaves a valid file up to its last row), writes every event to
 //! `DIR/events.csv`, draws SVG plots of the main quantities at the end from a bounded min/max
 //! decimation (memory does not grow with the number of rows), shows a progress bar on
-//! standard error when it is a terminal, and prints a short summary on standard output.
+//! standard error (indicatif, drawn only when it is a terminal), and prints a short summary on
+//! standard output.
 //!
 //! Exit status: 0 on success, 2 for bad input (the scene, its model or state, the command
 //! line), 1 for a run that fails part-way (the message says when and why), 130 for a run
 //! interrupted by Ctrl-C (SIGINT): the run stops at the next output row, the CSV holds every
 //! row up to it and standard error says `interrupted at t = … s; N rows written to …`.
 //! Further Ctrl-Cs within 2 s of the first are ignored (the clean stop is finishing); one
-//! after that kills the process at once.
+//! after that ends the process at once (status 130). The handler is `ctrlc`'s.
 //! `satsim` with no arguments runs the default scene `examples/scenes/deploy.toml`.
 
-use super::{CliError, Options, Output, usage_line};
+use super::{CliError, Output, stem};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use satsim_integrate::Output as Times;
 use satsim_satellite::output::{CsvWriter, PlotRecorder, write_events};
 use satsim_satellite::scene::Scene;
 use satsim_satellite::scene_keys::Override;
 use satsim_satellite::simulation::RunError;
 use satsim_satellite::view::{PoseRecorder, ViewError};
-use std::ffi::OsString;
 use std::fmt::Write as _;
-use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
-const NAME: &str = "run";
+/// The flags of `satsim run`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// The scene file (TOML, cli-contract section 7)
+    #[arg(value_name = "SCENE.toml")]
+    pub scene: PathBuf,
+    /// Output folder for trajectory.csv, events.csv, the plots and view.html [default:
+    /// out/<scene stem>]
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+    /// Override a scene value by its dotted path (the campaign's key syntax), e.g.
+    /// `--set duration=60` or `--set model.body.2.mass=3.5` (repeatable)
+    #[arg(long = "set", value_name = "KEY=VALUE", value_parser = parse_override)]
+    pub set: Vec<Override>,
+}
+
+/// The value parser of `--set`: `KEY=VALUE` (the key and value are checked against the scene
+/// when it is read).
+pub fn parse_override(s: &str) -> Result<Override, String> {
+    Override::parse(s).map_err(|e| e.to_string())
+}
 
 /// The exit status of a run that failed part-way.
 pub const EXIT_RUN_FAILED: u8 = 1;
@@ -88,28 +108,16 @@ pub fn default_scene() -> PathBuf {
 
 /// For the dispatcher: every failure as a [`CliError`] (exit status 2). The binary calls
 /// [`command`] directly to tell run failures (status 1) apart.
-pub fn run(args: &[OsString]) -> Result<Output, CliError> {
+pub fn run(args: &Args) -> Result<Output, CliError> {
     command(args).map_err(|f| match f {
         Failure::BadInput(e) => e,
         Failure::Run(m) | Failure::Interrupted(m) => CliError::Other(m),
     })
 }
 
-/// Runs `satsim run ARGS`.
-pub fn command(args: &[OsString]) -> Result<Output, Failure> {
-    let opts = Options::parse(NAME, args, &["out", "set"], 1)?;
-    if opts.help {
-        return Ok(format!("usage: {}\n", usage_line(Some(NAME))));
-    }
-    let scene_path = opts
-        .positional
-        .first()
-        .map(PathBuf::from)
-        .ok_or_else(|| CliError::Usage {
-            command: Some(NAME),
-            message: "missing the scene file".into(),
-        })?;
-    run_scene_with(&scene_path, opts.path("out"), &opts.overrides(NAME)?)
+/// Runs `satsim run`.
+pub fn command(args: &Args) -> Result<Output, Failure> {
+    run_scene_with(&args.scene, args.out.clone(), &args.set)
 }
 
 /// Runs the scene at `scene_path`, writing into `out` (default `out/<scene stem>`).
@@ -130,10 +138,7 @@ pub fn run_scene_with(
     let mut sim = scene
         .simulation()
         .map_err(|e| CliError::Other(format!("{}: {e}", scene_path.display())))?;
-    let stem = scene_path
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "scene".into());
+    let stem = stem(scene_path);
     let dir = out.unwrap_or_else(|| Path::new("out").join(&stem));
     std::fs::create_dir_all(&dir).map_err(|e| {
         CliError::Other(format!(
@@ -158,10 +163,10 @@ pub fn run_scene_with(
         false => None,
     };
 
-    let progress = std::io::stderr().is_terminal();
     let (t0, t_end) = (sim.t0(), sim.t0() + scene.duration);
     let started = Instant::now();
-    let mut last_draw = started;
+    let bar = progress_bar(t0, t_end);
+    let mut last_message = started;
     // Bounded memory: rows go to the CSV and to the plots' decimation, never into a list.
     let mut plots = PlotRecorder::new(&columns);
     let mut first_row: Option<Vec<f64>> = None;
@@ -182,9 +187,11 @@ pub fn run_scene_with(
             }
             last_row.clear();
             last_row.extend_from_slice(row);
-            if progress && (last_draw.elapsed().as_millis() >= 100 || t >= t_end) {
-                last_draw = Instant::now();
-                draw_progress((t - t0) / (t_end - t0), t);
+            // indicatif draws at most a few times a second (and not at all without a terminal).
+            bar.set_position(progress_units(t - t0));
+            if !bar.is_hidden() && last_message.elapsed() >= Duration::from_millis(200) {
+                last_message = Instant::now();
+                bar.set_message(format!("{t:.1}"));
             }
             // Checked after the row is written, so the CSV ends with a complete row.
             if interrupt::requested() {
@@ -193,9 +200,7 @@ pub fn run_scene_with(
             Ok(())
         },
     );
-    if progress {
-        eprint!("\r{:60}\r", "");
-    }
+    bar.finish_and_clear();
     let elapsed = started.elapsed().as_secs_f64();
     let n_rows = plots.rows();
     let last_t = last_row.first().copied();
@@ -342,19 +347,25 @@ pub fn run_scene_with(
     Ok(s)
 }
 
-fn draw_progress(frac: f64, t: f64) {
-    let frac = frac.clamp(0.0, 1.0);
-    let width = 30;
-    let done = (frac * width as f64).round() as usize;
-    let mut err = std::io::stderr().lock();
-    let _ = write!(
-        err,
-        "\r[{}{}] {:5.1}%  t = {t:.1} s",
-        "#".repeat(done),
-        " ".repeat(width - done),
-        100.0 * frac
+/// Progress in milliseconds of simulated time (indicatif counts in whole units).
+fn progress_units(dt: f64) -> u64 {
+    (dt.max(0.0) * 1e3) as u64
+}
+
+/// The run's progress bar on standard error: simulated time done, its rate and the time
+/// left. Hidden when standard error is not a terminal (tests, pipes, log files).
+fn progress_bar(t0: f64, t_end: f64) -> ProgressBar {
+    let bar = ProgressBar::with_draw_target(
+        Some(progress_units(t_end - t0)),
+        ProgressDrawTarget::stderr(),
     );
-    let _ = err.flush();
+    bar.set_style(
+        ProgressStyle::with_template("[{bar:30}] {percent:>3}%  t = {msg} s  {eta} left")
+            .unwrap_or_else(|_| ProgressStyle::default_bar())
+            .progress_chars("#> "),
+    );
+    bar.set_message(format!("{t0}"));
+    bar
 }
 
 /// Why the output sink stopped the run.
@@ -378,67 +389,50 @@ impl std::fmt::Display for Stop {
     }
 }
 
-/// Ctrl-C: a SIGINT handler that only sets a flag (async-signal-safe). The first SIGINT starts
-/// the clean stop (the run stops at its next row, the CSV is completed, the message printed).
-/// Further SIGINTs within [`interrupt::GRACE_NS`] of it are ignored, so that a burst (a
-/// process group signalled twice, a double key press) cannot lose what the first one is
-/// finishing; a SIGINT after the grace period kills the process at once.
+/// Ctrl-C, through `ctrlc` (its handler runs on a thread of its own, so it may do more than
+/// a signal handler could). The first SIGINT starts the clean stop (the run stops at its next
+/// row, the CSV is completed, the message printed). Further SIGINTs within
+/// [`interrupt::GRACE`] of it are ignored, so that a burst (a process group signalled twice, a
+/// double key press) cannot lose what the first one is finishing; a SIGINT after the grace
+/// period ends the process at once with status 130.
 mod interrupt {
-    use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::sync::{Mutex, OnceLock};
+    use std::time::{Duration, Instant};
 
-    /// How long after the first SIGINT further ones are ignored (2 s, in ns).
-    pub const GRACE_NS: u64 = 2_000_000_000;
+    /// How long after the first SIGINT further ones are ignored.
+    pub const GRACE: Duration = Duration::from_secs(2);
 
     static REQUESTED: AtomicBool = AtomicBool::new(false);
-    static FIRST_NS: AtomicU64 = AtomicU64::new(0);
+    static FIRST: OnceLock<Mutex<Option<Instant>>> = OnceLock::new();
 
     /// Whether Ctrl-C was pressed since [`install`].
     pub fn requested() -> bool {
         REQUESTED.load(Ordering::Relaxed)
     }
 
-    /// Monotonic clock in ns (`clock_gettime` is async-signal-safe).
-    #[cfg(unix)]
-    fn now_ns() -> u64 {
-        let mut ts = libc::timespec {
-            tv_sec: 0,
-            tv_nsec: 0,
-        };
-        // SAFETY: `ts` is a valid timespec; CLOCK_MONOTONIC always exists.
-        unsafe {
-            libc::clock_gettime(libc::CLOCK_MONOTONIC, &mut ts);
-        }
-        (ts.tv_sec as u64)
-            .saturating_mul(1_000_000_000)
-            .saturating_add(ts.tv_nsec as u64)
-    }
-
-    #[cfg(unix)]
-    extern "C" fn on_sigint(_: libc::c_int) {
-        let now = now_ns();
-        if !REQUESTED.swap(true, Ordering::SeqCst) {
-            FIRST_NS.store(now, Ordering::SeqCst);
-            return;
-        }
-        if now.saturating_sub(FIRST_NS.load(Ordering::SeqCst)) < GRACE_NS {
-            return;
-        }
-        // SAFETY: `signal` and `raise` are async-signal-safe; SIG_DFL is a valid disposition.
-        unsafe {
-            libc::signal(libc::SIGINT, libc::SIG_DFL);
-            libc::raise(libc::SIGINT);
+    fn on_sigint() {
+        let first = FIRST.get_or_init(|| Mutex::new(None));
+        let mut first = first.lock().unwrap_or_else(|e| e.into_inner());
+        match *first {
+            None => {
+                *first = Some(Instant::now());
+                REQUESTED.store(true, Ordering::SeqCst);
+            }
+            Some(at) if at.elapsed() < GRACE => {}
+            Some(_) => std::process::exit(i32::from(super::EXIT_INTERRUPTED)),
         }
     }
 
-    /// Installs the handler (a no-op where signals are not supported).
+    /// Installs the handler (once per process; a failure to install leaves Ctrl-C's default,
+    /// which still stops the run, without the clean stop).
     pub fn install() {
         REQUESTED.store(false, Ordering::Relaxed);
-        #[cfg(unix)]
-        // SAFETY: the handler only touches atomics and calls `clock_gettime`, `signal` and
-        // `raise`, all async-signal-safe.
-        unsafe {
-            let handler: extern "C" fn(libc::c_int) = on_sigint;
-            libc::signal(libc::SIGINT, handler as libc::sighandler_t);
-        }
+        static INSTALLED: OnceLock<()> = OnceLock::new();
+        INSTALLED.get_or_init(|| {
+            if let Err(e) = ctrlc::set_handler(on_sigint) {
+                eprintln!("warning: Ctrl-C will not stop the run cleanly: {e}");
+            }
+        });
     }
 }

@@ -1,28 +1,26 @@
 //! `satsim view DIR [--out FILE]`: re-creates a run's 3-D playback (`DIR/view.html`, contract
 //! section 11) from the scene and poses the run kept (`DIR/view.json`, `DIR/poses.csv`).
 
-use super::{CliError, Options, Output, usage_line};
+use super::{CliError, Output};
 use satsim_satellite::view::{VIEW_HTML, ViewData};
 use std::path::PathBuf;
 
-const NAME: &str = "view";
+/// The flags of `satsim view`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// The output folder of a `satsim run` (holding view.json and poses.csv)
+    #[arg(value_name = "DIR")]
+    pub dir: PathBuf,
+    /// Where to write the page [default: DIR/view.html]
+    #[arg(long, value_name = "FILE")]
+    pub out: Option<PathBuf>,
+}
 
 /// Runs the command.
-pub fn run(args: &[std::ffi::OsString]) -> Result<Output, CliError> {
-    let opts = Options::parse(NAME, args, &["out"], 1)?;
-    if opts.help {
-        return Ok(format!("usage: {}\n", usage_line(Some(NAME))));
-    }
-    let dir = opts
-        .positional
-        .first()
-        .map(PathBuf::from)
-        .ok_or_else(|| CliError::Usage {
-            command: Some(NAME),
-            message: "missing the run's output folder".into(),
-        })?;
-    let data = ViewData::read(&dir).map_err(|e| CliError::Other(e.to_string()))?;
-    let out = opts.path("out").unwrap_or_else(|| dir.join(VIEW_HTML));
+pub fn run(args: &Args) -> Result<Output, CliError> {
+    let dir = &args.dir;
+    let data = ViewData::read(dir).map_err(|e| CliError::Other(e.to_string()))?;
+    let out = args.out.clone().unwrap_or_else(|| dir.join(VIEW_HTML));
     data.write_html(&out)
         .map_err(|e| CliError::Other(e.to_string()))?;
     Ok(format!(

@@ -368,46 +368,29 @@ pub fn finish(dir: &Path, meta: &Meta) -> Result<Finished, CampaignError> {
     let n_ok = ok_rows.len() as u64;
     let n_runs = runs.rows.len() as u64;
     let missing = meta.expected().saturating_sub(n_runs);
-    let mut s = String::new();
-    let _ = writeln!(s, "{{");
-    let _ = writeln!(s, "  \"runs\": {n_runs},");
-    let _ = writeln!(s, "  \"ok\": {n_ok},");
-    let _ = writeln!(s, "  \"failed\": {failed},");
-    let _ = writeln!(s, "  \"missing\": {missing},");
-    let _ = writeln!(s, "  \"campaign_runs\": {},", meta.runs);
-    let _ = writeln!(s, "  \"seed\": {},", meta.seed);
-    let _ = writeln!(s, "  \"shard\": \"{}\",", meta.shard);
     let mut all_stats: Vec<Option<ColumnStats>> = Vec::with_capacity(stat_names.len());
     let mut column = Vec::with_capacity(ok_rows.len());
-    for (c, name) in stat_names.iter().enumerate() {
+    for c in 0..stat_names.len() {
         column.clear();
         column.extend(ok_rows.iter().map(|r| r.1[c]));
-        let st = column_stats(&column);
-        let body = match &st {
-            None => "{\"p1\": null, \"p5\": null, \"p50\": null, \"p95\": null, \"p99\": null, \"mean\": null, \"std\": null}".to_owned(),
-            Some(st) => {
-                let p = st.percentiles;
-                format!(
-                    "{{\"p1\": {}, \"p5\": {}, \"p50\": {}, \"p95\": {}, \"p99\": {}, \"mean\": {}, \"std\": {}}}",
-                    num(p[0]), num(p[1]), num(p[2]), num(p[3]), num(p[4]), num(st.mean), num(st.std)
-                )
-            }
-        };
-        let comma = if c + 1 < stat_names.len() { "," } else { "" };
-        let _ = writeln!(
-            s,
-            "  {}: {body}{comma}",
-            serde_json::to_string(name).unwrap_or_default()
-        );
-        all_stats.push(st);
+        all_stats.push(column_stats(&column));
     }
-    if stat_names.is_empty() {
-        // Remove the trailing comma of the last fixed field.
-        let cut = s.trim_end().trim_end_matches(',').len();
-        s.truncate(cut);
-        s.push('\n');
-    }
-    s.push_str("}\n");
+    let summary = Summary {
+        counts: [
+            ("runs", n_runs),
+            ("ok", n_ok),
+            ("failed", failed),
+            ("missing", missing),
+            ("campaign_runs", meta.runs),
+            ("seed", meta.seed),
+        ],
+        shard: meta.shard.to_string(),
+        names: stat_names,
+        stats: &all_stats,
+    };
+    let mut s = serde_json::to_string_pretty(&summary)
+        .map_err(|e| CampaignError::io(&dir.join(SUMMARY_JSON), e))?;
+    s.push('\n');
     std::fs::write(dir.join(SUMMARY_JSON), &s)
         .map_err(|e| CampaignError::io(&dir.join(SUMMARY_JSON), e))?;
 
@@ -428,12 +411,52 @@ pub fn finish(dir: &Path, meta: &Meta) -> Result<Finished, CampaignError> {
     })
 }
 
-/// A finite number in JSON (shortest round-trip form).
-fn num(x: f64) -> String {
-    if x.is_finite() {
-        serde_json::to_string(&x).unwrap_or_else(|_| "null".into())
-    } else {
-        "null".into()
+/// `summary.json`: the counts, the shard, then every statistics column's percentiles, mean
+/// and standard deviation in column order (`null` where no run finished or a value is not
+/// finite).
+struct Summary<'a> {
+    counts: [(&'static str, u64); 6],
+    shard: String,
+    names: &'a [String],
+    stats: &'a [Option<ColumnStats>],
+}
+
+impl serde::Serialize for Summary<'_> {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let finite = |x: f64| x.is_finite().then_some(x);
+        let mut map = s.serialize_map(Some(self.counts.len() + 1 + self.names.len()))?;
+        for (key, n) in &self.counts {
+            map.serialize_entry(key, n)?;
+        }
+        map.serialize_entry("shard", &self.shard)?;
+        for (name, st) in self.names.iter().zip(self.stats) {
+            let values: [Option<f64>; 7] = match st {
+                Some(st) => {
+                    let p = st.percentiles;
+                    [p[0], p[1], p[2], p[3], p[4], st.mean, st.std].map(finite)
+                }
+                None => [None; 7],
+            };
+            let keys = ["p1", "p5", "p50", "p95", "p99", "mean", "std"];
+            let entry: Vec<(&str, Option<f64>)> = keys.into_iter().zip(values).collect();
+            map.serialize_entry(name, &Ordered(&entry))?;
+        }
+        map.end()
+    }
+}
+
+/// A JSON object with its keys in the given order.
+struct Ordered<'a>(&'a [(&'a str, Option<f64>)]);
+
+impl serde::Serialize for Ordered<'_> {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let mut map = s.serialize_map(Some(self.0.len()))?;
+        for (k, v) in self.0 {
+            map.serialize_entry(k, v)?;
+        }
+        map.end()
     }
 }
 
