@@ -81,19 +81,19 @@ impl Effect for GravityGradient {
         let r = orbit.r.norm();
         let k = orbit.mu / (r * r * r);
         let e = orbit.r / r;
-        for (i, body) in ctx.model.bodies.iter().enumerate() {
-            if body.mass == 0.0 && body.inertia_com.norm() == 0.0 {
+        for (i, body) in ctx.model.bodies().iter().enumerate() {
+            if body.mass() == 0.0 && body.inertia_com().norm() == 0.0 {
                 continue;
             }
             let rot = &ctx.data.rotation[i];
             let eb = rot.tr_mul(&e);
-            let mut ang = 3.0 * k * eb.cross(&(body.inertia_com * eb));
+            let mut ang = 3.0 * k * eb.cross(&(body.inertia_com() * eb));
             let mut lin = Vec3::zeros();
-            if self.model == GravityModel::Full && body.mass > 0.0 {
-                let rho = ctx.data.position[i] + rot * body.com - ctx.com;
-                let f = k * body.mass * (3.0 * e.dot(&rho) * e - rho);
+            if self.model == GravityModel::Full && body.mass() > 0.0 {
+                let rho = ctx.data.position[i] + rot * body.com() - ctx.com;
+                let f = k * body.mass() * (3.0 * e.dot(&rho) * e - rho);
                 lin = rot.tr_mul(&f);
-                ang += body.com.cross(&lin);
+                ang += body.com().cross(&lin);
             }
             forces.add_wrench(i, Force::new(ang, lin));
         }
@@ -105,14 +105,14 @@ impl Effect for GravityGradient {
         let k = orbit.mu / (r * r * r);
         let e = orbit.r / r;
         let mut v = 0.0;
-        for (i, body) in ctx.model.bodies.iter().enumerate() {
+        for (i, body) in ctx.model.bodies().iter().enumerate() {
             let rot = &ctx.data.rotation[i];
             let eb = rot.tr_mul(&e);
-            v += 0.5 * k * (3.0 * eb.dot(&(body.inertia_com * eb)) - body.inertia_com.trace());
+            v += 0.5 * k * (3.0 * eb.dot(&(body.inertia_com() * eb)) - body.inertia_com().trace());
             if self.model == GravityModel::Full {
-                let rho = ctx.data.position[i] + rot * body.com - ctx.com;
+                let rho = ctx.data.position[i] + rot * body.com() - ctx.com;
                 let er = e.dot(&rho);
-                v -= 0.5 * k * body.mass * (3.0 * er * er - rho.norm_squared());
+                v -= 0.5 * k * body.mass() * (3.0 * er * er - rho.norm_squared());
             }
         }
         v
