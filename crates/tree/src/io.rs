@@ -1,10 +1,13 @@
 //! Readers for the model TOML and state JSON files of the command-line contract
 //! (`cli-contract.md` sections 1 and 2).
 //!
-//! - [`read_model`] / [`parse_model`]: a model file into a validated [`Model`]. The file is
-//!   first deserialised into a [`ModelFile`] (strict: unknown keys are errors), which keeps the
-//!   byte span of every body, hinge and key, so that every error names the line concerned.
+//! - [`read_model`] / [`parse_model`]: a model file into a validated
+//!   [`Model`](crate::Model). The file is first deserialised into a [`ModelFile`] (strict:
+//!   unknown keys are errors), which keeps the byte span of every body, hinge and key, so
+//!   that every error names the line concerned.
 //! - [`read_state`] / [`parse_state`]: a state file into a [`State`] in the engine's layout.
+//!   The root's attitude is a quaternion, Euler angles in a stated sequence or an axis and
+//!   angle ([`Attitude`]).
 //!
 //! Every [`FileError`] displays as `PATH:LINE: message` (or `PATH: field: message` where
 //! only the field is known, as for JSON arrays of the wrong length).
@@ -59,6 +62,7 @@ pub use state_file::{
 
 use std::path::Path;
 
+/// The text of the file at `path`; an empty file (or only white space) is an error.
 pub(crate) fn read_text(path: &Path) -> Result<String, FileError> {
     let text = std::fs::read_to_string(path).map_err(|source| FileError::Read {
         path: path.to_path_buf(),

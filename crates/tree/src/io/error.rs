@@ -114,8 +114,9 @@ pub fn line_of(text: &str, offset: usize) -> usize {
         + 1
 }
 
-/// An error of [`ModelFile::build`], located by a byte span in the TOML text the
-/// [`ModelFile`] was read from. [`SpannedError::in_file`] turns it into a [`FileError`].
+/// An error of [`ModelFile::build`](super::ModelFile::build), located by a byte span in the
+/// TOML text the [`ModelFile`](super::ModelFile) was read from. [`SpannedError::in_file`]
+/// turns it into a [`FileError`].
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum SpannedError {
     /// A required key is missing (`inertia` of a body with mass).
