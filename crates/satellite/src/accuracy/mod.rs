@@ -1,10 +1,10 @@
 //! Work-precision measurements: what accuracy costs in time.
 //!
-//! A [`Sweep`] runs a [`Scene`] with every integrator over a range of tolerances (and the
-//! fixed-step RK4 over a range of steps), measures each run's error against a reference
-//! solution and its cost (wall time, minimum over several repeats, and right-hand-side
-//! evaluations from [`Stats`]), and collects the points into a [`Report`] that renders as
-//! CSV, a log-log SVG diagram and a markdown table.
+//! A [`Sweep`] runs a [`Scene`](crate::scene::Scene) with every integrator over a range of
+//! tolerances (and the fixed-step RK4 over a range of steps), measures each run's error
+//! against a reference solution and its cost (wall time, minimum over several repeats, and
+//! right-hand-side evaluations from [`Stats`](satsim_integrate::Stats)), and collects the
+//! points into a [`Report`] that renders as CSV, a log-log SVG diagram and a markdown table.
 //!
 //! # Reference
 //!
