@@ -1,27 +1,7 @@
 //! A state file's `base.attitude`, in any of its three forms: a quaternion, Euler angles in a
 //! stated sequence, or an axis and an angle.
 //!
-//! All three give the root body frame relative to the inertial frame: the rotation that maps
-//! root-body coordinates to inertial ones (the quaternion `q` of the state, Hamilton
-//! `[w, x, y, z]`, `v_inertial = q v_body q*`).
-//!
-//! - `[w, x, y, z]`: the quaternion itself (the contract's form).
-//! - `{"euler_deg": [a1, a2, a3], "sequence": "zyx"}`: intrinsic rotations, in degrees, about
-//!   the axes named by `sequence` in that order, each about the axis as already turned by the
-//!   rotations before it: `q = Q(e1, a1) ⊗ Q(e2, a2) ⊗ Q(e3, a3)`. The angles come in the
-//!   order of the sequence (as `scipy`'s `from_euler("ZYX", …)` and MATLAB's
-//!   `eul2quat(…, "ZYX")` take them): for `"zyx"`, `[yaw, pitch, roll]` (z-y′-x″, the
-//!   aerospace 3-2-1 sequence), which is nalgebra's
-//!   `UnitQuaternion::from_euler_angles(roll, pitch, yaw)`. Any of the 12 sequences of three
-//!   axes with no axis twice in a row: the six Tait–Bryan ones (`xyz`, `xzy`, `yxz`, `yzx`,
-//!   `zxy`, `zyx`) and the six proper Euler ones (`xyx`, `xzx`, `yxy`, `yzy`, `zxz`, `zyz`).
-//! - `{"axis": [x, y, z], "angle_deg": θ}`: a right-handed rotation by `θ` degrees about
-//!   `axis` (the same components in both frames; any non-zero length, normalised):
-//!   `q = [cos(θ/2), sin(θ/2) â]`.
-//!
-//! The angle forms are checked as they are read (so that a JSON or TOML error names the line);
-//! the quaternion's length and norm are checked against the model by
-//! [`StateFile::resolve`](super::StateFile::resolve).
+//! See [`Attitude`].
 
 use crate::spatial::Vec3;
 use nalgebra::{Unit, UnitQuaternion};
@@ -29,7 +9,29 @@ use serde::Deserialize;
 use serde::de::{self, Deserializer, MapAccess, SeqAccess, Visitor};
 use std::fmt;
 
-/// `base.attitude` as written (see the [module](self) documentation for the conventions).
+/// `base.attitude` as written, in one of three forms.
+///
+/// All three give the root body frame relative to the inertial frame: the rotation that maps
+/// root-body coordinates to inertial ones (the quaternion `q` of the state, Hamilton
+/// `[w, x, y, z]`, `v_inertial = q v_body q*`).
+///
+/// - `[w, x, y, z]`: the quaternion itself (the contract's form).
+/// - `{"euler_deg": [a1, a2, a3], "sequence": "zyx"}`: intrinsic rotations, in degrees, about
+///   the axes named by `sequence` in that order, each about the axis as already turned by the
+///   rotations before it: `q = Q(e1, a1) ⊗ Q(e2, a2) ⊗ Q(e3, a3)`. The angles come in the
+///   order of the sequence (as `scipy`'s `from_euler("ZYX", …)` and MATLAB's
+///   `eul2quat(…, "ZYX")` take them): for `"zyx"`, `[yaw, pitch, roll]` (z-y′-x″, the
+///   aerospace 3-2-1 sequence), which is nalgebra's
+///   `UnitQuaternion::from_euler_angles(roll, pitch, yaw)`. Any of the 12 sequences of three
+///   axes with no axis twice in a row: the six Tait–Bryan ones (`xyz`, `xzy`, `yxz`, `yzx`,
+///   `zxy`, `zyx`) and the six proper Euler ones (`xyx`, `xzx`, `yxy`, `yzy`, `zxz`, `zyz`).
+/// - `{"axis": [x, y, z], "angle_deg": θ}`: a right-handed rotation by `θ` degrees about
+///   `axis` (the same components in both frames; any non-zero length, normalised):
+///   `q = [cos(θ/2), sin(θ/2) â]`.
+///
+/// The angle forms are checked as they are read (so that a JSON or TOML error names the line);
+/// the quaternion's length and norm are checked against the model by
+/// [`StateFile::resolve`](super::StateFile::resolve).
 ///
 /// ```
 /// use satsim_tree::io::{Attitude, StateFile};
