@@ -243,12 +243,10 @@ fn the_scene_armature_lets_the_same_scene_run_through_the_lock() {
         lock_scene(armature)
     );
     let sim = scene(&with_wheel).simulation().unwrap();
-    let armatures: Vec<f64> = sim
-        .model()
-        .joints
-        .iter()
-        .flatten()
-        .map(|j| j.armature)
+    let model = sim.model();
+    let armatures: Vec<f64> = (1..model.n_bodies())
+        .filter_map(|i| model.joint(i))
+        .map(|j| j.armature())
         .collect();
     assert_eq!(armatures, [1e-3, 1e-3, 1e-3, 0.0, 0.0, 0.0]);
 

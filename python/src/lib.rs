@@ -78,7 +78,7 @@ impl NativeModel {
     /// `"free"` or `"fixed"`.
     #[getter]
     fn base(&self) -> &'static str {
-        match self.model.base {
+        match self.model.base() {
             satsim_tree::BaseKind::Free => "free",
             satsim_tree::BaseKind::Fixed => "fixed",
         }
@@ -93,13 +93,17 @@ impl NativeModel {
     /// Body names, the root first (the engine's order: parents before children).
     #[getter]
     fn body_names(&self) -> Vec<String> {
-        self.model.bodies.iter().map(|b| b.name.clone()).collect()
+        self.model
+            .bodies()
+            .iter()
+            .map(|b| b.name().to_owned())
+            .collect()
     }
 
     /// Hinge names in the model file's order (the order of the state's arrays).
     #[getter]
     fn hinge_names(&self) -> Vec<String> {
-        self.model.hinge_names.clone()
+        self.model.hinge_names().to_vec()
     }
 
     /// Total mass (kg).

@@ -185,11 +185,11 @@ pub fn linearize_simulation(sim: &mut Simulation) -> Result<Linearization, Linea
     for j in 0..n_rotors {
         if sim.locked()[n_user + j] {
             sim.release(n_user + j);
-            released.push(model.hinge_names[n_user + j].clone());
+            released.push(model.hinge_names()[n_user + j].clone());
         }
     }
     let locked = sim.locked().to_vec();
-    let hinge_names = &model.hinge_names;
+    let hinge_names = &model.hinge_names();
 
     // The linear states: names, where they live in x, and their step scales.
     let mut states: Vec<String> = Vec::new();

@@ -251,14 +251,14 @@ pub fn sweep(scene: &Scene, along: &[Along], steps: usize) -> Result<Vec<SweepPo
     let model = &scene.model;
     let mut index = Vec::with_capacity(along.len());
     for a in along {
-        let k = model.hinge_names[..model.n_hinges()]
+        let k = model.hinge_names()[..model.n_hinges()]
             .iter()
             .position(|n| *n == a.hinge)
             .ok_or_else(|| {
                 ModesError::Sweep(format!(
                     "unknown hinge `{}` (the model's hinges: {})",
                     a.hinge,
-                    model.hinge_names.join(", ")
+                    model.hinge_names().join(", ")
                 ))
             })?;
         if index.contains(&k) {

@@ -766,7 +766,7 @@ impl Parser<'_> {
     }
 
     /// The model with the scene's `armature` on its hinges.
-    fn armature(&self, mut model: Model, a: &Spanned<ArmatureFile>) -> Result<Model, FileError> {
+    fn armature(&self, model: Model, a: &Spanned<ArmatureFile>) -> Result<Model, FileError> {
         let n = model.n_hinges();
         let values = match a.get_ref() {
             ArmatureFile::All(v) => vec![*v; n],
@@ -787,13 +787,15 @@ impl Parser<'_> {
                 format!("`armature` must be finite numbers >= 0 (kg m²), got {v}"),
             ));
         }
-        for (k, v) in values.into_iter().enumerate() {
-            let i = model.hinge_body[k];
-            if let Some(j) = model.joints[i].as_mut() {
-                j.armature = v;
-            }
+        // A built model never changes: the armature goes through the builder (which also
+        // stops treating a rotor with armature as a gyrostat).
+        let mut builder = model.to_builder();
+        for (hinge, v) in builder.hinges_mut().iter_mut().zip(values) {
+            hinge.armature = v;
         }
-        Ok(model)
+        builder
+            .build()
+            .map_err(|e| self.err(Some(a.span()), format!("`armature`: {e}")))
     }
 
     fn integrator(&self, f: Option<&Spanned<IntegratorFile>>) -> Result<Options, FileError> {
@@ -998,7 +1000,7 @@ impl Parser<'_> {
                 format!(
                     "unknown hinge `{}` (the model's hinges: {})",
                     name.get_ref(),
-                    model.hinge_names.join(", ")
+                    model.hinge_names().join(", ")
                 ),
             )
         })

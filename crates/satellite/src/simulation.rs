@@ -51,8 +51,8 @@ use satsim_integrate::{
 };
 use satsim_tree::spatial::{Mat3, Vec3};
 use satsim_tree::{
-    BaseKind, Body, Data, DynamicsError, Hinge, Model, ModelBuilder, ModelError, State, aba,
-    aba_hybrid, center_of_mass, crba, forward_kinematics, kinetic_energy, momentum, rnea,
+    BaseKind, Body, Data, DynamicsError, Hinge, Model, ModelError, State, aba, aba_hybrid,
+    center_of_mass, crba, forward_kinematics, kinetic_energy, momentum, rnea,
 };
 use std::cell::RefCell;
 use std::ops::{ControlFlow, Range};
@@ -249,31 +249,8 @@ fn order_of(name: &str) -> usize {
 
 /// The model plus rotor bodies hinged to its root (appended after its hinges).
 fn with_rotors(model: &Model, rotors: &[Rotor]) -> Result<Model, ModelError> {
-    let mut b = ModelBuilder::new(model.base);
-    for body in &model.bodies {
-        let mut copy = Body::new(body.name.clone(), body.mass, body.inertia_com).with_com(body.com);
-        copy.shape = body.shape;
-        b.push_body(copy);
-    }
-    for (k, name) in model.hinge_names.iter().enumerate() {
-        let i = model.hinge_body[k];
-        let j = model.joints[i].as_ref().expect("non-root body has a joint");
-        let p = model.parent[i].expect("non-root body has a parent");
-        let rot = UnitQuaternion::from_matrix(&j.rot0);
-        b.push_hinge(
-            Hinge::revolute(
-                name.clone(),
-                model.bodies[p].name.clone(),
-                model.bodies[i].name.clone(),
-                j.axis,
-            )
-            .at(j.at)
-            .child_at(j.child_at)
-            .rotation(*rot.quaternion())
-            .armature(j.armature),
-        );
-    }
-    let root = model.bodies[0].name.clone();
+    let mut b = model.to_builder();
+    let root = model.bodies()[0].name().to_owned();
     for r in rotors {
         b.push_body(Body::new(r.name.clone(), r.mass, r.inertia()));
         b.push_hinge(
@@ -325,7 +302,7 @@ impl Simulation {
                 )));
             }
         }
-        let free = user.base == BaseKind::Free;
+        let free = user.base() == BaseKind::Free;
         let has = |n: &str| effects.iter().any(|e| e.name() == n);
         for e in &effects {
             let needs = e.needs();
@@ -795,10 +772,10 @@ impl Simulation {
         .iter()
         .map(|s| s.to_string())
         .collect();
-        for name in &self.model.hinge_names[..self.n_user] {
+        for name in &self.model.hinge_names()[..self.n_user] {
             c.push(format!("angle_{name}"));
         }
-        for name in &self.model.hinge_names[..self.n_user] {
+        for name in &self.model.hinge_names()[..self.n_user] {
             c.push(format!("rate_{name}"));
         }
         for e in &self.effects {

@@ -65,11 +65,11 @@ fn cloud(model: &Model, q: &[f64]) -> Vec<(f64, Vec3)> {
     let mut data = Data::new(model);
     forward_kinematics(model, &mut data, q, &vec![0.0; model.nv()]).unwrap();
     let mut pts = Vec::new();
-    for (i, b) in model.bodies.iter().enumerate() {
-        if b.mass == 0.0 {
+    for (i, b) in model.bodies().iter().enumerate() {
+        if b.mass() == 0.0 {
             continue;
         }
-        for (m, p) in point_masses(b.mass, b.com, &b.inertia_com) {
+        for (m, p) in point_masses(b.mass(), *b.com(), b.inertia_com()) {
             pts.push((m, data.position[i] + data.rotation[i] * p));
         }
     }

@@ -326,22 +326,22 @@ fn rebuild(
     let p = PreprintParams::default();
     let m = build_model(&p).unwrap();
     let mut bodies: Vec<satsim_tree::Body> = m
-        .bodies
+        .bodies()
         .iter()
-        .map(|b| satsim_tree::Body::new(b.name.clone(), b.mass, b.inertia_com).with_com(b.com))
+        .map(|b| satsim_tree::Body::new(b.name(), b.mass(), *b.inertia_com()).with_com(*b.com()))
         .collect();
     let mut hinges: Vec<satsim_tree::Hinge> = (0..5)
         .map(|k| {
-            let i = m.hinge_body[k];
-            let j = m.joints[i].as_ref().unwrap();
+            let i = m.hinge_body()[k];
+            let j = m.joint(i).unwrap();
             satsim_tree::Hinge::revolute(
-                m.hinge_names[k].clone(),
-                m.bodies[m.parent[i].unwrap()].name.clone(),
-                m.bodies[i].name.clone(),
-                j.axis,
+                m.hinge_names()[k].clone(),
+                m.bodies()[m.parent()[i].unwrap()].name(),
+                m.bodies()[i].name(),
+                *j.axis(),
             )
-            .at(j.at)
-            .child_at(j.child_at)
+            .at(*j.at())
+            .child_at(*j.child_at())
         })
         .collect();
     f(&mut bodies, &mut hinges);

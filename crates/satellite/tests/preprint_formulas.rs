@@ -64,13 +64,13 @@ fn centre_of_mass_eq13() {
         let mut data = Data::new(&model);
         forward_kinematics(&model, &mut data, &q, &v).unwrap();
         let r_o = center_of_mass(&model, &data);
-        let bus = &model.bodies[0];
-        let r_o1 = data.position[0] + data.rotation[0] * bus.com;
+        let bus = &model.bodies()[0];
+        let r_o1 = data.position[0] + data.rotation[0] * bus.com();
         let sy = Symbols::new(&layout.params, &state_from_engine(&q, &v, &tau).unwrap());
         let by_13 = r_o + data.rotation[0] * bus_offset_eq13(&sy);
         assert!((by_13 - r_o1).norm() < 1e-11 * (1.0 + r_o.norm()), "{seed}");
         // (12): r_O2 = r_O1 + a1 + c2, etc.
-        let com = |b: usize| data.position[b] + data.rotation[b] * model.bodies[b].com;
+        let com = |b: usize| data.position[b] + data.rotation[b] * model.bodies()[b].com();
         let r = data.rotation[0];
         assert!(
             (com(layout.body(2).unwrap()) - (r_o1 + r * sy.d_12())).norm()
@@ -184,16 +184,16 @@ fn quaternion_equation_20() {
 fn bodies_about_com(model: &Model, data: &Data) -> Vec<(f64, Mat3, Vec3)> {
     let c = center_of_mass(model, data);
     model
-        .bodies
+        .bodies()
         .iter()
         .enumerate()
-        .filter(|(_, b)| b.mass > 0.0)
+        .filter(|(_, b)| b.mass() > 0.0)
         .map(|(i, b)| {
             let r = data.rotation[i];
             (
-                b.mass,
-                r * b.inertia_com * r.transpose(),
-                data.position[i] + r * b.com - c,
+                b.mass(),
+                r * b.inertia_com() * r.transpose(),
+                data.position[i] + r * b.com() - c,
             )
         })
         .collect()
@@ -277,8 +277,8 @@ fn newton_euler_equations_5_to_10_and_16() {
         // Inertial quantities of the preprint's bodies 1..4.
         let b = [1, 2, 3, 4].map(|i| layout.body(i).unwrap());
         let rot = |i: usize| data.rotation[b[i]];
-        let com = |i: usize| model.bodies[b[i]].com;
-        let mass = |i: usize| model.bodies[b[i]].mass;
+        let com = |i: usize| *model.bodies()[b[i]].com();
+        let mass = |i: usize| model.bodies()[b[i]].mass();
         let w = |i: usize| rot(i) * data.v[b[i]].ang;
         let wd = |i: usize| rot(i) * data.a[b[i]].ang;
         let r_o = |i: usize| data.position[b[i]] + rot(i) * com(i);
@@ -291,18 +291,18 @@ fn newton_euler_equations_5_to_10_and_16() {
                     + vv.ang.cross(&vv.ang.cross(&c)))
         };
         let kdot = |i: usize| {
-            let ii = rot(i) * model.bodies[b[i]].inertia_com * rot(i).transpose();
+            let ii = rot(i) * model.bodies()[b[i]].inertia_com() * rot(i).transpose();
             ii * wd(i) + w(i).cross(&(ii * w(i)))
         };
         let hinge_point = |k: usize| {
-            let c = model.hinge_body[k];
-            let p = model.parent[c].unwrap();
-            data.position[p] + data.rotation[p] * model.joints[c].as_ref().unwrap().at
+            let c = model.hinge_body()[k];
+            let p = model.parent()[c].unwrap();
+            data.position[p] + data.rotation[p] * model.joint(c).unwrap().at()
         };
         let axis = |k: usize| {
-            let c = model.hinge_body[k];
-            let p = model.parent[c].unwrap();
-            data.rotation[p] * model.joints[c].as_ref().unwrap().axis
+            let c = model.hinge_body()[k];
+            let p = model.parent()[c].unwrap();
+            data.rotation[p] * model.joint(c).unwrap().axis()
         };
         let f = |i: usize| acc(i) * mass(i); // m_i r̈_Oi − F_i with F_i = 0
         let (p1, p4, p5) = (hinge_point(0), hinge_point(3), hinge_point(4));

@@ -1,13 +1,20 @@
 //! [`Data`]: the reusable workspace of the per-call algorithms (Pinocchio's `Data`).
 //!
 //! Everything is allocated once by [`Data::new`]; the algorithms then only write into it.
+//! `Data` is scratch, not state: a field's contents are meaningful only right after the
+//! algorithm that fills it and until the next call that writes it (any algorithm may reuse
+//! any buffer). Keep the physical state (`q`, `v`) in your own vectors.
 
 use crate::model::Model;
 use crate::spatial::{ArticulatedInertia, Force, Mat3, Motion, RigidInertia, Transform, Vec3};
 use nalgebra::{DMatrix, DVector};
 
 /// Scratch buffers and results for one [`Model`]. Per-body vectors are indexed like
-/// `model.bodies` and expressed in each body's own frame unless said otherwise.
+/// [`Model::bodies`] and expressed in each body's own frame unless said otherwise.
+///
+/// Each field names the algorithms that fill it; read it right after one of them (with the
+/// same `q`, `v`), never as a record of an earlier call. Results are also returned by
+/// reference by the algorithms themselves (`aba` returns `&data.ddq`).
 ///
 /// ```
 /// use satsim_tree::{BaseKind, Body, Data, ModelBuilder, spatial::Mat3};
@@ -20,43 +27,53 @@ use nalgebra::{DMatrix, DVector};
 /// ```
 #[derive(Clone, Debug)]
 pub struct Data {
-    /// `Xup[i]`: from `λ(i)`'s coordinates to body `i`'s.
+    /// `Xup[i]`: from `λ(i)`'s coordinates to body `i`'s. Filled by
+    /// [`crate::update_transforms`] and so by every algorithm taking `q`.
     pub xup: Vec<Transform>,
-    /// Body-to-inertial rotation of each body (after [`crate::forward_kinematics`]).
+    /// Body-to-inertial rotation of each body. Filled by [`crate::forward_kinematics`]
+    /// (read by [`crate::center_of_mass`], [`crate::momentum`]).
     pub rotation: Vec<Mat3>,
-    /// Body frame origin in inertial coordinates (m).
+    /// Body frame origin in inertial coordinates (m). Filled by [`crate::forward_kinematics`].
     pub position: Vec<Vec3>,
-    /// Spatial velocity of each body.
+    /// Spatial velocity of each body. Filled by [`crate::forward_kinematics`],
+    /// [`crate::rnea()`], [`crate::aba()`] (not for gyrostat rotors in ABA).
     pub v: Vec<Motion>,
-    /// Spatial acceleration of each body.
+    /// Spatial acceleration of each body. Filled by [`crate::forward_kinematics_acc`],
+    /// [`crate::rnea()`], [`crate::aba()`] (not for gyrostat rotors in ABA).
     pub a: Vec<Motion>,
-    /// Velocity-product acceleration `cᵢ = vᵢ ×m Sᵢ q̇ᵢ`.
+    /// Velocity-product acceleration `cᵢ = vᵢ ×m Sᵢ q̇ᵢ`. Filled by [`crate::aba()`].
     pub c: Vec<Motion>,
-    /// Spatial force transmitted across each body's hinge (RNEA).
+    /// Spatial force transmitted across each body's hinge. Filled by [`crate::rnea()`].
     pub f: Vec<Force>,
-    /// Articulated-body inertias (ABA).
+    /// Articulated-body inertias. Filled by [`crate::aba()`].
     pub ia: Vec<ArticulatedInertia>,
-    /// Articulated bias forces (ABA).
+    /// Articulated bias forces. Filled by [`crate::aba()`].
     pub pa: Vec<Force>,
-    /// `Uᵢ = IAᵢ Sᵢ` (ABA).
+    /// `Uᵢ = IAᵢ Sᵢ`. Filled by [`crate::aba()`].
     pub u_col: Vec<Force>,
-    /// `Dᵢ = Sᵢᵀ Uᵢ` (ABA).
+    /// `Dᵢ = Sᵢᵀ Uᵢ`. Filled by [`crate::aba()`].
     pub d: Vec<f64>,
-    /// `uᵢ = τᵢ − Sᵢᵀ pAᵢ` (ABA).
+    /// `uᵢ = τᵢ − Sᵢᵀ pAᵢ`. Filled by [`crate::aba()`].
     pub u: Vec<f64>,
-    /// Composite rigid-body inertias (CRBA).
+    /// Composite rigid-body inertias. Filled by [`crate::crba()`].
     pub ic: Vec<RigidInertia>,
-    /// Joint-space mass matrix `M` (CRBA), `nv x nv`.
+    /// Joint-space mass matrix `M`, `nv x nv`. Filled by [`crate::crba()`] (and so by
+    /// [`crate::crba_cholesky`] and [`crate::impulse::hinge_impulse`]).
     pub mass_matrix: DMatrix<f64>,
-    /// Cholesky factor of `M` (lower triangle), forward dynamics by CRBA.
+    /// Cholesky factor of `M` (lower triangle). Filled by [`crate::crba_cholesky`] (models
+    /// under [`crate::cholesky::FAER_MIN_DOF`] DOF) and [`crate::impulse::hinge_impulse`].
     pub chol: DMatrix<f64>,
-    /// Generalised forces (RNEA output), `nv`.
+    /// Generalised forces, `nv`. Filled by [`crate::rnea()`].
     pub tau: DVector<f64>,
-    /// Velocity-product (bias) forces `C(q, v)` with external forces, `nv`.
+    /// Velocity-product (bias) forces `C(q, v)` with external forces, `nv`. Filled by
+    /// [`crate::bias`] (and so by [`crate::crba_cholesky`]).
     pub bias: DVector<f64>,
-    /// Generalised accelerations (ABA or CRBA forward dynamics), `nv`.
+    /// Generalised accelerations, `nv`. Filled by [`crate::aba()`], [`crate::aba_hybrid`]
+    /// and [`crate::crba_cholesky`]; [`crate::impulse::hinge_impulse`] writes `M⁻¹ e_k`
+    /// here, and [`crate::bias`] uses it as zero acceleration.
     pub ddq: DVector<f64>,
-    /// faer's factorisation buffers, for models of [`crate::cholesky::FAER_MIN_DOF`] or more DOF.
+    /// faer's factorisation buffers, for models of [`crate::cholesky::FAER_MIN_DOF`] or more
+    /// DOF (used by [`crate::crba_cholesky`]).
     pub faer: Option<crate::cholesky::FaerWork>,
 }
 

@@ -9,7 +9,9 @@
 //!   (inverse dynamics, [`bias`]), [`aba()`] (O(n) forward dynamics, the default),
 //!   [`crba_cholesky`] (forward dynamics through the mass matrix), [`kinetic_energy`],
 //!   [`center_of_mass`], [`momentum`].
-//! - [`io`] reads the model TOML and state JSON files of the command-line contract.
+//! - [`io`] reads the model TOML and state JSON files of the command-line contract (cargo
+//!   feature `files`, on by default; `default-features = false` builds the engine without
+//!   serde, serde_json and toml).
 //!
 //! Conventions: SI units; spatial vectors angular-then-linear, in body coordinates about the
 //! body frame's origin ([`spatial`]); quaternions are Hamilton `[w, x, y, z]`; a hinge torque
@@ -38,6 +40,7 @@ pub mod data;
 pub mod energy;
 pub mod error;
 pub mod impulse;
+#[cfg(feature = "files")]
 pub mod io;
 pub mod kinematics;
 pub mod model;
@@ -51,6 +54,7 @@ pub use crba::crba;
 pub use data::Data;
 pub use energy::{center_of_mass, kinetic_energy, momentum};
 pub use error::{DynamicsError, ModelError};
+#[cfg(feature = "files")]
 pub use io::{
     FileError, ModelFile, State, StateFile, parse_model, parse_state, read_model, read_state,
 };

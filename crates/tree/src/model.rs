@@ -232,6 +232,16 @@ impl ModelBuilder {
         self.hinges.push(hinge);
         self
     }
+    /// The hinges added so far, in order of addition, to adjust before [`ModelBuilder::build`]
+    /// (e.g. a scene's `armature`).
+    pub fn hinges_mut(&mut self) -> &mut [Hinge] {
+        &mut self.hinges
+    }
+    /// The bodies added so far (the first is the root), to adjust before
+    /// [`ModelBuilder::build`].
+    pub fn bodies_mut(&mut self) -> &mut [Body] {
+        &mut self.bodies
+    }
 
     /// Validates and builds the model.
     pub fn build(&self) -> Result<Model, ModelError> {
@@ -402,13 +412,32 @@ pub const GYROSTAT_TOLERANCE: f64 = 1e-14;
 #[derive(Clone, Debug, PartialEq)]
 pub struct Gyrostat {
     /// The rotor body.
-    pub body: usize,
+    pub(crate) body: usize,
     /// Its parent (the carrier).
-    pub parent: usize,
+    pub(crate) parent: usize,
     /// Unit spin axis, parent coordinates.
-    pub axis: Vec3,
+    pub(crate) axis: Vec3,
     /// Moment of inertia about the spin axis, `J` (kg m², > 0).
-    pub axial: f64,
+    pub(crate) axial: f64,
+}
+
+impl Gyrostat {
+    /// The rotor body.
+    pub fn body(&self) -> usize {
+        self.body
+    }
+    /// Its parent (the carrier).
+    pub fn parent(&self) -> usize {
+        self.parent
+    }
+    /// Unit spin axis, parent coordinates.
+    pub fn axis(&self) -> &Vec3 {
+        &self.axis
+    }
+    /// Moment of inertia about the spin axis, `J` (kg m², > 0).
+    pub fn axial(&self) -> f64 {
+        self.axial
+    }
 }
 
 fn finite3(v: &Vec3, what: impl FnOnce() -> String) -> Result<(), ModelError> {
@@ -518,41 +547,100 @@ fn check_hinge(h: &Hinge) -> Result<(Vec3, Mat3), ModelError> {
 #[derive(Clone, Debug, PartialEq)]
 pub struct BodyInfo {
     /// Name.
-    pub name: String,
+    pub(crate) name: String,
     /// Mass (kg).
-    pub mass: f64,
+    pub(crate) mass: f64,
     /// Centre of mass, body frame (m).
-    pub com: Vec3,
+    pub(crate) com: Vec3,
     /// Inertia about the centre of mass, body axes (kg m²).
-    pub inertia_com: Mat3,
+    pub(crate) inertia_com: Mat3,
     /// Spatial inertia about the body frame's origin.
-    pub inertia: RigidInertia,
+    pub(crate) inertia: RigidInertia,
     /// The box drawn for the body, if the model gave one (drawing only).
-    pub shape: Option<BoxShape>,
+    pub(crate) shape: Option<BoxShape>,
+}
+
+impl BodyInfo {
+    /// Name.
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+    /// Mass (kg).
+    pub fn mass(&self) -> f64 {
+        self.mass
+    }
+    /// Centre of mass, body frame (m).
+    pub fn com(&self) -> &Vec3 {
+        &self.com
+    }
+    /// Inertia about the centre of mass, body axes (kg m²).
+    pub fn inertia_com(&self) -> &Mat3 {
+        &self.inertia_com
+    }
+    /// Spatial inertia about the body frame's origin.
+    pub fn inertia(&self) -> &RigidInertia {
+        &self.inertia
+    }
+    /// The box drawn for the body, if the model gave one (drawing only).
+    pub fn shape(&self) -> Option<&BoxShape> {
+        self.shape.as_ref()
+    }
 }
 
 /// The revolute hinge that joins body `i` to its parent `λ(i)`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Joint {
     /// Index of the hinge in the order of addition (the model file's order).
-    pub hinge: usize,
+    pub(crate) hinge: usize,
     /// Index of its coordinate in `v` (and of its angle in the hinge part of `q`).
-    pub dof: usize,
+    pub(crate) dof: usize,
     /// Unit axis, parent frame.
-    pub axis: Vec3,
+    pub(crate) axis: Vec3,
     /// Hinge point, parent frame.
-    pub at: Vec3,
+    pub(crate) at: Vec3,
     /// Hinge point, child frame.
-    pub child_at: Vec3,
+    pub(crate) child_at: Vec3,
     /// Child to parent rotation at zero angle.
-    pub rot0: Mat3,
+    pub(crate) rot0: Mat3,
     /// Motion subspace `S` (constant, child coordinates).
-    pub s: Motion,
+    pub(crate) s: Motion,
     /// Armature (kg m²) added to the hinge's diagonal entry of `M`.
-    pub armature: f64,
+    pub(crate) armature: f64,
 }
 
 impl Joint {
+    /// Index of the hinge in the order of addition (the model file's order).
+    pub fn hinge(&self) -> usize {
+        self.hinge
+    }
+    /// Index of its coordinate in `v` (and of its angle in the hinge part of `q`).
+    pub fn dof(&self) -> usize {
+        self.dof
+    }
+    /// Unit axis, parent frame.
+    pub fn axis(&self) -> &Vec3 {
+        &self.axis
+    }
+    /// Hinge point, parent frame (m).
+    pub fn at(&self) -> &Vec3 {
+        &self.at
+    }
+    /// Hinge point, child frame (m).
+    pub fn child_at(&self) -> &Vec3 {
+        &self.child_at
+    }
+    /// Child to parent rotation at zero angle.
+    pub fn rot0(&self) -> &Mat3 {
+        &self.rot0
+    }
+    /// Motion subspace `S` (constant, child coordinates).
+    pub fn s(&self) -> &Motion {
+        &self.s
+    }
+    /// Armature (kg m²) added to the hinge's diagonal entry of `M`.
+    pub fn armature(&self) -> f64 {
+        self.armature
+    }
     /// `Xup`: the transform from the parent's coordinates to the child's at angle `phi`.
     #[inline]
     pub fn transform(&self, phi: f64) -> Transform {
@@ -573,20 +661,20 @@ impl Joint {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Model {
     /// Free or fixed root.
-    pub base: BaseKind,
+    pub(crate) base: BaseKind,
     /// Bodies, depth-first from the root.
-    pub bodies: Vec<BodyInfo>,
+    pub(crate) bodies: Vec<BodyInfo>,
     /// `λ(i)`: the parent of body `i` (`None` for the root).
-    pub parent: Vec<Option<usize>>,
+    pub(crate) parent: Vec<Option<usize>>,
     /// The hinge joining body `i` to `λ(i)` (`None` for the root).
-    pub joints: Vec<Option<Joint>>,
+    pub(crate) joints: Vec<Option<Joint>>,
     /// Hinge names in the order of addition.
-    pub hinge_names: Vec<String>,
+    pub(crate) hinge_names: Vec<String>,
     /// For hinge `k` (order of addition), the body it moves.
-    pub hinge_body: Vec<usize>,
+    pub(crate) hinge_body: Vec<usize>,
     base_nv: usize,
     /// Rotors that ABA treats as gyrostats of their parents (see [`Gyrostat`]).
-    pub gyrostats: Vec<Gyrostat>,
+    pub(crate) gyrostats: Vec<Gyrostat>,
     /// Per body: whether it is a [`Gyrostat`] rotor.
     pub(crate) is_gyrostat: Vec<bool>,
     /// Per body: its rigid inertia with its gyrostat rotors locked on (ABA's gyrostat form).
@@ -597,6 +685,34 @@ pub struct Model {
 }
 
 impl Model {
+    /// Free or fixed root.
+    pub fn base(&self) -> BaseKind {
+        self.base
+    }
+    /// Bodies, depth-first from the root (`λ(i) < i`, body 0 the root).
+    pub fn bodies(&self) -> &[BodyInfo] {
+        &self.bodies
+    }
+    /// `λ`: the parent of each body (`None` for the root).
+    pub fn parent(&self) -> &[Option<usize>] {
+        &self.parent
+    }
+    /// The hinge joining body `body` to its parent (`None` for the root).
+    pub fn joint(&self, body: usize) -> Option<&Joint> {
+        self.joints.get(body).and_then(Option::as_ref)
+    }
+    /// Hinge names in the order of addition.
+    pub fn hinge_names(&self) -> &[String] {
+        &self.hinge_names
+    }
+    /// For hinge `k` (order of addition), the body it moves.
+    pub fn hinge_body(&self) -> &[usize] {
+        &self.hinge_body
+    }
+    /// Rotors that ABA treats as gyrostats of their parents (see [`Gyrostat`]).
+    pub fn gyrostats(&self) -> &[Gyrostat] {
+        &self.gyrostats
+    }
     /// Number of bodies.
     pub fn n_bodies(&self) -> usize {
         self.bodies.len()
@@ -636,6 +752,53 @@ impl Model {
     /// Children of body `i`.
     pub fn children(&self, i: usize) -> impl Iterator<Item = usize> + '_ {
         (i + 1..self.n_bodies()).filter(move |&j| self.parent[j] == Some(i))
+    }
+    /// A builder that rebuilds this model: a built model never changes, so a variant (another
+    /// armature, a heavier body) is built anew. Bodies come in the model's depth-first order
+    /// and hinges in their order of addition, so the rebuilt model numbers bodies, hinges and
+    /// coordinates as this one does. A hinge's fixed `rotation` is recovered from its matrix
+    /// (identity exactly, others to round-off).
+    ///
+    /// ```
+    /// use satsim_tree::{BaseKind, Body, Hinge, ModelBuilder, spatial::{Mat3, Vec3}};
+    /// let model = ModelBuilder::new(BaseKind::Free)
+    ///     .body(Body::new("bus", 500.0, Mat3::identity() * 40.0))
+    ///     .body(Body::new("panel", 20.0, Mat3::identity() * 2.0))
+    ///     .hinge(Hinge::revolute("h", "bus", "panel", Vec3::z()).at(Vec3::x()))
+    ///     .build()?;
+    /// let mut builder = model.to_builder();
+    /// builder.hinges_mut()[0].armature = 0.1;
+    /// let stiffer = builder.build()?;
+    /// assert_eq!(stiffer.joint(1).unwrap().armature(), 0.1);
+    /// assert_eq!(model.joint(1).unwrap().armature(), 0.0);
+    /// # Ok::<(), satsim_tree::ModelError>(())
+    /// ```
+    pub fn to_builder(&self) -> ModelBuilder {
+        let mut builder = ModelBuilder::new(self.base);
+        for b in &self.bodies {
+            let mut body = Body::new(b.name.clone(), b.mass, b.inertia_com).with_com(b.com);
+            body.shape = b.shape;
+            builder.push_body(body);
+        }
+        for (k, name) in self.hinge_names.iter().enumerate() {
+            let i = self.hinge_body[k];
+            let j = self.joints[i].as_ref().expect("non-root body has a joint");
+            let p = self.parent[i].expect("non-root body has a parent");
+            let rotation = UnitQuaternion::from_matrix(&j.rot0).into_inner();
+            builder.push_hinge(
+                Hinge::revolute(
+                    name.clone(),
+                    self.bodies[p].name.clone(),
+                    self.bodies[i].name.clone(),
+                    j.axis,
+                )
+                .at(j.at)
+                .child_at(j.child_at)
+                .rotation(rotation)
+                .armature(j.armature),
+            );
+        }
+        builder
     }
     /// The neutral configuration: identity attitude, origin, zero angles.
     pub fn neutral(&self) -> Vec<f64> {

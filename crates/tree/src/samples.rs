@@ -128,7 +128,7 @@ pub fn random_tree(n: usize, base: BaseKind, massless_links: bool, seed: u64) ->
 ///
 /// ```
 /// let m = satsim_tree::samples::random_tree_with_rotors(8, satsim_tree::BaseKind::Free, true, 3, 7);
-/// assert_eq!(m.gyrostats.len(), 3);
+/// assert_eq!(m.gyrostats().len(), 3);
 /// ```
 pub fn random_tree_with_rotors(
     n: usize,

@@ -617,12 +617,12 @@ mod tests {
             assert_eq!(springs.stiffness[3], values[0]);
             assert_eq!(springs.damping[4], values[3]);
             assert_eq!(scene.initial.q[7 + 3], values[4]);
-            assert_eq!(scene.model.bodies[4].mass, values[6]);
+            assert_eq!(scene.model.bodies()[4].mass(), values[6]);
             let wheels = scene.effects.reaction_wheels.as_ref().unwrap();
             assert_eq!(wheels.wheels[2].coulomb, values[10]);
             // Untouched numbers stay as written.
             assert_eq!(springs.stiffness[0], 50.0);
-            assert_eq!(scene.model.bodies[3].mass, 20.0);
+            assert_eq!(scene.model.bodies()[3].mass(), 20.0);
         }
     }
 

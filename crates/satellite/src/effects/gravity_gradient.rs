@@ -95,25 +95,25 @@ impl Effect for GravityGradient {
         let e_dot = (orbit.v - ev * e) / r;
         let k_dot = -3.0 * k * ev / r;
         let mut field_power = 0.0;
-        for (i, body) in ctx.model.bodies.iter().enumerate() {
-            if body.mass == 0.0 && body.inertia_com.norm() == 0.0 {
+        for (i, body) in ctx.model.bodies().iter().enumerate() {
+            if body.mass() == 0.0 && body.inertia_com().norm() == 0.0 {
                 continue;
             }
             let rot = &ctx.data.rotation[i];
             let eb = rot.tr_mul(&e);
-            let ie = body.inertia_com * eb;
+            let ie = body.inertia_com() * eb;
             let mut ang = 3.0 * k * eb.cross(&ie);
-            field_power += 0.5 * k_dot * (3.0 * eb.dot(&ie) - body.inertia_com.trace())
+            field_power += 0.5 * k_dot * (3.0 * eb.dot(&ie) - body.inertia_com().trace())
                 + 3.0 * k * rot.tr_mul(&e_dot).dot(&ie);
             let mut lin = Vec3::zeros();
-            if self.model == GravityModel::Full && body.mass > 0.0 {
-                let rho = ctx.data.position[i] + rot * body.com - ctx.com;
+            if self.model == GravityModel::Full && body.mass() > 0.0 {
+                let rho = ctx.data.position[i] + rot * body.com() - ctx.com;
                 let er = e.dot(&rho);
-                let f = k * body.mass * (3.0 * er * e - rho);
+                let f = k * body.mass() * (3.0 * er * e - rho);
                 lin = rot.tr_mul(&f);
-                ang += body.com.cross(&lin);
+                ang += body.com().cross(&lin);
                 field_power -= 0.5
-                    * body.mass
+                    * body.mass()
                     * (k_dot * (3.0 * er * er - rho.norm_squared())
                         + 6.0 * k * er * e_dot.dot(&rho));
             }
@@ -133,14 +133,14 @@ impl Effect for GravityGradient {
         let k = orbit.mu / (r * r * r);
         let e = orbit.r / r;
         let mut v = 0.0;
-        for (i, body) in ctx.model.bodies.iter().enumerate() {
+        for (i, body) in ctx.model.bodies().iter().enumerate() {
             let rot = &ctx.data.rotation[i];
             let eb = rot.tr_mul(&e);
-            v += 0.5 * k * (3.0 * eb.dot(&(body.inertia_com * eb)) - body.inertia_com.trace());
+            v += 0.5 * k * (3.0 * eb.dot(&(body.inertia_com() * eb)) - body.inertia_com().trace());
             if self.model == GravityModel::Full {
-                let rho = ctx.data.position[i] + rot * body.com - ctx.com;
+                let rho = ctx.data.position[i] + rot * body.com() - ctx.com;
                 let er = e.dot(&rho);
-                v -= 0.5 * k * body.mass * (3.0 * er * er - rho.norm_squared());
+                v -= 0.5 * k * body.mass() * (3.0 * er * er - rho.norm_squared());
             }
         }
         v

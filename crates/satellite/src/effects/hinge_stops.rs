@@ -90,7 +90,7 @@ impl Effect for HingeStops {
     ) -> Result<(), SystemError> {
         for (s, stop) in self.stops.iter().enumerate() {
             let phi = ctx.angles[stop.hinge];
-            let name = &ctx.model.hinge_names[stop.hinge];
+            let name = &ctx.model.hinge_names()[stop.hinge];
             let below = stop.lower.is_some_and(|l| phi < l);
             let above = stop.upper.is_some_and(|u| phi > u);
             if below || above {
@@ -147,7 +147,7 @@ impl Effect for HingeStops {
             return EventAction::Continue;
         }
         self.impacts += 1;
-        let name = &ctx.model.hinge_names[h];
+        let name = &ctx.model.hinge_names()[h];
         let side = if k.is_multiple_of(2) {
             "lower"
         } else {

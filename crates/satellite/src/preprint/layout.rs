@@ -121,8 +121,8 @@ pub const ZERO_LENGTH_TOLERANCE: f64 = 1e-9;
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 pub fn recognise(model: &Model) -> Result<Layout, LayoutError> {
-    let name = |i: usize| model.bodies[i].name.clone();
-    if model.base != BaseKind::Free {
+    let name = |i: usize| model.bodies()[i].name().to_owned();
+    if model.base() != BaseKind::Free {
         return Err(LayoutError::FixedBase(name(0)));
     }
     if model.n_hinges() != 5 {
@@ -147,13 +147,13 @@ pub fn recognise(model: &Model) -> Result<Layout, LayoutError> {
     ];
     let mut chain = [0usize; 6];
     for k in 0..5 {
-        let child = model.hinge_body[k];
-        let parent = model.parent[child].expect("a hinge's child has a parent");
+        let child = model.hinge_body()[k];
+        let parent = model.parent()[child].expect("a hinge's child has a parent");
         if parent != chain[k] {
             let expected = format!("{} `{}`", PARENTS[k], name(chain[k]));
             return Err(LayoutError::WrongParent {
                 number: k + 1,
-                hinge: model.hinge_names[k].clone(),
+                hinge: model.hinge_names()[k].clone(),
                 role: ROLES[k],
                 expected,
                 found: name(parent),
@@ -161,27 +161,27 @@ pub fn recognise(model: &Model) -> Result<Layout, LayoutError> {
         }
         chain[k + 1] = child;
     }
-    let joint = |k: usize| model.joints[chain[k + 1]].as_ref().expect("joint");
+    let joint = |k: usize| model.joint(chain[k + 1]).expect("joint");
     for (number, link) in [(1usize, chain[1]), (2, chain[2])] {
-        let b = &model.bodies[link];
-        if b.mass != 0.0 || b.inertia_com.norm() != 0.0 {
+        let b = &model.bodies()[link];
+        if b.mass() != 0.0 || b.inertia_com().norm() != 0.0 {
             return Err(LayoutError::LinkHasMass {
                 number,
                 next: number + 1,
-                body: b.name.clone(),
-                mass: b.mass,
-                inertia: b.inertia_com.norm(),
+                body: b.name().to_owned(),
+                mass: b.mass(),
+                inertia: b.inertia_com().norm(),
             });
         }
         let (incoming, outgoing) = (joint(number - 1), joint(number));
-        let scale = 1.0 + incoming.child_at.norm() + outgoing.at.norm();
-        if (incoming.child_at - outgoing.at).norm() > ZERO_LENGTH_TOLERANCE * scale {
+        let scale = 1.0 + incoming.child_at().norm() + outgoing.at().norm();
+        if (incoming.child_at() - outgoing.at()).norm() > ZERO_LENGTH_TOLERANCE * scale {
             return Err(LayoutError::LinkLength {
                 number,
-                body: b.name.clone(),
-                incoming: model.hinge_names[number - 1].clone(),
-                outgoing: model.hinge_names[number].clone(),
-                distance: (incoming.child_at - outgoing.at).norm(),
+                body: b.name().to_owned(),
+                incoming: model.hinge_names()[number - 1].clone(),
+                outgoing: model.hinge_names()[number].clone(),
+                distance: (incoming.child_at() - outgoing.at()).norm(),
             });
         }
     }
@@ -192,30 +192,32 @@ pub fn recognise(model: &Model) -> Result<Layout, LayoutError> {
         (5, "panel 3"),
     ];
     for (number, (slot, role)) in MASSIVE.into_iter().enumerate() {
-        let b = &model.bodies[chain[slot]];
-        if b.mass <= 0.0 || b.mass.is_nan() {
+        let b = &model.bodies()[chain[slot]];
+        if b.mass() <= 0.0 || b.mass().is_nan() {
             return Err(LayoutError::NoMass {
                 number: number + 1,
                 role,
-                body: b.name.clone(),
-                mass: b.mass,
+                body: b.name().to_owned(),
+                mass: b.mass(),
             });
         }
     }
-    let com = |slot: usize| model.bodies[chain[slot]].com;
-    let inertia = |slot: usize| model.bodies[chain[slot]].inertia_com;
+    let com = |slot: usize| *model.bodies()[chain[slot]].com();
+    let inertia = |slot: usize| *model.bodies()[chain[slot]].inertia_com();
     let params = PreprintParams {
-        mass: MASSIVE.map(|(slot, _)| model.bodies[chain[slot]].mass),
+        mass: MASSIVE.map(|(slot, _)| model.bodies()[chain[slot]].mass()),
         inertia: [inertia(0), inertia(3), inertia(4), inertia(5)],
-        a1: joint(0).at - com(0),
-        c2: com(3) - joint(2).child_at,
-        a2: joint(3).at - com(3),
-        c3: com(4) - joint(3).child_at,
-        a3: joint(4).at - com(4),
-        c4: com(5) - joint(4).child_at,
-        e: [0, 1, 2, 3, 4].map(|k| joint(k).axis),
+        a1: joint(0).at() - com(0),
+        c2: com(3) - joint(2).child_at(),
+        a2: joint(3).at() - com(3),
+        c3: com(4) - joint(3).child_at(),
+        a3: joint(4).at() - com(4),
+        c4: com(5) - joint(4).child_at(),
+        e: [0, 1, 2, 3, 4].map(|k| *joint(k).axis()),
         rotation: [0, 1, 2, 3, 4].map(|k| {
-            UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(joint(k).rot0))
+            UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(
+                *joint(k).rot0(),
+            ))
         }),
     };
     Ok(Layout {

@@ -373,13 +373,13 @@ impl ViewScene {
     /// `columns`, with the nadir when `columns` has `orbit_r_x, orbit_r_y, orbit_r_z`.
     pub fn new(model: &Model, columns: &[String], title: impl Into<String>) -> Self {
         let bodies = model
-            .bodies
+            .bodies()
             .iter()
             .map(|b| ViewBody {
-                name: b.name.clone(),
-                drawn: match &b.shape {
+                name: b.name().to_owned(),
+                drawn: match b.shape() {
                     Some(s) => {
-                        let c = s.centre(&b.com);
+                        let c = s.centre(b.com());
                         Some(DrawnBox {
                             size: [s.size.x, s.size.y, s.size.z],
                             centre: [c.x, c.y, c.z],
@@ -387,24 +387,25 @@ impl ViewScene {
                             from: "shape".into(),
                         })
                     }
-                    None => inertia_box(b.mass, &b.com, &b.inertia_com),
+                    None => inertia_box(b.mass(), b.com(), b.inertia_com()),
                 },
             })
             .collect();
         let hinges = (1..model.n_bodies())
-            .filter_map(|i| model.joints[i].as_ref().map(|j| (i, j)))
+            .filter_map(|i| model.joint(i).map(|j| (i, j)))
             .map(|(i, j)| {
-                let axis = j.rot0.tr_mul(&j.axis);
+                let axis = j.rot0().tr_mul(j.axis());
+                let at = j.child_at();
                 ViewHinge {
-                    name: model.hinge_names[j.hinge].clone(),
+                    name: model.hinge_names()[j.hinge()].clone(),
                     body: i,
                     axis: [axis.x, axis.y, axis.z],
-                    at: [j.child_at.x, j.child_at.y, j.child_at.z],
+                    at: [at.x, at.y, at.z],
                 }
             })
             .collect();
         let angles = model
-            .hinge_names
+            .hinge_names()
             .iter()
             .filter(|h| columns.iter().any(|c| *c == format!("angle_{h}")))
             .cloned()
@@ -415,7 +416,7 @@ impl ViewScene {
         Self {
             format: FORMAT,
             title: title.into(),
-            origin: match model.base {
+            origin: match model.base() {
                 BaseKind::Free => "centre of mass".into(),
                 BaseKind::Fixed => "inertial origin".into(),
             },
@@ -480,7 +481,7 @@ impl PoseRecorder {
         if col("t") != Some(0) {
             return Err(missing("t"));
         }
-        let attitude = match model.base {
+        let attitude = match model.base() {
             BaseKind::Free => {
                 let mut a = [0; 4];
                 for (k, n) in ["q_w", "q_x", "q_y", "q_z"].iter().enumerate() {
@@ -491,7 +492,7 @@ impl PoseRecorder {
             BaseKind::Fixed => None,
         };
         let angle_cols: Vec<Option<usize>> = model
-            .hinge_names
+            .hinge_names()
             .iter()
             .map(|h| col(&format!("angle_{h}")))
             .collect();
@@ -547,7 +548,7 @@ impl PoseRecorder {
         }
         forward_kinematics(&self.model, &mut self.data, &self.q, &self.v)
             .map_err(|e| ViewError::Record(e.to_string()))?;
-        let origin = match self.model.base {
+        let origin = match self.model.base() {
             BaseKind::Free => center_of_mass(&self.model, &self.data),
             BaseKind::Fixed => Vec3::zeros(),
         };

@@ -1,4 +1,8 @@
 use super::*;
+use crate::model::{BaseKind, Model};
+use crate::spatial::Vec3;
+use serde::Deserialize;
+use std::path::Path;
 
 /// A valid two-body model (`tests/fixtures/two_body.toml`, shared with the CLI's contract
 /// tests): the bad inputs below are small edits of it.
@@ -670,4 +674,218 @@ fn a_nearly_unit_attitude_is_normalised_with_a_warning() {
     // Beyond 1e-3: refused.
     let e = f("[1.002, 0, 0, 0]").resolve(&model).unwrap_err();
     assert!(e.message.contains("within 1e-3"), "{e}");
+}
+
+/// The state file with `attitude` as given (JSON text), resolved for the two-body model.
+fn attitude_of(attitude: &str) -> Result<[f64; 4], FileError> {
+    let text = format!(
+        "{{\n  \"base\": {{\n    \"attitude\": {attitude}\n  }},\n  \"hinges\": {{\"angle\": [0], \"rate\": [0]}}\n}}"
+    );
+    let s = parse_state(&text, Path::new("s.json"), &model())?;
+    Ok([s.q[0], s.q[1], s.q[2], s.q[3]])
+}
+
+fn assert_close(a: [f64; 4], b: [f64; 4], what: &str) {
+    let d = a
+        .iter()
+        .zip(&b)
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f64::max);
+    assert!(d < 1e-15, "{what}: {a:?} vs {b:?}");
+}
+
+#[test]
+fn euler_angles_zyx_are_yaw_pitch_roll() {
+    let (yaw, pitch, roll) = (30f64, -20f64, 10f64);
+    let q = attitude_of(&format!(
+        "{{\"euler_deg\": [{yaw}, {pitch}, {roll}], \"sequence\": \"zyx\"}}"
+    ))
+    .unwrap();
+    // By hand: Qz(ψ) ⊗ Qy(θ) ⊗ Qx(φ), the aerospace 3-2-1 quaternion.
+    let h = |d: f64| (d.to_radians() / 2.0).sin_cos();
+    let ((sy, cy), (sp, cp), (sr, cr)) = (h(yaw), h(pitch), h(roll));
+    let hand = [
+        cr * cp * cy + sr * sp * sy,
+        sr * cp * cy - cr * sp * sy,
+        cr * sp * cy + sr * cp * sy,
+        cr * cp * sy - sr * sp * cy,
+    ];
+    assert_close(q, hand, "by hand");
+    // nalgebra's from_euler_angles(roll, pitch, yaw) is R = Rz(yaw) Ry(pitch) Rx(roll): the
+    // same rotation, with the angles in the opposite order.
+    let na = nalgebra::UnitQuaternion::from_euler_angles(
+        roll.to_radians(),
+        pitch.to_radians(),
+        yaw.to_radians(),
+    );
+    assert_close(q, [na.w, na.i, na.j, na.k], "nalgebra");
+}
+
+#[test]
+fn euler_yaw_turns_the_body_x_axis_towards_inertial_y() {
+    // A 90° yaw: the body x axis points along inertial y (body to inertial).
+    let [w, x, y, z] = attitude_of(r#"{"euler_deg": [90, 0, 0], "sequence": "zyx"}"#).unwrap();
+    let q = nalgebra::UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(w, x, y, z));
+    assert!((q * Vec3::x() - Vec3::y()).norm() < 1e-15);
+    // Intrinsic: after a 90° yaw, a 90° pitch about the turned y′ (inertial −x) tips the
+    // body x axis down to inertial −z.
+    let [w, x, y, z] = attitude_of(r#"{"euler_deg": [90, 90, 0], "sequence": "zyx"}"#).unwrap();
+    let q = nalgebra::UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(w, x, y, z));
+    assert!((q * Vec3::x() + Vec3::z()).norm() < 1e-15);
+    assert!((q * Vec3::y() + Vec3::x()).norm() < 1e-15);
+}
+
+#[test]
+fn proper_euler_zxz_by_hand() {
+    // zxz with (α, β, γ): w = cos(β/2) cos((α+γ)/2), x = sin(β/2) cos((α−γ)/2),
+    // y = sin(β/2) sin((α−γ)/2), z = cos(β/2) sin((α+γ)/2).
+    let (a, b, g) = (40f64.to_radians(), 70f64.to_radians(), -25f64.to_radians());
+    let q = attitude_of(r#"{"euler_deg": [40, 70, -25], "sequence": "zxz"}"#).unwrap();
+    let hand = [
+        (b / 2.0).cos() * ((a + g) / 2.0).cos(),
+        (b / 2.0).sin() * ((a - g) / 2.0).cos(),
+        (b / 2.0).sin() * ((a - g) / 2.0).sin(),
+        (b / 2.0).cos() * ((a + g) / 2.0).sin(),
+    ];
+    assert_close(q, hand, "zxz");
+}
+
+#[test]
+fn every_sequence_composes_its_three_rotations() {
+    let angles: [f64; 3] = [25.0, -60.0, 110.0];
+    for seq in EULER_SEQUENCES {
+        let q = attitude_of(&format!(
+            "{{\"euler_deg\": [25, -60, 110], \"sequence\": \"{seq}\"}}"
+        ))
+        .unwrap();
+        // Each rotation about the body axis as turned so far: R = R1 R2 R3 (matrices).
+        let axis = |c: u8| match c {
+            b'x' => Vec3::x_axis(),
+            b'y' => Vec3::y_axis(),
+            _ => Vec3::z_axis(),
+        };
+        let r = seq
+            .bytes()
+            .zip(angles)
+            .map(|(c, a)| nalgebra::Rotation3::from_axis_angle(&axis(c), f64::to_radians(a)))
+            .fold(nalgebra::Rotation3::identity(), |r, x| r * x);
+        let got = nalgebra::UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(
+            q[0], q[1], q[2], q[3],
+        ));
+        assert!(
+            (got.to_rotation_matrix().matrix() - r.matrix()).amax() < 1e-15,
+            "{seq}"
+        );
+    }
+}
+
+#[test]
+fn axis_angle_by_hand() {
+    // 90° about (1, 1, 0)/√2: [cos 45°, sin 45°/√2, sin 45°/√2, 0] = [√½, ½, ½, 0].
+    let q = attitude_of(r#"{"axis": [2, 2, 0], "angle_deg": 90}"#).unwrap();
+    assert_close(q, [0.5f64.sqrt(), 0.5, 0.5, 0.0], "axis-angle");
+    let na = nalgebra::UnitQuaternion::from_axis_angle(
+        &nalgebra::Unit::new_normalize(Vec3::new(1.0, 1.0, 0.0)),
+        std::f64::consts::FRAC_PI_2,
+    );
+    assert_close(q, [na.w, na.i, na.j, na.k], "nalgebra");
+    // The same attitude three ways.
+    let e = attitude_of(r#"{"euler_deg": [90, 0, 0], "sequence": "zyx"}"#).unwrap();
+    let a = attitude_of(r#"{"axis": [0, 0, 1], "angle_deg": 90}"#).unwrap();
+    let s = 0.5f64.sqrt();
+    assert_close(e, a, "euler vs axis");
+    assert_close(e, [s, 0.0, 0.0, s], "euler vs quaternion");
+}
+
+#[test]
+fn attitude_forms_from_toml() {
+    // A scene's inline `[initial]` table takes the same forms.
+    let m = model();
+    let f: StateFile = toml::from_str(
+        "[base]\nattitude = { axis = [0, 0, 1], angle_deg = 180 }\n[hinges]\nangle = [0]\nrate = [0]\n",
+    )
+    .unwrap();
+    let q = f.resolve(&m).unwrap().q;
+    assert!(q[0].abs() < 1e-16 && (q[3] - 1.0).abs() < 1e-16, "{q:?}");
+    assert!(f.warnings().is_empty());
+    // An error names the line of the attitude, here in a larger document.
+    #[derive(Deserialize)]
+    #[allow(dead_code)]
+    struct Scene {
+        duration: f64,
+        initial: StateFile,
+    }
+    let text =
+        "duration = 1.0\n\n[initial.base]\nattitude = { euler_deg = [1, 2], sequence = \"zyx\" }\n";
+    let Err(e) = toml::from_str::<Scene>(text) else {
+        panic!("accepted")
+    };
+    let line = line_of(text, e.span().expect("span").start);
+    assert_eq!(line, 4, "{e}");
+    assert!(e.message().contains("expected 3 numbers"), "{e}");
+}
+
+#[test]
+fn attitude_form_errors_name_file_and_line() {
+    // The attitude object opens on line 3 and closes on line 3 (one line): errors there.
+    let cases = [
+        (
+            r#"{"euler_deg": [1, 2, 3], "sequence": "zzx"}"#,
+            "unknown Euler sequence \"zzx\"",
+        ),
+        (
+            r#"{"euler_deg": [1, 2, 3], "sequence": "ZYX"}"#,
+            "unknown Euler sequence \"ZYX\"",
+        ),
+        (
+            r#"{"euler_deg": [1, 2, 3, 4], "sequence": "zyx"}"#,
+            "`euler_deg`: expected 3 numbers",
+        ),
+        (
+            r#"{"euler_deg": [1, 2], "sequence": "zyx"}"#,
+            "`euler_deg`: expected 3 numbers",
+        ),
+        (
+            r#"{"euler_deg": [1, 2, 3]}"#,
+            "`euler_deg` needs `sequence`",
+        ),
+        (r#"{"sequence": "zyx"}"#, "`sequence` needs `euler_deg`"),
+        (r#"{"axis": [0, 0, 0], "angle_deg": 10}"#, "`axis` is zero"),
+        (
+            r#"{"axis": [0, 0, 1, 0], "angle_deg": 10}"#,
+            "`axis`: expected 3 numbers",
+        ),
+        (r#"{"axis": [0, 0, 1]}"#, "`axis` needs `angle_deg`"),
+        (r#"{"angle_deg": 10}"#, "`angle_deg` needs `axis`"),
+        (
+            r#"{"axis": [0, 0, 1], "angle_deg": 10, "euler_deg": [1, 2, 3]}"#,
+            "give either `euler_deg` and `sequence`, or `axis` and `angle_deg`",
+        ),
+        (r#"{"axis": [0, 0, 1], "angle": 10}"#, "unknown key `angle`"),
+        (r#""identity""#, "invalid type"),
+    ];
+    for (attitude, message) in cases {
+        let e = attitude_of(attitude).unwrap_err();
+        assert!(matches!(e, FileError::Schema { .. }), "{attitude}: {e}");
+        let shown = e.to_string();
+        assert!(shown.starts_with("s.json:3: "), "{attitude}: {shown}");
+        assert!(shown.contains(message), "{attitude}: {shown}");
+    }
+}
+
+#[test]
+fn the_quaternion_form_keeps_its_checks() {
+    // Near-unit: normalised with a warning; the other forms never warn.
+    let q = attitude_of("[1.0005, 0, 0, 0]").unwrap();
+    assert_eq!(q, [1.0, 0.0, 0.0, 0.0]);
+    let e = attitude_of("[1, 0, 0]").unwrap_err().to_string();
+    assert_eq!(
+        e,
+        "s.json: base.attitude: expected 4 entries (a quaternion [w, x, y, z]), got 3"
+    );
+    let e = attitude_of("[1.002, 0, 0, 0]").unwrap_err().to_string();
+    assert!(
+        e.starts_with("s.json: base.attitude: quaternion norm"),
+        "{e}"
+    );
 }

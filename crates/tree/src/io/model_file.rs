@@ -1,0 +1,406 @@
+//! The model file (contract section 1): its TOML schema ([`ModelFile`]) and its reading into
+//! a validated [`Model`].
+
+use super::error::{FileError, SpannedError, line_of};
+use super::read_text;
+use crate::error::ModelError;
+use crate::model::{BaseKind, Body, BoxShape, Hinge, Model, ModelBuilder};
+use crate::spatial::{Mat3, Vec3};
+use nalgebra::Quaternion;
+use serde::Deserialize;
+use std::ops::Range;
+use std::path::Path;
+use toml::Spanned;
+
+/// The model file (contract section 1), as written. Deserialise it from TOML text (directly or
+/// as a field of a larger document, e.g. a scene's inline `[model]` table) with
+/// `toml::from_str`: the [`Spanned`] fields record byte offsets into that text. (Going through
+/// an intermediate `toml::Value` loses the spans and fails.)
+#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ModelFile {
+    /// `[base]` (default: a free base).
+    #[serde(default)]
+    pub base: Option<Spanned<BaseFile>>,
+    /// `[[body]]` entries, in file order; the first is the root.
+    #[serde(default)]
+    pub body: Vec<Spanned<BodyFile>>,
+    /// `[[hinge]]` entries, in file order (the order of the hinge coordinates).
+    #[serde(default)]
+    pub hinge: Vec<Spanned<HingeFile>>,
+}
+
+/// `[base]`.
+#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct BaseFile {
+    /// `kind = "free"` (default) or `"fixed"`.
+    #[serde(default)]
+    pub kind: BaseKindFile,
+}
+
+/// The values of `base.kind`.
+#[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum BaseKindFile {
+    /// `"free"`: a 6-DOF floating root.
+    #[default]
+    Free,
+    /// `"fixed"`: the root is fixed in the inertial frame.
+    Fixed,
+}
+
+impl From<BaseKindFile> for BaseKind {
+    fn from(k: BaseKindFile) -> Self {
+        match k {
+            BaseKindFile::Free => BaseKind::Free,
+            BaseKindFile::Fixed => BaseKind::Fixed,
+        }
+    }
+}
+
+/// A `[[body]]` entry.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct BodyFile {
+    /// Unique name.
+    pub name: Spanned<String>,
+    /// Mass (kg).
+    pub mass: Spanned<f64>,
+    /// Centre of mass in the body frame (m), default zero.
+    #[serde(default)]
+    pub com: Option<Spanned<[f64; 3]>>,
+    /// Inertia about the centre of mass, body axes (kg m²), rows; required unless the mass
+    /// is 0 (then zero by default).
+    #[serde(default)]
+    pub inertia: Option<Spanned<[[f64; 3]; 3]>>,
+    /// `shape = { box = [lx, ly, lz], at = [x, y, z] }`: how to draw the body (optional;
+    /// no algorithm reads it).
+    #[serde(default)]
+    pub shape: Option<Spanned<ShapeFile>>,
+}
+
+/// A body's `shape`: a box of edge lengths `box` (m, body axes, each positive) centred at
+/// `at` (m, body frame; default the body's `com`). For drawing only.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ShapeFile {
+    /// Edge lengths along the body's x, y, z axes (m).
+    #[serde(rename = "box")]
+    pub size: Spanned<[f64; 3]>,
+    /// The box's centre in the body frame (m), default the centre of mass.
+    #[serde(default)]
+    pub at: Option<Spanned<[f64; 3]>>,
+}
+
+/// A `[[hinge]]` entry.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct HingeFile {
+    /// Unique name.
+    pub name: Spanned<String>,
+    /// Parent body.
+    pub parent: Spanned<String>,
+    /// Child body.
+    pub child: Spanned<String>,
+    /// Axis in the parent frame.
+    pub axis: Spanned<[f64; 3]>,
+    /// Hinge point in the parent frame (m), default zero.
+    #[serde(default)]
+    pub at: Option<Spanned<[f64; 3]>>,
+    /// Hinge point in the child frame (m), default zero.
+    #[serde(default)]
+    pub child_at: Option<Spanned<[f64; 3]>>,
+    /// Child frame relative to the parent at zero angle, `[w, x, y, z]`, default identity.
+    #[serde(default)]
+    pub rotation: Option<Spanned<[f64; 4]>>,
+    /// Armature (kg m²), default zero: rotor inertia about the axis (an extension of the
+    /// contract, used to regularise a gimbal lock).
+    #[serde(default)]
+    pub armature: Option<Spanned<f64>>,
+}
+
+fn v3(a: &[f64; 3]) -> Vec3 {
+    Vec3::new(a[0], a[1], a[2])
+}
+
+fn span_of<T>(s: &Spanned<T>) -> Option<Range<usize>> {
+    Some(s.span())
+}
+
+impl ModelFile {
+    /// The base kind (free unless `[base] kind = "fixed"`).
+    pub fn base_kind(&self) -> BaseKind {
+        self.base
+            .as_ref()
+            .map(|b| b.get_ref().kind.into())
+            .unwrap_or_default()
+    }
+
+    /// Validates and builds the model. Errors carry the span of the body, hinge or key
+    /// concerned; [`SpannedError::in_file`] names the file and line.
+    pub fn build(&self) -> Result<Model, SpannedError> {
+        let mut builder = ModelBuilder::new(self.base_kind());
+        for b in &self.body {
+            let body = b.get_ref();
+            let name = body.name.get_ref();
+            let mass = *body.mass.get_ref();
+            let nonfinite = |field: &str, span: Option<Range<usize>>| SpannedError::Model {
+                span,
+                error: ModelError::NonFinite(format!("body `{name}`: {field}")),
+            };
+            if !mass.is_finite() {
+                return Err(nonfinite("mass", span_of(&body.mass)));
+            }
+            let inertia = match &body.inertia {
+                Some(i) => {
+                    if !i.get_ref().iter().flatten().all(|x| x.is_finite()) {
+                        return Err(nonfinite("inertia", span_of(i)));
+                    }
+                    let r = i.get_ref();
+                    Mat3::new(
+                        r[0][0], r[0][1], r[0][2], r[1][0], r[1][1], r[1][2], r[2][0], r[2][1],
+                        r[2][2],
+                    )
+                }
+                None if mass == 0.0 => Mat3::zeros(),
+                None => {
+                    return Err(SpannedError::Schema {
+                        span: span_of(b),
+                        message: format!(
+                            "body `{name}`: missing key `inertia` (required unless mass is 0)"
+                        ),
+                    });
+                }
+            };
+            let com = match &body.com {
+                Some(c) => {
+                    if !c.get_ref().iter().all(|x| x.is_finite()) {
+                        return Err(nonfinite("com", span_of(c)));
+                    }
+                    v3(c.get_ref())
+                }
+                None => Vec3::zeros(),
+            };
+            let mut entry = Body::new(name.clone(), mass, inertia).with_com(com);
+            if let Some(shape) = &body.shape {
+                let shape = shape.get_ref();
+                if !shape.size.get_ref().iter().all(|x| x.is_finite()) {
+                    return Err(nonfinite("shape.box", span_of(&shape.size)));
+                }
+                let mut drawn = BoxShape::new(v3(shape.size.get_ref()));
+                if let Some(at) = &shape.at {
+                    if !at.get_ref().iter().all(|x| x.is_finite()) {
+                        return Err(nonfinite("shape.at", span_of(at)));
+                    }
+                    drawn = drawn.at(v3(at.get_ref()));
+                }
+                entry = entry.with_shape(drawn);
+            }
+            builder.push_body(entry);
+        }
+        for h in &self.hinge {
+            let hinge = h.get_ref();
+            let name = hinge.name.get_ref();
+            let nonfinite = |field: &str, span: Option<Range<usize>>| SpannedError::Model {
+                span,
+                error: ModelError::NonFinite(format!("hinge `{name}`: {field}")),
+            };
+            let vec = |field: &str, x: &Option<Spanned<[f64; 3]>>| match x {
+                Some(s) if !s.get_ref().iter().all(|x| x.is_finite()) => {
+                    Err(nonfinite(field, span_of(s)))
+                }
+                Some(s) => Ok(v3(s.get_ref())),
+                None => Ok(Vec3::zeros()),
+            };
+            let axis = vec("axis", &Some(hinge.axis.clone()))?;
+            let at = vec("at", &hinge.at)?;
+            let child_at = vec("child_at", &hinge.child_at)?;
+            let rotation = match &hinge.rotation {
+                Some(r) if !r.get_ref().iter().all(|x| x.is_finite()) => {
+                    return Err(nonfinite("rotation", span_of(r)));
+                }
+                Some(r) => {
+                    let [w, x, y, z] = *r.get_ref();
+                    Quaternion::new(w, x, y, z)
+                }
+                None => Quaternion::identity(),
+            };
+            builder.push_hinge(
+                Hinge::revolute(
+                    name.clone(),
+                    hinge.parent.get_ref().clone(),
+                    hinge.child.get_ref().clone(),
+                    axis,
+                )
+                .at(at)
+                .child_at(child_at)
+                .rotation(rotation)
+                .armature(hinge.armature.as_ref().map_or(0.0, |a| *a.get_ref())),
+            );
+        }
+        builder.build().map_err(|error| SpannedError::Model {
+            span: self.locate(&error),
+            error,
+        })
+    }
+
+    fn body_named(&self, name: &str, occurrence: usize) -> Option<&BodyFile> {
+        self.body
+            .iter()
+            .map(|b| b.get_ref())
+            .filter(|b| b.name.get_ref() == name)
+            .nth(occurrence)
+    }
+
+    fn hinge_named(&self, name: &str, occurrence: usize) -> Option<&HingeFile> {
+        self.hinge
+            .iter()
+            .map(|h| h.get_ref())
+            .filter(|h| h.name.get_ref() == name)
+            .nth(occurrence)
+    }
+
+    fn body_span(&self, name: &str) -> Option<Range<usize>> {
+        self.body_named(name, 0).map(|b| b.name.span())
+    }
+
+    fn hinge_span(&self, name: &str) -> Option<Range<usize>> {
+        self.hinge_named(name, 0).map(|h| h.name.span())
+    }
+
+    /// The span of the body, hinge or key a [`ModelError`] is about. The builder checks the
+    /// entries in file order, so the first entry of a name is the one concerned (the second
+    /// for duplicates).
+    fn locate(&self, error: &ModelError) -> Option<Range<usize>> {
+        match error {
+            ModelError::NoBodies => None,
+            ModelError::DuplicateBody(n) => self.body_named(n, 1).map(|b| b.name.span()),
+            ModelError::DuplicateHinge(n) => self.hinge_named(n, 1).map(|h| h.name.span()),
+            ModelError::UnknownBody { hinge, role, .. } => {
+                self.hinge_named(hinge, 0).map(|h| match *role {
+                    "parent" => h.parent.span(),
+                    _ => h.child.span(),
+                })
+            }
+            ModelError::SelfLoop(hinge) | ModelError::RootIsChild { hinge, .. } => {
+                self.hinge_named(hinge, 0).map(|h| h.child.span())
+            }
+            ModelError::TwoParents { second, .. } => {
+                self.hinge_named(second, 0).map(|h| h.child.span())
+            }
+            ModelError::NoParent(b) | ModelError::MasslessLeaf(b) => self.body_span(b),
+            ModelError::Cycle(bodies) => bodies.first().and_then(|b| self.body_span(b)),
+            ModelError::NonFinite(what) => {
+                let name = |prefix: &str| {
+                    what.strip_prefix(prefix)
+                        .and_then(|r| r.split('`').next())
+                        .map(str::to_owned)
+                };
+                if let Some(b) = name("body `") {
+                    self.body_span(&b)
+                } else if let Some(h) = name("hinge `") {
+                    self.hinge_span(&h)
+                } else {
+                    None
+                }
+            }
+            ModelError::NegativeMass { body, .. } => {
+                self.body_named(body, 0).map(|b| b.mass.span())
+            }
+            ModelError::InertiaNotSymmetric(body)
+            | ModelError::InertiaNotPositive { body, .. }
+            | ModelError::InertiaTriangle { body, .. } => self.body_named(body, 0).map(|b| {
+                b.inertia
+                    .as_ref()
+                    .map(|i| i.span())
+                    .unwrap_or_else(|| b.name.span())
+            }),
+            ModelError::ShapeSize { body, .. } => self.body_named(body, 0).map(|b| {
+                b.shape
+                    .as_ref()
+                    .map(|s| s.get_ref().size.span())
+                    .unwrap_or_else(|| b.name.span())
+            }),
+            ModelError::NegativeArmature { hinge, .. } => self.hinge_named(hinge, 0).map(|h| {
+                h.armature
+                    .as_ref()
+                    .map(|a| a.span())
+                    .unwrap_or_else(|| h.name.span())
+            }),
+            ModelError::AxisNorm { hinge, .. } => self.hinge_named(hinge, 0).map(|h| h.axis.span()),
+            ModelError::RotationNorm { hinge, .. } => self.hinge_named(hinge, 0).map(|h| {
+                h.rotation
+                    .as_ref()
+                    .map(|r| r.span())
+                    .unwrap_or_else(|| h.name.span())
+            }),
+        }
+    }
+}
+
+/// Deserialises a model file's text into a [`ModelFile`] without building it. `origin` names
+/// the file in errors.
+pub fn parse_model_file(text: &str, origin: &Path) -> Result<ModelFile, FileError> {
+    let path = origin.to_path_buf();
+    if text.trim().is_empty() {
+        return Err(FileError::Empty { path });
+    }
+    let located = |e: &toml::de::Error| e.span().map(|s| line_of(text, s.start));
+    // A plain parse first, to tell syntax errors from schema errors.
+    if let Err(e) = text.parse::<toml::Table>() {
+        return Err(FileError::Syntax {
+            line: located(&e),
+            message: e.message().trim_end().to_owned(),
+            path,
+        });
+    }
+    toml::from_str::<ModelFile>(text).map_err(|e| FileError::Schema {
+        line: located(&e),
+        message: with_key(&e, schema_message(e.message())),
+        path,
+    })
+}
+
+/// Prefixes a toml error's message with the dotted key it concerns, when toml knows it.
+pub fn with_key(e: &toml::de::Error, message: String) -> String {
+    let mut bare = e.clone();
+    bare.set_input(None);
+    let shown = bare.to_string();
+    let key = shown
+        .lines()
+        .find_map(|l| l.strip_prefix("in `").and_then(|r| r.strip_suffix('`')));
+    match key {
+        Some(k) if !k.is_empty() => format!("`{k}`: {message}"),
+        _ => message,
+    }
+}
+
+/// Rewords serde's messages in the file's vocabulary (keys, not fields).
+pub(crate) fn schema_message(m: &str) -> String {
+    let owned = m.trim_end().replace("expected f64", "expected a number");
+    let m = owned.as_str();
+    if let Some(rest) = m.strip_prefix("unknown field ") {
+        format!("unknown key {rest}")
+    } else if let Some(rest) = m.strip_prefix("missing field ") {
+        format!("missing required key {rest}")
+    } else if let Some(rest) = m.strip_prefix("unknown variant ") {
+        format!("unknown value {rest}")
+    } else {
+        m.to_owned()
+    }
+}
+
+/// Parses and builds a model file's text. `origin` names the file in errors.
+pub fn parse_model(text: &str, origin: &Path) -> Result<(Model, ModelFile), FileError> {
+    let file = parse_model_file(text, origin)?;
+    let model = file.build().map_err(|e| e.in_file(text, origin))?;
+    Ok((model, file))
+}
+
+/// Reads and builds the model file at `path`.
+pub fn read_model(path: impl AsRef<Path>) -> Result<Model, FileError> {
+    let path = path.as_ref();
+    let text = read_text(path)?;
+    parse_model(&text, path).map(|(m, _)| m)
+}
