@@ -329,6 +329,17 @@ pub fn run_scene_with(
                 first[e], last[e], first[h], last[h]
             );
         }
+        if let Some(b) = col("energy_budget") {
+            // The budget (energy + dissipated − actuator work) is constant for exact physics:
+            // its change is the integration error, the line a user checks a run by.
+            let _ = writeln!(
+                s,
+                "budget     {:.9e} J -> {:.9e} J (change {:.2e} J)",
+                first[b],
+                last[b],
+                last[b] - first[b]
+            );
+        }
     }
     let _ = writeln!(
         s,
