@@ -217,7 +217,7 @@ fn no_example_scene_passes_a_latching_stop() {
     for entry in std::fs::read_dir(&dir).unwrap() {
         let path = entry.unwrap().path();
         let scene = Scene::read(&path).unwrap();
-        let Some(stops) = scene.effects.hinge_stops.clone() else {
+        let Some(stops) = scene.effects.get::<HingeStops>().cloned() else {
             continue;
         };
         let mut sim = scene.simulation().unwrap();
