@@ -15,9 +15,7 @@
 //! (the field points north at the equator). SI units; the torque acts on the root body.
 
 use satsim::integrate::{Output, SystemError};
-use satsim::satellite::effects::{
-    Context, Effect, Forces, Needs, Registry, SceneEffect, Section,
-};
+use satsim::satellite::effects::{Context, Effect, Forces, Needs, Registry, SceneEffect, Section};
 use satsim::satellite::scene::Scene;
 use satsim::tree::io::FileError;
 use satsim::tree::spatial::{Force, Vec3};
@@ -129,10 +127,15 @@ fn run(scene: &Scene) -> Result<(Vec<String>, Vec<Vec<f64>>), Box<dyn std::error
     let mut sim = scene.simulation()?;
     let columns = sim.columns();
     let mut rows = Vec::new();
-    sim.run(&scene.options, scene.duration, &Output::Interval(scene.every), |_, row| {
-        rows.push(row.to_vec());
-        Ok::<(), std::convert::Infallible>(())
-    })?;
+    sim.run(
+        &scene.options,
+        scene.duration,
+        &Output::Interval(scene.every),
+        |_, row| {
+            rows.push(row.to_vec());
+            Ok::<(), std::convert::Infallible>(())
+        },
+    )?;
     Ok((columns, rows))
 }
 
@@ -140,7 +143,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let scene = Scene::read_with_registry(scene_path(), &registry())?;
     let (columns, rows) = run(&scene)?;
     let col = |name: &str| columns.iter().position(|c| c == name).unwrap();
-    println!("effects: {}", scene.effects.names().collect::<Vec<_>>().join(", "));
+    println!(
+        "effects: {}",
+        scene.effects.names().collect::<Vec<_>>().join(", ")
+    );
     println!("{:>6} {:>12} {:>14}", "t (s)", "omega_y", "torque_y (N m)");
     for row in &rows {
         println!(
@@ -202,7 +208,7 @@ mod tests {
         let e = Scene::parse(&text, &scene_path()).unwrap_err().to_string();
         assert!(
             e.contains("magnetic_torquer.toml:25")
-                && e.contains("unknown effect section [effects.magnetic_torquer]")
+                && e.contains("unknown key `magnetic_torquer` in [effects]")
                 && e.contains("hinge_springs"),
             "{e}"
         );

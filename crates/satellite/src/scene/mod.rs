@@ -129,16 +129,25 @@ impl Scene {
     /// [`crate::scene_keys`]) applied in order. With overrides, an error found in the
     /// rewritten scene names the scene file and says which overrides were applied.
     pub fn read_with(path: impl AsRef<Path>, overrides: &[Override]) -> Result<Scene, FileError> {
+        Scene::read_overridden(path, overrides, &Registry::with_builtins())
+    }
+
+    /// [`Scene::read_with`] with the effects of `registry`.
+    pub fn read_overridden(
+        path: impl AsRef<Path>,
+        overrides: &[Override],
+        registry: &Registry,
+    ) -> Result<Scene, FileError> {
         let path = path.as_ref();
         if overrides.is_empty() {
-            return Scene::read(path);
+            return Scene::read_with_registry(path, registry);
         }
         let text = std::fs::read_to_string(path).map_err(|source| FileError::Read {
             path: path.to_path_buf(),
             source,
         })?;
         let rewritten = scene_keys::overridden_text(&text, path, overrides)?;
-        let mut scene = Scene::parse(&rewritten, path)
+        let mut scene = Scene::parse_with_registry(&rewritten, path, registry)
             .map_err(|e| scene_keys::after_overrides(e, path, overrides))?;
         // A line of the rewritten text means nothing to the user: drop it.
         let prefix = format!("{}:", path.display());

@@ -313,7 +313,7 @@ impl<'a> Parser<'a> {
             return Err(self.error(
                 Some(v.span()),
                 format!(
-                    "unknown effect section [effects.{name}] (known: {})",
+                    "unknown key `{name}` in [effects]: no effect of that name is registered (known: {})",
                     self.registry.names().join(", ")
                 ),
             ));
