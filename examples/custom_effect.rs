@@ -197,9 +197,10 @@ mod tests {
     fn without_the_torquer_the_bus_stays_put_and_unknown_sections_are_refused() {
         let text = std::fs::read_to_string(scene_path()).unwrap();
         let off = text.replace(
-            "[effects.magnetic_torquer]",
-            "[effects.magnetic_torquer]\nenabled = false",
+            "\n[effects.magnetic_torquer]\n",
+            "\n[effects.magnetic_torquer]\nenabled = false\n",
         );
+        assert_ne!(off, text);
         let scene = Scene::parse_with_registry(&off, &scene_path(), &registry()).unwrap();
         let (columns, rows) = run(&scene).unwrap();
         let w = columns.iter().position(|c| c == "omega_y").unwrap();
