@@ -122,8 +122,11 @@ fn scene_path() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/scenes/magnetic_torquer.toml")
 }
 
-/// Runs `scene`; the rows at the output times.
-fn run(scene: &Scene) -> Result<(Vec<String>, Vec<Vec<f64>>), Box<dyn std::error::Error>> {
+/// Output columns and the rows at the output times.
+type Table = (Vec<String>, Vec<Vec<f64>>);
+
+/// Runs `scene`.
+fn run(scene: &Scene) -> Result<Table, Box<dyn std::error::Error>> {
     let mut sim = scene.simulation()?;
     let columns = sim.columns();
     let mut rows = Vec::new();

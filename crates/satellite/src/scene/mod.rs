@@ -28,10 +28,10 @@
 //! [`Scene::read_with_registry`] a registry with a user's effects too); the reader here
 //! handles the rest of the file:
 //!
-//! - [`file`]: the top level as written (serde structs);
-//! - [`parse`]: the reader (model, initial state, armature, the effect sections);
-//! - [`integrator`]: `[integrator]`;
-//! - [`orbit`]: `[orbit]`.
+//! - [`file`], the top level as written (serde structs);
+//! - [`parse`], the reader (model, initial state, armature, the effect sections);
+//! - [`integrator`], the `[integrator]` table;
+//! - [`orbit`], the `[orbit]` table.
 
 pub mod file;
 pub mod integrator;
