@@ -28,7 +28,7 @@
 //! [`Scene::read_with_registry`] a registry with a user's effects too); the reader here
 //! handles the rest of the file:
 //!
-//! - [`file`], the top level as written (serde structs);
+//! - [`file`](mod@file), the top level as written (serde structs);
 //! - [`parse`], the reader (model, initial state, armature, the effect sections);
 //! - [`integrator`], the `[integrator]` table;
 //! - [`orbit`], the `[orbit]` table.
