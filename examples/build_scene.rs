@@ -34,18 +34,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             w
         })
         .collect();
-    let axes: Vec<Vec3> = wheels.iter().map(|w| w.axis).collect();
     let mut springs = HingeSprings::new(vec![50.0, 50.0, 50.0, 2.0, 2.0]);
     springs.damping = vec![40.0, 40.0, 40.0, 4.0, 4.0];
-    scene.effects.orbit = Some(orbit);
-    scene.effects.gravity_gradient = Some(GravityGradient::new(GravityModel::Full));
-    scene.effects.hinge_springs = Some(springs);
-    scene.effects.reaction_wheels = Some(ReactionWheels::new(wheels));
-    scene.effects.attitude_control = Some(AttitudeControl::new(
+    scene.effects.insert(orbit);
+    scene
+        .effects
+        .insert(GravityGradient::new(GravityModel::Full));
+    scene.effects.insert(springs);
+    scene.effects.insert(ReactionWheels::new(wheels));
+    // The controller commands the wheels (every rotor of the tree, in their order).
+    scene.effects.insert(AttitudeControl::new(
         Target::Inertial(Default::default()),
         9.0,
         150.0,
-        &axes,
     ));
 
     let mut sim = scene.simulation()?;

@@ -277,7 +277,7 @@ pub fn sweep(scene: &Scene, along: &[Along], steps: usize) -> Result<Vec<SweepPo
         let angles: Vec<f64> = along.iter().map(|a| a.from + f * (a.to - a.from)).collect();
         for (&k, &angle) in index.iter().zip(&angles) {
             sc.initial.q[nq0 + k] = angle;
-            if let Some(springs) = sc.effects.hinge_springs.as_mut() {
+            if let Some(springs) = sc.effects.get_mut::<crate::effects::HingeSprings>() {
                 springs.reference[k] = angle;
             }
         }

@@ -44,7 +44,7 @@
 //! is constant up to the integration error. `W` and `D` have zero weight in the error norm
 //! ([`System::error_weights`]), so tracking them leaves every other state as it was.
 
-use crate::effects::{CANONICAL_ORDER, Context, Effect, Forces, OrbitState, Power, Request, Rotor};
+use crate::effects::{Context, Effect, Forces, Links, OrbitState, Power, Request, Rotor, order};
 use nalgebra::{DMatrix, DVector, Quaternion, UnitQuaternion};
 use satsim_integrate::{
     EventAction, EventDirection, IntegrateError, Options, Output, Stats, System, SystemError,
@@ -67,7 +67,7 @@ pub enum SimError {
     /// The initial state does not fit the model.
     #[error("initial state: {0}")]
     State(String),
-    /// The model with the wheels' rotors added is invalid.
+    /// The model with the effects' rotors added is invalid.
     #[error("model with reaction-wheel rotors: {0}")]
     Model(#[from] ModelError),
     /// An effect rejected the initial state.
@@ -240,13 +240,6 @@ pub struct Simulation {
     work: Range<usize>,
 }
 
-fn order_of(name: &str) -> usize {
-    CANONICAL_ORDER
-        .iter()
-        .position(|n| *n == name)
-        .unwrap_or(CANONICAL_ORDER.len())
-}
-
 /// The model plus rotor bodies hinged to its root (appended after its hinges).
 fn with_rotors(model: &Model, rotors: &[Rotor]) -> Result<Model, ModelError> {
     let mut b = model.to_builder();
@@ -276,7 +269,7 @@ impl Simulation {
         let SimulationBuilder {
             model: user,
             state,
-            mut effects,
+            effects,
             t0,
             energy_budget,
         } = b;
@@ -293,7 +286,6 @@ impl Simulation {
                 state.tau.len()
             )));
         }
-        effects.sort_by_key(|e| order_of(e.name()));
         for (i, e) in effects.iter().enumerate() {
             if effects[..i].iter().any(|o| o.name() == e.name()) {
                 return Err(SimError::Needs(format!(
@@ -302,6 +294,13 @@ impl Simulation {
                 )));
             }
         }
+        // The order of evaluation: the effects' declared dependencies, else as given.
+        let run_order = order::run_order(&effects).map_err(SimError::Needs)?;
+        let mut slots: Vec<Option<Box<dyn Effect>>> = effects.into_iter().map(Some).collect();
+        let mut effects: Vec<Box<dyn Effect>> = run_order
+            .into_iter()
+            .filter_map(|i| slots[i].take())
+            .collect();
         let free = user.base() == BaseKind::Free;
         let has = |n: &str| effects.iter().any(|e| e.name() == n);
         for e in &effects {
@@ -312,9 +311,9 @@ impl Simulation {
                     e.name()
                 )));
             }
-            if needs.wheels && !effects.iter().any(|o| !o.rotors().is_empty()) {
+            if needs.rotors && !effects.iter().any(|o| !o.rotors().is_empty()) {
                 return Err(SimError::Needs(format!(
-                    "effects.{} needs [effects.reaction_wheels] with at least one [[effects.reaction_wheels.wheel]]",
+                    "effects.{} needs rotors to command (e.g. [effects.reaction_wheels] with at least one [[effects.reaction_wheels.wheel]])",
                     e.name()
                 )));
             }
@@ -343,16 +342,12 @@ impl Simulation {
                 effects[i].name()
             )));
         }
-        for e in &effects {
-            if let Some(k) = e.wheel_commands()
-                && k != rotors.len()
-            {
-                return Err(SimError::Needs(format!(
-                    "effects.{} commands {k} wheels, but [effects.reaction_wheels] has {}",
-                    e.name(),
-                    rotors.len()
-                )));
-            }
+        let links = Links {
+            rotors: &rotors,
+            rotors_commanded: effects.iter().any(|e| e.commands_rotors()),
+        };
+        for e in &mut effects {
+            e.connect(&links);
         }
         let orbit_effect = effects.iter().position(|e| e.name() == "orbit");
         let model = if rotors.is_empty() {

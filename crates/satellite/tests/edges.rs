@@ -50,27 +50,29 @@ fn bus() -> satsim_tree::Model {
 }
 
 #[test]
-fn a_controller_for_fewer_wheels_than_the_scene_has_is_refused_at_construction() {
+fn a_controller_runs_before_the_wheels_it_commands_and_is_refused_without_them() {
     let axes = [Vec3::x(), Vec3::y(), Vec3::z()];
     let wheels: Vec<Wheel> = ["x", "y", "z"]
         .iter()
         .zip(axes)
         .map(|(n, a)| Wheel::new(*n, a, 0.05))
         .collect();
-    let err = Simulation::builder(bus())
+    let control = AttitudeControl::new(Target::Inertial(Default::default()), 1.0, 10.0);
+    // Given after the wheels, the controller still runs first (it declares `before`).
+    let sim = Simulation::builder(bus())
         .effect(ReactionWheels::new(wheels))
-        .effect(AttitudeControl::new(
-            Target::Inertial(Default::default()),
-            1.0,
-            10.0,
-            &axes[..2],
-        ))
+        .effect(control.clone())
+        .build()
+        .unwrap();
+    assert_eq!(sim.effect_names(), ["attitude_control", "reaction_wheels"]);
+    let err = Simulation::builder(bus())
+        .effect(control)
         .build()
         .err()
-        .expect("two gain rows for three wheels must be refused");
+        .expect("a controller without wheels must be refused");
     let msg = err.to_string();
     assert!(
-        msg.contains("attitude_control") && msg.contains("2 wheels") && msg.contains("has 3"),
+        msg.contains("attitude_control") && msg.contains("`reaction_wheels`"),
         "{msg}"
     );
 }

@@ -21,8 +21,8 @@ use satsim_integrate::{EventAction, EventDirection, Method, Options, Output, Sys
 use satsim_satellite::effects::orbit::{Elements, R_EARTH};
 use satsim_satellite::effects::{
     AttitudeControl, Context, Effect, Forces, GravityGradient, GravityModel, HingeControl,
-    HingeProfile, HingeSprings, HingeStop, HingeStops, Needs, Orbit, OrbitModel, OrbitState, Power,
-    ReactionWheels, Request, Rotor, StopAction, Target, Wheel,
+    HingeProfile, HingeSprings, HingeStop, HingeStops, Links, Needs, Orbit, OrbitModel, OrbitState,
+    Power, ReactionWheels, Request, Rotor, StopAction, Target, Wheel,
 };
 use satsim_satellite::scene::Scene;
 use satsim_satellite::simulation::Simulation;
@@ -201,8 +201,17 @@ impl Effect for Unbooked {
     fn rotors(&self) -> Vec<Rotor> {
         self.0.rotors()
     }
-    fn wheel_commands(&self) -> Option<usize> {
-        self.0.wheel_commands()
+    fn commands_rotors(&self) -> bool {
+        self.0.commands_rotors()
+    }
+    fn after(&self) -> &[&str] {
+        self.0.after()
+    }
+    fn before(&self) -> &[&str] {
+        self.0.before()
+    }
+    fn connect(&mut self, links: &Links) {
+        self.0.connect(links)
     }
     fn apply(
         &mut self,
@@ -379,12 +388,7 @@ fn attitude_control_works_through_the_wheels() {
                 .collect(),
         );
         wheels.commanded = true;
-        let control = AttitudeControl::new(
-            Target::Orbital(UnitQuaternion::identity()),
-            5.0,
-            50.0,
-            &axes,
-        );
+        let control = AttitudeControl::new(Target::Orbital(UnitQuaternion::identity()), 5.0, 50.0);
         vec![
             Box::new(orbit()) as Box<dyn Effect>,
             Box::new(GravityGradient::new(GravityModel::Full)),

@@ -87,7 +87,7 @@ fn the_state_holds_only_the_enabled_effects_states() {
 fn a_disabled_effect_adds_no_state_and_is_never_visited() {
     let off = "[effects.gravity_gradient]\nenabled = false\n[effects.hinge_springs]\nstiffness = [1.0, 1.0, 1.0, 1.0, 1.0]\nenabled = false\n";
     let s = scene(&[ORBIT, off]);
-    assert!(s.effects.gravity_gradient.is_none() && s.effects.hinge_springs.is_none());
+    assert!(!s.effects.contains("gravity_gradient") && !s.effects.contains("hinge_springs"));
     let mut sim = s.simulation().unwrap();
     assert_eq!(sim.effect_names(), ["orbit"]);
     assert_eq!(sim.layout().len, 26 + 2); // + the energy budget's work states
@@ -289,4 +289,28 @@ fn an_inline_model_reports_lines_in_the_scene() {
     let s = parse(&ok).unwrap();
     assert_eq!(s.model.nv(), 7);
     assert_eq!(s.simulation().unwrap().layout().len, 4 + 1 + 6 + 1 + 2);
+}
+
+#[test]
+fn an_unknown_effect_section_names_its_line_and_the_known_ones() {
+    // BASE has 7 lines; the section header is line 8.
+    let e = error(&format!("{BASE}[effects.magnetorquer]\ndipole = 1.0\n"));
+    assert!(
+        e.contains("test.toml:8")
+            && e.contains("unknown key `magnetorquer` in [effects]")
+            && e.contains("gravity_gradient, hinge_springs, hinge_control, hinge_stops, attitude_control, reaction_wheels"),
+        "{e}"
+    );
+}
+
+#[test]
+fn the_file_order_of_sections_does_not_change_the_run_order() {
+    // Written wheels-last and wheels-first: the controller runs before the wheels either way.
+    for text in [
+        format!("{BASE}{WHEELS}{CONTROL}"),
+        format!("{BASE}{CONTROL}{WHEELS}"),
+    ] {
+        let sim = parse(&text).unwrap().simulation().unwrap();
+        assert_eq!(sim.effect_names(), ["attitude_control", "reaction_wheels"]);
+    }
 }

@@ -216,8 +216,12 @@ fn no_example_scene_passes_a_latching_stop() {
     let mut checked = 0;
     for entry in std::fs::read_dir(&dir).unwrap() {
         let path = entry.unwrap().path();
+        // This scene needs the effect that examples/custom_effect.rs defines and registers.
+        if path.ends_with("magnetic_torquer.toml") {
+            continue;
+        }
         let scene = Scene::read(&path).unwrap();
-        let Some(stops) = scene.effects.hinge_stops.clone() else {
+        let Some(stops) = scene.effects.get::<HingeStops>().cloned() else {
             continue;
         };
         let mut sim = scene.simulation().unwrap();

@@ -613,12 +613,15 @@ mod tests {
             let values = c.draw(k);
             let scene = Scene::parse(&c.scene_text(&values), &c.path).unwrap();
             // The substituted numbers arrive where the keys point.
-            let springs = scene.effects.hinge_springs.as_ref().unwrap();
+            let springs = scene.effects.get::<crate::effects::HingeSprings>().unwrap();
             assert_eq!(springs.stiffness[3], values[0]);
             assert_eq!(springs.damping[4], values[3]);
             assert_eq!(scene.initial.q[7 + 3], values[4]);
             assert_eq!(scene.model.bodies()[4].mass(), values[6]);
-            let wheels = scene.effects.reaction_wheels.as_ref().unwrap();
+            let wheels = scene
+                .effects
+                .get::<crate::effects::ReactionWheels>()
+                .unwrap();
             assert_eq!(wheels.wheels[2].coulomb, values[10]);
             // Untouched numbers stay as written.
             assert_eq!(springs.stiffness[0], 50.0);

@@ -9,15 +9,22 @@
 //! the wheel axes and `A⁺` its pseudo-inverse (least squares with fewer than three wheels).
 //! Torque and speed limits are then applied by the wheels.
 //!
+//! The commands go through [`Forces::rotor_command`], one per rotor of the tree; the
+//! controller runs before the wheels ([`Effect::before`]) and takes their axes from the
+//! rotors when the simulation is built ([`Effect::connect`]).
+//!
 //! Targets: [`Target::Inertial`] (a fixed attitude, `ω_t = 0`) or [`Target::Orbital`]: the
 //! local orbital frame (z towards the Earth's centre, y along the negative orbit normal, x
 //! completing the triad, close to the velocity) times a fixed offset, turning at the orbit's
 //! rate `ω_t = r × v / r²`.
 
-use super::{Context, Effect, Forces, Needs};
-use nalgebra::{DMatrix, Matrix3, Rotation3, UnitQuaternion};
+use super::{Context, Effect, EffectSet, Forces, Links, Needs, SceneEffect, Section, needs_met};
+use nalgebra::{DMatrix, Matrix3, Quaternion, Rotation3, UnitQuaternion};
 use satsim_integrate::SystemError;
+use satsim_tree::io::FileError;
 use satsim_tree::spatial::Vec3;
+use serde::Deserialize;
+use toml::Spanned;
 
 /// What the controller points the bus at.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -37,28 +44,30 @@ pub struct AttitudeControl {
     pub kp: f64,
     /// Derivative gain (N m s/rad).
     pub kd: f64,
-    /// `A⁺` (k x 3), from the wheel axes.
+    /// `A⁺` (k x 3), from the rotor axes ([`Effect::connect`]).
     allocation: DMatrix<f64>,
 }
 
 impl AttitudeControl {
-    /// A controller for wheels with these axes (bus frame), one per wheel of the scene's
-    /// reaction wheels, in their order: building a simulation whose wheels differ in number
-    /// is an error ([`crate::simulation::SimError::Needs`]).
-    pub fn new(target: Target, kp: f64, kd: f64, axes: &[Vec3]) -> Self {
+    /// A controller; it commands every rotor of the simulation it is built into (their
+    /// axes set its allocation, [`AttitudeControl::allocate`]).
+    pub fn new(target: Target, kp: f64, kd: f64) -> Self {
+        Self {
+            target,
+            kp,
+            kd,
+            allocation: DMatrix::zeros(0, 3),
+        }
+    }
+    /// Sets the allocation `A⁺` for rotors with these axes (bus frame), in their order.
+    pub fn allocate(&mut self, axes: &[Vec3]) {
         let a = DMatrix::from_fn(3, axes.len(), |r, c| axes[c][r]);
-        let allocation = if axes.is_empty() {
+        self.allocation = if axes.is_empty() {
             DMatrix::zeros(0, 3)
         } else {
             a.pseudo_inverse(1e-12)
                 .unwrap_or_else(|_| DMatrix::zeros(axes.len(), 3))
         };
-        Self {
-            target,
-            kp,
-            kd,
-            allocation,
-        }
     }
     /// The target attitude (bus to inertial) and rate (inertial axes) at this context.
     pub fn target_state(&self, ctx: &Context) -> Result<(UnitQuaternion<f64>, Vec3), SystemError> {
@@ -92,7 +101,7 @@ impl Effect for AttitudeControl {
     }
     fn needs(&self) -> Needs {
         Needs {
-            wheels: true,
+            rotors: true,
             free_base: true,
             orbit: matches!(self.target, Target::Orbital(_)),
             kinematics: false,
@@ -106,22 +115,29 @@ impl Effect for AttitudeControl {
         _own: &[f64],
         _own_dot: &mut [f64],
     ) -> Result<(), SystemError> {
-        if forces.wheel_command.len() != self.allocation.nrows() {
+        if forces.rotor_command.len() != self.allocation.nrows() {
             return Err(SystemError::new(format!(
-                "attitude_control: gains for {} wheels, but there are {}",
+                "attitude_control: gains for {} rotors, but there are {}",
                 self.allocation.nrows(),
-                forces.wheel_command.len()
+                forces.rotor_command.len()
             )));
         }
         let u = self.torque(ctx)?;
-        for (j, c) in forces.wheel_command.iter_mut().enumerate() {
+        for (j, c) in forces.rotor_command.iter_mut().enumerate() {
             let row = self.allocation.row(j);
             *c = -(row[0] * u.x + row[1] * u.y + row[2] * u.z);
         }
         Ok(())
     }
-    fn wheel_commands(&self) -> Option<usize> {
-        Some(self.allocation.nrows())
+    fn commands_rotors(&self) -> bool {
+        true
+    }
+    fn before(&self) -> &[&str] {
+        &["reaction_wheels"]
+    }
+    fn connect(&mut self, links: &Links) {
+        let axes: Vec<Vec3> = links.rotors.iter().map(|r| r.axis).collect();
+        self.allocate(&axes);
     }
     fn output_columns(&self) -> Vec<String> {
         vec!["pointing_error_deg".into()]
@@ -132,5 +148,74 @@ impl Effect for AttitudeControl {
             .map(|(qt, _)| (qt.inverse() * ctx.attitude).angle().to_degrees())
             .unwrap_or(f64::NAN);
         row.push(err);
+    }
+}
+
+/// `[effects.attitude_control]`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AttitudeFile {
+    /// `"inertial"` (default) or `"orbital"`.
+    #[serde(default)]
+    pub target: Option<Spanned<String>>,
+    /// Target attitude (inertial) or offset from the orbital frame, `[w, x, y, z]`.
+    #[serde(default)]
+    pub attitude: Option<Spanned<[f64; 4]>>,
+    /// Proportional gain (N m/rad).
+    pub kp: f64,
+    /// Derivative gain (N m s/rad).
+    pub kd: f64,
+    /// Off without removing the table (default true).
+    #[serde(default)]
+    pub enabled: Option<bool>,
+}
+
+impl SceneEffect for AttitudeControl {
+    const SECTION: &'static str = "attitude_control";
+    type File = AttitudeFile;
+    fn from_section(af: AttitudeFile, section: &Section) -> Result<Self, FileError> {
+        section.check_numbers(
+            section.span(),
+            "effects.attitude_control.",
+            &[("kp", Some(af.kp), true), ("kd", Some(af.kd), true)],
+        )?;
+        let q = match &af.attitude {
+            Some(q) => {
+                let [w, x, y, z] = *q.get_ref();
+                let quat = Quaternion::new(w, x, y, z);
+                if (quat.norm() - 1.0).abs().is_nan() || (quat.norm() - 1.0).abs() > 1e-6 {
+                    return Err(section.error(
+                        Some(q.span()),
+                        format!("`attitude`: quaternion norm {} is not 1", quat.norm()),
+                    ));
+                }
+                UnitQuaternion::from_quaternion(quat)
+            }
+            None => UnitQuaternion::identity(),
+        };
+        let target = match af.target.as_ref().map(|t| (t.get_ref().as_str(), t.span())) {
+            None | Some(("inertial", _)) => Target::Inertial(q),
+            Some(("orbital", _)) => Target::Orbital(q),
+            Some((other, s)) => {
+                return Err(section.error(
+                    Some(s),
+                    format!(
+                        "`target`: unknown value `{other}`, expected \"inertial\" or \"orbital\""
+                    ),
+                ));
+            }
+        };
+        Ok(AttitudeControl::new(target, af.kp, af.kd))
+    }
+    fn check(&self, enabled: &EffectSet) -> Result<(), String> {
+        if matches!(self.target, Target::Orbital(_)) && !enabled.contains("orbit") {
+            return Err(
+                "effects.attitude_control with target = \"orbital\" needs an [orbit] table".into(),
+            );
+        }
+        if !enabled.contains("reaction_wheels") {
+            return Err("effects.attitude_control needs [effects.reaction_wheels] with at least one [[effects.reaction_wheels.wheel]] to command".into());
+        }
+        needs_met(self, enabled)
     }
 }

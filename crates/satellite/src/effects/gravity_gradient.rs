@@ -34,9 +34,12 @@
 //! `k̇ = −3 k (E·v)/r`), which the energy budget counts as actuator work (see
 //! [`Effect::power`]).
 
-use super::{Context, Effect, Forces, Needs, Power};
+use super::{Context, Effect, Forces, Needs, Power, SceneEffect, Section};
 use satsim_integrate::SystemError;
+use satsim_tree::io::FileError;
 use satsim_tree::spatial::{Force, Vec3};
+use serde::Deserialize;
+use toml::Spanned;
 
 /// Which gravity-gradient model.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -144,5 +147,36 @@ impl Effect for GravityGradient {
             }
         }
         v
+    }
+}
+
+/// `[effects.gravity_gradient]`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GravityFile {
+    /// `"preprint"` (default) or `"full"`.
+    #[serde(default)]
+    pub model: Option<Spanned<String>>,
+    /// Off without removing the table (default true).
+    #[serde(default)]
+    pub enabled: Option<bool>,
+}
+
+impl SceneEffect for GravityGradient {
+    const SECTION: &'static str = "gravity_gradient";
+    type File = GravityFile;
+    fn from_section(file: GravityFile, section: &Section) -> Result<Self, FileError> {
+        let model = match file
+            .model
+            .as_ref()
+            .map(|m| (m.get_ref().as_str(), m.span()))
+        {
+            None | Some(("preprint", _)) => GravityModel::Preprint,
+            Some(("full", _)) => GravityModel::Full,
+            Some((other, s)) => {
+                return Err(section.error(Some(s), format!("`effects.gravity_gradient.model`: unknown value `{other}`, expected \"preprint\" or \"full\"")));
+            }
+        };
+        Ok(GravityGradient::new(model))
     }
 }

@@ -5,9 +5,12 @@
 //! `φ_ref = start + (end − start) (1 − cos π s) / 2`, `φ̇_ref = (end − start) π/(2 duration) sin π s`.
 //! The torque `clamp(kp (φ_ref − φ) + kd (φ̇_ref − φ̇), ±torque_limit)` acts on the hinge.
 
-use super::{Context, Effect, Forces};
+use super::{Context, Effect, Forces, SceneEffect, Section};
 use satsim_integrate::SystemError;
+use satsim_tree::io::FileError;
+use serde::Deserialize;
 use std::f64::consts::PI;
+use toml::Spanned;
 
 /// One controlled hinge.
 #[derive(Clone, Debug, PartialEq)]
@@ -78,5 +81,86 @@ impl Effect for HingeControl {
             forces.hinge_torque[p.hinge] += u.clamp(-p.torque_limit, p.torque_limit);
         }
         Ok(())
+    }
+}
+
+/// `[effects.hinge_control]`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HingeControlFile {
+    /// `[[effects.hinge_control.hinge]]`.
+    #[serde(default)]
+    pub hinge: Vec<Spanned<HingeProfileFile>>,
+    /// Off without removing the table (default true).
+    #[serde(default)]
+    pub enabled: Option<bool>,
+}
+
+/// One `[[effects.hinge_control.hinge]]`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HingeProfileFile {
+    /// The hinge's name.
+    pub name: Spanned<String>,
+    /// Start angle (rad).
+    pub start: f64,
+    /// End angle (rad).
+    pub end: f64,
+    /// Ramp start (s, default 0).
+    #[serde(default)]
+    pub t_start: Option<f64>,
+    /// Ramp duration (s, > 0).
+    pub duration: Spanned<f64>,
+    /// N m/rad.
+    pub kp: f64,
+    /// N m s/rad (default 0).
+    #[serde(default)]
+    pub kd: Option<f64>,
+    /// N m (default unlimited).
+    #[serde(default)]
+    pub torque_limit: Option<Spanned<f64>>,
+}
+
+impl SceneEffect for HingeControl {
+    const SECTION: &'static str = "hinge_control";
+    type File = HingeControlFile;
+    fn from_section(c: HingeControlFile, section: &Section) -> Result<Self, FileError> {
+        let mut hinges = Vec::new();
+        for h in &c.hinge {
+            let hf = h.get_ref();
+            let hinge = section.hinge_index(&hf.name)?;
+            section.check_numbers(
+                h.span(),
+                "effects.hinge_control.hinge.",
+                &[
+                    ("start", Some(hf.start), false),
+                    ("end", Some(hf.end), false),
+                    ("t_start", hf.t_start, false),
+                    ("kp", Some(hf.kp), true),
+                    ("kd", hf.kd, true),
+                ],
+            )?;
+            if hinges.iter().any(|p: &HingeProfile| p.hinge == hinge) {
+                return Err(section.error(
+                    Some(h.span()),
+                    format!("hinge `{}` is controlled twice", hf.name.get_ref()),
+                ));
+            }
+            let torque_limit = match &hf.torque_limit {
+                Some(t) => section.positive(t, "torque_limit")?,
+                None => f64::INFINITY,
+            };
+            hinges.push(HingeProfile {
+                hinge,
+                start: hf.start,
+                end: hf.end,
+                t_start: hf.t_start.unwrap_or(0.0),
+                duration: section.positive(&hf.duration, "duration")?,
+                kp: hf.kp,
+                kd: hf.kd.unwrap_or(0.0),
+                torque_limit,
+            });
+        }
+        Ok(HingeControl { hinges })
     }
 }

@@ -2,8 +2,11 @@
 //! of the model's hinges, in file order. Potential energy `Σ ½ λ_i (φ_i − φ_ref,i)²`; the
 //! dampers dissipate `Σ δ_i ψ_i²` (W).
 
-use super::{Context, Effect, Forces, Power};
+use super::{Context, Effect, Forces, Power, SceneEffect, Section};
 use satsim_integrate::SystemError;
+use satsim_tree::io::FileError;
+use serde::Deserialize;
+use toml::Spanned;
 
 /// The spring-damper effect; one entry per model hinge, file order.
 #[derive(Clone, Debug, PartialEq)]
@@ -61,5 +64,44 @@ impl Effect for HingeSprings {
                 0.5 * self.stiffness[k] * d * d
             })
             .sum()
+    }
+}
+
+/// `[effects.hinge_springs]` (contract section 7).
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SpringsFile {
+    /// N m/rad, one per hinge, file order.
+    pub stiffness: Spanned<Vec<f64>>,
+    /// N m s/rad (default zeros).
+    #[serde(default)]
+    pub damping: Option<Spanned<Vec<f64>>>,
+    /// rad (default zeros).
+    #[serde(default)]
+    pub reference: Option<Spanned<Vec<f64>>>,
+    /// Off without removing the table (default true).
+    #[serde(default)]
+    pub enabled: Option<bool>,
+}
+
+impl SceneEffect for HingeSprings {
+    const SECTION: &'static str = "hinge_springs";
+    type File = SpringsFile;
+    fn from_section(s: SpringsFile, section: &Section) -> Result<Self, FileError> {
+        let n = section.model().n_hinges();
+        let stiffness = section.per_hinge(&s.stiffness, "effects.hinge_springs.stiffness")?;
+        let damping = match &s.damping {
+            Some(d) => section.per_hinge(d, "effects.hinge_springs.damping")?,
+            None => vec![0.0; n],
+        };
+        let reference = match &s.reference {
+            Some(r) => section.per_hinge(r, "effects.hinge_springs.reference")?,
+            None => vec![0.0; n],
+        };
+        Ok(HingeSprings {
+            stiffness,
+            damping,
+            reference,
+        })
     }
 }

@@ -10,8 +10,11 @@
 //! `−e φ̇`; a rebound slower than `min_rebound_rate` latches instead, so that a hinge pressed
 //! against its stop comes to rest rather than bouncing forever (Zeno).
 
-use super::{Context, Effect, Forces, Request};
+use super::{Context, Effect, Forces, Request, SceneEffect, Section};
 use satsim_integrate::{EventAction, EventDirection, SystemError};
+use satsim_tree::io::FileError;
+use serde::Deserialize;
+use toml::Spanned;
 
 /// What a stop does.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -180,5 +183,102 @@ impl Effect for HingeStops {
     }
     fn describe_event(&self, _k: usize) -> String {
         self.last.clone()
+    }
+}
+
+/// `[effects.hinge_stops]`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HingeStopsFile {
+    /// `[[effects.hinge_stops.stop]]`.
+    #[serde(default)]
+    pub stop: Vec<Spanned<StopFile>>,
+    /// Off without removing the table (default true).
+    #[serde(default)]
+    pub enabled: Option<bool>,
+}
+
+/// One `[[effects.hinge_stops.stop]]`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StopFile {
+    /// The hinge's name.
+    pub hinge: Spanned<String>,
+    /// Lower stop (rad).
+    #[serde(default)]
+    pub lower: Option<f64>,
+    /// Upper stop (rad).
+    #[serde(default)]
+    pub upper: Option<f64>,
+    /// `"latch"` (default) or `"rebound"`.
+    #[serde(default)]
+    pub action: Option<Spanned<String>>,
+    /// Coefficient of restitution of a rebound, in [0, 1] (default 0.5).
+    #[serde(default)]
+    pub restitution: Option<Spanned<f64>>,
+    /// A rebound slower than this latches (rad/s, default 1e-3).
+    #[serde(default)]
+    pub min_rebound_rate: Option<f64>,
+}
+
+impl SceneEffect for HingeStops {
+    const SECTION: &'static str = "hinge_stops";
+    type File = HingeStopsFile;
+    fn from_section(s: HingeStopsFile, section: &Section) -> Result<Self, FileError> {
+        let mut stops = Vec::new();
+        for st in &s.stop {
+            let sf = st.get_ref();
+            let hinge = section.hinge_index(&sf.hinge)?;
+            section.check_numbers(
+                st.span(),
+                "effects.hinge_stops.stop.",
+                &[
+                    ("lower", sf.lower, false),
+                    ("upper", sf.upper, false),
+                    ("min_rebound_rate", sf.min_rebound_rate, true),
+                ],
+            )?;
+            if sf.lower.is_none() && sf.upper.is_none() {
+                return Err(section.error(Some(st.span()), "a stop needs `lower`, `upper` or both"));
+            }
+            if let (Some(l), Some(u)) = (sf.lower, sf.upper)
+                && l >= u
+            {
+                return Err(section.error(Some(st.span()), "`lower` must be below `upper`"));
+            }
+            let action = match sf.action.as_ref().map(|a| (a.get_ref().as_str(), a.span())) {
+                None | Some(("latch", _)) => StopAction::Latch,
+                Some(("rebound", _)) => {
+                    let e = match &sf.restitution {
+                        Some(e) => {
+                            let v = section.non_negative(e, "restitution")?;
+                            if v > 1.0 {
+                                return Err(section
+                                    .error(Some(e.span()), "`restitution` must be in [0, 1]"));
+                            }
+                            v
+                        }
+                        None => 0.5,
+                    };
+                    StopAction::Rebound { restitution: e }
+                }
+                Some((other, sp)) => {
+                    return Err(section.error(
+                        Some(sp),
+                        format!(
+                            "`action`: unknown value `{other}`, expected \"latch\" or \"rebound\""
+                        ),
+                    ));
+                }
+            };
+            stops.push(HingeStop {
+                hinge,
+                lower: sf.lower,
+                upper: sf.upper,
+                action,
+                min_rebound_rate: sf.min_rebound_rate.unwrap_or(1e-3),
+            });
+        }
+        Ok(HingeStops::new(stops))
     }
 }

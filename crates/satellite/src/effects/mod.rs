@@ -1,9 +1,10 @@
 //! Effects: the physics a scene may switch on, each a small module behind one trait,
 //! [`Effect`].
 //!
-//! A [`crate::simulation::Simulation`] holds only the effects a scene enables, in a fixed
-//! order ([`CANONICAL_ORDER`]); an effect that is off is never constructed, so it costs
-//! nothing and adds no state. At every right-hand-side evaluation the simulation
+//! A [`crate::simulation::Simulation`] holds only the effects a scene enables, in the order
+//! their declared dependencies give ([`Effect::after`], [`Effect::before`], resolved by a
+//! stable topological sort, [`order`]); an effect that is off is never constructed, so it
+//! costs nothing and adds no state. At every right-hand-side evaluation the simulation
 //!
 //! 1. unpacks the state and runs the tree's forward kinematics,
 //! 2. builds a [`Context`] (time, kinematics, hinge angles and rates, orbit, bus attitude),
@@ -17,9 +18,11 @@
 //! hinge, unlock it, set its rate by a momentum-conserving impulse) that the simulation
 //! carries out.
 //!
-//! Adding an effect: write a type implementing [`Effect`] (only `name` and `apply` are
-//! required), then construct it from the scene (see [`crate::scene`]) or push it with
-//! [`crate::simulation::SimulationBuilder::effect`].
+//! Adding an effect touches one new file: a type implementing [`Effect`] (only `name` and
+//! `apply` are required) and, to be read from a scene's `[effects.<name>]` section,
+//! [`SceneEffect`] (its serde section and its construction), registered in a [`Registry`]
+//! exactly as the built-in effects are ([`Registry::with_builtins`]). Without a scene, push
+//! it with [`crate::simulation::SimulationBuilder::effect`].
 
 pub mod attitude_control;
 pub mod gravity_gradient;
@@ -27,7 +30,9 @@ pub mod hinge_control;
 pub mod hinge_springs;
 pub mod hinge_stops;
 pub mod orbit;
+pub mod order;
 pub mod reaction_wheels;
+pub mod registry;
 
 pub use attitude_control::{AttitudeControl, Target};
 pub use gravity_gradient::{GravityGradient, GravityModel};
@@ -36,24 +41,12 @@ pub use hinge_springs::HingeSprings;
 pub use hinge_stops::{HingeStop, HingeStops, StopAction};
 pub use orbit::{Elements, Orbit, OrbitModel};
 pub use reaction_wheels::{ReactionWheels, Wheel};
+pub use registry::{AnyEffect, EffectSet, Registry, SceneEffect, Section, needs_met};
 
 use nalgebra::UnitQuaternion;
 use satsim_integrate::{EventAction, EventDirection, SystemError};
 use satsim_tree::spatial::{Force, Mat3, Motion, Vec3};
 use satsim_tree::{Data, Model};
-
-/// The order in which the simulation visits effects (by [`Effect::name`]); effects not in the
-/// list come last, in the order they were added. Attitude control runs before the wheels
-/// because it writes their torque commands.
-pub const CANONICAL_ORDER: [&str; 7] = [
-    "orbit",
-    "gravity_gradient",
-    "hinge_springs",
-    "hinge_control",
-    "hinge_stops",
-    "attitude_control",
-    "reaction_wheels",
-];
 
 /// What an effect requires of the rest of the scene. Unmet needs are scene errors that say
 /// what to add.
@@ -61,8 +54,9 @@ pub const CANONICAL_ORDER: [&str; 7] = [
 pub struct Needs {
     /// An `[orbit]` (the effect reads the centre of mass' position).
     pub orbit: bool,
-    /// `[effects.reaction_wheels]` (the effect commands the wheels).
-    pub wheels: bool,
+    /// Rotors to command (an effect that adds rotors, e.g. `[effects.reaction_wheels]`): the
+    /// effect writes [`Forces::rotor_command`].
+    pub rotors: bool,
     /// A free-floating root (`[base] kind = "free"`).
     pub free_base: bool,
     /// Body poses in [`Context::data`] (forward kinematics is skipped when no enabled effect
@@ -73,12 +67,13 @@ pub struct Needs {
     pub hold_torques: bool,
 }
 
-/// An axisymmetric rotor body that an effect adds to the tree (a reaction wheel), hinged to
+/// An axisymmetric rotor body that an effect adds to the tree (a reaction wheel, a momentum
+/// wheel, a control-moment gyro's rotor), hinged to
 /// the root about `axis`. Its dynamics do not depend on its angle, which is therefore not a
 /// state: its spin rate relative to the root is.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Rotor {
-    /// Body and hinge name (`wheel_<name>`).
+    /// Body and hinge name (the reaction wheels use `wheel_<name>`).
     pub name: String,
     /// Unit spin axis, root-body axes.
     pub axis: Vec3,
@@ -197,9 +192,11 @@ pub struct Forces {
     /// How many wrenches were added in this evaluation (the energy budget measures the
     /// wrenches' power only after an effect that added one).
     wrenches_added: u32,
-    /// Motor torque commanded to each wheel (N m, on the rotor about its axis), written by a
-    /// controller before the wheels run.
-    pub wheel_command: Vec<f64>,
+    /// Motor torque commanded to each rotor (N m, on the rotor about its axis, tree order):
+    /// the channel from a controller ([`Effect::commands_rotors`]) to the effect that owns
+    /// the rotors, which runs after it ([`Effect::before`]) and decides what to do with it
+    /// (limits, friction). Zeroed before every evaluation.
+    pub rotor_command: Vec<f64>,
 }
 
 impl Forces {
@@ -210,7 +207,7 @@ impl Forces {
             body_wrench: vec![Force::zero(); n_bodies],
             has_wrench: false,
             wrenches_added: 0,
-            wheel_command: vec![0.0; n_rotors],
+            rotor_command: vec![0.0; n_rotors],
         }
     }
     /// Clears everything to zero.
@@ -221,7 +218,7 @@ impl Forces {
             self.has_wrench = false;
         }
         self.wrenches_added = 0;
-        self.wheel_command.fill(0.0);
+        self.rotor_command.fill(0.0);
     }
     /// The power (W) of the hinge torques, `Σ_k τ_k q̇_k`, with `v` the tree's velocity
     /// vector (its first `n_base` entries the root's). The wheel commands are not forces
@@ -286,6 +283,16 @@ impl Power {
     }
 }
 
+/// What the simulation tells every effect once it is built ([`Effect::connect`]).
+#[derive(Clone, Copy, Debug)]
+pub struct Links<'a> {
+    /// The tree's rotors, in hinge order after the model's hinges (one entry of
+    /// [`Forces::rotor_command`] each).
+    pub rotors: &'a [Rotor],
+    /// Whether an enabled effect writes [`Forces::rotor_command`] ([`Effect::commands_rotors`]).
+    pub rotors_commanded: bool,
+}
+
 /// What an effect asks the simulation to do at one of its events.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Request {
@@ -331,11 +338,25 @@ pub trait Effect: Send {
     fn rotors(&self) -> Vec<Rotor> {
         Vec::new()
     }
-    /// How many wheel motor commands it writes into [`Forces::wheel_command`], if any. The
-    /// simulation refuses to build when this differs from the number of wheels (rotors).
-    fn wheel_commands(&self) -> Option<usize> {
-        None
+    /// Whether it writes motor commands into [`Forces::rotor_command`] (one per rotor of the
+    /// tree, see [`Effect::connect`]).
+    fn commands_rotors(&self) -> bool {
+        false
     }
+    /// Effects (by [`Effect::name`]) that must run before this one in every evaluation, e.g.
+    /// because it reads what they write into [`Forces`]. Each must be enabled: a missing one
+    /// or a cycle is a setup error.
+    fn after(&self) -> &[&str] {
+        &[]
+    }
+    /// Effects that must run after this one (attitude control before the wheels it
+    /// commands). Each must be enabled, as for [`Effect::after`].
+    fn before(&self) -> &[&str] {
+        &[]
+    }
+    /// Called once when the simulation is built, before [`Effect::start`]: what the rest of
+    /// the simulation provides (the tree's rotors, whether a controller commands them).
+    fn connect(&mut self, _links: &Links) {}
     /// Adds its hinge torques and body wrenches to `forces` and writes the derivatives of its
     /// own states (`own`) into `own_dot`.
     fn apply(

@@ -34,9 +34,12 @@
 //! Limits: the command is clamped to `±max_torque`; a wheel at or beyond `max_speed` gets
 //! no torque that would speed it up further.
 
-use super::{Context, Effect, Forces, Needs, Power, Request, Rotor};
+use super::{Context, Effect, Forces, Links, Needs, Power, Request, Rotor, SceneEffect, Section};
 use satsim_integrate::{EventAction, EventDirection, SystemError};
+use satsim_tree::io::FileError;
 use satsim_tree::spatial::Vec3;
+use serde::Deserialize;
+use toml::Spanned;
 
 /// One reaction wheel.
 #[derive(Clone, Debug, PartialEq)]
@@ -123,7 +126,8 @@ impl Wheel {
 pub struct ReactionWheels {
     /// The wheels.
     pub wheels: Vec<Wheel>,
-    /// Whether a controller writes the commands (otherwise each wheel's `torque`).
+    /// Whether a controller writes the commands into [`Forces::rotor_command`] (otherwise
+    /// each wheel's `torque`); set when the simulation is built ([`Effect::connect`]).
     pub commanded: bool,
     stuck: Vec<bool>,
     /// Slip direction of each slipping wheel (±1).
@@ -159,7 +163,7 @@ impl ReactionWheels {
     }
     fn command(&self, j: usize, forces: &Forces, omega: f64) -> f64 {
         let c = if self.commanded {
-            forces.wheel_command[j]
+            forces.rotor_command[j]
         } else {
             self.wheels[j].torque
         };
@@ -234,6 +238,10 @@ impl Effect for ReactionWheels {
             }
         }
         p
+    }
+
+    fn connect(&mut self, links: &Links) {
+        self.commanded = links.rotors_commanded;
     }
     fn output_columns(&self) -> Vec<String> {
         self.wheels
@@ -335,5 +343,141 @@ impl Effect for ReactionWheels {
     }
     fn describe_event(&self, _k: usize) -> String {
         self.last.clone()
+    }
+}
+
+/// `[effects.reaction_wheels]`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WheelsFile {
+    /// `[[effects.reaction_wheels.wheel]]`.
+    #[serde(default)]
+    pub wheel: Vec<Spanned<WheelFile>>,
+    /// Off without removing the table (default true).
+    #[serde(default)]
+    pub enabled: Option<bool>,
+}
+
+/// One `[[effects.reaction_wheels.wheel]]`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WheelFile {
+    /// Unique name.
+    pub name: Spanned<String>,
+    /// Spin axis, bus axes (normalised).
+    pub axis: Spanned<[f64; 3]>,
+    /// Axial inertia (kg m², > 0).
+    pub inertia: Spanned<f64>,
+    /// Transverse inertia (kg m², default inertia / 2, >= inertia / 2).
+    #[serde(default)]
+    pub transverse: Option<f64>,
+    /// Rotor mass (kg, default 0).
+    #[serde(default)]
+    pub mass: Option<f64>,
+    /// Rotor centre, bus frame (m, default origin).
+    #[serde(default)]
+    pub at: Option<[f64; 3]>,
+    /// Torque limit (N m, default unlimited).
+    #[serde(default)]
+    pub max_torque: Option<f64>,
+    /// Speed limit (rad/s, default unlimited).
+    #[serde(default)]
+    pub max_speed: Option<f64>,
+    /// Coulomb friction α0 (N m, default 0).
+    #[serde(default)]
+    pub coulomb: Option<f64>,
+    /// Stribeck friction α1 (N m, default 0).
+    #[serde(default)]
+    pub stribeck: Option<f64>,
+    /// Stribeck speed Ω0 (rad/s, default 1).
+    #[serde(default)]
+    pub stribeck_speed: Option<f64>,
+    /// Viscous friction α2 (N m s/rad, default 0).
+    #[serde(default)]
+    pub viscous: Option<f64>,
+    /// Initial speed relative to the bus (rad/s, default 0).
+    #[serde(default)]
+    pub speed: Option<f64>,
+    /// Constant motor torque without a controller (N m, default 0).
+    #[serde(default)]
+    pub torque: Option<f64>,
+}
+
+impl SceneEffect for ReactionWheels {
+    const SECTION: &'static str = "reaction_wheels";
+    type File = WheelsFile;
+    fn from_section(w: WheelsFile, section: &Section) -> Result<Self, FileError> {
+        let mut wheels: Vec<Wheel> = Vec::new();
+        for wf in &w.wheel {
+            let span = Some(wf.span());
+            let f = wf.get_ref();
+            let name = f.name.get_ref().clone();
+            let at = |k: usize| f.at.map(|a| a[k]);
+            section.check_numbers(
+                wf.span(),
+                "effects.reaction_wheels.wheel.",
+                &[
+                    ("transverse", f.transverse, true),
+                    ("at", at(0), false),
+                    ("at", at(1), false),
+                    ("at", at(2), false),
+                    ("coulomb", f.coulomb, true),
+                    ("stribeck", f.stribeck, true),
+                    ("viscous", f.viscous, true),
+                    ("speed", f.speed, false),
+                    ("torque", f.torque, false),
+                ],
+            )?;
+            if wheels.iter().any(|o| o.name == name) {
+                return Err(section.error(
+                    Some(f.name.span()),
+                    format!("duplicate wheel name `{name}`"),
+                ));
+            }
+            let axis = Vec3::from(*f.axis.get_ref());
+            if !axis.iter().all(|x| x.is_finite()) || axis.norm() <= 1e-9 {
+                return Err(section.error(
+                    Some(f.axis.span()),
+                    "`axis` must be a non-zero finite vector",
+                ));
+            }
+            let inertia = section.positive(&f.inertia, "inertia")?;
+            let mut wheel = Wheel::new(name, axis, inertia);
+            if let Some(t) = f.transverse {
+                if t < 0.5 * inertia * (1.0 - 1e-9) {
+                    return Err(section.error(span, "`transverse` must be >= inertia / 2 (a rotor's moments obey the triangle inequality)"));
+                }
+                wheel.transverse = t;
+            }
+            let nn = |v: Option<f64>, what: &str, default: f64| -> Result<f64, FileError> {
+                match v {
+                    Some(x) if x.is_nan() || x < 0.0 => {
+                        Err(section.error(span.clone(), format!("`{what}` must be >= 0, got {x}")))
+                    }
+                    Some(x) => Ok(x),
+                    None => Ok(default),
+                }
+            };
+            wheel.mass = nn(f.mass, "mass", 0.0)?;
+            wheel.at = f.at.map(Vec3::from).unwrap_or_else(Vec3::zeros);
+            wheel.max_torque = nn(f.max_torque, "max_torque", f64::INFINITY)?;
+            wheel.max_speed = nn(f.max_speed, "max_speed", f64::INFINITY)?;
+            wheel.coulomb = nn(f.coulomb, "coulomb", 0.0)?;
+            wheel.stribeck = nn(f.stribeck, "stribeck", 0.0)?;
+            wheel.viscous = nn(f.viscous, "viscous", 0.0)?;
+            wheel.stribeck_speed = f.stribeck_speed.unwrap_or(1.0);
+            if !(wheel.stribeck_speed.is_finite() && wheel.stribeck_speed > 0.0) {
+                return Err(section.error(span, "`stribeck_speed` must be a finite number > 0"));
+            }
+            wheel.speed = f.speed.unwrap_or(0.0);
+            wheel.torque = f.torque.unwrap_or(0.0);
+            wheels.push(wheel);
+        }
+        if wheels.is_empty() {
+            return Err(section.error_here(
+                "[effects.reaction_wheels] needs at least one [[effects.reaction_wheels.wheel]]",
+            ));
+        }
+        Ok(ReactionWheels::new(wheels))
     }
 }
