@@ -1,0 +1,165 @@
+//! Hinges about a coordinate axis: the fast path of the per-call algorithms.
+//!
+//! A hinge whose axis is `±x`, `±y` or `±z` and that has no fixed rotation (`rot0 = 1`, the
+//! common case: every hinge of the preprint satellite) turns its child about one coordinate
+//! axis `k`. Then `E = Rot(±e_k, φ)ᵀ` has row and column `k` equal to `e_k` and a 2x2 rotation
+//! block on the two other axes, and the motion subspace is `S = [±e_k; child_at × ±e_k]`.
+//! Every product with `E` or `S` then touches two of three rows (or one entry): `Xᵀ IA X`
+//! costs three planar similarities instead of three 3x3 similarities, `U = IA S` is a column
+//! of `IA` (plus a lever term when the hinge point is off the child's origin), `D` an entry.
+//! The results equal the general path's to round-off (tested in `aba.rs`).
+
+use crate::spatial::{ArticulatedInertia, Force, Mat3, Motion, Transform, Vec3};
+
+/// A hinge about the coordinate axis `k` of its parent (and child) frame, with sign `sign`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct CoordAxis {
+    /// The axis: 0, 1, 2 for x, y, z.
+    k: usize,
+    /// The two other axes in cyclic order: `(k + 1) % 3`, `(k + 2) % 3`.
+    i: usize,
+    j: usize,
+    /// `+1` or `−1`: the hinge axis is `sign · e_k`.
+    sign: f64,
+    /// Whether the hinge point is off the child's origin (`S` has a linear part).
+    lever: bool,
+}
+
+impl CoordAxis {
+    /// The coordinate axis of a hinge about `axis` (unit, parent frame) with fixed rotation
+    /// `rot0`, if the axis is exactly `±e_k` and `rot0` exactly the identity.
+    pub(crate) fn of(axis: &Vec3, rot0: &Mat3, child_at: &Vec3) -> Option<Self> {
+        if *rot0 != Mat3::identity() {
+            return None;
+        }
+        let k = (0..3).find(|&k| axis[k].abs() == 1.0)?;
+        if (0..3).any(|m| m != k && axis[m] != 0.0) {
+            return None;
+        }
+        Some(Self {
+            k,
+            i: (k + 1) % 3,
+            j: (k + 2) % 3,
+            sign: axis[k],
+            lever: *child_at != Vec3::zeros(),
+        })
+    }
+
+    /// `Xup` at hinge angle `phi`: `E = Rot(sign e_k, φ)ᵀ`, `r = at − Eᵀ child_at`.
+    #[inline]
+    pub(crate) fn transform(&self, phi: f64, at: &Vec3, child_at: &Vec3) -> Transform {
+        let (s, c) = (self.sign * phi).sin_cos();
+        let (k, i, j) = (self.k, self.i, self.j);
+        // Rot(e_k, φ) maps e_i to c e_i + s e_j; E is its transpose.
+        let mut e = Mat3::zeros();
+        e[(k, k)] = 1.0;
+        e[(i, i)] = c;
+        e[(j, j)] = c;
+        e[(i, j)] = s;
+        e[(j, i)] = -s;
+        let mut rc = Vec3::zeros();
+        rc[k] = child_at[k];
+        rc[i] = c * child_at[i] - s * child_at[j];
+        rc[j] = s * child_at[i] + c * child_at[j];
+        Transform::new(e, at - rc)
+    }
+
+    /// `E v` (parent to child coordinates).
+    #[inline]
+    fn rotate(&self, e: &Mat3, v: &Vec3) -> Vec3 {
+        let (k, i, j) = (self.k, self.i, self.j);
+        let mut out = Vec3::zeros();
+        out[k] = v[k];
+        out[i] = e[(i, i)] * v[i] + e[(i, j)] * v[j];
+        out[j] = e[(j, i)] * v[i] + e[(j, j)] * v[j];
+        out
+    }
+
+    /// `Eᵀ v` (child to parent coordinates).
+    #[inline]
+    fn rotate_back(&self, e: &Mat3, v: &Vec3) -> Vec3 {
+        let (k, i, j) = (self.k, self.i, self.j);
+        let mut out = Vec3::zeros();
+        out[k] = v[k];
+        out[i] = e[(i, i)] * v[i] + e[(j, i)] * v[j];
+        out[j] = e[(i, j)] * v[i] + e[(j, j)] * v[j];
+        out
+    }
+
+    /// `Eᵀ M E`: rows then columns `i`, `j` mixed by the 2x2 block of `E`.
+    #[inline]
+    fn similarity(&self, e: &Mat3, m: &Mat3) -> Mat3 {
+        let (i, j) = (self.i, self.j);
+        let (eii, eij, eji, ejj) = (e[(i, i)], e[(i, j)], e[(j, i)], e[(j, j)]);
+        let mut n = *m;
+        // N = M E: columns i and j.
+        for r in 0..3 {
+            let (mi, mj) = (m[(r, i)], m[(r, j)]);
+            n[(r, i)] = mi * eii + mj * eji;
+            n[(r, j)] = mi * eij + mj * ejj;
+        }
+        // Eᵀ N: rows i and j.
+        let mut out = n;
+        for col in 0..3 {
+            let (ni, nj) = (n[(i, col)], n[(j, col)]);
+            out[(i, col)] = eii * ni + eji * nj;
+            out[(j, col)] = eij * ni + ejj * nj;
+        }
+        out
+    }
+
+    /// `X m` for this hinge's `Xup` (as [`Transform::apply_motion`]).
+    #[inline]
+    pub(crate) fn apply_motion(&self, x: &Transform, m: &Motion) -> Motion {
+        Motion {
+            ang: self.rotate(&x.rot, &m.ang),
+            lin: self.rotate(&x.rot, &(m.lin - x.trans.cross(&m.ang))),
+        }
+    }
+
+    /// `Xᵀ f` for this hinge's `Xup` (as [`Transform::inv_apply_force`]).
+    #[inline]
+    pub(crate) fn inv_apply_force(&self, x: &Transform, f: &Force) -> Force {
+        let lin = self.rotate_back(&x.rot, &f.lin);
+        Force {
+            ang: self.rotate_back(&x.rot, &f.ang) + x.trans.cross(&lin),
+            lin,
+        }
+    }
+
+    /// `Xᵀ IA X` for this hinge's `Xup` (as [`ArticulatedInertia::inv_transform`]).
+    #[inline]
+    pub(crate) fn inv_transform(
+        &self,
+        ia: &ArticulatedInertia,
+        x: &Transform,
+    ) -> ArticulatedInertia {
+        let e = &x.rot;
+        let rotated = ArticulatedInertia {
+            a: self.similarity(e, &ia.a),
+            b: self.similarity(e, &ia.b),
+            c: self.similarity(e, &ia.c),
+        };
+        rotated.translate(&x.trans)
+    }
+
+    /// `U = IA S` for `S = [sign e_k; l]`, `l = child_at × sign e_k` (the joint's `s.lin`).
+    #[inline]
+    pub(crate) fn mul_subspace(&self, ia: &ArticulatedInertia, l: &Vec3) -> Force {
+        let k = self.k;
+        let mut ang: Vec3 = ia.a.column(k) * self.sign;
+        let mut lin: Vec3 = ia.b.row(k).transpose() * self.sign;
+        if self.lever {
+            ang += ia.b * l;
+            lin += ia.c * l;
+        }
+        Force { ang, lin }
+    }
+
+    /// `Sᵀ f` for `S = [sign e_k; l]`.
+    #[inline]
+    pub(crate) fn dot_subspace(&self, l: &Vec3, f: &Force) -> f64 {
+        let d = self.sign * f.ang[self.k];
+        if self.lever { d + l.dot(&f.lin) } else { d }
+    }
+}
