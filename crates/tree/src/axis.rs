@@ -67,45 +67,32 @@ impl CoordAxis {
     /// `E v` (parent to child coordinates).
     #[inline]
     fn rotate(&self, e: &Mat3, v: &Vec3) -> Vec3 {
-        let (k, i, j) = (self.k, self.i, self.j);
-        let mut out = Vec3::zeros();
-        out[k] = v[k];
-        out[i] = e[(i, i)] * v[i] + e[(i, j)] * v[j];
-        out[j] = e[(j, i)] * v[i] + e[(j, j)] * v[j];
-        out
+        match self.k {
+            0 => rotate::<1, 2, false>(e, v),
+            1 => rotate::<2, 0, false>(e, v),
+            _ => rotate::<0, 1, false>(e, v),
+        }
     }
 
     /// `Eᵀ v` (child to parent coordinates).
     #[inline]
     fn rotate_back(&self, e: &Mat3, v: &Vec3) -> Vec3 {
-        let (k, i, j) = (self.k, self.i, self.j);
-        let mut out = Vec3::zeros();
-        out[k] = v[k];
-        out[i] = e[(i, i)] * v[i] + e[(j, i)] * v[j];
-        out[j] = e[(i, j)] * v[i] + e[(j, j)] * v[j];
-        out
+        match self.k {
+            0 => rotate::<1, 2, true>(e, v),
+            1 => rotate::<2, 0, true>(e, v),
+            _ => rotate::<0, 1, true>(e, v),
+        }
     }
 
-    /// `Eᵀ M E`: rows then columns `i`, `j` mixed by the 2x2 block of `E`.
+    /// `Eᵀ M E` for `M = A, B, C` of `ia`: rows then columns `i`, `j` mixed by the 2x2 block
+    /// of `E`, with the axes as constants (no index checks, straight-line code).
     #[inline]
-    fn similarity(&self, e: &Mat3, m: &Mat3) -> Mat3 {
-        let (i, j) = (self.i, self.j);
-        let (eii, eij, eji, ejj) = (e[(i, i)], e[(i, j)], e[(j, i)], e[(j, j)]);
-        let mut n = *m;
-        // N = M E: columns i and j.
-        for r in 0..3 {
-            let (mi, mj) = (m[(r, i)], m[(r, j)]);
-            n[(r, i)] = mi * eii + mj * eji;
-            n[(r, j)] = mi * eij + mj * ejj;
+    fn similarities(&self, e: &Mat3, ia: &ArticulatedInertia) -> ArticulatedInertia {
+        match self.k {
+            0 => similarities::<1, 2>(e, ia),
+            1 => similarities::<2, 0>(e, ia),
+            _ => similarities::<0, 1>(e, ia),
         }
-        // Eᵀ N: rows i and j.
-        let mut out = n;
-        for col in 0..3 {
-            let (ni, nj) = (n[(i, col)], n[(j, col)]);
-            out[(i, col)] = eii * ni + eji * nj;
-            out[(j, col)] = eij * ni + ejj * nj;
-        }
-        out
     }
 
     /// `X m` for this hinge's `Xup` (as [`Transform::apply_motion`]).
@@ -134,13 +121,7 @@ impl CoordAxis {
         ia: &ArticulatedInertia,
         x: &Transform,
     ) -> ArticulatedInertia {
-        let e = &x.rot;
-        let rotated = ArticulatedInertia {
-            a: self.similarity(e, &ia.a),
-            b: self.similarity(e, &ia.b),
-            c: self.similarity(e, &ia.c),
-        };
-        rotated.translate(&x.trans)
+        self.similarities(&x.rot, ia).translate(&x.trans)
     }
 
     /// `U = IA S` for `S = [sign e_k; l]`, `l = child_at × sign e_k` (the joint's `s.lin`).
@@ -162,4 +143,50 @@ impl CoordAxis {
         let d = self.sign * f.ang[self.k];
         if self.lever { d + l.dot(&f.lin) } else { d }
     }
+}
+
+/// `Eᵀ M E` for the three blocks, `E` a rotation about the third axis `k` (`i`, `j` the
+/// others): only rows and columns `I` and `J` change.
+#[inline(always)]
+fn similarities<const I: usize, const J: usize>(
+    e: &Mat3,
+    ia: &ArticulatedInertia,
+) -> ArticulatedInertia {
+    let (eii, eij, eji, ejj) = (e[(I, I)], e[(I, J)], e[(J, I)], e[(J, J)]);
+    let sim = |m: &Mat3| {
+        let mut n = *m;
+        // N = M E: columns I and J.
+        for r in 0..3 {
+            let (mi, mj) = (m[(r, I)], m[(r, J)]);
+            n[(r, I)] = mi * eii + mj * eji;
+            n[(r, J)] = mi * eij + mj * ejj;
+        }
+        // Eᵀ N: rows I and J.
+        let mut out = n;
+        for col in 0..3 {
+            let (ni, nj) = (n[(I, col)], n[(J, col)]);
+            out[(I, col)] = eii * ni + eji * nj;
+            out[(J, col)] = eij * ni + ejj * nj;
+        }
+        out
+    };
+    ArticulatedInertia {
+        a: sim(&ia.a),
+        b: sim(&ia.b),
+        c: sim(&ia.c),
+    }
+}
+
+/// `E v` (or `Eᵀ v` when `BACK`), `E` a rotation about the third axis (`I`, `J` the others).
+#[inline(always)]
+fn rotate<const I: usize, const J: usize, const BACK: bool>(e: &Mat3, v: &Vec3) -> Vec3 {
+    let (eij, eji) = if BACK {
+        (e[(J, I)], e[(I, J)])
+    } else {
+        (e[(I, J)], e[(J, I)])
+    };
+    let mut out = *v;
+    out[I] = e[(I, I)] * v[I] + eij * v[J];
+    out[J] = eji * v[I] + e[(J, J)] * v[J];
+    out
 }
