@@ -5,7 +5,7 @@ use crate::data::Data;
 use crate::error::DynamicsError;
 use crate::kinematics::{base_motion, check_len, update_transforms};
 use crate::model::{BaseKind, Model};
-use crate::spatial::{ArticulatedInertia, Force, Motion, RigidInertia, Transform};
+use crate::spatial::{ArticulatedInertia, Force, Motion, Transform};
 use nalgebra::DVector;
 
 /// Pivots `Dᵢ` below this fraction of the articulated inertia's scale are singular.
@@ -132,12 +132,7 @@ fn articulated<'d, const GYRO: bool>(
             data.ia[i] = ArticulatedInertia::from(*inertia);
             inertia
         };
-        data.pa[i] = if *inertia == RigidInertia::default() {
-            // A massless link: no momentum, no bias.
-            Force::zero()
-        } else {
-            vi.cross_force(&inertia.mul_motion(&vi))
-        };
+        data.pa[i] = vi.cross_force(&inertia.mul_motion(&vi));
         if let Some(f) = fext {
             data.pa[i] -= f[i];
         }

@@ -7,7 +7,9 @@
 //! Every product with `E` or `S` then touches two of three rows (or one entry): `Xᵀ IA X`
 //! costs three planar similarities instead of three 3x3 similarities, `U = IA S` is a column
 //! of `IA` (plus a lever term when the hinge point is off the child's origin), `D` an entry.
-//! The results equal the general path's to round-off (tested in `aba.rs`).
+//! The results equal the general path's to round-off (tested in `aba.rs`). The kernels are
+//! kept out of line: inlined into ABA's three passes (three axes each) they multiplied its
+//! instruction-cache misses and made it slower in wall time despite fewer instructions.
 
 use crate::spatial::{ArticulatedInertia, Force, Mat3, Motion, Transform, Vec3};
 
@@ -21,14 +23,12 @@ pub(crate) struct CoordAxis {
     j: usize,
     /// `+1` or `−1`: the hinge axis is `sign · e_k`.
     sign: f64,
-    /// Whether the hinge point is off the child's origin (`S` has a linear part).
-    lever: bool,
 }
 
 impl CoordAxis {
     /// The coordinate axis of a hinge about `axis` (unit, parent frame) with fixed rotation
     /// `rot0`, if the axis is exactly `±e_k` and `rot0` exactly the identity.
-    pub(crate) fn of(axis: &Vec3, rot0: &Mat3, child_at: &Vec3) -> Option<Self> {
+    pub(crate) fn of(axis: &Vec3, rot0: &Mat3) -> Option<Self> {
         if *rot0 != Mat3::identity() {
             return None;
         }
@@ -41,7 +41,6 @@ impl CoordAxis {
             i: (k + 1) % 3,
             j: (k + 2) % 3,
             sign: axis[k],
-            lever: *child_at != Vec3::zeros(),
         })
     }
 
@@ -96,7 +95,7 @@ impl CoordAxis {
     }
 
     /// `X m` for this hinge's `Xup` (as [`Transform::apply_motion`]).
-    #[inline]
+    #[inline(never)]
     pub(crate) fn apply_motion(&self, x: &Transform, m: &Motion) -> Motion {
         Motion {
             ang: self.rotate(&x.rot, &m.ang),
@@ -105,7 +104,7 @@ impl CoordAxis {
     }
 
     /// `Xᵀ f` for this hinge's `Xup` (as [`Transform::inv_apply_force`]).
-    #[inline]
+    #[inline(never)]
     pub(crate) fn inv_apply_force(&self, x: &Transform, f: &Force) -> Force {
         let lin = self.rotate_back(&x.rot, &f.lin);
         Force {
@@ -115,7 +114,7 @@ impl CoordAxis {
     }
 
     /// `Xᵀ IA X` for this hinge's `Xup` (as [`ArticulatedInertia::inv_transform`]).
-    #[inline]
+    #[inline(never)]
     pub(crate) fn inv_transform(
         &self,
         ia: &ArticulatedInertia,
@@ -125,23 +124,20 @@ impl CoordAxis {
     }
 
     /// `U = IA S` for `S = [sign e_k; l]`, `l = child_at × sign e_k` (the joint's `s.lin`).
-    #[inline]
+    #[inline(never)]
     pub(crate) fn mul_subspace(&self, ia: &ArticulatedInertia, l: &Vec3) -> Force {
         let k = self.k;
-        let mut ang: Vec3 = ia.a.column(k) * self.sign;
-        let mut lin: Vec3 = ia.b.row(k).transpose() * self.sign;
-        if self.lever {
-            ang += ia.b * l;
-            lin += ia.c * l;
+        // The lever term unconditionally: a branch costs more than its 30 flops.
+        Force {
+            ang: ia.a.column(k) * self.sign + ia.b * l,
+            lin: ia.b.row(k).transpose() * self.sign + ia.c * l,
         }
-        Force { ang, lin }
     }
 
     /// `Sᵀ f` for `S = [sign e_k; l]`.
     #[inline]
     pub(crate) fn dot_subspace(&self, l: &Vec3, f: &Force) -> f64 {
-        let d = self.sign * f.ang[self.k];
-        if self.lever { d + l.dot(&f.lin) } else { d }
+        self.sign * f.ang[self.k] + l.dot(&f.lin)
     }
 }
 

@@ -386,10 +386,7 @@ impl ModelBuilder {
         model.coord_axis = model
             .joints
             .iter()
-            .map(|j| {
-                j.as_ref()
-                    .and_then(|j| CoordAxis::of(&j.axis, &j.rot0, &j.child_at))
-            })
+            .map(|j| j.as_ref().and_then(|j| CoordAxis::of(&j.axis, &j.rot0)))
             .collect();
         model.find_gyrostats();
         Ok(model)
