@@ -1,10 +1,11 @@
 //! The articulated-body algorithm (Featherstone §7.3): O(n) forward dynamics, the default.
 
+use crate::axis::CoordAxis;
 use crate::data::Data;
 use crate::error::DynamicsError;
 use crate::kinematics::{base_motion, check_len, update_transforms};
 use crate::model::{BaseKind, Model};
-use crate::spatial::{ArticulatedInertia, Force, Motion};
+use crate::spatial::{ArticulatedInertia, Force, Motion, Transform};
 use nalgebra::DVector;
 
 /// Pivots `Dᵢ` below this fraction of the articulated inertia's scale are singular.
@@ -103,8 +104,7 @@ fn articulated<'d, const GYRO: bool>(
         check_len("q", q.len(), model.nq())?;
         for i in 1..n {
             if !model.is_gyrostat[i] {
-                let joint = model.joints[i].as_ref().expect("non-root body has a joint");
-                data.xup[i] = joint.transform(model.angle(q, joint));
+                data.xup[i] = model.xup(i, q);
             }
         }
     } else {
@@ -120,7 +120,7 @@ fn articulated<'d, const GYRO: bool>(
         if let Some(joint) = &model.joints[i] {
             let p = model.parent[i].expect("parent");
             let vj = joint.s * v[joint.dof];
-            data.v[i] = data.xup[i].apply_motion(&data.v[p]) + vj;
+            data.v[i] = apply_motion(&model.coord_axis[i], &data.xup[i], &data.v[p]) + vj;
             data.c[i] = data.v[i].cross_motion(&vj);
         }
         let vi = data.v[i];
@@ -149,7 +149,7 @@ fn articulated<'d, const GYRO: bool>(
                 // rest acts on the carrier through the bearing.
                 let fr = f[g.body];
                 tau_axial += joint.s.dot(&fr);
-                let x = joint.transform(model.angle(q, joint));
+                let x = model.xup(g.body, q);
                 data.pa[g.parent] -= x.inv_apply_force(&fr);
             }
             let w = data.v[g.parent].ang;
@@ -167,17 +167,27 @@ fn articulated<'d, const GYRO: bool>(
         let joint = model.joints[i].as_ref().expect("joint");
         let p = model.parent[i].expect("parent");
         let x = data.xup[i];
+        let axis = &model.coord_axis[i];
         if locked.is_some_and(|l| l[joint.hinge]) {
             // Known (zero) acceleration: the child rides rigidly on its parent.
             let ia = data.ia[i];
             let pa = data.pa[i] + ia.mul_motion(&data.c[i]);
-            data.ia[p] += ia.inv_transform(&x);
-            data.pa[p] += x.inv_apply_force(&pa);
+            data.ia[p] += inv_transform(axis, &ia, &x);
+            data.pa[p] += inv_apply_force(axis, &x, &pa);
             continue;
         }
         let ia = data.ia[i];
-        let u_col = ia.mul_motion(&joint.s);
-        let d = joint.s.dot(&u_col) + joint.armature;
+        let (u_col, d) = match axis {
+            Some(a) => {
+                let u_col = a.mul_subspace(&ia, &joint.s.lin);
+                (u_col, a.dot_subspace(&joint.s.lin, &u_col))
+            }
+            None => {
+                let u_col = ia.mul_motion(&joint.s);
+                (u_col, joint.s.dot(&u_col))
+            }
+        };
+        let d = d + joint.armature;
         let scale = ia.a.trace() + ia.c.trace() * joint.child_at.norm_squared();
         // Written so that a NaN pivot counts as singular too.
         let regular = d.is_finite() && d > SINGULAR_PIVOT_RELATIVE * scale;
@@ -189,7 +199,11 @@ fn articulated<'d, const GYRO: bool>(
                 relative: if scale > 0.0 { d / scale } else { 0.0 },
             });
         }
-        let u = tau[joint.dof] - joint.s.dot(&data.pa[i]);
+        let u = tau[joint.dof]
+            - match axis {
+                Some(a) => a.dot_subspace(&joint.s.lin, &data.pa[i]),
+                None => joint.s.dot(&data.pa[i]),
+            };
         data.u_col[i] = u_col;
         data.d[i] = d;
         data.u[i] = u;
@@ -197,8 +211,8 @@ fn articulated<'d, const GYRO: bool>(
         let mut ia_proj = ia;
         ia_proj.sub_outer(&u_col, inv_d);
         let pa = data.pa[i] + ia_proj.mul_motion(&data.c[i]) + u_col * (u * inv_d);
-        data.ia[p] += ia_proj.inv_transform(&x);
-        data.pa[p] += x.inv_apply_force(&pa);
+        data.ia[p] += inv_transform(axis, &ia_proj, &x);
+        data.pa[p] += inv_apply_force(axis, &x, &pa);
     }
     // Pass 3, outward: accelerations.
     data.a[0] = match model.base {
@@ -222,7 +236,7 @@ fn articulated<'d, const GYRO: bool>(
             data.ddq[joint.dof] = data.u[i] / data.d[i] - joint.axis.dot(&data.a[p].ang);
             continue;
         }
-        let a = data.xup[i].apply_motion(&data.a[p]) + data.c[i];
+        let a = apply_motion(&model.coord_axis[i], &data.xup[i], &data.a[p]) + data.c[i];
         if locked.is_some_and(|l| l[joint.hinge]) {
             data.ddq[joint.dof] = 0.0;
             data.a[i] = a;
@@ -234,6 +248,37 @@ fn articulated<'d, const GYRO: bool>(
         data.a[i] = a + joint.s * qdd;
     }
     Ok(&data.ddq)
+}
+
+/// `X m`, by the coordinate-axis fast path where the hinge has one.
+#[inline]
+fn apply_motion(axis: &Option<CoordAxis>, x: &Transform, m: &Motion) -> Motion {
+    match axis {
+        Some(a) => a.apply_motion(x, m),
+        None => x.apply_motion(m),
+    }
+}
+
+/// `Xᵀ f`, by the coordinate-axis fast path where the hinge has one.
+#[inline]
+fn inv_apply_force(axis: &Option<CoordAxis>, x: &Transform, f: &Force) -> Force {
+    match axis {
+        Some(a) => a.inv_apply_force(x, f),
+        None => x.inv_apply_force(f),
+    }
+}
+
+/// `Xᵀ IA X`, by the coordinate-axis fast path where the hinge has one.
+#[inline]
+fn inv_transform(
+    axis: &Option<CoordAxis>,
+    ia: &ArticulatedInertia,
+    x: &Transform,
+) -> ArticulatedInertia {
+    match axis {
+        Some(a) => a.inv_transform(ia, x),
+        None => ia.inv_transform(x),
+    }
 }
 
 /// The hinges reached from body `i` downwards through massless bodies: the other axes of a
@@ -252,4 +297,128 @@ fn massless_hinges_below(model: &Model, i: usize) -> Vec<String> {
         }
     }
     names
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::{Body, Hinge, ModelBuilder};
+    use crate::samples::{SplitMix, random_tree_with_rotors};
+    use crate::spatial::Vec3;
+    use nalgebra::Quaternion;
+
+    /// `model` with every hinge axis snapped to the nearest signed coordinate axis and no
+    /// fixed rotations, plus `rotors` balanced rotors about coordinate axes (gyrostats): every
+    /// hinge takes the coordinate-axis path.
+    fn snapped(model: &Model, rotors: usize, rng: &mut SplitMix) -> Model {
+        let mut b = ModelBuilder::new(model.base);
+        for body in &model.bodies {
+            b.push_body(
+                Body::new(body.name.clone(), body.mass, body.inertia_com).with_com(body.com),
+            );
+        }
+        for (k, name) in model.hinge_names.iter().enumerate() {
+            let i = model.hinge_body[k];
+            let joint = model.joints[i].as_ref().unwrap();
+            let m = joint.axis.iamax();
+            let mut axis = Vec3::zeros();
+            axis[m] = joint.axis[m].signum();
+            let p = model.parent[i].unwrap();
+            b.push_hinge(
+                Hinge::revolute(
+                    name.clone(),
+                    model.bodies[p].name.clone(),
+                    model.bodies[i].name.clone(),
+                    axis,
+                )
+                .at(joint.at)
+                .child_at(joint.child_at)
+                .rotation(Quaternion::identity())
+                .armature(joint.armature),
+            );
+        }
+        for r in 0..rotors {
+            let k = r % 3;
+            let (j, it) = (rng.range(0.05, 0.2), rng.range(0.1, 0.2));
+            let mut diag = Vec3::repeat(it);
+            diag[k] = j;
+            let mass = if r % 2 == 0 { rng.range(0.5, 3.0) } else { 0.0 };
+            let name = format!("axial_rotor{r}");
+            let p = (rng.next_f64() * model.n_bodies() as f64) as usize;
+            let e = Vec3::ith(k, if r % 2 == 0 { 1.0 } else { -1.0 });
+            b.push_body(
+                Body::new(name.clone(), mass, nalgebra::Matrix3::from_diagonal(&diag))
+                    .with_com(e * rng.range(-0.3, 0.3)),
+            );
+            b.push_hinge(
+                Hinge::revolute(name.clone(), model.bodies[p].name.clone(), name, e)
+                    .at(rng.vec3(0.5))
+                    .child_at(e * rng.range(-0.3, 0.3)),
+            );
+        }
+        b.build().unwrap()
+    }
+
+    fn rel(a: &nalgebra::DVector<f64>, b: &nalgebra::DVector<f64>) -> f64 {
+        (a - b).amax() / a.amax().max(b.amax()).max(1.0)
+    }
+
+    #[test]
+    fn coordinate_axis_path_equals_the_general_path() {
+        let (mut worst, mut compared): (f64, usize) = (0.0, 0);
+        for seed in 0..200u64 {
+            let mut rng = SplitMix(seed ^ 0x51ed);
+            let base = if seed % 3 == 0 {
+                BaseKind::Fixed
+            } else {
+                BaseKind::Free
+            };
+            let n = 2 + (seed % 20) as usize;
+            let rotors = (seed % 3) as usize;
+            let tree = random_tree_with_rotors(n, base, seed % 2 == 0, rotors, seed);
+            let fast = snapped(&tree, rotors, &mut rng);
+            assert!(fast.coord_axis.iter().skip(1).all(Option::is_some));
+            assert!(fast.gyrostats.len() >= rotors);
+            // Some snapped axes are negative, some hinge points off the child origin.
+            let mut general = fast.clone();
+            general.coord_axis.iter_mut().for_each(|a| *a = None);
+            let mut q = fast.neutral();
+            let nb = fast.base_nq();
+            if base == BaseKind::Free {
+                let a = Quaternion::new(0.3, -0.5, rng.range(-1.0, 1.0), 0.2).normalize();
+                q[..4].copy_from_slice(&[a.w, a.i, a.j, a.k]);
+            }
+            for x in &mut q[nb..] {
+                *x = rng.range(-3.0, 3.0);
+            }
+            let v: Vec<f64> = (0..fast.nv()).map(|_| rng.range(-2.0, 2.0)).collect();
+            let tau: Vec<f64> = (0..fast.nv()).map(|_| rng.range(-2.0, 2.0)).collect();
+            let fext: Vec<Force> = (0..fast.n_bodies())
+                .map(|_| Force::new(rng.vec3(1.0), rng.vec3(1.0)))
+                .collect();
+            let locked: Vec<bool> = (0..fast.n_hinges()).map(|_| rng.next_f64() < 0.3).collect();
+            let (mut df, mut dg) = (Data::new(&fast), Data::new(&general));
+            let (Ok(a), Ok(b)) = (
+                aba(&fast, &mut df, &q, &v, &tau, Some(&fext)).cloned(),
+                aba(&general, &mut dg, &q, &v, &tau, Some(&fext)).cloned(),
+            ) else {
+                continue; // a singular snapped tree (parallel hinges through massless links)
+            };
+            compared += 1;
+            worst = worst.max(rel(&a, &b));
+            let (Ok(a), Ok(b)) = (
+                aba_hybrid(&fast, &mut df, &q, &v, &tau, None, &locked).cloned(),
+                aba_hybrid(&general, &mut dg, &q, &v, &tau, None, &locked).cloned(),
+            ) else {
+                continue;
+            };
+            worst = worst.max(rel(&a, &b));
+            for i in 1..fast.n_bodies() {
+                let (xf, xg) = (fast.xup(i, &q), general.xup(i, &q));
+                assert!((xf.rot - xg.rot).amax() < 1e-15 && (xf.trans - xg.trans).amax() < 1e-14);
+            }
+        }
+        assert!(compared > 150, "only {compared} regular trees");
+        assert!(worst < 1e-12, "worst relative difference {worst:e}");
+    }
 }

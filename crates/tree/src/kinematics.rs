@@ -26,8 +26,7 @@ pub(crate) fn check_len(
 pub fn update_transforms(model: &Model, data: &mut Data, q: &[f64]) -> Result<(), DynamicsError> {
     check_len("q", q.len(), model.nq())?;
     for i in 1..model.n_bodies() {
-        let joint = model.joints[i].as_ref().expect("non-root body has a joint");
-        data.xup[i] = joint.transform(model.angle(q, joint));
+        data.xup[i] = model.xup(i, q);
     }
     Ok(())
 }

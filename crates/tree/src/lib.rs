@@ -34,6 +34,7 @@
 #![warn(missing_docs)]
 
 pub mod aba;
+mod axis;
 pub mod cholesky;
 pub mod crba;
 pub mod data;

@@ -11,6 +11,7 @@
 //! (root-body axes, root frame origin) or `[hinge rates…]`. Hinges follow the order in
 //! which they were added (the model file's order), whatever the tree's shape.
 
+use crate::axis::CoordAxis;
 use crate::error::ModelError;
 use crate::spatial::{
     ArticulatedInertia, Mat3, Motion, RigidInertia, Transform, Vec3, rotation_about,
@@ -390,7 +391,13 @@ impl ModelBuilder {
             is_gyrostat: Vec::new(),
             carrier_inertia: Vec::new(),
             carrier_ia: Vec::new(),
+            coord_axis: Vec::new(),
         };
+        model.coord_axis = model
+            .joints
+            .iter()
+            .map(|j| j.as_ref().and_then(|j| CoordAxis::of(&j.axis, &j.rot0)))
+            .collect();
         model.find_gyrostats();
         Ok(model)
     }
@@ -682,6 +689,9 @@ pub struct Model {
     /// Per body: the articulated inertia ABA starts from in the gyrostat form, the carrier
     /// inertia less `J a aᵀ` (angular block) for each rotor.
     pub(crate) carrier_ia: Vec<ArticulatedInertia>,
+    /// Per body: its hinge's coordinate axis where the hinge turns about one (the fast path
+    /// of `axis.rs`), `None` for the root and for general hinges.
+    pub(crate) coord_axis: Vec<Option<CoordAxis>>,
 }
 
 impl Model {
@@ -868,6 +878,18 @@ impl Model {
         self.carrier_ia = self.carrier_inertia.iter().map(|&i| i.into()).collect();
         for g in &self.gyrostats {
             self.carrier_ia[g.parent].a -= g.axis * g.axis.transpose() * g.axial;
+        }
+    }
+
+    /// `Xup[i]` for a non-root body `i` at the angles in `q` (the coordinate-axis fast path
+    /// where it applies).
+    #[inline]
+    pub(crate) fn xup(&self, i: usize, q: &[f64]) -> Transform {
+        let joint = self.joints[i].as_ref().expect("non-root body has a joint");
+        let phi = self.angle(q, joint);
+        match &self.coord_axis[i] {
+            Some(axis) => axis.transform(phi, &joint.at, &joint.child_at),
+            None => joint.transform(phi),
         }
     }
 

@@ -439,12 +439,19 @@ impl ArticulatedInertia {
         let a = e.tr_mul(&(self.a * e));
         let b = e.tr_mul(&(self.b * e));
         let c = e.tr_mul(&(self.c * e));
-        let r = &x.trans;
+        ArticulatedInertia { a, b, c }.translate(&x.trans)
+    }
+    /// The translation part of [`Self::inv_transform`], `[1 [r]×; 0 1] IA [1 0; −[r]× 1]`:
+    /// this inertia about the origin of a frame with the same axes in which this inertia's
+    /// origin lies at `r`.
+    #[inline]
+    pub(crate) fn translate(self, r: &Vec3) -> ArticulatedInertia {
+        let ArticulatedInertia { a, b, c } = self;
         if *r == Vec3::zeros() {
             // Coincident origins (a zero-length gimbal link): a pure rotation.
-            return ArticulatedInertia { a, b, c };
+            return self;
         }
-        // [1 [r]×; 0 1] [A B; Bᵀ C] [1 0; −[r]× 1], with M [r]× = −([r]× Mᵀ)ᵀ.
+        // With M [r]× = −([r]× Mᵀ)ᵀ.
         let nb = b + cross_columns(r, &c);
         let na =
             a + cross_columns(r, &b.transpose()) + cross_columns(r, &nb.transpose()).transpose();

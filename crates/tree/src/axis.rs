@@ -1,0 +1,188 @@
+//! Hinges about a coordinate axis: the fast path of the per-call algorithms.
+//!
+//! A hinge whose axis is `±x`, `±y` or `±z` and that has no fixed rotation (`rot0 = 1`, the
+//! common case: every hinge of the preprint satellite) turns its child about one coordinate
+//! axis `k`. Then `E = Rot(±e_k, φ)ᵀ` has row and column `k` equal to `e_k` and a 2x2 rotation
+//! block on the two other axes, and the motion subspace is `S = [±e_k; child_at × ±e_k]`.
+//! Every product with `E` or `S` then touches two of three rows (or one entry): `Xᵀ IA X`
+//! costs three planar similarities instead of three 3x3 similarities, `U = IA S` is a column
+//! of `IA` (plus a lever term when the hinge point is off the child's origin), `D` an entry.
+//! The results equal the general path's to round-off (tested in `aba.rs`). The kernels are
+//! kept out of line: inlined into ABA's three passes (three axes each) they multiplied its
+//! instruction-cache misses and made it slower in wall time despite fewer instructions.
+
+use crate::spatial::{ArticulatedInertia, Force, Mat3, Motion, Transform, Vec3};
+
+/// A hinge about the coordinate axis `k` of its parent (and child) frame, with sign `sign`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct CoordAxis {
+    /// The axis: 0, 1, 2 for x, y, z.
+    k: usize,
+    /// The two other axes in cyclic order: `(k + 1) % 3`, `(k + 2) % 3`.
+    i: usize,
+    j: usize,
+    /// `+1` or `−1`: the hinge axis is `sign · e_k`.
+    sign: f64,
+}
+
+impl CoordAxis {
+    /// The coordinate axis of a hinge about `axis` (unit, parent frame) with fixed rotation
+    /// `rot0`, if the axis is exactly `±e_k` and `rot0` exactly the identity.
+    pub(crate) fn of(axis: &Vec3, rot0: &Mat3) -> Option<Self> {
+        if *rot0 != Mat3::identity() {
+            return None;
+        }
+        let k = (0..3).find(|&k| axis[k].abs() == 1.0)?;
+        if (0..3).any(|m| m != k && axis[m] != 0.0) {
+            return None;
+        }
+        Some(Self {
+            k,
+            i: (k + 1) % 3,
+            j: (k + 2) % 3,
+            sign: axis[k],
+        })
+    }
+
+    /// `Xup` at hinge angle `phi`: `E = Rot(sign e_k, φ)ᵀ`, `r = at − Eᵀ child_at`.
+    #[inline]
+    pub(crate) fn transform(&self, phi: f64, at: &Vec3, child_at: &Vec3) -> Transform {
+        let (s, c) = (self.sign * phi).sin_cos();
+        let (k, i, j) = (self.k, self.i, self.j);
+        // Rot(e_k, φ) maps e_i to c e_i + s e_j; E is its transpose.
+        let mut e = Mat3::zeros();
+        e[(k, k)] = 1.0;
+        e[(i, i)] = c;
+        e[(j, j)] = c;
+        e[(i, j)] = s;
+        e[(j, i)] = -s;
+        let mut rc = Vec3::zeros();
+        rc[k] = child_at[k];
+        rc[i] = c * child_at[i] - s * child_at[j];
+        rc[j] = s * child_at[i] + c * child_at[j];
+        Transform::new(e, at - rc)
+    }
+
+    /// `E v` (parent to child coordinates).
+    #[inline]
+    fn rotate(&self, e: &Mat3, v: &Vec3) -> Vec3 {
+        match self.k {
+            0 => rotate::<1, 2, false>(e, v),
+            1 => rotate::<2, 0, false>(e, v),
+            _ => rotate::<0, 1, false>(e, v),
+        }
+    }
+
+    /// `Eᵀ v` (child to parent coordinates).
+    #[inline]
+    fn rotate_back(&self, e: &Mat3, v: &Vec3) -> Vec3 {
+        match self.k {
+            0 => rotate::<1, 2, true>(e, v),
+            1 => rotate::<2, 0, true>(e, v),
+            _ => rotate::<0, 1, true>(e, v),
+        }
+    }
+
+    /// `Eᵀ M E` for `M = A, B, C` of `ia`: rows then columns `i`, `j` mixed by the 2x2 block
+    /// of `E`, with the axes as constants (no index checks, straight-line code).
+    #[inline]
+    fn similarities(&self, e: &Mat3, ia: &ArticulatedInertia) -> ArticulatedInertia {
+        match self.k {
+            0 => similarities::<1, 2>(e, ia),
+            1 => similarities::<2, 0>(e, ia),
+            _ => similarities::<0, 1>(e, ia),
+        }
+    }
+
+    /// `X m` for this hinge's `Xup` (as [`Transform::apply_motion`]).
+    #[inline(never)]
+    pub(crate) fn apply_motion(&self, x: &Transform, m: &Motion) -> Motion {
+        Motion {
+            ang: self.rotate(&x.rot, &m.ang),
+            lin: self.rotate(&x.rot, &(m.lin - x.trans.cross(&m.ang))),
+        }
+    }
+
+    /// `Xᵀ f` for this hinge's `Xup` (as [`Transform::inv_apply_force`]).
+    #[inline(never)]
+    pub(crate) fn inv_apply_force(&self, x: &Transform, f: &Force) -> Force {
+        let lin = self.rotate_back(&x.rot, &f.lin);
+        Force {
+            ang: self.rotate_back(&x.rot, &f.ang) + x.trans.cross(&lin),
+            lin,
+        }
+    }
+
+    /// `Xᵀ IA X` for this hinge's `Xup` (as [`ArticulatedInertia::inv_transform`]).
+    #[inline(never)]
+    pub(crate) fn inv_transform(
+        &self,
+        ia: &ArticulatedInertia,
+        x: &Transform,
+    ) -> ArticulatedInertia {
+        self.similarities(&x.rot, ia).translate(&x.trans)
+    }
+
+    /// `U = IA S` for `S = [sign e_k; l]`, `l = child_at × sign e_k` (the joint's `s.lin`).
+    #[inline(never)]
+    pub(crate) fn mul_subspace(&self, ia: &ArticulatedInertia, l: &Vec3) -> Force {
+        let k = self.k;
+        // The lever term unconditionally: a branch costs more than its 30 flops.
+        Force {
+            ang: ia.a.column(k) * self.sign + ia.b * l,
+            lin: ia.b.row(k).transpose() * self.sign + ia.c * l,
+        }
+    }
+
+    /// `Sᵀ f` for `S = [sign e_k; l]`.
+    #[inline]
+    pub(crate) fn dot_subspace(&self, l: &Vec3, f: &Force) -> f64 {
+        self.sign * f.ang[self.k] + l.dot(&f.lin)
+    }
+}
+
+/// `Eᵀ M E` for the three blocks, `E` a rotation about the third axis `k` (`i`, `j` the
+/// others): only rows and columns `I` and `J` change.
+#[inline(always)]
+fn similarities<const I: usize, const J: usize>(
+    e: &Mat3,
+    ia: &ArticulatedInertia,
+) -> ArticulatedInertia {
+    let (eii, eij, eji, ejj) = (e[(I, I)], e[(I, J)], e[(J, I)], e[(J, J)]);
+    let sim = |m: &Mat3| {
+        let mut n = *m;
+        // N = M E: columns I and J.
+        for r in 0..3 {
+            let (mi, mj) = (m[(r, I)], m[(r, J)]);
+            n[(r, I)] = mi * eii + mj * eji;
+            n[(r, J)] = mi * eij + mj * ejj;
+        }
+        // Eᵀ N: rows I and J.
+        let mut out = n;
+        for col in 0..3 {
+            let (ni, nj) = (n[(I, col)], n[(J, col)]);
+            out[(I, col)] = eii * ni + eji * nj;
+            out[(J, col)] = eij * ni + ejj * nj;
+        }
+        out
+    };
+    ArticulatedInertia {
+        a: sim(&ia.a),
+        b: sim(&ia.b),
+        c: sim(&ia.c),
+    }
+}
+
+/// `E v` (or `Eᵀ v` when `BACK`), `E` a rotation about the third axis (`I`, `J` the others).
+#[inline(always)]
+fn rotate<const I: usize, const J: usize, const BACK: bool>(e: &Mat3, v: &Vec3) -> Vec3 {
+    let (eij, eji) = if BACK {
+        (e[(J, I)], e[(I, J)])
+    } else {
+        (e[(I, J)], e[(J, I)])
+    };
+    let mut out = *v;
+    out[I] = e[(I, I)] * v[I] + eij * v[J];
+    out[J] = eji * v[I] + e[(J, J)] * v[J];
+    out
+}
