@@ -375,6 +375,7 @@ impl ModelBuilder {
                 at: h.at,
                 child_at: h.child_at,
                 rot0,
+                rotation: h.rotation,
                 s: Motion::new(s, h.child_at.cross(&s)),
                 armature: h.armature,
             });
@@ -609,6 +610,9 @@ pub struct Joint {
     pub(crate) child_at: Vec3,
     /// Child to parent rotation at zero angle.
     pub(crate) rot0: Mat3,
+    /// The hinge's fixed rotation as the builder got it (kept so that
+    /// [`Model::to_builder`] gives back exactly the same model).
+    pub(crate) rotation: Quaternion<f64>,
     /// Motion subspace `S` (constant, child coordinates).
     pub(crate) s: Motion,
     /// Armature (kg m²) added to the hinge's diagonal entry of `M`.
@@ -639,6 +643,11 @@ impl Joint {
     /// Child to parent rotation at zero angle.
     pub fn rot0(&self) -> &Mat3 {
         &self.rot0
+    }
+    /// The hinge's fixed rotation, child to parent at zero angle, Hamilton `[w, x, y, z]`,
+    /// exactly as given to the builder (`rot0` is its matrix).
+    pub fn rotation(&self) -> &Quaternion<f64> {
+        &self.rotation
     }
     /// Motion subspace `S` (constant, child coordinates).
     pub fn s(&self) -> &Motion {
@@ -766,8 +775,8 @@ impl Model {
     /// A builder that rebuilds this model: a built model never changes, so a variant (another
     /// armature, a heavier body) is built anew. Bodies come in the model's depth-first order
     /// and hinges in their order of addition, so the rebuilt model numbers bodies, hinges and
-    /// coordinates as this one does. A hinge's fixed `rotation` is recovered from its matrix
-    /// (identity exactly, others to round-off).
+    /// coordinates as this one does. A hinge's fixed `rotation` comes back exactly as it was
+    /// given and its axis normalised, so an unchanged rebuild has the same joint frames.
     ///
     /// ```
     /// use satsim_tree::{BaseKind, Body, Hinge, ModelBuilder, spatial::{Mat3, Vec3}};
@@ -794,7 +803,7 @@ impl Model {
             let i = self.hinge_body[k];
             let j = self.joints[i].as_ref().expect("non-root body has a joint");
             let p = self.parent[i].expect("non-root body has a parent");
-            let rotation = UnitQuaternion::from_matrix(&j.rot0).into_inner();
+            let rotation = j.rotation;
             builder.push_hinge(
                 Hinge::revolute(
                     name.clone(),
