@@ -150,4 +150,8 @@ pub struct OutputFile {
     /// Write the 3-D playback `view.html` and its kept poses (default true).
     #[serde(default)]
     pub view: Option<bool>,
+    /// Integrate the energy budget's works (actuators, dissipation) and write its columns
+    /// (default true).
+    #[serde(default)]
+    pub energy_budget: Option<bool>,
 }

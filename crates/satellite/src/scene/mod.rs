@@ -69,6 +69,9 @@ pub struct Scene {
     pub plots: bool,
     /// Write the 3-D playback `view.html` (and `poses.csv`, `view.json`): see [`crate::view`].
     pub view: bool,
+    /// Integrate the energy budget (two more states) and write its columns `work_actuators`,
+    /// `energy_dissipated`, `energy_budget`: see [`crate::simulation`].
+    pub energy_budget: bool,
     /// The enabled effects (the orbit included): look one up by type,
     /// `scene.effects.get::<HingeSprings>()`.
     pub effects: EffectSet,
@@ -91,6 +94,7 @@ impl Scene {
             every: duration / 100.0,
             plots: true,
             view: true,
+            energy_budget: true,
             effects: EffectSet::default(),
             warnings: Vec::new(),
         }
@@ -99,7 +103,9 @@ impl Scene {
     /// A fresh [`Simulation`] with exactly the enabled effects (fresh copies of them, in the
     /// order their dependencies give, see [`crate::effects::order`]).
     pub fn simulation(&self) -> Result<Simulation, SimError> {
-        let mut b = Simulation::builder(self.model.clone()).initial(self.initial.clone());
+        let mut b = Simulation::builder(self.model.clone())
+            .initial(self.initial.clone())
+            .energy_budget(self.energy_budget);
         for e in self.effects.to_boxed() {
             b = b.boxed(e);
         }

@@ -260,15 +260,20 @@ impl<'a> Parser<'a> {
 
         let duration = self.positive(&file.duration, "duration")?;
         let options = self.integrator(file.integrator.as_ref())?;
-        let (every, plots, view) = match &file.output {
-            None => (duration / 100.0, true, true),
+        let (every, plots, view, energy_budget) = match &file.output {
+            None => (duration / 100.0, true, true, true),
             Some(o) => {
                 let o = o.get_ref();
                 let every = match &o.every {
                     Some(e) => self.positive(e, "output.every")?,
                     None => duration / 100.0,
                 };
-                (every, o.plots.unwrap_or(true), o.view.unwrap_or(true))
+                (
+                    every,
+                    o.plots.unwrap_or(true),
+                    o.view.unwrap_or(true),
+                    o.energy_budget.unwrap_or(true),
+                )
             }
         };
         let mut effects = EffectSet::default();
@@ -287,6 +292,7 @@ impl<'a> Parser<'a> {
             every,
             plots,
             view,
+            energy_budget,
             effects,
             warnings,
         };
