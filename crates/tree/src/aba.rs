@@ -166,20 +166,22 @@ fn articulated<'d, const GYRO: bool>(
         }
         let joint = model.joints[i].as_ref().expect("joint");
         let p = model.parent[i].expect("parent");
-        let x = data.xup[i];
+        let x = &data.xup[i];
         let axis = &model.coord_axis[i];
+        // λ(i) < i: the child's inertia and the parent's, borrowed together, so that the
+        // projection and the accumulation happen in place (no 216-byte copies).
+        let (head, tail) = data.ia.split_at_mut(i);
+        let (ia, ia_parent) = (&mut tail[0], &mut head[p]);
         if locked.is_some_and(|l| l[joint.hinge]) {
             // Known (zero) acceleration: the child rides rigidly on its parent.
-            let ia = data.ia[i];
             let pa = data.pa[i] + ia.mul_motion(&data.c[i]);
-            data.ia[p] += inv_transform(axis, &ia, &x);
-            data.pa[p] += inv_apply_force(axis, &x, &pa);
+            add_inv_transform(axis, ia, x, ia_parent);
+            data.pa[p] += inv_apply_force(axis, x, &pa);
             continue;
         }
-        let ia = data.ia[i];
         let (u_col, d) = match axis {
             Some(a) => {
-                let u_col = a.mul_subspace(&ia, &joint.s.lin);
+                let u_col = a.mul_subspace(ia, &joint.s.lin);
                 (u_col, a.dot_subspace(&joint.s.lin, &u_col))
             }
             None => {
@@ -208,11 +210,11 @@ fn articulated<'d, const GYRO: bool>(
         data.d[i] = d;
         data.u[i] = u;
         let inv_d = 1.0 / d;
-        let mut ia_proj = ia;
-        ia_proj.sub_outer(&u_col, inv_d);
-        let pa = data.pa[i] + ia_proj.mul_motion(&data.c[i]) + u_col * (u * inv_d);
-        data.ia[p] += inv_transform(axis, &ia_proj, &x);
-        data.pa[p] += inv_apply_force(axis, &x, &pa);
+        // IAᵢ becomes its projection IAᵢ − Uᵢ Dᵢ⁻¹ Uᵢᵀ, the inertia the parent sees.
+        ia.sub_outer(&u_col, inv_d);
+        let pa = data.pa[i] + ia.mul_motion(&data.c[i]) + u_col * (u * inv_d);
+        add_inv_transform(axis, ia, x, ia_parent);
+        data.pa[p] += inv_apply_force(axis, x, &pa);
     }
     // Pass 3, outward: accelerations.
     data.a[0] = match model.base {
@@ -268,16 +270,17 @@ fn inv_apply_force(axis: &Option<CoordAxis>, x: &Transform, f: &Force) -> Force 
     }
 }
 
-/// `Xᵀ IA X`, by the coordinate-axis fast path where the hinge has one.
+/// `out += Xᵀ IA X`, by the coordinate-axis fast path where the hinge has one.
 #[inline]
-fn inv_transform(
+fn add_inv_transform(
     axis: &Option<CoordAxis>,
     ia: &ArticulatedInertia,
     x: &Transform,
-) -> ArticulatedInertia {
+    out: &mut ArticulatedInertia,
+) {
     match axis {
-        Some(a) => a.inv_transform(ia, x),
-        None => ia.inv_transform(x),
+        Some(a) => a.add_inv_transform(ia, x, out),
+        None => ia.add_inv_transform_to(x, out),
     }
 }
 

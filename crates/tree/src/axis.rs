@@ -11,7 +11,7 @@
 //! kept out of line: inlined into ABA's three passes (three axes each) they multiplied its
 //! instruction-cache misses and made it slower in wall time despite fewer instructions.
 
-use crate::spatial::{ArticulatedInertia, Force, Mat3, Motion, Transform, Vec3};
+use crate::spatial::{ArticulatedInertia, Force, Mat3, Motion, Transform, Vec3, add_translated};
 
 /// A hinge about the coordinate axis `k` of its parent (and child) frame, with sign `sign`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -113,14 +113,17 @@ impl CoordAxis {
         }
     }
 
-    /// `Xᵀ IA X` for this hinge's `Xup` (as [`ArticulatedInertia::inv_transform`]).
+    /// `out += Xᵀ IA X` for this hinge's `Xup` (as [`ArticulatedInertia::inv_transform`],
+    /// accumulated in place into the parent's inertia).
     #[inline(never)]
-    pub(crate) fn inv_transform(
+    pub(crate) fn add_inv_transform(
         &self,
         ia: &ArticulatedInertia,
         x: &Transform,
-    ) -> ArticulatedInertia {
-        self.similarities(&x.rot, ia).translate(&x.trans)
+        out: &mut ArticulatedInertia,
+    ) {
+        let s = self.similarities(&x.rot, ia);
+        add_translated(&s.a, &s.b, &s.c, &x.trans, out);
     }
 
     /// `U = IA S` for `S = [sign e_k; l]`, `l = child_at × sign e_k` (the joint's `s.lin`).

@@ -45,7 +45,9 @@ pub struct Data {
     pub c: Vec<Motion>,
     /// Spatial force transmitted across each body's hinge. Filled by [`crate::rnea()`].
     pub f: Vec<Force>,
-    /// Articulated-body inertias. Filled by [`crate::aba()`].
+    /// Articulated-body inertias. Filled by [`crate::aba()`]: the root's `IA₀`; a hinged
+    /// body's is left projected, `IAᵢ − Uᵢ Dᵢ⁻¹ Uᵢᵀ` (the inertia its parent receives; ABA
+    /// projects in place), or `IAᵢ` where the hinge is locked in [`crate::aba_hybrid`].
     pub ia: Vec<ArticulatedInertia>,
     /// Articulated bias forces. Filled by [`crate::aba()`].
     pub pa: Vec<Force>,
