@@ -125,13 +125,12 @@ fn articulated<'d, const GYRO: bool>(
         }
         let vi = data.v[i];
         let inertia = if gyro {
-            data.ia[i] = model.carrier_ia[i];
             &model.carrier_inertia[i]
         } else {
-            let inertia = &model.bodies[i].inertia;
-            data.ia[i] = ArticulatedInertia::from(*inertia);
-            inertia
+            &model.bodies[i].inertia
         };
+        // IAᵢ starts from the rigid inertia (`start` below), written by the first child.
+        data.ia_started[i] = false;
         data.pa[i] = vi.cross_force(&inertia.mul_motion(&vi));
         if let Some(f) = fext {
             data.pa[i] -= f[i];
@@ -160,6 +159,11 @@ fn articulated<'d, const GYRO: bool>(
         }
     }
     // Pass 2, inward: articulated inertias and bias forces.
+    let start = if gyro {
+        &model.carrier_ia
+    } else {
+        &model.rigid_ia
+    };
     for i in (1..n).rev() {
         if gyro && model.is_gyrostat[i] {
             continue;
@@ -171,11 +175,16 @@ fn articulated<'d, const GYRO: bool>(
         // λ(i) < i: the child's inertia and the parent's, borrowed together, so that the
         // projection and the accumulation happen in place (no 216-byte copies).
         let (head, tail) = data.ia.split_at_mut(i);
-        let (ia, ia_parent) = (&mut tail[0], &mut head[p]);
+        let (ia_i, ia_parent) = (&mut tail[0], &mut head[p]);
+        // A leaf (no child started it) reads its start in place of a copy.
+        let started = data.ia_started[i];
+        let ia: &ArticulatedInertia = if started { ia_i } else { &start[i] };
+        let parent_start = (!data.ia_started[p]).then(|| &start[p]);
+        data.ia_started[p] = true;
         if locked.is_some_and(|l| l[joint.hinge]) {
             // Known (zero) acceleration: the child rides rigidly on its parent.
             let pa = data.pa[i] + ia.mul_motion(&data.c[i]);
-            add_inv_transform(axis, ia, x, ia_parent);
+            add_inv_transform(axis, ia, x, ia_parent, parent_start);
             data.pa[p] += inv_apply_force(axis, x, &pa);
             continue;
         }
@@ -211,10 +220,18 @@ fn articulated<'d, const GYRO: bool>(
         data.u[i] = u;
         let inv_d = 1.0 / d;
         // IAᵢ becomes its projection IAᵢ − Uᵢ Dᵢ⁻¹ Uᵢᵀ, the inertia the parent sees.
-        ia.sub_outer(&u_col, inv_d);
+        if started {
+            ia_i.sub_outer(&u_col, inv_d);
+        } else {
+            ia_i.set_sub_outer(&start[i], &u_col, inv_d);
+        }
+        let ia = &*ia_i;
         let pa = data.pa[i] + ia.mul_motion(&data.c[i]) + u_col * (u * inv_d);
-        add_inv_transform(axis, ia, x, ia_parent);
+        add_inv_transform(axis, ia, x, ia_parent, parent_start);
         data.pa[p] += inv_apply_force(axis, x, &pa);
+    }
+    if !data.ia_started[0] {
+        data.ia[0] = start[0]; // a root without hinged children (other than rotors)
     }
     // Pass 3, outward: accelerations.
     data.a[0] = match model.base {
@@ -270,17 +287,19 @@ fn inv_apply_force(axis: &Option<CoordAxis>, x: &Transform, f: &Force) -> Force 
     }
 }
 
-/// `out += Xᵀ IA X`, by the coordinate-axis fast path where the hinge has one.
+/// `out += Xᵀ IA X` (`out = start + Xᵀ IA X` with `Some(start)`), by the coordinate-axis
+/// fast path where the hinge has one.
 #[inline]
 fn add_inv_transform(
     axis: &Option<CoordAxis>,
     ia: &ArticulatedInertia,
     x: &Transform,
     out: &mut ArticulatedInertia,
+    start: Option<&ArticulatedInertia>,
 ) {
     match axis {
-        Some(a) => a.add_inv_transform(ia, x, out),
-        None => ia.add_inv_transform_to(x, out),
+        Some(a) => a.add_inv_transform(ia, x, out, start),
+        None => ia.add_inv_transform_to(x, out, start),
     }
 }
 

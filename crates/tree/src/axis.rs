@@ -106,17 +106,18 @@ impl CoordAxis {
         }
     }
 
-    /// `out += Xᵀ IA X` for this hinge's `Xup` (as [`ArticulatedInertia::inv_transform`],
-    /// accumulated in place into the parent's inertia).
+    /// `out += Xᵀ IA X` (or `out = start + Xᵀ IA X`) for this hinge's `Xup` (as
+    /// [`ArticulatedInertia::inv_transform`], accumulated in place into the parent's inertia).
     #[inline(never)]
     pub(crate) fn add_inv_transform(
         &self,
         ia: &ArticulatedInertia,
         x: &Transform,
         out: &mut ArticulatedInertia,
+        start: Option<&ArticulatedInertia>,
     ) {
         let s = self.similarities(&x.rot, ia);
-        add_translated(&s.a, &s.b, &s.c, &x.trans, out);
+        add_translated(&s.a, &s.b, &s.c, &x.trans, out, start);
     }
 
     /// `U = IA S` for `S = [sign e_k; l]`, `l = child_at × sign e_k` (the joint's `s.lin`).
