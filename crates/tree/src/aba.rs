@@ -125,13 +125,12 @@ fn articulated<'d, const GYRO: bool>(
         }
         let vi = data.v[i];
         let inertia = if gyro {
-            data.ia[i] = model.carrier_ia[i];
             &model.carrier_inertia[i]
         } else {
-            let inertia = &model.bodies[i].inertia;
-            data.ia[i] = ArticulatedInertia::from(*inertia);
-            inertia
+            &model.bodies[i].inertia
         };
+        // IAᵢ starts from the rigid inertia (`start` below), written by the first child.
+        data.ia_started[i] = false;
         data.pa[i] = vi.cross_force(&inertia.mul_motion(&vi));
         if let Some(f) = fext {
             data.pa[i] -= f[i];
@@ -160,26 +159,38 @@ fn articulated<'d, const GYRO: bool>(
         }
     }
     // Pass 2, inward: articulated inertias and bias forces.
+    let start = if gyro {
+        &model.carrier_ia
+    } else {
+        &model.rigid_ia
+    };
     for i in (1..n).rev() {
         if gyro && model.is_gyrostat[i] {
             continue;
         }
         let joint = model.joints[i].as_ref().expect("joint");
         let p = model.parent[i].expect("parent");
-        let x = data.xup[i];
+        let x = &data.xup[i];
         let axis = &model.coord_axis[i];
+        // λ(i) < i: the child's inertia and the parent's, borrowed together, so that the
+        // projection and the accumulation happen in place (no 216-byte copies).
+        let (head, tail) = data.ia.split_at_mut(i);
+        let (ia_i, ia_parent) = (&mut tail[0], &mut head[p]);
+        // A leaf (no child started it) reads its start in place of a copy.
+        let started = data.ia_started[i];
+        let ia: &ArticulatedInertia = if started { ia_i } else { &start[i] };
+        let parent_start = (!data.ia_started[p]).then(|| &start[p]);
+        data.ia_started[p] = true;
         if locked.is_some_and(|l| l[joint.hinge]) {
             // Known (zero) acceleration: the child rides rigidly on its parent.
-            let ia = data.ia[i];
             let pa = data.pa[i] + ia.mul_motion(&data.c[i]);
-            data.ia[p] += inv_transform(axis, &ia, &x);
-            data.pa[p] += inv_apply_force(axis, &x, &pa);
+            add_inv_transform(axis, ia, x, ia_parent, parent_start);
+            data.pa[p] += inv_apply_force(axis, x, &pa);
             continue;
         }
-        let ia = data.ia[i];
         let (u_col, d) = match axis {
             Some(a) => {
-                let u_col = a.mul_subspace(&ia, &joint.s.lin);
+                let u_col = a.mul_subspace(ia, &joint.s.lin);
                 (u_col, a.dot_subspace(&joint.s.lin, &u_col))
             }
             None => {
@@ -208,11 +219,19 @@ fn articulated<'d, const GYRO: bool>(
         data.d[i] = d;
         data.u[i] = u;
         let inv_d = 1.0 / d;
-        let mut ia_proj = ia;
-        ia_proj.sub_outer(&u_col, inv_d);
-        let pa = data.pa[i] + ia_proj.mul_motion(&data.c[i]) + u_col * (u * inv_d);
-        data.ia[p] += inv_transform(axis, &ia_proj, &x);
-        data.pa[p] += inv_apply_force(axis, &x, &pa);
+        // IAᵢ becomes its projection IAᵢ − Uᵢ Dᵢ⁻¹ Uᵢᵀ, the inertia the parent sees.
+        if started {
+            ia_i.sub_outer(&u_col, inv_d);
+        } else {
+            ia_i.set_sub_outer(&start[i], &u_col, inv_d);
+        }
+        let ia = &*ia_i;
+        let pa = data.pa[i] + ia.mul_motion(&data.c[i]) + u_col * (u * inv_d);
+        add_inv_transform(axis, ia, x, ia_parent, parent_start);
+        data.pa[p] += inv_apply_force(axis, x, &pa);
+    }
+    if !data.ia_started[0] {
+        data.ia[0] = start[0]; // a root without hinged children (other than rotors)
     }
     // Pass 3, outward: accelerations.
     data.a[0] = match model.base {
@@ -268,16 +287,19 @@ fn inv_apply_force(axis: &Option<CoordAxis>, x: &Transform, f: &Force) -> Force 
     }
 }
 
-/// `Xᵀ IA X`, by the coordinate-axis fast path where the hinge has one.
+/// `out += Xᵀ IA X` (`out = start + Xᵀ IA X` with `Some(start)`), by the coordinate-axis
+/// fast path where the hinge has one.
 #[inline]
-fn inv_transform(
+fn add_inv_transform(
     axis: &Option<CoordAxis>,
     ia: &ArticulatedInertia,
     x: &Transform,
-) -> ArticulatedInertia {
+    out: &mut ArticulatedInertia,
+    start: Option<&ArticulatedInertia>,
+) {
     match axis {
-        Some(a) => a.inv_transform(ia, x),
-        None => ia.inv_transform(x),
+        Some(a) => a.add_inv_transform(ia, x, out, start),
+        None => ia.add_inv_transform_to(x, out, start),
     }
 }
 

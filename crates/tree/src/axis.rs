@@ -11,7 +11,7 @@
 //! kept out of line: inlined into ABA's three passes (three axes each) they multiplied its
 //! instruction-cache misses and made it slower in wall time despite fewer instructions.
 
-use crate::spatial::{ArticulatedInertia, Force, Mat3, Motion, Transform, Vec3};
+use crate::spatial::{ArticulatedInertia, Force, Mat3, Motion, Transform, Vec3, add_translated};
 
 /// A hinge about the coordinate axis `k` of its parent (and child) frame, with sign `sign`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -47,20 +47,13 @@ impl CoordAxis {
     /// `Xup` at hinge angle `phi`: `E = Rot(sign e_k, φ)ᵀ`, `r = at − Eᵀ child_at`.
     #[inline]
     pub(crate) fn transform(&self, phi: f64, at: &Vec3, child_at: &Vec3) -> Transform {
-        let (s, c) = (self.sign * phi).sin_cos();
-        let (k, i, j) = (self.k, self.i, self.j);
-        // Rot(e_k, φ) maps e_i to c e_i + s e_j; E is its transpose.
-        let mut e = Mat3::zeros();
-        e[(k, k)] = 1.0;
-        e[(i, i)] = c;
-        e[(j, j)] = c;
-        e[(i, j)] = s;
-        e[(j, i)] = -s;
-        let mut rc = Vec3::zeros();
-        rc[k] = child_at[k];
-        rc[i] = c * child_at[i] - s * child_at[j];
-        rc[j] = s * child_at[i] + c * child_at[j];
-        Transform::new(e, at - rc)
+        let sc = (self.sign * phi).sin_cos();
+        // The axes as constants: no index checks, straight-line code.
+        match self.k {
+            0 => transform::<0, 1, 2>(sc, at, child_at),
+            1 => transform::<1, 2, 0>(sc, at, child_at),
+            _ => transform::<2, 0, 1>(sc, at, child_at),
+        }
     }
 
     /// `E v` (parent to child coordinates).
@@ -113,14 +106,18 @@ impl CoordAxis {
         }
     }
 
-    /// `Xᵀ IA X` for this hinge's `Xup` (as [`ArticulatedInertia::inv_transform`]).
+    /// `out += Xᵀ IA X` (or `out = start + Xᵀ IA X`) for this hinge's `Xup` (as
+    /// [`ArticulatedInertia::inv_transform`], accumulated in place into the parent's inertia).
     #[inline(never)]
-    pub(crate) fn inv_transform(
+    pub(crate) fn add_inv_transform(
         &self,
         ia: &ArticulatedInertia,
         x: &Transform,
-    ) -> ArticulatedInertia {
-        self.similarities(&x.rot, ia).translate(&x.trans)
+        out: &mut ArticulatedInertia,
+        start: Option<&ArticulatedInertia>,
+    ) {
+        let s = self.similarities(&x.rot, ia);
+        add_translated(&s.a, &s.b, &s.c, &x.trans, out, start);
     }
 
     /// `U = IA S` for `S = [sign e_k; l]`, `l = child_at × sign e_k` (the joint's `s.lin`).
@@ -139,6 +136,28 @@ impl CoordAxis {
     pub(crate) fn dot_subspace(&self, l: &Vec3, f: &Force) -> f64 {
         self.sign * f.ang[self.k] + l.dot(&f.lin)
     }
+}
+
+/// [`CoordAxis::transform`] about axis `K` (`I`, `J` the others in cyclic order), from
+/// `(s, c) = sin_cos(sign φ)`.
+#[inline(always)]
+fn transform<const K: usize, const I: usize, const J: usize>(
+    (s, c): (f64, f64),
+    at: &Vec3,
+    child_at: &Vec3,
+) -> Transform {
+    // Rot(e_k, φ) maps e_i to c e_i + s e_j; E is its transpose.
+    let mut e = Mat3::zeros();
+    e[(K, K)] = 1.0;
+    e[(I, I)] = c;
+    e[(J, J)] = c;
+    e[(I, J)] = s;
+    e[(J, I)] = -s;
+    let mut rc = Vec3::zeros();
+    rc[K] = child_at[K];
+    rc[I] = c * child_at[I] - s * child_at[J];
+    rc[J] = s * child_at[I] + c * child_at[J];
+    Transform::new(e, at - rc)
 }
 
 /// `Eᵀ M E` for the three blocks, `E` a rotation about the third axis `k` (`i`, `j` the

@@ -45,8 +45,15 @@ pub struct Data {
     pub c: Vec<Motion>,
     /// Spatial force transmitted across each body's hinge. Filled by [`crate::rnea()`].
     pub f: Vec<Force>,
-    /// Articulated-body inertias. Filled by [`crate::aba()`].
+    /// Articulated-body inertias. Filled by [`crate::aba()`]: the root's `IA₀`; a hinged
+    /// body's is left projected, `IAᵢ − Uᵢ Dᵢ⁻¹ Uᵢᵀ` (the inertia its parent receives; ABA
+    /// projects in place); unspecified for gyrostat rotors and hinges locked in
+    /// [`crate::aba_hybrid`].
     pub ia: Vec<ArticulatedInertia>,
+    /// Per body: whether ABA's pass 2 has started `ia[i]` (a child has added to it). The
+    /// first child writes its parent's inertia as the rigid start plus its own part, so
+    /// that no body's start is copied in first.
+    pub(crate) ia_started: Vec<bool>,
     /// Articulated bias forces. Filled by [`crate::aba()`].
     pub pa: Vec<Force>,
     /// `Uᵢ = IAᵢ Sᵢ`. Filled by [`crate::aba()`].
@@ -91,6 +98,7 @@ impl Data {
             c: vec![Motion::zero(); n],
             f: vec![Force::zero(); n],
             ia: vec![ArticulatedInertia::default(); n],
+            ia_started: vec![false; n],
             pa: vec![Force::zero(); n],
             u_col: vec![Force::zero(); n],
             d: vec![0.0; n],

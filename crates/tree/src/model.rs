@@ -392,6 +392,7 @@ impl ModelBuilder {
             is_gyrostat: Vec::new(),
             carrier_inertia: Vec::new(),
             carrier_ia: Vec::new(),
+            rigid_ia: Vec::new(),
             coord_axis: Vec::new(),
         };
         model.coord_axis = model
@@ -399,6 +400,7 @@ impl ModelBuilder {
             .iter()
             .map(|j| j.as_ref().and_then(|j| CoordAxis::of(&j.axis, &j.rot0)))
             .collect();
+        model.rigid_ia = model.bodies.iter().map(|b| b.inertia.into()).collect();
         model.find_gyrostats();
         Ok(model)
     }
@@ -698,6 +700,9 @@ pub struct Model {
     /// Per body: the articulated inertia ABA starts from in the gyrostat form, the carrier
     /// inertia less `J a aᵀ` (angular block) for each rotor.
     pub(crate) carrier_ia: Vec<ArticulatedInertia>,
+    /// Per body: its own rigid inertia as an articulated inertia, where ABA's plain form
+    /// starts (the gyrostat form starts from `carrier_ia`).
+    pub(crate) rigid_ia: Vec<ArticulatedInertia>,
     /// Per body: its hinge's coordinate axis where the hinge turns about one (the fast path
     /// of `axis.rs`), `None` for the root and for general hinges.
     pub(crate) coord_axis: Vec<Option<CoordAxis>>,

@@ -432,31 +432,77 @@ impl ArticulatedInertia {
         self.b -= un * u.lin.transpose();
         self.c -= uf * u.lin.transpose();
     }
+    /// `self = from − u uᵀ / d`: [`Self::sub_outer`] of `from`, written here.
+    #[inline]
+    pub(crate) fn set_sub_outer(&mut self, from: &ArticulatedInertia, u: &Force, inv_d: f64) {
+        let un = u.ang * inv_d;
+        let uf = u.lin * inv_d;
+        self.a = from.a - un * u.ang.transpose();
+        self.b = from.b - un * u.lin.transpose();
+        self.c = from.c - uf * u.lin.transpose();
+    }
     /// `Xᵀ IA X`: this inertia, given in B-coordinates, expressed in A-coordinates.
     #[inline]
     pub fn inv_transform(&self, x: &Transform) -> ArticulatedInertia {
+        let mut out = ArticulatedInertia::default();
+        self.add_inv_transform_to(x, &mut out, None);
+        out
+    }
+    /// `out += Xᵀ IA X`, or `out = start + Xᵀ IA X` with `Some(start)` (ABA's accumulation
+    /// into the parent, in place: no 6x6 temporary is returned and copied).
+    #[inline]
+    pub(crate) fn add_inv_transform_to(
+        &self,
+        x: &Transform,
+        out: &mut ArticulatedInertia,
+        start: Option<&ArticulatedInertia>,
+    ) {
         let e = &x.rot;
         let a = e.tr_mul(&(self.a * e));
         let b = e.tr_mul(&(self.b * e));
         let c = e.tr_mul(&(self.c * e));
-        ArticulatedInertia { a, b, c }.translate(&x.trans)
+        add_translated(&a, &b, &c, &x.trans, out, start);
     }
-    /// The translation part of [`Self::inv_transform`], `[1 [r]×; 0 1] IA [1 0; −[r]× 1]`:
-    /// this inertia about the origin of a frame with the same axes in which this inertia's
-    /// origin lies at `r`.
-    #[inline]
-    pub(crate) fn translate(self, r: &Vec3) -> ArticulatedInertia {
-        let ArticulatedInertia { a, b, c } = self;
-        if *r == Vec3::zeros() {
-            // Coincident origins (a zero-length gimbal link): a pure rotation.
-            return self;
-        }
+}
+
+/// `out += [1 [r]×; 0 1] [A B; Bᵀ C] [1 0; −[r]× 1]` (or `out = start + ...` with
+/// `Some(start)`), the translation part of [`ArticulatedInertia::inv_transform`]: the inertia
+/// `[A B; Bᵀ C]` about the origin of a frame with the same axes in which its origin lies at
+/// `r`, added to `out`.
+#[inline]
+pub(crate) fn add_translated(
+    a: &Mat3,
+    b: &Mat3,
+    c: &Mat3,
+    r: &Vec3,
+    out: &mut ArticulatedInertia,
+    start: Option<&ArticulatedInertia>,
+) {
+    let (na, nb) = if *r == Vec3::zeros() {
+        // Coincident origins (a zero-length gimbal link): a pure rotation.
+        (*a, *b)
+    } else {
         // With M [r]× = −([r]× Mᵀ)ᵀ.
-        let nb = b + cross_columns(r, &c);
+        let nb = b + cross_columns(r, c);
         let na =
             a + cross_columns(r, &b.transpose()) + cross_columns(r, &nb.transpose()).transpose();
-        ArticulatedInertia { a: na, b: nb, c }
+        (na, nb)
+    };
+    match start {
+        Some(s) => {
+            out.a = s.a + na;
+            out.b = s.b + nb;
+            out.c = s.c + c;
+        }
+        None => {
+            out.a += na;
+            out.b += nb;
+            out.c += c;
+        }
     }
+}
+
+impl ArticulatedInertia {
     /// `IA⁻¹ f`: the motion `[α; a]` with `IA [α; a] = f`, by the Schur complement
     /// `S = A − B C⁻¹ Bᵀ` and two 3x3 Cholesky factorisations (no 6x6 matrix). `None` unless
     /// `IA` is positive definite (then `C` and `S` are, and conversely).
