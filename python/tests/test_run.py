@@ -11,7 +11,9 @@ import pytest
 import satsim
 from conftest import EXAMPLES, SCENES
 
-SCENE_FILES = sorted(SCENES.glob("*.toml"))
+# magnetic_torquer.toml needs the effect that examples/custom_effect.rs registers in Rust:
+# neither the Python module nor the `satsim` binary knows it (by design: a plug-in).
+SCENE_FILES = sorted(p for p in SCENES.glob("*.toml") if p.stem != "magnetic_torquer")
 
 
 def read_csv(path):
