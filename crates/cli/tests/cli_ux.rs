@@ -318,6 +318,16 @@ fn a_nearly_unit_attitude_is_normalised_with_a_warning() {
         .collect();
     let norm = q.iter().map(|x| x * x).sum::<f64>().sqrt();
     assert!((norm - 1.0).abs() < 1e-9, "{norm}");
+    // Every command that reads a scene says so, not only `run`.
+    for command in ["linearize", "modes"] {
+        let o = satsim_in(&dir, &[command, "scene.toml"]);
+        assert!(o.status.success(), "{command}: {}", stderr(&o));
+        let err = stderr(&o);
+        assert!(
+            err.contains("warning:") && err.contains("normalised"),
+            "{command}: {err}"
+        );
+    }
     std::fs::write(dir.join("state.json"), state("[1.01, 0, 0, 0]")).unwrap();
     let o = satsim_in(&dir, &["run", "scene.toml"]);
     assert_eq!(o.status.code(), Some(2));

@@ -40,6 +40,7 @@ fn parse_method(s: &str) -> Result<Method, String> {
 pub fn run(args: &Args) -> Result<Output, CliError> {
     let scene_path = &args.scene;
     let scene = Scene::read(scene_path)?;
+    super::print_warnings(&scene.warnings);
     let mut plan = if args.quick {
         Sweep::quick(&scene)
     } else {

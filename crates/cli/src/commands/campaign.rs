@@ -95,6 +95,7 @@ pub fn run(args: &Args) -> Result<Output, CliError> {
     })
     .map_err(|e| usage(&["campaign"], e))?;
     let c = Campaign::read_with(scene_path, &args.set)?;
+    super::print_warnings(&c.nominal.warnings);
     let dir = args
         .out
         .clone()

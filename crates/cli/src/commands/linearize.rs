@@ -33,6 +33,7 @@ struct Json<'a> {
 /// Runs `satsim linearize`.
 pub fn run(args: &Args) -> Result<Output, CliError> {
     let scene = Scene::read(&args.scene)?;
+    super::print_warnings(&scene.warnings);
     let lin = linearize(&scene).map_err(|e| scene_error(&args.scene, e))?;
     to_json(&json(&lin))
 }

@@ -195,6 +195,15 @@ pub fn to_json(value: &impl serde::Serialize) -> Result<Output, CliError> {
 }
 
 /// The stem of a scene or CSV path (`"scene"` when it has none), for default output names.
+/// Prints what a reader accepted but the user should hear about (a nearly unit quaternion
+/// normalised, …) on standard error, one `warning:` line each: every command that reads a
+/// scene says the same.
+pub fn print_warnings(warnings: &[String]) {
+    for w in warnings {
+        eprintln!("warning: {w}");
+    }
+}
+
 pub fn stem(path: &std::path::Path) -> String {
     path.file_stem()
         .map(|s| s.to_string_lossy().into_owned())

@@ -80,6 +80,7 @@ pub fn run(args: &Args) -> Result<Output, CliError> {
         .map(|a| parse_along(a).map_err(|e| usage(&["modes"], format!("`--along` {e}"))))
         .transpose()?;
     let scene = Scene::read(path)?;
+    super::print_warnings(&scene.warnings);
     let Some((along, steps)) = along else {
         let m = modes(&scene).map_err(|e| scene_error(path, e))?;
         return to_json(&ModesJson(&m));

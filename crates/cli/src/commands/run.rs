@@ -132,9 +132,7 @@ pub fn run_scene_with(
     overrides: &[Override],
 ) -> Result<Output, Failure> {
     let scene = Scene::read_with(scene_path, overrides).map_err(CliError::File)?;
-    for w in &scene.warnings {
-        eprintln!("warning: {w}");
-    }
+    super::print_warnings(&scene.warnings);
     let mut sim = scene
         .simulation()
         .map_err(|e| CliError::Other(format!("{}: {e}", scene_path.display())))?;
