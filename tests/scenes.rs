@@ -420,17 +420,12 @@ fn two_wings_latch_rebound_and_settle_with_zero_momentum() {
     assert!(norm(r.vec3(last, "omega")) < 1e-4);
 }
 
-/// The boom elbow's stop holds: the angle never goes past it. FAILS today: after the run of
-/// ever smaller rebounds near t = 7.09 s the elbow passes through its stop (0.26 rad at
-/// t = 8 s, 1.4 rad at 13 s) and rebounds at it again from below at 32 s. The likely cause:
-/// a rebound is located slightly past the stop, so the event function (`upper - angle`)
-/// restarts negative and never changes sign again while the hinge creeps back the wrong way
-/// (crates/satellite/src/effects/hinge_stops.rs). Seen again after the simultaneous-event work:
-/// after a rebound of a few mrad/s the hinge leaves the stop and comes back within one step,
-/// so the event function has the same sign at both ends of that step and the return is not
-/// seen. Run with `--ignored` once that is fixed.
+/// The boom elbow's stop holds: the angle never goes past it. It used to creep through after
+/// the run of ever smaller rebounds near t = 7.09 s: a rebound of a few mrad/s left the stop
+/// and came back within one step, so the event function had the same sign at both ends of
+/// that step (crates/integrate/src/driver.rs now probes the dense output of a step that
+/// starts on a handled event; crates/integrate/tests/short_rebounds.rs).
 #[test]
-#[ignore = "known bug: a hinge can creep through a rebound stop after tiny rebounds"]
 fn two_wings_boom_elbow_never_passes_its_stop() {
     let r = run("two_wings");
     for (t, a) in r.series("angle_boom_elbow") {

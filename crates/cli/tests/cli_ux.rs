@@ -163,10 +163,21 @@ fn campaign_takes_set_too() {
 
 #[test]
 fn every_event_goes_to_events_csv() {
-    // two_wings.toml has more events than the ten the summary prints.
+    // two_wings.toml with a livelier elbow stop has more events than the ten the summary
+    // prints (19: two latches, then rebounds until the elbow comes to rest).
     let dir = setup("events");
     let scene = root().join("examples/scenes/two_wings.toml");
-    let o = satsim_in(&dir, &["run", scene.to_str().unwrap(), "--out", "ev"]);
+    let o = satsim_in(
+        &dir,
+        &[
+            "run",
+            scene.to_str().unwrap(),
+            "--out",
+            "ev",
+            "--set",
+            "effects.hinge_stops.stop.2.restitution=0.7",
+        ],
+    );
     assert!(o.status.success(), "{}", stderr(&o));
     let out = String::from_utf8_lossy(&o.stdout);
     let shown = out.lines().filter(|l| l.starts_with("  event ")).count();

@@ -173,6 +173,12 @@ enum Next {
     Done(Stats),
 }
 
+/// Where in a step (as fractions of it) the dense output is probed for an event that left
+/// zero right after being handled and came back before the step's end. A return shorter
+/// than the first probe's interval is missed; such a rebound moves the state by less than
+/// `1e-3` of a step's motion.
+const RETURN_PROBES: [f64; 5] = [1e-3, 0.125, 0.25, 0.5, 0.75];
+
 impl<'a, S, St, F> Run<'a, S, St, F>
 where
     S: System + ?Sized,
@@ -324,7 +330,12 @@ where
             for k in 0..ne {
                 self.t_loc[k] = f64::NAN;
                 let dir = self.sys.event_direction(k);
-                if !dir.crosses(self.g_left[k], self.g_right[k]) {
+                let (g_l, g_r) = (self.g_left[k], self.g_right[k]);
+                // An event handled at `t_left` restarts from g = 0. If it is past again at
+                // the step's end, g may have left zero and come back inside the step (a
+                // rebound shorter than the step): the end points alone cannot tell.
+                let returned = g_l == 0.0 && dir.crosses(-g_r, g_r);
+                if !dir.crosses(g_l, g_r) && !returned {
                     continue;
                 }
                 if !prepared {
@@ -332,24 +343,43 @@ where
                     prepared = true;
                 }
                 let (sys, st, buf, g) = (&mut *self.sys, &self.st, &mut self.buf, &mut self.g_mid);
-                let tk = locate(
-                    dir,
-                    t_left,
-                    self.g_left[k],
-                    t_right,
-                    self.g_right[k],
-                    self.event_tol,
-                    |t| {
-                        if t == st.t() {
-                            buf.copy_from_slice(st.x());
+                let mut g_at = |t: f64| {
+                    if t == st.t() {
+                        buf.copy_from_slice(st.x());
+                    } else {
+                        st.dense(t, buf);
+                    }
+                    sys.events(t, buf, g)
+                        .map_err(|source| IntegrateError::System { t, source })?;
+                    Ok::<f64, IntegrateError>(g[k])
+                };
+                // The bracket: the step, or for a return, from the last probe on the far
+                // side of zero (the dense output sampled from just after t_left) to the next.
+                let (mut t_a, mut g_a, mut t_b, mut g_b) = (t_left, g_l, t_right, g_r);
+                if returned {
+                    let mut bracket = None;
+                    let mut before: Option<(f64, f64)> = None;
+                    for f in RETURN_PROBES.iter().copied().chain([1.0]) {
+                        let t = if f == 1.0 {
+                            t_right
                         } else {
-                            st.dense(t, buf);
+                            t_left + f * (t_right - t_left)
+                        };
+                        let gt = if f == 1.0 { g_r } else { g_at(t)? };
+                        if let Some((tp, gp)) = before
+                            && dir.crosses(gp, gt)
+                        {
+                            bracket = Some((tp, gp, t, gt));
+                            break;
                         }
-                        sys.events(t, buf, g)
-                            .map_err(|source| IntegrateError::System { t, source })?;
-                        Ok::<f64, IntegrateError>(g[k])
-                    },
-                )?;
+                        if dir.crosses(gt, -gt) {
+                            before = Some((t, gt));
+                        }
+                    }
+                    let Some(b) = bracket else { continue };
+                    (t_a, g_a, t_b, g_b) = b;
+                }
+                let tk = locate(dir, t_a, g_a, t_b, g_b, self.event_tol, g_at)?;
                 self.t_loc[k] = tk;
                 t_ev = t_ev.min(tk);
             }
