@@ -4,7 +4,7 @@ mod common;
 
 use std::ops::ControlFlow;
 
-use common::{Smooth, collect, max_err};
+use common::{Ball, Smooth, collect, max_err};
 use satsim_integrate::{
     EventAction, EventDirection, Method, Options, Output, StopReason, System, SystemError,
     integrate,
@@ -86,55 +86,8 @@ fn interval_output_ends_at_t_end() {
     assert_eq!(rows.last().unwrap().0, 1.0);
 }
 
-/// A ball dropped from `H`, bouncing with restitution `E` on y = 0.
-struct Ball {
-    action: EventAction,
-}
-const G: f64 = 9.81;
 const H: f64 = 10.0;
 const E: f64 = 0.8;
-
-impl Ball {
-    /// Analytic impact times.
-    fn impacts(k: usize) -> Vec<f64> {
-        let t1 = (2.0 * H / G).sqrt();
-        let v1 = G * t1;
-        let mut t = t1;
-        let mut out = vec![t1];
-        for j in 1..k {
-            t += 2.0 * E.powi(j as i32) * v1 / G;
-            out.push(t);
-        }
-        out
-    }
-}
-
-impl System for Ball {
-    fn dim(&self) -> usize {
-        2
-    }
-    fn rhs(&mut self, _t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), SystemError> {
-        dx[0] = x[1];
-        dx[1] = -G;
-        Ok(())
-    }
-    fn n_events(&self) -> usize {
-        1
-    }
-    fn events(&mut self, _t: f64, x: &[f64], g: &mut [f64]) -> Result<(), SystemError> {
-        g[0] = x[0];
-        Ok(())
-    }
-    fn event_direction(&self, _k: usize) -> EventDirection {
-        EventDirection::Falling
-    }
-    fn on_event(&mut self, _k: usize, _t: f64, x: &mut [f64]) -> EventAction {
-        if self.action == EventAction::Reset {
-            x[1] *= -E;
-        }
-        self.action
-    }
-}
 
 fn ball_options(method: Method) -> Options {
     let opts = Options::new(method).with_tolerances(1e-10, 1e-12);
@@ -147,12 +100,10 @@ fn ball_options(method: Method) -> Options {
 
 #[test]
 fn bouncing_ball_impacts_at_analytic_times() {
-    let expected = Ball::impacts(4);
+    let expected = Ball::new(H, E, EventAction::Reset).expected(4);
     let t_end = expected[3] + 0.1;
     for method in Method::ALL {
-        let mut ball = Ball {
-            action: EventAction::Reset,
-        };
+        let mut ball = Ball::new(H, E, EventAction::Reset);
         let (r, rows) = collect(
             &mut ball,
             &ball_options(method),
@@ -182,11 +133,9 @@ fn bouncing_ball_impacts_at_analytic_times() {
 
 #[test]
 fn stop_action_ends_at_event() {
-    let t1 = Ball::impacts(1)[0];
+    let t1 = Ball::new(H, E, EventAction::Stop).expected(1)[0];
     for method in Method::ALL {
-        let mut ball = Ball {
-            action: EventAction::Stop,
-        };
+        let mut ball = Ball::new(H, E, EventAction::Stop);
         let (r, rows) = collect(
             &mut ball,
             &ball_options(method),

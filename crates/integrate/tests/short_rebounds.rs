@@ -6,70 +6,18 @@
 
 mod common;
 
-use common::collect;
-use satsim_integrate::{
-    EventAction, EventDirection, Method, Options, Output, StopReason, System, SystemError,
-};
-
-const G: f64 = 9.81;
-
-/// A ball dropped from `h`, bouncing on y = 0 with restitution `e`; below `v_rest` it stops
-/// (rests on the floor). State `[y, v]`.
-struct Ball {
-    e: f64,
-    v_rest: f64,
-    impacts: Vec<f64>,
-}
-
-impl System for Ball {
-    fn dim(&self) -> usize {
-        2
-    }
-    fn rhs(&mut self, _t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), SystemError> {
-        dx[0] = x[1];
-        dx[1] = -G;
-        Ok(())
-    }
-    fn n_events(&self) -> usize {
-        1
-    }
-    fn events(&mut self, _t: f64, x: &[f64], g: &mut [f64]) -> Result<(), SystemError> {
-        g[0] = x[0];
-        Ok(())
-    }
-    fn event_direction(&self, _k: usize) -> EventDirection {
-        EventDirection::Falling
-    }
-    fn on_event(&mut self, _k: usize, t: f64, x: &mut [f64]) -> EventAction {
-        self.impacts.push(t);
-        let after = -self.e * x[1];
-        if after < self.v_rest {
-            return EventAction::Stop;
-        }
-        x[1] = after;
-        EventAction::Reset
-    }
-}
-
-/// Analytic impact times of a ball dropped from `h` at rest (while the rebound is above
-/// `v_rest`).
-fn impacts(h: f64, e: f64, v_rest: f64) -> Vec<f64> {
-    let mut t = (2.0 * h / G).sqrt();
-    let mut v = G * t;
-    let mut out = vec![t];
-    while e * v >= v_rest {
-        v *= e;
-        t += 2.0 * v / G;
-        out.push(t);
-    }
-    out
-}
+use common::{Ball, collect};
+use satsim_integrate::{EventAction, Method, Options, Output, StopReason};
 
 #[test]
 fn rebounds_shorter_than_a_step_are_found_under_every_method() {
     // Rebound speeds 0.22, 0.011 m/s: flights of 45 ms and 2.3 ms, against steps of 50 ms.
     let (h, e, v_rest) = (1.0, 0.05, 5e-3);
-    let expected = impacts(h, e, v_rest);
+    let resting = || Ball {
+        v_rest,
+        ..Ball::new(h, e, EventAction::Reset)
+    };
+    let expected = resting().expected(usize::MAX);
     assert_eq!(expected.len(), 3);
     // The second flight is shorter than a step, the third much shorter.
     assert!(expected[1] - expected[0] < 0.05 && expected[2] - expected[1] < 0.005);
@@ -81,11 +29,7 @@ fn rebounds_shorter_than_a_step_are_found_under_every_method() {
             // Adaptive methods take long steps on this quadratic: force them to be long.
             opts.h_max = 0.05;
         }
-        let mut ball = Ball {
-            e,
-            v_rest,
-            impacts: Vec::new(),
-        };
+        let mut ball = resting();
         let (r, rows) = collect(&mut ball, &opts, &[h, 0.0], 2.0, &Output::Steps);
         let stats = r.unwrap();
         assert!(

@@ -3,7 +3,10 @@
 
 use std::ops::ControlFlow;
 
-use satsim_integrate::{IntegrateError, Options, Output, Stats, System, SystemError, integrate};
+use satsim_integrate::{
+    EventAction, EventDirection, IntegrateError, Options, Output, Stats, System, SystemError,
+    integrate,
+};
 
 /// Harmonic oscillator plus a forced decay, with a closed-form solution:
 /// x0'' = -x0 and y' = -y + sin t.
@@ -70,4 +73,74 @@ pub fn collect<S: System>(
         ControlFlow::Continue(())
     });
     (r, rows)
+}
+
+pub const G: f64 = 9.81;
+
+/// A ball dropped from rest at height `h`, bouncing on y = 0 with restitution `e`. State
+/// `[y, v]`; event 0 is the touch-down. An impact answers `action`; with `Reset` the ball
+/// rebounds at `−e v`, or stops the run when that is slower than `v_rest` (it rests on the
+/// floor). `impacts` records every impact time.
+pub struct Ball {
+    pub h: f64,
+    pub e: f64,
+    pub v_rest: f64,
+    pub action: EventAction,
+    pub impacts: Vec<f64>,
+}
+
+impl Ball {
+    pub fn new(h: f64, e: f64, action: EventAction) -> Self {
+        Self {
+            h,
+            e,
+            v_rest: 0.0,
+            action,
+            impacts: Vec::new(),
+        }
+    }
+    /// The analytic impact times: the first `k`, fewer when a rebound falls below `v_rest`.
+    pub fn expected(&self, k: usize) -> Vec<f64> {
+        let mut t = (2.0 * self.h / G).sqrt();
+        let mut v = G * t;
+        let mut out = vec![t];
+        while out.len() < k && self.e * v >= self.v_rest {
+            v *= self.e;
+            t += 2.0 * v / G;
+            out.push(t);
+        }
+        out
+    }
+}
+
+impl System for Ball {
+    fn dim(&self) -> usize {
+        2
+    }
+    fn rhs(&mut self, _t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), SystemError> {
+        dx[0] = x[1];
+        dx[1] = -G;
+        Ok(())
+    }
+    fn n_events(&self) -> usize {
+        1
+    }
+    fn events(&mut self, _t: f64, x: &[f64], g: &mut [f64]) -> Result<(), SystemError> {
+        g[0] = x[0];
+        Ok(())
+    }
+    fn event_direction(&self, _k: usize) -> EventDirection {
+        EventDirection::Falling
+    }
+    fn on_event(&mut self, _k: usize, t: f64, x: &mut [f64]) -> EventAction {
+        self.impacts.push(t);
+        if self.action == EventAction::Reset {
+            let after = -self.e * x[1];
+            if after < self.v_rest {
+                return EventAction::Stop;
+            }
+            x[1] = after;
+        }
+        self.action
+    }
 }
