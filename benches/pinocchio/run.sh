@@ -70,8 +70,9 @@ n = max(1, int(1.5 / t)); p = 1
 while p * 10 <= n: p *= 10
 print(next(c for c in (5 * p, 2 * p, p, 1) if c <= n))' "$probe")"
   echo "== $m: $ROUNDS rounds of satsim and Pinocchio, $calls calls per repetition" >&2
+  # `satsim bench` prints its JSON over several lines: one line per record here.
   for r in $(seq 1 "$ROUNDS"); do
-    s() { echo "{\"side\": \"satsim\", \"model\": \"$m\", \"result\": $("$SATSIM" bench --model "$OUT/$m.model.toml" --state "$OUT/$m.state.json" --calls "$calls")}" >> "$RESULTS"; }
+    s() { echo "{\"side\": \"satsim\", \"model\": \"$m\", \"result\": $("$SATSIM" bench --model "$OUT/$m.model.toml" --state "$OUT/$m.state.json" --calls "$calls" | tr -d '\n')}" >> "$RESULTS"; }
     p() { echo "{\"side\": \"pinocchio\", \"model\": \"$m\", \"result\": $("$HARNESS" "$OUT/$m" --calls "$calls")}" >> "$RESULTS"; }
     if [ $((r % 2)) = 1 ]; then s; p; else p; s; fi
   done
