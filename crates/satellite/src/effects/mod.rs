@@ -166,8 +166,9 @@ pub struct Context<'a> {
     /// zero acceleration, everything else as now (the locked hinges locked): `(M q̈ + C −
     /// Jᵀfext)_k` with `q̈` from hybrid dynamics. A hinge held by friction sticks while the
     /// friction it needs, `hold − motor`, is within its static friction. Filled for locked
-    /// hinges in `events`, for every hinge in `on_event` and `start`, and only when an effect
-    /// sets [`Needs::hold_torques`]; NaN where not computed.
+    /// hinges in `events` (when an effect's [`Effect::event_reads`] asks for them), for
+    /// every hinge in `on_event` and `start`, and only when an effect sets
+    /// [`Needs::hold_torques`]; NaN where not computed.
     pub hold_torque: &'a [f64],
 }
 

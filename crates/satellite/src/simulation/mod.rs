@@ -30,7 +30,7 @@
 //! # Event and output passes
 //!
 //! The event functions are evaluated at the end of every step. That pass computes only what
-//! they read ([`Effect::event_reads`](crate::effects::Effect::event_reads)): hinge stops and
+//! they read ([`Effect::event_reads`]): hinge stops and
 //! slipping wheels read the state alone, so no effect is applied; a stuck wheel reads its
 //! hold torque, and only then are the effects applied and the hybrid-dynamics solve run.
 //! An output row applies the effects (their output columns may read what `apply` set) and
