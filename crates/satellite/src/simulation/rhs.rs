@@ -78,7 +78,8 @@ impl Simulation {
     }
 
     /// Before the event functions: what they read, and no more (the union of the
-    /// effects' [`Effect::event_reads`]). Returns whether the poses are current.
+    /// effects' [`Effect::event_reads`]). Returns whether they read the poses (which are
+    /// then current).
     pub(super) fn prepare_events(&mut self, t: f64, x: &[f64]) -> Result<bool, SystemError> {
         let reads = self
             .effects
@@ -90,7 +91,7 @@ impl Simulation {
         if reads.forces || hold {
             let h = if hold { Hold::Locked } else { Hold::None };
             self.prepare_with(t, x, reads.kinematics, h).map_err(wrap)?;
-            return Ok(reads.kinematics || self.needs_kinematics);
+            return Ok(reads.kinematics);
         }
         self.unpack(x);
         self.hold.fill(f64::NAN);
