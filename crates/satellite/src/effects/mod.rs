@@ -348,12 +348,6 @@ impl EventReads {
     }
 }
 
-impl Default for EventReads {
-    fn default() -> Self {
-        Self::ALL
-    }
-}
-
 /// What an effect asks the simulation to do at one of its events.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Request {
@@ -468,11 +462,15 @@ pub trait Effect: Send {
     fn events(&self, _ctx: &Context, _forces: &Forces, _own: &[f64], _g: &mut [f64]) {}
     /// What [`Effect::events`] reads beyond the state, asked before every evaluation of the
     /// event functions (so it may depend on the effect's mode: a wheel reads hold torques only
-    /// while it is stuck). The default, [`EventReads::ALL`], is always right; a narrower
-    /// answer spares the event pass, at every step, the effects' `apply`, kinematics or a
-    /// hybrid-dynamics solve. It must be exact: what is not declared is stale in `events`.
+    /// while it is stuck). The default, everything ([`EventReads::ALL`], the poses only when
+    /// the effect declares [`Needs::kinematics`]), is always right; a narrower answer spares
+    /// the event pass, at every step, the effects' `apply`, kinematics or a hybrid-dynamics
+    /// solve. It must be exact: what is not declared is stale in `events`.
     fn event_reads(&self) -> EventReads {
-        EventReads::ALL
+        EventReads {
+            kinematics: self.needs().kinematics,
+            ..EventReads::ALL
+        }
     }
     /// Which sign changes of event `k` count.
     fn event_direction(&self, _k: usize) -> EventDirection {
