@@ -43,9 +43,9 @@ pub fn aba<'d>(
     fext: Option<&[Force]>,
 ) -> Result<&'d DVector<f64>, DynamicsError> {
     if model.gyrostats.is_empty() {
-        articulated::<false>(model, data, q, v, tau, fext, None)
+        articulated::<false>(model, data, q, v, tau, fext, None, false)
     } else {
-        articulated::<true>(model, data, q, v, tau, fext, None)
+        articulated::<true>(model, data, q, v, tau, fext, None, false)
     }
 }
 
@@ -77,11 +77,61 @@ pub fn aba_hybrid<'d>(
     locked: &[bool],
 ) -> Result<&'d DVector<f64>, DynamicsError> {
     check_len("locked", locked.len(), model.n_hinges())?;
-    articulated::<false>(model, data, q, v, tau, fext, Some(locked))
+    articulated::<false>(model, data, q, v, tau, fext, Some(locked), false)
+}
+
+/// As [`aba`], reusing the hinge transforms in `data.xup`: **`data.xup` must hold the
+/// transforms of this `q`**, as [`crate::forward_kinematics`] leaves them (Pinocchio's
+/// convention for algorithms that follow kinematics). The caller that has just run
+/// kinematics for the effects saves ABA one `sin_cos` and one transform per hinge; the
+/// result is bit for bit that of [`aba`]. Stale transforms give wrong accelerations
+/// silently: call [`aba`] when unsure.
+///
+/// ```
+/// use satsim_tree::{aba, aba_with_kinematics, forward_kinematics, samples::chain, BaseKind, Data};
+/// let model = chain(4, BaseKind::Free);
+/// let mut data = Data::new(&model);
+/// let mut q = model.neutral();
+/// q[7] = 0.3;
+/// let (v, tau) = (vec![0.1; model.nv()], vec![0.2; model.nv()]);
+/// let plain = aba(&model, &mut data, &q, &v, &tau, None)?.clone();
+/// forward_kinematics(&model, &mut data, &q, &v)?;
+/// assert_eq!(aba_with_kinematics(&model, &mut data, &q, &v, &tau, None)?, &plain);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn aba_with_kinematics<'d>(
+    model: &Model,
+    data: &'d mut Data,
+    q: &[f64],
+    v: &[f64],
+    tau: &[f64],
+    fext: Option<&[Force]>,
+) -> Result<&'d DVector<f64>, DynamicsError> {
+    if model.gyrostats.is_empty() {
+        articulated::<false>(model, data, q, v, tau, fext, None, true)
+    } else {
+        articulated::<true>(model, data, q, v, tau, fext, None, true)
+    }
+}
+
+/// As [`aba_hybrid`], reusing the hinge transforms in `data.xup`, which must hold those of
+/// this `q` (see [`aba_with_kinematics`]).
+pub fn aba_hybrid_with_kinematics<'d>(
+    model: &Model,
+    data: &'d mut Data,
+    q: &[f64],
+    v: &[f64],
+    tau: &[f64],
+    fext: Option<&[Force]>,
+    locked: &[bool],
+) -> Result<&'d DVector<f64>, DynamicsError> {
+    check_len("locked", locked.len(), model.n_hinges())?;
+    articulated::<false>(model, data, q, v, tau, fext, Some(locked), true)
 }
 
 /// ABA proper; `GYRO`: the gyrostat form (a separate instance, so that the plain form has no
-/// branches for it).
+/// branches for it); `xup_ready`: `data.xup` already holds this `q`'s transforms.
+#[allow(clippy::too_many_arguments)]
 fn articulated<'d, const GYRO: bool>(
     model: &Model,
     data: &'d mut Data,
@@ -90,6 +140,7 @@ fn articulated<'d, const GYRO: bool>(
     tau: &[f64],
     fext: Option<&[Force]>,
     locked: Option<&[bool]>,
+    xup_ready: bool,
 ) -> Result<&'d DVector<f64>, DynamicsError> {
     check_len("v", v.len(), model.nv())?;
     check_len("tau", tau.len(), model.nv())?;
@@ -100,7 +151,10 @@ fn articulated<'d, const GYRO: bool>(
     // rotor can be locked): balanced rotors ride on their parents, see `Gyrostat`.
     let gyro = GYRO;
     let n = model.n_bodies();
-    if gyro {
+    if xup_ready {
+        // The caller's forward kinematics left `data.xup` at this `q` (`aba_with_kinematics`).
+        check_len("q", q.len(), model.nq())?;
+    } else if gyro {
         check_len("q", q.len(), model.nq())?;
         for i in 1..n {
             if !model.is_gyrostat[i] {
