@@ -548,7 +548,7 @@ impl ArticulatedInertia {
     /// `a = C⁻¹ (f_lin − Bᵀ α)`. `None` unless `IA` is positive definite (then `C` and `S`
     /// are, and conversely).
     ///
-    /// The two 3x3 inverses are written out ([`spd_inverse`]: `L D Lᵀ`, no square roots),
+    /// The two 3x3 inverses are written out (`L D Lᵀ`, no square roots),
     /// where nalgebra's generic Cholesky factorisations and solves ran out of line: ABA
     /// ends every right-hand side with this solve, and a perf profile of the peer orbit put
     /// that form at 12 % of the run.
