@@ -1,11 +1,13 @@
 //! The articulated-body algorithm (Featherstone §7.3): O(n) forward dynamics, the default.
 
 use crate::axis::CoordAxis;
-use crate::data::Data;
+use crate::data::{ChainWork, Data};
 use crate::error::DynamicsError;
 use crate::kinematics::{base_motion, check_len, update_transforms};
-use crate::model::{BaseKind, Model};
-use crate::spatial::{ArticulatedInertia, Force, Motion, Transform};
+use crate::model::{BaseKind, Chain, ChainPart, Model};
+use crate::spatial::{
+    ArticulatedInertia, Force, Mat3, Motion, Transform, Vec3, add_translated, skew,
+};
 use nalgebra::DVector;
 
 /// Pivots `Dᵢ` below this fraction of the articulated inertia's scale are singular.
@@ -42,10 +44,11 @@ pub fn aba<'d>(
     tau: &[f64],
     fext: Option<&[Force]>,
 ) -> Result<&'d DVector<f64>, DynamicsError> {
-    if model.gyrostats.is_empty() {
-        articulated::<false>(model, data, q, v, tau, fext, None)
-    } else {
-        articulated::<true>(model, data, q, v, tau, fext, None)
+    match (model.gyrostats.is_empty(), model.chains.is_empty()) {
+        (true, true) => articulated::<false, false>(model, data, q, v, tau, fext, None),
+        (true, false) => articulated::<false, true>(model, data, q, v, tau, fext, None),
+        (false, true) => articulated::<true, false>(model, data, q, v, tau, fext, None),
+        (false, false) => articulated::<true, true>(model, data, q, v, tau, fext, None),
     }
 }
 
@@ -77,12 +80,12 @@ pub fn aba_hybrid<'d>(
     locked: &[bool],
 ) -> Result<&'d DVector<f64>, DynamicsError> {
     check_len("locked", locked.len(), model.n_hinges())?;
-    articulated::<false>(model, data, q, v, tau, fext, Some(locked))
+    articulated::<false, false>(model, data, q, v, tau, fext, Some(locked))
 }
 
-/// ABA proper; `GYRO`: the gyrostat form (a separate instance, so that the plain form has no
-/// branches for it).
-fn articulated<'d, const GYRO: bool>(
+/// ABA proper; `GYRO`: the gyrostat form, `CHAINS`: the multi-axis form of [`crate::Chain`]s
+/// (separate instances, so that the plain form has no branches for them).
+fn articulated<'d, const GYRO: bool, const CHAINS: bool>(
     model: &Model,
     data: &'d mut Data,
     q: &[f64],
@@ -167,6 +170,16 @@ fn articulated<'d, const GYRO: bool>(
     for i in (1..n).rev() {
         if gyro && model.is_gyrostat[i] {
             continue;
+        }
+        if CHAINS {
+            match model.chain_part[i] {
+                ChainPart::Link => continue, // processed at its tip
+                ChainPart::Tip(k) => {
+                    chain_inward(model, data, &model.chains[k], tau, start)?;
+                    continue;
+                }
+                ChainPart::None => {}
+            }
         }
         let joint = model.joints[i].as_ref().expect("joint");
         let p = model.parent[i].expect("parent");
@@ -255,6 +268,16 @@ fn articulated<'d, const GYRO: bool>(
             data.ddq[joint.dof] = data.u[i] / data.d[i] - joint.axis.dot(&data.a[p].ang);
             continue;
         }
+        if CHAINS {
+            match model.chain_part[i] {
+                ChainPart::Link => continue, // processed at its tip
+                ChainPart::Tip(k) => {
+                    chain_outward(model, data, &model.chains[k]);
+                    continue;
+                }
+                ChainPart::None => {}
+            }
+        }
         let a = apply_motion(&model.coord_axis[i], &data.xup[i], &data.a[p]) + data.c[i];
         if locked.is_some_and(|l| l[joint.hinge]) {
             data.ddq[joint.dof] = 0.0;
@@ -301,6 +324,230 @@ fn add_inv_transform(
         Some(a) => a.add_inv_transform(ia, x, out, start),
         None => ia.add_inv_transform_to(x, out, start),
     }
+}
+
+/// Pass 2 for a [`Chain`], at its tip `C` (body `order[0]`): the chain's `k` hinges as one
+/// multi-axis joint. In the frame at the common hinge point with `C`'s axes, its motion
+/// subspace is `S = [E; 0]` (`E`: the hinge axes in `C`'s axes); with `IA_h`, `pA_h` the tip's
+/// articulated inertia and bias there, `U = IA_h S`, `D = Sᵀ U + diag(armature)`,
+/// `u = τ − Sᵀ pA_h` (less the massless links' own external forces), and the parent receives
+/// `IA_h − U D⁻¹ Uᵀ` and `pA_h + IAᵃ c + U D⁻¹ u` through the composite transform. `D` is
+/// factored `L Δ Lᵀ` eliminating the tip's hinge first and the outermost link's last: the
+/// pivots `Δ` are then the tree form's `Dᵢ` (Schur complements), checked against the same
+/// scales, so a singular chain fails at the same hinge with the same error.
+fn chain_inward(
+    model: &Model,
+    data: &mut Data,
+    chain: &Chain,
+    tau: &[f64],
+    start: &[ArticulatedInertia],
+) -> Result<(), DynamicsError> {
+    let (k, b, p) = (chain.k, &chain.order, chain.parent);
+    let tip = b[0];
+    let joint = |i: usize| model.joints[i].as_ref().expect("joint");
+    let r = joint(tip).child_at; // the hinge point in the tip's frame
+    // The hinge axes in the tip's axes, and the rotation from the parent's axes to the tip's;
+    // `off[t]`: link `b[t]`'s origin from the hinge point (tip's axes), for its pivot scale.
+    let mut e = [Vec3::zeros(); 3];
+    let mut off = [Vec3::zeros(); 3];
+    e[0] = joint(tip).s.ang;
+    let mut rot = data.xup[tip].rot;
+    for t in 1..k {
+        let j = joint(b[t]);
+        e[t] = rot * j.s.ang;
+        if chain.offset_links {
+            off[t] = -(rot * j.child_at);
+        }
+        rot *= data.xup[b[t]].rot;
+    }
+    // The chain's velocity-product term: c = X_C (X_L2 c_L1 + c_L2) + c_C, then at the point.
+    let mut c = data.c[b[k - 1]];
+    for t in (0..k - 1).rev() {
+        let i = b[t];
+        c = apply_motion(&model.coord_axis[i], &data.xup[i], &c) + data.c[i];
+    }
+    let c = Motion::new(c.ang, c.lin - r.cross(&c.ang));
+    // The links' own bias (external forces only: they have no inertia) reaches the parent
+    // rigidly and loads the hinges between them and the parent, as in the tree form.
+    let mut u = [0.0; 3];
+    for t in 0..k {
+        u[t] = tau[joint(b[t]).dof];
+    }
+    if (1..k).any(|t| data.pa[b[t]] != Force::zero()) {
+        let mut g = Force::zero();
+        for t in 1..k {
+            if t > 1 {
+                let i = b[t - 1];
+                g = inv_apply_force(&model.coord_axis[i], &data.xup[i], &g);
+            }
+            g += data.pa[b[t]];
+            u[t] -= joint(b[t]).s.dot(&g);
+        }
+        let i = b[k - 1];
+        let g = inv_apply_force(&model.coord_axis[i], &data.xup[i], &g);
+        data.pa[p] += g;
+    }
+    let (head, tail) = data.ia.split_at_mut(tip);
+    let ia: &ArticulatedInertia = if data.ia_started[tip] {
+        &tail[0]
+    } else {
+        &start[tip]
+    };
+    let ia_parent = &mut head[p];
+    let parent_start = (!data.ia_started[p]).then(|| &start[p]);
+    data.ia_started[p] = true;
+    // The tip's inertia and bias at the hinge point (a translation by r).
+    let bh = ia.b - cross_columns(&r, &ia.c);
+    let ah = ia.a
+        - cross_columns(&r, &ia.b.transpose())
+        - cross_columns(&r, &bh.transpose()).transpose();
+    let pa = data.pa[tip];
+    let pa = Force::new(pa.ang - r.cross(&pa.lin), pa.lin);
+    // D = L Δ Lᵀ, the tip's hinge first: w_t = U_t − Σ_{s<t} l_ts w_s (the columns of U L⁻ᵀ),
+    // Δ_t = e_t · w_t + armature, and u ← L⁻¹ u.
+    let mut w = [Force::zero(); 3];
+    let mut piv = [0.0; 3];
+    let mut l = [0.0; 3]; // l₁₀, l₂₀, l₂₁
+    let (mut tr_a, mut tr_c) = (ah.trace(), ia.c.trace());
+    for t in 0..k {
+        let j = joint(b[t]);
+        let mut wt = Force::new(ah * e[t], bh.tr_mul(&e[t]));
+        u[t] -= e[t].dot(&pa.ang);
+        for s in 0..t {
+            let lts = e[t].dot(&w[s].ang) / piv[s];
+            l[t + s - 1] = lts;
+            wt -= w[s] * lts;
+            u[t] -= lts * u[s];
+        }
+        let d = e[t].dot(&wt.ang) + j.armature;
+        // The tree form's scale: the body's articulated inertia about its own origin.
+        let scale = if t == 0 {
+            ia.a.trace() + ia.c.trace() * r.norm_squared()
+        } else if chain.offset_links && off[t] != Vec3::zeros() {
+            offset_scale(&off[t], &bh, &ia.c, &w[..t], &piv[..t], tr_a, tr_c)
+        } else {
+            tr_a
+        };
+        let regular = d.is_finite() && d > SINGULAR_PIVOT_RELATIVE * scale;
+        if !regular {
+            return Err(DynamicsError::SingularHinge {
+                hinge: model.hinge_names[j.hinge].clone(),
+                through: massless_hinges_below(model, b[t]),
+                pivot: d,
+                relative: if scale > 0.0 { d / scale } else { 0.0 },
+            });
+        }
+        tr_a -= wt.ang.norm_squared() / d;
+        tr_c -= wt.lin.norm_squared() / d;
+        w[t] = wt;
+        piv[t] = d;
+    }
+    // The projected inertia IAᵃ = IA_h − Σ w_t w_tᵀ / Δ_t and the bias the parent receives,
+    // pA_h + IAᵃ c + Σ w_t (L⁻¹u)_t / Δ_t, moved by one transform (parent to hinge point).
+    let x = Transform::new(rot, joint(b[k - 1]).at);
+    let mut pa = pa;
+    if chain.spherical {
+        // Three independent axes, no armature: IAᵃ = [0 0; 0 C − Bᵀ A⁻¹ B] exactly.
+        let mut cc = ia.c;
+        for t in 0..3 {
+            cc -= w[t].lin * (w[t].lin.transpose() / piv[t]);
+        }
+        pa.lin += cc * c.lin;
+        let cc = rot.tr_mul(&(cc * rot));
+        add_translated(
+            &Mat3::zeros(),
+            &Mat3::zeros(),
+            &cc,
+            &x.trans,
+            ia_parent,
+            parent_start,
+        );
+    } else {
+        let mut iaa = ArticulatedInertia {
+            a: ah,
+            b: bh,
+            c: ia.c,
+        };
+        for t in 0..k {
+            iaa.sub_outer(&w[t], 1.0 / piv[t]);
+        }
+        pa += iaa.mul_motion(&c);
+        iaa.add_inv_transform_to(&x, ia_parent, parent_start);
+    }
+    for t in 0..k {
+        pa += w[t] * (u[t] / piv[t]);
+        data.u_col[b[t]] = w[t];
+        data.d[b[t]] = piv[t];
+        data.u[b[t]] = u[t];
+    }
+    data.pa[p] += x.inv_apply_force(&pa);
+    data.chain[tip] = ChainWork { x, c, l };
+    Ok(())
+}
+
+/// The tree form's singular-pivot scale of a chain's link whose origin lies at `d` from the
+/// hinge point (tip's axes): `tr A + |d|² tr C` of the link's articulated inertia about its
+/// origin, where the inertia at the point is `[A_h B_h; B_hᵀ C] − Σ w wᵀ / Δ` (the hinges
+/// eliminated before it) with `tr A` = `tr_a`, `tr C` = `tr_c` already projected.
+fn offset_scale(
+    d: &Vec3,
+    bh: &Mat3,
+    c: &Mat3,
+    w: &[Force],
+    piv: &[f64],
+    tr_a: f64,
+    tr_c: f64,
+) -> f64 {
+    // About the origin, A_o = A + B[d]× − [d]×Bᵀ − [d]×C[d]×, so
+    // tr A_o = tr A − 2 tr([d]×Bᵀ) − dᵀCd + |d|² tr C.
+    let mut tr_db = (skew(d) * bh.transpose()).trace();
+    let mut dcd = d.dot(&(c * d));
+    for (w, &p) in w.iter().zip(piv) {
+        tr_db -= w.ang.dot(&d.cross(&w.lin)) / p;
+        dcd -= d.dot(&w.lin).powi(2) / p;
+    }
+    let d2 = d.norm_squared();
+    tr_a - 2.0 * tr_db - dcd + d2 * tr_c + tr_c * d2
+}
+
+/// Pass 3 for a [`Chain`], at its tip: `q̈ = D⁻¹ (u − Uᵀ a′)` with `a′` the tip's acceleration
+/// at the hinge point before the hinges move (`L⁻ᵀ Δ⁻¹ (L⁻¹u − Wᵀ a′)`, outermost hinge
+/// first), then the links' and the tip's accelerations as in the tree form.
+fn chain_outward(model: &Model, data: &mut Data, chain: &Chain) {
+    let (k, b, p) = (chain.k, &chain.order, chain.parent);
+    let work = &data.chain[b[0]];
+    let a = work.x.apply_motion(&data.a[p]) + work.c;
+    let mut qdd = [0.0; 3];
+    for t in 0..k {
+        let i = b[t];
+        qdd[t] = (data.u[i] - a.dot(&data.u_col[i])) / data.d[i];
+    }
+    let l = &work.l;
+    if k == 3 {
+        qdd[1] -= l[2] * qdd[2];
+        qdd[0] -= l[1] * qdd[2];
+    }
+    qdd[0] -= l[0] * qdd[1];
+    let mut parent = p;
+    for t in (0..k).rev() {
+        let i = b[t];
+        let joint = model.joints[i].as_ref().expect("joint");
+        data.ddq[joint.dof] = qdd[t];
+        data.a[i] = apply_motion(&model.coord_axis[i], &data.xup[i], &data.a[parent])
+            + data.c[i]
+            + joint.s * qdd[t];
+        parent = i;
+    }
+}
+
+/// `[a]× M`, column by column.
+#[inline]
+fn cross_columns(a: &Vec3, m: &Mat3) -> Mat3 {
+    Mat3::from_columns(&[
+        a.cross(&m.column(0)),
+        a.cross(&m.column(1)),
+        a.cross(&m.column(2)),
+    ])
 }
 
 /// The hinges reached from body `i` downwards through massless bodies: the other axes of a
