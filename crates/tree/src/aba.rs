@@ -690,4 +690,148 @@ mod tests {
         assert!(compared > 150, "only {compared} regular trees");
         assert!(worst < 1e-12, "worst relative difference {worst:e}");
     }
+
+    /// `model` rebuilt with, at random, armature on some hinges (`armature`) and the origins of
+    /// some massless links moved off their hinge point (`offset`: the link's `child_at` and its
+    /// child's `at` the same vector, so the link stays zero-length).
+    fn chain_variant(model: &Model, rng: &mut SplitMix, armature: bool, offset: bool) -> Model {
+        let mut b = model.to_builder();
+        let names: Vec<String> = model.bodies.iter().map(|x| x.name.clone()).collect();
+        for i in 1..model.n_bodies() {
+            if !(offset && model.bodies[i].mass == 0.0 && rng.next_f64() < 0.6) {
+                continue;
+            }
+            let o = rng.vec3(0.5);
+            for h in b.hinges_mut() {
+                if h.child == names[i] {
+                    h.child_at = o;
+                }
+                if h.parent == names[i] {
+                    h.at = o;
+                }
+            }
+        }
+        if armature {
+            for h in b.hinges_mut() {
+                if rng.next_f64() < 0.5 {
+                    h.armature = rng.range(0.0, 0.5);
+                }
+            }
+        }
+        b.build().unwrap()
+    }
+
+    /// A random state: attitude, position, angles, rates, torques and external forces on
+    /// every body (links included).
+    fn random_state(
+        model: &Model,
+        rng: &mut SplitMix,
+    ) -> (Vec<f64>, Vec<f64>, Vec<f64>, Vec<Force>) {
+        let mut q = model.neutral();
+        let nb = model.base_nq();
+        if model.base == BaseKind::Free {
+            let a = Quaternion::new(
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+            )
+            .normalize();
+            q[..4].copy_from_slice(&[a.w, a.i, a.j, a.k]);
+            for x in &mut q[4..7] {
+                *x = rng.range(-3.0, 3.0);
+            }
+        }
+        for x in &mut q[nb..] {
+            *x = rng.range(-3.0, 3.0);
+        }
+        let v = (0..model.nv()).map(|_| rng.range(-2.0, 2.0)).collect();
+        let tau = (0..model.nv()).map(|_| rng.range(-2.0, 2.0)).collect();
+        let fext = (0..model.n_bodies())
+            .map(|_| Force::new(rng.vec3(1.0), rng.vec3(1.0)))
+            .collect();
+        (q, v, tau, fext)
+    }
+
+    /// The multi-axis form of massless-link chains against the tree form (every link a body):
+    /// random trees with chains of 2 and 3 hinges, general and coordinate axes, with and
+    /// without armature, link origins on and off the hinge point, gyrostat rotors, external
+    /// forces on every body, free and fixed roots, tips with children. The accelerations of
+    /// every body must agree too.
+    #[test]
+    fn chain_form_equals_the_tree_form() {
+        let (mut worst, mut compared, mut refused) = (0.0f64, 0usize, 0usize);
+        let mut seen = [0usize; 4]; // chains of k = 2, k = 3, spherical ones, offset links
+        let mut tips_with_children = 0;
+        let mut rotor_on_tip = 0;
+        for seed in 0..1500u64 {
+            let mut rng = SplitMix(seed ^ 0xc4a1);
+            let base = if seed % 3 == 0 {
+                BaseKind::Fixed
+            } else {
+                BaseKind::Free
+            };
+            let n = 3 + (seed % 18) as usize;
+            let rotors = (seed % 3) as usize;
+            let tree = random_tree_with_rotors(n, base, true, rotors, seed);
+            let tree = if seed % 4 == 1 {
+                snapped(&tree, rotors, &mut rng)
+            } else {
+                tree
+            };
+            let model = chain_variant(&tree, &mut rng, seed % 5 < 2, seed % 7 < 3);
+            for c in &model.chains {
+                seen[c.k - 2] += 1;
+                seen[2] += c.spherical as usize;
+                seen[3] += c.offset_links as usize;
+                tips_with_children += model.children(c.tip()).count().min(1);
+                rotor_on_tip += model.gyrostats.iter().any(|g| g.parent == c.tip()) as usize;
+            }
+            let plain = model.without_chains();
+            assert!(plain.chains.is_empty());
+            let (q, v, tau, fext) = random_state(&model, &mut rng);
+            let (mut dc, mut dp) = (Data::new(&model), Data::new(&plain));
+            for f in [None, Some(fext.as_slice())] {
+                let a = aba(&model, &mut dc, &q, &v, &tau, f).cloned();
+                let b = aba(&plain, &mut dp, &q, &v, &tau, f).cloned();
+                let (a, b) = match (a, b) {
+                    (Ok(a), Ok(b)) => (a, b),
+                    (Err(x), Err(y)) => {
+                        // Both refuse, naming the same hinges (the pivots agree to round-off).
+                        let names = |e: DynamicsError| match e {
+                            DynamicsError::SingularHinge { hinge, through, .. } => (hinge, through),
+                            other => panic!("seed {seed}: {other}"),
+                        };
+                        assert_eq!(names(x), names(y), "seed {seed}");
+                        refused += 1;
+                        continue;
+                    }
+                    (a, b) => panic!("seed {seed}: chain form {a:?}, tree form {b:?}"),
+                };
+                compared += 1;
+                let e = rel(&a, &b);
+                assert!(e < 1e-12, "seed {seed}: chain vs tree form {e:e}");
+                worst = worst.max(e);
+                for i in 0..model.n_bodies() {
+                    if model.is_gyrostat[i] {
+                        continue;
+                    }
+                    let (x, y) = (dc.a[i].to_array(), dp.a[i].to_array());
+                    let scale = b.amax().max(1.0) * 10.0;
+                    for (x, y) in x.iter().zip(y) {
+                        assert!((x - y).abs() < 1e-12 * scale, "seed {seed}: body {i} a");
+                    }
+                }
+            }
+        }
+        eprintln!(
+            "chain vs tree: {compared} compared, {refused} refused, worst {worst:e}; chains \
+             k=2 {}, k=3 {}, spherical {}, offset {}, tips with children {tips_with_children}, \
+             with rotors {rotor_on_tip}",
+            seen[0], seen[1], seen[2], seen[3]
+        );
+        assert!(compared > 2500, "only {compared} regular cases");
+        assert!(seen.iter().all(|&s| s > 30), "chains seen {seen:?}");
+        assert!(tips_with_children > 40 && rotor_on_tip > 40);
+    }
 }
