@@ -834,4 +834,34 @@ mod tests {
         assert!(seen.iter().all(|&s| s > 30), "chains seen {seen:?}");
         assert!(tips_with_children > 40 && rotor_on_tip > 40);
     }
+
+    /// The singular-pivot scale of a chain's link with its origin off the hinge point is the
+    /// tree form's: `tr A + |d|² tr C` of the projected inertia moved to the link's origin.
+    #[test]
+    fn offset_scale_is_the_tree_forms_scale() {
+        let mut rng = SplitMix(3);
+        for _ in 0..50 {
+            let m = rng.range(0.5, 5.0);
+            let rigid = crate::spatial::RigidInertia::from_com(
+                m,
+                rng.vec3(0.5),
+                crate::samples::random_inertia(&mut rng, m),
+            );
+            let mut ia = ArticulatedInertia::from(rigid);
+            let w: Vec<Force> = (0..2)
+                .map(|_| Force::new(rng.vec3(0.3), rng.vec3(0.3)))
+                .collect();
+            let piv = [rng.range(1.0, 2.0), rng.range(1.0, 2.0)];
+            let (bh, c) = (ia.b, ia.c);
+            for (w, p) in w.iter().zip(piv) {
+                ia.sub_outer(w, 1.0 / p);
+            }
+            let d = rng.vec3(0.8);
+            // The projected inertia about the link's origin, which lies at d from the point.
+            let at_origin = ia.inv_transform(&Transform::new(Mat3::identity(), -d));
+            let tree = at_origin.a.trace() + at_origin.c.trace() * d.norm_squared();
+            let ours = offset_scale(&d, &bh, &c, &w, &piv, ia.a.trace(), ia.c.trace());
+            assert!((tree - ours).abs() < 1e-13 * tree.abs(), "{tree} vs {ours}");
+        }
+    }
 }
