@@ -5,9 +5,7 @@ use crate::data::{ChainWork, Data};
 use crate::error::DynamicsError;
 use crate::kinematics::{base_motion, check_len, update_transforms};
 use crate::model::{BaseKind, Chain, ChainPart, Model};
-use crate::spatial::{
-    ArticulatedInertia, Force, Mat3, Motion, Transform, Vec3, add_translated, skew,
-};
+use crate::spatial::{ArticulatedInertia, Force, Mat3, Motion, Transform, Vec3, skew};
 use nalgebra::DVector;
 
 /// Pivots `Dᵢ` below this fraction of the articulated inertia's scale are singular.
@@ -175,7 +173,12 @@ fn articulated<'d, const GYRO: bool, const CHAINS: bool>(
             match model.chain_part[i] {
                 ChainPart::Link => continue, // processed at its tip
                 ChainPart::Tip(k) => {
-                    chain_inward(model, data, &model.chains[k], tau, start)?;
+                    let chain = &model.chains[k];
+                    if chain.k == 3 {
+                        chain_inward::<3>(model, data, chain, tau, start)?;
+                    } else {
+                        chain_inward::<2>(model, data, chain, tau, start)?;
+                    }
                     continue;
                 }
                 ChainPart::None => {}
@@ -272,7 +275,12 @@ fn articulated<'d, const GYRO: bool, const CHAINS: bool>(
             match model.chain_part[i] {
                 ChainPart::Link => continue, // processed at its tip
                 ChainPart::Tip(k) => {
-                    chain_outward(model, data, &model.chains[k]);
+                    let chain = &model.chains[k];
+                    if chain.k == 3 {
+                        chain_outward::<3>(model, data, chain);
+                    } else {
+                        chain_outward::<2>(model, data, chain);
+                    }
                     continue;
                 }
                 ChainPart::None => {}
@@ -326,8 +334,8 @@ fn add_inv_transform(
     }
 }
 
-/// Pass 2 for a [`Chain`], at its tip `C` (body `order[0]`): the chain's `k` hinges as one
-/// multi-axis joint. In the frame at the common hinge point with `C`'s axes, its motion
+/// Pass 2 for a [`Chain`] of `K` hinges, at its tip `C` (body `order[0]`): the chain's hinges
+/// as one multi-axis joint. In the frame at the common hinge point with `C`'s axes, its motion
 /// subspace is `S = [E; 0]` (`E`: the hinge axes in `C`'s axes); with `IA_h`, `pA_h` the tip's
 /// articulated inertia and bias there, `U = IA_h S`, `D = Sᵀ U + diag(armature)`,
 /// `u = τ − Sᵀ pA_h` (less the massless links' own external forces), and the parent receives
@@ -335,55 +343,54 @@ fn add_inv_transform(
 /// factored `L Δ Lᵀ` eliminating the tip's hinge first and the outermost link's last: the
 /// pivots `Δ` are then the tree form's `Dᵢ` (Schur complements), checked against the same
 /// scales, so a singular chain fails at the same hinge with the same error.
-fn chain_inward(
+fn chain_inward<const K: usize>(
     model: &Model,
     data: &mut Data,
     chain: &Chain,
     tau: &[f64],
     start: &[ArticulatedInertia],
 ) -> Result<(), DynamicsError> {
-    let (k, b, p) = (chain.k, &chain.order, chain.parent);
+    let (b, p) = (&chain.order, chain.parent);
     let tip = b[0];
-    let joint = |i: usize| model.joints[i].as_ref().expect("joint");
-    let r = joint(tip).child_at; // the hinge point in the tip's frame
+    let r = chain.tip_at; // the hinge point in the tip's frame
     // The hinge axes in the tip's axes, and the rotation from the parent's axes to the tip's;
     // `off[t]`: link `b[t]`'s origin from the hinge point (tip's axes), for its pivot scale.
-    let mut e = [Vec3::zeros(); 3];
-    let mut off = [Vec3::zeros(); 3];
-    e[0] = joint(tip).s.ang;
+    let mut e = [Vec3::zeros(); K];
+    let mut off = [Vec3::zeros(); K];
+    e[0] = chain.axis[0];
     let mut rot = data.xup[tip].rot;
-    for t in 1..k {
-        let j = joint(b[t]);
-        e[t] = rot * j.s.ang;
+    for t in 1..K {
+        e[t] = rot * chain.axis[t];
         if chain.offset_links {
-            off[t] = -(rot * j.child_at);
+            off[t] = -(rot * chain.link_at[t]);
         }
         rot *= data.xup[b[t]].rot;
     }
     // The chain's velocity-product term: c = X_C (X_L2 c_L1 + c_L2) + c_C, then at the point.
-    let mut c = data.c[b[k - 1]];
-    for t in (0..k - 1).rev() {
+    let mut c = data.c[b[K - 1]];
+    for t in (0..K - 1).rev() {
         let i = b[t];
         c = apply_motion(&model.coord_axis[i], &data.xup[i], &c) + data.c[i];
     }
     let c = Motion::new(c.ang, c.lin - r.cross(&c.ang));
     // The links' own bias (external forces only: they have no inertia) reaches the parent
     // rigidly and loads the hinges between them and the parent, as in the tree form.
-    let mut u = [0.0; 3];
-    for t in 0..k {
-        u[t] = tau[joint(b[t]).dof];
+    let mut u = [0.0; K];
+    for t in 0..K {
+        u[t] = tau[chain.dof[t]];
     }
-    if (1..k).any(|t| data.pa[b[t]] != Force::zero()) {
+    if (1..K).any(|t| data.pa[b[t]] != Force::zero()) {
         let mut g = Force::zero();
-        for t in 1..k {
+        for t in 1..K {
             if t > 1 {
                 let i = b[t - 1];
                 g = inv_apply_force(&model.coord_axis[i], &data.xup[i], &g);
             }
             g += data.pa[b[t]];
-            u[t] -= joint(b[t]).s.dot(&g);
+            let j = model.joints[b[t]].as_ref().expect("joint");
+            u[t] -= j.s.dot(&g);
         }
-        let i = b[k - 1];
+        let i = b[K - 1];
         let g = inv_apply_force(&model.coord_axis[i], &data.xup[i], &g);
         data.pa[p] += g;
     }
@@ -396,7 +403,8 @@ fn chain_inward(
     let ia_parent = &mut head[p];
     let parent_start = (!data.ia_started[p]).then(|| &start[p]);
     data.ia_started[p] = true;
-    // The tip's inertia and bias at the hinge point (a translation by r).
+    // The tip's inertia and bias at the hinge point (a translation by r):
+    // B_h = B − [r]×C, A_h = A − [r]×Bᵀ + B_h [r]×.
     let bh = ia.b - cross_columns(&r, &ia.c);
     let ah = ia.a
         - cross_columns(&r, &ia.b.transpose())
@@ -405,12 +413,11 @@ fn chain_inward(
     let pa = Force::new(pa.ang - r.cross(&pa.lin), pa.lin);
     // D = L Δ Lᵀ, the tip's hinge first: w_t = U_t − Σ_{s<t} l_ts w_s (the columns of U L⁻ᵀ),
     // Δ_t = e_t · w_t + armature, and u ← L⁻¹ u.
-    let mut w = [Force::zero(); 3];
-    let mut piv = [0.0; 3];
+    let mut w = [Force::zero(); K];
+    let mut piv = [0.0; K];
     let mut l = [0.0; 3]; // l₁₀, l₂₀, l₂₁
-    let (mut tr_a, mut tr_c) = (ah.trace(), ia.c.trace());
-    for t in 0..k {
-        let j = joint(b[t]);
+    let mut tr = (ah.trace(), ia.c.trace()); // tr A, tr C of the projected inertia at the point
+    for t in 0..K {
         let mut wt = Force::new(ah * e[t], bh.tr_mul(&e[t]));
         u[t] -= e[t].dot(&pa.ang);
         for s in 0..t {
@@ -419,17 +426,18 @@ fn chain_inward(
             wt -= w[s] * lts;
             u[t] -= lts * u[s];
         }
-        let d = e[t].dot(&wt.ang) + j.armature;
+        let d = e[t].dot(&wt.ang) + chain.armature[t];
         // The tree form's scale: the body's articulated inertia about its own origin.
         let scale = if t == 0 {
             ia.a.trace() + ia.c.trace() * r.norm_squared()
         } else if chain.offset_links && off[t] != Vec3::zeros() {
-            offset_scale(&off[t], &bh, &ia.c, &w[..t], &piv[..t], tr_a, tr_c)
+            offset_scale(&off[t], &bh, &ia.c, &w[..t], &piv[..t], tr.0, tr.1)
         } else {
-            tr_a
+            tr.0
         };
         let regular = d.is_finite() && d > SINGULAR_PIVOT_RELATIVE * scale;
         if !regular {
+            let j = model.joints[b[t]].as_ref().expect("joint");
             return Err(DynamicsError::SingularHinge {
                 hinge: model.hinge_names[j.hinge].clone(),
                 through: massless_hinges_below(model, b[t]),
@@ -437,44 +445,38 @@ fn chain_inward(
                 relative: if scale > 0.0 { d / scale } else { 0.0 },
             });
         }
-        tr_a -= wt.ang.norm_squared() / d;
-        tr_c -= wt.lin.norm_squared() / d;
+        if t + 1 < K {
+            tr.0 -= wt.ang.norm_squared() / d;
+            tr.1 -= wt.lin.norm_squared() / d;
+        }
         w[t] = wt;
         piv[t] = d;
     }
     // The projected inertia IAᵃ = IA_h − Σ w_t w_tᵀ / Δ_t and the bias the parent receives,
     // pA_h + IAᵃ c + Σ w_t (L⁻¹u)_t / Δ_t, moved by one transform (parent to hinge point).
-    let x = Transform::new(rot, joint(b[k - 1]).at);
+    let x = Transform::new(rot, chain.point);
     let mut pa = pa;
-    if chain.spherical {
+    if K == 3 && chain.spherical {
         // Three independent axes, no armature: IAᵃ = [0 0; 0 C − Bᵀ A⁻¹ B] exactly.
         let mut cc = ia.c;
-        for t in 0..3 {
+        for t in 0..K {
             cc -= w[t].lin * (w[t].lin.transpose() / piv[t]);
         }
         pa.lin += cc * c.lin;
-        let cc = rot.tr_mul(&(cc * rot));
-        add_translated(
-            &Mat3::zeros(),
-            &Mat3::zeros(),
-            &cc,
-            &x.trans,
-            ia_parent,
-            parent_start,
-        );
+        add_linear_inv_transform(&cc, &x, ia_parent, parent_start);
     } else {
         let mut iaa = ArticulatedInertia {
             a: ah,
             b: bh,
             c: ia.c,
         };
-        for t in 0..k {
+        for t in 0..K {
             iaa.sub_outer(&w[t], 1.0 / piv[t]);
         }
         pa += iaa.mul_motion(&c);
         iaa.add_inv_transform_to(&x, ia_parent, parent_start);
     }
-    for t in 0..k {
+    for t in 0..K {
         pa += w[t] * (u[t] / piv[t]);
         data.u_col[b[t]] = w[t];
         data.d[b[t]] = piv[t];
@@ -483,6 +485,33 @@ fn chain_inward(
     data.pa[p] += x.inv_apply_force(&pa);
     data.chain[tip] = ChainWork { x, c, l };
     Ok(())
+}
+
+/// `out += Xᵀ [0 0; 0 C] X` (or `out = start + ...`): a purely linear inertia (what a
+/// spherical joint passes on) moved by `X`, `Eᵀ C E` then the translation's two lever terms.
+#[inline]
+fn add_linear_inv_transform(
+    c: &Mat3,
+    x: &Transform,
+    out: &mut ArticulatedInertia,
+    start: Option<&ArticulatedInertia>,
+) {
+    let c = x.rot.tr_mul(&(c * x.rot));
+    // [1 [r]×; 0 1] [0 0; 0 C] [1 0; −[r]× 1] = [−[r]×C[r]× [r]×C; −C[r]× C].
+    let nb = cross_columns(&x.trans, &c);
+    let na = cross_columns(&x.trans, &nb.transpose()).transpose();
+    match start {
+        Some(s) => {
+            out.a = s.a + na;
+            out.b = s.b + nb;
+            out.c = s.c + c;
+        }
+        None => {
+            out.a += na;
+            out.b += nb;
+            out.c += c;
+        }
+    }
 }
 
 /// The tree form's singular-pivot scale of a chain's link whose origin lies at `d` from the
@@ -510,32 +539,36 @@ fn offset_scale(
     tr_a - 2.0 * tr_db - dcd + d2 * tr_c + tr_c * d2
 }
 
-/// Pass 3 for a [`Chain`], at its tip: `q̈ = D⁻¹ (u − Uᵀ a′)` with `a′` the tip's acceleration
-/// at the hinge point before the hinges move (`L⁻ᵀ Δ⁻¹ (L⁻¹u − Wᵀ a′)`, outermost hinge
-/// first), then the links' and the tip's accelerations as in the tree form.
-fn chain_outward(model: &Model, data: &mut Data, chain: &Chain) {
-    let (k, b, p) = (chain.k, &chain.order, chain.parent);
+/// Pass 3 for a [`Chain`] of `K` hinges, at its tip: `q̈ = D⁻¹ (u − Uᵀ a′)` with `a′` the
+/// tip's acceleration at the hinge point before the hinges move
+/// (`L⁻ᵀ Δ⁻¹ (L⁻¹u − Wᵀ a′)`, outermost hinge first), then the links' and the tip's
+/// accelerations as in the tree form.
+fn chain_outward<const K: usize>(model: &Model, data: &mut Data, chain: &Chain) {
+    let (b, p) = (&chain.order, chain.parent);
     let work = &data.chain[b[0]];
     let a = work.x.apply_motion(&data.a[p]) + work.c;
-    let mut qdd = [0.0; 3];
-    for t in 0..k {
+    let mut qdd = [0.0; K];
+    for t in 0..K {
         let i = b[t];
         qdd[t] = (data.u[i] - a.dot(&data.u_col[i])) / data.d[i];
     }
     let l = &work.l;
-    if k == 3 {
-        qdd[1] -= l[2] * qdd[2];
-        qdd[0] -= l[1] * qdd[2];
+    if K == 3 {
+        qdd[1] -= l[2] * qdd[K - 1];
+        qdd[0] -= l[1] * qdd[K - 1];
     }
     qdd[0] -= l[0] * qdd[1];
     let mut parent = p;
-    for t in (0..k).rev() {
+    for t in (0..K).rev() {
         let i = b[t];
-        let joint = model.joints[i].as_ref().expect("joint");
-        data.ddq[joint.dof] = qdd[t];
+        data.ddq[chain.dof[t]] = qdd[t];
+        let s = Motion::new(
+            chain.axis[t],
+            model.joints[i].as_ref().expect("joint").s.lin,
+        );
         data.a[i] = apply_motion(&model.coord_axis[i], &data.xup[i], &data.a[parent])
             + data.c[i]
-            + joint.s * qdd[t];
+            + s * qdd[t];
         parent = i;
     }
 }

@@ -491,6 +491,18 @@ pub struct Chain {
     /// Whether some link's origin lies off the hinge point (its singular-pivot scale then
     /// needs the off-point terms).
     pub(crate) offset_links: bool,
+    /// Per hinge (elimination order): its unit axis in its child's coordinates (`s.ang`).
+    pub(crate) axis: [Vec3; 3],
+    /// Per hinge: its armature.
+    pub(crate) armature: [f64; 3],
+    /// Per hinge: its coordinate's index in `v`.
+    pub(crate) dof: [usize; 3],
+    /// Per link (entry 0 unused): the hinge point in the link's frame (its `child_at`).
+    pub(crate) link_at: [Vec3; 3],
+    /// The hinge point in the tip's frame (its `child_at`).
+    pub(crate) tip_at: Vec3,
+    /// The hinge point in the parent's frame (the outermost link's `at`).
+    pub(crate) point: Vec3,
 }
 
 impl Chain {
@@ -982,13 +994,30 @@ impl Model {
                 self.chain_part[l] = ChainPart::Link;
             }
             self.chain_part[tip] = ChainPart::Tip(self.chains.len());
-            self.chains.push(Chain {
+            let joint = |t: usize| self.joints[order[t]].as_ref().expect("joint");
+            let mut chain = Chain {
                 order,
                 k,
                 parent: self.parent[outermost].expect("a link has a parent"),
                 spherical: k == 3 && !armature,
                 offset_links,
-            });
+                axis: [Vec3::zeros(); 3],
+                armature: [0.0; 3],
+                dof: [0; 3],
+                link_at: [Vec3::zeros(); 3],
+                tip_at: joint(0).child_at,
+                point: joint(k - 1).at,
+            };
+            for t in 0..k {
+                let j = joint(t);
+                chain.axis[t] = j.s.ang;
+                chain.armature[t] = j.armature;
+                chain.dof[t] = j.dof;
+                if t > 0 {
+                    chain.link_at[t] = j.child_at;
+                }
+            }
+            self.chains.push(chain);
         }
     }
 
