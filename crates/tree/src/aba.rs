@@ -360,11 +360,15 @@ fn chain_inward<const K: usize>(
     e[0] = chain.axis[0];
     let mut rot = data.xup[tip].rot;
     for t in 1..K {
-        e[t] = rot * chain.axis[t];
+        let i = b[t];
         if chain.offset_links {
             off[t] = -(rot * chain.link_at[t]);
         }
-        rot *= data.xup[b[t]].rot;
+        // Links about coordinate axes: a signed column, and two columns mixed.
+        (e[t], rot) = match &model.coord_axis[i] {
+            Some(a) => (a.times_axis(&rot), a.post_rotate(&rot, &data.xup[i].rot)),
+            None => (rot * chain.axis[t], rot * data.xup[i].rot),
+        };
     }
     // The chain's velocity-product term: c = X_C (X_L2 c_L1 + c_L2) + c_C, then at the point.
     let mut c = data.c[b[K - 1]];
