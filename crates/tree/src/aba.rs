@@ -175,9 +175,9 @@ fn articulated<'d, const GYRO: bool, const CHAINS: bool>(
                 ChainPart::Tip(k) => {
                     let chain = &model.chains[k];
                     if chain.k == 3 {
-                        chain_inward::<3>(model, data, chain, tau, start)?;
+                        chain_inward::<3>(model, data, chain, tau, fext.is_some(), start)?;
                     } else {
-                        chain_inward::<2>(model, data, chain, tau, start)?;
+                        chain_inward::<2>(model, data, chain, tau, fext.is_some(), start)?;
                     }
                     continue;
                 }
@@ -342,12 +342,14 @@ fn add_inv_transform(
 /// `IA_h − U D⁻¹ Uᵀ` and `pA_h + IAᵃ c + U D⁻¹ u` through the composite transform. `D` is
 /// factored `L Δ Lᵀ` eliminating the tip's hinge first and the outermost link's last: the
 /// pivots `Δ` are then the tree form's `Dᵢ` (Schur complements), checked against the same
-/// scales, so a singular chain fails at the same hinge with the same error.
+/// scales, so a singular chain fails at the same hinge with the same error. `loaded`: whether
+/// external forces were given (the links' bias is zero otherwise).
 fn chain_inward<const K: usize>(
     model: &Model,
     data: &mut Data,
     chain: &Chain,
     tau: &[f64],
+    loaded: bool,
     start: &[ArticulatedInertia],
 ) -> Result<(), DynamicsError> {
     let (b, p) = (&chain.order, chain.parent);
@@ -383,7 +385,7 @@ fn chain_inward<const K: usize>(
     for t in 0..K {
         u[t] = tau[chain.dof[t]];
     }
-    if (1..K).any(|t| data.pa[b[t]] != Force::zero()) {
+    if loaded && (1..K).any(|t| data.pa[b[t]] != Force::zero()) {
         let mut g = Force::zero();
         for t in 1..K {
             if t > 1 {
@@ -422,7 +424,10 @@ fn chain_inward<const K: usize>(
     let mut l = [0.0; 3]; // l₁₀, l₂₀, l₂₁
     let mut tr = (ah.trace(), ia.c.trace()); // tr A, tr C of the projected inertia at the point
     for t in 0..K {
-        let mut wt = Force::new(ah * e[t], bh.tr_mul(&e[t]));
+        let mut wt = match (t, &model.coord_axis[tip]) {
+            (0, Some(a)) => Force::new(a.times_axis(&ah), a.tr_times_axis(&bh)),
+            _ => Force::new(ah * e[t], bh.tr_mul(&e[t])),
+        };
         u[t] -= e[t].dot(&pa.ang);
         for s in 0..t {
             let lts = e[t].dot(&w[s].ang) / piv[s];

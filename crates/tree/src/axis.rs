@@ -150,6 +150,12 @@ impl CoordAxis {
         m.column(self.k) * self.sign
     }
 
+    /// `Mᵀ a` for this hinge's axis `a = sign e_k`: a signed row of `M`.
+    #[inline]
+    pub(crate) fn tr_times_axis(&self, m: &Mat3) -> Vec3 {
+        m.row(self.k).transpose() * self.sign
+    }
+
     /// `Sᵀ f` for `S = [sign e_k; l]`.
     #[inline]
     pub(crate) fn dot_subspace(&self, l: &Vec3, f: &Force) -> f64 {
