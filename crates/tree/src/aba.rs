@@ -19,7 +19,11 @@ pub const SINGULAR_PIVOT_RELATIVE: f64 = 1e-13;
 /// Balanced axisymmetric rotors ([`crate::Gyrostat`], e.g. reaction wheels) are not processed
 /// as bodies but as gyrostat terms of their carriers (same accelerations to round-off, a third
 /// less work for a bus with three wheels); their `data.xup`, `data.v`, `data.a` are then left
-/// as they were. [`Model::without_gyrostats`] gives the plain tree form. Fails with
+/// as they were. [`Model::without_gyrostats`] gives the plain tree form. Likewise a chain of
+/// hinges through massless zero-length links ([`crate::Chain`], e.g. a 3-DOF gimbal) is
+/// processed as one multi-axis joint at its tip (same accelerations to round-off, every body's
+/// `data.a` and every hinge's `data.ddq` written; [`Model::without_chains`] gives the plain
+/// form). Fails with
 /// [`DynamicsError::SingularHinge`] where a hinge's articulated inertia vanishes (gimbal lock
 /// of massless links).
 ///
