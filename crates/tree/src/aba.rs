@@ -383,26 +383,12 @@ fn chain_inward<const K: usize>(
         c = apply_motion(&model.coord_axis[i], &data.xup[i], &c) + data.c[i];
     }
     let c = Motion::new(c.ang, c.lin - r.cross(&c.ang));
-    // The links' own bias (external forces only: they have no inertia) reaches the parent
-    // rigidly and loads the hinges between them and the parent, as in the tree form.
     let mut u = [0.0; K];
     for t in 0..K {
         u[t] = tau[chain.dof[t]];
     }
     if loaded && (1..K).any(|t| data.pa[b[t]] != Force::zero()) {
-        let mut g = Force::zero();
-        for t in 1..K {
-            if t > 1 {
-                let i = b[t - 1];
-                g = inv_apply_force(&model.coord_axis[i], &data.xup[i], &g);
-            }
-            g += data.pa[b[t]];
-            let j = model.joints[b[t]].as_ref().expect("joint");
-            u[t] -= j.s.dot(&g);
-        }
-        let i = b[K - 1];
-        let g = inv_apply_force(&model.coord_axis[i], &data.xup[i], &g);
-        data.pa[p] += g;
+        links_bias(model, data, chain, &mut u);
     }
     let (head, tail) = data.ia.split_at_mut(tip);
     let ia: &ArticulatedInertia = if data.ia_started[tip] {
@@ -450,13 +436,7 @@ fn chain_inward<const K: usize>(
         };
         let regular = d.is_finite() && d > SINGULAR_PIVOT_RELATIVE * scale;
         if !regular {
-            let j = model.joints[b[t]].as_ref().expect("joint");
-            return Err(DynamicsError::SingularHinge {
-                hinge: model.hinge_names[j.hinge].clone(),
-                through: massless_hinges_below(model, b[t]),
-                pivot: d,
-                relative: if scale > 0.0 { d / scale } else { 0.0 },
-            });
+            return Err(singular(model, b[t], d, scale));
         }
         if t + 1 < K {
             tr.0 -= wt.ang.norm_squared() / d;
@@ -478,16 +458,12 @@ fn chain_inward<const K: usize>(
         pa.lin += cc * c.lin;
         add_linear_inv_transform(&cc, &x, ia_parent, parent_start);
     } else {
-        let mut iaa = ArticulatedInertia {
+        let iaa = ArticulatedInertia {
             a: ah,
             b: bh,
             c: ia.c,
         };
-        for t in 0..K {
-            iaa.sub_outer(&w[t], 1.0 / piv[t]);
-        }
-        pa += iaa.mul_motion(&c);
-        iaa.add_inv_transform_to(&x, ia_parent, parent_start);
+        pa += project(iaa, &w, &piv, &c, &x, ia_parent, parent_start);
     }
     for t in 0..K {
         pa += w[t] * (u[t] / piv[t]);
@@ -498,6 +474,59 @@ fn chain_inward<const K: usize>(
     data.pa[p] += x.inv_apply_force(&pa);
     data.chain[tip] = ChainWork { x, c, l };
     Ok(())
+}
+
+/// The links' own bias (external forces only: they have no inertia) reaches the chain's
+/// parent rigidly and loads the hinges between them and the parent (`u`, elimination order),
+/// as in the tree form. Out of line: only calls with external forces on links come here.
+#[inline(never)]
+fn links_bias<const K: usize>(model: &Model, data: &mut Data, chain: &Chain, u: &mut [f64; K]) {
+    let b = &chain.order;
+    let mut g = Force::zero();
+    for t in 1..K {
+        if t > 1 {
+            let i = b[t - 1];
+            g = inv_apply_force(&model.coord_axis[i], &data.xup[i], &g);
+        }
+        g += data.pa[b[t]];
+        let j = model.joints[b[t]].as_ref().expect("joint");
+        u[t] -= j.s.dot(&g);
+    }
+    let i = b[K - 1];
+    let g = inv_apply_force(&model.coord_axis[i], &data.xup[i], &g);
+    data.pa[chain.parent] += g;
+}
+
+/// The singular-hinge error of body `i`'s hinge (the tree form's, see [`aba`]).
+#[cold]
+#[inline(never)]
+fn singular(model: &Model, i: usize, d: f64, scale: f64) -> DynamicsError {
+    let j = model.joints[i].as_ref().expect("joint");
+    DynamicsError::SingularHinge {
+        hinge: model.hinge_names[j.hinge].clone(),
+        through: massless_hinges_below(model, i),
+        pivot: d,
+        relative: if scale > 0.0 { d / scale } else { 0.0 },
+    }
+}
+
+/// The general projection of a chain at its hinge point: `IAᵃ = IA_h − Σ w wᵀ / Δ` moved to
+/// the parent by `x` into `out` (`start` as in `add_inv_transform_to`); returns `IAᵃ c`.
+#[inline(never)]
+fn project<const K: usize>(
+    mut ia: ArticulatedInertia,
+    w: &[Force; K],
+    piv: &[f64; K],
+    c: &Motion,
+    x: &Transform,
+    out: &mut ArticulatedInertia,
+    start: Option<&ArticulatedInertia>,
+) -> Force {
+    for t in 0..K {
+        ia.sub_outer(&w[t], 1.0 / piv[t]);
+    }
+    ia.add_inv_transform_to(x, out, start);
+    ia.mul_motion(c)
 }
 
 /// `out += Xᵀ [0 0; 0 C] X` (or `out = start + ...`): a purely linear inertia (what a
