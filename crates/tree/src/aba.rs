@@ -401,10 +401,7 @@ fn chain_inward<const K: usize>(
     data.ia_started[p] = true;
     // The tip's inertia and bias at the hinge point (a translation by r):
     // B_h = B − [r]×C, A_h = A − [r]×Bᵀ + B_h [r]×.
-    let bh = ia.b - cross_columns(&r, &ia.c);
-    let ah = ia.a
-        - cross_columns(&r, &ia.b.transpose())
-        - cross_columns(&r, &bh.transpose()).transpose();
+    let (ah, bh) = to_point(ia, &r);
     let pa = data.pa[tip];
     let pa = Force::new(pa.ang - r.cross(&pa.lin), pa.lin);
     // D = L Δ Lᵀ, the tip's hinge first: w_t = U_t − Σ_{s<t} l_ts w_s (the columns of U L⁻ᵀ),
@@ -529,9 +526,20 @@ fn project<const K: usize>(
     ia.mul_motion(c)
 }
 
+/// The rotational and cross blocks of `ia` (about a body's origin) about the point `r` of the
+/// body's frame, same axes: `B_h = B − [r]×C`, `A_h = A − [r]×Bᵀ + B_h [r]×` (`C` is
+/// unchanged).
+#[inline(never)]
+fn to_point(ia: &ArticulatedInertia, r: &Vec3) -> (Mat3, Mat3) {
+    let bh = ia.b - cross_columns(r, &ia.c);
+    let ah =
+        ia.a - cross_columns(r, &ia.b.transpose()) - cross_columns(r, &bh.transpose()).transpose();
+    (ah, bh)
+}
+
 /// `out += Xᵀ [0 0; 0 C] X` (or `out = start + ...`): a purely linear inertia (what a
 /// spherical joint passes on) moved by `X`, `Eᵀ C E` then the translation's two lever terms.
-#[inline]
+#[inline(never)]
 fn add_linear_inv_transform(
     c: &Mat3,
     x: &Transform,
