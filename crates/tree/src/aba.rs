@@ -408,6 +408,7 @@ fn chain_inward<const K: usize>(
     // Δ_t = e_t · w_t + armature, and u ← L⁻¹ u.
     let mut w = [Force::zero(); K];
     let mut piv = [0.0; K];
+    let mut inv = [0.0; K]; // 1 / Δ: one division per hinge
     let mut l = [0.0; 3]; // l₁₀, l₂₀, l₂₁
     let mut tr = (ah.trace(), ia.c.trace()); // tr A, tr C of the projected inertia at the point
     for t in 0..K {
@@ -417,7 +418,7 @@ fn chain_inward<const K: usize>(
         };
         u[t] -= e[t].dot(&pa.ang);
         for s in 0..t {
-            let lts = e[t].dot(&w[s].ang) / piv[s];
+            let lts = e[t].dot(&w[s].ang) * inv[s];
             l[t + s - 1] = lts;
             wt -= w[s] * lts;
             u[t] -= lts * u[s];
@@ -435,12 +436,14 @@ fn chain_inward<const K: usize>(
         if !regular {
             return Err(singular(model, b[t], d, scale));
         }
+        let inv_d = 1.0 / d;
         if t + 1 < K {
-            tr.0 -= wt.ang.norm_squared() / d;
-            tr.1 -= wt.lin.norm_squared() / d;
+            tr.0 -= wt.ang.norm_squared() * inv_d;
+            tr.1 -= wt.lin.norm_squared() * inv_d;
         }
         w[t] = wt;
         piv[t] = d;
+        inv[t] = inv_d;
     }
     // The projected inertia IAᵃ = IA_h − Σ w_t w_tᵀ / Δ_t and the bias the parent receives,
     // pA_h + IAᵃ c + Σ w_t (L⁻¹u)_t / Δ_t, moved by one transform (parent to hinge point).
@@ -450,7 +453,7 @@ fn chain_inward<const K: usize>(
         // Three independent axes, no armature: IAᵃ = [0 0; 0 C − Bᵀ A⁻¹ B] exactly.
         let mut cc = ia.c;
         for t in 0..K {
-            cc -= w[t].lin * (w[t].lin.transpose() / piv[t]);
+            cc -= (w[t].lin * inv[t]) * w[t].lin.transpose();
         }
         pa.lin += cc * c.lin;
         add_linear_inv_transform(&cc, &x, ia_parent, parent_start);
@@ -460,10 +463,10 @@ fn chain_inward<const K: usize>(
             b: bh,
             c: ia.c,
         };
-        pa += project(iaa, &w, &piv, &c, &x, ia_parent, parent_start);
+        pa += project(iaa, &w, &inv, &c, &x, ia_parent, parent_start);
     }
     for t in 0..K {
-        pa += w[t] * (u[t] / piv[t]);
+        pa += w[t] * (u[t] * inv[t]);
         data.u_col[b[t]] = w[t];
         data.d[b[t]] = piv[t];
         data.u[b[t]] = u[t];
@@ -507,20 +510,21 @@ fn singular(model: &Model, i: usize, d: f64, scale: f64) -> DynamicsError {
     }
 }
 
-/// The general projection of a chain at its hinge point: `IAᵃ = IA_h − Σ w wᵀ / Δ` moved to
-/// the parent by `x` into `out` (`start` as in `add_inv_transform_to`); returns `IAᵃ c`.
+/// The general projection of a chain at its hinge point: `IAᵃ = IA_h − Σ w wᵀ / Δ` (`inv`:
+/// the `1 / Δ`) moved to the parent by `x` into `out` (`start` as in
+/// `add_inv_transform_to`); returns `IAᵃ c`.
 #[inline(never)]
 fn project<const K: usize>(
     mut ia: ArticulatedInertia,
     w: &[Force; K],
-    piv: &[f64; K],
+    inv: &[f64; K],
     c: &Motion,
     x: &Transform,
     out: &mut ArticulatedInertia,
     start: Option<&ArticulatedInertia>,
 ) -> Force {
     for t in 0..K {
-        ia.sub_outer(&w[t], 1.0 / piv[t]);
+        ia.sub_outer(&w[t], inv[t]);
     }
     ia.add_inv_transform_to(x, out, start);
     ia.mul_motion(c)
