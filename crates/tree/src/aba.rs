@@ -408,7 +408,7 @@ fn chain_inward<const K: usize>(
     // Δ_t = e_t · w_t + armature, and u ← L⁻¹ u.
     let mut w = [Force::zero(); K];
     let mut piv = [0.0; K];
-    let mut inv = [0.0; K]; // 1 / Δ: one division per hinge
+    let mut inv = [0.0; 3]; // 1 / Δ: one division per hinge
     let mut l = [0.0; 3]; // l₁₀, l₂₀, l₂₁
     let mut tr = (ah.trace(), ia.c.trace()); // tr A, tr C of the projected inertia at the point
     for t in 0..K {
@@ -472,7 +472,7 @@ fn chain_inward<const K: usize>(
         data.u[b[t]] = u[t];
     }
     data.pa[p] += x.inv_apply_force(&pa);
-    data.chain[tip] = ChainWork { x, c, l };
+    data.chain[tip] = ChainWork { x, c, l, inv };
     Ok(())
 }
 
@@ -517,7 +517,7 @@ fn singular(model: &Model, i: usize, d: f64, scale: f64) -> DynamicsError {
 fn project<const K: usize>(
     mut ia: ArticulatedInertia,
     w: &[Force; K],
-    inv: &[f64; K],
+    inv: &[f64; 3],
     c: &Motion,
     x: &Transform,
     out: &mut ArticulatedInertia,
@@ -604,7 +604,7 @@ fn chain_outward<const K: usize>(model: &Model, data: &mut Data, chain: &Chain) 
     let mut qdd = [0.0; K];
     for t in 0..K {
         let i = b[t];
-        qdd[t] = (data.u[i] - a.dot(&data.u_col[i])) / data.d[i];
+        qdd[t] = (data.u[i] - a.dot(&data.u_col[i])) * work.inv[t];
     }
     let l = &work.l;
     if K == 3 {

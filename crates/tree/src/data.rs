@@ -128,4 +128,6 @@ pub(crate) struct ChainWork {
     pub(crate) c: Motion,
     /// The unit lower factor of `D = L Δ Lᵀ`: `[l₁₀, l₂₀, l₂₁]`.
     pub(crate) l: [f64; 3],
+    /// `1 / Δ`, elimination order.
+    pub(crate) inv: [f64; 3],
 }
