@@ -784,16 +784,16 @@ mod tests {
     fn chain_variant(model: &Model, rng: &mut SplitMix, armature: bool, offset: bool) -> Model {
         let mut b = model.to_builder();
         let names: Vec<String> = model.bodies.iter().map(|x| x.name.clone()).collect();
-        for i in 1..model.n_bodies() {
-            if !(offset && model.bodies[i].mass == 0.0 && rng.next_f64() < 0.6) {
+        for (body, name) in model.bodies.iter().zip(&names).skip(1) {
+            if !(offset && body.mass == 0.0 && rng.next_f64() < 0.6) {
                 continue;
             }
             let o = rng.vec3(0.5);
             for h in b.hinges_mut() {
-                if h.child == names[i] {
+                if h.child == *name {
                     h.child_at = o;
                 }
-                if h.parent == names[i] {
+                if h.parent == *name {
                     h.at = o;
                 }
             }
