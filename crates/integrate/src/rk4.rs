@@ -170,17 +170,20 @@ pub(crate) fn hermite(
     let s = if h > 0.0 { (t - t0) / h } else { 1.0 };
     let s2 = s * s;
     let s3 = s2 * s;
-    let h00 = 2.0 * s3 - 3.0 * s2 + 1.0;
     let h10 = s3 - 2.0 * s2 + s;
     let h01 = -2.0 * s3 + 3.0 * s2;
     let h11 = s3 - s2;
+    // x0 + h01 (x1 − x0) rather than h00 x0 + h01 x1 (h00 = 1 − h01): a component that
+    // does not move during the step (a latched hinge: x1 = x0, zero slopes) comes out as
+    // x0 exactly, where the blend rounded it by an ulp depending on where t falls.
     for i in 0..out.len() {
-        out[i] = h00 * x0[i] + h * h10 * f0[i] + h01 * x1[i] + h * h11 * f1[i];
+        out[i] = x0[i] + h01 * (x1[i] - x0[i]) + h * (h10 * f0[i] + h11 * f1[i]);
     }
 }
 
 #[cfg(test)]
 mod tests {
+    use super::hermite;
     use crate::{Method, Options, Output, System, SystemError, integrate};
     use std::ops::ControlFlow;
 
@@ -235,6 +238,28 @@ mod tests {
         assert_eq!(rows.len(), 11);
         // Phase error of RK4 on a rotation: 100 h⁵/120 ≈ 8e-6 rad.
         assert!((st.x_final[0] - 10f64.cos()).abs() < 1e-5);
+    }
+
+    #[test]
+    fn hermite_keeps_a_component_that_does_not_move_exactly() {
+        // A latched hinge's angle: equal ends, zero slopes, at any point of the step.
+        let x = [-1.3876441445556664e-11, 0.3, 1.0 / 3.0, -7.1e5];
+        let zero = [0.0; 4];
+        let mut out = [0.0; 4];
+        for k in 0..=1000 {
+            let t = 116.53228313873322 + 0.01 * k as f64 / 1000.0;
+            hermite(
+                116.53228313873322,
+                &x,
+                &zero,
+                116.54228313873322,
+                &x,
+                &zero,
+                t,
+                &mut out,
+            );
+            assert_eq!(out, x, "at t = {t}");
+        }
     }
 
     #[test]

@@ -46,12 +46,7 @@ pub fn aba<'d>(
     tau: &[f64],
     fext: Option<&[Force]>,
 ) -> Result<&'d DVector<f64>, DynamicsError> {
-    match (model.gyrostats.is_empty(), model.chains.is_empty()) {
-        (true, true) => articulated::<false, false>(model, data, q, v, tau, fext, None),
-        (true, false) => articulated::<false, true>(model, data, q, v, tau, fext, None),
-        (false, true) => articulated::<true, false>(model, data, q, v, tau, fext, None),
-        (false, false) => articulated::<true, true>(model, data, q, v, tau, fext, None),
-    }
+    plain_or_chains(model, data, q, v, tau, fext, false)
 }
 
 /// Hybrid dynamics (Featherstone §9.2) with locked hinges: as [`aba`], except that a hinge
@@ -82,11 +77,77 @@ pub fn aba_hybrid<'d>(
     locked: &[bool],
 ) -> Result<&'d DVector<f64>, DynamicsError> {
     check_len("locked", locked.len(), model.n_hinges())?;
-    articulated::<false, false>(model, data, q, v, tau, fext, Some(locked))
+    articulated::<false, false>(model, data, q, v, tau, fext, Some(locked), false)
+}
+
+/// As [`aba`], reusing the hinge transforms in `data.xup`: **`data.xup` must hold the
+/// transforms of this `q`**, as [`crate::forward_kinematics`] leaves them (Pinocchio's
+/// convention for algorithms that follow kinematics). The caller that has just run
+/// kinematics for the effects saves ABA one `sin_cos` and one transform per hinge; the
+/// result is bit for bit that of [`aba`]. Stale transforms give wrong accelerations
+/// silently: call [`aba`] when unsure.
+///
+/// ```
+/// use satsim_tree::{aba, aba_with_kinematics, forward_kinematics, samples::chain, BaseKind, Data};
+/// let model = chain(4, BaseKind::Free);
+/// let mut data = Data::new(&model);
+/// let mut q = model.neutral();
+/// q[7] = 0.3;
+/// let (v, tau) = (vec![0.1; model.nv()], vec![0.2; model.nv()]);
+/// let plain = aba(&model, &mut data, &q, &v, &tau, None)?.clone();
+/// forward_kinematics(&model, &mut data, &q, &v)?;
+/// assert_eq!(aba_with_kinematics(&model, &mut data, &q, &v, &tau, None)?, &plain);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn aba_with_kinematics<'d>(
+    model: &Model,
+    data: &'d mut Data,
+    q: &[f64],
+    v: &[f64],
+    tau: &[f64],
+    fext: Option<&[Force]>,
+) -> Result<&'d DVector<f64>, DynamicsError> {
+    plain_or_chains(model, data, q, v, tau, fext, true)
+}
+
+/// As [`aba_hybrid`], reusing the hinge transforms in `data.xup`, which must hold those of
+/// this `q` (see [`aba_with_kinematics`]).
+pub fn aba_hybrid_with_kinematics<'d>(
+    model: &Model,
+    data: &'d mut Data,
+    q: &[f64],
+    v: &[f64],
+    tau: &[f64],
+    fext: Option<&[Force]>,
+    locked: &[bool],
+) -> Result<&'d DVector<f64>, DynamicsError> {
+    check_len("locked", locked.len(), model.n_hinges())?;
+    articulated::<false, false>(model, data, q, v, tau, fext, Some(locked), true)
+}
+
+/// [`aba`] and [`aba_with_kinematics`]: the instance for the model's gyrostats and chains.
+fn plain_or_chains<'d>(
+    model: &Model,
+    data: &'d mut Data,
+    q: &[f64],
+    v: &[f64],
+    tau: &[f64],
+    fext: Option<&[Force]>,
+    xup_ready: bool,
+) -> Result<&'d DVector<f64>, DynamicsError> {
+    let x = xup_ready;
+    match (model.gyrostats.is_empty(), model.chains.is_empty()) {
+        (true, true) => articulated::<false, false>(model, data, q, v, tau, fext, None, x),
+        (true, false) => articulated::<false, true>(model, data, q, v, tau, fext, None, x),
+        (false, true) => articulated::<true, false>(model, data, q, v, tau, fext, None, x),
+        (false, false) => articulated::<true, true>(model, data, q, v, tau, fext, None, x),
+    }
 }
 
 /// ABA proper; `GYRO`: the gyrostat form, `CHAINS`: the multi-axis form of [`crate::Chain`]s
-/// (separate instances, so that the plain form has no branches for them).
+/// (separate instances, so that the plain form has no branches for them); `xup_ready`:
+/// `data.xup` already holds this `q`'s transforms.
+#[allow(clippy::too_many_arguments)]
 fn articulated<'d, const GYRO: bool, const CHAINS: bool>(
     model: &Model,
     data: &'d mut Data,
@@ -95,6 +156,7 @@ fn articulated<'d, const GYRO: bool, const CHAINS: bool>(
     tau: &[f64],
     fext: Option<&[Force]>,
     locked: Option<&[bool]>,
+    xup_ready: bool,
 ) -> Result<&'d DVector<f64>, DynamicsError> {
     check_len("v", v.len(), model.nv())?;
     check_len("tau", tau.len(), model.nv())?;
@@ -105,7 +167,10 @@ fn articulated<'d, const GYRO: bool, const CHAINS: bool>(
     // rotor can be locked): balanced rotors ride on their parents, see `Gyrostat`.
     let gyro = GYRO;
     let n = model.n_bodies();
-    if gyro {
+    if xup_ready {
+        // The caller's forward kinematics left `data.xup` at this `q` (`aba_with_kinematics`).
+        check_len("q", q.len(), model.nq())?;
+    } else if gyro {
         check_len("q", q.len(), model.nq())?;
         for i in 1..n {
             if !model.is_gyrostat[i] {

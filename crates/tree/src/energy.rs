@@ -25,6 +25,25 @@ pub fn kinetic_energy(
     v: &[f64],
 ) -> Result<f64, DynamicsError> {
     forward_kinematics(model, data, q, v)?;
+    Ok(kinetic_energy_after_kinematics(model, data, v))
+}
+
+/// As [`kinetic_energy`], from the body velocities of the caller's last
+/// [`forward_kinematics`] (which must have run with this `v`): for a caller that has just
+/// run kinematics, so that they do not run twice. `v` gives the armatures' rates.
+///
+/// ```
+/// use satsim_tree::{forward_kinematics, kinetic_energy, kinetic_energy_after_kinematics};
+/// use satsim_tree::{samples::chain, BaseKind, Data};
+/// let model = chain(3, BaseKind::Free);
+/// let mut data = Data::new(&model);
+/// let (q, v) = (model.neutral(), vec![0.3; model.nv()]);
+/// let t = kinetic_energy(&model, &mut data, &q, &v)?;
+/// forward_kinematics(&model, &mut data, &q, &v)?;
+/// assert_eq!(kinetic_energy_after_kinematics(&model, &data, &v), t);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn kinetic_energy_after_kinematics(model: &Model, data: &Data, v: &[f64]) -> f64 {
     let bodies: f64 = (0..model.n_bodies())
         .map(|i| 0.5 * data.v[i].dot(&model.bodies[i].inertia.mul_motion(&data.v[i])))
         .sum();
@@ -34,7 +53,7 @@ pub fn kinetic_energy(
         .flatten()
         .map(|j| 0.5 * j.armature * v[j.dof] * v[j.dof])
         .sum();
-    Ok(bodies + armatures)
+    bodies + armatures
 }
 
 /// The system's centre of mass in inertial coordinates (m), from the poses of the last

@@ -51,7 +51,11 @@ pub(crate) fn base_motion(model: &Model, s: &[f64]) -> Motion {
     }
 }
 
-/// Poses (`data.rotation`, `data.position`) and spatial velocities (`data.v`) of all bodies.
+/// Poses (`data.rotation`, `data.position`), hinge transforms (`data.xup`) and spatial
+/// velocities (`data.v`) of all bodies. The transforms are those [`crate::aba()`] computes
+/// (the same [`Model`] function), so that ABA may reuse them
+/// ([`crate::aba_with_kinematics`]) when the caller has run kinematics for the same `q`;
+/// the velocities equal ABA's to the last bit (tested).
 ///
 /// ```
 /// use satsim_tree::{BaseKind, Body, Data, Hinge, ModelBuilder, forward_kinematics, spatial::{Mat3, Vec3}};
@@ -84,6 +88,8 @@ pub fn forward_kinematics(
         let x = data.xup[i];
         data.rotation[i] = data.rotation[p] * x.rot.transpose();
         data.position[i] = data.position[p] + data.rotation[p] * x.trans;
+        // The general product, inlined: equal to ABA's coordinate-axis path (which only
+        // leaves out products with exact zeros and ones) and cheaper here than its call.
         data.v[i] = x.apply_motion(&data.v[p]) + joint.s * v[joint.dof];
     }
     Ok(())
@@ -110,4 +116,122 @@ pub fn forward_kinematics_acc(
             + data.v[i].cross_motion(&vj);
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::{Body, Hinge, ModelBuilder};
+    use crate::samples::{SplitMix, random_inertia, random_tree_with_rotors};
+    use crate::spatial::{Force, Mat3};
+    use crate::{aba, aba_hybrid, aba_hybrid_with_kinematics, aba_with_kinematics};
+
+    /// A tree whose hinges take both paths: coordinate axes (positive and negative, hinge
+    /// points off the child origin) and a general axis, plus a balanced rotor (a gyrostat).
+    fn mixed(base: BaseKind, rng: &mut SplitMix) -> Model {
+        let axes = [
+            Vec3::x(),
+            -Vec3::y(),
+            Vec3::z(),
+            Vec3::new(0.3, -0.4, 0.5).normalize(),
+            -Vec3::x(),
+        ];
+        let mut b = ModelBuilder::new(base);
+        b.push_body(Body::new("b0", 5.0, random_inertia(rng, 2.0)));
+        for (k, axis) in axes.iter().enumerate() {
+            let name = format!("b{}", k + 1);
+            b.push_body(
+                Body::new(name.clone(), rng.range(0.5, 2.0), random_inertia(rng, 1.0))
+                    .with_com(rng.vec3(0.3)),
+            );
+            let parent = format!("b{}", k / 2);
+            b.push_hinge(
+                Hinge::revolute(format!("h{k}"), parent, name, *axis)
+                    .at(rng.vec3(0.5))
+                    .child_at(rng.vec3(0.5)),
+            );
+        }
+        b.push_body(Body::new(
+            "rotor",
+            0.0,
+            Mat3::from_diagonal(&Vec3::new(0.1, 0.1, 0.2)),
+        ));
+        b.push_hinge(Hinge::revolute("spin", "b0", "rotor", Vec3::z()).at(rng.vec3(0.5)));
+        b.build().unwrap()
+    }
+
+    /// Forward kinematics leaves the transforms and velocities ABA computes, bit for bit,
+    /// and ABA reusing them gives bit for bit the accelerations of plain ABA (hybrid too).
+    #[test]
+    fn kinematics_match_aba_and_its_reuse_is_exact() {
+        let mut coordinate_paths = 0;
+        for seed in 0..60u64 {
+            let mut rng = SplitMix(seed ^ 0x7e57);
+            let base = if seed % 4 == 0 {
+                BaseKind::Fixed
+            } else {
+                BaseKind::Free
+            };
+            let model = if seed % 2 == 0 {
+                mixed(base, &mut rng)
+            } else {
+                random_tree_with_rotors(3 + (seed % 9) as usize, base, true, 2, seed)
+            };
+            coordinate_paths += model.coord_axis.iter().flatten().count();
+            let mut q = model.neutral();
+            let nb = model.base_nq();
+            if base == BaseKind::Free {
+                let a = Quaternion::new(0.4, rng.range(-1.0, 1.0), -0.3, 0.2).normalize();
+                q[..4].copy_from_slice(&[a.w, a.i, a.j, a.k]);
+            }
+            for x in &mut q[nb..] {
+                *x = rng.range(-3.0, 3.0);
+            }
+            let v: Vec<f64> = (0..model.nv()).map(|_| rng.range(-2.0, 2.0)).collect();
+            let tau: Vec<f64> = (0..model.nv()).map(|_| rng.range(-2.0, 2.0)).collect();
+            let fext: Vec<Force> = (0..model.n_bodies())
+                .map(|_| Force::new(rng.vec3(1.0), rng.vec3(1.0)))
+                .collect();
+            let locked: Vec<bool> = (0..model.n_hinges())
+                .map(|_| rng.next_f64() < 0.3)
+                .collect();
+            let mut data = Data::new(&model);
+            let Ok(plain) = aba(&model, &mut data, &q, &v, &tau, Some(&fext)).cloned() else {
+                continue; // a singular gimbal of massless links
+            };
+            let aba_v = data.v.clone();
+            // Fresh buffers: the transforms come from kinematics, not from that ABA call.
+            let mut data = Data::new(&model);
+            let stale = aba_with_kinematics(&model, &mut data, &q, &v, &tau, Some(&fext))
+                .map(|a| a != &plain);
+            assert!(
+                stale.unwrap_or(true),
+                "seed {seed}: the transforms were recomputed"
+            );
+            forward_kinematics(&model, &mut data, &q, &v).unwrap();
+            for (i, aba_vi) in aba_v.iter().enumerate().skip(1) {
+                assert_eq!(data.xup[i], model.xup(i, &q), "seed {seed} body {i}");
+                if !model.is_gyrostat[i] {
+                    assert_eq!(&data.v[i], aba_vi, "seed {seed} body {i}");
+                }
+            }
+            let reused = aba_with_kinematics(&model, &mut data, &q, &v, &tau, Some(&fext))
+                .unwrap()
+                .clone();
+            assert_eq!(reused, plain, "seed {seed}");
+            let Ok(hybrid) = aba_hybrid(&model, &mut data, &q, &v, &tau, None, &locked).cloned()
+            else {
+                continue;
+            };
+            let mut data = Data::new(&model);
+            forward_kinematics(&model, &mut data, &q, &v).unwrap();
+            let reused =
+                aba_hybrid_with_kinematics(&model, &mut data, &q, &v, &tau, None, &locked).unwrap();
+            assert_eq!(reused, &hybrid, "seed {seed}");
+        }
+        assert!(
+            coordinate_paths > 50,
+            "{coordinate_paths} coordinate-axis hinges"
+        );
+    }
 }

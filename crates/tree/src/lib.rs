@@ -49,11 +49,11 @@ pub mod rnea;
 pub mod samples;
 pub mod spatial;
 
-pub use aba::{aba, aba_hybrid};
+pub use aba::{aba, aba_hybrid, aba_hybrid_with_kinematics, aba_with_kinematics};
 pub use cholesky::crba_cholesky;
 pub use crba::crba;
 pub use data::Data;
-pub use energy::{center_of_mass, kinetic_energy, momentum};
+pub use energy::{center_of_mass, kinetic_energy, kinetic_energy_after_kinematics, momentum};
 pub use error::{DynamicsError, ModelError};
 #[cfg(feature = "files")]
 pub use io::{

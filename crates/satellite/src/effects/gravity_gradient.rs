@@ -79,6 +79,7 @@ impl Effect for GravityGradient {
             orbit: true,
             free_base: true,
             kinematics: true,
+            com: self.model == GravityModel::Full,
             ..Needs::default()
         }
     }
@@ -97,6 +98,10 @@ impl Effect for GravityGradient {
         let ev = e.dot(&orbit.v);
         let e_dot = (orbit.v - ev * e) / r;
         let k_dot = -3.0 * k * ev / r;
+        let com = match self.model {
+            GravityModel::Full => ctx.com_or_err("gravity_gradient")?,
+            GravityModel::Preprint => Vec3::zeros(), // not read
+        };
         let mut field_power = 0.0;
         for (i, body) in ctx.model.bodies().iter().enumerate() {
             if body.mass() == 0.0 && body.inertia_com().norm() == 0.0 {
@@ -110,7 +115,7 @@ impl Effect for GravityGradient {
                 + 3.0 * k * rot.tr_mul(&e_dot).dot(&ie);
             let mut lin = Vec3::zeros();
             if self.model == GravityModel::Full && body.mass() > 0.0 {
-                let rho = ctx.data.position[i] + rot * body.com() - ctx.com;
+                let rho = ctx.data.position[i] + rot * body.com() - com;
                 let er = e.dot(&rho);
                 let f = k * body.mass() * (3.0 * er * e - rho);
                 lin = rot.tr_mul(&f);
@@ -135,13 +140,15 @@ impl Effect for GravityGradient {
         let r = orbit.r.norm();
         let k = orbit.mu / (r * r * r);
         let e = orbit.r / r;
+        // Declared in `needs` for the full model; NaN (never a silent zero) if it were not.
+        let com = ctx.com.unwrap_or(Vec3::repeat(f64::NAN));
         let mut v = 0.0;
         for (i, body) in ctx.model.bodies().iter().enumerate() {
             let rot = &ctx.data.rotation[i];
             let eb = rot.tr_mul(&e);
             v += 0.5 * k * (3.0 * eb.dot(&(body.inertia_com() * eb)) - body.inertia_com().trace());
             if self.model == GravityModel::Full {
-                let rho = ctx.data.position[i] + rot * body.com() - ctx.com;
+                let rho = ctx.data.position[i] + rot * body.com() - com;
                 let er = e.dot(&rho);
                 v -= 0.5 * k * body.mass() * (3.0 * er * er - rho.norm_squared());
             }

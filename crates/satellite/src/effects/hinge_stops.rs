@@ -10,7 +10,7 @@
 //! `−e φ̇`; a rebound slower than `min_rebound_rate` latches instead, so that a hinge pressed
 //! against its stop comes to rest rather than bouncing forever (Zeno).
 
-use super::{Context, Effect, Forces, Request, SceneEffect, Section};
+use super::{Context, Effect, EventReads, Forces, Request, SceneEffect, Section};
 use satsim_integrate::{EventAction, EventDirection, SystemError};
 use satsim_tree::io::FileError;
 use serde::Deserialize;
@@ -125,6 +125,10 @@ impl Effect for HingeStops {
                 _ => 1.0,
             };
         }
+    }
+    /// The angles, the locked flags and the latches: nothing beyond the state.
+    fn event_reads(&self) -> EventReads {
+        EventReads::STATE
     }
     fn event_direction(&self, _k: usize) -> EventDirection {
         EventDirection::Falling

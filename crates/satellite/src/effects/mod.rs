@@ -60,8 +60,11 @@ pub struct Needs {
     /// A free-floating root (`[base] kind = "free"`).
     pub free_base: bool,
     /// Body poses in [`Context::data`] (forward kinematics is skipped when no enabled effect
-    /// needs it; without it `data.rotation`, `data.position` and [`Context::com`] are stale).
+    /// needs it; without it `data.rotation`, `data.position` and `data.v` are stale).
     pub kinematics: bool,
+    /// The system's centre of mass, [`Context::com`] (implies `kinematics`). It is computed
+    /// only when an enabled effect declares it; otherwise `Context::com` is `None`.
+    pub com: bool,
     /// [`Context::hold_torque`] in `events`, `on_event` and `start` (stick/slip decisions).
     /// It costs a hybrid-dynamics solve and an RNEA per evaluation, never in the rhs.
     pub hold_torques: bool,
@@ -147,8 +150,10 @@ pub struct Context<'a> {
     pub rates: &'a [f64],
     /// Which hinges (model hinges then rotors) are locked.
     pub locked: &'a [bool],
-    /// The system's centre of mass, inertial axes, relative to the tree's reference point.
-    pub com: Vec3,
+    /// The system's centre of mass, inertial axes, relative to the tree's reference point:
+    /// `Some` when an enabled effect declares [`Needs::com`] and the poses are current
+    /// (see [`Context::com_or_err`]), `None` otherwise, never a stale or zero value.
+    pub com: Option<Vec3>,
     /// The orbit of the centre of mass, when the scene has one.
     pub orbit: Option<OrbitState>,
     /// Root (bus) attitude, bus to inertial.
@@ -161,8 +166,9 @@ pub struct Context<'a> {
     /// zero acceleration, everything else as now (the locked hinges locked): `(M q̈ + C −
     /// Jᵀfext)_k` with `q̈` from hybrid dynamics. A hinge held by friction sticks while the
     /// friction it needs, `hold − motor`, is within its static friction. Filled for locked
-    /// hinges in `events`, for every hinge in `on_event` and `start`, and only when an effect
-    /// sets [`Needs::hold_torques`]; NaN where not computed.
+    /// hinges in `events` (when an effect's [`Effect::event_reads`] asks for them), for
+    /// every hinge in `on_event` and `start`, and only when an effect sets
+    /// [`Needs::hold_torques`]; NaN where not computed.
     pub hold_torque: &'a [f64],
 }
 
@@ -170,6 +176,15 @@ impl Context<'_> {
     /// Index (in the tree's hinge order) of rotor `j`'s hinge.
     pub fn rotor_hinge(&self, j: usize) -> usize {
         self.n_hinges + j
+    }
+    /// The centre of mass, or an error naming the effect that read it without declaring
+    /// [`Needs::com`].
+    pub fn com_or_err(&self, effect: &str) -> Result<Vec3, SystemError> {
+        self.com.ok_or_else(|| {
+            SystemError::new(format!(
+                "{effect} reads the centre of mass but does not declare `Needs::com`"
+            ))
+        })
     }
     /// The orbit, or an error naming the effect that needed it.
     pub fn orbit_or_err(&self, effect: &str) -> Result<OrbitState, SystemError> {
@@ -293,6 +308,46 @@ pub struct Links<'a> {
     pub rotors_commanded: bool,
 }
 
+/// What an effect's event functions ([`Effect::events`]) read beyond the state, so that the
+/// event pass (run at the end of every step) computes only that. Always available to them:
+/// the time, the hinge angles and rates, the locked flags, the attitude and rates, the orbit,
+/// the effect's own states and its own fields (its mode). See [`Effect::event_reads`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct EventReads {
+    /// `forces`: what every effect's [`Effect::apply`] writes at this state (then every
+    /// effect is applied). Otherwise `forces` holds an earlier evaluation's values.
+    pub forces: bool,
+    /// [`Context::hold_torque`] of the locked hinges (a hybrid-dynamics solve and an RNEA,
+    /// after every `apply`; only with [`Needs::hold_torques`]). Otherwise NaN.
+    pub hold_torques: bool,
+    /// Body poses and velocities in [`Context::data`], and [`Context::com`] (forward
+    /// kinematics). Otherwise stale (and `com` is `None`).
+    pub kinematics: bool,
+}
+
+impl EventReads {
+    /// Nothing beyond the state: no effect is applied, no kinematics, no hold torques.
+    pub const STATE: Self = Self {
+        forces: false,
+        hold_torques: false,
+        kinematics: false,
+    };
+    /// Everything (the default: always right, the most work).
+    pub const ALL: Self = Self {
+        forces: true,
+        hold_torques: true,
+        kinematics: true,
+    };
+    /// What either reads.
+    pub fn union(self, o: Self) -> Self {
+        Self {
+            forces: self.forces || o.forces,
+            hold_torques: self.hold_torques || o.hold_torques,
+            kinematics: self.kinematics || o.kinematics,
+        }
+    }
+}
+
 /// What an effect asks the simulation to do at one of its events.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Request {
@@ -402,8 +457,21 @@ pub trait Effect: Send {
     fn n_events(&self) -> usize {
         0
     }
-    /// Evaluates the event functions into `g` (after `apply` ran on the same state).
+    /// Evaluates the event functions into `g`. What is current in `ctx` and `forces` beyond
+    /// the state is what some effect's [`Effect::event_reads`] asks for.
     fn events(&self, _ctx: &Context, _forces: &Forces, _own: &[f64], _g: &mut [f64]) {}
+    /// What [`Effect::events`] reads beyond the state, asked before every evaluation of the
+    /// event functions (so it may depend on the effect's mode: a wheel reads hold torques only
+    /// while it is stuck). The default, everything ([`EventReads::ALL`], the poses only when
+    /// the effect declares [`Needs::kinematics`]), is always right; a narrower answer spares
+    /// the event pass, at every step, the effects' `apply`, kinematics or a hybrid-dynamics
+    /// solve. It must be exact: what is not declared is stale in `events`.
+    fn event_reads(&self) -> EventReads {
+        EventReads {
+            kinematics: self.needs().kinematics,
+            ..EventReads::ALL
+        }
+    }
     /// Which sign changes of event `k` count.
     fn event_direction(&self, _k: usize) -> EventDirection {
         EventDirection::Both

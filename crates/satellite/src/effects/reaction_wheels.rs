@@ -34,7 +34,9 @@
 //! Limits: the command is clamped to `±max_torque`; a wheel at or beyond `max_speed` gets
 //! no torque that would speed it up further.
 
-use super::{Context, Effect, Forces, Links, Needs, Power, Request, Rotor, SceneEffect, Section};
+use super::{
+    Context, Effect, EventReads, Forces, Links, Needs, Power, Request, Rotor, SceneEffect, Section,
+};
 use satsim_integrate::{EventAction, EventDirection, SystemError};
 use satsim_tree::io::FileError;
 use satsim_tree::spatial::Vec3;
@@ -299,6 +301,20 @@ impl Effect for ReactionWheels {
             } else {
                 self.dir[j] * own[j]
             };
+        }
+    }
+    /// A slipping wheel's event is `d·Ω` (its own state); a stuck wheel's reads its hold
+    /// torque and its motor command (the controller's, in `forces`).
+    fn event_reads(&self) -> EventReads {
+        let stuck = self
+            .wheels
+            .iter()
+            .zip(&self.stuck)
+            .any(|(w, &s)| s && w.static_friction() > 0.0);
+        EventReads {
+            forces: stuck,
+            hold_torques: stuck,
+            kinematics: false,
         }
     }
     fn on_event(

@@ -200,7 +200,8 @@ impl Simulation {
             event_start.push(n_events);
             n_events += e.n_events();
         }
-        let needs_kinematics = effects.iter().any(|e| e.needs().kinematics);
+        let needs_com = effects.iter().any(|e| e.needs().com);
+        let needs_kinematics = needs_com || effects.iter().any(|e| e.needs().kinematics);
         let needs_hold = effects.iter().any(|e| e.needs().hold_torques);
         let (n_tree_hinges, n_tree_nv) = (model.n_hinges(), model.nv());
         let nh = model.n_hinges();
@@ -237,6 +238,7 @@ impl Simulation {
             rotor_effect,
             orbit_effect,
             needs_kinematics,
+            needs_com,
             base_tau,
             n_locked: 0,
             scratch: vec![0.0; x0.len()],

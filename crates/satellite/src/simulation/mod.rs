@@ -22,9 +22,19 @@
 //!
 //! # Right-hand side
 //!
-//! unpack `x` → forward kinematics (only when an effect needs it) → each enabled effect adds
-//! hinge torques, body wrenches and its own derivatives → ABA (hybrid ABA when hinges are
-//! locked) → pack `dx`.
+//! unpack `x` → forward kinematics (only when an effect needs it; the centre of mass only
+//! when an effect reads it) → each enabled effect adds hinge torques, body wrenches and its
+//! own derivatives → ABA (hybrid ABA when hinges are locked; reusing the kinematics' hinge
+//! transforms when they ran) → pack `dx`.
+//!
+//! # Event and output passes
+//!
+//! The event functions are evaluated at the end of every step. That pass computes only what
+//! they read ([`Effect::event_reads`]): hinge stops and
+//! slipping wheels read the state alone, so no effect is applied; a stuck wheel reads its
+//! hold torque, and only then are the effects applied and the hybrid-dynamics solve run.
+//! An output row applies the effects (their output columns may read what `apply` set) and
+//! runs kinematics once, but no hold-torque solve (nothing in a row reads it).
 //!
 //! # Energy budget
 //!
@@ -58,6 +68,8 @@ mod rhs;
 mod rows;
 mod run;
 mod system;
+#[cfg(test)]
+mod tests;
 
 pub use build::SimulationBuilder;
 pub use layout::StateLayout;
@@ -106,6 +118,9 @@ pub struct Simulation {
     rotor_effect: Option<usize>,
     orbit_effect: Option<usize>,
     needs_kinematics: bool,
+    /// Whether an effect reads [`Context::com`](crate::effects::Context::com) (computed
+    /// only then).
+    needs_com: bool,
     base_tau: Vec<f64>,
     locked: Vec<bool>,
     n_locked: usize,

@@ -2,11 +2,13 @@
 //! the [`Context`] they read) and the hold torques.
 
 use super::{SimError, Simulation};
-use crate::effects::{Context, Effect, Forces, OrbitState, Request};
+use crate::effects::{Context, Effect, EventReads, Forces, OrbitState, Request};
 use nalgebra::{Quaternion, UnitQuaternion};
 use satsim_integrate::SystemError;
 use satsim_tree::spatial::Vec3;
-use satsim_tree::{aba_hybrid, center_of_mass, forward_kinematics, rnea};
+use satsim_tree::{
+    aba_hybrid, aba_hybrid_with_kinematics, center_of_mass, forward_kinematics, rnea,
+};
 use std::ops::Range;
 
 impl Simulation {
@@ -50,30 +52,64 @@ impl Simulation {
     ) -> Result<(), SystemError> {
         self.apply_effects(t, x, kinematics)?;
         self.hold.fill(f64::NAN);
-        if !self.needs_hold {
+        if !self.needs_hold || hold == Hold::None {
             return Ok(());
         }
         let nb = self.model.base_nv();
         self.tau[nb..].copy_from_slice(&self.forces.hinge_torque);
+        // The transforms are current after kinematics, and after every solve (RNEA's).
+        let mut xup_ready = kinematics || self.needs_kinematics;
         if self.n_locked > 0 {
             self.hold_mask.copy_from_slice(&self.locked);
-            self.solve_hold(None)?;
+            self.solve_hold(None, xup_ready)?;
+            xup_ready = true;
         }
         if hold == Hold::All {
             for k in 0..self.locked.len() {
                 if !self.locked[k] {
                     self.hold_mask.copy_from_slice(&self.locked);
                     self.hold_mask[k] = true;
-                    self.solve_hold(Some(k))?;
+                    self.solve_hold(Some(k), xup_ready)?;
+                    xup_ready = true;
                 }
             }
         }
         Ok(())
     }
 
+    /// Before the event functions: what they read, and no more (the union of the
+    /// effects' [`Effect::event_reads`]). Returns whether they read the poses (which are
+    /// then current).
+    pub(super) fn prepare_events(&mut self, t: f64, x: &[f64]) -> Result<bool, SystemError> {
+        let reads = self
+            .effects
+            .iter()
+            .filter(|e| e.n_events() > 0)
+            .fold(EventReads::STATE, |r, e| r.union(e.event_reads()));
+        let hold = reads.hold_torques && self.needs_hold && self.n_locked > 0;
+        let wrap = |e: SystemError| SystemError::new(format!("event functions: {e}"));
+        if reads.forces || hold {
+            let h = if hold { Hold::Locked } else { Hold::None };
+            self.prepare_with(t, x, reads.kinematics, h).map_err(wrap)?;
+            return Ok(reads.kinematics);
+        }
+        self.unpack(x);
+        self.hold.fill(f64::NAN);
+        if reads.kinematics {
+            forward_kinematics(&self.model, &mut self.data, &self.q, &self.v)
+                .map_err(|e| wrap(SystemError::new(e.to_string())))?;
+        }
+        Ok(reads.kinematics)
+    }
+
     /// Hybrid dynamics with `hold_mask` locked, then RNEA for the torques the locked hinges
-    /// must receive: all of them (`only` = None) or hinge `only`.
-    pub(super) fn solve_hold(&mut self, only: Option<usize>) -> Result<(), SystemError> {
+    /// must receive: all of them (`only` = None) or hinge `only`. `xup_ready`: `data.xup`
+    /// holds the transforms of this state (kinematics or an earlier solve ran on it).
+    pub(super) fn solve_hold(
+        &mut self,
+        only: Option<usize>,
+        xup_ready: bool,
+    ) -> Result<(), SystemError> {
         let nb = self.model.base_nv();
         let fext = if self.forces.has_wrench {
             Some(self.forces.body_wrench.as_slice())
@@ -81,7 +117,12 @@ impl Simulation {
             None
         };
         let err = |e: satsim_tree::DynamicsError| SystemError::new(e.to_string());
-        let ddq = aba_hybrid(
+        let hybrid = if xup_ready {
+            aba_hybrid_with_kinematics
+        } else {
+            aba_hybrid
+        };
+        let ddq = hybrid(
             &self.model,
             &mut self.data,
             &self.q,
@@ -210,7 +251,8 @@ pub(super) struct Hooks<'a> {
 
 impl Simulation {
     /// Splits the simulation, once for every hook, into the [`Context`] of time `t` and state
-    /// `x` (`kin`: whether the poses are current) and the mutable [`Hooks`], and runs `f`.
+    /// `x` (`kin`: whether the poses are current; the centre of mass is computed from them
+    /// when an effect reads it) and the mutable [`Hooks`], and runs `f`.
     pub(super) fn with_context<R>(
         &mut self,
         t: f64,
@@ -235,6 +277,7 @@ impl Simulation {
             layout,
             n_user,
             hold,
+            needs_com,
             ..
         } = self;
         let (attitude, omega) = if layout.free {
@@ -256,11 +299,7 @@ impl Simulation {
             angles: &x[layout.angles.clone()],
             rates: &x[layout.rates.clone()],
             locked,
-            com: if kin {
-                center_of_mass(model, data)
-            } else {
-                Vec3::zeros()
-            },
+            com: (kin && *needs_com).then(|| center_of_mass(model, data)),
             orbit: orbit_of(effects, own, x),
             attitude,
             omega,
@@ -283,10 +322,11 @@ impl Simulation {
     }
 }
 
-/// Which hold torques [`Simulation::prepare_with`] computes.
+/// Which hold torques [`Simulation::prepare_with`] computes (only when an effect declares
+/// [`Needs::hold_torques`](crate::effects::Needs::hold_torques)).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(super) enum Hold {
-    /// None.
+    /// None (output rows, energies: nothing there reads them).
     None,
     /// The locked hinges' (one hybrid solve).
     Locked,

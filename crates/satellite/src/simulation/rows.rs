@@ -3,7 +3,7 @@
 use super::Simulation;
 use satsim_integrate::SystemError;
 use satsim_tree::spatial::Vec3;
-use satsim_tree::{kinetic_energy, momentum};
+use satsim_tree::{kinetic_energy_after_kinematics, momentum};
 
 impl Simulation {
     /// Output column names: `t`, attitude, rates, hinge angles and rates, the effects'
@@ -94,8 +94,8 @@ impl Simulation {
         x: &[f64],
         row: Option<&mut Vec<f64>>,
     ) -> Diagnostics {
-        let kinetic =
-            kinetic_energy(&self.model, &mut self.data, &self.q, &self.v).unwrap_or(f64::NAN);
+        // `prepare` ran kinematics on this state.
+        let kinetic = kinetic_energy_after_kinematics(&self.model, &self.data, &self.v);
         let (p, h) = momentum(&self.model, &self.data);
         let rotor_effect = self.rotor_effect;
         let potential = self.with_context(t, x, true, |ctx, hooks| {

@@ -5,7 +5,9 @@ use super::Simulation;
 use super::rhs::Hold;
 use crate::effects::Power;
 use satsim_integrate::{EventAction, EventDirection, System, SystemError};
-use satsim_tree::{aba, aba_hybrid, forward_kinematics};
+use satsim_tree::{
+    aba, aba_hybrid, aba_hybrid_with_kinematics, aba_with_kinematics, forward_kinematics,
+};
 
 impl System for Simulation {
     fn dim(&self) -> usize {
@@ -74,25 +76,15 @@ impl System for Simulation {
         } else {
             None
         };
-        let ddq = if self.n_locked > 0 {
-            aba_hybrid(
-                &self.model,
-                &mut self.data,
-                &self.q,
-                &self.v,
-                &self.tau,
-                fext,
-                &self.locked,
-            )
-        } else {
-            aba(
-                &self.model,
-                &mut self.data,
-                &self.q,
-                &self.v,
-                &self.tau,
-                fext,
-            )
+        // After kinematics `data.xup` holds this state's transforms (the effects only read
+        // `data`): ABA reuses them, with bit for bit the same result.
+        let (model, data) = (&self.model, &mut self.data);
+        let (q, v, tau) = (&self.q, &self.v, &self.tau);
+        let ddq = match (self.n_locked > 0, kin) {
+            (true, true) => aba_hybrid_with_kinematics(model, data, q, v, tau, fext, &self.locked),
+            (true, false) => aba_hybrid(model, data, q, v, tau, fext, &self.locked),
+            (false, true) => aba_with_kinematics(model, data, q, v, tau, fext),
+            (false, false) => aba(model, data, q, v, tau, fext),
         }
         .map_err(|e| SystemError::new(e.to_string()))?;
         let l = &self.layout;
@@ -141,8 +133,10 @@ impl System for Simulation {
         self.n_events
     }
 
-    /// The effects' event functions. A state on which the effects or the hold torques
-    /// cannot be evaluated is an error (an event is never skipped silently).
+    /// The effects' event functions, computing first only what they read
+    /// ([`Effect::event_reads`](crate::effects::Effect::event_reads)). A state on which the
+    /// effects or the hold torques cannot be evaluated is an error (an event is never
+    /// skipped silently).
     fn events(&mut self, t: f64, x: &[f64], g: &mut [f64]) -> Result<(), SystemError> {
         if self.n_events == 0 {
             return Ok(());
@@ -155,9 +149,7 @@ impl System for Simulation {
                 self.n_events
             )));
         }
-        self.prepare_with(t, x, false, Hold::Locked)
-            .map_err(|e| SystemError::new(format!("event functions: {e}")))?;
-        let kin = self.needs_kinematics;
+        let kin = self.prepare_events(t, x)?;
         self.with_context(t, x, kin, |ctx, h| {
             for (i, (e, r)) in h.effects.iter().zip(h.own).enumerate() {
                 let s = h.event_start[i];

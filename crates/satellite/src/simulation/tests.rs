@@ -1,0 +1,189 @@
+//! The lean event pass against the full one, and the centre of mass only on request.
+
+use super::Simulation;
+use super::rhs::Hold;
+use crate::effects::{Context, Effect, EventReads, Forces, Needs};
+use crate::scene::Scene;
+use satsim_integrate::{System, SystemError};
+use satsim_tree::samples::SplitMix;
+use satsim_tree::{BaseKind, State, samples::chain};
+use std::path::{Path, PathBuf};
+
+impl Simulation {
+    /// The event functions with everything computed first (every effect applied,
+    /// kinematics, the locked hinges' hold torques): what every event pass did before
+    /// [`Effect::event_reads`].
+    fn events_full(&mut self, t: f64, x: &[f64], g: &mut [f64]) {
+        self.prepare_with(t, x, true, Hold::Locked).unwrap();
+        self.with_context(t, x, true, |ctx, h| {
+            for (i, (e, r)) in h.effects.iter().zip(h.own).enumerate() {
+                let s = h.event_start[i];
+                e.events(ctx, h.forces, &x[r.clone()], &mut g[s..s + e.n_events()]);
+            }
+        });
+    }
+}
+
+fn examples() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples")
+}
+
+/// Scenes whose built-in effects have events, in every mode: hinges latched at the start
+/// (locked), free stops, rebounding stops, wheels stuck at the start (locked, reading hold
+/// torques and the controller's commands) and wheels slipping.
+fn scenes() -> Vec<(String, Simulation)> {
+    let deploy = examples().join("scenes/deploy.toml");
+    let text = std::fs::read_to_string(&deploy).unwrap();
+    // h4 starts on its latching stop; wheel y spins (slips), x and z start at rest (stuck).
+    let modes = text
+        .replace(
+            "angle = [0.0, 0.0, 0.0, 3.14159, -3.14159]",
+            "angle = [0.0, 0.0, 0.0, 0.0, -0.5]",
+        )
+        .replace("name = \"y\"", "name = \"y\"\nspeed = 5.0");
+    assert_ne!(modes, text);
+    let mut out = Vec::new();
+    for (name, text, path) in [
+        ("deploy", text.clone(), deploy.clone()),
+        ("deploy, latched and stuck", modes, deploy),
+    ] {
+        let scene = Scene::parse(&text, &path).unwrap();
+        out.push((name.to_owned(), scene.simulation().unwrap()));
+    }
+    for f in ["scenes/two_wings.toml", "scenes/spin_down.toml"] {
+        let scene = Scene::read(examples().join(f)).unwrap();
+        out.push((f.to_owned(), scene.simulation().unwrap()));
+    }
+    out
+}
+
+/// `x0` with every state but the orbit moved at random (attitude renormalised).
+fn random_state(sim: &Simulation, rng: &mut SplitMix) -> Vec<f64> {
+    let l = sim.layout().clone();
+    let mut x = sim.x0().to_vec();
+    let orbit = l
+        .effects
+        .iter()
+        .find(|(n, _)| n == "orbit")
+        .map(|(_, r)| r.clone());
+    for (k, v) in x.iter_mut().enumerate() {
+        if orbit.as_ref().is_some_and(|r| r.contains(&k)) {
+            continue;
+        }
+        *v += rng.range(-0.5, 0.5);
+    }
+    if l.free {
+        let a = l.attitude.clone();
+        let n = x[a.clone()].iter().map(|v| v * v).sum::<f64>().sqrt();
+        x[a].iter_mut().for_each(|v| *v /= n);
+    }
+    x
+}
+
+/// Every built-in effect's event functions give, bit for bit, the same `g` in the lean pass
+/// (only what `event_reads` declares is computed; the rest is left from an evaluation at
+/// another state) as in the full pass, at random states in every mode.
+#[test]
+fn lean_event_pass_equals_the_full_pass() {
+    let mut rng = SplitMix(0xe7e);
+    let (mut stuck_wheels, mut locked_hinges, mut lean_passes) = (0, 0, 0);
+    for (name, mut sim) in scenes() {
+        let n_user = sim.n_user;
+        let locked = sim.locked().to_vec();
+        locked_hinges += locked[..n_user].iter().filter(|&&l| l).count();
+        stuck_wheels += locked[n_user..].iter().filter(|&&l| l).count();
+        let n = sim.n_events();
+        assert!(n > 0, "{name}");
+        let mut dx = vec![0.0; sim.dim()];
+        let (mut lean, mut full) = (vec![0.0; n], vec![0.0; n]);
+        for trial in 0..50 {
+            // Stale buffers: forces, kinematics and hold torques of another state.
+            let other = random_state(&sim, &mut rng);
+            sim.events_full(rng.range(0.0, 100.0), &other, &mut full);
+            sim.rhs(rng.range(0.0, 100.0), &other, &mut dx).unwrap();
+            let stale = sim.forces.hinge_torque.clone();
+            let t = rng.range(0.0, 100.0);
+            let x = random_state(&sim, &mut rng);
+            sim.events(t, &x, &mut lean).unwrap();
+            let reads = sim
+                .effects
+                .iter()
+                .filter(|e| e.n_events() > 0)
+                .fold(EventReads::STATE, |r, e| r.union(e.event_reads()));
+            if !reads.forces {
+                // Lean indeed: no effect was applied.
+                assert_eq!(sim.forces.hinge_torque, stale, "{name}");
+                lean_passes += 1;
+            }
+            sim.events_full(t, &x, &mut full);
+            for k in 0..n {
+                assert_eq!(
+                    lean[k].to_bits(),
+                    full[k].to_bits(),
+                    "{name}, trial {trial}, event {k}: lean {} full {}",
+                    lean[k],
+                    full[k]
+                );
+            }
+        }
+    }
+    // The modes above were really exercised.
+    assert!(
+        locked_hinges >= 1 && stuck_wheels >= 2,
+        "{locked_hinges} {stuck_wheels}"
+    );
+    assert!(lean_passes >= 100, "{lean_passes} passes without `apply`");
+}
+
+/// An effect that reads the centre of mass, declaring it or not.
+struct ReadsCom(bool);
+
+impl Effect for ReadsCom {
+    fn name(&self) -> &str {
+        "reads_com"
+    }
+    fn needs(&self) -> Needs {
+        Needs {
+            kinematics: true,
+            com: self.0,
+            ..Needs::default()
+        }
+    }
+    fn apply(
+        &mut self,
+        ctx: &Context,
+        forces: &mut Forces,
+        _own: &[f64],
+        _own_dot: &mut [f64],
+    ) -> Result<(), SystemError> {
+        forces.hinge_torque[0] += ctx.com_or_err("reads_com")?.x;
+        Ok(())
+    }
+}
+
+/// The centre of mass is there for an effect that declares it, and an error naming the
+/// effect and the declaration otherwise (never a silent zero).
+#[test]
+fn centre_of_mass_only_when_declared() {
+    let model = chain(3, BaseKind::Free);
+    let mut state = State::rest(&model);
+    state.q[7] = 0.4;
+    for declared in [true, false] {
+        let sim = Simulation::builder(model.clone())
+            .initial(state.clone())
+            .effect(ReadsCom(declared))
+            .build();
+        match (declared, sim) {
+            (true, Ok(mut sim)) => {
+                let x = sim.x0().to_vec();
+                let mut dx = vec![0.0; x.len()];
+                sim.rhs(0.0, &x, &mut dx).unwrap();
+            }
+            (false, Err(e)) => {
+                let e = e.to_string();
+                assert!(e.contains("reads_com") && e.contains("Needs::com"), "{e}");
+            }
+            (d, r) => panic!("declared {d}: {:?}", r.err()),
+        }
+    }
+}
