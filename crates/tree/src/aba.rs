@@ -1,11 +1,11 @@
 //! The articulated-body algorithm (Featherstone §7.3): O(n) forward dynamics, the default.
 
 use crate::axis::CoordAxis;
-use crate::data::Data;
+use crate::data::{ChainWork, Data};
 use crate::error::DynamicsError;
 use crate::kinematics::{base_motion, check_len, update_transforms};
-use crate::model::{BaseKind, Model};
-use crate::spatial::{ArticulatedInertia, Force, Motion, Transform};
+use crate::model::{BaseKind, Chain, ChainPart, Model};
+use crate::spatial::{ArticulatedInertia, Force, Mat3, Motion, Transform, Vec3, skew};
 use nalgebra::DVector;
 
 /// Pivots `Dᵢ` below this fraction of the articulated inertia's scale are singular.
@@ -19,7 +19,11 @@ pub const SINGULAR_PIVOT_RELATIVE: f64 = 1e-13;
 /// Balanced axisymmetric rotors ([`crate::Gyrostat`], e.g. reaction wheels) are not processed
 /// as bodies but as gyrostat terms of their carriers (same accelerations to round-off, a third
 /// less work for a bus with three wheels); their `data.xup`, `data.v`, `data.a` are then left
-/// as they were. [`Model::without_gyrostats`] gives the plain tree form. Fails with
+/// as they were. [`Model::without_gyrostats`] gives the plain tree form. Likewise a chain of
+/// hinges through massless zero-length links ([`crate::Chain`], e.g. a 3-DOF gimbal) is
+/// processed as one multi-axis joint at its tip (same accelerations to round-off, every body's
+/// `data.a` and every hinge's `data.ddq` written; [`Model::without_chains`] gives the plain
+/// form). Fails with
 /// [`DynamicsError::SingularHinge`] where a hinge's articulated inertia vanishes (gimbal lock
 /// of massless links).
 ///
@@ -42,11 +46,7 @@ pub fn aba<'d>(
     tau: &[f64],
     fext: Option<&[Force]>,
 ) -> Result<&'d DVector<f64>, DynamicsError> {
-    if model.gyrostats.is_empty() {
-        articulated::<false>(model, data, q, v, tau, fext, None, false)
-    } else {
-        articulated::<true>(model, data, q, v, tau, fext, None, false)
-    }
+    plain_or_chains(model, data, q, v, tau, fext, false)
 }
 
 /// Hybrid dynamics (Featherstone §9.2) with locked hinges: as [`aba`], except that a hinge
@@ -77,7 +77,7 @@ pub fn aba_hybrid<'d>(
     locked: &[bool],
 ) -> Result<&'d DVector<f64>, DynamicsError> {
     check_len("locked", locked.len(), model.n_hinges())?;
-    articulated::<false>(model, data, q, v, tau, fext, Some(locked), false)
+    articulated::<false, false>(model, data, q, v, tau, fext, Some(locked), false)
 }
 
 /// As [`aba`], reusing the hinge transforms in `data.xup`: **`data.xup` must hold the
@@ -107,11 +107,7 @@ pub fn aba_with_kinematics<'d>(
     tau: &[f64],
     fext: Option<&[Force]>,
 ) -> Result<&'d DVector<f64>, DynamicsError> {
-    if model.gyrostats.is_empty() {
-        articulated::<false>(model, data, q, v, tau, fext, None, true)
-    } else {
-        articulated::<true>(model, data, q, v, tau, fext, None, true)
-    }
+    plain_or_chains(model, data, q, v, tau, fext, true)
 }
 
 /// As [`aba_hybrid`], reusing the hinge transforms in `data.xup`, which must hold those of
@@ -126,13 +122,33 @@ pub fn aba_hybrid_with_kinematics<'d>(
     locked: &[bool],
 ) -> Result<&'d DVector<f64>, DynamicsError> {
     check_len("locked", locked.len(), model.n_hinges())?;
-    articulated::<false>(model, data, q, v, tau, fext, Some(locked), true)
+    articulated::<false, false>(model, data, q, v, tau, fext, Some(locked), true)
 }
 
-/// ABA proper; `GYRO`: the gyrostat form (a separate instance, so that the plain form has no
-/// branches for it); `xup_ready`: `data.xup` already holds this `q`'s transforms.
+/// [`aba`] and [`aba_with_kinematics`]: the instance for the model's gyrostats and chains.
+fn plain_or_chains<'d>(
+    model: &Model,
+    data: &'d mut Data,
+    q: &[f64],
+    v: &[f64],
+    tau: &[f64],
+    fext: Option<&[Force]>,
+    xup_ready: bool,
+) -> Result<&'d DVector<f64>, DynamicsError> {
+    let x = xup_ready;
+    match (model.gyrostats.is_empty(), model.chains.is_empty()) {
+        (true, true) => articulated::<false, false>(model, data, q, v, tau, fext, None, x),
+        (true, false) => articulated::<false, true>(model, data, q, v, tau, fext, None, x),
+        (false, true) => articulated::<true, false>(model, data, q, v, tau, fext, None, x),
+        (false, false) => articulated::<true, true>(model, data, q, v, tau, fext, None, x),
+    }
+}
+
+/// ABA proper; `GYRO`: the gyrostat form, `CHAINS`: the multi-axis form of [`crate::Chain`]s
+/// (separate instances, so that the plain form has no branches for them); `xup_ready`:
+/// `data.xup` already holds this `q`'s transforms.
 #[allow(clippy::too_many_arguments)]
-fn articulated<'d, const GYRO: bool>(
+fn articulated<'d, const GYRO: bool, const CHAINS: bool>(
     model: &Model,
     data: &'d mut Data,
     q: &[f64],
@@ -222,6 +238,21 @@ fn articulated<'d, const GYRO: bool>(
         if gyro && model.is_gyrostat[i] {
             continue;
         }
+        if CHAINS {
+            match model.chain_part[i] {
+                ChainPart::Link => continue, // processed at its tip
+                ChainPart::Tip(k) => {
+                    let chain = &model.chains[k];
+                    if chain.k == 3 {
+                        chain_inward::<3>(model, data, chain, tau, fext.is_some(), start)?;
+                    } else {
+                        chain_inward::<2>(model, data, chain, tau, fext.is_some(), start)?;
+                    }
+                    continue;
+                }
+                ChainPart::None => {}
+            }
+        }
         let joint = model.joints[i].as_ref().expect("joint");
         let p = model.parent[i].expect("parent");
         let x = &data.xup[i];
@@ -309,6 +340,21 @@ fn articulated<'d, const GYRO: bool>(
             data.ddq[joint.dof] = data.u[i] / data.d[i] - joint.axis.dot(&data.a[p].ang);
             continue;
         }
+        if CHAINS {
+            match model.chain_part[i] {
+                ChainPart::Link => continue, // processed at its tip
+                ChainPart::Tip(k) => {
+                    let chain = &model.chains[k];
+                    if chain.k == 3 {
+                        chain_outward::<3>(model, data, chain);
+                    } else {
+                        chain_outward::<2>(model, data, chain);
+                    }
+                    continue;
+                }
+                ChainPart::None => {}
+            }
+        }
         let a = apply_motion(&model.coord_axis[i], &data.xup[i], &data.a[p]) + data.c[i];
         if locked.is_some_and(|l| l[joint.hinge]) {
             data.ddq[joint.dof] = 0.0;
@@ -355,6 +401,305 @@ fn add_inv_transform(
         Some(a) => a.add_inv_transform(ia, x, out, start),
         None => ia.add_inv_transform_to(x, out, start),
     }
+}
+
+/// Pass 2 for a [`Chain`] of `K` hinges, at its tip `C` (body `order[0]`): the chain's hinges
+/// as one multi-axis joint. In the frame at the common hinge point with `C`'s axes, its motion
+/// subspace is `S = [E; 0]` (`E`: the hinge axes in `C`'s axes); with `IA_h`, `pA_h` the tip's
+/// articulated inertia and bias there, `U = IA_h S`, `D = Sᵀ U + diag(armature)`,
+/// `u = τ − Sᵀ pA_h` (less the massless links' own external forces), and the parent receives
+/// `IA_h − U D⁻¹ Uᵀ` and `pA_h + IAᵃ c + U D⁻¹ u` through the composite transform. `D` is
+/// factored `L Δ Lᵀ` eliminating the tip's hinge first and the outermost link's last: the
+/// pivots `Δ` are then the tree form's `Dᵢ` (Schur complements), checked against the same
+/// scales, so a singular chain fails at the same hinge with the same error. `loaded`: whether
+/// external forces were given (the links' bias is zero otherwise).
+fn chain_inward<const K: usize>(
+    model: &Model,
+    data: &mut Data,
+    chain: &Chain,
+    tau: &[f64],
+    loaded: bool,
+    start: &[ArticulatedInertia],
+) -> Result<(), DynamicsError> {
+    let (b, p) = (&chain.order, chain.parent);
+    let tip = b[0];
+    let r = chain.tip_at; // the hinge point in the tip's frame
+    // The hinge axes in the tip's axes, and the rotation from the parent's axes to the tip's;
+    // `off[t]`: link `b[t]`'s origin from the hinge point (tip's axes), for its pivot scale.
+    let mut e = [Vec3::zeros(); K];
+    let mut off = [Vec3::zeros(); K];
+    e[0] = chain.axis[0];
+    let mut rot = data.xup[tip].rot;
+    for t in 1..K {
+        let i = b[t];
+        if chain.offset_links {
+            off[t] = -(rot * chain.link_at[t]);
+        }
+        // Links about coordinate axes: a signed column, and two columns mixed.
+        (e[t], rot) = match &model.coord_axis[i] {
+            Some(a) => (a.times_axis(&rot), a.post_rotate(&rot, &data.xup[i].rot)),
+            None => (rot * chain.axis[t], rot * data.xup[i].rot),
+        };
+    }
+    // The chain's velocity-product term: c = X_C (X_L2 c_L1 + c_L2) + c_C, then at the point.
+    let mut c = data.c[b[K - 1]];
+    for t in (0..K - 1).rev() {
+        let i = b[t];
+        c = apply_motion(&model.coord_axis[i], &data.xup[i], &c) + data.c[i];
+    }
+    let c = Motion::new(c.ang, c.lin - r.cross(&c.ang));
+    let mut u = [0.0; K];
+    for t in 0..K {
+        u[t] = tau[chain.dof[t]];
+    }
+    if loaded && (1..K).any(|t| data.pa[b[t]] != Force::zero()) {
+        links_bias(model, data, chain, &mut u);
+    }
+    let (head, tail) = data.ia.split_at_mut(tip);
+    let ia: &ArticulatedInertia = if data.ia_started[tip] {
+        &tail[0]
+    } else {
+        &start[tip]
+    };
+    let ia_parent = &mut head[p];
+    let parent_start = (!data.ia_started[p]).then(|| &start[p]);
+    data.ia_started[p] = true;
+    // The tip's inertia and bias at the hinge point (a translation by r):
+    // B_h = B − [r]×C, A_h = A − [r]×Bᵀ + B_h [r]×.
+    let (ah, bh) = to_point(ia, &r);
+    let pa = data.pa[tip];
+    let pa = Force::new(pa.ang - r.cross(&pa.lin), pa.lin);
+    // D = L Δ Lᵀ, the tip's hinge first: w_t = U_t − Σ_{s<t} l_ts w_s (the columns of U L⁻ᵀ),
+    // Δ_t = e_t · w_t + armature, and u ← L⁻¹ u.
+    let mut w = [Force::zero(); K];
+    let mut piv = [0.0; K];
+    let mut inv = [0.0; 3]; // 1 / Δ: one division per hinge
+    let mut l = [0.0; 3]; // l₁₀, l₂₀, l₂₁
+    let mut tr = (ah.trace(), ia.c.trace()); // tr A, tr C of the projected inertia at the point
+    for t in 0..K {
+        let mut wt = match (t, &model.coord_axis[tip]) {
+            (0, Some(a)) => Force::new(a.times_axis(&ah), a.tr_times_axis(&bh)),
+            _ => Force::new(ah * e[t], bh.tr_mul(&e[t])),
+        };
+        u[t] -= e[t].dot(&pa.ang);
+        for s in 0..t {
+            let lts = e[t].dot(&w[s].ang) * inv[s];
+            l[t + s - 1] = lts;
+            wt -= w[s] * lts;
+            u[t] -= lts * u[s];
+        }
+        let d = e[t].dot(&wt.ang) + chain.armature[t];
+        // The tree form's scale: the body's articulated inertia about its own origin.
+        let scale = if t == 0 {
+            ia.a.trace() + ia.c.trace() * r.norm_squared()
+        } else if chain.offset_links && off[t] != Vec3::zeros() {
+            offset_scale(&off[t], &bh, &ia.c, &w[..t], &piv[..t], tr.0, tr.1)
+        } else {
+            tr.0
+        };
+        let regular = d.is_finite() && d > SINGULAR_PIVOT_RELATIVE * scale;
+        if !regular {
+            return Err(singular(model, b[t], d, scale));
+        }
+        let inv_d = 1.0 / d;
+        if t + 1 < K {
+            tr.0 -= wt.ang.norm_squared() * inv_d;
+            tr.1 -= wt.lin.norm_squared() * inv_d;
+        }
+        w[t] = wt;
+        piv[t] = d;
+        inv[t] = inv_d;
+    }
+    // The projected inertia IAᵃ = IA_h − Σ w_t w_tᵀ / Δ_t and the bias the parent receives,
+    // pA_h + IAᵃ c + Σ w_t (L⁻¹u)_t / Δ_t, moved by one transform (parent to hinge point).
+    let x = Transform::new(rot, chain.point);
+    let mut pa = pa;
+    if K == 3 && chain.spherical {
+        // Three independent axes, no armature: IAᵃ = [0 0; 0 C − Bᵀ A⁻¹ B] exactly.
+        let mut cc = ia.c;
+        for t in 0..K {
+            cc -= (w[t].lin * inv[t]) * w[t].lin.transpose();
+        }
+        pa.lin += cc * c.lin;
+        add_linear_inv_transform(&cc, &x, ia_parent, parent_start);
+    } else {
+        let iaa = ArticulatedInertia {
+            a: ah,
+            b: bh,
+            c: ia.c,
+        };
+        pa += project(iaa, &w, &inv, &c, &x, ia_parent, parent_start);
+    }
+    for t in 0..K {
+        pa += w[t] * (u[t] * inv[t]);
+        data.u_col[b[t]] = w[t];
+        data.d[b[t]] = piv[t];
+        data.u[b[t]] = u[t];
+    }
+    data.pa[p] += x.inv_apply_force(&pa);
+    data.chain[tip] = ChainWork { x, c, l, inv };
+    Ok(())
+}
+
+/// The links' own bias (external forces only: they have no inertia) reaches the chain's
+/// parent rigidly and loads the hinges between them and the parent (`u`, elimination order),
+/// as in the tree form. Out of line: only calls with external forces on links come here.
+#[inline(never)]
+fn links_bias<const K: usize>(model: &Model, data: &mut Data, chain: &Chain, u: &mut [f64; K]) {
+    let b = &chain.order;
+    let mut g = Force::zero();
+    for t in 1..K {
+        if t > 1 {
+            let i = b[t - 1];
+            g = inv_apply_force(&model.coord_axis[i], &data.xup[i], &g);
+        }
+        g += data.pa[b[t]];
+        let j = model.joints[b[t]].as_ref().expect("joint");
+        u[t] -= j.s.dot(&g);
+    }
+    let i = b[K - 1];
+    let g = inv_apply_force(&model.coord_axis[i], &data.xup[i], &g);
+    data.pa[chain.parent] += g;
+}
+
+/// The singular-hinge error of body `i`'s hinge (the tree form's, see [`aba`]).
+#[cold]
+#[inline(never)]
+fn singular(model: &Model, i: usize, d: f64, scale: f64) -> DynamicsError {
+    let j = model.joints[i].as_ref().expect("joint");
+    DynamicsError::SingularHinge {
+        hinge: model.hinge_names[j.hinge].clone(),
+        through: massless_hinges_below(model, i),
+        pivot: d,
+        relative: if scale > 0.0 { d / scale } else { 0.0 },
+    }
+}
+
+/// The general projection of a chain at its hinge point: `IAᵃ = IA_h − Σ w wᵀ / Δ` (`inv`:
+/// the `1 / Δ`) moved to the parent by `x` into `out` (`start` as in
+/// `add_inv_transform_to`); returns `IAᵃ c`.
+#[inline(never)]
+fn project<const K: usize>(
+    mut ia: ArticulatedInertia,
+    w: &[Force; K],
+    inv: &[f64; 3],
+    c: &Motion,
+    x: &Transform,
+    out: &mut ArticulatedInertia,
+    start: Option<&ArticulatedInertia>,
+) -> Force {
+    for t in 0..K {
+        ia.sub_outer(&w[t], inv[t]);
+    }
+    ia.add_inv_transform_to(x, out, start);
+    ia.mul_motion(c)
+}
+
+/// The rotational and cross blocks of `ia` (about a body's origin) about the point `r` of the
+/// body's frame, same axes: `B_h = B − [r]×C`, `A_h = A − [r]×Bᵀ + B_h [r]×` (`C` is
+/// unchanged).
+#[inline(never)]
+fn to_point(ia: &ArticulatedInertia, r: &Vec3) -> (Mat3, Mat3) {
+    let bh = ia.b - cross_columns(r, &ia.c);
+    let ah =
+        ia.a - cross_columns(r, &ia.b.transpose()) - cross_columns(r, &bh.transpose()).transpose();
+    (ah, bh)
+}
+
+/// `out += Xᵀ [0 0; 0 C] X` (or `out = start + ...`): a purely linear inertia (what a
+/// spherical joint passes on) moved by `X`, `Eᵀ C E` then the translation's two lever terms.
+#[inline(never)]
+fn add_linear_inv_transform(
+    c: &Mat3,
+    x: &Transform,
+    out: &mut ArticulatedInertia,
+    start: Option<&ArticulatedInertia>,
+) {
+    let c = x.rot.tr_mul(&(c * x.rot));
+    // [1 [r]×; 0 1] [0 0; 0 C] [1 0; −[r]× 1] = [−[r]×C[r]× [r]×C; −C[r]× C].
+    let nb = cross_columns(&x.trans, &c);
+    let na = cross_columns(&x.trans, &nb.transpose()).transpose();
+    match start {
+        Some(s) => {
+            out.a = s.a + na;
+            out.b = s.b + nb;
+            out.c = s.c + c;
+        }
+        None => {
+            out.a += na;
+            out.b += nb;
+            out.c += c;
+        }
+    }
+}
+
+/// The tree form's singular-pivot scale of a chain's link whose origin lies at `d` from the
+/// hinge point (tip's axes): `tr A + |d|² tr C` of the link's articulated inertia about its
+/// origin, where the inertia at the point is `[A_h B_h; B_hᵀ C] − Σ w wᵀ / Δ` (the hinges
+/// eliminated before it) with `tr A` = `tr_a`, `tr C` = `tr_c` already projected.
+fn offset_scale(
+    d: &Vec3,
+    bh: &Mat3,
+    c: &Mat3,
+    w: &[Force],
+    piv: &[f64],
+    tr_a: f64,
+    tr_c: f64,
+) -> f64 {
+    // About the origin, A_o = A + B[d]× − [d]×Bᵀ − [d]×C[d]×, so
+    // tr A_o = tr A − 2 tr([d]×Bᵀ) − dᵀCd + |d|² tr C.
+    let mut tr_db = (skew(d) * bh.transpose()).trace();
+    let mut dcd = d.dot(&(c * d));
+    for (w, &p) in w.iter().zip(piv) {
+        tr_db -= w.ang.dot(&d.cross(&w.lin)) / p;
+        dcd -= d.dot(&w.lin).powi(2) / p;
+    }
+    let d2 = d.norm_squared();
+    tr_a - 2.0 * tr_db - dcd + d2 * tr_c + tr_c * d2
+}
+
+/// Pass 3 for a [`Chain`] of `K` hinges, at its tip: `q̈ = D⁻¹ (u − Uᵀ a′)` with `a′` the
+/// tip's acceleration at the hinge point before the hinges move
+/// (`L⁻ᵀ Δ⁻¹ (L⁻¹u − Wᵀ a′)`, outermost hinge first), then the links' and the tip's
+/// accelerations as in the tree form.
+fn chain_outward<const K: usize>(model: &Model, data: &mut Data, chain: &Chain) {
+    let (b, p) = (&chain.order, chain.parent);
+    let work = &data.chain[b[0]];
+    let a = work.x.apply_motion(&data.a[p]) + work.c;
+    let mut qdd = [0.0; K];
+    for t in 0..K {
+        let i = b[t];
+        qdd[t] = (data.u[i] - a.dot(&data.u_col[i])) * work.inv[t];
+    }
+    let l = &work.l;
+    if K == 3 {
+        qdd[1] -= l[2] * qdd[K - 1];
+        qdd[0] -= l[1] * qdd[K - 1];
+    }
+    qdd[0] -= l[0] * qdd[1];
+    let mut parent = p;
+    for t in (0..K).rev() {
+        let i = b[t];
+        data.ddq[chain.dof[t]] = qdd[t];
+        let s = Motion::new(
+            chain.axis[t],
+            model.joints[i].as_ref().expect("joint").s.lin,
+        );
+        data.a[i] = apply_motion(&model.coord_axis[i], &data.xup[i], &data.a[parent])
+            + data.c[i]
+            + s * qdd[t];
+        parent = i;
+    }
+}
+
+/// `[a]× M`, column by column.
+#[inline]
+fn cross_columns(a: &Vec3, m: &Mat3) -> Mat3 {
+    Mat3::from_columns(&[
+        a.cross(&m.column(0)),
+        a.cross(&m.column(1)),
+        a.cross(&m.column(2)),
+    ])
 }
 
 /// The hinges reached from body `i` downwards through massless bodies: the other axes of a
@@ -496,5 +841,179 @@ mod tests {
         }
         assert!(compared > 150, "only {compared} regular trees");
         assert!(worst < 1e-12, "worst relative difference {worst:e}");
+    }
+
+    /// `model` rebuilt with, at random, armature on some hinges (`armature`) and the origins of
+    /// some massless links moved off their hinge point (`offset`: the link's `child_at` and its
+    /// child's `at` the same vector, so the link stays zero-length).
+    fn chain_variant(model: &Model, rng: &mut SplitMix, armature: bool, offset: bool) -> Model {
+        let mut b = model.to_builder();
+        let names: Vec<String> = model.bodies.iter().map(|x| x.name.clone()).collect();
+        for (body, name) in model.bodies.iter().zip(&names).skip(1) {
+            if !(offset && body.mass == 0.0 && rng.next_f64() < 0.6) {
+                continue;
+            }
+            let o = rng.vec3(0.5);
+            for h in b.hinges_mut() {
+                if h.child == *name {
+                    h.child_at = o;
+                }
+                if h.parent == *name {
+                    h.at = o;
+                }
+            }
+        }
+        if armature {
+            for h in b.hinges_mut() {
+                if rng.next_f64() < 0.5 {
+                    h.armature = rng.range(0.0, 0.5);
+                }
+            }
+        }
+        b.build().unwrap()
+    }
+
+    /// A random state: attitude, position, angles, rates, torques and external forces on
+    /// every body (links included).
+    fn random_state(
+        model: &Model,
+        rng: &mut SplitMix,
+    ) -> (Vec<f64>, Vec<f64>, Vec<f64>, Vec<Force>) {
+        let mut q = model.neutral();
+        let nb = model.base_nq();
+        if model.base == BaseKind::Free {
+            let a = Quaternion::new(
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+            )
+            .normalize();
+            q[..4].copy_from_slice(&[a.w, a.i, a.j, a.k]);
+            for x in &mut q[4..7] {
+                *x = rng.range(-3.0, 3.0);
+            }
+        }
+        for x in &mut q[nb..] {
+            *x = rng.range(-3.0, 3.0);
+        }
+        let v = (0..model.nv()).map(|_| rng.range(-2.0, 2.0)).collect();
+        let tau = (0..model.nv()).map(|_| rng.range(-2.0, 2.0)).collect();
+        let fext = (0..model.n_bodies())
+            .map(|_| Force::new(rng.vec3(1.0), rng.vec3(1.0)))
+            .collect();
+        (q, v, tau, fext)
+    }
+
+    /// The multi-axis form of massless-link chains against the tree form (every link a body):
+    /// random trees with chains of 2 and 3 hinges, general and coordinate axes, with and
+    /// without armature, link origins on and off the hinge point, gyrostat rotors, external
+    /// forces on every body, free and fixed roots, tips with children. The accelerations of
+    /// every body must agree too.
+    #[test]
+    fn chain_form_equals_the_tree_form() {
+        let (mut worst, mut compared, mut refused) = (0.0f64, 0usize, 0usize);
+        let mut seen = [0usize; 4]; // chains of k = 2, k = 3, spherical ones, offset links
+        let mut tips_with_children = 0;
+        let mut rotor_on_tip = 0;
+        for seed in 0..1500u64 {
+            let mut rng = SplitMix(seed ^ 0xc4a1);
+            let base = if seed % 3 == 0 {
+                BaseKind::Fixed
+            } else {
+                BaseKind::Free
+            };
+            let n = 3 + (seed % 18) as usize;
+            let rotors = (seed % 3) as usize;
+            let tree = random_tree_with_rotors(n, base, true, rotors, seed);
+            let tree = if seed % 4 == 1 {
+                snapped(&tree, rotors, &mut rng)
+            } else {
+                tree
+            };
+            let model = chain_variant(&tree, &mut rng, seed % 5 < 2, seed % 7 < 3);
+            for c in &model.chains {
+                seen[c.k - 2] += 1;
+                seen[2] += c.spherical as usize;
+                seen[3] += c.offset_links as usize;
+                tips_with_children += model.children(c.tip()).count().min(1);
+                rotor_on_tip += model.gyrostats.iter().any(|g| g.parent == c.tip()) as usize;
+            }
+            let plain = model.without_chains();
+            assert!(plain.chains.is_empty());
+            let (q, v, tau, fext) = random_state(&model, &mut rng);
+            let (mut dc, mut dp) = (Data::new(&model), Data::new(&plain));
+            for f in [None, Some(fext.as_slice())] {
+                let a = aba(&model, &mut dc, &q, &v, &tau, f).cloned();
+                let b = aba(&plain, &mut dp, &q, &v, &tau, f).cloned();
+                let (a, b) = match (a, b) {
+                    (Ok(a), Ok(b)) => (a, b),
+                    (Err(x), Err(y)) => {
+                        // Both refuse, naming the same hinges (the pivots agree to round-off).
+                        let names = |e: DynamicsError| match e {
+                            DynamicsError::SingularHinge { hinge, through, .. } => (hinge, through),
+                            other => panic!("seed {seed}: {other}"),
+                        };
+                        assert_eq!(names(x), names(y), "seed {seed}");
+                        refused += 1;
+                        continue;
+                    }
+                    (a, b) => panic!("seed {seed}: chain form {a:?}, tree form {b:?}"),
+                };
+                compared += 1;
+                let e = rel(&a, &b);
+                assert!(e < 1e-12, "seed {seed}: chain vs tree form {e:e}");
+                worst = worst.max(e);
+                for i in 0..model.n_bodies() {
+                    if model.is_gyrostat[i] {
+                        continue;
+                    }
+                    let (x, y) = (dc.a[i].to_array(), dp.a[i].to_array());
+                    let scale = b.amax().max(1.0) * 10.0;
+                    for (x, y) in x.iter().zip(y) {
+                        assert!((x - y).abs() < 1e-12 * scale, "seed {seed}: body {i} a");
+                    }
+                }
+            }
+        }
+        eprintln!(
+            "chain vs tree: {compared} compared, {refused} refused, worst {worst:e}; chains \
+             k=2 {}, k=3 {}, spherical {}, offset {}, tips with children {tips_with_children}, \
+             with rotors {rotor_on_tip}",
+            seen[0], seen[1], seen[2], seen[3]
+        );
+        assert!(compared > 2500, "only {compared} regular cases");
+        assert!(seen.iter().all(|&s| s > 30), "chains seen {seen:?}");
+        assert!(tips_with_children > 40 && rotor_on_tip > 40);
+    }
+
+    /// The singular-pivot scale of a chain's link with its origin off the hinge point is the
+    /// tree form's: `tr A + |d|² tr C` of the projected inertia moved to the link's origin.
+    #[test]
+    fn offset_scale_is_the_tree_forms_scale() {
+        let mut rng = SplitMix(3);
+        for _ in 0..50 {
+            let m = rng.range(0.5, 5.0);
+            let rigid = crate::spatial::RigidInertia::from_com(
+                m,
+                rng.vec3(0.5),
+                crate::samples::random_inertia(&mut rng, m),
+            );
+            let mut ia = ArticulatedInertia::from(rigid);
+            let w: Vec<Force> = (0..2)
+                .map(|_| Force::new(rng.vec3(0.3), rng.vec3(0.3)))
+                .collect();
+            let piv = [rng.range(1.0, 2.0), rng.range(1.0, 2.0)];
+            let (bh, c) = (ia.b, ia.c);
+            for (w, p) in w.iter().zip(piv) {
+                ia.sub_outer(w, 1.0 / p);
+            }
+            let d = rng.vec3(0.8);
+            // The projected inertia about the link's origin, which lies at d from the point.
+            let at_origin = ia.inv_transform(&Transform::new(Mat3::identity(), -d));
+            let tree = at_origin.a.trace() + at_origin.c.trace() * d.norm_squared();
+            let ours = offset_scale(&d, &bh, &c, &w, &piv, ia.a.trace(), ia.c.trace());
+            assert!((tree - ours).abs() < 1e-13 * tree.abs(), "{tree} vs {ours}");
+        }
     }
 }

@@ -131,6 +131,31 @@ impl CoordAxis {
         }
     }
 
+    /// `M E` for this hinge's `E` (`x.rot`): only columns `i` and `j` of `M` mix (a
+    /// composite rotation through a chain of massless links, see `aba.rs`).
+    #[inline]
+    pub(crate) fn post_rotate(&self, m: &Mat3, e: &Mat3) -> Mat3 {
+        let (i, j) = (self.i, self.j);
+        let (eii, eij, eji, ejj) = (e[(i, i)], e[(i, j)], e[(j, i)], e[(j, j)]);
+        let (mi, mj) = (m.column(i).into_owned(), m.column(j).into_owned());
+        let mut out = *m;
+        out.set_column(i, &(mi * eii + mj * eji));
+        out.set_column(j, &(mi * eij + mj * ejj));
+        out
+    }
+
+    /// `M a` for this hinge's axis `a = sign e_k`: a signed column of `M`.
+    #[inline]
+    pub(crate) fn times_axis(&self, m: &Mat3) -> Vec3 {
+        m.column(self.k) * self.sign
+    }
+
+    /// `Mᵀ a` for this hinge's axis `a = sign e_k`: a signed row of `M`.
+    #[inline]
+    pub(crate) fn tr_times_axis(&self, m: &Mat3) -> Vec3 {
+        m.row(self.k).transpose() * self.sign
+    }
+
     /// `Sᵀ f` for `S = [sign e_k; l]`.
     #[inline]
     pub(crate) fn dot_subspace(&self, l: &Vec3, f: &Force) -> f64 {

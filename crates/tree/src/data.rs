@@ -47,8 +47,8 @@ pub struct Data {
     pub f: Vec<Force>,
     /// Articulated-body inertias. Filled by [`crate::aba()`]: the root's `IA₀`; a hinged
     /// body's is left projected, `IAᵢ − Uᵢ Dᵢ⁻¹ Uᵢᵀ` (the inertia its parent receives; ABA
-    /// projects in place); unspecified for gyrostat rotors and hinges locked in
-    /// [`crate::aba_hybrid`].
+    /// projects in place); unspecified for gyrostat rotors, hinges locked in
+    /// [`crate::aba_hybrid`] and the links and tips of a [`crate::Chain`].
     pub ia: Vec<ArticulatedInertia>,
     /// Per body: whether ABA's pass 2 has started `ia[i]` (a child has added to it). The
     /// first child writes its parent's inertia as the rigid start plus its own part, so
@@ -56,11 +56,14 @@ pub struct Data {
     pub(crate) ia_started: Vec<bool>,
     /// Articulated bias forces. Filled by [`crate::aba()`].
     pub pa: Vec<Force>,
-    /// `Uᵢ = IAᵢ Sᵢ`. Filled by [`crate::aba()`].
+    /// Per chain tip ([`crate::Chain`]): what ABA's pass 3 reads of the chain's pass 2.
+    pub(crate) chain: Vec<ChainWork>,
+    /// `Uᵢ = IAᵢ Sᵢ`. Filled by [`crate::aba()`] (for the hinges of a [`crate::Chain`]: the
+    /// columns of `U L⁻ᵀ` at the hinge point, `D = L Δ Lᵀ`).
     pub u_col: Vec<Force>,
-    /// `Dᵢ = Sᵢᵀ Uᵢ`. Filled by [`crate::aba()`].
+    /// `Dᵢ = Sᵢᵀ Uᵢ`. Filled by [`crate::aba()`] (for a chain's hinges: the pivots `Δ`).
     pub d: Vec<f64>,
-    /// `uᵢ = τᵢ − Sᵢᵀ pAᵢ`. Filled by [`crate::aba()`].
+    /// `uᵢ = τᵢ − Sᵢᵀ pAᵢ`. Filled by [`crate::aba()`] (for a chain's hinges: `L⁻¹ u`).
     pub u: Vec<f64>,
     /// Composite rigid-body inertias. Filled by [`crate::crba()`].
     pub ic: Vec<RigidInertia>,
@@ -100,6 +103,7 @@ impl Data {
             ia: vec![ArticulatedInertia::default(); n],
             ia_started: vec![false; n],
             pa: vec![Force::zero(); n],
+            chain: vec![ChainWork::default(); n],
             u_col: vec![Force::zero(); n],
             d: vec![0.0; n],
             u: vec![0.0; n],
@@ -112,4 +116,18 @@ impl Data {
             faer: (nv >= crate::cholesky::FAER_MIN_DOF).then(|| crate::cholesky::FaerWork::new(nv)),
         }
     }
+}
+
+/// What ABA's pass 2 leaves at a [`crate::Chain`]'s tip for pass 3 (indexed by body, so that
+/// a `Data` serves any form of its model).
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct ChainWork {
+    /// From the chain parent's coordinates to the hinge point's frame (the tip's axes).
+    pub(crate) x: Transform,
+    /// The chain's velocity-product acceleration at the hinge point (the tip's axes).
+    pub(crate) c: Motion,
+    /// The unit lower factor of `D = L Δ Lᵀ`: `[l₁₀, l₂₀, l₂₁]`.
+    pub(crate) l: [f64; 3],
+    /// `1 / Δ`, elimination order.
+    pub(crate) inv: [f64; 3],
 }

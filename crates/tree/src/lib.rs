@@ -60,5 +60,7 @@ pub use io::{
     FileError, ModelFile, State, StateFile, parse_model, parse_state, read_model, read_state,
 };
 pub use kinematics::{base_pose, forward_kinematics, forward_kinematics_acc, update_transforms};
-pub use model::{BaseKind, Body, BodyInfo, BoxShape, Gyrostat, Hinge, Joint, Model, ModelBuilder};
+pub use model::{
+    BaseKind, Body, BodyInfo, BoxShape, Chain, Gyrostat, Hinge, Joint, Model, ModelBuilder,
+};
 pub use rnea::{bias, rnea};

@@ -394,6 +394,8 @@ impl ModelBuilder {
             carrier_ia: Vec::new(),
             rigid_ia: Vec::new(),
             coord_axis: Vec::new(),
+            chains: Vec::new(),
+            chain_part: Vec::new(),
         };
         model.coord_axis = model
             .joints
@@ -402,6 +404,7 @@ impl ModelBuilder {
             .collect();
         model.rigid_ia = model.bodies.iter().map(|b| b.inertia.into()).collect();
         model.find_gyrostats();
+        model.find_chains();
         Ok(model)
     }
 }
@@ -448,6 +451,88 @@ impl Gyrostat {
     pub fn axial(&self) -> f64 {
         self.axial
     }
+}
+
+/// A chain of `k = 2` or `3` hinges through massless, inertia-less links of zero length (each
+/// link's two hinge points coincide, so every axis passes through one point), ending at a body
+/// with mass or inertia, the *tip* (e.g. the preprint's 3-DOF gimbal: hinges `h1`, `h2`, `h3`
+/// through `link1`, `link2` to `panel1`). Each link has exactly one child (rotors count);
+/// links carry no rotors and the tip is no gyrostat rotor.
+///
+/// [`crate::aba()`] processes such a chain as one multi-axis joint at its tip (a `6 x k`
+/// motion subspace and a `k x k` pivot block), not as `k` bodies: same accelerations to
+/// round-off, and the same singular-hinge errors. The other algorithms keep the links as
+/// bodies; [`Model::without_chains`] gives the plain form.
+///
+/// ```
+/// use satsim_tree::{BaseKind, Body, Hinge, ModelBuilder, spatial::{Mat3, Vec3}};
+/// let model = ModelBuilder::new(BaseKind::Free)
+///     .body(Body::new("bus", 500.0, Mat3::identity() * 40.0))
+///     .body(Body::massless("link"))
+///     .body(Body::new("panel", 20.0, Mat3::identity() * 2.0))
+///     .hinge(Hinge::revolute("h1", "bus", "link", Vec3::z()).at(Vec3::y()))
+///     .hinge(Hinge::revolute("h2", "link", "panel", Vec3::x()).child_at(-Vec3::y()))
+///     .build()?;
+/// let chain = &model.chains()[0];
+/// assert_eq!((chain.tip(), chain.links(), chain.hinges()), (2, &[1][..], 2));
+/// # Ok::<(), satsim_tree::ModelError>(())
+/// ```
+#[derive(Clone, Debug, PartialEq)]
+pub struct Chain {
+    /// The bodies in ABA's elimination order: the tip, its link, ..., the outermost link
+    /// last (the first `k` entries count).
+    pub(crate) order: [usize; 3],
+    /// Number of hinges `k` (2 or 3).
+    pub(crate) k: usize,
+    /// The outermost link's parent.
+    pub(crate) parent: usize,
+    /// `k = 3` without armature: a spherical joint, which passes on only a linear inertia.
+    pub(crate) spherical: bool,
+    /// Whether some link's origin lies off the hinge point (its singular-pivot scale then
+    /// needs the off-point terms).
+    pub(crate) offset_links: bool,
+    /// Per hinge (elimination order): its unit axis in its child's coordinates (`s.ang`).
+    pub(crate) axis: [Vec3; 3],
+    /// Per hinge: its armature.
+    pub(crate) armature: [f64; 3],
+    /// Per hinge: its coordinate's index in `v`.
+    pub(crate) dof: [usize; 3],
+    /// Per link (entry 0 unused): the hinge point in the link's frame (its `child_at`).
+    pub(crate) link_at: [Vec3; 3],
+    /// The hinge point in the tip's frame (its `child_at`).
+    pub(crate) tip_at: Vec3,
+    /// The hinge point in the parent's frame (the outermost link's `at`).
+    pub(crate) point: Vec3,
+}
+
+impl Chain {
+    /// The tip body (with mass or inertia).
+    pub fn tip(&self) -> usize {
+        self.order[0]
+    }
+    /// Number of hinges (2 or 3).
+    pub fn hinges(&self) -> usize {
+        self.k
+    }
+    /// The links, innermost (the tip's parent) first.
+    pub fn links(&self) -> &[usize] {
+        &self.order[1..self.k]
+    }
+    /// The outermost link's parent.
+    pub fn parent(&self) -> usize {
+        self.parent
+    }
+}
+
+/// A body's part in a [`Chain`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum ChainPart {
+    /// Not in a chain (or the chain's parent).
+    None,
+    /// A massless link: ABA processes it at its chain's tip.
+    Link,
+    /// The tip of chain `Model::chains[_]`.
+    Tip(usize),
 }
 
 fn finite3(v: &Vec3, what: impl FnOnce() -> String) -> Result<(), ModelError> {
@@ -706,6 +791,11 @@ pub struct Model {
     /// Per body: its hinge's coordinate axis where the hinge turns about one (the fast path
     /// of `axis.rs`), `None` for the root and for general hinges.
     pub(crate) coord_axis: Vec<Option<CoordAxis>>,
+    /// Chains of hinges through massless zero-length links that ABA processes as one
+    /// multi-axis joint (see [`Chain`]).
+    pub(crate) chains: Vec<Chain>,
+    /// Per body: its part in a [`Chain`], if any.
+    pub(crate) chain_part: Vec<ChainPart>,
 }
 
 impl Model {
@@ -841,6 +931,94 @@ impl Model {
         m.carrier_inertia = m.bodies.iter().map(|b| b.inertia).collect();
         m.carrier_ia = m.carrier_inertia.iter().map(|&i| i.into()).collect();
         m
+    }
+
+    /// Chains of hinges through massless zero-length links that ABA processes as one
+    /// multi-axis joint (see [`Chain`]).
+    pub fn chains(&self) -> &[Chain] {
+        &self.chains
+    }
+
+    /// The same model with every massless link of a [`Chain`] kept as a plain tree body in
+    /// ABA: the reference form against which the multi-axis form is checked.
+    pub fn without_chains(&self) -> Model {
+        let mut m = self.clone();
+        m.chains.clear();
+        m.chain_part = vec![ChainPart::None; m.n_bodies()];
+        m
+    }
+
+    /// Recognises the chains of hinges through massless zero-length links (see [`Chain`]);
+    /// after [`Model::find_gyrostats`] (a gyrostat rotor is no chain's tip).
+    fn find_chains(&mut self) {
+        let n = self.n_bodies();
+        self.chains.clear();
+        self.chain_part = vec![ChainPart::None; n];
+        let mut children = vec![0usize; n];
+        for p in self.parent.iter().flatten() {
+            children[*p] += 1;
+        }
+        let massless = |b: &BodyInfo| b.mass == 0.0 && b.inertia_com == Mat3::zeros();
+        for tip in 1..n {
+            if massless(&self.bodies[tip]) || self.is_gyrostat[tip] {
+                continue;
+            }
+            // Walk up through massless one-child links whose two hinge points coincide.
+            let mut inward = Vec::new(); // the tip's link first
+            let mut child = tip;
+            while let Some(l) = self.parent[child] {
+                let (Some(lj), Some(cj)) = (&self.joints[l], &self.joints[child]) else {
+                    break; // the root is no link
+                };
+                if !massless(&self.bodies[l]) || children[l] != 1 || cj.at != lj.child_at {
+                    break;
+                }
+                inward.push(l);
+                child = l;
+            }
+            // k = 2 or 3 hinges; more through one point are always singular: plain bodies.
+            if inward.is_empty() || inward.len() > 2 {
+                continue;
+            }
+            let k = inward.len() + 1;
+            let mut order = [tip; 3];
+            order[1..k].copy_from_slice(&inward);
+            let outermost = inward[inward.len() - 1];
+            let armature = order[..k]
+                .iter()
+                .any(|&b| self.joints[b].as_ref().expect("joint").armature != 0.0);
+            let offset_links = inward
+                .iter()
+                .any(|&b| self.joints[b].as_ref().expect("joint").child_at != Vec3::zeros());
+            for &l in &inward {
+                self.chain_part[l] = ChainPart::Link;
+            }
+            self.chain_part[tip] = ChainPart::Tip(self.chains.len());
+            let joint = |t: usize| self.joints[order[t]].as_ref().expect("joint");
+            let mut chain = Chain {
+                order,
+                k,
+                parent: self.parent[outermost].expect("a link has a parent"),
+                spherical: k == 3 && !armature,
+                offset_links,
+                axis: [Vec3::zeros(); 3],
+                armature: [0.0; 3],
+                dof: [0; 3],
+                link_at: [Vec3::zeros(); 3],
+                tip_at: joint(0).child_at,
+                point: joint(k - 1).at,
+            };
+            for t in 0..k {
+                let j = joint(t);
+                chain.axis[t] = j.s.ang;
+                chain.armature[t] = j.armature;
+                chain.dof[t] = j.dof;
+                if t > 0 {
+                    chain.link_at[t] = j.child_at;
+                }
+            }
+            self.chains.push(chain);
+        }
     }
 
     /// Recognises the balanced axisymmetric leaf rotors (see [`Gyrostat`]).

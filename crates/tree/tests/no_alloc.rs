@@ -41,7 +41,30 @@ static GLOBAL: Counting = Counting;
 fn per_call_algorithms_do_not_allocate() {
     // One small model (in-house Cholesky), one with gyrostat rotors (ABA's gyrostat form)
     // and one large enough for faer's path.
+    // And a 3-DOF gimbal through massless links with a wheel on its tip (ABA's multi-axis
+    // chain form with a gyrostat).
+    let i = spatial::Mat3::identity();
+    let gimbal = ModelBuilder::new(BaseKind::Free)
+        .body(Body::new("bus", 500.0, i * 40.0))
+        .body(Body::massless("l1"))
+        .body(Body::massless("l2"))
+        .body(Body::new("panel", 20.0, i * 2.0))
+        .body(Body::new(
+            "wheel",
+            1.0,
+            spatial::Mat3::from_diagonal(&spatial::Vec3::new(0.1, 0.1, 0.2)),
+        ))
+        .hinge(Hinge::revolute("h1", "bus", "l1", spatial::Vec3::z()).at(spatial::Vec3::y()))
+        .hinge(Hinge::revolute("h2", "l1", "l2", spatial::Vec3::x()))
+        .hinge(
+            Hinge::revolute("h3", "l2", "panel", spatial::Vec3::y()).child_at(-spatial::Vec3::y()),
+        )
+        .hinge(Hinge::revolute("w", "panel", "wheel", spatial::Vec3::z()))
+        .build()
+        .unwrap();
+    assert_eq!((gimbal.chains().len(), gimbal.gyrostats().len()), (1, 1));
     for model in [
+        gimbal,
         random_tree(12, BaseKind::Free, true, 5),
         random_tree_with_rotors(8, BaseKind::Free, true, 3, 5),
         chain(80, BaseKind::Free),
