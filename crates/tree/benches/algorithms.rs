@@ -61,6 +61,19 @@ fn bench_model(c: &mut Criterion, label: &str, model: &Model) {
             .unwrap();
         })
     });
+    // The same calls made a chain: each call's base rate depends on the previous call's last
+    // acceleration (`+ 0 · q̈`, which the compiler must keep), so no call can start before
+    // the one before it ends, as in a simulation (each RK4 stage needs the last). The
+    // difference to `aba` is the time the processor overlapped independent calls: how much
+    // of a call is its dependency chain (latency) rather than its instructions (throughput).
+    group.bench_function(BenchmarkId::new("aba_dependent", model.nv()), |b| {
+        let mut v = v.clone();
+        let (v0, last) = (v[0], model.nv() - 1);
+        b.iter(|| {
+            let ddq = aba(model, &mut data, black_box(&q), &v, black_box(&tau), None).unwrap();
+            v[0] = v0 + 0.0 * ddq[last];
+        })
+    });
     group.bench_function(BenchmarkId::new("crba_cholesky", model.nv()), |b| {
         b.iter(|| {
             crba_cholesky(
