@@ -384,7 +384,11 @@ impl RigidInertia {
     }
     /// `Xᵀ I X`: this inertia, given in B-coordinates, expressed in A-coordinates
     /// (moves a child's inertia to its parent; Featherstone eq. 2.66 in 3-D blocks).
-    #[inline]
+    ///
+    /// Always inlined: CRBA's inward pass is little else, and when the multi-axis chains
+    /// grew the crate, LLVM stopped inlining it there (+10 % instructions per mass matrix,
+    /// the result returned through memory).
+    #[inline(always)]
     pub fn inv_transform(&self, x: &Transform) -> RigidInertia {
         let (e, r) = (&x.rot, &x.trans);
         let h = e.tr_mul(&self.h);
