@@ -446,6 +446,52 @@ fn resume_skips_the_runs_already_in_runs_csv() {
 }
 
 #[test]
+fn resume_and_merge_refuse_runs_of_another_scene() {
+    let dir = temp_dir("resume_scene");
+    write_campaign(&dir, &CAMPAIGN.replace("runs = 12", "runs = 2"));
+    let run = |args: &[&str]| satsim(&dir, args);
+    ok(&run(&["campaign", "scene.toml", "--out", "a"]));
+    let json = read(&dir.join("a/campaign.json"));
+    assert!(json.contains("\"scene_digest\""), "{json}");
+    // The same scene resumes (nothing left to run).
+    ok(&run(&["campaign", "scene.toml", "--out", "a", "--resume"]));
+    // Another --set value, or a changed model file, draws the same values but is another
+    // scene: refused, naming campaign.json, and nothing in the folder changes.
+    let runs = read(&dir.join("a/runs.csv"));
+    let refused = |o: &Output| {
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert!(
+            err.contains("campaign.json") && err.contains("another scene"),
+            "{err}"
+        );
+    };
+    refused(&run(&[
+        "campaign",
+        "scene.toml",
+        "--out",
+        "a",
+        "--resume",
+        "--set",
+        "duration=2.0",
+    ]));
+    let model = read(&dir.join("satellite.toml"));
+    let heavier = model.replacen("mass = 800.0", "mass = 801.0", 1);
+    assert_ne!(heavier, model, "the model file has a bus of 800 kg");
+    std::fs::write(dir.join("satellite.toml"), &heavier).unwrap();
+    refused(&run(&["campaign", "scene.toml", "--out", "a", "--resume"]));
+    assert_eq!(read(&dir.join("a/runs.csv")), runs);
+    assert_eq!(read(&dir.join("a/campaign.json")), json);
+    // Shards of the two scenes do not merge.
+    ok(&run(&["campaign", "scene.toml", "--out", "b"]));
+    let o = run(&["campaign", "merge", "a", "b", "--out", "m"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("another scene"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
 fn the_shard_comes_from_the_scheduler_environment() {
     let dir = temp_dir("env");
     write_campaign(&dir, &CAMPAIGN.replace("runs = 12", "runs = 5"));

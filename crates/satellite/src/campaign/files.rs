@@ -62,6 +62,9 @@ pub struct Meta {
     pub shard: Shard,
     /// The stat columns drawn as histograms.
     pub histograms: Vec<String>,
+    /// [`super::Campaign::scene_digest`] of the scene the runs were made with (`None` in a
+    /// folder written before it was recorded).
+    pub scene_digest: Option<String>,
 }
 
 impl Meta {
@@ -77,6 +80,7 @@ impl Meta {
             "seed": self.seed,
             "shard": self.shard.to_string(),
             "histograms": self.histograms,
+            "scene_digest": self.scene_digest,
         });
         let path = dir.join(CAMPAIGN_JSON);
         let text = serde_json::to_string_pretty(&v).expect("JSON serialises") + "\n";
@@ -109,6 +113,7 @@ impl Meta {
                         .ok_or_else(|| bad("bad `histograms`"))
                 })
                 .collect::<Result<_, _>>()?,
+            scene_digest: v["scene_digest"].as_str().map(str::to_owned),
         })
     }
 }
@@ -478,6 +483,19 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<Finished, CampaignError> {
         let m = Meta::read(d)?;
         match &meta {
             None => meta = Some(m),
+            Some(first)
+                if first.scene_digest.is_some()
+                    && m.scene_digest.is_some()
+                    && first.scene_digest != m.scene_digest =>
+            {
+                return Err(CampaignError::Other(format!(
+                    "{} was run with another scene than {} (scene digests {} and {}: a changed scene, model file or --set value)",
+                    d.display(),
+                    dirs[0].display(),
+                    m.scene_digest.as_deref().unwrap_or_default(),
+                    first.scene_digest.as_deref().unwrap_or_default()
+                )));
+            }
             Some(first) if first.runs != m.runs || first.seed != m.seed => {
                 return Err(CampaignError::Other(format!(
                     "{} is another campaign ({} runs, seed {}) than {} ({} runs, seed {})",

@@ -147,6 +147,21 @@ fn reword(m: &str) -> String {
 }
 
 impl Campaign {
+    /// A fingerprint of the scene every run starts from (the scene after `--set`, with its
+    /// model file and initial state read in, `[campaign]` left out): 16 hex digits of the
+    /// 64-bit FNV-1a hash of its TOML. Recorded in `campaign.json`, so that `--resume` and
+    /// `merge` refuse runs made from another scene. FNV-1a rather than std's hasher, whose
+    /// output may change between Rust releases.
+    pub fn scene_digest(&self) -> String {
+        let text = toml::to_string(&self.base).expect("a TOML table serialises");
+        let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+        for b in text.bytes() {
+            h ^= u64::from(b);
+            h = h.wrapping_mul(0x0100_0000_01b3);
+        }
+        format!("{h:016x}")
+    }
+
     /// Reads the scene file at `path` and its `[campaign]` table.
     pub fn read(path: impl AsRef<Path>) -> Result<Campaign, FileError> {
         let path = path.as_ref();
@@ -513,7 +528,26 @@ pub fn run_campaign(
         seed: campaign.seed,
         shard: opts.shard,
         histograms: campaign.histograms.clone(),
+        scene_digest: Some(campaign.scene_digest()),
     };
+    // A folder is resumed only with the scene its runs were made with: the drawn values
+    // alone would not notice a changed model file or a different `--set`.
+    let json = dir.join(CAMPAIGN_JSON);
+    if opts.resume && json.exists() {
+        let before = files::Meta::read(dir)?;
+        if before
+            .scene_digest
+            .as_ref()
+            .is_some_and(|d| *d != campaign.scene_digest())
+        {
+            return Err(CampaignError::Other(format!(
+                "{}: its runs were made with another scene (a changed scene, model file or --set value; scene digest {} here, {} now): resume with the same scene and --set, or use another --out",
+                json.display(),
+                before.scene_digest.as_deref().unwrap_or_default(),
+                campaign.scene_digest()
+            )));
+        }
+    }
     meta.write(dir)?;
     let header = campaign.header();
     let (runs, traces, done) = files::open_streams(dir, &header, opts.resume)?;
@@ -576,6 +610,20 @@ mod tests {
 
     fn example() -> PathBuf {
         Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/scenes/deploy_campaign.toml")
+    }
+
+    #[test]
+    fn the_scene_digest_follows_the_scene_not_the_campaign_table() {
+        let text = std::fs::read_to_string(example()).unwrap();
+        let digest = |t: &str| Campaign::parse(t, &example()).unwrap().scene_digest();
+        let d = digest(&text);
+        assert_eq!(d.len(), 16);
+        assert_eq!(d, digest(&text), "deterministic");
+        // More runs or another seed: the same scene (a campaign may be extended).
+        assert_eq!(d, digest(&text.replace("runs = 64", "runs = 65")));
+        assert_eq!(d, digest(&text.replace("seed = 2015", "seed = 7")));
+        // Any change of what a run starts from: another digest.
+        assert_ne!(d, digest(&text.replace("duration = ", "duration = 1")));
     }
 
     #[test]
