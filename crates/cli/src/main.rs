@@ -15,7 +15,7 @@ mod commands;
 
 use clap::Parser;
 use commands::run::{EXIT_RUN_FAILED, Failure};
-use commands::{Cli, Command, EXIT_BAD_INPUT};
+use commands::{Cli, CliError, Command, EXIT_BAD_INPUT};
 use std::io::Write;
 use std::panic::AssertUnwindSafe;
 use std::process::ExitCode;
@@ -39,7 +39,10 @@ fn main() -> ExitCode {
     let result = std::panic::catch_unwind(AssertUnwindSafe(|| match cli.command {
         None => commands::run::run_scene(&commands::run::default_scene(), None),
         Some(Command::Run(args)) => commands::run::command(&args),
-        Some(other) => commands::dispatch(other).map_err(Failure::BadInput),
+        Some(other) => commands::dispatch(other).map_err(|e| match e {
+            CliError::Interrupted(m) => Failure::Interrupted(m),
+            e => Failure::BadInput(e),
+        }),
     }));
     match result {
         Ok(Ok(output)) => {

@@ -5,7 +5,8 @@
 mod common;
 use common::root;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
 
 const SCHEDULER_VARS: [&str; 6] = [
     "SLURM_ARRAY_TASK_ID",
@@ -488,6 +489,71 @@ fn resume_and_merge_refuse_runs_of_another_scene() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(2), "{err}");
     assert!(err.contains("another scene"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn ctrl_c_keeps_the_finished_runs_and_resume_completes_them() {
+    let dir = temp_dir("sigint");
+    let p = write_campaign(&dir, &CAMPAIGN.replace("runs = 12", "runs = 400"));
+    // Runs long enough to be interrupted part-way (400 of them would take minutes).
+    std::fs::write(&p, read(&p).replace("duration = 3.0", "duration = 60.0")).unwrap();
+    let child = Command::new(env!("CARGO_BIN_EXE_satsim"))
+        .args(["campaign", "scene.toml", "--out", "part", "--threads", "1"])
+        .current_dir(&dir)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let runs_csv = dir.join("part/runs.csv");
+    let start = Instant::now();
+    while std::fs::read_to_string(&runs_csv).map_or(0, |t| t.lines().count()) < 3 {
+        assert!(
+            start.elapsed() < Duration::from_secs(120),
+            "no runs written"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let kill = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(kill.success());
+    let o = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(130), "{err}");
+    assert!(o.stdout.is_empty());
+    // Every finished run is in runs.csv as a complete row; nothing was summarised.
+    let text = read(&runs_csv);
+    assert!(text.ends_with('\n'));
+    let held = text.lines().count() - 1;
+    assert!((2..400).contains(&held), "{held} runs held");
+    let expected = format!(
+        "interrupted: {held} runs in {}, {} not run; continue with --resume",
+        Path::new("part").join("runs.csv").display(),
+        400 - held
+    );
+    assert!(err.lines().any(|l| l == expected), "{err}");
+    assert!(!dir.join("part/summary.json").exists());
+    // Resumed as a campaign a little longer than what it holds, it completes, equal to the
+    // same campaign run without interruption.
+    let last = text
+        .lines()
+        .skip(1)
+        .map(|l| fields(l)[0].parse::<u64>().unwrap())
+        .max()
+        .unwrap();
+    let runs = format!("campaign.runs={}", last + 3);
+    let args = |out: &'static str, resume: bool| {
+        let mut a = vec!["campaign", "scene.toml", "--out", out, "--set", &runs];
+        if resume {
+            a.push("--resume");
+        }
+        a
+    };
+    ok(&satsim(&dir, &args("part", true)));
+    ok(&satsim(&dir, &args("fresh", false)));
+    assert_eq!(read(&runs_csv), read(&dir.join("fresh/runs.csv")));
     let _ = std::fs::remove_dir_all(&dir);
 }
 

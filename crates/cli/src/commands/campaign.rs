@@ -78,6 +78,7 @@ fn parse_shard(s: &str) -> Result<Shard, String> {
 fn from(e: CampaignError) -> CliError {
     match e {
         CampaignError::File(f) => CliError::File(f),
+        e @ CampaignError::Interrupted { .. } => CliError::Interrupted(e.to_string()),
         other => CliError::Other(other.to_string()),
     }
 }
@@ -111,6 +112,9 @@ pub fn run(args: &Args) -> Result<Output, CliError> {
     });
     let bar = Bar::new();
     let started = Instant::now();
+    // Ctrl-C: no new run starts, the running ones finish and are written, exit 130 (a
+    // second Ctrl-C within 2 s is ignored, a later one ends the process at once).
+    super::run::interrupt::install();
     let report = campaign::run_campaign(
         &c,
         &dir,
@@ -120,9 +124,9 @@ pub fn run(args: &Args) -> Result<Output, CliError> {
             resume: args.resume,
         },
         &bar,
-    )
-    .map_err(from)?;
+    );
     bar.bar.finish_and_clear();
+    let report = report.map_err(from)?;
     let secs = started.elapsed().as_secs_f64();
 
     let mut s = String::new();
@@ -223,5 +227,8 @@ impl Progress for Bar {
             self.bar.set_message(format!("{n} failed"));
         }
         self.bar.inc(1);
+    }
+    fn cancelled(&self) -> bool {
+        super::run::interrupt::requested()
     }
 }

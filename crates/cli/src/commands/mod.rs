@@ -90,7 +90,8 @@ pub fn dispatch(command: Command) -> Result<Output, CliError> {
     }
 }
 
-/// Why a command failed. Every variant exits with status 2.
+/// Why a command failed. Every variant but [`CliError::Interrupted`] (130) exits with
+/// status 2.
 #[derive(Debug)]
 pub enum CliError {
     /// Bad command line, found after parsing (a value clap cannot check alone): clap's
@@ -100,6 +101,8 @@ pub enum CliError {
     File(FileError),
     /// Anything else (a singular configuration, an unwritable output…).
     Other(String),
+    /// Stopped by Ctrl-C (exit status 130, as `run`'s); the message says what was kept.
+    Interrupted(String),
 }
 
 impl From<FileError> for CliError {
@@ -114,6 +117,7 @@ impl fmt::Display for CliError {
             CliError::Usage(e) => write!(f, "{}", e.render().to_string().trim_end()),
             CliError::File(e) => write!(f, "error: {e}"),
             CliError::Other(m) => write!(f, "error: {m}"),
+            CliError::Interrupted(m) => write!(f, "{m}"),
         }
     }
 }

@@ -106,12 +106,13 @@ pub fn default_scene() -> PathBuf {
     ))
 }
 
-/// For the dispatcher: every failure as a [`CliError`] (exit status 2). The binary calls
-/// [`command`] directly to tell run failures (status 1) apart.
+/// For the dispatcher: every failure as a [`CliError`] (exit status 2, 130 for Ctrl-C). The
+/// binary calls [`command`] directly to tell run failures (status 1) apart.
 pub fn run(args: &Args) -> Result<Output, CliError> {
     command(args).map_err(|f| match f {
         Failure::BadInput(e) => e,
-        Failure::Run(m) | Failure::Interrupted(m) => CliError::Other(m),
+        Failure::Run(m) => CliError::Other(m),
+        Failure::Interrupted(m) => CliError::Interrupted(m),
     })
 }
 
@@ -404,7 +405,7 @@ impl std::fmt::Display for Stop {
 /// [`interrupt::GRACE`] of it are ignored, so that a burst (a process group signalled twice, a
 /// double key press) cannot lose what the first one is finishing; a SIGINT after the grace
 /// period ends the process at once with status 130.
-mod interrupt {
+pub(crate) mod interrupt {
     use std::sync::atomic::{AtomicBool, Ordering};
     use std::sync::{Mutex, OnceLock};
     use std::time::{Duration, Instant};

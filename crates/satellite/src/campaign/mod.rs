@@ -45,6 +45,7 @@ use std::collections::HashSet;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
+use std::sync::atomic::{AtomicU64, Ordering};
 use thiserror::Error;
 use toml::{Spanned, Table};
 
@@ -66,6 +67,20 @@ pub enum CampaignError {
     /// Anything else (a thread pool that cannot start, shards that do not belong together…).
     #[error("{0}")]
     Other(String),
+    /// Stopped on request ([`Progress::cancelled`]): `runs.csv` holds every finished run,
+    /// in completion order, and `--resume` continues the campaign.
+    #[error(
+        "interrupted: {held} runs in {}, {left} not run; continue with --resume",
+        runs_csv.display()
+    )]
+    Interrupted {
+        /// The folder's `runs.csv`.
+        runs_csv: PathBuf,
+        /// Runs it holds.
+        held: u64,
+        /// Runs of the campaign (or shard) not run.
+        left: u64,
+    },
 }
 
 impl CampaignError {
@@ -488,6 +503,11 @@ pub trait Progress: Sync {
     fn start(&self, _todo: u64, _skipped: u64) {}
     /// One run finished.
     fn finished(&self, _ok: bool) {}
+    /// Whether to stop: no run starts after this turns true (those running finish and are
+    /// written), and the campaign ends with [`CampaignError::Interrupted`].
+    fn cancelled(&self) -> bool {
+        false
+    }
 }
 
 /// No progress report.
@@ -579,10 +599,14 @@ pub fn run_campaign(
         .build()
         .map_err(|e| CampaignError::Other(format!("cannot start the thread pool: {e}")))?;
     let sinks = Mutex::new((runs, traces));
+    let ran = AtomicU64::new(0);
     pool.install(|| {
         todo.par_iter()
             .with_max_len(1)
             .try_for_each(|&k| -> Result<(), CampaignError> {
+                if progress.cancelled() {
+                    return Ok(());
+                }
                 let r = campaign.run_one(k);
                 let row = campaign.csv_row(&r);
                 let lines = campaign.trace_lines(&r);
@@ -592,13 +616,24 @@ pub fn run_campaign(
                 s.0.append(&row)?;
                 drop(s);
                 progress.finished(r.outcome.is_ok());
+                ran.fetch_add(1, Ordering::Relaxed);
                 Ok(())
             })
     })?;
     drop(sinks);
+    let ran = ran.into_inner();
+    if ran < todo.len() as u64 {
+        // Stopped: runs.csv stays as streamed (complete rows, completion order), not
+        // sorted or summarised, so that --resume takes it up.
+        return Err(CampaignError::Interrupted {
+            runs_csv: dir.join(RUNS_CSV),
+            held: done.len() as u64 + ran,
+            left: todo.len() as u64 - ran,
+        });
+    }
     let finished = finish(dir, &meta)?;
     Ok(Report {
-        ran: todo.len() as u64,
+        ran,
         skipped: done.len() as u64,
         finished,
     })
