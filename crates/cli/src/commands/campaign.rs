@@ -6,7 +6,8 @@
 //! job array, Kubernetes indexed Job with `--shards N`, AWS Batch array job); standard error
 //! says which was used. A progress bar (runs, runs per second, time left, failures) is drawn
 //! on standard error when it is a terminal. Exit status 0 when the campaign could run, even
-//! with failed runs; 2 for bad input.
+//! with failed runs; 2 for bad input; 130 when stopped by Ctrl-C (`runs.csv` keeps every
+//! finished run, `--resume` continues).
 
 use super::{CliError, Output, at_least_one, stem, usage};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
