@@ -5,7 +5,9 @@ use crate::data::{ChainWork, Data};
 use crate::error::DynamicsError;
 use crate::kinematics::{base_motion, check_len, update_transforms};
 use crate::model::{BaseKind, Chain, ChainPart, Model};
-use crate::spatial::{ArticulatedInertia, Force, Mat3, Motion, Transform, Vec3, skew};
+use crate::spatial::{
+    ArticulatedInertia, Force, Mat3, Motion, Transform, Vec3, add_blocks, cross_columns, skew,
+};
 use nalgebra::DVector;
 
 /// Pivots `Dᵢ` below this fraction of the articulated inertia's scale are singular.
@@ -619,18 +621,7 @@ fn add_linear_inv_transform(
     // [1 [r]×; 0 1] [0 0; 0 C] [1 0; −[r]× 1] = [−[r]×C[r]× [r]×C; −C[r]× C].
     let nb = cross_columns(&x.trans, &c);
     let na = cross_columns(&x.trans, &nb.transpose()).transpose();
-    match start {
-        Some(s) => {
-            out.a = s.a + na;
-            out.b = s.b + nb;
-            out.c = s.c + c;
-        }
-        None => {
-            out.a += na;
-            out.b += nb;
-            out.c += c;
-        }
-    }
+    add_blocks(&na, &nb, &c, out, start);
 }
 
 /// The tree form's singular-pivot scale of a chain's link whose origin lies at `d` from the
@@ -690,16 +681,6 @@ fn chain_outward<const K: usize>(model: &Model, data: &mut Data, chain: &Chain) 
             + s * qdd[t];
         parent = i;
     }
-}
-
-/// `[a]× M`, column by column.
-#[inline]
-fn cross_columns(a: &Vec3, m: &Mat3) -> Mat3 {
-    Mat3::from_columns(&[
-        a.cross(&m.column(0)),
-        a.cross(&m.column(1)),
-        a.cross(&m.column(2)),
-    ])
 }
 
 /// The hinges reached from body `i` downwards through massless bodies: the other axes of a

@@ -31,7 +31,7 @@ pub fn skew(a: &Vec3) -> Mat3 {
 
 /// `[a]× M`, column by column: `a × mⱼ` (cheaper than the product with the matrix `[a]×`).
 #[inline]
-fn cross_columns(a: &Vec3, m: &Mat3) -> Mat3 {
+pub(crate) fn cross_columns(a: &Vec3, m: &Mat3) -> Mat3 {
     Mat3::from_columns(&[
         a.cross(&m.column(0)),
         a.cross(&m.column(1)),
@@ -532,15 +532,28 @@ pub(crate) fn add_translated(
             a + cross_columns(r, &b.transpose()) + cross_columns(r, &nb.transpose()).transpose();
         (na, nb)
     };
+    add_blocks(&na, &nb, c, out, start);
+}
+
+/// `out += [A B; Bᵀ C]` (`out = start + [A B; Bᵀ C]` with `Some(start)`): the last step of
+/// every inertia transform that accumulates into a parent.
+#[inline]
+pub(crate) fn add_blocks(
+    a: &Mat3,
+    b: &Mat3,
+    c: &Mat3,
+    out: &mut ArticulatedInertia,
+    start: Option<&ArticulatedInertia>,
+) {
     match start {
         Some(s) => {
-            out.a = s.a + na;
-            out.b = s.b + nb;
+            out.a = s.a + a;
+            out.b = s.b + b;
             out.c = s.c + c;
         }
         None => {
-            out.a += na;
-            out.b += nb;
+            out.a += a;
+            out.b += b;
             out.c += c;
         }
     }
