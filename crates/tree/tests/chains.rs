@@ -5,21 +5,11 @@
 
 use nalgebra::DVector;
 use satsim_tree::spatial::{Force, Vec3};
+mod common;
+
+use common::satellite;
 use satsim_tree::*;
 use std::f64::consts::FRAC_PI_2;
-use std::path::Path;
-
-fn satellite(armature: f64) -> Model {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/satellite.toml");
-    let text = std::fs::read_to_string(&path).unwrap();
-    let (_, mut file) = parse_model(&text, &path).unwrap();
-    if armature > 0.0 {
-        for h in file.hinge.iter_mut().take(3) {
-            h.get_mut().armature = Some(toml::Spanned::new(0..0, armature));
-        }
-    }
-    file.build().unwrap()
-}
 
 fn state(model: &Model, middle: f64) -> (Vec<f64>, Vec<f64>, Vec<f64>, Vec<Force>) {
     let mut q = model.neutral();
