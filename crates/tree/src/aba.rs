@@ -705,7 +705,7 @@ fn massless_hinges_below(model: &Model, i: usize) -> Vec<String> {
 mod tests {
     use super::*;
     use crate::model::{Body, Hinge, ModelBuilder};
-    use crate::samples::{SplitMix, random_tree_with_rotors};
+    use crate::samples::{SplitMix, random_q, random_tree_with_rotors};
     use crate::spatial::Vec3;
     use nalgebra::Quaternion;
 
@@ -860,24 +860,7 @@ mod tests {
         model: &Model,
         rng: &mut SplitMix,
     ) -> (Vec<f64>, Vec<f64>, Vec<f64>, Vec<Force>) {
-        let mut q = model.neutral();
-        let nb = model.base_nq();
-        if model.base == BaseKind::Free {
-            let a = Quaternion::new(
-                rng.range(-1.0, 1.0),
-                rng.range(-1.0, 1.0),
-                rng.range(-1.0, 1.0),
-                rng.range(-1.0, 1.0),
-            )
-            .normalize();
-            q[..4].copy_from_slice(&[a.w, a.i, a.j, a.k]);
-            for x in &mut q[4..7] {
-                *x = rng.range(-3.0, 3.0);
-            }
-        }
-        for x in &mut q[nb..] {
-            *x = rng.range(-3.0, 3.0);
-        }
+        let q = random_q(model, rng, 3.0);
         let v = (0..model.nv()).map(|_| rng.range(-2.0, 2.0)).collect();
         let tau = (0..model.nv()).map(|_| rng.range(-2.0, 2.0)).collect();
         let fext = (0..model.n_bodies())

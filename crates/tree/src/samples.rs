@@ -93,6 +93,31 @@ impl SplitMix {
     }
 }
 
+/// A random configuration `q` of `model`: a random unit attitude `[w, x, y, z]` and a
+/// position with entries in `[-position, position)` for a free base, hinge angles in
+/// `[-3, 3)` rad.
+pub fn random_q(model: &Model, rng: &mut SplitMix, position: f64) -> Vec<f64> {
+    let mut q = model.neutral();
+    if model.base() == BaseKind::Free {
+        let a = Quaternion::new(
+            rng.range(-1.0, 1.0),
+            rng.range(-1.0, 1.0),
+            rng.range(-1.0, 1.0),
+            rng.range(-1.0, 1.0),
+        )
+        .normalize();
+        q[..4].copy_from_slice(&[a.w, a.i, a.j, a.k]);
+        for x in &mut q[4..7] {
+            *x = rng.range(-position, position);
+        }
+    }
+    let nb = model.base_nq();
+    for x in &mut q[nb..] {
+        *x = rng.range(-3.0, 3.0);
+    }
+    q
+}
+
 /// A random physical inertia about the centre of mass: `R diag(p) Rᵀ` with principal moments
 /// obeying the triangle inequality.
 pub fn random_inertia(rng: &mut SplitMix, scale: f64) -> Mat3 {

@@ -3,30 +3,13 @@
 //! trees with massless link chains, rotors with and without mass, external forces on every
 //! body (rotors included), free and fixed roots.
 
-use nalgebra::{DVector, Quaternion};
-use satsim_tree::samples::{SplitMix, random_tree_with_rotors};
+use nalgebra::DVector;
+use satsim_tree::samples::{SplitMix, random_q, random_tree_with_rotors};
 use satsim_tree::spatial::{Force, Mat3, Vec3};
 use satsim_tree::*;
 
 fn state(model: &Model, rng: &mut SplitMix) -> (Vec<f64>, Vec<f64>, Vec<f64>, Vec<Force>) {
-    let mut q = model.neutral();
-    if model.base() == BaseKind::Free {
-        let a = Quaternion::new(
-            rng.range(-1.0, 1.0),
-            rng.range(-1.0, 1.0),
-            rng.range(-1.0, 1.0),
-            rng.range(-1.0, 1.0),
-        )
-        .normalize();
-        q[..4].copy_from_slice(&[a.w, a.i, a.j, a.k]);
-        for x in &mut q[4..7] {
-            *x = rng.range(-5.0, 5.0);
-        }
-    }
-    let nb = model.base_nq();
-    for x in &mut q[nb..] {
-        *x = rng.range(-3.0, 3.0);
-    }
+    let q = random_q(model, rng, 5.0);
     // Rotor rates up to 100 rad/s: the gyroscopic terms dominate.
     let v = (0..model.nv())
         .map(|k| {
