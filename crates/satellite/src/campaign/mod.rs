@@ -542,29 +542,26 @@ pub fn run_campaign(
     progress: &dyn Progress,
 ) -> Result<Report, CampaignError> {
     std::fs::create_dir_all(dir).map_err(|e| CampaignError::io(dir, e))?;
+    let digest = campaign.scene_digest();
     let meta = files::Meta {
         scene: campaign.path.display().to_string(),
         runs: campaign.runs,
         seed: campaign.seed,
         shard: opts.shard,
         histograms: campaign.histograms.clone(),
-        scene_digest: Some(campaign.scene_digest()),
+        scene_digest: Some(digest.clone()),
     };
     // A folder is resumed only with the scene its runs were made with: the drawn values
     // alone would not notice a changed model file or a different `--set`.
     let json = dir.join(CAMPAIGN_JSON);
     if opts.resume && json.exists() {
         let before = files::Meta::read(dir)?;
-        if before
-            .scene_digest
-            .as_ref()
-            .is_some_and(|d| *d != campaign.scene_digest())
-        {
+        if before.scene_digest.as_ref().is_some_and(|d| *d != digest) {
             return Err(CampaignError::Other(format!(
                 "{}: its runs were made with another scene (a changed scene, model file or --set value; scene digest {} here, {} now): resume with the same scene and --set, or use another --out",
                 json.display(),
                 before.scene_digest.as_deref().unwrap_or_default(),
-                campaign.scene_digest()
+                digest
             )));
         }
     }
