@@ -174,9 +174,15 @@ pub(crate) fn scaled_norm(
     if n.is_finite() { n } else { f64::INFINITY }
 }
 
+/// Whether no entry is infinite or NaN (all exponent bits set). Without an early exit the
+/// test is an OR over the bit patterns, which the compiler vectorises: it runs after every
+/// right-hand side, and `iter().all(is_finite)` cost 4 instructions per entry.
 #[inline]
 pub(crate) fn all_finite(x: &[f64]) -> bool {
-    x.iter().all(|v| v.is_finite())
+    const EXPONENT: u64 = 0x7ff0_0000_0000_0000;
+    x.iter().fold(0u64, |any, v| {
+        any | u64::from(v.to_bits() & EXPONENT == EXPONENT)
+    }) == 0
 }
 
 /// Fails when `h` is too small to change `t`.
@@ -324,5 +330,35 @@ pub(crate) fn combine(out: &mut [f64], x: &[f64], h: f64, coeffs: &[f64], ks: &[
     lincomb(out, h, coeffs, ks);
     for (o, xi) in out.iter_mut().zip(x) {
         *o += xi;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::all_finite;
+
+    #[test]
+    fn all_finite_refuses_every_infinity_and_nan_and_nothing_else() {
+        let finite = [
+            0.0,
+            -0.0,
+            1.0,
+            -2.5,
+            f64::MAX,
+            f64::MIN,
+            f64::MIN_POSITIVE,
+            5e-324,
+        ];
+        assert!(all_finite(&finite));
+        assert!(all_finite(&[]));
+        for bad in [f64::INFINITY, f64::NEG_INFINITY, f64::NAN, -f64::NAN] {
+            for at in 0..finite.len() {
+                let mut x = finite;
+                x[at] = bad;
+                assert!(!all_finite(&x), "{bad} at {at}");
+            }
+        }
+        // A NaN with a payload (any mantissa bits) is still a NaN.
+        assert!(!all_finite(&[1.0, f64::from_bits(0x7ff0_0000_0000_0001)]));
     }
 }

@@ -72,29 +72,22 @@ impl Stepper for Rk4 {
         ctx.check_budget(self.t)?;
         let h_fixed = ctx.fixed.expect("validated: rk4 has a fixed step");
         let (h, land) = clamp_to_limit(self.t, h_fixed, limit);
-        let (t, n) = (self.t, self.x.len());
+        let t = self.t;
         if !self.f_valid {
             ctx.eval(sys, t, &self.x, &mut self.f)?;
         }
-        let x = &self.x;
-        for i in 0..n {
-            self.tmp[i] = x[i] + 0.5 * h * self.f[i];
-        }
+        axpy(&mut self.tmp, &self.x, 0.5 * h, &self.f);
         ctx.eval(sys, t + 0.5 * h, &self.tmp, &mut self.k2)?;
-        for i in 0..n {
-            self.tmp[i] = x[i] + 0.5 * h * self.k2[i];
-        }
+        axpy(&mut self.tmp, &self.x, 0.5 * h, &self.k2);
         ctx.eval(sys, t + 0.5 * h, &self.tmp, &mut self.k3)?;
-        for i in 0..n {
-            self.tmp[i] = x[i] + h * self.k3[i];
-        }
+        axpy(&mut self.tmp, &self.x, h, &self.k3);
         ctx.eval(sys, t + h, &self.tmp, &mut self.k4)?;
 
         std::mem::swap(&mut self.x, &mut self.x_old);
         std::mem::swap(&mut self.f, &mut self.f_old);
-        for i in 0..n {
-            self.x[i] = self.x_old[i]
-                + h / 6.0 * (self.f_old[i] + 2.0 * (self.k2[i] + self.k3[i]) + self.k4[i]);
+        let slopes = self.f_old.iter().zip(&self.k2).zip(&self.k3).zip(&self.k4);
+        for ((x, x_old), (((f, k2), k3), k4)) in self.x.iter_mut().zip(&self.x_old).zip(slopes) {
+            *x = x_old + h / 6.0 * (f + 2.0 * (k2 + k3) + k4);
         }
         if !all_finite(&self.x) {
             return Err(IntegrateError::NonFinite { t: t + h });
@@ -155,6 +148,14 @@ impl Stepper for Rk4 {
 }
 
 /// Cubic Hermite interpolation between `(t0, x0, f0)` and `(t1, x1, f1)`.
+/// `out = x + a k` (zipped: no bounds checks, so that the loop vectorises).
+#[inline]
+fn axpy(out: &mut [f64], x: &[f64], a: f64, k: &[f64]) {
+    for ((o, x), k) in out.iter_mut().zip(x).zip(k) {
+        *o = x + a * k;
+    }
+}
+
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn hermite(
     t0: f64,

@@ -42,9 +42,20 @@ impl Effect for HingeSprings {
         _own: &[f64],
         _own_dot: &mut [f64],
     ) -> Result<(), SystemError> {
-        for k in 0..self.stiffness.len() {
-            forces.hinge_torque[k] += -self.damping[k] * ctx.rates[k]
-                - self.stiffness[k] * (ctx.angles[k] - self.reference[k]);
+        // Zipped rather than indexed: no bounds check per hinge (the lengths are the
+        // model's hinge count, checked when the scene was read).
+        let hinges = forces
+            .hinge_torque
+            .iter_mut()
+            .zip(ctx.angles)
+            .zip(ctx.rates);
+        let gains = self
+            .stiffness
+            .iter()
+            .zip(&self.damping)
+            .zip(&self.reference);
+        for (((tau, phi), psi), ((lambda, delta), phi_ref)) in hinges.zip(gains) {
+            *tau += -delta * psi - lambda * (phi - phi_ref);
         }
         Ok(())
     }

@@ -217,13 +217,27 @@ impl Effect for ReactionWheels {
         own: &[f64],
         _own_dot: &mut [f64],
     ) -> Result<(), SystemError> {
-        for (j, w) in self.wheels.iter().enumerate() {
-            let omega = own[j];
-            let tau = self.command(j, forces, omega);
-            self.motor[j] = tau;
-            let h = ctx.rotor_hinge(j);
-            if !ctx.locked[h] {
-                forces.hinge_torque[h] += tau - w.friction(omega, self.dir[j]);
+        // Zipped rather than indexed: no bounds checks per wheel.
+        let n = ctx.rotor_hinge(0);
+        let rotors = forces.hinge_torque[n..].iter_mut().zip(&ctx.locked[n..]);
+        let commands = &forces.rotor_command;
+        let wheels = self
+            .wheels
+            .iter()
+            .zip(own)
+            .zip(&mut self.motor)
+            .zip(&self.dir);
+        for (j, ((((w, &omega), motor), &dir), (torque, &locked))) in wheels.zip(rotors).enumerate()
+        {
+            let c = if self.commanded {
+                commands[j]
+            } else {
+                w.torque
+            };
+            let tau = w.limited(c, omega);
+            *motor = tau;
+            if !locked {
+                *torque += tau - w.friction(omega, dir);
             }
         }
         Ok(())

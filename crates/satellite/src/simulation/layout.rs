@@ -2,7 +2,10 @@
 
 use std::ops::Range;
 
-/// Where each part of the state lives in `x`.
+/// Where each part of the state lives in `x`: `[attitude (4), angles (n), ω (3), v (3),
+/// rates (n), the effects' own states]` for a free base, `[angles, rates, ...]` for a fixed
+/// one. The right-hand side relies on this order: `[ω; v; rates]` is the tree's velocity
+/// vector as it stands, and so is the head of its derivative.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct StateLayout {
     /// Free-floating root.
@@ -61,5 +64,23 @@ impl StateLayout {
             .iter()
             .find(|(n, r)| n == name && !r.is_empty())
             .map(|(_, r)| r.clone())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::StateLayout;
+
+    #[test]
+    fn the_velocity_vector_is_contiguous_after_the_attitude_and_angles() {
+        let l = StateLayout::new(true, 5, &[("reaction_wheels".into(), 3)]);
+        assert_eq!((l.attitude.clone(), l.angles.clone()), (0..4, 4..9));
+        assert_eq!(
+            (l.omega.end, l.velocity.end),
+            (l.velocity.start, l.rates.start)
+        );
+        assert_eq!(l.rates.end, l.effect("reaction_wheels").unwrap().start);
+        let f = StateLayout::new(false, 2, &[]);
+        assert_eq!((f.angles, f.rates, f.len), (0..2, 2..4, 4));
     }
 }

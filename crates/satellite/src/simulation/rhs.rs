@@ -17,11 +17,11 @@ impl Simulation {
         let l = &self.layout;
         let n = self.n_user;
         if l.free {
-            self.q[..4].copy_from_slice(&x[l.attitude.clone()]);
-            self.q[7..7 + n].copy_from_slice(&x[l.angles.clone()]);
-            self.v[..3].copy_from_slice(&x[l.omega.clone()]);
-            self.v[3..6].copy_from_slice(&x[l.velocity.clone()]);
-            self.v[6..6 + n].copy_from_slice(&x[l.rates.clone()]);
+            // x = [attitude, angles, ω, v, rates, ...]: `[ω; v; rates]` is `v`'s head as
+            // it stands (fixed-size copies where the length is known: no `memcpy` calls).
+            self.q[..4].copy_from_slice(&x[..4]);
+            self.q[7..7 + n].copy_from_slice(&x[4..4 + n]);
+            self.v[..6 + n].copy_from_slice(&x[l.omega.start..l.omega.start + 6 + n]);
         } else {
             self.q[..n].copy_from_slice(&x[l.angles.clone()]);
             self.v[..n].copy_from_slice(&x[l.rates.clone()]);

@@ -89,23 +89,24 @@ impl System for Simulation {
         .map_err(|e| SystemError::new(e.to_string()))?;
         let l = &self.layout;
         let n = self.n_user;
+        let ddq = ddq.as_slice();
         if l.free {
-            let (w, a) = (&x[l.omega.clone()], &x[l.attitude.clone()]);
+            // x = [attitude, angles, ω, v, rates, ...] (`StateLayout`).
+            let (a, w) = (&x[..4], &x[l.omega.start..l.omega.start + 3]);
             // q̇ = ½ q ⊗ (0, ω)
             let qd = crate::effects::quat_mul(&[a[0], a[1], a[2], a[3]], &[0.0, w[0], w[1], w[2]]);
-            for k in 0..4 {
-                dx[l.attitude.start + k] = 0.5 * qd[k];
+            for (d, q) in dx[..4].iter_mut().zip(qd) {
+                *d = 0.5 * q;
             }
-            for k in 0..3 {
-                dx[l.omega.start + k] = ddq[k];
-                dx[l.velocity.start + k] = ddq[3 + k];
-            }
+            // [ω̇; v̇; rates'] is `ddq`'s head, in place.
+            dx[l.omega.start..l.omega.start + 6 + n].copy_from_slice(&ddq[..6 + n]);
+        } else {
+            dx[l.rates.clone()].copy_from_slice(&ddq[..n]);
         }
         dx[l.angles.clone()].copy_from_slice(&x[l.rates.clone()]);
-        dx[l.rates.clone()].copy_from_slice(&ddq.as_slice()[nb..nb + n]);
         if let Some(i) = self.rotor_effect {
             let r = self.own[i].clone();
-            dx[r].copy_from_slice(&ddq.as_slice()[nb + n..nb + n + self.n_rotors]);
+            dx[r].copy_from_slice(&ddq[nb + n..nb + n + self.n_rotors]);
         }
         Ok(())
     }
