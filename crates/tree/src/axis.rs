@@ -47,7 +47,10 @@ impl CoordAxis {
     /// `Xup` at hinge angle `phi`: `E = Rot(sign e_k, φ)ᵀ`, `r = at − Eᵀ child_at`.
     #[inline]
     pub(crate) fn transform(&self, phi: f64, at: &Vec3, child_at: &Vec3) -> Transform {
-        let sc = (self.sign * phi).sin_cos();
+        // libm's (musl's) sincos, < 1 ulp: inlined, about 90 instructions against 130 for
+        // the C library's through `f64::sin_cos` (callgrind), which also saves and restores
+        // the rounding mode on every call. Five per right-hand side on the satellite.
+        let sc = libm::sincos(self.sign * phi);
         // The axes as constants: no index checks, straight-line code.
         match self.k {
             0 => transform::<0, 1, 2>(sc, at, child_at),

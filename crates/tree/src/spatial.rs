@@ -608,7 +608,7 @@ impl AddAssign for ArticulatedInertia {
 #[inline]
 pub fn rotation_about(axis: &Vec3, angle: f64) -> Mat3 {
     // 1 + s [a]× + (1 − c) [a]×², with [a]×² = a aᵀ − 1 for a unit axis.
-    let (s, c) = angle.sin_cos();
+    let (s, c) = libm::sincos(angle); // as the coordinate-axis transforms (`axis.rs`)
     let (a, t) = (axis * s, axis * (1.0 - c));
     let [x, y, z] = [axis.x, axis.y, axis.z];
     Mat3::new(
