@@ -156,6 +156,18 @@ impl CoordAxis {
         m.row(self.k).transpose() * self.sign
     }
 
+    /// `a · v` for this hinge's axis `a = sign e_k`: a signed entry of `v`.
+    #[inline]
+    pub(crate) fn dot_axis(&self, v: &Vec3) -> f64 {
+        self.sign * v[self.k]
+    }
+
+    /// The axis `sign e_k` times `x`.
+    #[inline]
+    pub(crate) fn scaled_axis(&self, x: f64) -> Vec3 {
+        Vec3::ith(self.k, self.sign * x)
+    }
+
     /// `Sᵀ f` for `S = [sign e_k; l]`.
     #[inline]
     pub(crate) fn dot_subspace(&self, l: &Vec3, f: &Force) -> f64 {
