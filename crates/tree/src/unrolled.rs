@@ -347,15 +347,15 @@ impl UnrolledAba {
             self.check(d, &ia, &s.origin, 3 + j)?;
             let inv_d = 1.0 / d;
             let u = tau[s.dof] - a.dot_axis(&pa.ang);
-            ia.sub_outer(&u_col, inv_d);
-            let pa_j = pa + ia.mul_motion(&cs[j]) + u_col * (u * inv_d);
             let (parent_start, parent_bias) = if j > 0 {
                 (&serial[j - 1].start, pas[j - 1])
             } else {
                 (&self.tip_start, pa_tip)
             };
+            // The parent's inertia: its start plus Xᵀ (IA − U Uᵀ / D) X.
             let mut parent = ArticulatedInertia::default();
-            a.add_inv_transform(&ia, &xs[j], &mut parent, Some(parent_start));
+            let iac = a.project_at_point(&ia, inv_d, &cs[j], &xs[j], &mut parent, parent_start);
+            let pa_j = pa + iac + u_col * (u * inv_d);
             pa = parent_bias + a.inv_apply_force(&xs[j], &pa_j);
             ia = parent;
             (us[j], uu[j], inv_ds[j]) = (u_col, u, inv_d);
