@@ -1,5 +1,7 @@
-//! Per-call cost of the engine's algorithms: the preprint satellite (11 DOF) and chains and
-//! binary trees of 10, 100 and 1000 bodies. `cargo bench -p satsim-tree --bench algorithms`.
+//! Per-call cost of the engine's algorithms: the preprint satellite (11 DOF; with the peer
+//! orbit's three wheels, 14 DOF) and chains and binary trees of 10, 100 and 1000 bodies;
+//! `aba_unrolled`: [`UnrolledAba`] where the model has its layout.
+//! `cargo bench -p satsim-tree --bench algorithms`.
 //! Results and the scaling slopes are in docs/src/results/performance.md.
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
@@ -12,6 +14,21 @@ use std::time::Duration;
 fn satellite() -> Model {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/satellite.toml");
     read_model(&path).expect("examples/satellite.toml loads")
+}
+
+/// The preprint satellite with the peer orbit's three reaction wheels on the bus
+/// (benches/peers/orbit.toml), as `satsim-satellite` adds them: 2 kg rotors about x, y, z at
+/// 0.3 m, axial inertia 0.1 kg m².
+fn satellite_with_wheels() -> Model {
+    let mut b = satellite().to_builder();
+    for (k, name) in ["x", "y", "z"].into_iter().enumerate() {
+        let axis = spatial::Vec3::ith(k, 1.0);
+        let aat = axis * axis.transpose();
+        let inertia = aat * 0.1 + (spatial::Mat3::identity() - aat) * 0.05;
+        b.push_body(Body::new(name, 2.0, inertia));
+        b.push_hinge(Hinge::revolute(name, "bus", name, axis).at(axis * 0.3));
+    }
+    b.build().expect("the satellite with wheels is valid")
 }
 
 fn bench_model(c: &mut Criterion, label: &str, model: &Model) {
@@ -61,6 +78,16 @@ fn bench_model(c: &mut Criterion, label: &str, model: &Model) {
             .unwrap();
         })
     });
+    // The straight-line kernel for the preprint's layout, where the model has it.
+    if let Some(kernel) = UnrolledAba::new(model) {
+        group.bench_function(BenchmarkId::new("aba_unrolled", model.nv()), |b| {
+            b.iter(|| {
+                kernel
+                    .aba(&mut data, black_box(&q), black_box(&v), black_box(&tau))
+                    .unwrap();
+            })
+        });
+    }
     // The same calls made a chain: each call's base rate depends on the previous call's last
     // acceleration (`+ 0 · q̈`, which the compiler must keep), so no call can start before
     // the one before it ends, as in a simulation (each RK4 stage needs the last). The
@@ -92,6 +119,7 @@ fn bench_model(c: &mut Criterion, label: &str, model: &Model) {
 
 fn algorithms(c: &mut Criterion) {
     bench_model(c, "satellite", &satellite());
+    bench_model(c, "satellite_wheels", &satellite_with_wheels());
     for n in [10, 100, 1000] {
         bench_model(c, &format!("chain{n}"), &chain(n, BaseKind::Free));
         bench_model(c, &format!("binary{n}"), &binary_tree(n, BaseKind::Free));

@@ -567,7 +567,7 @@ fn links_bias<const K: usize>(model: &Model, data: &mut Data, chain: &Chain, u: 
 /// The singular-hinge error of body `i`'s hinge (the tree form's, see [`aba`]).
 #[cold]
 #[inline(never)]
-fn singular(model: &Model, i: usize, d: f64, scale: f64) -> DynamicsError {
+pub(crate) fn singular(model: &Model, i: usize, d: f64, scale: f64) -> DynamicsError {
     let j = model.joints[i].as_ref().expect("joint");
     DynamicsError::SingularHinge {
         hinge: model.hinge_names[j.hinge].clone(),
@@ -611,7 +611,7 @@ fn to_point(ia: &ArticulatedInertia, r: &Vec3) -> (Mat3, Mat3) {
 /// `out += Xᵀ [0 0; 0 C] X` (or `out = start + ...`): a purely linear inertia (what a
 /// spherical joint passes on) moved by `X`, `Eᵀ C E` then the translation's two lever terms.
 #[inline(never)]
-fn add_linear_inv_transform(
+pub(crate) fn add_linear_inv_transform(
     c: &Mat3,
     x: &Transform,
     out: &mut ArticulatedInertia,
@@ -628,7 +628,7 @@ fn add_linear_inv_transform(
 /// hinge point (tip's axes): `tr A + |d|² tr C` of the link's articulated inertia about its
 /// origin, where the inertia at the point is `[A_h B_h; B_hᵀ C] − Σ w wᵀ / Δ` (the hinges
 /// eliminated before it) with `tr A` = `tr_a`, `tr C` = `tr_c` already projected.
-fn offset_scale(
+pub(crate) fn offset_scale(
     d: &Vec3,
     bh: &Mat3,
     c: &Mat3,
@@ -685,7 +685,7 @@ fn chain_outward<const K: usize>(model: &Model, data: &mut Data, chain: &Chain) 
 
 /// The hinges reached from body `i` downwards through massless bodies: the other axes of a
 /// multi-axis hinge made of massless links (named in a singular-configuration error).
-fn massless_hinges_below(model: &Model, i: usize) -> Vec<String> {
+pub(crate) fn massless_hinges_below(model: &Model, i: usize) -> Vec<String> {
     let mut names = Vec::new();
     let mut stack = vec![i];
     while let Some(b) = stack.pop() {

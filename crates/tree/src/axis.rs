@@ -123,6 +123,28 @@ impl CoordAxis {
         add_translated(&s.a, &s.b, &s.c, &x.trans, out, start);
     }
 
+    /// For a hinge through its child's origin (`S = [sign e_k; 0]`, `U = sign [A e_k; Bᵀ e_k]`,
+    /// `D = A_kk`, `inv_d = 1 / D`): `out = start + Xᵀ IAᵃ X` with the projection
+    /// `IAᵃ = IA − U Uᵀ / D`, and returns `IAᵃ c`. `IAᵃ` has row and column `k` of `A` and
+    /// row `k` of `B` zero exactly (`IAᵃ S = 0`), and the rotation about `e_k` keeps them
+    /// zero: they are neither formed nor rotated (the unrolled ABA's serial bodies).
+    #[inline(never)]
+    pub(crate) fn project_at_point(
+        &self,
+        ia: &ArticulatedInertia,
+        inv_d: f64,
+        c: &Motion,
+        x: &Transform,
+        out: &mut ArticulatedInertia,
+        start: &ArticulatedInertia,
+    ) -> Force {
+        match self.k {
+            0 => project_at_point::<0, 1, 2>(ia, inv_d, c, x, out, start),
+            1 => project_at_point::<1, 2, 0>(ia, inv_d, c, x, out, start),
+            _ => project_at_point::<2, 0, 1>(ia, inv_d, c, x, out, start),
+        }
+    }
+
     /// `U = IA S` for `S = [sign e_k; l]`, `l = child_at × sign e_k` (the joint's `s.lin`).
     #[inline(never)]
     pub(crate) fn mul_subspace(&self, ia: &ArticulatedInertia, l: &Vec3) -> Force {
@@ -157,6 +179,18 @@ impl CoordAxis {
     #[inline]
     pub(crate) fn tr_times_axis(&self, m: &Mat3) -> Vec3 {
         m.row(self.k).transpose() * self.sign
+    }
+
+    /// `a · v` for this hinge's axis `a = sign e_k`: a signed entry of `v`.
+    #[inline]
+    pub(crate) fn dot_axis(&self, v: &Vec3) -> f64 {
+        self.sign * v[self.k]
+    }
+
+    /// The axis `sign e_k` times `x`.
+    #[inline]
+    pub(crate) fn scaled_axis(&self, x: f64) -> Vec3 {
+        Vec3::ith(self.k, self.sign * x)
     }
 
     /// `Sᵀ f` for `S = [sign e_k; l]`.
@@ -218,6 +252,80 @@ fn similarities<const I: usize, const J: usize>(
         b: sim(&ia.b),
         c: sim(&ia.c),
     }
+}
+
+/// [`CoordAxis::project_at_point`] about axis `K` (`I`, `J` the others in cyclic order).
+#[inline(always)]
+fn project_at_point<const K: usize, const I: usize, const J: usize>(
+    ia: &ArticulatedInertia,
+    r: f64,
+    c: &Motion,
+    x: &Transform,
+    out: &mut ArticulatedInertia,
+    start: &ArticulatedInertia,
+) -> Force {
+    let (a, b) = (&ia.a, &ia.b);
+    // U = ±[a; bk]: column K of A, row K of B. The projected blocks: A's I-J block, B's
+    // rows I and J, all of C.
+    let (ai, aj) = (a[(K, I)], a[(K, J)]);
+    let bk = b.row(K).transpose();
+    let (ri, rj) = (ai * r, aj * r);
+    let (aii, aij, ajj) = (
+        a[(I, I)] - ai * ri,
+        a[(I, J)] - ai * rj,
+        a[(J, J)] - aj * rj,
+    );
+    let bi = b.row(I).transpose() - bk * ri;
+    let bj = b.row(J).transpose() - bk * rj;
+    let cp = ia.c - (bk * r) * bk.transpose();
+    // IAᵃ c.
+    let (ci, cj) = (c.ang[I], c.ang[J]);
+    let mut f_ang = Vec3::zeros();
+    f_ang[I] = aii * ci + aij * cj + bi.dot(&c.lin);
+    f_ang[J] = aij * ci + ajj * cj + bj.dot(&c.lin);
+    let f = Force::new(f_ang, bi * ci + bj * cj + cp * c.lin);
+    // Eᵀ M E: the I-J block of A, rows I and J of B (then its columns), all of C.
+    let e = &x.rot;
+    let (eii, eij, eji, ejj) = (e[(I, I)], e[(I, J)], e[(J, I)], e[(J, J)]);
+    let (nii, nij) = (aii * eii + aij * eji, aii * eij + aij * ejj);
+    let (nji, njj) = (aij * eii + ajj * eji, aij * eij + ajj * ejj);
+    let mut an = Mat3::zeros();
+    an[(I, I)] = eii * nii + eji * nji;
+    an[(I, J)] = eii * nij + eji * njj;
+    an[(J, I)] = an[(I, J)];
+    an[(J, J)] = eij * nij + ejj * njj;
+    let col = |row: &Vec3| {
+        let mut o = *row;
+        o[I] = row[I] * eii + row[J] * eji;
+        o[J] = row[I] * eij + row[J] * ejj;
+        o
+    };
+    let (bi, bj) = (col(&bi), col(&bj));
+    let mut bn = Mat3::zeros();
+    bn.set_row(I, &(bi * eii + bj * eji).transpose());
+    bn.set_row(J, &(bi * eij + bj * ejj).transpose());
+    let cn = similarity::<I, J>(e, &cp);
+    add_translated(&an, &bn, &cn, &x.trans, out, Some(start));
+    f
+}
+
+/// `Eᵀ M E`, `E` a rotation about the third axis (`I`, `J` the others).
+#[inline(always)]
+fn similarity<const I: usize, const J: usize>(e: &Mat3, m: &Mat3) -> Mat3 {
+    let (eii, eij, eji, ejj) = (e[(I, I)], e[(I, J)], e[(J, I)], e[(J, J)]);
+    let mut n = *m;
+    for r in 0..3 {
+        let (mi, mj) = (m[(r, I)], m[(r, J)]);
+        n[(r, I)] = mi * eii + mj * eji;
+        n[(r, J)] = mi * eij + mj * ejj;
+    }
+    let mut out = n;
+    for col in 0..3 {
+        let (ni, nj) = (n[(I, col)], n[(J, col)]);
+        out[(I, col)] = eii * ni + eji * nj;
+        out[(J, col)] = eij * ni + ejj * nj;
+    }
+    out
 }
 
 /// `E v` (or `Eᵀ v` when `BACK`), `E` a rotation about the third axis (`I`, `J` the others).

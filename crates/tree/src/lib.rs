@@ -48,6 +48,7 @@ pub mod model;
 pub mod rnea;
 pub mod samples;
 pub mod spatial;
+pub mod unrolled;
 
 pub use aba::{aba, aba_hybrid, aba_hybrid_with_kinematics, aba_with_kinematics};
 pub use cholesky::crba_cholesky;
@@ -64,3 +65,4 @@ pub use model::{
     BaseKind, Body, BodyInfo, BoxShape, Chain, Gyrostat, Hinge, Joint, Model, ModelBuilder,
 };
 pub use rnea::{bias, rnea};
+pub use unrolled::UnrolledAba;

@@ -63,8 +63,32 @@ fn per_call_algorithms_do_not_allocate() {
         .build()
         .unwrap();
     assert_eq!((gimbal.chains().len(), gimbal.gyrostats().len()), (1, 1));
+    // The unrolled kernel's layout: the gimbal with a second panel below the first and the
+    // wheel on the bus.
+    let layout = ModelBuilder::new(BaseKind::Free)
+        .body(Body::new("bus", 500.0, i * 40.0))
+        .body(Body::massless("l1"))
+        .body(Body::massless("l2"))
+        .body(Body::new("panel", 20.0, i * 2.0))
+        .body(Body::new("panel2", 20.0, i * 2.0).with_com(spatial::Vec3::y()))
+        .body(Body::new(
+            "wheel",
+            1.0,
+            spatial::Mat3::from_diagonal(&spatial::Vec3::new(0.1, 0.1, 0.2)),
+        ))
+        .hinge(Hinge::revolute("h1", "bus", "l1", spatial::Vec3::z()).at(spatial::Vec3::y()))
+        .hinge(Hinge::revolute("h2", "l1", "l2", spatial::Vec3::x()))
+        .hinge(
+            Hinge::revolute("h3", "l2", "panel", spatial::Vec3::y()).child_at(-spatial::Vec3::y()),
+        )
+        .hinge(Hinge::revolute("h4", "panel", "panel2", spatial::Vec3::x()).at(spatial::Vec3::y()))
+        .hinge(Hinge::revolute("w", "bus", "wheel", spatial::Vec3::z()))
+        .build()
+        .unwrap();
+    let mut kernels = 0;
     for model in [
         gimbal,
+        layout,
         random_tree(12, BaseKind::Free, true, 5),
         random_tree_with_rotors(8, BaseKind::Free, true, 3, 5),
         chain(80, BaseKind::Free),
@@ -77,6 +101,8 @@ fn per_call_algorithms_do_not_allocate() {
             vec![spatial::Force::new(spatial::Vec3::x(), spatial::Vec3::y()); model.n_bodies()];
         // One warm-up round: faer initialises process-wide state (its kernel dispatch) on its
         // first call. Every later call must allocate nothing.
+        let kernel = UnrolledAba::new(&model);
+        kernels += kernel.is_some() as usize;
         let mut before = 0;
         for round in 0..4 {
             if round == 1 {
@@ -88,6 +114,9 @@ fn per_call_algorithms_do_not_allocate() {
             bias(&model, &mut data, &q, &v, None).unwrap();
             aba(&model, &mut data, &q, &v, &tau, Some(&fext)).unwrap();
             aba(&model, &mut data, &q, &v, &tau, None).unwrap();
+            if let Some(k) = &kernel {
+                k.aba(&mut data, &q, &v, &tau).unwrap();
+            }
             crba_cholesky(&model, &mut data, &q, &v, &tau, None).unwrap();
             kinetic_energy(&model, &mut data, &q, &v).unwrap();
             momentum(&model, &data);
@@ -101,4 +130,5 @@ fn per_call_algorithms_do_not_allocate() {
             model.nv()
         );
     }
+    assert_eq!(kernels, 1, "the unrolled kernel's layout");
 }

@@ -5,7 +5,8 @@ use super::rhs::Hold;
 use super::{SimError, Simulation, StateLayout};
 use crate::effects::{Effect, Forces, Links, Rotor, order};
 use satsim_tree::{
-    BaseKind, Body, Data, Hinge, Model, ModelError, State, forward_kinematics, momentum,
+    BaseKind, Body, Data, Hinge, Model, ModelError, State, UnrolledAba, forward_kinematics,
+    momentum,
 };
 use std::ops::Range;
 
@@ -221,6 +222,7 @@ impl Simulation {
         let n_bodies = model.n_bodies();
         let mut sim = Self {
             data: Data::new(&model),
+            unrolled: UnrolledAba::new(&model),
             q: model.neutral(),
             v: vec![0.0; model.nv()],
             tau: vec![0.0; model.nv()],

@@ -79,7 +79,7 @@ pub use run::RunError;
 use crate::effects::{Effect, Forces, Request, Rotor};
 use satsim_integrate::SystemError;
 use satsim_tree::spatial::{Mat3, Vec3};
-use satsim_tree::{Data, DynamicsError, Model, ModelError};
+use satsim_tree::{Data, DynamicsError, Model, ModelError, UnrolledAba};
 use std::ops::Range;
 use thiserror::Error;
 
@@ -107,6 +107,9 @@ pub enum SimError {
 pub struct Simulation {
     model: Model,
     data: Data,
+    /// ABA unrolled for the model's layout, where it has the preprint's (`rhs` uses it
+    /// without locked hinges, kinematics or external forces).
+    unrolled: Option<UnrolledAba>,
     layout: StateLayout,
     effects: Vec<Box<dyn Effect>>,
     own: Vec<Range<usize>>,

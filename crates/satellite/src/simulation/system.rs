@@ -84,7 +84,10 @@ impl System for Simulation {
             (true, true) => aba_hybrid_with_kinematics(model, data, q, v, tau, fext, &self.locked),
             (true, false) => aba_hybrid(model, data, q, v, tau, fext, &self.locked),
             (false, true) => aba_with_kinematics(model, data, q, v, tau, fext),
-            (false, false) => aba(model, data, q, v, tau, fext),
+            (false, false) => match (&self.unrolled, fext) {
+                (Some(kernel), None) => kernel.aba(data, q, v, tau),
+                _ => aba(model, data, q, v, tau, fext),
+            },
         }
         .map_err(|e| SystemError::new(e.to_string()))?;
         let l = &self.layout;

@@ -1,0 +1,48 @@
+//! 100 000 forward-dynamics calls on the preprint satellite with the peer orbit's wheels, by
+//! the generic ABA or the unrolled kernel: the program to count instructions per call with
+//! callgrind (`valgrind --tool=callgrind target/release/examples/aba_calls unrolled`, then
+//! `callgrind_annotate --inclusive=yes`). `cargo run --release -p satsim-tree --example
+//! aba_calls -- generic|unrolled`.
+
+use satsim_tree::spatial::{Mat3, Vec3};
+use satsim_tree::*;
+use std::hint::black_box;
+use std::path::Path;
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let which = std::env::args().nth(1).unwrap_or_else(|| "unrolled".into());
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/satellite.toml");
+    let mut b = read_model(&path)?.to_builder();
+    for (k, name) in ["x", "y", "z"].into_iter().enumerate() {
+        let axis = Vec3::ith(k, 1.0);
+        let aat = axis * axis.transpose();
+        b.push_body(Body::new(
+            name,
+            2.0,
+            aat * 0.1 + (Mat3::identity() - aat) * 0.05,
+        ));
+        b.push_hinge(Hinge::revolute(name, "bus", name, axis).at(axis * 0.3));
+    }
+    let model = b.build()?;
+    let kernel = UnrolledAba::new(&model).ok_or("not the kernel's layout")?;
+    let mut data = Data::new(&model);
+    let mut q = model.neutral();
+    q[7..12].copy_from_slice(&[0.1, 0.2, 0.3, 1.2, -1.0]);
+    let mut v: Vec<f64> = (0..model.nv())
+        .map(|k| 0.01 * (1.0 + k as f64).sin())
+        .collect();
+    let tau: Vec<f64> = (0..model.nv())
+        .map(|k| 0.1 * (2.0 + k as f64).cos())
+        .collect();
+    let mut sum = 0.0;
+    for _ in 0..100_000 {
+        let ddq = match which.as_str() {
+            "generic" => aba(&model, &mut data, black_box(&q), &v, black_box(&tau), None)?,
+            _ => kernel.aba(&mut data, black_box(&q), &v, black_box(&tau))?,
+        };
+        sum += ddq[10];
+        v[0] += 0.0 * ddq[10];
+    }
+    println!("{which}: {sum}");
+    Ok(())
+}

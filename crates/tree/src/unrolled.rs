@@ -1,0 +1,824 @@
+//! ABA unrolled for one layout: the preprint satellite's (Featherstone §7.3, the chain form
+//! of `aba.rs`), straight-line code with everything constant folded in once.
+//!
+//! The layout ([`UnrolledAba::new`] recognises it): a free base; balanced rotors
+//! ([`crate::Gyrostat`]) on the base only; one spherical [`crate::Chain`] (three hinges, no
+//! armature, link origins on the hinge point) from the base to a tip body; then a serial
+//! chain of up to [`MAX_SERIAL`] bodies, each the only child of the one before (the tip's
+//! child first); every hinge of the chain and of the serial bodies about a coordinate axis
+//! without fixed rotation or armature; no other bodies. This is the preprint satellite (bus,
+//! three reaction wheels, the 3-DOF gimbal to panel 1, panels 2 and 3).
+//!
+//! What is folded, and why it is the same algorithm as [`crate::aba()`]:
+//! - Every body below the base is processed in a frame with its own axes and its origin at
+//!   its hinge point (the tip: the gimbal's common point). A constant change of origin: the
+//!   rigid inertias and the children's hinge points are moved once, here. Then each motion
+//!   subspace is `S = [σ e_k; 0]`, each hinge transform has a constant translation, and
+//!   `U = IA S` and `D = Sᵀ U` are a signed column of `IA` and one entry.
+//! - The gimbal's links are massless: they get no inertia, no bias; only the chain's
+//!   rotation, its velocity-product term `c` and the tip's velocity (all axes through one
+//!   point, so `c = Σ vₜ × Sₜ q̇ₜ` in closed form). The spherical joint passes on only
+//!   `C − Bᵀ A⁻¹ B` (as `aba.rs`'s `chain_inward`), factored `L Δ Lᵀ` in the same order with
+//!   the same pivots, so a gimbal lock fails as there, with the same
+//!   [`DynamicsError::SingularHinge`].
+//! - Rotors add `ω × Σ J Ω a + Σ τ a` to the base's bias and `Ω̇ = τ / J − a · ω̇` at the end.
+//! - The serial chain's length is a const parameter: its loops run over arrays of known
+//!   size (no per-body dispatch, no `Option`s, no index checks).
+//!
+//! Equal to [`crate::aba()`] to round-off (tested on the preprint satellite and on random
+//! models of the layout).
+
+use crate::aba::{
+    SINGULAR_PIVOT_RELATIVE, add_linear_inv_transform, massless_hinges_below, offset_scale,
+};
+use crate::axis::CoordAxis;
+use crate::data::Data;
+use crate::error::DynamicsError;
+use crate::kinematics::check_len;
+use crate::model::{BaseKind, ChainPart, Model};
+use crate::spatial::{ArticulatedInertia, Force, Mat3, Motion, RigidInertia, Transform, Vec3};
+use nalgebra::DVector;
+
+/// The longest serial chain below the gimbal's tip that [`UnrolledAba`] takes.
+pub const MAX_SERIAL: usize = 6;
+
+/// A balanced rotor on the base (a [`crate::Gyrostat`]).
+#[derive(Clone, Debug)]
+struct Rotor {
+    /// Unit spin axis, base coordinates.
+    axis: Vec3,
+    /// `J a`: the axis times the axial moment of inertia (kg m²).
+    j_axis: Vec3,
+    /// `1 / J`.
+    inv_j: f64,
+    /// Its coordinate in `v`.
+    dof: usize,
+}
+
+/// A body of the serial chain, in the frame at its hinge point (its own axes).
+#[derive(Clone, Debug)]
+struct Serial {
+    axis: CoordAxis,
+    /// The hinge point in the parent's frame (that frame's origin is the parent's hinge point).
+    at: Vec3,
+    /// Rigid inertia about the hinge point.
+    inertia: RigidInertia,
+    /// The same as an articulated inertia (where pass 2 starts).
+    start: ArticulatedInertia,
+    /// The body's origin from its hinge point (`−child_at`), for the pivot scale of
+    /// `aba.rs`, which is taken about the body's origin.
+    origin: Vec3,
+    /// Its coordinate in `q` and in `v`.
+    angle: usize,
+    dof: usize,
+}
+
+/// [`crate::aba()`] without external forces, unrolled for one layout (see the module
+/// documentation): the preprint satellite's right-hand side at a fraction of the generic
+/// algorithm's instructions, with the same result to round-off and the same errors.
+///
+/// ```
+/// use satsim_tree::{BaseKind, Body, Data, Hinge, ModelBuilder, UnrolledAba, aba};
+/// use satsim_tree::spatial::{Mat3, Vec3};
+/// // A bus, a 3-DOF gimbal through two massless links to a panel, a second panel below it.
+/// let model = ModelBuilder::new(BaseKind::Free)
+///     .body(Body::new("bus", 800.0, Mat3::from_diagonal(&Vec3::new(900.0, 800.0, 600.0))))
+///     .body(Body::massless("link1"))
+///     .body(Body::massless("link2"))
+///     .body(Body::new("panel1", 20.0, Mat3::from_diagonal(&Vec3::new(1.7, 6.7, 8.3))))
+///     .body(Body::new("panel2", 20.0, Mat3::from_diagonal(&Vec3::new(1.7, 6.7, 8.3))))
+///     .hinge(Hinge::revolute("h1", "bus", "link1", Vec3::z()).at(Vec3::y()))
+///     .hinge(Hinge::revolute("h2", "link1", "link2", Vec3::x()))
+///     .hinge(Hinge::revolute("h3", "link2", "panel1", Vec3::y()).child_at(-0.6 * Vec3::y()))
+///     .hinge(
+///         Hinge::revolute("h4", "panel1", "panel2", Vec3::x())
+///             .at(0.5 * Vec3::y())
+///             .child_at(-0.5 * Vec3::y()),
+///     )
+///     .build()?;
+/// let kernel = UnrolledAba::new(&model).expect("the preprint's layout");
+/// let mut data = Data::new(&model);
+/// let mut q = model.neutral();
+/// q[7..].copy_from_slice(&[0.1, 0.2, 0.3, 1.2]);
+/// let (v, tau) = (vec![0.01; model.nv()], vec![0.5; model.nv()]);
+/// let fast = kernel.aba(&mut data, &q, &v, &tau)?.clone();
+/// let generic = aba(&model, &mut data, &q, &v, &tau, None)?;
+/// assert!((&fast - generic).amax() < 1e-12 * generic.amax());
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+#[derive(Clone, Debug)]
+pub struct UnrolledAba {
+    nq: usize,
+    nv: usize,
+    /// The base with its rotors locked on (bias), and less `J a aᵀ` per rotor (pass 2 start).
+    base_inertia: RigidInertia,
+    base_start: ArticulatedInertia,
+    rotors: Vec<Rotor>,
+    /// The gimbal's hinges in elimination order: the tip's, its link's, the outermost.
+    gimbal: [CoordAxis; 3],
+    gimbal_angle: [usize; 3],
+    gimbal_dof: [usize; 3],
+    /// The gimbal's point in the base's frame.
+    point: Vec3,
+    /// The tip's rigid inertia about the gimbal's point.
+    tip_inertia: RigidInertia,
+    tip_start: ArticulatedInertia,
+    /// The tip's origin from the gimbal's point (`−child_at`), for the pivot scale.
+    tip_origin: Vec3,
+    serial: Vec<Serial>,
+    /// Per pivot (the gimbal's three in elimination order, then the serial bodies): the
+    /// hinge named by a singular-hinge error and the hinges through massless links below it.
+    names: Vec<(String, Vec<String>)>,
+}
+
+impl UnrolledAba {
+    /// The kernel for `model` if it has the layout (see the module documentation), `None`
+    /// otherwise (the caller keeps [`crate::aba()`]).
+    pub fn new(model: &Model) -> Option<Self> {
+        if model.base != BaseKind::Free || model.chains.len() != 1 {
+            return None;
+        }
+        let chain = &model.chains[0];
+        if chain.k != 3 || !chain.spherical || chain.offset_links || chain.parent != 0 {
+            return None;
+        }
+        if model.gyrostats.iter().any(|g| g.parent != 0) {
+            return None;
+        }
+        let joint = |i: usize| model.joints[i].as_ref().expect("non-root body has a joint");
+        let mut gimbal = [None; 3];
+        for (t, g) in gimbal.iter_mut().enumerate() {
+            *g = model.coord_axis[chain.order[t]];
+        }
+        let [Some(g0), Some(g1), Some(g2)] = gimbal else {
+            return None;
+        };
+        // The serial chain: the tip's only child, its only child, ...
+        let tip = chain.order[0];
+        let mut body = tip;
+        let mut serial_bodies = Vec::new();
+        loop {
+            let mut children = model.children(body);
+            let Some(child) = children.next() else { break };
+            if children.next().is_some()
+                || model.is_gyrostat[child]
+                || model.chain_part[child] != ChainPart::None
+                || model.coord_axis[child].is_none()
+                || joint(child).armature != 0.0
+                || serial_bodies.len() == MAX_SERIAL
+            {
+                return None;
+            }
+            serial_bodies.push(child);
+            body = child;
+        }
+        // No other bodies: the base, its rotors, the two links, the tip and the serial chain.
+        if model.n_bodies() != 1 + model.gyrostats.len() + 3 + serial_bodies.len() {
+            return None;
+        }
+        let base_nq = model.base_nq();
+        let r = chain.tip_at;
+        let tip_body = &model.bodies[tip];
+        let tip_inertia =
+            RigidInertia::from_com(tip_body.mass, tip_body.com - r, tip_body.inertia_com);
+        let mut serial = Vec::new();
+        let mut parent_origin = r; // the parent's hinge point in its own body frame
+        for &i in &serial_bodies {
+            let j = joint(i);
+            let b = &model.bodies[i];
+            let inertia = RigidInertia::from_com(b.mass, b.com - j.child_at, b.inertia_com);
+            serial.push(Serial {
+                axis: model.coord_axis[i].expect("checked above"),
+                at: j.at - parent_origin,
+                inertia,
+                start: inertia.into(),
+                origin: -j.child_at,
+                angle: base_nq + j.hinge,
+                dof: model.base_nv() + j.hinge,
+            });
+            parent_origin = j.child_at;
+        }
+        let name = |i: usize| {
+            (
+                model.hinge_names[joint(i).hinge].clone(),
+                massless_hinges_below(model, i),
+            )
+        };
+        let names = chain
+            .order
+            .iter()
+            .chain(&serial_bodies)
+            .map(|&i| name(i))
+            .collect();
+        let rotors = model
+            .gyrostats
+            .iter()
+            .map(|g| Rotor {
+                axis: g.axis,
+                j_axis: g.axis * g.axial,
+                inv_j: 1.0 / g.axial,
+                dof: joint(g.body).dof,
+            })
+            .collect();
+        Some(Self {
+            nq: model.nq(),
+            nv: model.nv(),
+            base_inertia: model.carrier_inertia[0],
+            base_start: model.carrier_ia[0],
+            rotors,
+            gimbal: [g0, g1, g2],
+            gimbal_angle: chain.order.map(|i| base_nq + joint(i).hinge),
+            gimbal_dof: chain.dof,
+            point: chain.point,
+            tip_inertia,
+            tip_start: tip_inertia.into(),
+            tip_origin: -r,
+            serial,
+            names,
+        })
+    }
+
+    /// Number of serial bodies below the gimbal's tip.
+    pub fn serial_bodies(&self) -> usize {
+        self.serial.len()
+    }
+
+    /// Forward dynamics without external forces, as [`crate::aba()`] with `fext = None`:
+    /// the accelerations `q̈` into `data.ddq` (same layout: the base's `[ω̇; v̇]` in its own
+    /// axes, then the hinges in their order of addition, rotors included). `data` must be
+    /// this model's; only `data.ddq` is written (the other buffers of `aba` are not).
+    /// Fails as [`crate::aba()`] does: [`DynamicsError::SingularHinge`] at a gimbal lock
+    /// (same hinge, same pivot), [`DynamicsError::SingularBase`], or a dimension error.
+    pub fn aba<'d>(
+        &self,
+        data: &'d mut Data,
+        q: &[f64],
+        v: &[f64],
+        tau: &[f64],
+    ) -> Result<&'d DVector<f64>, DynamicsError> {
+        check_len("q", q.len(), self.nq)?;
+        check_len("v", v.len(), self.nv)?;
+        check_len("tau", tau.len(), self.nv)?;
+        check_len("data.ddq", data.ddq.len(), self.nv)?;
+        let ddq = data.ddq.as_mut_slice();
+        match self.serial.len() {
+            0 => self.run::<0>(ddq, q, v, tau)?,
+            1 => self.run::<1>(ddq, q, v, tau)?,
+            2 => self.run::<2>(ddq, q, v, tau)?,
+            3 => self.run::<3>(ddq, q, v, tau)?,
+            4 => self.run::<4>(ddq, q, v, tau)?,
+            5 => self.run::<5>(ddq, q, v, tau)?,
+            _ => self.run::<MAX_SERIAL>(ddq, q, v, tau)?,
+        }
+        Ok(&data.ddq)
+    }
+
+    /// The three passes for `N` serial bodies (`q`, `v`, `tau`, `ddq` of checked lengths).
+    #[inline(never)]
+    fn run<const N: usize>(
+        &self,
+        ddq: &mut [f64],
+        q: &[f64],
+        v: &[f64],
+        tau: &[f64],
+    ) -> Result<(), DynamicsError> {
+        let serial: &[Serial; N] = self.serial.as_slice().try_into().expect("N bodies");
+        // Pass 1, outward. The base, with its rotors' gyroscopic couple and axial reactions.
+        let v0 = Motion::from_slice(&v[..6]);
+        let mut pa0 = v0.cross_force(&self.base_inertia.mul_motion(&v0));
+        let mut spin = Vec3::zeros();
+        for r in &self.rotors {
+            spin += r.j_axis * v[r.dof];
+            pa0.ang += r.axis * tau[r.dof];
+        }
+        pa0.ang += v0.ang.cross(&spin);
+        // The gimbal: its rotation (base axes to the tip's), the axes in the tip's axes.
+        let [g0, g1, g2] = &self.gimbal;
+        let [i0, i1, i2] = self.gimbal_angle;
+        let e0m = g0.transform(q[i0], &Vec3::zeros(), &Vec3::zeros()).rot;
+        let e1m = g1.transform(q[i1], &Vec3::zeros(), &Vec3::zeros()).rot;
+        let e2m = g2.transform(q[i2], &Vec3::zeros(), &Vec3::zeros()).rot;
+        let e0 = g0.scaled_axis(1.0);
+        let e1 = g1.times_axis(&e0m);
+        let r01 = g1.post_rotate(&e0m, &e1m);
+        let e2 = g2.times_axis(&r01);
+        let x = Transform::new(g2.post_rotate(&r01, &e2m), self.point);
+        let [d0, d1, d2] = self.gimbal_dof;
+        let (w0, w1, w2) = (e0 * v[d0], e1 * v[d1], e2 * v[d2]);
+        let w_rel = w0 + w1 + w2;
+        // The base's velocity at the point, tip axes; all axes pass through the point, so
+        // the chain's velocity-product term is Σ vₜ × Sₜ q̇ₜ with vₜ the links' velocities.
+        let vp = x.apply_motion(&v0);
+        let c_tip = Motion::new(
+            vp.ang.cross(&w_rel) + w2.cross(&w1) + (w2 + w1).cross(&w0),
+            vp.lin.cross(&w_rel),
+        );
+        let v_tip = Motion::new(vp.ang + w_rel, vp.lin);
+        let pa_tip = v_tip.cross_force(&self.tip_inertia.mul_motion(&v_tip));
+        // The serial bodies.
+        let mut xs = [Transform::identity(); N];
+        let mut cs = [Motion::zero(); N];
+        let mut pas = [Force::zero(); N];
+        let mut vp = v_tip;
+        for (j, s) in serial.iter().enumerate() {
+            xs[j] = s.axis.transform(q[s.angle], &s.at, &Vec3::zeros());
+            let vx = s.axis.apply_motion(&xs[j], &vp);
+            let sq = s.axis.scaled_axis(v[s.dof]);
+            cs[j] = Motion::new(vx.ang.cross(&sq), vx.lin.cross(&sq));
+            let vj = Motion::new(vx.ang + sq, vx.lin);
+            pas[j] = vj.cross_force(&s.inertia.mul_motion(&vj));
+            vp = vj;
+        }
+        // Pass 2, inward: the serial bodies, last first, each projected into its parent.
+        let mut us = [Force::zero(); N];
+        let mut uu = [0.0; N];
+        let mut inv_ds = [0.0; N];
+        let mut ia = if N > 0 {
+            serial[N - 1].start
+        } else {
+            self.tip_start
+        };
+        let mut pa = if N > 0 { pas[N - 1] } else { pa_tip };
+        for j in (0..N).rev() {
+            let s = &serial[j];
+            let a = &s.axis;
+            let u_col = Force::new(a.times_axis(&ia.a), a.tr_times_axis(&ia.b));
+            let d = a.dot_axis(&u_col.ang);
+            self.check(d, &ia, &s.origin, 3 + j)?;
+            let inv_d = 1.0 / d;
+            let u = tau[s.dof] - a.dot_axis(&pa.ang);
+            let (parent_start, parent_bias) = if j > 0 {
+                (&serial[j - 1].start, pas[j - 1])
+            } else {
+                (&self.tip_start, pa_tip)
+            };
+            // The parent's inertia: its start plus Xᵀ (IA − U Uᵀ / D) X.
+            let mut parent = ArticulatedInertia::default();
+            let iac = a.project_at_point(&ia, inv_d, &cs[j], &xs[j], &mut parent, parent_start);
+            let pa_j = pa + iac + u_col * (u * inv_d);
+            pa = parent_bias + a.inv_apply_force(&xs[j], &pa_j);
+            ia = parent;
+            (us[j], uu[j], inv_ds[j]) = (u_col, u, inv_d);
+        }
+        // The gimbal at its point: D = L Δ Lᵀ over the axes e₀ (the tip's), e₁, e₂, as
+        // `chain_inward` (the tip's hinge first), with the same pivot scales.
+        let (ah, bh) = (&ia.a, &ia.b);
+        let w0 = Force::new(g0.times_axis(ah), g0.tr_times_axis(bh));
+        let u0 = tau[d0] - g0.dot_axis(&pa.ang);
+        let p0 = g0.dot_axis(&w0.ang);
+        self.check(p0, &ia, &self.tip_origin, 0)?;
+        let inv0 = 1.0 / p0;
+        let tr_a = ah.trace() - w0.ang.norm_squared() * inv0;
+        let l10 = e1.dot(&w0.ang) * inv0;
+        let w1 = Force::new(ah * e1, bh.tr_mul(&e1)) - w0 * l10;
+        let u1 = tau[d1] - e1.dot(&pa.ang) - l10 * u0;
+        let p1 = e1.dot(&w1.ang);
+        self.check_plain(p1, tr_a, 1)?;
+        let inv1 = 1.0 / p1;
+        let tr_a = tr_a - w1.ang.norm_squared() * inv1;
+        let l20 = e2.dot(&w0.ang) * inv0;
+        let l21 = e2.dot(&w1.ang) * inv1;
+        let w2 = Force::new(ah * e2, bh.tr_mul(&e2)) - w0 * l20 - w1 * l21;
+        let u2 = tau[d2] - e2.dot(&pa.ang) - l20 * u0 - l21 * u1;
+        let p2 = e2.dot(&w2.ang);
+        self.check_plain(p2, tr_a, 2)?;
+        let inv2 = 1.0 / p2;
+        // What the spherical joint passes on: [0 0; 0 C − Bᵀ A⁻¹ B], and the bias.
+        let cc: Mat3 = ia.c
+            - (w0.lin * inv0) * w0.lin.transpose()
+            - (w1.lin * inv1) * w1.lin.transpose()
+            - (w2.lin * inv2) * w2.lin.transpose();
+        let mut pa_h = pa + w0 * (u0 * inv0) + w1 * (u1 * inv1) + w2 * (u2 * inv2);
+        pa_h.lin += cc * c_tip.lin;
+        let mut ia0 = ArticulatedInertia::default();
+        add_linear_inv_transform(&cc, &x, &mut ia0, Some(&self.base_start));
+        let pa0 = pa0 + x.inv_apply_force(&pa_h);
+        // Pass 3, outward: a₀ = IA₀⁻¹ (τ₀ − pA₀), the rotors, the gimbal, the serial bodies.
+        let a0 = ia0
+            .solve(&(Force::from_slice(&tau[..6]) - pa0))
+            .ok_or(DynamicsError::SingularBase)?;
+        ddq[..6].copy_from_slice(&a0.to_array());
+        for r in &self.rotors {
+            ddq[r.dof] = tau[r.dof] * r.inv_j - r.axis.dot(&a0.ang);
+        }
+        let a = x.apply_motion(&a0) + c_tip;
+        let qdd2 = (u2 - a.dot(&w2)) * inv2;
+        let qdd1 = (u1 - a.dot(&w1)) * inv1 - l21 * qdd2;
+        let qdd0 = (u0 - a.dot(&w0)) * inv0 - l20 * qdd2 - l10 * qdd1;
+        ddq[d0] = qdd0;
+        ddq[d1] = qdd1;
+        ddq[d2] = qdd2;
+        let mut ap = Motion::new(a.ang + e0 * qdd0 + e1 * qdd1 + e2 * qdd2, a.lin);
+        for (j, s) in serial.iter().enumerate() {
+            let aj = s.axis.apply_motion(&xs[j], &ap) + cs[j];
+            let qdd = (uu[j] - aj.dot(&us[j])) * inv_ds[j];
+            ddq[s.dof] = qdd;
+            ap = Motion::new(aj.ang + s.axis.scaled_axis(qdd), aj.lin);
+        }
+        Ok(())
+    }
+
+    /// `aba.rs`'s pivot test for a body whose articulated inertia `ia` is given about its
+    /// hinge point while `aba.rs` takes the scale about the body's origin, at `origin` from
+    /// the point: `tr A_o + |o|² tr C`. Cheap first: for a positive semidefinite `ia`,
+    /// `tr A_o ≤ 2 tr A + 2 |o|² tr C` (`(x + y)ᵀ M (x + y) ≤ 2 xᵀ M x + 2 yᵀ M y`), so a
+    /// pivot above that bound's threshold is regular; the exact scale only below it.
+    #[inline]
+    fn check(
+        &self,
+        d: f64,
+        ia: &ArticulatedInertia,
+        origin: &Vec3,
+        pivot: usize,
+    ) -> Result<(), DynamicsError> {
+        let (tr_a, tr_c) = (ia.a.trace(), ia.c.trace());
+        let o2 = origin.norm_squared();
+        let bound = 2.0 * tr_a + 3.0 * o2 * tr_c;
+        if d > SINGULAR_PIVOT_RELATIVE * bound && d < f64::INFINITY {
+            return Ok(());
+        }
+        let scale = offset_scale(origin, &ia.b, &ia.c, &[], &[], tr_a, tr_c);
+        self.check_plain(d, scale, pivot)
+    }
+
+    /// `aba.rs`'s pivot test against `scale`; the error names pivot `pivot`'s hinge.
+    #[inline]
+    fn check_plain(&self, d: f64, scale: f64, pivot: usize) -> Result<(), DynamicsError> {
+        // Written so that a NaN pivot counts as singular too.
+        if d.is_finite() && d > SINGULAR_PIVOT_RELATIVE * scale {
+            Ok(())
+        } else {
+            Err(self.singular(d, scale, pivot))
+        }
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn singular(&self, d: f64, scale: f64, pivot: usize) -> DynamicsError {
+        let (hinge, through) = self.names[pivot].clone();
+        DynamicsError::SingularHinge {
+            hinge,
+            through,
+            pivot: d,
+            relative: if scale > 0.0 { d / scale } else { 0.0 },
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::aba;
+    use crate::model::{Body, Hinge, ModelBuilder};
+    use crate::samples::{SplitMix, random_inertia, random_q};
+    use nalgebra::Quaternion;
+
+    /// A signed coordinate axis other than `not` (so that two consecutive gimbal axes are
+    /// never parallel).
+    fn coordinate_axis(rng: &mut SplitMix, not: Option<usize>) -> (usize, Vec3) {
+        loop {
+            let k = (rng.next_f64() * 3.0) as usize;
+            if Some(k) != not {
+                let sign = if rng.next_f64() < 0.5 { -1.0 } else { 1.0 };
+                return (k, Vec3::ith(k, sign));
+            }
+        }
+    }
+
+    fn body(rng: &mut SplitMix, name: &str, mass: (f64, f64)) -> Body {
+        let m = rng.range(mass.0, mass.1);
+        Body::new(name, m, random_inertia(rng, m * 0.3)).with_com(rng.vec3(0.5))
+    }
+
+    /// A random model of the layout: a bus, `rotors` balanced rotors on it about random
+    /// axes, a 3-DOF gimbal about signed coordinate axes (random point, tip hinge point) to
+    /// a tip, and `serial` bodies in a row below the tip (random masses, inertias, hinge
+    /// points, signed coordinate axes); bodies and hinges listed in a random order.
+    fn random_layout(serial: usize, rotors: usize, seed: u64) -> Model {
+        let mut rng = SplitMix(seed);
+        let mut bodies = vec![
+            body(&mut rng, "bus", (100.0, 1000.0)),
+            Body::massless("l1"),
+            Body::massless("l2"),
+            body(&mut rng, "tip", (1.0, 50.0)),
+        ];
+        let (k1, a1) = coordinate_axis(&mut rng, None);
+        let (k2, a2) = coordinate_axis(&mut rng, Some(k1));
+        let (_, a3) = coordinate_axis(&mut rng, Some(k2));
+        let mut hinges = vec![
+            Hinge::revolute("g1", "bus", "l1", a1).at(rng.vec3(1.0)),
+            Hinge::revolute("g2", "l1", "l2", a2),
+            Hinge::revolute("g3", "l2", "tip", a3).child_at(rng.vec3(0.8)),
+        ];
+        let mut parent = "tip".to_string();
+        for j in 0..serial {
+            let name = format!("s{j}");
+            bodies.push(body(&mut rng, &name, (0.5, 30.0)));
+            let (_, a) = coordinate_axis(&mut rng, None);
+            hinges.push(
+                Hinge::revolute(format!("h{j}"), parent.clone(), name.clone(), a)
+                    .at(rng.vec3(0.6))
+                    .child_at(rng.vec3(0.6)),
+            );
+            parent = name;
+        }
+        for r in 0..rotors {
+            let axis = rng.unit();
+            let j = rng.range(0.01, 0.2);
+            let it = rng.range(0.55 * j, 2.0 * j);
+            let aat = axis * axis.transpose();
+            let inertia = aat * j + (Mat3::identity() - aat) * it;
+            let mass = if r % 2 == 0 { rng.range(0.1, 3.0) } else { 0.0 };
+            let com = rng.vec3(0.3);
+            let name = format!("rotor{r}");
+            bodies.push(Body::new(name.clone(), mass, inertia).with_com(com));
+            hinges.push(
+                Hinge::revolute(name.clone(), "bus", name, axis)
+                    .at(rng.vec3(0.5))
+                    .child_at(com + axis * rng.range(-0.2, 0.2)),
+            );
+        }
+        // Rotors first or last among the bodies; hinges (so coordinates) in a random order.
+        if seed % 2 == 0 {
+            bodies[4..].rotate_right(rotors);
+        }
+        for k in (1..hinges.len()).rev() {
+            let j = (rng.next_f64() * (k + 1) as f64) as usize;
+            hinges.swap(k, j);
+        }
+        let mut b = ModelBuilder::new(BaseKind::Free);
+        for x in bodies {
+            b.push_body(x);
+        }
+        for h in hinges {
+            b.push_hinge(h);
+        }
+        b.build().expect("a valid layout")
+    }
+
+    /// The preprint satellite (`examples/satellite.toml`) plus the peer orbit's three
+    /// reaction wheels on the bus, as `satsim-satellite` adds them.
+    #[cfg(feature = "files")]
+    fn satellite_with_wheels() -> (Model, Model) {
+        let path =
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/satellite.toml");
+        let plain = crate::read_model(&path).unwrap();
+        let mut b = plain.to_builder();
+        for (k, name) in ["x", "y", "z"].into_iter().enumerate() {
+            let axis = Vec3::ith(k, 1.0);
+            let aat = axis * axis.transpose();
+            b.push_body(Body::new(
+                name,
+                2.0,
+                aat * 0.1 + (Mat3::identity() - aat) * 0.05,
+            ));
+            b.push_hinge(Hinge::revolute(name, "bus", name, axis).at(axis * 0.3));
+        }
+        (plain, b.build().unwrap())
+    }
+
+    fn random_state(model: &Model, rng: &mut SplitMix) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+        let q = random_q(model, rng, 3.0);
+        let v = (0..model.nv()).map(|_| rng.range(-2.0, 2.0)).collect();
+        let tau = (0..model.nv()).map(|_| rng.range(-5.0, 5.0)).collect();
+        (q, v, tau)
+    }
+
+    /// The kernel against the generic ABA on one state: the same accelerations to 1e-12 of
+    /// the largest, or the same refusal. Returns whether both solved.
+    fn agrees(model: &Model, kernel: &UnrolledAba, q: &[f64], v: &[f64], tau: &[f64]) -> bool {
+        let (mut dk, mut dg) = (Data::new(model), Data::new(model));
+        let fast = kernel.aba(&mut dk, q, v, tau).cloned();
+        let generic = aba(model, &mut dg, q, v, tau, None).cloned();
+        match (fast, generic) {
+            (Ok(a), Ok(b)) => {
+                // Forward: 1e-12 of the largest acceleration, or the textbook bound κ(M) ε
+                // where the mass matrix is ill-conditioned (close to a gimbal lock, where
+                // any two orders of the same arithmetic differ by that much; `aba`'s chain
+                // and tree forms too).
+                let m = crate::crba(model, &mut dg, q).unwrap().clone();
+                let eig = m.symmetric_eigenvalues();
+                let kappa_eps = eig.max() / eig.min() * f64::EPSILON;
+                let e = (&a - &b).amax() / b.amax();
+                assert!(
+                    e < 1e-12_f64.max(kappa_eps),
+                    "relative difference {e:e}, κε {kappa_eps:e}\n{a}\n{b}"
+                );
+                // Backward (no κ): inverse dynamics of the kernel's result gives back τ.
+                let back = crate::rnea(model, &mut dg, q, v, a.as_slice(), None).unwrap();
+                let scale = (m.abs() * a.abs()).amax().max(1.0);
+                let r = (back - DVector::from_column_slice(tau)).amax();
+                assert!(r < 1e-12 * scale, "residual {r:e} of {scale:e}");
+                true
+            }
+            (Err(x), Err(y)) => {
+                same_refusal(&x, &y);
+                false
+            }
+            (a, b) => panic!("kernel {a:?}, generic {b:?}"),
+        }
+    }
+
+    fn same_refusal(x: &DynamicsError, y: &DynamicsError) {
+        match (x, y) {
+            (
+                DynamicsError::SingularHinge {
+                    hinge: h1,
+                    through: t1,
+                    pivot: p1,
+                    ..
+                },
+                DynamicsError::SingularHinge {
+                    hinge: h2,
+                    through: t2,
+                    pivot: p2,
+                    ..
+                },
+            ) => {
+                assert_eq!((h1, t1), (h2, t2));
+                assert!((p1 - p2).abs() <= 1e-9 * p1.abs().max(p2.abs()).max(1e-3));
+            }
+            (DynamicsError::SingularBase, DynamicsError::SingularBase) => {}
+            (x, y) => panic!("kernel {x:?}, generic {y:?}"),
+        }
+    }
+
+    #[cfg(feature = "files")]
+    #[test]
+    fn preprint_satellite_equals_generic_aba() {
+        let (plain, wheels) = satellite_with_wheels();
+        for (model, rotors) in [(plain, 0), (wheels, 3)] {
+            let kernel = UnrolledAba::new(&model).expect("the preprint's layout");
+            assert_eq!((kernel.serial_bodies(), kernel.rotors.len()), (2, rotors));
+            let mut rng = SplitMix(11);
+            let solved = (0..300)
+                .filter(|_| {
+                    let (q, v, tau) = random_state(&model, &mut rng);
+                    agrees(&model, &kernel, &q, &v, &tau)
+                })
+                .count();
+            assert!(solved > 290, "{solved}");
+        }
+    }
+
+    #[test]
+    fn random_layouts_equal_generic_aba() {
+        let mut solved = 0;
+        let mut seen = [[0usize; 4]; 5]; // serial bodies x rotors
+        for seed in 0..400u64 {
+            let (serial, rotors) = ((seed % 5) as usize, ((seed / 5) % 4) as usize);
+            let model = random_layout(serial, rotors, seed);
+            let kernel = UnrolledAba::new(&model).expect("the layout");
+            assert_eq!(kernel.serial_bodies(), serial);
+            assert_eq!(kernel.rotors.len(), rotors);
+            let mut rng = SplitMix(seed ^ 0xab1e);
+            for _ in 0..3 {
+                let (q, v, tau) = random_state(&model, &mut rng);
+                if agrees(&model, &kernel, &q, &v, &tau) {
+                    solved += 1;
+                    seen[serial][rotors] += 1;
+                }
+            }
+        }
+        assert!(solved > 1100, "only {solved} regular cases");
+        assert!(seen.iter().flatten().all(|&s| s > 30), "{seen:?}");
+    }
+
+    /// Layouts that differ from the kernel's in one way each are not taken.
+    #[test]
+    fn other_layouts_are_refused() {
+        let base = random_layout(2, 2, 7);
+        assert!(UnrolledAba::new(&base).is_some());
+        let hinge_of = |b: &mut ModelBuilder, name: &str| {
+            b.hinges_mut().iter().position(|h| h.name == name).unwrap()
+        };
+        let variant = |f: &dyn Fn(&mut ModelBuilder)| {
+            let mut b = base.to_builder();
+            f(&mut b);
+            UnrolledAba::new(&b.build().unwrap())
+        };
+        // A fixed base.
+        let mut b = ModelBuilder::new(BaseKind::Fixed);
+        for x in &base.to_builder().bodies {
+            b.push_body(x.clone());
+        }
+        for h in base.to_builder().hinges_mut() {
+            b.push_hinge(h.clone());
+        }
+        assert!(
+            UnrolledAba::new(&b.build().unwrap()).is_none(),
+            "fixed base"
+        );
+        // Armature on a serial hinge, on a gimbal hinge.
+        for name in ["h1", "g2"] {
+            let r = variant(&|b| {
+                let k = hinge_of(b, name);
+                b.hinges_mut()[k].armature = 0.1;
+            });
+            assert!(r.is_none(), "armature on {name}");
+        }
+        // A general axis, a fixed rotation, on a serial hinge and on a gimbal hinge.
+        for name in ["h0", "g3"] {
+            let r = variant(&|b| {
+                let k = hinge_of(b, name);
+                b.hinges_mut()[k].axis = Vec3::new(1.0, 1.0, 0.0).normalize();
+            });
+            assert!(r.is_none(), "general axis on {name}");
+            let r = variant(&|b| {
+                let k = hinge_of(b, name);
+                b.hinges_mut()[k].rotation = Quaternion::new(0.9, 0.1, 0.0, 0.0).normalize();
+            });
+            assert!(r.is_none(), "fixed rotation on {name}");
+        }
+        // A branch below the tip, a second (non-rotor) body on the bus, a rotor off the base.
+        for parent in ["tip", "s0", "bus"] {
+            let r = variant(&|b| {
+                b.push_body(Body::new("extra", 1.0, Mat3::identity()).with_com(Vec3::x()));
+                b.push_hinge(Hinge::revolute("extra", parent, "extra", Vec3::z()));
+            });
+            assert!(r.is_none(), "an extra body on {parent}");
+        }
+        let r = variant(&|b| {
+            b.push_body(Body::new("wheel", 1.0, Mat3::identity()));
+            b.push_hinge(Hinge::revolute("wheel", "s1", "wheel", Vec3::z()));
+        });
+        assert!(r.is_none(), "a rotor off the base");
+        // Offset links: link 2's origin off the gimbal's point (zero length kept).
+        let r = variant(&|b| {
+            for h in b.hinges_mut() {
+                if h.child == "l2" {
+                    h.child_at = Vec3::new(0.1, 0.2, 0.0);
+                }
+                if h.parent == "l2" {
+                    h.at = Vec3::new(0.1, 0.2, 0.0);
+                }
+            }
+        });
+        assert!(r.is_none(), "offset links");
+        // A link with mass: no chain.
+        let r = variant(&|b| {
+            let k = b.bodies.iter().position(|x| x.name == "l1").unwrap();
+            b.bodies_mut()[k] = Body::new("l1", 1.0, Mat3::identity());
+        });
+        assert!(r.is_none(), "no chain");
+        // A 2-DOF gimbal: link 2 welded away (tip hinged on link 1).
+        let mut b = ModelBuilder::new(BaseKind::Free);
+        for x in base.to_builder().bodies.iter().filter(|x| x.name != "l2") {
+            b.push_body(x.clone());
+        }
+        for h in base.to_builder().hinges_mut() {
+            if h.name == "g2" {
+                continue;
+            }
+            if h.parent == "l2" {
+                h.parent = "l1".into();
+            }
+            b.push_hinge(h.clone());
+        }
+        assert!(UnrolledAba::new(&b.build().unwrap()).is_none(), "k = 2");
+        // Too long a serial chain.
+        let long = random_layout(MAX_SERIAL, 0, 3);
+        assert!(UnrolledAba::new(&long).is_some());
+        let mut b = long.to_builder();
+        b.push_body(Body::new("last", 1.0, Mat3::identity()).with_com(Vec3::x()));
+        let tail = format!("s{}", MAX_SERIAL - 1);
+        b.push_hinge(Hinge::revolute("last", tail, "last", Vec3::z()));
+        assert!(UnrolledAba::new(&b.build().unwrap()).is_none(), "too long");
+    }
+
+    /// A gimbal lock (the middle hinge at 90°) fails as in the generic ABA: the same hinge,
+    /// the same hinges named through the links, the same pivot.
+    #[cfg(feature = "files")]
+    #[test]
+    fn gimbal_lock_fails_as_generic_aba() {
+        let (_, model) = satellite_with_wheels();
+        let kernel = UnrolledAba::new(&model).unwrap();
+        let mut q = model.neutral();
+        q[7..12].copy_from_slice(&[0.3, std::f64::consts::FRAC_PI_2, 0.1, 1.2, -1.0]);
+        let v: Vec<f64> = (0..model.nv()).map(|k| 0.01 * k as f64).collect();
+        let tau = vec![0.3; model.nv()];
+        let (mut dk, mut dg) = (Data::new(&model), Data::new(&model));
+        let x = kernel.aba(&mut dk, &q, &v, &tau).unwrap_err();
+        let y = aba(&model, &mut dg, &q, &v, &tau, None).unwrap_err();
+        same_refusal(&x, &y);
+        assert!(matches!(&x, DynamicsError::SingularHinge { hinge, .. } if hinge == "h1"));
+        // Close to the lock both solve, and agree.
+        q[8] = std::f64::consts::FRAC_PI_2 - 1e-3;
+        let fast = kernel.aba(&mut dk, &q, &v, &tau).unwrap().clone();
+        let generic = aba(&model, &mut dg, &q, &v, &tau, None).unwrap();
+        assert!((&fast - generic).amax() < 1e-9 * generic.amax());
+    }
+
+    #[test]
+    fn wrong_lengths_are_refused() {
+        let model = random_layout(1, 1, 5);
+        let kernel = UnrolledAba::new(&model).unwrap();
+        let mut data = Data::new(&model);
+        let (q, v) = (model.neutral(), vec![0.0; model.nv()]);
+        assert!(kernel.aba(&mut data, &q[1..], &v, &v).is_err());
+        assert!(kernel.aba(&mut data, &q, &v[1..], &v).is_err());
+        assert!(kernel.aba(&mut data, &q, &v, &v[1..]).is_err());
+        let other = random_layout(2, 1, 5);
+        assert!(kernel.aba(&mut Data::new(&other), &q, &v, &v).is_err());
+    }
+}
