@@ -235,6 +235,17 @@ impl Forces {
         self.wrenches_added = 0;
         self.rotor_command.fill(0.0);
     }
+    /// As [`Forces::clear`], with the hinge torques set to `hinge_torque` (one copy rather
+    /// than zeroing first: this runs at every right-hand side).
+    pub fn reset_to(&mut self, hinge_torque: &[f64]) {
+        self.hinge_torque.copy_from_slice(hinge_torque);
+        if self.has_wrench {
+            self.body_wrench.fill(Force::zero());
+            self.has_wrench = false;
+        }
+        self.wrenches_added = 0;
+        self.rotor_command.fill(0.0);
+    }
     /// The power (W) of the hinge torques, `Σ_k τ_k q̇_k`, with `v` the tree's velocity
     /// vector (its first `n_base` entries the root's). The wheel commands are not forces
     /// and do not count.
@@ -503,4 +514,23 @@ pub fn quat_mul(a: &[f64; 4], b: &[f64; 4]) -> [f64; 4] {
         a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1],
         a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0],
     ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Forces;
+    use satsim_tree::spatial::{Force, Vec3};
+
+    #[test]
+    fn reset_to_sets_the_hinge_torques_and_clears_the_rest() {
+        let mut f = Forces::new(3, 2, 1);
+        f.hinge_torque.copy_from_slice(&[1.0, 2.0, 3.0]);
+        f.add_wrench(1, Force::new(Vec3::x(), Vec3::y()));
+        f.rotor_command[0] = 4.0;
+        f.reset_to(&[0.5, 0.0, -0.5]);
+        assert_eq!(f.hinge_torque, [0.5, 0.0, -0.5]);
+        assert!(!f.has_wrench && f.wrenches_added() == 0);
+        assert!(f.body_wrench.iter().all(|w| *w == Force::zero()));
+        assert_eq!(f.rotor_command, [0.0]);
+    }
 }

@@ -170,8 +170,7 @@ impl Simulation {
                 .map_err(|e| SystemError::new(e.to_string()))?;
         }
         self.with_context(t, x, kin, |ctx, h| {
-            h.forces.clear();
-            h.forces.hinge_torque.copy_from_slice(h.base_tau);
+            h.forces.reset_to(h.base_tau);
             for (e, r) in h.effects.iter_mut().zip(h.own) {
                 e.apply(ctx, h.forces, &x[r.clone()], &mut h.scratch[r.clone()])?;
             }

@@ -28,8 +28,7 @@ impl System for Simulation {
         let track = !self.work.is_empty();
         let nb = self.model.base_nv();
         let power = self.with_context(t, x, kin, |ctx, h| {
-            h.forces.clear();
-            h.forces.hinge_torque.copy_from_slice(h.base_tau);
+            h.forces.reset_to(h.base_tau);
             // Energy budget: the constant torques are an actuator's; each effect's forces
             // are measured by the change of the total power it makes.
             let mut hinges = if track {
