@@ -539,7 +539,7 @@ mod tests {
             );
         }
         // Rotors first or last among the bodies; hinges (so coordinates) in a random order.
-        if seed % 2 == 0 {
+        if seed.is_multiple_of(2) {
             bodies[4..].rotate_right(rotors);
         }
         for k in (1..hinges.len()).rev() {

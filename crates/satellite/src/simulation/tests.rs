@@ -187,3 +187,29 @@ fn centre_of_mass_only_when_declared() {
         }
     }
 }
+
+/// The peer orbit's scene (benches/peers/orbit.toml: the preprint satellite with three
+/// wheels) takes the unrolled ABA, and its right-hand side equals the generic ABA's to
+/// round-off at random states.
+#[test]
+fn unrolled_aba_in_the_right_hand_side() {
+    let scene = Scene::read(examples().join("../benches/peers/orbit.toml")).unwrap();
+    let mut fast = scene.simulation().unwrap();
+    assert!(fast.unrolled.is_some());
+    let mut generic = scene.simulation().unwrap();
+    generic.unrolled = None;
+    let mut rng = SplitMix(5);
+    let n = fast.dim();
+    for _ in 0..50 {
+        let x = random_state(&fast, &mut rng);
+        let (mut a, mut b) = (vec![0.0; n], vec![0.0; n]);
+        fast.rhs(0.0, &x, &mut a).unwrap();
+        generic.rhs(0.0, &x, &mut b).unwrap();
+        let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let diff = a
+            .iter()
+            .zip(&b)
+            .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
+        assert!(diff <= 1e-12 * scale, "{diff:e} of {scale:e}");
+    }
+}
