@@ -220,6 +220,7 @@ impl Simulation {
             e.initial_state(&mut x0[r.clone()]);
         }
         let n_bodies = model.n_bodies();
+        let velocity_at = velocity_in_state(&layout, rotor_effect.map(|i| own[i].clone()));
         let mut sim = Self {
             data: Data::new(&model),
             unrolled: UnrolledAba::new(&model),
@@ -238,6 +239,7 @@ impl Simulation {
             n_user,
             n_rotors,
             rotor_effect,
+            velocity_at,
             orbit_effect,
             needs_kinematics,
             needs_com,
@@ -294,5 +296,43 @@ impl Simulation {
         }
         sim.x0 = x0;
         Ok(sim)
+    }
+}
+
+/// Where the tree's velocity vector `[ω; v; hinge rates; rotor rates]` lies in the state as
+/// one contiguous run (it does when the rotors' spin rates, if any, follow the hinge rates:
+/// the usual order), so that `rhs` moves it, and its derivative, in one copy each.
+fn velocity_in_state(layout: &StateLayout, rotors: Option<Range<usize>>) -> Option<usize> {
+    let start = if layout.free {
+        layout.omega.start
+    } else {
+        layout.rates.start
+    };
+    match rotors {
+        Some(r) if r.start != layout.rates.end => None,
+        _ => Some(start),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::velocity_in_state;
+    use crate::simulation::StateLayout;
+
+    #[test]
+    fn the_velocity_vector_is_one_run_only_when_the_rotor_rates_follow_the_hinge_rates() {
+        let wheels_first = StateLayout::new(true, 5, &[("wheels".into(), 3), ("orbit".into(), 6)]);
+        assert_eq!(
+            velocity_in_state(&wheels_first, wheels_first.effect("wheels")),
+            Some(9)
+        );
+        let orbit_first = StateLayout::new(true, 5, &[("orbit".into(), 6), ("wheels".into(), 3)]);
+        assert_eq!(
+            velocity_in_state(&orbit_first, orbit_first.effect("wheels")),
+            None
+        );
+        assert_eq!(velocity_in_state(&orbit_first, None), Some(9));
+        let fixed = StateLayout::new(false, 2, &[("wheels".into(), 1)]);
+        assert_eq!(velocity_in_state(&fixed, fixed.effect("wheels")), Some(2));
     }
 }

@@ -119,6 +119,9 @@ pub struct Simulation {
     n_user: usize,
     n_rotors: usize,
     rotor_effect: Option<usize>,
+    /// Where the tree's whole velocity vector lies in the state, as one run (see
+    /// `velocity_in_state` in build.rs); `None`: in pieces.
+    velocity_at: Option<usize>,
     orbit_effect: Option<usize>,
     needs_kinematics: bool,
     /// Whether an effect reads [`Context::com`](crate::effects::Context::com) (computed

@@ -17,18 +17,27 @@ impl Simulation {
         let l = &self.layout;
         let n = self.n_user;
         if l.free {
-            // x = [attitude, angles, ω, v, rates, ...]: `[ω; v; rates]` is `v`'s head as
-            // it stands (fixed-size copies where the length is known: no `memcpy` calls).
+            // x = [attitude, angles, ω, v, rates, ...] (`StateLayout`); a fixed-size copy
+            // where the length is known (no `memcpy` call).
             self.q[..4].copy_from_slice(&x[..4]);
             self.q[7..7 + n].copy_from_slice(&x[4..4 + n]);
-            self.v[..6 + n].copy_from_slice(&x[l.omega.start..l.omega.start + 6 + n]);
         } else {
             self.q[..n].copy_from_slice(&x[l.angles.clone()]);
+        }
+        if let Some(s) = self.velocity_at {
+            // The whole velocity vector is one run of the state: one copy.
+            let nv = self.v.len();
+            self.v.copy_from_slice(&x[s..s + nv]);
+            return;
+        }
+        let nb = self.model.base_nv();
+        if l.free {
+            self.v[..6 + n].copy_from_slice(&x[l.omega.start..l.omega.start + 6 + n]);
+        } else {
             self.v[..n].copy_from_slice(&x[l.rates.clone()]);
         }
         if let Some(i) = self.rotor_effect {
-            let b = self.model.base_nv() + n;
-            self.v[b..b + self.n_rotors].copy_from_slice(&x[self.own[i].clone()]);
+            self.v[nb + n..nb + n + self.n_rotors].copy_from_slice(&x[self.own[i].clone()]);
         }
     }
 

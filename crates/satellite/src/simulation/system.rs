@@ -100,12 +100,18 @@ impl System for Simulation {
             for (d, q) in dx[..4].iter_mut().zip(qd) {
                 *d = 0.5 * q;
             }
-            // [ω̇; v̇; rates'] is `ddq`'s head, in place.
+        }
+        dx[l.angles.clone()].copy_from_slice(&x[l.rates.clone()]);
+        if let Some(s) = self.velocity_at {
+            // `q̈` in the velocity vector's order is the derivative of that run: one copy.
+            dx[s..s + ddq.len()].copy_from_slice(ddq);
+            return Ok(());
+        }
+        if l.free {
             dx[l.omega.start..l.omega.start + 6 + n].copy_from_slice(&ddq[..6 + n]);
         } else {
             dx[l.rates.clone()].copy_from_slice(&ddq[..n]);
         }
-        dx[l.angles.clone()].copy_from_slice(&x[l.rates.clone()]);
         if let Some(i) = self.rotor_effect {
             let r = self.own[i].clone();
             dx[r].copy_from_slice(&ddq[nb + n..nb + n + self.n_rotors]);
