@@ -182,11 +182,19 @@ fn bench_prints_the_four_figures() {
         let v: Value = serde_json::from_slice(&o.stdout).expect("one JSON object");
         assert_eq!(v["dof"], 11);
         assert_eq!(v["calls"], 50);
-        for k in ["crba", "rnea", "aba", "crba_cholesky"] {
+        // The satellite has the unrolled kernel's layout: its figure is there too.
+        for k in ["crba", "rnea", "aba", "crba_cholesky", "aba_unrolled"] {
             let x = v["ns_per_call"][k].as_f64().unwrap_or(-1.0);
             assert!(x > 0.0 && x.is_finite(), "{k}: {x}");
         }
     }
+    // A model without that layout has no `aba_unrolled` key.
+    let wings = root().join("examples/two_wings.toml");
+    let o = satsim(&["bench", "--model", wings.to_str().unwrap(), "--calls", "50"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: Value = serde_json::from_slice(&o.stdout).expect("one JSON object");
+    assert!(v["ns_per_call"]["aba"].as_f64().is_some());
+    assert!(v["ns_per_call"].get("aba_unrolled").is_none());
     let o = satsim(&["bench", "--model", model.to_str().unwrap(), "--calls", "0"]);
     assert_eq!(o.status.code(), Some(2));
     assert!(o.stdout.is_empty());

@@ -1,5 +1,7 @@
 //! `satsim bench --model MODEL.toml [--state STATE.json] [--calls N]` (contract section 5):
-//! the per-call cost of `crba`, `rnea`, `aba` and `crba_cholesky` on one model and state.
+//! the per-call cost of `crba`, `rnea`, `aba` and `crba_cholesky` on one model and state,
+//! and of `aba_unrolled` ([`UnrolledAba`], the same forward dynamics written out for the
+//! preprint's layout) where the model has that layout (the key is absent otherwise).
 //!
 //! For each algorithm: a warm-up, then [`REPETITIONS`] repetitions of `calls` calls; each
 //! repetition gives the mean time per call, and the figure printed is their median. Without
@@ -8,7 +10,7 @@
 
 use super::{CliError, Output, at_least_one, to_json};
 use satsim_tree::io::{State, read_model, read_state};
-use satsim_tree::{Data, Model, aba, crba, crba_cholesky, rnea};
+use satsim_tree::{Data, Model, UnrolledAba, aba, crba, crba_cholesky, rnea};
 use serde::Serialize;
 use std::hint::black_box;
 use std::path::PathBuf;
@@ -46,6 +48,9 @@ struct NsPerCall {
     rnea: f64,
     aba: f64,
     crba_cholesky: f64,
+    /// Only for models with the layout of [`UnrolledAba`].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    aba_unrolled: Option<f64>,
 }
 
 /// One timed algorithm: a call on the workspace.
@@ -121,8 +126,17 @@ pub fn run(args: &Args) -> Result<Output, CliError> {
         .as_slice()
         .to_vec();
     finite("forward dynamics (crba_cholesky)", &c)?;
+    let unrolled = UnrolledAba::new(&model);
+    if let Some(k) = &unrolled {
+        let u = k
+            .aba(&mut data, q, v, tau)
+            .map_err(err)?
+            .as_slice()
+            .to_vec();
+        finite("forward dynamics (aba_unrolled)", &u)?;
+    }
 
-    let mut algorithms: [(&str, Timed<'_>); 4] = [
+    let mut algorithms: Vec<(&str, Timed<'_>)> = vec![
         (
             "crba",
             Box::new(|d: &mut Data| {
@@ -178,6 +192,14 @@ pub fn run(args: &Args) -> Result<Output, CliError> {
             }),
         ),
     ];
+    if let Some(k) = &unrolled {
+        algorithms.push((
+            "aba_unrolled",
+            Box::new(move |d: &mut Data| {
+                let _ = black_box(k.aba(d, black_box(q), black_box(v), black_box(tau)).is_ok());
+            }),
+        ));
+    }
 
     let calls = match calls {
         Some(c) => c,
@@ -187,14 +209,14 @@ pub fn run(args: &Args) -> Result<Output, CliError> {
             for (_, f) in algorithms.iter_mut() {
                 total += mean_ns(f, &mut data, Duration::from_millis(20));
             }
-            // Warm-up of one repetition plus REPETITIONS timed ones, for all four.
+            // Warm-up of one repetition plus REPETITIONS timed ones, for all of them.
             let per_call_all = total * 1e-9 * (REPETITIONS + 1) as f64;
             round_down((TARGET_SECONDS / per_call_all).max(100.0) as usize)
         }
     };
 
-    // Medians in the order of `algorithms`: crba, rnea, aba, crba_cholesky.
-    let mut medians = [0.0; 4];
+    // Medians in the order of `algorithms`: crba, rnea, aba, crba_cholesky[, aba_unrolled].
+    let mut medians = vec![0.0; algorithms.len()];
     for ((_, f), median) in algorithms.iter_mut().zip(&mut medians) {
         for _ in 0..calls {
             f(&mut data);
@@ -211,16 +233,16 @@ pub fn run(args: &Args) -> Result<Output, CliError> {
         means.sort_by(f64::total_cmp);
         *median = means[REPETITIONS / 2];
     }
-    let [crba, rnea, aba, crba_cholesky] = medians;
     to_json(&Json {
         dof: n,
         calls,
         repetitions: REPETITIONS,
         ns_per_call: NsPerCall {
-            crba,
-            rnea,
-            aba,
-            crba_cholesky,
+            crba: medians[0],
+            rnea: medians[1],
+            aba: medians[2],
+            crba_cholesky: medians[3],
+            aba_unrolled: medians.get(4).copied(),
         },
     })
 }
