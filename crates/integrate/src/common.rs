@@ -174,15 +174,19 @@ pub(crate) fn scaled_norm(
     if n.is_finite() { n } else { f64::INFINITY }
 }
 
-/// Whether no entry is infinite or NaN (all exponent bits set). Without an early exit the
-/// test is an OR over the bit patterns, which the compiler vectorises: it runs after every
-/// right-hand side, and `iter().all(is_finite)` cost 4 instructions per entry.
+/// Whether no entry is infinite or NaN (all exponent bits set). It runs after every
+/// right-hand side: without an early exit, and with integer operations that baseline SSE2
+/// has for 64-bit lanes (and, xor, subtract, or; not a 64-bit compare), the compiler
+/// vectorises it, where `iter().all(is_finite)` cost 4 instructions per entry. For an
+/// exponent field `e`, `(e ^ EXPONENT) - 1` wraps to a set top bit exactly when `e` is all
+/// ones.
 #[inline]
 pub(crate) fn all_finite(x: &[f64]) -> bool {
     const EXPONENT: u64 = 0x7ff0_0000_0000_0000;
-    x.iter().fold(0u64, |any, v| {
-        any | u64::from(v.to_bits() & EXPONENT == EXPONENT)
-    }) == 0
+    let any = x.iter().fold(0u64, |any, v| {
+        any | ((v.to_bits() & EXPONENT) ^ EXPONENT).wrapping_sub(1)
+    });
+    any >> 63 == 0
 }
 
 /// Fails when `h` is too small to change `t`.
