@@ -4,7 +4,6 @@
 //! `callgrind_annotate --inclusive=yes`). `cargo run --release -p satsim-tree --example
 //! aba_calls -- generic|unrolled`.
 
-use satsim_tree::spatial::{Mat3, Vec3};
 use satsim_tree::*;
 use std::hint::black_box;
 use std::path::Path;
@@ -13,16 +12,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let which = std::env::args().nth(1).unwrap_or_else(|| "unrolled".into());
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/satellite.toml");
     let mut b = read_model(&path)?.to_builder();
-    for (k, name) in ["x", "y", "z"].into_iter().enumerate() {
-        let axis = Vec3::ith(k, 1.0);
-        let aat = axis * axis.transpose();
-        b.push_body(Body::new(
-            name,
-            2.0,
-            aat * 0.1 + (Mat3::identity() - aat) * 0.05,
-        ));
-        b.push_hinge(Hinge::revolute(name, "bus", name, axis).at(axis * 0.3));
-    }
+    samples::push_wheels(&mut b, "bus");
     let model = b.build()?;
     let kernel = UnrolledAba::new(&model).ok_or("not the kernel's layout")?;
     let mut data = Data::new(&model);

@@ -229,28 +229,10 @@ fn similarities<const I: usize, const J: usize>(
     e: &Mat3,
     ia: &ArticulatedInertia,
 ) -> ArticulatedInertia {
-    let (eii, eij, eji, ejj) = (e[(I, I)], e[(I, J)], e[(J, I)], e[(J, J)]);
-    let sim = |m: &Mat3| {
-        let mut n = *m;
-        // N = M E: columns I and J.
-        for r in 0..3 {
-            let (mi, mj) = (m[(r, I)], m[(r, J)]);
-            n[(r, I)] = mi * eii + mj * eji;
-            n[(r, J)] = mi * eij + mj * ejj;
-        }
-        // Eᵀ N: rows I and J.
-        let mut out = n;
-        for col in 0..3 {
-            let (ni, nj) = (n[(I, col)], n[(J, col)]);
-            out[(I, col)] = eii * ni + eji * nj;
-            out[(J, col)] = eij * ni + ejj * nj;
-        }
-        out
-    };
     ArticulatedInertia {
-        a: sim(&ia.a),
-        b: sim(&ia.b),
-        c: sim(&ia.c),
+        a: similarity::<I, J>(e, &ia.a),
+        b: similarity::<I, J>(e, &ia.b),
+        c: similarity::<I, J>(e, &ia.c),
     }
 }
 

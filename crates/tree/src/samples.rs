@@ -93,6 +93,20 @@ impl SplitMix {
     }
 }
 
+/// Adds three balanced reaction wheels to `parent` (2 kg, 0.1 kg m² about their axes `x`,
+/// `y`, `z`, 0.05 transverse, 0.3 m out along their axes; bodies and hinges named `x`, `y`,
+/// `z`): the peer orbit's wheels (`benches/peers/orbit.toml`), as `satsim-satellite` adds
+/// them, for the benchmarks and tests of the gyrostat and unrolled paths.
+pub fn push_wheels(b: &mut ModelBuilder, parent: &str) {
+    for (k, name) in ["x", "y", "z"].into_iter().enumerate() {
+        let axis = Vec3::ith(k, 1.0);
+        let aat = axis * axis.transpose();
+        let inertia = aat * 0.1 + (Mat3::identity() - aat) * 0.05;
+        b.push_body(Body::new(name, 2.0, inertia));
+        b.push_hinge(Hinge::revolute(name, parent, name, axis).at(axis * 0.3));
+    }
+}
+
 /// A random configuration `q` of `model`: a random unit attitude `[w, x, y, z]` and a
 /// position with entries in `[-position, position)` for a free base, hinge angles in
 /// `[-3, 3)` rad.

@@ -564,16 +564,7 @@ mod tests {
             std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/satellite.toml");
         let plain = crate::read_model(&path).unwrap();
         let mut b = plain.to_builder();
-        for (k, name) in ["x", "y", "z"].into_iter().enumerate() {
-            let axis = Vec3::ith(k, 1.0);
-            let aat = axis * axis.transpose();
-            b.push_body(Body::new(
-                name,
-                2.0,
-                aat * 0.1 + (Mat3::identity() - aat) * 0.05,
-            ));
-            b.push_hinge(Hinge::revolute(name, "bus", name, axis).at(axis * 0.3));
-        }
+        crate::samples::push_wheels(&mut b, "bus");
         (plain, b.build().unwrap())
     }
 
