@@ -44,45 +44,33 @@ fn per_call_algorithms_do_not_allocate() {
     // And a 3-DOF gimbal through massless links with a wheel on its tip (ABA's multi-axis
     // chain form with a gyrostat).
     let i = spatial::Mat3::identity();
-    let gimbal = ModelBuilder::new(BaseKind::Free)
-        .body(Body::new("bus", 500.0, i * 40.0))
-        .body(Body::massless("l1"))
-        .body(Body::massless("l2"))
-        .body(Body::new("panel", 20.0, i * 2.0))
-        .body(Body::new(
-            "wheel",
-            1.0,
-            spatial::Mat3::from_diagonal(&spatial::Vec3::new(0.1, 0.1, 0.2)),
-        ))
-        .hinge(Hinge::revolute("h1", "bus", "l1", spatial::Vec3::z()).at(spatial::Vec3::y()))
-        .hinge(Hinge::revolute("h2", "l1", "l2", spatial::Vec3::x()))
-        .hinge(
-            Hinge::revolute("h3", "l2", "panel", spatial::Vec3::y()).child_at(-spatial::Vec3::y()),
-        )
-        .hinge(Hinge::revolute("w", "panel", "wheel", spatial::Vec3::z()))
-        .build()
-        .unwrap();
+    // The bus, the gimbal's two massless links and the panel, with a wheel on `wheel_on`.
+    let gimbal_with_wheel = |wheel_on: &str| {
+        ModelBuilder::new(BaseKind::Free)
+            .body(Body::new("bus", 500.0, i * 40.0))
+            .body(Body::massless("l1"))
+            .body(Body::massless("l2"))
+            .body(Body::new("panel", 20.0, i * 2.0))
+            .body(Body::new(
+                "wheel",
+                1.0,
+                spatial::Mat3::from_diagonal(&spatial::Vec3::new(0.1, 0.1, 0.2)),
+            ))
+            .hinge(Hinge::revolute("h1", "bus", "l1", spatial::Vec3::z()).at(spatial::Vec3::y()))
+            .hinge(Hinge::revolute("h2", "l1", "l2", spatial::Vec3::x()))
+            .hinge(
+                Hinge::revolute("h3", "l2", "panel", spatial::Vec3::y())
+                    .child_at(-spatial::Vec3::y()),
+            )
+            .hinge(Hinge::revolute("w", wheel_on, "wheel", spatial::Vec3::z()))
+    };
+    let gimbal = gimbal_with_wheel("panel").build().unwrap();
     assert_eq!((gimbal.chains().len(), gimbal.gyrostats().len()), (1, 1));
     // The unrolled kernel's layout: the gimbal with a second panel below the first and the
     // wheel on the bus.
-    let layout = ModelBuilder::new(BaseKind::Free)
-        .body(Body::new("bus", 500.0, i * 40.0))
-        .body(Body::massless("l1"))
-        .body(Body::massless("l2"))
-        .body(Body::new("panel", 20.0, i * 2.0))
+    let layout = gimbal_with_wheel("bus")
         .body(Body::new("panel2", 20.0, i * 2.0).with_com(spatial::Vec3::y()))
-        .body(Body::new(
-            "wheel",
-            1.0,
-            spatial::Mat3::from_diagonal(&spatial::Vec3::new(0.1, 0.1, 0.2)),
-        ))
-        .hinge(Hinge::revolute("h1", "bus", "l1", spatial::Vec3::z()).at(spatial::Vec3::y()))
-        .hinge(Hinge::revolute("h2", "l1", "l2", spatial::Vec3::x()))
-        .hinge(
-            Hinge::revolute("h3", "l2", "panel", spatial::Vec3::y()).child_at(-spatial::Vec3::y()),
-        )
         .hinge(Hinge::revolute("h4", "panel", "panel2", spatial::Vec3::x()).at(spatial::Vec3::y()))
-        .hinge(Hinge::revolute("w", "bus", "wheel", spatial::Vec3::z()))
         .build()
         .unwrap();
     let mut kernels = 0;
