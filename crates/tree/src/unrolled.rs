@@ -22,6 +22,13 @@
 //!   the same pivots, so a gimbal lock fails as there, with the same
 //!   [`DynamicsError::SingularHinge`].
 //! - Rotors add `ω × Σ J Ω a + Σ τ a` to the base's bias and `Ω̇ = τ / J − a · ω̇` at the end.
+//! - External forces (`fext`, body coordinates, about each body's origin) are moved once to
+//!   the frame a body is processed in: about its hinge point, `n' = n + o × f` with `o` its
+//!   origin from the point. A rotor's axial moment `Sᵀ f` adds to its `τ`, the whole wrench
+//!   reaches the base through the bearing (`aba.rs`'s gyrostat form). The massless links'
+//!   wrenches (their origins are the gimbal's point: a rotation only) load the hinges
+//!   between them and the base and reach the base rigidly (`aba.rs`'s `links_bias`). A
+//!   const parameter keeps the force-free instance free of all this.
 //! - The serial chain's length is a const parameter: its loops run over arrays of known
 //!   size (no per-body dispatch, no `Option`s, no index checks).
 //!
@@ -35,7 +42,7 @@ use crate::axis::CoordAxis;
 use crate::data::Data;
 use crate::error::DynamicsError;
 use crate::kinematics::check_len;
-use crate::model::{BaseKind, ChainPart, Model};
+use crate::model::{BaseKind, ChainPart, Joint, Model};
 use crate::spatial::{ArticulatedInertia, Force, Mat3, Motion, RigidInertia, Transform, Vec3};
 use nalgebra::DVector;
 
@@ -53,6 +60,24 @@ struct Rotor {
     inv_j: f64,
     /// Its coordinate in `v`.
     dof: usize,
+    /// Its body (the index of its wrench in `fext`), its hinge, the hinge's coordinate axis
+    /// and its angle's index in `q`: only a wrench on the rotor needs its transform.
+    body: usize,
+    joint: Joint,
+    coord: Option<CoordAxis>,
+    angle: usize,
+}
+
+impl Rotor {
+    /// `Xup` of the rotor's hinge at `q` (as `Model::xup`).
+    #[inline]
+    fn xup(&self, q: &[f64]) -> Transform {
+        let phi = q[self.angle];
+        match &self.coord {
+            Some(a) => a.transform(phi, &self.joint.at, &self.joint.child_at),
+            None => self.joint.transform(phi),
+        }
+    }
 }
 
 /// A body of the serial chain, in the frame at its hinge point (its own axes).
@@ -71,10 +96,13 @@ struct Serial {
     /// Its coordinate in `q` and in `v`.
     angle: usize,
     dof: usize,
+    /// Its index in `model.bodies` (its wrench in `fext`).
+    body: usize,
 }
 
-/// [`crate::aba()`] without external forces, unrolled for one layout (see the module
-/// documentation): the preprint satellite's right-hand side at a fraction of the generic
+/// [`crate::aba()`] unrolled for one layout (see the module documentation), with external
+/// forces ([`UnrolledAba::aba_with_forces`]) or without ([`UnrolledAba::aba`]): the
+/// preprint satellite's right-hand side at a fraction of the generic
 /// algorithm's instructions, with the same result to round-off and the same errors.
 ///
 /// ```
@@ -126,6 +154,9 @@ pub struct UnrolledAba {
     /// The tip's origin from the gimbal's point (`−child_at`), for the pivot scale.
     tip_origin: Vec3,
     serial: Vec<Serial>,
+    /// Bodies (indices in `model.bodies`, as in `fext`): the tip, its link, the outermost link.
+    chain_bodies: [usize; 3],
+    n_bodies: usize,
     /// Per pivot (the gimbal's three in elimination order, then the serial bodies): the
     /// hinge named by a singular-hinge error and the hinges through massless links below it.
     names: Vec<(String, Vec<String>)>,
@@ -195,6 +226,7 @@ impl UnrolledAba {
                 origin: -j.child_at,
                 angle: base_nq + j.hinge,
                 dof: model.base_nv() + j.hinge,
+                body: i,
             });
             parent_origin = j.child_at;
         }
@@ -218,6 +250,10 @@ impl UnrolledAba {
                 j_axis: g.axis * g.axial,
                 inv_j: 1.0 / g.axial,
                 dof: joint(g.body).dof,
+                body: g.body,
+                joint: joint(g.body).clone(),
+                coord: model.coord_axis[g.body],
+                angle: base_nq + joint(g.body).hinge,
             })
             .collect();
         Some(Self {
@@ -234,6 +270,8 @@ impl UnrolledAba {
             tip_start: tip_inertia.into(),
             tip_origin: -r,
             serial,
+            chain_bodies: chain.order,
+            n_bodies: model.n_bodies(),
             names,
         })
     }
@@ -246,9 +284,11 @@ impl UnrolledAba {
     /// Forward dynamics without external forces, as [`crate::aba()`] with `fext = None`:
     /// the accelerations `q̈` into `data.ddq` (same layout: the base's `[ω̇; v̇]` in its own
     /// axes, then the hinges in their order of addition, rotors included). `data` must be
-    /// this model's; only `data.ddq` is written (the other buffers of `aba` are not).
-    /// Fails as [`crate::aba()`] does: [`DynamicsError::SingularHinge`] at a gimbal lock
-    /// (same hinge, same pivot), [`DynamicsError::SingularBase`], or a dimension error.
+    /// this model's; only `data.ddq` is written (the other buffers of `aba` are not, nor
+    /// read: the kernel computes its own transforms, so a caller's forward kinematics in
+    /// `data` stays as it was). Fails as [`crate::aba()`] does:
+    /// [`DynamicsError::SingularHinge`] at a gimbal lock (same hinge, same pivot),
+    /// [`DynamicsError::SingularBase`], or a dimension error.
     pub fn aba<'d>(
         &self,
         data: &'d mut Data,
@@ -256,40 +296,116 @@ impl UnrolledAba {
         v: &[f64],
         tau: &[f64],
     ) -> Result<&'d DVector<f64>, DynamicsError> {
+        self.aba_with_forces(data, q, v, tau, None)
+    }
+
+    /// As [`UnrolledAba::aba`], with external body forces `fext` in [`crate::aba()`]'s
+    /// convention (one wrench `[n; f]` per body in `model.bodies` order, body coordinates,
+    /// moment about the body's origin; see [`crate::rnea()`]), on any body: the base, its
+    /// rotors (the axial moment drives the spin, the rest acts on the base through the
+    /// bearing), the gimbal's massless links, the tip and the serial bodies. `None` is the
+    /// force-free instance, as cheap as [`UnrolledAba::aba`]. A `fext` of another length
+    /// than the model's bodies is a dimension error.
+    ///
+    /// ```
+    /// use satsim_tree::spatial::{Force, Mat3, Vec3};
+    /// use satsim_tree::{BaseKind, Body, Data, Hinge, ModelBuilder, UnrolledAba, aba, samples};
+    /// // A bus with three wheels, a 3-DOF gimbal through two massless links to a panel.
+    /// let mut builder = ModelBuilder::new(BaseKind::Free)
+    ///     .body(Body::new("bus", 800.0, Mat3::from_diagonal(&Vec3::new(900.0, 800.0, 600.0))))
+    ///     .body(Body::massless("link1"))
+    ///     .body(Body::massless("link2"))
+    ///     .body(Body::new("panel", 20.0, Mat3::from_diagonal(&Vec3::new(1.7, 6.7, 8.3))))
+    ///     .hinge(Hinge::revolute("h1", "bus", "link1", Vec3::z()).at(Vec3::y()))
+    ///     .hinge(Hinge::revolute("h2", "link1", "link2", Vec3::x()))
+    ///     .hinge(Hinge::revolute("h3", "link2", "panel", Vec3::y()).child_at(-0.6 * Vec3::y()));
+    /// samples::push_wheels(&mut builder, "bus");
+    /// let model = builder.build()?;
+    /// let kernel = UnrolledAba::new(&model).expect("the preprint's layout");
+    /// let mut data = Data::new(&model);
+    /// let mut q = model.neutral();
+    /// q[7..10].copy_from_slice(&[0.1, 0.2, 0.3]);
+    /// let (v, tau) = (vec![0.01; model.nv()], vec![0.5; model.nv()]);
+    /// // A wrench on every body, the massless links included.
+    /// let fext: Vec<Force> = (0..model.n_bodies())
+    ///     .map(|i| Force::new(Vec3::new(0.1, -0.2, 0.3) * i as f64, Vec3::new(1.0, 0.5, -0.4)))
+    ///     .collect();
+    /// let fast = kernel.aba_with_forces(&mut data, &q, &v, &tau, Some(&fext))?.clone();
+    /// let generic = aba(&model, &mut data, &q, &v, &tau, Some(&fext))?;
+    /// assert!((&fast - generic).amax() < 1e-12 * generic.amax());
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn aba_with_forces<'d>(
+        &self,
+        data: &'d mut Data,
+        q: &[f64],
+        v: &[f64],
+        tau: &[f64],
+        fext: Option<&[Force]>,
+    ) -> Result<&'d DVector<f64>, DynamicsError> {
         check_len("q", q.len(), self.nq)?;
         check_len("v", v.len(), self.nv)?;
         check_len("tau", tau.len(), self.nv)?;
         check_len("data.ddq", data.ddq.len(), self.nv)?;
         let ddq = data.ddq.as_mut_slice();
-        match self.serial.len() {
-            0 => self.run::<0>(ddq, q, v, tau)?,
-            1 => self.run::<1>(ddq, q, v, tau)?,
-            2 => self.run::<2>(ddq, q, v, tau)?,
-            3 => self.run::<3>(ddq, q, v, tau)?,
-            4 => self.run::<4>(ddq, q, v, tau)?,
-            5 => self.run::<5>(ddq, q, v, tau)?,
-            _ => self.run::<MAX_SERIAL>(ddq, q, v, tau)?,
+        match fext {
+            None => self.serial_len::<false>(ddq, q, v, tau, &[])?,
+            Some(f) => {
+                check_len("fext", f.len(), self.n_bodies)?;
+                self.serial_len::<true>(ddq, q, v, tau, f)?
+            }
         }
         Ok(&data.ddq)
     }
 
-    /// The three passes for `N` serial bodies (`q`, `v`, `tau`, `ddq` of checked lengths).
-    #[inline(never)]
-    fn run<const N: usize>(
+    /// [`UnrolledAba::run`]'s instance for this model's serial chain.
+    #[inline]
+    fn serial_len<const LOADED: bool>(
         &self,
         ddq: &mut [f64],
         q: &[f64],
         v: &[f64],
         tau: &[f64],
+        fext: &[Force],
+    ) -> Result<(), DynamicsError> {
+        match self.serial.len() {
+            0 => self.run::<0, LOADED>(ddq, q, v, tau, fext),
+            1 => self.run::<1, LOADED>(ddq, q, v, tau, fext),
+            2 => self.run::<2, LOADED>(ddq, q, v, tau, fext),
+            3 => self.run::<3, LOADED>(ddq, q, v, tau, fext),
+            4 => self.run::<4, LOADED>(ddq, q, v, tau, fext),
+            5 => self.run::<5, LOADED>(ddq, q, v, tau, fext),
+            _ => self.run::<MAX_SERIAL, LOADED>(ddq, q, v, tau, fext),
+        }
+    }
+
+    /// The three passes for `N` serial bodies (`q`, `v`, `tau`, `ddq` of checked lengths);
+    /// `LOADED`: with the external forces `fext` (one per body, checked), else `fext` is
+    /// not read.
+    #[inline(never)]
+    fn run<const N: usize, const LOADED: bool>(
+        &self,
+        ddq: &mut [f64],
+        q: &[f64],
+        v: &[f64],
+        tau: &[f64],
+        fext: &[Force],
     ) -> Result<(), DynamicsError> {
         let serial: &[Serial; N] = self.serial.as_slice().try_into().expect("N bodies");
         // Pass 1, outward. The base, with its rotors' gyroscopic couple and axial reactions.
         let v0 = Motion::from_slice(&v[..6]);
         let mut pa0 = v0.cross_force(&self.base_inertia.mul_motion(&v0));
+        if LOADED {
+            pa0 -= fext[0];
+        }
         let mut spin = Vec3::zeros();
         for r in &self.rotors {
             spin += r.j_axis * v[r.dof];
-            pa0.ang += r.axis * tau[r.dof];
+            pa0.ang += r.axis * (tau[r.dof] + self.rotor_load::<LOADED>(r, fext));
+            if LOADED {
+                // The rest of the rotor's wrench acts on the base through the bearing.
+                pa0 -= r.xup(q).inv_apply_force(&fext[r.body]);
+            }
         }
         pa0.ang += v0.ang.cross(&spin);
         // The gimbal: its rotation (base axes to the tip's), the axes in the tip's axes.
@@ -314,7 +430,17 @@ impl UnrolledAba {
             vp.lin.cross(&w_rel),
         );
         let v_tip = Motion::new(vp.ang + w_rel, vp.lin);
-        let pa_tip = v_tip.cross_force(&self.tip_inertia.mul_motion(&v_tip));
+        let mut pa_tip = v_tip.cross_force(&self.tip_inertia.mul_motion(&v_tip));
+        let [tip, link_in, link_out] = self.chain_bodies;
+        // The links' wrenches at the point, tip axes: g₁ the tip's link's, g₂ both links'
+        // (each link's origin is the point: a rotation only).
+        let (mut g1, mut g2) = (Force::zero(), Force::zero());
+        if LOADED {
+            pa_tip -= at_hinge(&fext[tip], &self.tip_origin);
+            let rotate = |m: &Mat3, f: &Force| Force::new(m * f.ang, m * f.lin);
+            g1 = rotate(&e0m, &fext[link_in]);
+            g2 = g1 + rotate(&r01, &fext[link_out]);
+        }
         // The serial bodies.
         let mut xs = [Transform::identity(); N];
         let mut cs = [Motion::zero(); N];
@@ -327,6 +453,9 @@ impl UnrolledAba {
             cs[j] = Motion::new(vx.ang.cross(&sq), vx.lin.cross(&sq));
             let vj = Motion::new(vx.ang + sq, vx.lin);
             pas[j] = vj.cross_force(&s.inertia.mul_motion(&vj));
+            if LOADED {
+                pas[j] -= at_hinge(&fext[s.body], &s.origin);
+            }
             vp = vj;
         }
         // Pass 2, inward: the serial bodies, last first, each projected into its parent.
@@ -371,7 +500,9 @@ impl UnrolledAba {
         let tr_a = ah.trace() - w0.ang.norm_squared() * inv0;
         let l10 = e1.dot(&w0.ang) * inv0;
         let w1 = Force::new(ah * e1, bh.tr_mul(&e1)) - w0 * l10;
-        let u1 = tau[d1] - e1.dot(&pa.ang) - l10 * u0;
+        // The links' wrenches load the hinges between them and the base (`links_bias` of
+        // `aba.rs`): the tip's link's on e₁, both on e₂.
+        let u1 = tau[d1] + e1.dot(&g1.ang) - e1.dot(&pa.ang) - l10 * u0;
         let p1 = e1.dot(&w1.ang);
         self.check_plain(p1, tr_a, 1)?;
         let inv1 = 1.0 / p1;
@@ -379,7 +510,7 @@ impl UnrolledAba {
         let l20 = e2.dot(&w0.ang) * inv0;
         let l21 = e2.dot(&w1.ang) * inv1;
         let w2 = Force::new(ah * e2, bh.tr_mul(&e2)) - w0 * l20 - w1 * l21;
-        let u2 = tau[d2] - e2.dot(&pa.ang) - l20 * u0 - l21 * u1;
+        let u2 = tau[d2] + e2.dot(&g2.ang) - e2.dot(&pa.ang) - l20 * u0 - l21 * u1;
         let p2 = e2.dot(&w2.ang);
         self.check_plain(p2, tr_a, 2)?;
         let inv2 = 1.0 / p2;
@@ -390,6 +521,9 @@ impl UnrolledAba {
             - (w2.lin * inv2) * w2.lin.transpose();
         let mut pa_h = pa + w0 * (u0 * inv0) + w1 * (u1 * inv1) + w2 * (u2 * inv2);
         pa_h.lin += cc * c_tip.lin;
+        if LOADED {
+            pa_h -= g2; // and reach the base rigidly
+        }
         let mut ia0 = ArticulatedInertia::default();
         add_linear_inv_transform(&cc, &x, &mut ia0, Some(&self.base_start));
         let pa0 = pa0 + x.inv_apply_force(&pa_h);
@@ -399,7 +533,8 @@ impl UnrolledAba {
             .ok_or(DynamicsError::SingularBase)?;
         ddq[..6].copy_from_slice(&a0.to_array());
         for r in &self.rotors {
-            ddq[r.dof] = tau[r.dof] * r.inv_j - r.axis.dot(&a0.ang);
+            let axial = tau[r.dof] + self.rotor_load::<LOADED>(r, fext);
+            ddq[r.dof] = axial * r.inv_j - r.axis.dot(&a0.ang);
         }
         let a = x.apply_motion(&a0) + c_tip;
         let qdd2 = (u2 - a.dot(&w2)) * inv2;
@@ -416,6 +551,16 @@ impl UnrolledAba {
             ap = Motion::new(aj.ang + s.axis.scaled_axis(qdd), aj.lin);
         }
         Ok(())
+    }
+
+    /// The axial moment `Sᵀ f` of the external wrench on rotor `r` (zero when not `LOADED`).
+    #[inline(always)]
+    fn rotor_load<const LOADED: bool>(&self, r: &Rotor, fext: &[Force]) -> f64 {
+        if LOADED {
+            r.joint.s.dot(&fext[r.body])
+        } else {
+            0.0
+        }
     }
 
     /// `aba.rs`'s pivot test for a body whose articulated inertia `ia` is given about its
@@ -463,6 +608,13 @@ impl UnrolledAba {
             relative: if scale > 0.0 { d / scale } else { 0.0 },
         }
     }
+}
+
+/// A wrench `f` about a body's origin moved to its hinge point, the origin lying at `o` from
+/// the point (same axes): `[n + o × f; f]`.
+#[inline(always)]
+fn at_hinge(f: &Force, o: &Vec3) -> Force {
+    Force::new(f.ang + o.cross(&f.lin), f.lin)
 }
 
 #[cfg(test)]
@@ -575,12 +727,31 @@ mod tests {
         (q, v, tau)
     }
 
-    /// The kernel against the generic ABA on one state: the same accelerations to 1e-12 of
-    /// the largest, or the same refusal. Returns whether both solved.
-    fn agrees(model: &Model, kernel: &UnrolledAba, q: &[f64], v: &[f64], tau: &[f64]) -> bool {
+    /// A random wrench on every body (base, rotors, links, tip, serial bodies).
+    fn random_wrenches(model: &Model, rng: &mut SplitMix) -> Vec<Force> {
+        (0..model.n_bodies())
+            .map(|_| Force::new(rng.vec3(5.0), rng.vec3(5.0)))
+            .collect()
+    }
+
+    /// The kernel against the generic ABA on one state, with external forces `fext` or
+    /// without: the same accelerations to 1e-12 of the largest, or the same refusal.
+    /// Returns whether both solved.
+    fn agrees(
+        model: &Model,
+        kernel: &UnrolledAba,
+        q: &[f64],
+        v: &[f64],
+        tau: &[f64],
+        fext: Option<&[Force]>,
+    ) -> bool {
         let (mut dk, mut dg) = (Data::new(model), Data::new(model));
-        let fast = kernel.aba(&mut dk, q, v, tau).cloned();
-        let generic = aba(model, &mut dg, q, v, tau, None).cloned();
+        let fast = if fext.is_some() {
+            kernel.aba_with_forces(&mut dk, q, v, tau, fext).cloned()
+        } else {
+            kernel.aba(&mut dk, q, v, tau).cloned()
+        };
+        let generic = aba(model, &mut dg, q, v, tau, fext).cloned();
         match (fast, generic) {
             (Ok(a), Ok(b)) => {
                 // Forward: 1e-12 of the largest acceleration, or the textbook bound κ(M) ε
@@ -596,7 +767,7 @@ mod tests {
                     "relative difference {e:e}, κε {kappa_eps:e}\n{a}\n{b}"
                 );
                 // Backward (no κ): inverse dynamics of the kernel's result gives back τ.
-                let back = crate::rnea(model, &mut dg, q, v, a.as_slice(), None).unwrap();
+                let back = crate::rnea(model, &mut dg, q, v, a.as_slice(), fext).unwrap();
                 let scale = (m.abs() * a.abs()).amax().max(1.0);
                 let r = (back - DVector::from_column_slice(tau)).amax();
                 assert!(r < 1e-12 * scale, "residual {r:e} of {scale:e}");
@@ -645,7 +816,11 @@ mod tests {
             let solved = (0..300)
                 .filter(|_| {
                     let (q, v, tau) = random_state(&model, &mut rng);
-                    agrees(&model, &kernel, &q, &v, &tau)
+                    let fext = random_wrenches(&model, &mut rng);
+                    let free = agrees(&model, &kernel, &q, &v, &tau, None);
+                    let loaded = agrees(&model, &kernel, &q, &v, &tau, Some(&fext));
+                    assert_eq!(free, loaded, "a force changes no pivot");
+                    free
                 })
                 .count();
             assert!(solved > 290, "{solved}");
@@ -665,7 +840,11 @@ mod tests {
             let mut rng = SplitMix(seed ^ 0xab1e);
             for _ in 0..3 {
                 let (q, v, tau) = random_state(&model, &mut rng);
-                if agrees(&model, &kernel, &q, &v, &tau) {
+                let fext = random_wrenches(&model, &mut rng);
+                let free = agrees(&model, &kernel, &q, &v, &tau, None);
+                let loaded = agrees(&model, &kernel, &q, &v, &tau, Some(&fext));
+                assert_eq!(free, loaded, "a force changes no pivot");
+                if free {
                     solved += 1;
                     seen[serial][rotors] += 1;
                 }
@@ -800,6 +979,32 @@ mod tests {
         assert!((&fast - generic).amax() < 1e-9 * generic.amax());
     }
 
+    /// A wrench on one body at a time (each kind: base, rotor, link, tip, serial body) moves
+    /// the accelerations, and as in the generic ABA.
+    #[test]
+    fn each_bodys_wrench_acts_as_in_generic_aba() {
+        for seed in 0..20u64 {
+            let model = random_layout(2, 2, seed);
+            let kernel = UnrolledAba::new(&model).unwrap();
+            let mut rng = SplitMix(seed ^ 0xf0ce);
+            let (q, v, tau) = random_state(&model, &mut rng);
+            let mut data = Data::new(&model);
+            let Ok(free) = kernel.aba(&mut data, &q, &v, &tau).cloned() else {
+                continue;
+            };
+            for i in 0..model.n_bodies() {
+                let mut fext = vec![Force::zero(); model.n_bodies()];
+                fext[i] = Force::new(rng.vec3(5.0), rng.vec3(5.0));
+                assert!(agrees(&model, &kernel, &q, &v, &tau, Some(&fext)));
+                let loaded = kernel
+                    .aba_with_forces(&mut data, &q, &v, &tau, Some(&fext))
+                    .unwrap();
+                let moved = (loaded - &free).amax();
+                assert!(moved > 1e-6 * free.amax(), "body {i}: moved {moved:e}");
+            }
+        }
+    }
+
     #[test]
     fn wrong_lengths_are_refused() {
         let model = random_layout(1, 1, 5);
@@ -811,5 +1016,17 @@ mod tests {
         assert!(kernel.aba(&mut data, &q, &v, &v[1..]).is_err());
         let other = random_layout(2, 1, 5);
         assert!(kernel.aba(&mut Data::new(&other), &q, &v, &v).is_err());
+        let fext = vec![Force::zero(); model.n_bodies()];
+        // (At the neutral angles this gimbal's first and last axes may be parallel: locked.)
+        let (q, v, tau) = random_state(&model, &mut SplitMix(1));
+        assert!(
+            kernel
+                .aba_with_forces(&mut data, &q, &v, &tau, Some(&fext))
+                .is_ok()
+        );
+        let e = kernel
+            .aba_with_forces(&mut data, &q, &v, &tau, Some(&fext[1..]))
+            .unwrap_err();
+        assert!(e.to_string().contains("fext"), "{e}");
     }
 }

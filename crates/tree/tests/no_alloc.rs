@@ -104,6 +104,8 @@ fn per_call_algorithms_do_not_allocate() {
             aba(&model, &mut data, &q, &v, &tau, None).unwrap();
             if let Some(k) = &kernel {
                 k.aba(&mut data, &q, &v, &tau).unwrap();
+                k.aba_with_forces(&mut data, &q, &v, &tau, Some(&fext))
+                    .unwrap();
             }
             crba_cholesky(&model, &mut data, &q, &v, &tau, None).unwrap();
             kinetic_energy(&model, &mut data, &q, &v).unwrap();
