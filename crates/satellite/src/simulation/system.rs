@@ -76,17 +76,19 @@ impl System for Simulation {
             None
         };
         // After kinematics `data.xup` holds this state's transforms (the effects only read
-        // `data`): ABA reuses them, with bit for bit the same result.
+        // `data`): the generic ABA reuses them, with bit for bit the same result. The
+        // unrolled kernel computes its own and writes only `data.ddq` (nothing after this
+        // reads the other buffers the generic ABA would have written).
         let (model, data) = (&self.model, &mut self.data);
         let (q, v, tau) = (&self.q, &self.v, &self.tau);
-        let ddq = match (self.n_locked > 0, kin) {
-            (true, true) => aba_hybrid_with_kinematics(model, data, q, v, tau, fext, &self.locked),
-            (true, false) => aba_hybrid(model, data, q, v, tau, fext, &self.locked),
-            (false, true) => aba_with_kinematics(model, data, q, v, tau, fext),
-            (false, false) => match (&self.unrolled, fext) {
-                (Some(kernel), None) => kernel.aba(data, q, v, tau),
-                _ => aba(model, data, q, v, tau, fext),
-            },
+        let ddq = match (self.n_locked > 0, &self.unrolled, kin) {
+            (true, _, true) => {
+                aba_hybrid_with_kinematics(model, data, q, v, tau, fext, &self.locked)
+            }
+            (true, _, false) => aba_hybrid(model, data, q, v, tau, fext, &self.locked),
+            (false, Some(kernel), _) => kernel.aba_with_forces(data, q, v, tau, fext),
+            (false, None, true) => aba_with_kinematics(model, data, q, v, tau, fext),
+            (false, None, false) => aba(model, data, q, v, tau, fext),
         }
         .map_err(|e| SystemError::new(e.to_string()))?;
         let l = &self.layout;
