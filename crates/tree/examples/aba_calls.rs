@@ -1,8 +1,9 @@
 //! 100 000 forward-dynamics calls on the preprint satellite with the peer orbit's wheels, by
-//! the generic ABA or the unrolled kernel: the program to count instructions per call with
+//! the generic ABA or the unrolled kernel, without external forces or (second argument
+//! `forces`) with a wrench on every body: the program to count instructions per call with
 //! callgrind (`valgrind --tool=callgrind target/release/examples/aba_calls unrolled`, then
 //! `callgrind_annotate --inclusive=yes`). `cargo run --release -p satsim-tree --example
-//! aba_calls -- generic|unrolled`.
+//! aba_calls -- generic|unrolled [forces]`.
 
 use satsim_tree::*;
 use std::hint::black_box;
@@ -10,6 +11,7 @@ use std::path::Path;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let which = std::env::args().nth(1).unwrap_or_else(|| "unrolled".into());
+    let forces = std::env::args().nth(2).is_some_and(|a| a == "forces");
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/satellite.toml");
     let mut b = read_model(&path)?.to_builder();
     samples::push_wheels(&mut b, "bus");
@@ -24,15 +26,29 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let tau: Vec<f64> = (0..model.nv())
         .map(|k| 0.1 * (2.0 + k as f64).cos())
         .collect();
+    // Gravity-gradient-like wrenches: small, different on every body.
+    let wrenches: Vec<spatial::Force> = (0..model.n_bodies())
+        .map(|i| {
+            let x = i as f64;
+            spatial::Force::new(
+                spatial::Vec3::new(x.sin(), x.cos(), 0.5) * 1e-4,
+                spatial::Vec3::new(0.3, -x.sin(), x.cos()) * 1e-3,
+            )
+        })
+        .collect();
+    let fext = forces.then_some(wrenches.as_slice());
     let mut sum = 0.0;
     for _ in 0..100_000 {
         let ddq = match which.as_str() {
-            "generic" => aba(&model, &mut data, black_box(&q), &v, black_box(&tau), None)?,
+            "generic" => aba(&model, &mut data, black_box(&q), &v, black_box(&tau), fext)?,
+            _ if forces => {
+                kernel.aba_with_forces(&mut data, black_box(&q), &v, black_box(&tau), fext)?
+            }
             _ => kernel.aba(&mut data, black_box(&q), &v, black_box(&tau))?,
         };
         sum += ddq[10];
         v[0] += 0.0 * ddq[10];
     }
-    println!("{which}: {sum}");
+    println!("{which}{}: {sum}", if forces { " with forces" } else { "" });
     Ok(())
 }
