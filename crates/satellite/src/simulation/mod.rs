@@ -25,7 +25,8 @@
 //! unpack `x` → forward kinematics (only when an effect needs it; the centre of mass only
 //! when an effect reads it) → each enabled effect adds hinge torques, body wrenches and its
 //! own derivatives → ABA (hybrid ABA when hinges are locked; reusing the kinematics' hinge
-//! transforms when they ran) → pack `dx`.
+//! transforms when they ran; the unrolled kernel where the model has the preprint's layout
+//! and no hinge is locked) → pack `dx`.
 //!
 //! # Event and output passes
 //!
@@ -107,8 +108,8 @@ pub enum SimError {
 pub struct Simulation {
     model: Model,
     data: Data,
-    /// ABA unrolled for the model's layout, where it has the preprint's (`rhs` uses it
-    /// without locked hinges, kinematics or external forces).
+    /// ABA unrolled for the model's layout, where it has the preprint's (`rhs` uses it,
+    /// with the effects' wrenches, whenever no hinge is locked).
     unrolled: Option<UnrolledAba>,
     layout: StateLayout,
     effects: Vec<Box<dyn Effect>>,
