@@ -65,4 +65,4 @@ pub use model::{
     BaseKind, Body, BodyInfo, BoxShape, Chain, Gyrostat, Hinge, Joint, Model, ModelBuilder,
 };
 pub use rnea::{bias, rnea};
-pub use unrolled::UnrolledAba;
+pub use unrolled::{Locks, UnrolledAba};

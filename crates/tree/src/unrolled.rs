@@ -49,6 +49,38 @@ use nalgebra::DVector;
 /// The longest serial chain below the gimbal's tip that [`UnrolledAba`] takes.
 pub const MAX_SERIAL: usize = 6;
 
+/// Which of the kernel's hinges are locked (hybrid dynamics, as [`crate::aba_hybrid()`]): the
+/// rotors' and the serial bodies', one bit each (rotor `k` of the model's gyrostats, serial
+/// body `j` from the tip). Made by [`UnrolledAba::locks`] from a lock mask.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Locks {
+    rotors: u64,
+    serial: u8,
+}
+
+impl Locks {
+    /// Nothing locked.
+    pub const NONE: Locks = Locks {
+        rotors: 0,
+        serial: 0,
+    };
+
+    /// Whether nothing is locked.
+    pub fn is_none(&self) -> bool {
+        *self == Self::NONE
+    }
+
+    #[inline(always)]
+    fn rotor(&self, k: usize) -> bool {
+        k < 64 && self.rotors >> k & 1 == 1
+    }
+
+    #[inline(always)]
+    fn serial(&self, j: usize) -> bool {
+        self.serial >> j & 1 == 1
+    }
+}
+
 /// A balanced rotor on the base (a [`crate::Gyrostat`]).
 #[derive(Clone, Debug)]
 struct Rotor {
@@ -157,6 +189,11 @@ pub struct UnrolledAba {
     /// Bodies (indices in `model.bodies`, as in `fext`): the tip, its link, the outermost link.
     chain_bodies: [usize; 3],
     n_bodies: usize,
+    /// Hinge indices (as in a lock mask): the gimbal's, the rotors', the serial bodies'.
+    gimbal_hinges: [usize; 3],
+    rotor_hinges: Vec<usize>,
+    serial_hinges: Vec<usize>,
+    n_hinges: usize,
     /// Per pivot (the gimbal's three in elimination order, then the serial bodies): the
     /// hinge named by a singular-hinge error and the hinges through massless links below it.
     names: Vec<(String, Vec<String>)>,
@@ -272,6 +309,14 @@ impl UnrolledAba {
             serial,
             chain_bodies: chain.order,
             n_bodies: model.n_bodies(),
+            gimbal_hinges: chain.order.map(|i| joint(i).hinge),
+            rotor_hinges: model
+                .gyrostats
+                .iter()
+                .map(|g| joint(g.body).hinge)
+                .collect(),
+            serial_hinges: serial_bodies.iter().map(|&i| joint(i).hinge).collect(),
+            n_hinges: model.n_hinges(),
             names,
         })
     }
@@ -343,16 +388,59 @@ impl UnrolledAba {
         tau: &[f64],
         fext: Option<&[Force]>,
     ) -> Result<&'d DVector<f64>, DynamicsError> {
+        self.aba_hybrid_with_forces(data, q, v, tau, fext, Locks::NONE)
+    }
+
+    /// The kernel's form of a lock mask `locked` (one entry per hinge in the order of
+    /// addition, rotors included, as [`crate::aba_hybrid()`] takes it), or `None` where the
+    /// kernel does not take it: a gimbal hinge locked (the caller keeps
+    /// [`crate::aba_hybrid()`]), a mask of another length, or a locked rotor past the 64th.
+    pub fn locks(&self, locked: &[bool]) -> Option<Locks> {
+        if locked.len() != self.n_hinges || self.gimbal_hinges.iter().any(|&h| locked[h]) {
+            return None;
+        }
+        let mut locks = Locks::NONE;
+        for (k, &h) in self.rotor_hinges.iter().enumerate() {
+            if locked[h] {
+                if k >= 64 {
+                    return None;
+                }
+                locks.rotors |= 1 << k;
+            }
+        }
+        for (j, &h) in self.serial_hinges.iter().enumerate() {
+            if locked[h] {
+                locks.serial |= 1 << j;
+            }
+        }
+        Some(locks)
+    }
+
+    /// Hybrid dynamics (Featherstone §9.2), as [`crate::aba_hybrid()`]: as
+    /// [`UnrolledAba::aba_with_forces`], except that the hinges locked in `locks` (rotors,
+    /// serial bodies; see [`UnrolledAba::locks`]) have zero acceleration, their `τ` ignored,
+    /// and pass their child's inertia rigidly to the parent. A locked rotor rides on the
+    /// base: its axial inertia is the base's again, its axial torque and the axial moment of
+    /// its wrench go through the lock, its spin's gyroscopic couple stays.
+    pub fn aba_hybrid_with_forces<'d>(
+        &self,
+        data: &'d mut Data,
+        q: &[f64],
+        v: &[f64],
+        tau: &[f64],
+        fext: Option<&[Force]>,
+        locks: Locks,
+    ) -> Result<&'d DVector<f64>, DynamicsError> {
         check_len("q", q.len(), self.nq)?;
         check_len("v", v.len(), self.nv)?;
         check_len("tau", tau.len(), self.nv)?;
         check_len("data.ddq", data.ddq.len(), self.nv)?;
         let ddq = data.ddq.as_mut_slice();
         match fext {
-            None => self.serial_len::<false>(ddq, q, v, tau, &[])?,
+            None => self.serial_len::<false>(ddq, q, v, tau, &[], locks)?,
             Some(f) => {
                 check_len("fext", f.len(), self.n_bodies)?;
-                self.serial_len::<true>(ddq, q, v, tau, f)?
+                self.serial_len::<true>(ddq, q, v, tau, f, locks)?
             }
         }
         Ok(&data.ddq)
@@ -367,21 +455,22 @@ impl UnrolledAba {
         v: &[f64],
         tau: &[f64],
         fext: &[Force],
+        locks: Locks,
     ) -> Result<(), DynamicsError> {
         match self.serial.len() {
-            0 => self.run::<0, LOADED>(ddq, q, v, tau, fext),
-            1 => self.run::<1, LOADED>(ddq, q, v, tau, fext),
-            2 => self.run::<2, LOADED>(ddq, q, v, tau, fext),
-            3 => self.run::<3, LOADED>(ddq, q, v, tau, fext),
-            4 => self.run::<4, LOADED>(ddq, q, v, tau, fext),
-            5 => self.run::<5, LOADED>(ddq, q, v, tau, fext),
-            _ => self.run::<MAX_SERIAL, LOADED>(ddq, q, v, tau, fext),
+            0 => self.run::<0, LOADED>(ddq, q, v, tau, fext, locks),
+            1 => self.run::<1, LOADED>(ddq, q, v, tau, fext, locks),
+            2 => self.run::<2, LOADED>(ddq, q, v, tau, fext, locks),
+            3 => self.run::<3, LOADED>(ddq, q, v, tau, fext, locks),
+            4 => self.run::<4, LOADED>(ddq, q, v, tau, fext, locks),
+            5 => self.run::<5, LOADED>(ddq, q, v, tau, fext, locks),
+            _ => self.run::<MAX_SERIAL, LOADED>(ddq, q, v, tau, fext, locks),
         }
     }
 
     /// The three passes for `N` serial bodies (`q`, `v`, `tau`, `ddq` of checked lengths);
     /// `LOADED`: with the external forces `fext` (one per body, checked), else `fext` is
-    /// not read.
+    /// not read; `locks`: the locked hinges (hybrid dynamics).
     #[inline(never)]
     fn run<const N: usize, const LOADED: bool>(
         &self,
@@ -390,6 +479,7 @@ impl UnrolledAba {
         v: &[f64],
         tau: &[f64],
         fext: &[Force],
+        locks: Locks,
     ) -> Result<(), DynamicsError> {
         let serial: &[Serial; N] = self.serial.as_slice().try_into().expect("N bodies");
         // Pass 1, outward. The base, with its rotors' gyroscopic couple and axial reactions.
@@ -399,9 +489,12 @@ impl UnrolledAba {
             pa0 -= fext[0];
         }
         let mut spin = Vec3::zeros();
-        for r in &self.rotors {
+        for (k, r) in self.rotors.iter().enumerate() {
             spin += r.j_axis * v[r.dof];
-            pa0.ang += r.axis * (tau[r.dof] + self.rotor_load::<LOADED>(r, fext));
+            if !locks.rotor(k) {
+                // (Locked, the axial torque goes through the lock: the hold torque.)
+                pa0.ang += r.axis * (tau[r.dof] + self.rotor_load::<LOADED>(r, fext));
+            }
             if LOADED {
                 // The rest of the rotor's wrench acts on the base through the bearing.
                 pa0 -= r.xup(q).inv_apply_force(&fext[r.body]);
@@ -471,16 +564,25 @@ impl UnrolledAba {
         for j in (0..N).rev() {
             let s = &serial[j];
             let a = &s.axis;
-            let u_col = Force::new(a.times_axis(&ia.a), a.tr_times_axis(&ia.b));
-            let d = a.dot_axis(&u_col.ang);
-            self.check(d, &ia, &s.origin, 3 + j)?;
-            let inv_d = 1.0 / d;
-            let u = tau[s.dof] - a.dot_axis(&pa.ang);
             let (parent_start, parent_bias) = if j > 0 {
                 (&serial[j - 1].start, pas[j - 1])
             } else {
                 (&self.tip_start, pa_tip)
             };
+            if locks.serial(j) {
+                // Known (zero) acceleration: the body rides rigidly on its parent.
+                let mut parent = ArticulatedInertia::default();
+                a.add_inv_transform(&ia, &xs[j], &mut parent, Some(parent_start));
+                let pa_j = pa + ia.mul_motion(&cs[j]);
+                pa = parent_bias + a.inv_apply_force(&xs[j], &pa_j);
+                ia = parent;
+                continue;
+            }
+            let u_col = Force::new(a.times_axis(&ia.a), a.tr_times_axis(&ia.b));
+            let d = a.dot_axis(&u_col.ang);
+            self.check(d, &ia, &s.origin, 3 + j)?;
+            let inv_d = 1.0 / d;
+            let u = tau[s.dof] - a.dot_axis(&pa.ang);
             // The parent's inertia: its start plus Xᵀ (IA − U Uᵀ / D) X.
             let mut parent = ArticulatedInertia::default();
             let iac = a.project_at_point(&ia, inv_d, &cs[j], &xs[j], &mut parent, parent_start);
@@ -524,17 +626,35 @@ impl UnrolledAba {
         if LOADED {
             pa_h -= g2; // and reach the base rigidly
         }
+        // Locked rotors' axial inertia is the base's again.
+        let with_locked;
+        let base_start = if locks.rotors == 0 {
+            &self.base_start
+        } else {
+            let mut start = self.base_start;
+            for (k, r) in self.rotors.iter().enumerate() {
+                if locks.rotor(k) {
+                    start.a += r.j_axis * r.axis.transpose();
+                }
+            }
+            with_locked = start;
+            &with_locked
+        };
         let mut ia0 = ArticulatedInertia::default();
-        add_linear_inv_transform(&cc, &x, &mut ia0, Some(&self.base_start));
+        add_linear_inv_transform(&cc, &x, &mut ia0, Some(base_start));
         let pa0 = pa0 + x.inv_apply_force(&pa_h);
         // Pass 3, outward: a₀ = IA₀⁻¹ (τ₀ − pA₀), the rotors, the gimbal, the serial bodies.
         let a0 = ia0
             .solve(&(Force::from_slice(&tau[..6]) - pa0))
             .ok_or(DynamicsError::SingularBase)?;
         ddq[..6].copy_from_slice(&a0.to_array());
-        for r in &self.rotors {
-            let axial = tau[r.dof] + self.rotor_load::<LOADED>(r, fext);
-            ddq[r.dof] = axial * r.inv_j - r.axis.dot(&a0.ang);
+        for (k, r) in self.rotors.iter().enumerate() {
+            ddq[r.dof] = if locks.rotor(k) {
+                0.0
+            } else {
+                let axial = tau[r.dof] + self.rotor_load::<LOADED>(r, fext);
+                axial * r.inv_j - r.axis.dot(&a0.ang)
+            };
         }
         let a = x.apply_motion(&a0) + c_tip;
         let qdd2 = (u2 - a.dot(&w2)) * inv2;
@@ -546,7 +666,11 @@ impl UnrolledAba {
         let mut ap = Motion::new(a.ang + e0 * qdd0 + e1 * qdd1 + e2 * qdd2, a.lin);
         for (j, s) in serial.iter().enumerate() {
             let aj = s.axis.apply_motion(&xs[j], &ap) + cs[j];
-            let qdd = (uu[j] - aj.dot(&us[j])) * inv_ds[j];
+            let qdd = if locks.serial(j) {
+                0.0
+            } else {
+                (uu[j] - aj.dot(&us[j])) * inv_ds[j]
+            };
             ddq[s.dof] = qdd;
             ap = Motion::new(aj.ang + s.axis.scaled_axis(qdd), aj.lin);
         }
@@ -1003,6 +1127,85 @@ mod tests {
                 assert!(moved > 1e-6 * free.amax(), "body {i}: moved {moved:e}");
             }
         }
+    }
+
+    /// Hybrid dynamics: random locks on the rotors and the serial bodies, with and without
+    /// wrenches, against the generic `aba_hybrid` (the plain tree form: rotors and links as
+    /// bodies), forward to the same tolerance as above (a locked system's mass matrix is a
+    /// principal block of `M`: its κ is no larger) and backward (RNEA of the result gives
+    /// back `τ` on the free hinges; the locked ones do not move).
+    #[test]
+    fn hybrid_equals_generic_aba_hybrid() {
+        let (mut solved, mut locked_rotors, mut locked_serial) = (0, 0, 0);
+        for seed in 0..300u64 {
+            let (serial, rotors) = ((seed % 5) as usize, ((seed / 5) % 4) as usize);
+            let model = random_layout(serial, rotors, seed);
+            let kernel = UnrolledAba::new(&model).unwrap();
+            let mut rng = SplitMix(seed ^ 0x10c4);
+            let (q, v, tau) = random_state(&model, &mut rng);
+            let fext = random_wrenches(&model, &mut rng);
+            let gimbal: Vec<usize> = kernel.gimbal_hinges.to_vec();
+            let locked: Vec<bool> = (0..model.n_hinges())
+                .map(|h| !gimbal.contains(&h) && rng.next_f64() < 0.5)
+                .collect();
+            let locks = kernel.locks(&locked).expect("no gimbal hinge locked");
+            locked_rotors += locks.rotors.count_ones();
+            locked_serial += locks.serial.count_ones();
+            for f in [None, Some(fext.as_slice())] {
+                let (mut dk, mut dg) = (Data::new(&model), Data::new(&model));
+                let fast = kernel
+                    .aba_hybrid_with_forces(&mut dk, &q, &v, &tau, f, locks)
+                    .cloned();
+                let generic = crate::aba_hybrid(&model, &mut dg, &q, &v, &tau, f, &locked).cloned();
+                let (a, b) = match (fast, generic) {
+                    (Ok(a), Ok(b)) => (a, b),
+                    (Err(x), Err(y)) => {
+                        same_refusal(&x, &y);
+                        continue;
+                    }
+                    (a, b) => panic!("seed {seed}: kernel {a:?}, generic {b:?}"),
+                };
+                solved += 1;
+                let m = crate::crba(&model, &mut dg, &q).unwrap().clone();
+                let eig = m.symmetric_eigenvalues();
+                let kappa_eps = eig.max() / eig.min() * f64::EPSILON;
+                let e = (&a - &b).amax() / b.amax();
+                assert!(e < 1e-12_f64.max(kappa_eps), "seed {seed}: {e:e}\n{a}\n{b}");
+                let back = crate::rnea(&model, &mut dg, &q, &v, a.as_slice(), f).unwrap();
+                let scale = (m.abs() * a.abs()).amax().max(1.0);
+                for (h, &l) in locked.iter().enumerate() {
+                    let dof = model.base_nv() + h;
+                    if l {
+                        assert_eq!(a[dof], 0.0, "seed {seed}: locked hinge {h} moves");
+                    } else {
+                        let r = (back[dof] - tau[dof]).abs();
+                        assert!(r < 1e-12 * scale, "seed {seed}: hinge {h} residual {r:e}");
+                    }
+                }
+            }
+        }
+        assert!(solved > 550, "only {solved} regular cases");
+        assert!(locked_rotors > 100 && locked_serial > 100);
+    }
+
+    /// A lock mask with a gimbal hinge locked, or of another length, is not the kernel's.
+    #[test]
+    fn gimbal_locks_are_not_taken() {
+        let model = random_layout(2, 2, 9);
+        let kernel = UnrolledAba::new(&model).unwrap();
+        let mut locked = vec![false; model.n_hinges()];
+        assert_eq!(kernel.locks(&locked), Some(Locks::NONE));
+        for &h in &kernel.gimbal_hinges {
+            locked[h] = true;
+            assert_eq!(kernel.locks(&locked), None);
+            locked[h] = false;
+        }
+        assert_eq!(kernel.locks(&locked[1..]), None);
+        for (h, l) in locked.iter_mut().enumerate() {
+            *l = !kernel.gimbal_hinges.contains(&h);
+        }
+        let locks = kernel.locks(&locked).unwrap();
+        assert_eq!((locks.rotors, locks.serial), (0b11, 0b11));
     }
 
     #[test]

@@ -91,6 +91,18 @@ fn per_call_algorithms_do_not_allocate() {
         // first call. Every later call must allocate nothing.
         let kernel = UnrolledAba::new(&model);
         kernels += kernel.is_some() as usize;
+        // Every hinge off the gimbal locked (hybrid dynamics), where there is a kernel.
+        let locks = kernel.as_ref().map(|k| {
+            let mut locked = vec![true; model.n_hinges()];
+            let mut h = 0;
+            loop {
+                if let Some(l) = k.locks(&locked) {
+                    return l;
+                }
+                locked[h] = false;
+                h += 1;
+            }
+        });
         let mut before = 0;
         for round in 0..4 {
             if round == 1 {
@@ -102,9 +114,11 @@ fn per_call_algorithms_do_not_allocate() {
             bias(&model, &mut data, &q, &v, None).unwrap();
             aba(&model, &mut data, &q, &v, &tau, Some(&fext)).unwrap();
             aba(&model, &mut data, &q, &v, &tau, None).unwrap();
-            if let Some(k) = &kernel {
+            if let (Some(k), Some(locks)) = (&kernel, locks) {
                 k.aba(&mut data, &q, &v, &tau).unwrap();
                 k.aba_with_forces(&mut data, &q, &v, &tau, Some(&fext))
+                    .unwrap();
+                k.aba_hybrid_with_forces(&mut data, &q, &v, &tau, Some(&fext), locks)
                     .unwrap();
             }
             crba_cholesky(&model, &mut data, &q, &v, &tau, None).unwrap();
