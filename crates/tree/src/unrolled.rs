@@ -29,6 +29,10 @@
 //!   wrenches (their origins are the gimbal's point: a rotation only) load the hinges
 //!   between them and the base and reach the base rigidly (`aba.rs`'s `links_bias`). A
 //!   const parameter keeps the force-free instance free of all this.
+//! - Locked hinges ([`Locks`], hybrid dynamics as [`crate::aba_hybrid()`]): a locked serial
+//!   body passes its inertia and bias to its parent unprojected; a locked rotor's axial
+//!   inertia is the base's again and its axial torque leaves the base's bias. A locked
+//!   gimbal hinge is not taken ([`UnrolledAba::locks`] says so).
 //! - The serial chain's length is a const parameter: its loops run over arrays of known
 //!   size (no per-body dispatch, no `Option`s, no index checks).
 //!
@@ -133,7 +137,8 @@ struct Serial {
 }
 
 /// [`crate::aba()`] unrolled for one layout (see the module documentation), with external
-/// forces ([`UnrolledAba::aba_with_forces`]) or without ([`UnrolledAba::aba`]): the
+/// forces ([`UnrolledAba::aba_with_forces`]) or without ([`UnrolledAba::aba`]), and with
+/// locked hinges ([`UnrolledAba::aba_hybrid_with_forces`]): the
 /// preprint satellite's right-hand side at a fraction of the generic
 /// algorithm's instructions, with the same result to round-off and the same errors.
 ///

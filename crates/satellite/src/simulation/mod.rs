@@ -25,8 +25,8 @@
 //! unpack `x` → forward kinematics (only when an effect needs it; the centre of mass only
 //! when an effect reads it) → each enabled effect adds hinge torques, body wrenches and its
 //! own derivatives → ABA (hybrid ABA when hinges are locked; reusing the kinematics' hinge
-//! transforms when they ran; the unrolled kernel where the model has the preprint's layout
-//! and no hinge is locked) → pack `dx`.
+//! transforms when they ran; the unrolled kernel, hybrid too, where the model has the
+//! preprint's layout and no gimbal hinge is locked) → pack `dx`.
 //!
 //! # Event and output passes
 //!
@@ -109,7 +109,7 @@ pub struct Simulation {
     model: Model,
     data: Data,
     /// ABA unrolled for the model's layout, where it has the preprint's (`rhs` uses it,
-    /// with the effects' wrenches, whenever no hinge is locked).
+    /// with the effects' wrenches, unless a gimbal hinge is locked).
     unrolled: Option<UnrolledAba>,
     layout: StateLayout,
     effects: Vec<Box<dyn Effect>>,

@@ -6,7 +6,7 @@ use super::rhs::Hold;
 use crate::effects::Power;
 use satsim_integrate::{EventAction, EventDirection, System, SystemError};
 use satsim_tree::{
-    aba, aba_hybrid, aba_hybrid_with_kinematics, aba_with_kinematics, forward_kinematics,
+    Locks, aba, aba_hybrid, aba_hybrid_with_kinematics, aba_with_kinematics, forward_kinematics,
 };
 
 impl System for Simulation {
@@ -78,17 +78,23 @@ impl System for Simulation {
         // After kinematics `data.xup` holds this state's transforms (the effects only read
         // `data`): the generic ABA reuses them, with bit for bit the same result. The
         // unrolled kernel computes its own and writes only `data.ddq` (nothing after this
-        // reads the other buffers the generic ABA would have written).
+        // reads the other buffers the generic ABA would have written); it takes locked
+        // rotors and serial hinges, not a locked gimbal hinge.
+        let kernel = match &self.unrolled {
+            Some(k) if self.n_locked == 0 => Some((k, Locks::NONE)),
+            Some(k) => k.locks(&self.locked).map(|l| (k, l)),
+            None => None,
+        };
         let (model, data) = (&self.model, &mut self.data);
         let (q, v, tau) = (&self.q, &self.v, &self.tau);
-        let ddq = match (self.n_locked > 0, &self.unrolled, kin) {
-            (true, _, true) => {
+        let ddq = match (kernel, self.n_locked > 0, kin) {
+            (Some((k, locks)), _, _) => k.aba_hybrid_with_forces(data, q, v, tau, fext, locks),
+            (None, true, true) => {
                 aba_hybrid_with_kinematics(model, data, q, v, tau, fext, &self.locked)
             }
-            (true, _, false) => aba_hybrid(model, data, q, v, tau, fext, &self.locked),
-            (false, Some(kernel), _) => kernel.aba_with_forces(data, q, v, tau, fext),
-            (false, None, true) => aba_with_kinematics(model, data, q, v, tau, fext),
-            (false, None, false) => aba(model, data, q, v, tau, fext),
+            (None, true, false) => aba_hybrid(model, data, q, v, tau, fext, &self.locked),
+            (None, false, true) => aba_with_kinematics(model, data, q, v, tau, fext),
+            (None, false, false) => aba(model, data, q, v, tau, fext),
         }
         .map_err(|e| SystemError::new(e.to_string()))?;
         let l = &self.layout;

@@ -191,54 +191,69 @@ fn centre_of_mass_only_when_declared() {
 
 /// The default scene (examples/scenes/deploy.toml: the gravity gradient asks for
 /// kinematics and writes a wrench on every body; wheels, springs, stops) takes the unrolled
-/// ABA with its forces while no hinge is locked, and its right-hand side equals the generic
-/// ABA's to round-off at random states; the forward kinematics the effects read is left as
-/// it was. (As written, the scene starts with its wheels at rest, held by static friction:
-/// locked hinges, hybrid dynamics, the generic code. Here they spin.)
+/// ABA with its forces, and its right-hand side equals the generic ABA's to round-off at
+/// random states; the forward kinematics the effects read is left as it was. In three
+/// modes: as written (the wheels start at rest, held by static friction: locked rotors,
+/// hybrid dynamics), with h4 latched from the start as well (a locked serial hinge), and
+/// with the wheels spinning (nothing locked).
 #[test]
 fn unrolled_aba_with_forces_and_kinematics_in_the_right_hand_side() {
     let deploy = examples().join("scenes/deploy.toml");
     let text = std::fs::read_to_string(&deploy).unwrap();
+    let latched = text.replace(
+        "angle = [0.0, 0.0, 0.0, 3.14159, -3.14159]",
+        "angle = [0.0, 0.0, 0.0, 0.0, -0.5]",
+    );
     let spinning = ["x", "y", "z"].iter().fold(text.clone(), |t, w| {
         t.replace(
             &format!("name = \"{w}\""),
             &format!("name = \"{w}\"\nspeed = 5.0"),
         )
     });
-    assert_ne!(spinning, text);
-    let scene = Scene::parse(&spinning, &deploy).unwrap();
-    let mut fast = scene.simulation().unwrap();
-    assert!(fast.unrolled.is_some() && fast.n_locked == 0);
-    let mut generic = scene.simulation().unwrap();
-    generic.unrolled = None;
-    let mut rng = SplitMix(8);
-    let n = fast.dim();
-    for _ in 0..50 {
-        let x = random_state(&fast, &mut rng);
-        let (mut a, mut b) = (vec![0.0; n], vec![0.0; n]);
-        fast.rhs(0.0, &x, &mut a).unwrap();
-        // Both branches of the kernel's match were taken: kinematics and wrenches.
-        assert!(fast.needs_kinematics && fast.forces.has_wrench);
-        let bodies = fast.model.bodies();
-        for (body, f) in bodies.iter().zip(&fast.forces.body_wrench) {
-            if body.mass() > 0.0 {
-                assert!(
-                    f.ang != Vec3::zeros() && f.lin != Vec3::zeros(),
-                    "{}",
-                    body.name()
-                );
+    assert!(latched != text && spinning != text);
+    for (text, n_locked) in [(text, 3), (latched, 4), (spinning, 0)] {
+        let scene = Scene::parse(&text, &deploy).unwrap();
+        let mut fast = scene.simulation().unwrap();
+        assert_eq!(fast.n_locked, n_locked);
+        let kernel = fast.unrolled.as_ref().expect("the kernel's layout");
+        assert!(
+            kernel.locks(&fast.locked).is_some(),
+            "no gimbal hinge locked"
+        );
+        let mut generic = scene.simulation().unwrap();
+        generic.unrolled = None;
+        let mut rng = SplitMix(8);
+        let n = fast.dim();
+        for _ in 0..50 {
+            let x = random_state(&fast, &mut rng);
+            let (mut a, mut b) = (vec![0.0; n], vec![0.0; n]);
+            fast.rhs(0.0, &x, &mut a).unwrap();
+            // The kernel's arm with kinematics and wrenches.
+            assert!(fast.needs_kinematics && fast.forces.has_wrench);
+            let bodies = fast.model.bodies();
+            for (body, f) in bodies.iter().zip(&fast.forces.body_wrench) {
+                if body.mass() > 0.0 {
+                    assert!(
+                        f.ang != Vec3::zeros() && f.lin != Vec3::zeros(),
+                        "{}",
+                        body.name()
+                    );
+                }
             }
-        }
-        generic.rhs(0.0, &x, &mut b).unwrap();
-        let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        let diff = a
-            .iter()
-            .zip(&b)
-            .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
-        assert!(diff <= 1e-12 * scale, "{diff:e} of {scale:e}");
-        // The poses of the forward kinematics are those of this state in both.
-        for (p, q) in fast.data.position.iter().zip(&generic.data.position) {
-            assert_eq!(p, q);
+            generic.rhs(0.0, &x, &mut b).unwrap();
+            let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            let diff = a
+                .iter()
+                .zip(&b)
+                .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
+            assert!(
+                diff <= 1e-12 * scale,
+                "{n_locked} locked: {diff:e} of {scale:e}"
+            );
+            // The poses of the forward kinematics are those of this state in both.
+            for (p, q) in fast.data.position.iter().zip(&generic.data.position) {
+                assert_eq!(p, q);
+            }
         }
     }
 }
