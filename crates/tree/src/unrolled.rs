@@ -427,6 +427,36 @@ impl UnrolledAba {
     /// and pass their child's inertia rigidly to the parent. A locked rotor rides on the
     /// base: its axial inertia is the base's again, its axial torque and the axial moment of
     /// its wrench go through the lock, its spin's gyroscopic couple stays.
+    ///
+    /// ```
+    /// use satsim_tree::spatial::{Mat3, Vec3};
+    /// use satsim_tree::{BaseKind, Body, Data, Hinge, ModelBuilder, UnrolledAba, aba_hybrid};
+    /// let mut builder = ModelBuilder::new(BaseKind::Free)
+    ///     .body(Body::new("bus", 800.0, Mat3::from_diagonal(&Vec3::new(900.0, 800.0, 600.0))))
+    ///     .body(Body::massless("link1"))
+    ///     .body(Body::massless("link2"))
+    ///     .body(Body::new("panel", 20.0, Mat3::from_diagonal(&Vec3::new(1.7, 6.7, 8.3))))
+    ///     .hinge(Hinge::revolute("h1", "bus", "link1", Vec3::z()).at(Vec3::y()))
+    ///     .hinge(Hinge::revolute("h2", "link1", "link2", Vec3::x()))
+    ///     .hinge(Hinge::revolute("h3", "link2", "panel", Vec3::y()).child_at(-0.6 * Vec3::y()));
+    /// satsim_tree::samples::push_wheels(&mut builder, "bus");
+    /// let model = builder.build()?;
+    /// let kernel = UnrolledAba::new(&model).expect("the preprint's layout");
+    /// // Wheel `x` (hinge 3) held; a gimbal hinge locked is not the kernel's.
+    /// let mut locked = vec![false, false, false, true, false, false];
+    /// let locks = kernel.locks(&locked).expect("no gimbal hinge locked");
+    /// let mut data = Data::new(&model);
+    /// let mut q = model.neutral();
+    /// q[7..10].copy_from_slice(&[0.1, 0.2, 0.3]);
+    /// let (v, tau) = (vec![0.01; model.nv()], vec![0.5; model.nv()]);
+    /// let fast = kernel.aba_hybrid_with_forces(&mut data, &q, &v, &tau, None, locks)?.clone();
+    /// let generic = aba_hybrid(&model, &mut data, &q, &v, &tau, None, &locked)?;
+    /// assert!((&fast - generic).amax() < 1e-12 * generic.amax());
+    /// assert_eq!(fast[6 + 3], 0.0);
+    /// locked[1] = true;
+    /// assert!(kernel.locks(&locked).is_none());
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
     pub fn aba_hybrid_with_forces<'d>(
         &self,
         data: &'d mut Data,
