@@ -528,7 +528,7 @@ impl UnrolledAba {
             spin += r.j_axis * v[r.dof];
             if !locks.rotor(k) {
                 // (Locked, the axial torque goes through the lock: the hold torque.)
-                pa0.ang += r.axis * (tau[r.dof] + self.rotor_load::<LOADED>(r, fext));
+                pa0.ang += r.axis * self.rotor_torque::<LOADED>(r, tau, fext);
             }
             if LOADED {
                 // The rest of the rotor's wrench acts on the base through the bearing.
@@ -639,7 +639,12 @@ impl UnrolledAba {
         let w1 = Force::new(ah * e1, bh.tr_mul(&e1)) - w0 * l10;
         // The links' wrenches load the hinges between them and the base (`links_bias` of
         // `aba.rs`): the tip's link's on e₁, both on e₂.
-        let u1 = tau[d1] + e1.dot(&g1.ang) - e1.dot(&pa.ang) - l10 * u0;
+        let (t1, t2) = if LOADED {
+            (tau[d1] + e1.dot(&g1.ang), tau[d2] + e2.dot(&g2.ang))
+        } else {
+            (tau[d1], tau[d2]) // (no `+ 0`: it cannot be folded away)
+        };
+        let u1 = t1 - e1.dot(&pa.ang) - l10 * u0;
         let p1 = e1.dot(&w1.ang);
         self.check_plain(p1, tr_a, 1)?;
         let inv1 = 1.0 / p1;
@@ -647,7 +652,7 @@ impl UnrolledAba {
         let l20 = e2.dot(&w0.ang) * inv0;
         let l21 = e2.dot(&w1.ang) * inv1;
         let w2 = Force::new(ah * e2, bh.tr_mul(&e2)) - w0 * l20 - w1 * l21;
-        let u2 = tau[d2] + e2.dot(&g2.ang) - e2.dot(&pa.ang) - l20 * u0 - l21 * u1;
+        let u2 = t2 - e2.dot(&pa.ang) - l20 * u0 - l21 * u1;
         let p2 = e2.dot(&w2.ang);
         self.check_plain(p2, tr_a, 2)?;
         let inv2 = 1.0 / p2;
@@ -687,8 +692,7 @@ impl UnrolledAba {
             ddq[r.dof] = if locks.rotor(k) {
                 0.0
             } else {
-                let axial = tau[r.dof] + self.rotor_load::<LOADED>(r, fext);
-                axial * r.inv_j - r.axis.dot(&a0.ang)
+                self.rotor_torque::<LOADED>(r, tau, fext) * r.inv_j - r.axis.dot(&a0.ang)
             };
         }
         let a = x.apply_motion(&a0) + c_tip;
@@ -712,13 +716,14 @@ impl UnrolledAba {
         Ok(())
     }
 
-    /// The axial moment `Sᵀ f` of the external wrench on rotor `r` (zero when not `LOADED`).
+    /// Rotor `r`'s axial torque: its `τ`, plus the axial moment `Sᵀ f` of its external
+    /// wrench when `LOADED` (not `+ 0` otherwise: that cannot be folded away).
     #[inline(always)]
-    fn rotor_load<const LOADED: bool>(&self, r: &Rotor, fext: &[Force]) -> f64 {
+    fn rotor_torque<const LOADED: bool>(&self, r: &Rotor, tau: &[f64], fext: &[Force]) -> f64 {
         if LOADED {
-            r.joint.s.dot(&fext[r.body])
+            tau[r.dof] + r.joint.s.dot(&fext[r.body])
         } else {
-            0.0
+            tau[r.dof]
         }
     }
 
