@@ -590,10 +590,15 @@ impl UnrolledAba {
         let mut us = [Force::zero(); N];
         let mut uu = [0.0; N];
         let mut inv_ds = [0.0; N];
-        let mut ia = if N > 0 {
-            serial[N - 1].start
+        // Each parent's inertia is written into one of two buffers, in turn, and read from
+        // there (no 216-byte copies of whole inertias).
+        let mut buffers = [ArticulatedInertia::default(); 2];
+        let [b0, b1] = &mut buffers;
+        let (mut parent, mut written) = (b0, b1);
+        let mut ia: &ArticulatedInertia = if N > 0 {
+            &serial[N - 1].start
         } else {
-            self.tip_start
+            &self.tip_start
         };
         let mut pa = if N > 0 { pas[N - 1] } else { pa_tip };
         for j in (0..N).rev() {
@@ -606,25 +611,23 @@ impl UnrolledAba {
             };
             if locks.serial(j) {
                 // Known (zero) acceleration: the body rides rigidly on its parent.
-                let mut parent = ArticulatedInertia::default();
-                a.add_inv_transform(&ia, &xs[j], &mut parent, Some(parent_start));
+                a.add_inv_transform(ia, &xs[j], parent, Some(parent_start));
                 let pa_j = pa + ia.mul_motion(&cs[j]);
                 pa = parent_bias + a.inv_apply_force(&xs[j], &pa_j);
-                ia = parent;
-                continue;
+            } else {
+                let u_col = Force::new(a.times_axis(&ia.a), a.tr_times_axis(&ia.b));
+                let d = a.dot_axis(&u_col.ang);
+                self.check(d, ia, &s.origin, 3 + j)?;
+                let inv_d = 1.0 / d;
+                let u = tau[s.dof] - a.dot_axis(&pa.ang);
+                // The parent's inertia: its start plus Xᵀ (IA − U Uᵀ / D) X.
+                let iac = a.project_at_point(ia, inv_d, &cs[j], &xs[j], parent, parent_start);
+                let pa_j = pa + iac + u_col * (u * inv_d);
+                pa = parent_bias + a.inv_apply_force(&xs[j], &pa_j);
+                (us[j], uu[j], inv_ds[j]) = (u_col, u, inv_d);
             }
-            let u_col = Force::new(a.times_axis(&ia.a), a.tr_times_axis(&ia.b));
-            let d = a.dot_axis(&u_col.ang);
-            self.check(d, &ia, &s.origin, 3 + j)?;
-            let inv_d = 1.0 / d;
-            let u = tau[s.dof] - a.dot_axis(&pa.ang);
-            // The parent's inertia: its start plus Xᵀ (IA − U Uᵀ / D) X.
-            let mut parent = ArticulatedInertia::default();
-            let iac = a.project_at_point(&ia, inv_d, &cs[j], &xs[j], &mut parent, parent_start);
-            let pa_j = pa + iac + u_col * (u * inv_d);
-            pa = parent_bias + a.inv_apply_force(&xs[j], &pa_j);
-            ia = parent;
-            (us[j], uu[j], inv_ds[j]) = (u_col, u, inv_d);
+            std::mem::swap(&mut parent, &mut written);
+            ia = written;
         }
         // The gimbal at its point: D = L Δ Lᵀ over the axes e₀ (the tip's), e₁, e₂, as
         // `chain_inward` (the tip's hinge first), with the same pivot scales.
@@ -632,7 +635,7 @@ impl UnrolledAba {
         let w0 = Force::new(g0.times_axis(ah), g0.tr_times_axis(bh));
         let u0 = tau[d0] - g0.dot_axis(&pa.ang);
         let p0 = g0.dot_axis(&w0.ang);
-        self.check(p0, &ia, &self.tip_origin, 0)?;
+        self.check(p0, ia, &self.tip_origin, 0)?;
         let inv0 = 1.0 / p0;
         let tr_a = ah.trace() - w0.ang.norm_squared() * inv0;
         let l10 = e1.dot(&w0.ang) * inv0;
