@@ -466,19 +466,35 @@ impl UnrolledAba {
         fext: Option<&[Force]>,
         locks: Locks,
     ) -> Result<&'d DVector<f64>, DynamicsError> {
+        self.aba_hybrid_with_forces_into(q, v, tau, fext, locks, data.ddq.as_mut_slice())?;
+        Ok(&data.ddq)
+    }
+
+    /// As [`UnrolledAba::aba_hybrid_with_forces`], with `q̈` written into `ddq` (length
+    /// `nv`) instead of `data.ddq`: the kernel needs no [`Data`], and a caller whose state
+    /// holds the velocities in `v`'s order gets `q̈` straight into its derivative, with no
+    /// copy (a copy right after the writes costs more than its instructions: its wide loads
+    /// wait for the narrower stores to retire).
+    pub fn aba_hybrid_with_forces_into(
+        &self,
+        q: &[f64],
+        v: &[f64],
+        tau: &[f64],
+        fext: Option<&[Force]>,
+        locks: Locks,
+        ddq: &mut [f64],
+    ) -> Result<(), DynamicsError> {
         check_len("q", q.len(), self.nq)?;
         check_len("v", v.len(), self.nv)?;
         check_len("tau", tau.len(), self.nv)?;
-        check_len("data.ddq", data.ddq.len(), self.nv)?;
-        let ddq = data.ddq.as_mut_slice();
+        check_len("ddq", ddq.len(), self.nv)?;
         match fext {
-            None => self.serial_len::<false>(ddq, q, v, tau, &[], locks)?,
+            None => self.serial_len::<false>(ddq, q, v, tau, &[], locks),
             Some(f) => {
                 check_len("fext", f.len(), self.n_bodies)?;
-                self.serial_len::<true>(ddq, q, v, tau, f, locks)?
+                self.serial_len::<true>(ddq, q, v, tau, f, locks)
             }
         }
-        Ok(&data.ddq)
     }
 
     /// [`UnrolledAba::run`]'s instance for this model's serial chain.

@@ -77,29 +77,16 @@ impl System for Simulation {
         };
         // After kinematics `data.xup` holds this state's transforms (the effects only read
         // `data`): the generic ABA reuses them, with bit for bit the same result. The
-        // unrolled kernel computes its own and writes only `data.ddq` (nothing after this
-        // reads the other buffers the generic ABA would have written); it takes locked
-        // rotors and serial hinges, not a locked gimbal hinge.
+        // unrolled kernel computes its own and writes only `q̈`, into `dx` or `data.ddq`
+        // (nothing after this reads `data`'s other buffers that the generic ABA would have
+        // written); it takes locked rotors and serial hinges, not a locked gimbal hinge.
         let kernel = match &self.unrolled {
             Some(k) if self.n_locked == 0 => Some((k, Locks::NONE)),
             Some(k) => k.locks(&self.locked).map(|l| (k, l)),
             None => None,
         };
-        let (model, data) = (&self.model, &mut self.data);
-        let (q, v, tau) = (&self.q, &self.v, &self.tau);
-        let ddq = match (kernel, self.n_locked > 0, kin) {
-            (Some((k, locks)), _, _) => k.aba_hybrid_with_forces(data, q, v, tau, fext, locks),
-            (None, true, true) => {
-                aba_hybrid_with_kinematics(model, data, q, v, tau, fext, &self.locked)
-            }
-            (None, true, false) => aba_hybrid(model, data, q, v, tau, fext, &self.locked),
-            (None, false, true) => aba_with_kinematics(model, data, q, v, tau, fext),
-            (None, false, false) => aba(model, data, q, v, tau, fext),
-        }
-        .map_err(|e| SystemError::new(e.to_string()))?;
         let l = &self.layout;
         let n = self.n_user;
-        let ddq = ddq.as_slice();
         if l.free {
             // x = [attitude, angles, ω, v, rates, ...] (`StateLayout`).
             let (a, w) = (&x[..4], &x[l.omega.start..l.omega.start + 3]);
@@ -110,6 +97,25 @@ impl System for Simulation {
             }
         }
         dx[l.angles.clone()].copy_from_slice(&x[l.rates.clone()]);
+        let (q, v, tau) = (&self.q, &self.v, &self.tau);
+        if let (Some((k, locks)), Some(s)) = (kernel, self.velocity_at) {
+            // The kernel writes `q̈` straight into the derivative of the velocity run.
+            return k
+                .aba_hybrid_with_forces_into(q, v, tau, fext, locks, &mut dx[s..s + v.len()])
+                .map_err(|e| SystemError::new(e.to_string()));
+        }
+        let (model, data) = (&self.model, &mut self.data);
+        let ddq = match (kernel, self.n_locked > 0, kin) {
+            (Some((k, locks)), _, _) => k.aba_hybrid_with_forces(data, q, v, tau, fext, locks),
+            (None, true, true) => {
+                aba_hybrid_with_kinematics(model, data, q, v, tau, fext, &self.locked)
+            }
+            (None, true, false) => aba_hybrid(model, data, q, v, tau, fext, &self.locked),
+            (None, false, true) => aba_with_kinematics(model, data, q, v, tau, fext),
+            (None, false, false) => aba(model, data, q, v, tau, fext),
+        }
+        .map_err(|e| SystemError::new(e.to_string()))?;
+        let ddq = ddq.as_slice();
         if let Some(s) = self.velocity_at {
             // `q̈` in the velocity vector's order is the derivative of that run: one copy.
             dx[s..s + ddq.len()].copy_from_slice(ddq);

@@ -266,6 +266,8 @@ fn unrolled_aba_in_the_right_hand_side() {
     let scene = Scene::read(examples().join("../benches/peers/orbit.toml")).unwrap();
     let mut fast = scene.simulation().unwrap();
     assert!(fast.unrolled.is_some());
+    // The velocities are one run of the state: the kernel writes `q̈` straight into `dx`.
+    assert!(fast.velocity_at.is_some());
     let mut generic = scene.simulation().unwrap();
     generic.unrolled = None;
     let mut rng = SplitMix(5);
