@@ -126,22 +126,34 @@ impl Simulation {
             None
         };
         let err = |e: satsim_tree::DynamicsError| SystemError::new(e.to_string());
-        let hybrid = if xup_ready {
-            aba_hybrid_with_kinematics
-        } else {
-            aba_hybrid
-        };
-        let ddq = hybrid(
-            &self.model,
-            &mut self.data,
-            &self.q,
-            &self.v,
-            &self.tau,
-            fext,
-            &self.hold_mask,
-        )
-        .map_err(err)?;
-        self.hold_ddq.copy_from_slice(ddq.as_slice());
+        // The unrolled kernel where it takes this lock mask (as in `rhs`), else the generic
+        // hybrid ABA.
+        let kernel = self.unrolled.as_ref();
+        match kernel.and_then(|k| Some((k, k.locks(&self.hold_mask)?))) {
+            Some((k, locks)) => {
+                let (q, v, tau) = (&self.q, &self.v, &self.tau);
+                k.aba_hybrid_with_forces_into(q, v, tau, fext, locks, &mut self.hold_ddq)
+                    .map_err(err)?;
+            }
+            None => {
+                let hybrid = if xup_ready {
+                    aba_hybrid_with_kinematics
+                } else {
+                    aba_hybrid
+                };
+                let ddq = hybrid(
+                    &self.model,
+                    &mut self.data,
+                    &self.q,
+                    &self.v,
+                    &self.tau,
+                    fext,
+                    &self.hold_mask,
+                )
+                .map_err(err)?;
+                self.hold_ddq.copy_from_slice(ddq.as_slice());
+            }
+        }
         let need = rnea(
             &self.model,
             &mut self.data,

@@ -258,6 +258,43 @@ fn unrolled_aba_with_forces_and_kinematics_in_the_right_hand_side() {
     }
 }
 
+/// The hold torques of the default scene's stuck wheels and latched panel (one hybrid solve
+/// for the locked hinges, and one per unlocked hinge: a gimbal hinge's goes to the generic
+/// code) equal the generic hybrid ABA's to round-off at random states.
+#[test]
+fn unrolled_aba_in_the_hold_torques() {
+    let deploy = examples().join("scenes/deploy.toml");
+    let text = std::fs::read_to_string(&deploy).unwrap();
+    let latched = text.replace(
+        "angle = [0.0, 0.0, 0.0, 3.14159, -3.14159]",
+        "angle = [0.0, 0.0, 0.0, 0.0, -0.5]",
+    );
+    for (text, n_locked) in [(text.clone(), 3), (latched, 4)] {
+        let scene = Scene::parse(&text, &deploy).unwrap();
+        let mut fast = scene.simulation().unwrap();
+        assert!(fast.needs_hold && fast.unrolled.is_some());
+        assert_eq!(fast.n_locked, n_locked);
+        let mut generic = scene.simulation().unwrap();
+        generic.unrolled = None;
+        let mut rng = SplitMix(9);
+        for _ in 0..30 {
+            let x = random_state(&fast, &mut rng);
+            for hold in [Hold::Locked, Hold::All] {
+                fast.prepare_with(0.0, &x, false, hold).unwrap();
+                generic.prepare_with(0.0, &x, false, hold).unwrap();
+                let scale = generic.hold.iter().fold(0.0f64, |m, h| m.max(h.abs()));
+                assert!(scale > 0.0);
+                for (k, (a, b)) in fast.hold.iter().zip(&generic.hold).enumerate() {
+                    assert_eq!(a.is_nan(), b.is_nan(), "hinge {k}");
+                    if !b.is_nan() {
+                        assert!((a - b).abs() <= 1e-12 * scale, "hinge {k}: {a:e} {b:e}");
+                    }
+                }
+            }
+        }
+    }
+}
+
 /// The peer orbit's scene (benches/peers/orbit.toml: the preprint satellite with three
 /// wheels) takes the unrolled ABA, and its right-hand side equals the generic ABA's to
 /// round-off at random states.
