@@ -59,6 +59,16 @@ fn scenes() -> Vec<(String, Simulation)> {
 }
 
 /// `x0` with every state but the orbit moved at random (attitude renormalised).
+/// `a` equals `b` to round-off: every entry within `1e-12` of `b`'s largest.
+fn assert_round_off(a: &[f64], b: &[f64], what: &str) {
+    let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let diff = a
+        .iter()
+        .zip(b)
+        .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
+    assert!(diff <= 1e-12 * scale, "{what}: {diff:e} of {scale:e}");
+}
+
 fn random_state(sim: &Simulation, rng: &mut SplitMix) -> Vec<f64> {
     let l = sim.layout().clone();
     let mut x = sim.x0().to_vec();
@@ -241,15 +251,7 @@ fn unrolled_aba_with_forces_and_kinematics_in_the_right_hand_side() {
                 }
             }
             generic.rhs(0.0, &x, &mut b).unwrap();
-            let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-            let diff = a
-                .iter()
-                .zip(&b)
-                .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
-            assert!(
-                diff <= 1e-12 * scale,
-                "{n_locked} locked: {diff:e} of {scale:e}"
-            );
+            assert_round_off(&a, &b, &format!("{n_locked} locked"));
             // The poses of the forward kinematics are those of this state in both.
             for (p, q) in fast.data.position.iter().zip(&generic.data.position) {
                 assert_eq!(p, q);
@@ -314,11 +316,6 @@ fn unrolled_aba_in_the_right_hand_side() {
         let (mut a, mut b) = (vec![0.0; n], vec![0.0; n]);
         fast.rhs(0.0, &x, &mut a).unwrap();
         generic.rhs(0.0, &x, &mut b).unwrap();
-        let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        let diff = a
-            .iter()
-            .zip(&b)
-            .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
-        assert!(diff <= 1e-12 * scale, "{diff:e} of {scale:e}");
+        assert_round_off(&a, &b, "orbit");
     }
 }
