@@ -744,6 +744,16 @@ impl Joint {
     pub fn armature(&self) -> f64 {
         self.armature
     }
+    /// [`Joint::transform`] through `axis`, the hinge's coordinate-axis form where it has one
+    /// (the same transform, with its zeros folded).
+    #[inline]
+    pub(crate) fn transform_with(&self, axis: Option<&CoordAxis>, phi: f64) -> Transform {
+        match axis {
+            Some(a) => a.transform(phi, &self.at, &self.child_at),
+            None => self.transform(phi),
+        }
+    }
+
     /// `Xup`: the transform from the parent's coordinates to the child's at angle `phi`.
     #[inline]
     pub fn transform(&self, phi: f64) -> Transform {
@@ -1078,11 +1088,7 @@ impl Model {
     #[inline]
     pub(crate) fn xup(&self, i: usize, q: &[f64]) -> Transform {
         let joint = self.joints[i].as_ref().expect("non-root body has a joint");
-        let phi = self.angle(q, joint);
-        match &self.coord_axis[i] {
-            Some(axis) => axis.transform(phi, &joint.at, &joint.child_at),
-            None => joint.transform(phi),
-        }
+        joint.transform_with(self.coord_axis[i].as_ref(), self.angle(q, joint))
     }
 
     /// The hinge angle of body `i`'s joint in `q`.

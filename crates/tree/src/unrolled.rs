@@ -108,11 +108,8 @@ impl Rotor {
     /// `Xup` of the rotor's hinge at `q` (as `Model::xup`).
     #[inline]
     fn xup(&self, q: &[f64]) -> Transform {
-        let phi = q[self.angle];
-        match &self.coord {
-            Some(a) => a.transform(phi, &self.joint.at, &self.joint.child_at),
-            None => self.joint.transform(phi),
-        }
+        self.joint
+            .transform_with(self.coord.as_ref(), q[self.angle])
     }
 }
 
@@ -1290,5 +1287,17 @@ mod tests {
             .aba_with_forces(&mut data, &q, &v, &tau, Some(&fext[1..]))
             .unwrap_err();
         assert!(e.to_string().contains("fext"), "{e}");
+        // The `_into` form: the same numbers, bit for bit, into the caller's slice, whose
+        // length is checked too.
+        let mut ddq = vec![0.0; model.nv()];
+        kernel
+            .aba_hybrid_with_forces_into(&q, &v, &tau, Some(&fext), Locks::NONE, &mut ddq)
+            .unwrap();
+        let into_data = kernel.aba_with_forces(&mut data, &q, &v, &tau, Some(&fext));
+        assert_eq!(ddq.as_slice(), into_data.unwrap().as_slice());
+        let e = kernel
+            .aba_hybrid_with_forces_into(&q, &v, &tau, None, Locks::NONE, &mut ddq[1..])
+            .unwrap_err();
+        assert!(e.to_string().contains("ddq"), "{e}");
     }
 }

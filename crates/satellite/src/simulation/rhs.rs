@@ -7,7 +7,8 @@ use nalgebra::{Quaternion, UnitQuaternion};
 use satsim_integrate::SystemError;
 use satsim_tree::spatial::Vec3;
 use satsim_tree::{
-    aba_hybrid, aba_hybrid_with_kinematics, center_of_mass, forward_kinematics, rnea,
+    Locks, UnrolledAba, aba_hybrid, aba_hybrid_with_kinematics, center_of_mass, forward_kinematics,
+    rnea,
 };
 use std::ops::Range;
 
@@ -128,8 +129,7 @@ impl Simulation {
         let err = |e: satsim_tree::DynamicsError| SystemError::new(e.to_string());
         // The unrolled kernel where it takes this lock mask (as in `rhs`), else the generic
         // hybrid ABA.
-        let kernel = self.unrolled.as_ref();
-        match kernel.and_then(|k| Some((k, k.locks(&self.hold_mask)?))) {
+        match kernel_for(&self.unrolled, Some(&self.hold_mask)) {
             Some((k, locks)) => {
                 let (q, v, tau) = (&self.q, &self.v, &self.tau);
                 k.aba_hybrid_with_forces_into(q, v, tau, fext, locks, &mut self.hold_ddq)
@@ -352,4 +352,18 @@ pub(super) enum Hold {
     Locked,
     /// Every hinge's (one hybrid solve per unlocked hinge): at events and at the start.
     All,
+}
+
+/// The unrolled kernel and its form of the lock mask `locked` (`None`: nothing locked, no
+/// mask to read), where the model has the kernel's layout and the kernel takes the mask
+/// (not with a gimbal hinge locked); `None` sends the caller to the generic ABA.
+pub(super) fn kernel_for<'a>(
+    unrolled: &'a Option<UnrolledAba>,
+    locked: Option<&[bool]>,
+) -> Option<(&'a UnrolledAba, Locks)> {
+    let kernel = unrolled.as_ref()?;
+    match locked {
+        None => Some((kernel, Locks::NONE)),
+        Some(mask) => Some((kernel, kernel.locks(mask)?)),
+    }
 }

@@ -2,11 +2,11 @@
 //! projection, the event functions and the handling of their crossings.
 
 use super::Simulation;
-use super::rhs::Hold;
+use super::rhs::{Hold, kernel_for};
 use crate::effects::Power;
 use satsim_integrate::{EventAction, EventDirection, System, SystemError};
 use satsim_tree::{
-    Locks, aba, aba_hybrid, aba_hybrid_with_kinematics, aba_with_kinematics, forward_kinematics,
+    aba, aba_hybrid, aba_hybrid_with_kinematics, aba_with_kinematics, forward_kinematics,
 };
 
 impl System for Simulation {
@@ -80,11 +80,8 @@ impl System for Simulation {
         // unrolled kernel computes its own and writes only `q̈`, into `dx` or `data.ddq`
         // (nothing after this reads `data`'s other buffers that the generic ABA would have
         // written); it takes locked rotors and serial hinges, not a locked gimbal hinge.
-        let kernel = match &self.unrolled {
-            Some(k) if self.n_locked == 0 => Some((k, Locks::NONE)),
-            Some(k) => k.locks(&self.locked).map(|l| (k, l)),
-            None => None,
-        };
+        let locked = (self.n_locked > 0).then_some(self.locked.as_slice());
+        let kernel = kernel_for(&self.unrolled, locked);
         let l = &self.layout;
         let n = self.n_user;
         if l.free {
