@@ -808,6 +808,10 @@ mod tests {
             };
             compared += 1;
             worst = worst.max(rel(&a, &b));
+            // CRBA's fast path too (composite inertias, the columns' forces).
+            let mf = crate::crba(&fast, &mut df, &q).unwrap().clone();
+            let mg = crate::crba(&general, &mut dg, &q).unwrap();
+            worst = worst.max((&mf - mg).amax() / mg.amax());
             let (Ok(a), Ok(b)) = (
                 aba_hybrid(&fast, &mut df, &q, &v, &tau, None, &locked).cloned(),
                 aba_hybrid(&general, &mut dg, &q, &v, &tau, None, &locked).cloned(),

@@ -11,7 +11,9 @@
 //! kept out of line: inlined into ABA's three passes (three axes each) they multiplied its
 //! instruction-cache misses and made it slower in wall time despite fewer instructions.
 
-use crate::spatial::{ArticulatedInertia, Force, Mat3, Motion, Transform, Vec3, add_translated};
+use crate::spatial::{
+    ArticulatedInertia, Force, Mat3, Motion, RigidInertia, Transform, Vec3, add_translated,
+};
 
 /// A hinge about the coordinate axis `k` of its parent (and child) frame, with sign `sign`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -102,11 +104,35 @@ impl CoordAxis {
     /// `Xᵀ f` for this hinge's `Xup` (as [`Transform::inv_apply_force`]).
     #[inline(never)]
     pub(crate) fn inv_apply_force(&self, x: &Transform, f: &Force) -> Force {
+        self.inv_apply_force_inline(x, f)
+    }
+
+    /// [`CoordAxis::inv_apply_force`] inlined: for a chain of them (CRBA's columns), where
+    /// a call's result returned through memory would make the next call wait for it.
+    #[inline(always)]
+    pub(crate) fn inv_apply_force_inline(&self, x: &Transform, f: &Force) -> Force {
         let lin = self.rotate_back(&x.rot, &f.lin);
         Force {
             ang: self.rotate_back(&x.rot, &f.ang) + x.trans.cross(&lin),
             lin,
         }
+    }
+
+    /// `Xᵀ I X` for this hinge's `Xup` and a rigid inertia `I` (as
+    /// [`RigidInertia::inv_transform`]: CRBA's composite inertias): one planar similarity
+    /// for the rotational inertia, `Eᵀ h` two entries mixed.
+    #[inline]
+    pub(crate) fn rigid_inv_transform(&self, ic: &RigidInertia, x: &Transform) -> RigidInertia {
+        let rotated = RigidInertia {
+            mass: ic.mass,
+            h: self.rotate_back(&x.rot, &ic.h),
+            inertia: match self.k {
+                0 => similarity::<1, 2>(&x.rot, &ic.inertia),
+                1 => similarity::<2, 0>(&x.rot, &ic.inertia),
+                _ => similarity::<0, 1>(&x.rot, &ic.inertia),
+            },
+        };
+        rotated.translated(&x.trans)
     }
 
     /// `out += Xᵀ IA X` (or `out = start + Xᵀ IA X`) for this hinge's `Xup` (as

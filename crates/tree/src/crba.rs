@@ -39,7 +39,11 @@ pub(crate) fn mass_matrix(model: &Model, data: &mut Data) {
     }
     for i in (1..n).rev() {
         let p = model.parent[i].expect("parent");
-        let moved = data.ic[i].inv_transform(&data.xup[i]);
+        // Hinges about coordinate axes by their fast path (planar similarities).
+        let moved = match &model.coord_axis[i] {
+            Some(a) => a.rigid_inv_transform(&data.ic[i], &data.xup[i]),
+            None => data.ic[i].inv_transform(&data.xup[i]),
+        };
         data.ic[p] += moved;
     }
     let m = &mut data.mass_matrix;
@@ -49,7 +53,10 @@ pub(crate) fn mass_matrix(model: &Model, data: &mut Data) {
         m[(ji.dof, ji.dof)] = ji.s.dot(&f) + ji.armature;
         let mut j = i;
         while let Some(p) = model.parent[j] {
-            f = data.xup[j].inv_apply_force(&f);
+            f = match &model.coord_axis[j] {
+                Some(a) => a.inv_apply_force_inline(&data.xup[j], &f),
+                None => data.xup[j].inv_apply_force(&f),
+            };
             j = p;
             match &model.joints[j] {
                 Some(jj) => {

@@ -390,11 +390,24 @@ impl RigidInertia {
     /// the result returned through memory).
     #[inline(always)]
     pub fn inv_transform(&self, x: &Transform) -> RigidInertia {
-        let (e, r) = (&x.rot, &x.trans);
-        let h = e.tr_mul(&self.h);
+        let e = &x.rot;
+        let rotated = RigidInertia {
+            mass: self.mass,
+            h: e.tr_mul(&self.h),
+            inertia: e.tr_mul(&(self.inertia * e)),
+        };
+        rotated.translated(&x.trans)
+    }
+
+    /// This inertia (same axes) about a point at `−r` from the origin, i.e. about the origin
+    /// of a frame in which this origin lies at `r`: the translation part of
+    /// [`RigidInertia::inv_transform`].
+    #[inline]
+    pub(crate) fn translated(&self, r: &Vec3) -> RigidInertia {
+        let h = self.h;
         let hp = h + r * self.mass;
-        // Eᵀ I E − [r]×[h]× − [h']×[r]×, the skew products by [a]×[b]× = b aᵀ − (a·b) 1.
-        let i = e.tr_mul(&(self.inertia * e)) - h * r.transpose() - r * hp.transpose()
+        // I − [r]×[h]× − [h']×[r]×, the skew products by [a]×[b]× = b aᵀ − (a·b) 1.
+        let i = self.inertia - h * r.transpose() - r * hp.transpose()
             + Mat3::from_diagonal_element(r.dot(&h) + r.dot(&hp));
         RigidInertia {
             mass: self.mass,
