@@ -120,8 +120,9 @@ impl CoordAxis {
 
     /// `Xᵀ I X` for this hinge's `Xup` and a rigid inertia `I` (as
     /// [`RigidInertia::inv_transform`]: CRBA's composite inertias): one planar similarity
-    /// for the rotational inertia, `Eᵀ h` two entries mixed.
-    #[inline]
+    /// for the rotational inertia, `Eᵀ h` two entries mixed. Always inlined, as
+    /// [`RigidInertia::inv_transform`] is (out of line, its result returns through memory).
+    #[inline(always)]
     pub(crate) fn rigid_inv_transform(&self, ic: &RigidInertia, x: &Transform) -> RigidInertia {
         let rotated = RigidInertia {
             mass: ic.mass,

@@ -401,8 +401,8 @@ impl RigidInertia {
 
     /// This inertia (same axes) about a point at `−r` from the origin, i.e. about the origin
     /// of a frame in which this origin lies at `r`: the translation part of
-    /// [`RigidInertia::inv_transform`].
-    #[inline]
+    /// [`RigidInertia::inv_transform`]. Always inlined, as that is (CRBA's inward pass).
+    #[inline(always)]
     pub(crate) fn translated(&self, r: &Vec3) -> RigidInertia {
         let h = self.h;
         let hp = h + r * self.mass;
