@@ -5,12 +5,12 @@
 //! `cargo run --example build_scene`
 
 use satsim::integrate::{Method, Options, Output};
-use satsim::satellite::effects::{
+use satsim::satellite::{Deployment, PreprintParams, build_model};
+use satsim::spacecraft::effects::{
     AttitudeControl, Elements, GravityGradient, GravityModel, HingeSprings, Orbit, OrbitModel,
     ReactionWheels, Target, Wheel,
 };
-use satsim::satellite::preprint::{Deployment, PreprintParams, build_model};
-use satsim::satellite::scene::Scene;
+use satsim::tools::scene::Scene;
 use satsim::tree::State;
 use satsim::tree::spatial::Vec3;
 

@@ -15,8 +15,8 @@
 //! (the field points north at the equator). SI units; the torque acts on the root body.
 
 use satsim::integrate::{Output, SystemError};
-use satsim::satellite::effects::{Context, Effect, Forces, Needs, Registry, SceneEffect, Section};
-use satsim::satellite::scene::Scene;
+use satsim::spacecraft::effects::{Context, Effect, Forces, Needs, Registry, SceneEffect, Section};
+use satsim::tools::scene::Scene;
 use satsim::tree::io::FileError;
 use satsim::tree::spatial::{Force, Vec3};
 use serde::Deserialize;

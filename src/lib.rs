@@ -2,12 +2,17 @@
 //!
 //! This facade re-exports the workspace crates:
 //! - [`tree`]: the generic recursive multibody engine (CRBA, RNEA, ABA);
-//! - [`satellite`]: the Keldysh preprint's layout, effects, scenes and runs;
-//! - [`integrate`]: ODE integrators and event location.
+//! - [`integrate`]: ODE integrators and event location;
+//! - [`satellite`]: the Keldysh preprint's layout and its closed-form equations, checked;
+//! - [`spacecraft`]: the spacecraft engine (effects, the simulation and its right-hand side);
+//! - [`tools`]: scene files, campaigns, accuracy sweeps, linearisation and modes, output, the
+//!   3-D view.
 #![warn(missing_docs)]
 
 pub use satsim_integrate as integrate;
 pub use satsim_satellite as satellite;
+pub use satsim_spacecraft as spacecraft;
+pub use satsim_tools as tools;
 pub use satsim_tree as tree;
 
 /// The Rust snippets of the book (docs/src) run as doc tests, so the guide cannot drift

@@ -6,7 +6,7 @@
 //!   next to hinge stops (events) indexed past the wheels' empty event slice.
 
 use satsim::integrate::{Output, System};
-use satsim::satellite::scene::Scene;
+use satsim::tools::scene::Scene;
 use std::path::Path;
 
 fn inputs(target: &str) -> Vec<(String, String)> {

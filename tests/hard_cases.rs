@@ -16,8 +16,8 @@
 
 use nalgebra::DVector;
 use satsim::integrate::{Output, Stats, StopReason};
-use satsim::satellite::scene::Scene;
-use satsim::satellite::simulation::{RunError, Simulation, attitude_norm_error};
+use satsim::spacecraft::simulation::{RunError, Simulation, attitude_norm_error};
+use satsim::tools::scene::Scene;
 use satsim::tree::{Data, aba, crba, crba_cholesky, rnea};
 use std::path::{Path, PathBuf};
 

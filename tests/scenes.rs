@@ -6,7 +6,7 @@
 //! force, sign or impulse fails.
 
 use satsim::integrate::Output;
-use satsim::satellite::scene::Scene;
+use satsim::tools::scene::Scene;
 use std::path::{Path, PathBuf};
 
 /// A finished run: the columns, every output row and the event log.

@@ -8,7 +8,7 @@
 #![no_main]
 use libfuzzer_sys::fuzz_target;
 use satsim_integrate::{Output, System};
-use satsim_satellite::scene::Scene;
+use satsim_tools::scene::Scene;
 use std::path::Path;
 
 fuzz_target!(|bytes: &[u8]| {

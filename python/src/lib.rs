@@ -1,7 +1,7 @@
 //! `satsim._satsim`: the native half of the Python package `satsim` (contract section 10).
 //!
 //! Every function here reads its input with the same readers as the `satsim` command line and
-//! computes with the same library functions ([`satsim_satellite::api`]), so the numbers are
+//! computes with the same library functions ([`satsim_tools::api`]), so the numbers are
 //! the command line's to the last bit. The GIL is released ([`Python::detach`]) while a
 //! file is read and parsed and while anything is computed; a long run re-attaches about five
 //! times a second only to let Ctrl-C (`KeyboardInterrupt`) stop it.
@@ -15,12 +15,12 @@ use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use satsim_satellite::api::{self, DynamicsFailure, RunFailure, Trajectory};
-use satsim_satellite::campaign::{Campaign, Shard};
-use satsim_satellite::linearize::linearize as linearize_scene;
-use satsim_satellite::modes::{Mode, modes as modes_of_scene};
-use satsim_satellite::output::{CsvWriter, write_plots};
-use satsim_satellite::scene::Scene;
+use satsim_tools::api::{self, DynamicsFailure, RunFailure, Trajectory};
+use satsim_tools::campaign::{Campaign, Shard};
+use satsim_tools::linearize::linearize as linearize_scene;
+use satsim_tools::modes::{Mode, modes as modes_of_scene};
+use satsim_tools::output::{CsvWriter, write_plots};
+use satsim_tools::scene::Scene;
 use satsim_tree::io::{self as tio, FileError};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};

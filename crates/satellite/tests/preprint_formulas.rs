@@ -7,8 +7,8 @@ mod common;
 
 use common::{Rng, random_model, random_state, realistic};
 use nalgebra::{Quaternion, UnitQuaternion, Vector4};
-use satsim_satellite::preprint::checks::*;
-use satsim_satellite::preprint::*;
+use satsim_satellite::checks::*;
+use satsim_satellite::*;
 use satsim_tree::spatial::{Mat3, Vec3};
 use satsim_tree::{Data, Model, aba, center_of_mass, forward_kinematics, forward_kinematics_acc};
 

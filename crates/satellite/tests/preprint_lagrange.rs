@@ -27,7 +27,7 @@ mod common;
 
 use common::{Rng, random_model, random_state, realistic};
 use nalgebra::{SMatrix, SVector};
-use satsim_satellite::preprint::*;
+use satsim_satellite::*;
 
 /// Finite-difference step on the hinge angles (rad).
 const H: f64 = 1e-5;

@@ -1,5 +1,5 @@
 //! `satsim accuracy SCENE.toml [--out DIR] [--repeats N] [--methods LIST] [--quick]`: the
-//! work-precision sweep of [`satsim_satellite::accuracy`] on a scene. Writes
+//! work-precision sweep of [`satsim_tools::accuracy`] on a scene. Writes
 //! `DIR/accuracy.csv`, `DIR/accuracy.svg` (final error against wall time, log-log),
 //! `DIR/accuracy_rhs.svg` (against right-hand-side evaluations) and `DIR/accuracy.md`, and
 //! prints a short summary. `DIR` defaults to `out/<scene stem>-accuracy`.
@@ -7,8 +7,8 @@
 use super::{CliError, Output, at_least_one, stem};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use satsim_integrate::Method;
-use satsim_satellite::accuracy::{Cost, Sweep, fmt_seconds, method_label, sweep};
-use satsim_satellite::scene::Scene;
+use satsim_tools::accuracy::{Cost, Sweep, fmt_seconds, method_label, sweep};
+use satsim_tools::scene::Scene;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 

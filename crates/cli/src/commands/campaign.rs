@@ -1,6 +1,6 @@
 //! `satsim campaign SCENE.toml [--out DIR] [--threads T] [--shard I/N] [--shards N]
 //! [--resume]` and `satsim campaign merge DIR... --out DIR` (contract section 8): a thin
-//! wrapper over [`satsim_satellite::campaign`].
+//! wrapper over [`satsim_tools::campaign`].
 //!
 //! Without `--shard`, the shard comes from the scheduler's environment when present (Slurm
 //! job array, Kubernetes indexed Job with `--shards N`, AWS Batch array job); standard error
@@ -11,10 +11,10 @@
 
 use super::{CliError, Output, at_least_one, stem, usage};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use satsim_satellite::campaign::{
+use satsim_tools::campaign::{
     self, Campaign, CampaignError, Finished, Progress, RunOptions, Shard, choose_shard,
 };
-use satsim_satellite::scene_keys::Override;
+use satsim_tools::scene_keys::Override;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};

@@ -3,7 +3,7 @@
 //! of one state, as one JSON object with every number at full `f64` precision.
 
 use super::{CliError, ModelAndState, ModelStateArgs, Output, rows, to_json};
-use satsim_satellite::api::{Dynamics, DynamicsFailure, dynamics};
+use satsim_tools::api::{Dynamics, DynamicsFailure, dynamics};
 use serde::Serialize;
 
 /// The flags of `satsim dynamics`.

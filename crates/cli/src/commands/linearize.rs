@@ -1,11 +1,11 @@
 //! `satsim linearize SCENE.toml` (contract section 9): the linear model `ż = A z + B u` of a
 //! scene at its initial state, every enabled effect included, as one JSON object
 //! (`states`, `inputs`, `A`, `B`, plus `error_estimate`, `locked` and `released`). The work
-//! is [`satsim_satellite::linearize`]'s; this is its command-line face.
+//! is [`satsim_tools::linearize`]'s; this is its command-line face.
 
 use super::{CliError, Output, rows, to_json};
-use satsim_satellite::linearize::{Linearization, linearize};
-use satsim_satellite::scene::Scene;
+use satsim_tools::linearize::{Linearization, linearize};
+use satsim_tools::scene::Scene;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 

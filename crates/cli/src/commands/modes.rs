@@ -1,6 +1,6 @@
 //! `satsim modes SCENE.toml [--along HINGE=FROM:TO:N[,HINGE=FROM:TO] [--plot FILE.svg]]`
 //! (contract section 9): the structural modes of a scene at its initial state, from
-//! [`satsim_satellite::modes`].
+//! [`satsim_tools::modes`].
 //!
 //! Without `--along`: one JSON object, `frequencies_hz` (ascending), `damping_ratios`,
 //! `rigid_modes`, `modes` (each with `frequency_hz`, `damping_ratio`, `eigenvalue`,
@@ -15,8 +15,8 @@
 
 use super::linearize::scene_error;
 use super::{CliError, Output, stem, to_json, usage};
-use satsim_satellite::modes::{Along, Mode, Modes, modes, sweep, sweep_plot};
-use satsim_satellite::scene::Scene;
+use satsim_tools::modes::{Along, Mode, Modes, modes, sweep, sweep_plot};
+use satsim_tools::scene::Scene;
 use serde::ser::{Serialize, SerializeMap, Serializer};
 use std::path::{Path, PathBuf};
 

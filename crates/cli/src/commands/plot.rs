@@ -1,7 +1,7 @@
 //! `satsim plot CSV --columns a,b,... [--from T] [--to T] [-o OUT.svg]`: re-plots columns of a
 //! run's CSV (such as `out/deploy/trajectory.csv`) against its time column `t`, without
 //! running again. The file is streamed and each curve decimated as `satsim run`'s own plots
-//! are ([`satsim_satellite::output::Decimation`]), so the plot stays small whatever the
+//! are ([`satsim_tools::output::Decimation`]), so the plot stays small whatever the
 //! number of rows.
 //!
 //! Bad input (exit status 2): an unreadable or empty file, a file without a `t` column, a
@@ -9,7 +9,7 @@
 //! `--from` >= `--to` or holding no row, and a row that is not numbers (file and line named).
 
 use super::{CliError, Output, usage};
-use satsim_satellite::output::{Decimation, column_matches, plot_curves};
+use satsim_tools::output::{Decimation, column_matches, plot_curves};
 use std::fs::File;
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};

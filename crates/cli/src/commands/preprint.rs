@@ -3,7 +3,7 @@
 //! the same matrices from the generic engine, and their largest absolute difference.
 
 use super::{CliError, ModelAndState, ModelStateArgs, Output, rows, to_json};
-use satsim_satellite::preprint::{PreprintError, compare};
+use satsim_satellite::{PreprintError, compare};
 use serde::Serialize;
 
 /// The flags of `satsim preprint`.

@@ -1,5 +1,5 @@
 //! `satsim run SCENE.toml [--out DIR] [--set KEY=VALUE]...` (contract section 7): integrates a
-//! scene (with `--set` overrides, see [`satsim_satellite::scene_keys`]), streams
+//! scene (with `--set` overrides, see [`satsim_tools::scene_keys`]), streams
 //! `DIR/trajectory.csv` row by row (in blocks, flushed on success, failure and interrupt, so
 //! a stopped run leaves a valid file up to its last row), writes every event to
 //! `DIR/events.csv`, draws SVG plots of the main quantities at the end from a bounded min/max
@@ -18,11 +18,11 @@
 use super::{CliError, Output, stem};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use satsim_integrate::Output as Times;
-use satsim_satellite::output::{CsvWriter, PlotRecorder, write_events};
-use satsim_satellite::scene::Scene;
-use satsim_satellite::scene_keys::Override;
-use satsim_satellite::simulation::RunError;
-use satsim_satellite::view::{PoseRecorder, ViewError};
+use satsim_spacecraft::simulation::RunError;
+use satsim_tools::output::{CsvWriter, PlotRecorder, write_events};
+use satsim_tools::scene::Scene;
+use satsim_tools::scene_keys::Override;
+use satsim_tools::view::{PoseRecorder, ViewError};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};

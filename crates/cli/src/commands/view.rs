@@ -2,7 +2,7 @@
 //! section 11) from the scene and poses the run kept (`DIR/view.json`, `DIR/poses.csv`).
 
 use super::{CliError, Output};
-use satsim_satellite::view::{VIEW_HTML, ViewData};
+use satsim_tools::view::{VIEW_HTML, ViewData};
 use std::path::PathBuf;
 
 /// The flags of `satsim view`.

@@ -3,7 +3,7 @@
 #![allow(dead_code)]
 
 use nalgebra::{Quaternion, UnitQuaternion};
-use satsim_satellite::preprint::{Deployment, PreprintParams, build_model};
+use satsim_satellite::{Deployment, PreprintParams, build_model};
 use satsim_tree::spatial::{Force, Mat3, Vec3};
 use satsim_tree::{BaseKind, Body, Hinge, Model, ModelBuilder};
 

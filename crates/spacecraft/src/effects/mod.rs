@@ -1,0 +1,538 @@
+//! Effects: the physics a scene may switch on, each a small module behind one trait,
+//! [`Effect`].
+//!
+//! A [`crate::simulation::Simulation`] holds only the effects a scene enables, in the order
+//! their declared dependencies give ([`Effect::after`], [`Effect::before`], resolved by a
+//! stable topological sort, [`order`]); an effect that is off is never constructed, so it
+//! costs nothing and adds no state. At every right-hand-side evaluation the simulation
+//!
+//! 1. unpacks the state and runs the tree's forward kinematics,
+//! 2. builds a [`Context`] (time, kinematics, hinge angles and rates, orbit, bus attitude),
+//! 3. calls [`Effect::apply`] on each enabled effect, which adds hinge torques and body
+//!    wrenches to [`Forces`] and writes the derivatives of its own states,
+//! 4. runs the articulated-body algorithm (hybrid, when hinges are locked) and packs the
+//!    derivative.
+//!
+//! Effects with discontinuities (hinge stops, stiction) declare event functions; the
+//! integrator locates their zero crossings and the effect answers with [`Request`]s (lock a
+//! hinge, unlock it, set its rate by a momentum-conserving impulse) that the simulation
+//! carries out.
+//!
+//! Adding an effect touches one new file: a type implementing [`Effect`] (only `name` and
+//! `apply` are required) and, to be read from a scene's `[effects.<name>]` section,
+//! [`SceneEffect`] (its serde section and its construction), registered in a [`Registry`]
+//! exactly as the built-in effects are ([`Registry::with_builtins`]). Without a scene, push
+//! it with [`crate::simulation::SimulationBuilder::effect`].
+
+pub mod attitude_control;
+pub mod gravity_gradient;
+pub mod hinge_control;
+pub mod hinge_springs;
+pub mod hinge_stops;
+pub mod orbit;
+pub mod order;
+pub mod reaction_wheels;
+pub mod registry;
+pub mod section;
+
+pub use attitude_control::{AttitudeControl, Target};
+pub use gravity_gradient::{GravityGradient, GravityModel};
+pub use hinge_control::{HingeControl, HingeProfile};
+pub use hinge_springs::HingeSprings;
+pub use hinge_stops::{HingeStop, HingeStops, StopAction};
+pub use orbit::{Elements, Orbit, OrbitModel};
+pub use reaction_wheels::{ReactionWheels, Wheel};
+pub use registry::{AnyEffect, EffectSet, Registry, SceneEffect, needs_met};
+pub use section::{SceneText, Section};
+
+use nalgebra::UnitQuaternion;
+use satsim_integrate::{EventAction, EventDirection, SystemError};
+use satsim_tree::spatial::{Force, Mat3, Motion, Vec3};
+use satsim_tree::{Data, Model};
+
+/// What an effect requires of the rest of the scene. Unmet needs are scene errors that say
+/// what to add.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Needs {
+    /// An `[orbit]` (the effect reads the centre of mass' position).
+    pub orbit: bool,
+    /// Rotors to command (an effect that adds rotors, e.g. `[effects.reaction_wheels]`): the
+    /// effect writes [`Forces::rotor_command`].
+    pub rotors: bool,
+    /// A free-floating root (`[base] kind = "free"`).
+    pub free_base: bool,
+    /// Body poses in [`Context::data`] (forward kinematics is skipped when no enabled effect
+    /// needs it; without it `data.rotation`, `data.position` and `data.v` are stale).
+    pub kinematics: bool,
+    /// The system's centre of mass, [`Context::com`] (implies `kinematics`). It is computed
+    /// only when an enabled effect declares it; otherwise `Context::com` is `None`.
+    pub com: bool,
+    /// [`Context::hold_torque`] in `events`, `on_event` and `start` (stick/slip decisions).
+    /// It costs a hybrid-dynamics solve and an RNEA per evaluation, never in the rhs.
+    pub hold_torques: bool,
+}
+
+/// An axisymmetric rotor body that an effect adds to the tree (a reaction wheel, a momentum
+/// wheel, a control-moment gyro's rotor), hinged to
+/// the root about `axis`. Its dynamics do not depend on its angle, which is therefore not a
+/// state: its spin rate relative to the root is.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Rotor {
+    /// Body and hinge name (the reaction wheels use `wheel_<name>`).
+    pub name: String,
+    /// Unit spin axis, root-body axes.
+    pub axis: Vec3,
+    /// Centre of the rotor in the root body's frame (m).
+    pub at: Vec3,
+    /// Mass (kg, default 0: the wheel's mass is usually part of the bus).
+    pub mass: f64,
+    /// Moment of inertia about the spin axis (kg m²).
+    pub axial: f64,
+    /// Moment of inertia about any transverse axis through the centre (kg m²).
+    pub transverse: f64,
+}
+
+impl Rotor {
+    /// The rotor's inertia tensor about its centre, root-body axes (the rotor frame is
+    /// parallel to the root's at zero angle, and the tensor is invariant under spin).
+    pub fn inertia(&self) -> Mat3 {
+        let a = self.axis;
+        let aat = a * a.transpose();
+        aat * self.axial + (Mat3::identity() - aat) * self.transverse
+    }
+}
+
+/// The orbit of the system's centre of mass at the time of evaluation (inertial frame, SI).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct OrbitState {
+    /// Position of the centre of mass from the Earth's centre (m).
+    pub r: Vec3,
+    /// Its velocity (m/s).
+    pub v: Vec3,
+    /// Gravitational parameter μ (m³/s²).
+    pub mu: f64,
+}
+
+impl OrbitState {
+    /// The unit local vertical (from the Earth's centre to the satellite), inertial axes.
+    pub fn vertical(&self) -> Vec3 {
+        self.r.normalize()
+    }
+    /// The local orbital frame (LVLH), orbital to inertial: z towards the Earth's centre
+    /// (nadir), y along the negative orbit normal `−r × v`, x = y × z completing the triad
+    /// (along the velocity on a circular orbit). The frame turns at `r × v / r²`.
+    pub fn orbital_frame(&self) -> UnitQuaternion<f64> {
+        let z = -self.r.normalize();
+        let y = -self.r.cross(&self.v).normalize();
+        let x = y.cross(&z);
+        UnitQuaternion::from_rotation_matrix(&nalgebra::Rotation3::from_matrix_unchecked(
+            Mat3::from_columns(&[x, y, z]),
+        ))
+    }
+}
+
+/// Everything an effect may read during an evaluation.
+pub struct Context<'a> {
+    /// Time (s).
+    pub t: f64,
+    /// The tree (the scene's model plus any rotor bodies).
+    pub model: &'a Model,
+    /// Kinematics after `forward_kinematics`: `rotation[i]` (body to inertial),
+    /// `position[i]` (body origin, relative to the tree's reference point), `v[i]`.
+    pub data: &'a Data,
+    /// The tree's full position vector (attitude, position (zero), all hinge angles).
+    pub q: &'a [f64],
+    /// The tree's full velocity vector.
+    pub v: &'a [f64],
+    /// Number of the scene model's hinges (the rotors' hinges follow).
+    pub n_hinges: usize,
+    /// The model's hinge angles, file order (rad).
+    pub angles: &'a [f64],
+    /// The model's hinge rates, file order (rad/s).
+    pub rates: &'a [f64],
+    /// Which hinges (model hinges then rotors) are locked.
+    pub locked: &'a [bool],
+    /// The system's centre of mass, inertial axes, relative to the tree's reference point:
+    /// `Some` when an enabled effect declares [`Needs::com`] and the poses are current
+    /// (see [`Context::com_or_err`]), `None` otherwise, never a stale or zero value.
+    pub com: Option<Vec3>,
+    /// The orbit of the centre of mass, when the scene has one.
+    pub orbit: Option<OrbitState>,
+    /// Root (bus) attitude, bus to inertial.
+    pub attitude: UnitQuaternion<f64>,
+    /// Root angular velocity, bus axes (rad/s).
+    pub omega: Vec3,
+    /// Rotor spin rates relative to the bus (rad/s), one per rotor.
+    pub rotor_rates: &'a [f64],
+    /// Per hinge (model hinges then rotors): the total torque the hinge must receive to have
+    /// zero acceleration, everything else as now (the locked hinges locked): `(M q̈ + C −
+    /// Jᵀfext)_k` with `q̈` from hybrid dynamics. A hinge held by friction sticks while the
+    /// friction it needs, `hold − motor`, is within its static friction. Filled for locked
+    /// hinges in `events` (when an effect's [`Effect::event_reads`] asks for them), for
+    /// every hinge in `on_event` and `start`, and only when an effect sets
+    /// [`Needs::hold_torques`]; NaN where not computed.
+    pub hold_torque: &'a [f64],
+}
+
+impl Context<'_> {
+    /// Index (in the tree's hinge order) of rotor `j`'s hinge.
+    pub fn rotor_hinge(&self, j: usize) -> usize {
+        self.n_hinges + j
+    }
+    /// The centre of mass, or an error naming the effect that read it without declaring
+    /// [`Needs::com`].
+    pub fn com_or_err(&self, effect: &str) -> Result<Vec3, SystemError> {
+        self.com.ok_or_else(|| {
+            SystemError::new(format!(
+                "{effect} reads the centre of mass but does not declare `Needs::com`"
+            ))
+        })
+    }
+    /// The orbit, or an error naming the effect that needed it.
+    pub fn orbit_or_err(&self, effect: &str) -> Result<OrbitState, SystemError> {
+        self.orbit
+            .ok_or_else(|| SystemError::new(format!("{effect} needs an orbit")))
+    }
+}
+
+/// What effects produce: generalised forces and commands.
+#[derive(Clone, Debug)]
+pub struct Forces {
+    /// Torque on each hinge (model hinges in file order, then rotors), N m, acting on the
+    /// child, reacting on the parent.
+    pub hinge_torque: Vec<f64>,
+    /// External wrench on each body (in `model.bodies` order), body coordinates, about the
+    /// body frame's origin.
+    pub body_wrench: Vec<Force>,
+    /// Whether any effect wrote a body wrench in this evaluation.
+    pub has_wrench: bool,
+    /// How many wrenches were added in this evaluation (the energy budget measures the
+    /// wrenches' power only after an effect that added one).
+    wrenches_added: u32,
+    /// Motor torque commanded to each rotor (N m, on the rotor about its axis, tree order):
+    /// the channel from a controller ([`Effect::commands_rotors`]) to the effect that owns
+    /// the rotors, which runs after it ([`Effect::before`]) and decides what to do with it
+    /// (limits, friction). Zeroed before every evaluation.
+    pub rotor_command: Vec<f64>,
+}
+
+impl Forces {
+    /// Zeroed forces for `n_hinges` hinges, `n_bodies` bodies and `n_rotors` rotors.
+    pub fn new(n_hinges: usize, n_bodies: usize, n_rotors: usize) -> Self {
+        Self {
+            hinge_torque: vec![0.0; n_hinges],
+            body_wrench: vec![Force::zero(); n_bodies],
+            has_wrench: false,
+            wrenches_added: 0,
+            rotor_command: vec![0.0; n_rotors],
+        }
+    }
+    /// Clears everything to zero.
+    pub fn clear(&mut self) {
+        self.hinge_torque.fill(0.0);
+        if self.has_wrench {
+            self.body_wrench.fill(Force::zero());
+            self.has_wrench = false;
+        }
+        self.wrenches_added = 0;
+        self.rotor_command.fill(0.0);
+    }
+    /// As [`Forces::clear`], with the hinge torques set to `hinge_torque` (one copy rather
+    /// than zeroing first: this runs at every right-hand side).
+    pub fn reset_to(&mut self, hinge_torque: &[f64]) {
+        self.hinge_torque.copy_from_slice(hinge_torque);
+        if self.has_wrench {
+            self.body_wrench.fill(Force::zero());
+            self.has_wrench = false;
+        }
+        self.wrenches_added = 0;
+        self.rotor_command.fill(0.0);
+    }
+    /// The power (W) of the hinge torques, `Σ_k τ_k q̇_k`, with `v` the tree's velocity
+    /// vector (its first `n_base` entries the root's). The wheel commands are not forces
+    /// and do not count.
+    pub fn hinge_power(&self, v: &[f64], n_base: usize) -> f64 {
+        self.hinge_torque
+            .iter()
+            .zip(&v[n_base..])
+            .map(|(t, r)| t * r)
+            .sum()
+    }
+    /// The power (W) of the body wrenches, `Σ_i f_i · v_i`, with `body_v` the bodies'
+    /// spatial velocities in body coordinates (not read when no wrench was added).
+    pub fn wrench_power(&self, body_v: &[Motion]) -> f64 {
+        if !self.has_wrench {
+            return 0.0;
+        }
+        self.body_wrench
+            .iter()
+            .zip(body_v)
+            .map(|(f, m)| m.dot(f))
+            .sum()
+    }
+    /// How many wrenches [`Forces::add_wrench`] added since the last [`Forces::clear`].
+    pub fn wrenches_added(&self) -> u32 {
+        self.wrenches_added
+    }
+    /// Adds a wrench (body coordinates, about the body origin) on body `i`.
+    pub fn add_wrench(&mut self, i: usize, f: Force) {
+        self.body_wrench[i] += f;
+        self.has_wrench = true;
+        self.wrenches_added = self.wrenches_added.wrapping_add(1);
+    }
+}
+
+/// The non-conservative power of an effect's forces at one evaluation (W), split by where
+/// the energy goes: see [`Effect::power`] and the energy budget in
+/// [`crate::simulation`].
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Power {
+    /// Power that actuators (motors, controllers) and other non-conservative driving forces
+    /// (a field that moves with the orbit) feed into the system; negative when they brake it.
+    pub actuator: f64,
+    /// Power lost to dissipation (dampers, friction); `>= 0` for a passive element.
+    pub dissipated: f64,
+}
+
+impl Power {
+    /// All of `p` is an actuator's.
+    pub fn actuator(p: f64) -> Self {
+        Self {
+            actuator: p,
+            dissipated: 0.0,
+        }
+    }
+    /// All of `p` is dissipated.
+    pub fn dissipated(p: f64) -> Self {
+        Self {
+            actuator: 0.0,
+            dissipated: p,
+        }
+    }
+}
+
+/// What the simulation tells every effect once it is built ([`Effect::connect`]).
+#[derive(Clone, Copy, Debug)]
+pub struct Links<'a> {
+    /// The tree's rotors, in hinge order after the model's hinges (one entry of
+    /// [`Forces::rotor_command`] each).
+    pub rotors: &'a [Rotor],
+    /// Whether an enabled effect writes [`Forces::rotor_command`] ([`Effect::commands_rotors`]).
+    pub rotors_commanded: bool,
+}
+
+/// What an effect's event functions ([`Effect::events`]) read beyond the state, so that the
+/// event pass (run at the end of every step) computes only that. Always available to them:
+/// the time, the hinge angles and rates, the locked flags, the attitude and rates, the orbit,
+/// the effect's own states and its own fields (its mode). See [`Effect::event_reads`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct EventReads {
+    /// `forces`: what every effect's [`Effect::apply`] writes at this state (then every
+    /// effect is applied). Otherwise `forces` holds an earlier evaluation's values.
+    pub forces: bool,
+    /// [`Context::hold_torque`] of the locked hinges (a hybrid-dynamics solve and an RNEA,
+    /// after every `apply`; only with [`Needs::hold_torques`]). Otherwise NaN.
+    pub hold_torques: bool,
+    /// Body poses and velocities in [`Context::data`], and [`Context::com`] (forward
+    /// kinematics). Otherwise stale (and `com` is `None`).
+    pub kinematics: bool,
+}
+
+impl EventReads {
+    /// Nothing beyond the state: no effect is applied, no kinematics, no hold torques.
+    pub const STATE: Self = Self {
+        forces: false,
+        hold_torques: false,
+        kinematics: false,
+    };
+    /// Everything (the default: always right, the most work).
+    pub const ALL: Self = Self {
+        forces: true,
+        hold_torques: true,
+        kinematics: true,
+    };
+    /// What either reads.
+    pub fn union(self, o: Self) -> Self {
+        Self {
+            forces: self.forces || o.forces,
+            hold_torques: self.hold_torques || o.hold_torques,
+            kinematics: self.kinematics || o.kinematics,
+        }
+    }
+}
+
+/// What an effect asks the simulation to do at one of its events.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Request {
+    /// Bring hinge `h` (tree order) to rest by a plastic, momentum-conserving impulse, then
+    /// lock it (it transmits rigidly until unlocked).
+    Lock(usize),
+    /// Release a locked hinge.
+    Unlock(usize),
+    /// Change hinge `h`'s rate to `rate` by a momentum-conserving impulse between its two
+    /// bodies (a rebound).
+    SetRate {
+        /// The hinge, tree order.
+        hinge: usize,
+        /// The rate after the impulse (rad/s).
+        rate: f64,
+    },
+}
+
+/// One piece of physics. Only [`Effect::name`] and [`Effect::apply`] are required.
+pub trait Effect: Send {
+    /// The scene's name for it (`hinge_springs`, ...).
+    fn name(&self) -> &str;
+    /// What it needs from the scene.
+    fn needs(&self) -> Needs {
+        Needs::default()
+    }
+    /// Number of its own states (orbit: 6, wheels: one per wheel).
+    fn n_states(&self) -> usize {
+        0
+    }
+    /// Names of its own states (for the state layout and output).
+    fn state_names(&self) -> Vec<String> {
+        Vec::new()
+    }
+    /// Its initial own states.
+    fn initial_state(&self, _own: &mut [f64]) {}
+    /// The centre of mass' orbit held in its own states, for an orbit effect.
+    fn orbit_state(&self, _own: &[f64]) -> Option<OrbitState> {
+        None
+    }
+    /// Rotor bodies it adds to the tree. An effect with rotors has exactly one own state per
+    /// rotor, its spin rate, whose derivative the dynamics provide (`apply` leaves it alone).
+    fn rotors(&self) -> Vec<Rotor> {
+        Vec::new()
+    }
+    /// Whether it writes motor commands into [`Forces::rotor_command`] (one per rotor of the
+    /// tree, see [`Effect::connect`]).
+    fn commands_rotors(&self) -> bool {
+        false
+    }
+    /// Effects (by [`Effect::name`]) that must run before this one in every evaluation, e.g.
+    /// because it reads what they write into [`Forces`]. Each must be enabled: a missing one
+    /// or a cycle is a setup error.
+    fn after(&self) -> &[&str] {
+        &[]
+    }
+    /// Effects that must run after this one (attitude control before the wheels it
+    /// commands). Each must be enabled, as for [`Effect::after`].
+    fn before(&self) -> &[&str] {
+        &[]
+    }
+    /// Called once when the simulation is built, before [`Effect::start`]: what the rest of
+    /// the simulation provides (the tree's rotors, whether a controller commands them).
+    fn connect(&mut self, _links: &Links) {}
+    /// Adds its hinge torques and body wrenches to `forces` and writes the derivatives of its
+    /// own states (`own`) into `own_dot`.
+    fn apply(
+        &mut self,
+        ctx: &Context,
+        forces: &mut Forces,
+        own: &[f64],
+        own_dot: &mut [f64],
+    ) -> Result<(), SystemError>;
+    /// Its potential energy (J), counted in the total energy.
+    fn potential_energy(&self, _ctx: &Context, _own: &[f64]) -> f64 {
+        0.0
+    }
+    /// The non-conservative power of the forces it added in its last [`Effect::apply`] (on
+    /// the same state), for the energy budget. `applied` is the power of those forces, which
+    /// the simulation measures: `Σ_k Δτ_k q̇_k + Σ_i Δf_i · v_i` over the hinge torques and
+    /// body wrenches it added. An effect with a [`Effect::potential_energy`] must leave out
+    /// the conservative part, `−dV/dt` at fixed time (it is counted in the potential); what
+    /// remains it splits into actuator work and dissipation. The default counts all of
+    /// `applied` as an actuator's: right for an effect that has neither a potential nor
+    /// losses (a motor, a controller).
+    fn power(&self, _ctx: &Context, _own: &[f64], applied: f64) -> Power {
+        Power::actuator(applied)
+    }
+    /// Extra output columns.
+    fn output_columns(&self) -> Vec<String> {
+        Vec::new()
+    }
+    /// Values of [`Effect::output_columns`], appended to `row`.
+    fn output(&self, _ctx: &Context, _own: &[f64], _row: &mut Vec<f64>) {}
+    /// Called once before the run with the initial state: may lock hinges (a wheel at rest
+    /// under static friction, a hinge that starts on a latching stop).
+    fn start(
+        &mut self,
+        _ctx: &Context,
+        _forces: &Forces,
+        _own: &[f64],
+        _requests: &mut Vec<Request>,
+    ) -> Result<(), SystemError> {
+        Ok(())
+    }
+    /// Number of event functions (fixed for the run).
+    fn n_events(&self) -> usize {
+        0
+    }
+    /// Evaluates the event functions into `g`. What is current in `ctx` and `forces` beyond
+    /// the state is what some effect's [`Effect::event_reads`] asks for.
+    fn events(&self, _ctx: &Context, _forces: &Forces, _own: &[f64], _g: &mut [f64]) {}
+    /// What [`Effect::events`] reads beyond the state, asked before every evaluation of the
+    /// event functions (so it may depend on the effect's mode: a wheel reads hold torques only
+    /// while it is stuck). The default, everything ([`EventReads::ALL`], the poses only when
+    /// the effect declares [`Needs::kinematics`]), is always right; a narrower answer spares
+    /// the event pass, at every step, the effects' `apply`, kinematics or a hybrid-dynamics
+    /// solve. It must be exact: what is not declared is stale in `events`.
+    fn event_reads(&self) -> EventReads {
+        EventReads {
+            kinematics: self.needs().kinematics,
+            ..EventReads::ALL
+        }
+    }
+    /// Which sign changes of event `k` count.
+    fn event_direction(&self, _k: usize) -> EventDirection {
+        EventDirection::Both
+    }
+    /// Handles its event `k`: may change its own states and mode, and push requests.
+    /// Return [`EventAction::Reset`] when anything changed (the integrator restarts).
+    fn on_event(
+        &mut self,
+        _k: usize,
+        _ctx: &Context,
+        _forces: &Forces,
+        _own: &mut [f64],
+        _requests: &mut Vec<Request>,
+    ) -> EventAction {
+        EventAction::Continue
+    }
+    /// A short description of what happened at the last event (for the run summary).
+    fn describe_event(&self, _k: usize) -> String {
+        String::new()
+    }
+}
+
+/// Hamilton product of quaternions stored `[w, x, y, z]`.
+#[inline]
+pub fn quat_mul(a: &[f64; 4], b: &[f64; 4]) -> [f64; 4] {
+    [
+        a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3],
+        a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2],
+        a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1],
+        a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0],
+    ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Forces;
+    use satsim_tree::spatial::{Force, Vec3};
+
+    #[test]
+    fn reset_to_sets_the_hinge_torques_and_clears_the_rest() {
+        let mut f = Forces::new(3, 2, 1);
+        f.hinge_torque.copy_from_slice(&[1.0, 2.0, 3.0]);
+        f.add_wrench(1, Force::new(Vec3::x(), Vec3::y()));
+        f.rotor_command[0] = 4.0;
+        f.reset_to(&[0.5, 0.0, -0.5]);
+        assert_eq!(f.hinge_torque, [0.5, 0.0, -0.5]);
+        assert!(!f.has_wrench && f.wrenches_added() == 0);
+        assert!(f.body_wrench.iter().all(|w| *w == Force::zero()));
+        assert_eq!(f.rotor_command, [0.0]);
+    }
+}

@@ -1,0 +1,227 @@
+//! The orbit of the system's centre of mass: Keplerian (preprint eq. 17) or J2-perturbed
+//! (eq. 18 with `F_per` the J2 zonal acceleration). States: position `r` and velocity `v`,
+//! inertial (Earth-centred, Z along the Earth's pole), SI units.
+//!
+//! The attitude and hinge motion are integrated in the frame that translates with the centre
+//! of mass (free-falling, not rotating); the orbit effect carries that frame's motion. To the
+//! first order in size/r that the gravity-gradient models keep, the two motions decouple: the
+//! tidal forces sum to zero, so the centre of mass follows eq. (17) or (18) exactly.
+//!
+//! Output: the orbit's radius and position, and the bus' `roll`, `pitch`, `yaw` (rad)
+//! relative to the local orbital frame (LVLH, [`OrbitState::orbital_frame`]: z to nadir,
+//! y along the negative orbit normal, x completing the triad, along-track on a circular
+//! orbit), sequence z-y'-x'' (yaw, then pitch, then roll).
+
+use super::{Context, Effect, Forces, OrbitState};
+use nalgebra::UnitQuaternion;
+use satsim_integrate::SystemError;
+use satsim_tree::spatial::Vec3;
+
+/// Earth's gravitational parameter μ (m³/s², EGM96/WGS-84).
+pub const MU_EARTH: f64 = 3.986004418e14;
+/// Earth's equatorial radius R_E (m, WGS-84).
+pub const R_EARTH: f64 = 6_378_137.0;
+/// Earth's second zonal harmonic J2 (EGM2008, unnormalised).
+pub const J2_EARTH: f64 = 1.08262668e-3;
+
+/// Which equation moves the centre of mass.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum OrbitModel {
+    /// `r'' = −μ r / r³` (eq. 17).
+    #[default]
+    Kepler,
+    /// Eq. (18) with the J2 zonal perturbation.
+    J2,
+}
+
+/// Classical orbital elements (SI, angles in radians).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Elements {
+    /// Semi-major axis a (m).
+    pub a: f64,
+    /// Eccentricity e, `0 <= e < 1`.
+    pub e: f64,
+    /// Inclination i (rad).
+    pub i: f64,
+    /// Right ascension of the ascending node Ω (rad).
+    pub raan: f64,
+    /// Argument of periapsis ω (rad).
+    pub argp: f64,
+    /// True anomaly ν (rad).
+    pub nu: f64,
+}
+
+impl Elements {
+    /// A circular orbit of radius `a`.
+    pub fn circular(a: f64, i: f64) -> Self {
+        Self {
+            a,
+            e: 0.0,
+            i,
+            raan: 0.0,
+            argp: 0.0,
+            nu: 0.0,
+        }
+    }
+    /// Position and velocity (inertial) for gravitational parameter `mu`.
+    ///
+    /// ```
+    /// use satsim_spacecraft::effects::orbit::{Elements, MU_EARTH};
+    /// let (r, v) = Elements::circular(7.0e6, 0.0).to_cartesian(MU_EARTH);
+    /// assert!((r.norm() - 7.0e6).abs() < 1e-6);
+    /// assert!((v.norm() - (MU_EARTH / 7.0e6).sqrt()).abs() < 1e-9);
+    /// ```
+    pub fn to_cartesian(&self, mu: f64) -> (Vec3, Vec3) {
+        let p = self.a * (1.0 - self.e * self.e);
+        let (sn, cn) = self.nu.sin_cos();
+        let rad = p / (1.0 + self.e * cn);
+        let r_pf = Vec3::new(rad * cn, rad * sn, 0.0);
+        let k = (mu / p).sqrt();
+        let v_pf = Vec3::new(-k * sn, k * (self.e + cn), 0.0);
+        let rot = nalgebra::Rotation3::from_axis_angle(&Vec3::z_axis(), self.raan)
+            * nalgebra::Rotation3::from_axis_angle(&Vec3::x_axis(), self.i)
+            * nalgebra::Rotation3::from_axis_angle(&Vec3::z_axis(), self.argp);
+        (rot * r_pf, rot * v_pf)
+    }
+}
+
+/// The orbit effect.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Orbit {
+    /// Kepler or J2.
+    pub model: OrbitModel,
+    /// Gravitational parameter (m³/s²).
+    pub mu: f64,
+    /// Equatorial radius used by J2 (m).
+    pub radius: f64,
+    /// J2 coefficient.
+    pub j2: f64,
+    /// Initial position (m, inertial).
+    pub r0: Vec3,
+    /// Initial velocity (m/s, inertial).
+    pub v0: Vec3,
+}
+
+impl Orbit {
+    /// An Earth orbit from an initial position and velocity.
+    pub fn new(model: OrbitModel, r0: Vec3, v0: Vec3) -> Self {
+        Self {
+            model,
+            mu: MU_EARTH,
+            radius: R_EARTH,
+            j2: J2_EARTH,
+            r0,
+            v0,
+        }
+    }
+    /// An Earth orbit from classical elements.
+    pub fn from_elements(model: OrbitModel, el: &Elements) -> Self {
+        let (r, v) = el.to_cartesian(MU_EARTH);
+        Self::new(model, r, v)
+    }
+    /// The gravitational acceleration at `r` (inertial).
+    pub fn acceleration(&self, r: &Vec3) -> Vec3 {
+        let r2 = r.norm_squared();
+        let rn = r2.sqrt();
+        let mut a = -self.mu / (r2 * rn) * r;
+        if self.model == OrbitModel::J2 {
+            let z2 = r.z * r.z / r2;
+            let k = -1.5 * self.j2 * self.mu * self.radius * self.radius / (r2 * r2 * rn);
+            a += k * Vec3::new(
+                r.x * (1.0 - 5.0 * z2),
+                r.y * (1.0 - 5.0 * z2),
+                r.z * (3.0 - 5.0 * z2),
+            );
+        }
+        a
+    }
+    /// Roll, pitch and yaw (rad) of `attitude` (bus to inertial) relative to the local
+    /// orbital frame of the orbit state `own` (see [`Effect::output_columns`]).
+    ///
+    /// ```
+    /// use nalgebra::UnitQuaternion;
+    /// use satsim_spacecraft::effects::orbit::{Elements, Orbit, OrbitModel};
+    /// let orbit = Orbit::from_elements(OrbitModel::Kepler, &Elements::circular(7.0e6, 0.3));
+    /// let own = [orbit.r0.x, orbit.r0.y, orbit.r0.z, orbit.v0.x, orbit.v0.y, orbit.v0.z];
+    /// let lvlh = orbit.state(&own).orbital_frame();
+    /// let bus = lvlh * UnitQuaternion::from_euler_angles(0.1, -0.2, 0.3);
+    /// let (roll, pitch, yaw) = orbit.attitude_in_orbit(bus, &own);
+    /// assert!((roll - 0.1).abs() < 1e-12 && (pitch + 0.2).abs() < 1e-12 && (yaw - 0.3).abs() < 1e-12);
+    /// ```
+    pub fn attitude_in_orbit(&self, attitude: UnitQuaternion<f64>, own: &[f64]) -> (f64, f64, f64) {
+        // nalgebra's Euler angles are those of Rz(yaw) Ry(pitch) Rx(roll): z-y'-x''.
+        (self.state(own).orbital_frame().inverse() * attitude).euler_angles()
+    }
+    /// The state of the orbit held in `own` (`[r, v]`).
+    pub fn state(&self, own: &[f64]) -> OrbitState {
+        OrbitState {
+            r: Vec3::new(own[0], own[1], own[2]),
+            v: Vec3::new(own[3], own[4], own[5]),
+            mu: self.mu,
+        }
+    }
+}
+
+impl Effect for Orbit {
+    fn name(&self) -> &str {
+        "orbit"
+    }
+    fn n_states(&self) -> usize {
+        6
+    }
+    fn state_names(&self) -> Vec<String> {
+        ["r_x", "r_y", "r_z", "v_x", "v_y", "v_z"]
+            .iter()
+            .map(|s| format!("orbit_{s}"))
+            .collect()
+    }
+    fn orbit_state(&self, own: &[f64]) -> Option<OrbitState> {
+        Some(self.state(own))
+    }
+    fn initial_state(&self, own: &mut [f64]) {
+        own[..3].copy_from_slice(self.r0.as_slice());
+        own[3..].copy_from_slice(self.v0.as_slice());
+    }
+    fn apply(
+        &mut self,
+        _ctx: &Context,
+        _forces: &mut Forces,
+        own: &[f64],
+        own_dot: &mut [f64],
+    ) -> Result<(), SystemError> {
+        let r = Vec3::new(own[0], own[1], own[2]);
+        if r.norm().is_nan() || r.norm() == 0.0 {
+            return Err(SystemError::new(
+                "orbit: the centre of mass reached the Earth's centre",
+            ));
+        }
+        let a = self.acceleration(&r);
+        own_dot[..3].copy_from_slice(&own[3..6]);
+        own_dot[3..].copy_from_slice(a.as_slice());
+        Ok(())
+    }
+    /// The radius, the position, and the bus' roll, pitch and yaw (rad) relative to the
+    /// local orbital frame ([`OrbitState::orbital_frame`]), sequence z-y'-x'': the bus is the
+    /// orbital frame turned by yaw about its z, then pitch about the new y, then roll about
+    /// the newest x.
+    fn output_columns(&self) -> Vec<String> {
+        [
+            "orbit_radius",
+            "orbit_r_x",
+            "orbit_r_y",
+            "orbit_r_z",
+            "roll",
+            "pitch",
+            "yaw",
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .collect()
+    }
+    fn output(&self, ctx: &Context, own: &[f64], row: &mut Vec<f64>) {
+        row.push(Vec3::new(own[0], own[1], own[2]).norm());
+        row.extend_from_slice(&own[..3]);
+        let (roll, pitch, yaw) = self.attitude_in_orbit(ctx.attitude, own);
+        row.extend_from_slice(&[roll, pitch, yaw]);
+    }
+}

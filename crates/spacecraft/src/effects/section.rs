@@ -1,0 +1,258 @@
+//! How an effect reads its own `[effects.<name>]` section: [`SceneText`] (the scene's text and
+//! path, with the checks every section uses, each error naming the file and line) and
+//! [`Section`] (one section being read, and the model it applies to). The scene reader in
+//! `satsim-tools` makes them and calls each registered effect's
+//! [`SceneEffect::from_section`](super::SceneEffect::from_section); no effect imports the
+//! scene reader.
+
+use satsim_tree::Model;
+use satsim_tree::io::{FileError, line_of, with_key};
+use serde::de::{self, DeserializeOwned, DeserializeSeed, IgnoredAny, MapAccess, Visitor};
+use std::fmt;
+use std::marker::PhantomData;
+use std::ops::{Deref, Range};
+use std::path::Path;
+use toml::Spanned;
+
+/// A scene file's text and path: what an error needs to name the file and line. The checks
+/// here are the ones every section uses (numbers finite, positive, ...).
+#[derive(Clone, Copy, Debug)]
+pub struct SceneText<'a> {
+    text: &'a str,
+    path: &'a Path,
+}
+
+impl<'a> SceneText<'a> {
+    /// The scene `text`, read from `path`.
+    pub fn new(text: &'a str, path: &'a Path) -> Self {
+        Self { text, path }
+    }
+    /// The scene's text.
+    pub fn text(&self) -> &'a str {
+        self.text
+    }
+    /// The scene file's path.
+    pub fn path(&self) -> &'a Path {
+        self.path
+    }
+
+    /// A schema error at the line of `span` (no line when `None`).
+    pub fn error(&self, span: Option<Range<usize>>, message: impl Into<String>) -> FileError {
+        FileError::Schema {
+            path: self.path.to_path_buf(),
+            line: span.map(|s| line_of(self.text, s.start)),
+            message: message.into(),
+        }
+    }
+
+    /// `x`, which must be a finite number > 0 (`what` names the key).
+    pub fn positive(&self, x: &Spanned<f64>, what: &str) -> Result<f64, FileError> {
+        let v = *x.get_ref();
+        if !(v > 0.0 && v.is_finite()) {
+            return Err(self.error(
+                Some(x.span()),
+                format!("`{what}` must be a finite number > 0, got {v}"),
+            ));
+        }
+        Ok(v)
+    }
+
+    /// `x`, which must be a finite number >= 0 (`what` names the key).
+    pub fn non_negative(&self, x: &Spanned<f64>, what: &str) -> Result<f64, FileError> {
+        let v = *x.get_ref();
+        if !(v >= 0.0 && v.is_finite()) {
+            return Err(self.error(
+                Some(x.span()),
+                format!("`{what}` must be a finite number >= 0, got {v}"),
+            ));
+        }
+        Ok(v)
+    }
+
+    /// Every given value is finite (TOML accepts `nan` and `inf`), and those marked
+    /// non-negative are `>= 0`; the error names the key and the table's line.
+    pub fn check_numbers(
+        &self,
+        span: Range<usize>,
+        table: &str,
+        values: &[(&str, Option<f64>, bool)],
+    ) -> Result<(), FileError> {
+        for &(key, v, non_negative) in values {
+            let Some(v) = v else { continue };
+            if !v.is_finite() || (non_negative && v < 0.0) {
+                let what = if non_negative {
+                    "a finite number >= 0"
+                } else {
+                    "a finite number"
+                };
+                return Err(self.error(
+                    Some(span),
+                    format!("`{table}{key}` must be {what}, got {v}"),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// The section `[effects.<name>]` as `T` (`None` when the scene has none), with the
+    /// spans of its values in this text. A schema error names the key and its line.
+    pub fn effect_section<T: DeserializeOwned>(
+        &self,
+        name: &str,
+    ) -> Result<Option<Spanned<T>>, FileError> {
+        let located = |e: &toml::de::Error| e.span().map(|s| line_of(self.text, s.start));
+        let schema = |e: toml::de::Error| FileError::Schema {
+            line: located(&e),
+            message: with_key(&e, reword(e.message())),
+            path: self.path.to_path_buf(),
+        };
+        let de = toml::Deserializer::parse(self.text).map_err(schema)?;
+        Pick::<T> {
+            path: &["effects", name],
+            t: PhantomData,
+        }
+        .deserialize(de)
+        .map_err(schema)
+    }
+}
+
+/// Deserializes only the value at `path` (table keys) from a document, as `Spanned<T>`.
+/// The deserializer is the document's, so spans and the key path in errors are the file's.
+struct Pick<'p, T> {
+    path: &'p [&'p str],
+    t: PhantomData<T>,
+}
+
+impl<'de, T: DeserializeOwned> DeserializeSeed<'de> for Pick<'_, T> {
+    type Value = Option<Spanned<T>>;
+    fn deserialize<D: de::Deserializer<'de>>(self, d: D) -> Result<Self::Value, D::Error> {
+        d.deserialize_map(self)
+    }
+}
+
+impl<'de, T: DeserializeOwned> Visitor<'de> for Pick<'_, T> {
+    type Value = Option<Spanned<T>>;
+    fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        f.write_str("a table")
+    }
+    fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<Self::Value, A::Error> {
+        let mut found = None;
+        while let Some(key) = map.next_key::<String>()? {
+            if key != self.path[0] {
+                map.next_value::<IgnoredAny>()?;
+            } else if self.path.len() == 1 {
+                found = Some(map.next_value::<Spanned<T>>()?);
+            } else {
+                found = map.next_value_seed(Pick::<T> {
+                    path: &self.path[1..],
+                    t: PhantomData,
+                })?;
+            }
+        }
+        Ok(found)
+    }
+}
+
+/// One `[effects.<name>]` section being read: where it is (for errors naming the scene file
+/// and line) and the model it applies to. It dereferences to [`SceneText`], whose checks
+/// (`positive`, `check_numbers`, ...) name the file and line.
+pub struct Section<'a> {
+    text: SceneText<'a>,
+    name: &'a str,
+    span: Range<usize>,
+    model: &'a Model,
+    enabled: bool,
+}
+
+impl<'a> Deref for Section<'a> {
+    type Target = SceneText<'a>;
+    fn deref(&self) -> &SceneText<'a> {
+        &self.text
+    }
+}
+
+impl<'a> Section<'a> {
+    /// The section `[effects.<name>]` of `text` at `span`, for `model`; `enabled`: whether it
+    /// is switched on. The scene reader makes one per section.
+    pub fn new(
+        text: SceneText<'a>,
+        name: &'a str,
+        span: Range<usize>,
+        model: &'a Model,
+        enabled: bool,
+    ) -> Self {
+        Self {
+            text,
+            name,
+            span,
+            model,
+            enabled,
+        }
+    }
+    /// Whether the section is switched on (a section switched off is still checked against
+    /// its schema, and makes no effect).
+    pub fn enabled(&self) -> bool {
+        self.enabled
+    }
+    /// The section's name (`hinge_springs` for `[effects.hinge_springs]`).
+    pub fn name(&self) -> &str {
+        self.name
+    }
+    /// The scene's model (the hinges the section may name).
+    pub fn model(&self) -> &Model {
+        self.model
+    }
+    /// The section's span in the scene text (an error there names its first line).
+    pub fn span(&self) -> Range<usize> {
+        self.span.clone()
+    }
+    /// An error at the section's line.
+    pub fn error_here(&self, message: impl Into<String>) -> FileError {
+        self.text.error(Some(self.span()), message)
+    }
+    /// The index (file order) of the hinge called `name`; else an error at its line listing
+    /// the model's hinges.
+    pub fn hinge_index(&self, name: &Spanned<String>) -> Result<usize, FileError> {
+        self.model.hinge_index(name.get_ref()).ok_or_else(|| {
+            self.text.error(
+                Some(name.span()),
+                format!(
+                    "unknown hinge `{}` (the model's hinges: {})",
+                    name.get_ref(),
+                    self.model.hinge_names().join(", ")
+                ),
+            )
+        })
+    }
+    /// A list with one finite number per hinge (file order); `what` names the key.
+    pub fn per_hinge(&self, x: &Spanned<Vec<f64>>, what: &str) -> Result<Vec<f64>, FileError> {
+        let n = self.model.n_hinges();
+        if x.get_ref().len() != n {
+            return Err(self.text.error(
+                Some(x.span()),
+                format!(
+                    "`{what}`: expected {n} entries (one per hinge, file order), got {}",
+                    x.get_ref().len()
+                ),
+            ));
+        }
+        if x.get_ref().iter().any(|v| !v.is_finite()) {
+            return Err(self
+                .text
+                .error(Some(x.span()), format!("`{what}`: entries must be finite")));
+        }
+        Ok(x.get_ref().clone())
+    }
+}
+
+/// Rewords serde's messages in the file's vocabulary.
+pub fn reword(m: &str) -> String {
+    let m = m.trim_end().replace("expected f64", "expected a number");
+    if let Some(rest) = m.strip_prefix("unknown field ") {
+        format!("unknown key {rest}")
+    } else if let Some(rest) = m.strip_prefix("missing field ") {
+        format!("missing required key {rest}")
+    } else {
+        m
+    }
+}

@@ -1,0 +1,333 @@
+//! [`SimulationBuilder`] and the one-time set-up of a [`Simulation`]: rotors into the tree,
+//! effects in dependency order, the state layout, the initial state.
+
+use super::hold::Hold;
+use super::{RunLog, SimData, SimError, SimModel, Simulation, StateLayout};
+use crate::effects::{Effect, Links, Rotor, order};
+use satsim_tree::{
+    BaseKind, Body, Hinge, Model, ModelError, State, UnrolledAba, forward_kinematics, momentum,
+};
+use std::ops::Range;
+
+/// Builds a [`Simulation`] from a model, an initial state and effects.
+///
+/// ```
+/// use satsim_spacecraft::effects::HingeSprings;
+/// use satsim_spacecraft::simulation::Simulation;
+/// use satsim_tree::{State, samples::chain, BaseKind};
+/// let model = chain(3, BaseKind::Free);
+/// let mut state = State::rest(&model);
+/// state.q[7] = 0.1;
+/// let sim = Simulation::builder(model)
+///     .initial(state)
+///     .effect(HingeSprings::new(vec![5.0, 5.0]))
+///     .build()?;
+/// // no state for the springs; two for the energy budget
+/// assert_eq!(sim.layout().len, 4 + 2 + 6 + 2 + 2);
+/// # Ok::<(), satsim_spacecraft::simulation::SimError>(())
+/// ```
+pub struct SimulationBuilder {
+    model: Model,
+    state: Option<State>,
+    effects: Vec<Box<dyn Effect>>,
+    t0: f64,
+    energy_budget: bool,
+}
+
+impl SimulationBuilder {
+    /// The initial state (default: at rest, neutral).
+    pub fn initial(mut self, state: State) -> Self {
+        self.state = Some(state);
+        self
+    }
+    /// Adds an effect.
+    pub fn effect(mut self, e: impl Effect + 'static) -> Self {
+        self.effects.push(Box::new(e));
+        self
+    }
+    /// Adds a boxed effect.
+    pub fn boxed(mut self, e: Box<dyn Effect>) -> Self {
+        self.effects.push(e);
+        self
+    }
+    /// The initial time (default 0).
+    pub fn t0(mut self, t0: f64) -> Self {
+        self.t0 = t0;
+        self
+    }
+    /// Whether to integrate the energy budget's work states (default true; see
+    /// [the module documentation](crate::simulation#energy-budget)). Without them the output has no
+    /// `work_actuators`, `energy_dissipated`, `energy_budget` columns.
+    pub fn energy_budget(mut self, on: bool) -> Self {
+        self.energy_budget = on;
+        self
+    }
+    /// Checks the effects' needs, adds rotor bodies, lays out the state and prepares the
+    /// initial state.
+    pub fn build(self) -> Result<Simulation, SimError> {
+        Simulation::new(self)
+    }
+}
+
+/// The model plus rotor bodies hinged to its root (appended after its hinges).
+pub(super) fn with_rotors(model: &Model, rotors: &[Rotor]) -> Result<Model, ModelError> {
+    let mut b = model.to_builder();
+    let root = model.bodies()[0].name().to_owned();
+    for r in rotors {
+        b.push_body(Body::new(r.name.clone(), r.mass, r.inertia()));
+        b.push_hinge(
+            Hinge::revolute(r.name.clone(), root.clone(), r.name.clone(), r.axis).at(r.at),
+        );
+    }
+    b.build()
+}
+
+impl Simulation {
+    /// Starts building a simulation of `model`.
+    pub fn builder(model: Model) -> SimulationBuilder {
+        SimulationBuilder {
+            model,
+            state: None,
+            effects: Vec::new(),
+            t0: 0.0,
+            energy_budget: true,
+        }
+    }
+
+    pub(super) fn new(b: SimulationBuilder) -> Result<Self, SimError> {
+        let SimulationBuilder {
+            model: user,
+            state,
+            effects,
+            t0,
+            energy_budget,
+        } = b;
+        let state = state.unwrap_or_else(|| State::rest(&user));
+        if state.q.len() != user.nq() || state.v.len() != user.nv() || state.tau.len() != user.nv()
+        {
+            return Err(SimError::State(format!(
+                "expected q, v, tau of lengths {}, {}, {}; got {}, {}, {}",
+                user.nq(),
+                user.nv(),
+                user.nv(),
+                state.q.len(),
+                state.v.len(),
+                state.tau.len()
+            )));
+        }
+        for (i, e) in effects.iter().enumerate() {
+            if effects[..i].iter().any(|o| o.name() == e.name()) {
+                return Err(SimError::Needs(format!(
+                    "effect `{}` given twice",
+                    e.name()
+                )));
+            }
+        }
+        // The order of evaluation: the effects' declared dependencies, else as given.
+        let run_order = order::run_order(&effects).map_err(SimError::Needs)?;
+        let mut slots: Vec<Option<Box<dyn Effect>>> = effects.into_iter().map(Some).collect();
+        let mut effects: Vec<Box<dyn Effect>> = run_order
+            .into_iter()
+            .filter_map(|i| slots[i].take())
+            .collect();
+        let free = user.base() == BaseKind::Free;
+        let has = |n: &str| effects.iter().any(|e| e.name() == n);
+        for e in &effects {
+            let needs = e.needs();
+            if needs.orbit && !has("orbit") {
+                return Err(SimError::Needs(format!(
+                    "effects.{} needs an [orbit] table",
+                    e.name()
+                )));
+            }
+            if needs.rotors && !effects.iter().any(|o| !o.rotors().is_empty()) {
+                return Err(SimError::Needs(format!(
+                    "effects.{} needs rotors to command (e.g. [effects.reaction_wheels] with at least one [[effects.reaction_wheels.wheel]])",
+                    e.name()
+                )));
+            }
+            if needs.free_base && !free {
+                return Err(SimError::Needs(format!(
+                    "effects.{} needs a free-floating root (the model has [base] kind = \"fixed\")",
+                    e.name()
+                )));
+            }
+        }
+        let rotor_effects: Vec<usize> = (0..effects.len())
+            .filter(|&i| !effects[i].rotors().is_empty())
+            .collect();
+        if rotor_effects.len() > 1 {
+            return Err(SimError::Needs("only one effect may add rotors".into()));
+        }
+        let rotor_effect = rotor_effects.first().copied();
+        let rotors = rotor_effect
+            .map(|i| effects[i].rotors())
+            .unwrap_or_default();
+        if let Some(i) = rotor_effect
+            && effects[i].n_states() != rotors.len()
+        {
+            return Err(SimError::Needs(format!(
+                "effect `{}` must have one state per rotor",
+                effects[i].name()
+            )));
+        }
+        let links = Links {
+            rotors: &rotors,
+            rotors_commanded: effects.iter().any(|e| e.commands_rotors()),
+        };
+        for e in &mut effects {
+            e.connect(&links);
+        }
+        let orbit_effect = effects.iter().position(|e| e.name() == "orbit");
+        let model = if rotors.is_empty() {
+            user.clone()
+        } else {
+            with_rotors(&user, &rotors)?
+        };
+        let n_user = user.n_hinges();
+        let n_rotors = rotors.len();
+        let own_sizes: Vec<(String, usize)> = effects
+            .iter()
+            .map(|e| (e.name().to_owned(), e.n_states()))
+            .collect();
+        let mut layout = StateLayout::new(free, n_user, &own_sizes);
+        let work = layout.len..layout.len + if energy_budget { 2 } else { 0 };
+        layout.len = work.end;
+        let own: Vec<Range<usize>> = layout.effects.iter().map(|(_, r)| r.clone()).collect();
+        let mut event_start = Vec::with_capacity(effects.len());
+        let mut n_events = 0;
+        for e in &effects {
+            event_start.push(n_events);
+            n_events += e.n_events();
+        }
+        let needs_com = effects.iter().any(|e| e.needs().com);
+        let needs_kinematics = needs_com || effects.iter().any(|e| e.needs().kinematics);
+        let needs_hold = effects.iter().any(|e| e.needs().hold_torques);
+        let nh = model.n_hinges();
+        let mut base_tau = vec![0.0; nh];
+        base_tau[..n_user].copy_from_slice(&state.tau[user.base_nv()..]);
+        let mut x0 = vec![0.0; layout.len];
+        if free {
+            x0[layout.attitude.clone()].copy_from_slice(&state.q[..4]);
+            x0[layout.omega.clone()].copy_from_slice(&state.v[..3]);
+            x0[layout.velocity.clone()].copy_from_slice(&state.v[3..6]);
+        }
+        x0[layout.angles.clone()].copy_from_slice(&state.q[user.base_nq()..]);
+        x0[layout.rates.clone()].copy_from_slice(&state.v[user.base_nv()..]);
+        for (e, r) in effects.iter().zip(&own) {
+            e.initial_state(&mut x0[r.clone()]);
+        }
+        let velocity_at = velocity_in_state(&layout, rotor_effect.map(|i| own[i].clone()));
+        let unrolled = UnrolledAba::new(&model);
+        let mut data = SimData::new(&model, n_rotors, layout.len);
+        data.needs_kinematics = needs_kinematics;
+        data.base_tau = base_tau;
+        let mut sim = Self {
+            model: SimModel {
+                tree: model,
+                layout,
+                own,
+                event_start,
+                n_events,
+                n_user,
+                n_rotors,
+                rotor_effect,
+                velocity_at,
+                orbit_effect,
+                needs_com,
+                needs_hold,
+                work,
+                unrolled,
+            },
+            log: RunLog {
+                calls: vec![0; effects.len()],
+                ..RunLog::default()
+            },
+            effects,
+            data,
+            x0: Vec::new(),
+            t0,
+        };
+        // With an orbit, put the centre of mass at rest in the orbit's frame.
+        if free && sim.model.orbit_effect.is_some() && sim.model.tree.total_mass() > 0.0 {
+            sim.unpack(&x0);
+            forward_kinematics(
+                &sim.model.tree,
+                &mut sim.data.tree,
+                &sim.data.q,
+                &sim.data.v,
+            )?;
+            let (p, _) = momentum(&sim.model.tree, &sim.data.tree);
+            let du = sim.data.tree.rotation[0].tr_mul(&p) / sim.model.tree.total_mass();
+            for k in 0..3 {
+                x0[sim.model.layout.velocity.start + k] -= du[k];
+            }
+        }
+        // Effects' start hooks (initial locks).
+        sim.prepare_with(t0, &x0, true, Hold::All)
+            .map_err(SimError::Start)?;
+        sim.with_context(t0, &x0, true, |ctx, h| {
+            for (e, r) in h.effects.iter_mut().zip(h.own) {
+                e.start(ctx, h.forces, &x0[r.clone()], h.requests)
+                    .map_err(SimError::Start)?;
+            }
+            Ok::<(), SimError>(())
+        })?;
+        let reqs = std::mem::take(&mut sim.data.requests);
+        let before = sim.mechanical_energy(t0, &x0).map_err(SimError::Start)?;
+        sim.apply_requests(&reqs, &mut x0)?;
+        sim.book_jump(t0, &mut x0, before)
+            .map_err(SimError::Start)?;
+        // Every output quantity of the initial state must be finite (an energy or a momentum
+        // can overflow while the state itself is finite).
+        let mut row = Vec::new();
+        sim.row(t0, &x0, &mut row).map_err(SimError::Start)?;
+        if let Some(c) = row.iter().position(|v| !v.is_finite()) {
+            return Err(SimError::State(format!(
+                "`{}` is not finite at the start: the computation overflows (rates, masses or \
+                 inertias too extreme for f64)",
+                sim.columns()[c]
+            )));
+        }
+        sim.x0 = x0;
+        Ok(sim)
+    }
+}
+
+/// Where the tree's velocity vector `[ω; v; hinge rates; rotor rates]` lies in the state as
+/// one contiguous run (it does when the rotors' spin rates, if any, follow the hinge rates:
+/// the usual order), so that `rhs` moves it, and its derivative, in one copy each.
+fn velocity_in_state(layout: &StateLayout, rotors: Option<Range<usize>>) -> Option<usize> {
+    let start = if layout.free {
+        layout.omega.start
+    } else {
+        layout.rates.start
+    };
+    match rotors {
+        Some(r) if r.start != layout.rates.end => None,
+        _ => Some(start),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::velocity_in_state;
+    use crate::simulation::StateLayout;
+
+    #[test]
+    fn the_velocity_vector_is_one_run_only_when_the_rotor_rates_follow_the_hinge_rates() {
+        let wheels_first = StateLayout::new(true, 5, &[("wheels".into(), 3), ("orbit".into(), 6)]);
+        assert_eq!(
+            velocity_in_state(&wheels_first, wheels_first.effect("wheels")),
+            Some(9)
+        );
+        let orbit_first = StateLayout::new(true, 5, &[("orbit".into(), 6), ("wheels".into(), 3)]);
+        assert_eq!(
+            velocity_in_state(&orbit_first, orbit_first.effect("wheels")),
+            None
+        );
+        assert_eq!(velocity_in_state(&orbit_first, None), Some(9));
+        let fixed = StateLayout::new(false, 2, &[("wheels".into(), 1)]);
+        assert_eq!(velocity_in_state(&fixed, fixed.effect("wheels")), Some(2));
+    }
+}

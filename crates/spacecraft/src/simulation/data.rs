@@ -1,0 +1,75 @@
+//! [`SimData`]: the scratch of every evaluation, and the discrete state.
+
+use crate::effects::{Forces, Request};
+use satsim_tree::{Data, Model};
+
+/// The written part of a [`Simulation`](super::Simulation), allocated once by the builder:
+/// the buffers every pass of the right-hand-side pipeline writes, and the discrete state that
+/// the continuous state `x` does not hold (which hinges are locked, the constant torques).
+/// A buffer's contents mean something only right after the pass that wrote it.
+pub struct SimData {
+    /// The tree's workspace (poses after kinematics, ABA's and RNEA's buffers).
+    pub(super) tree: Data,
+    /// `x` unpacked into the tree's coordinates and velocities, and its generalized forces.
+    pub(super) q: Vec<f64>,
+    pub(super) v: Vec<f64>,
+    pub(super) tau: Vec<f64>,
+    /// What the effects applied in the last pass.
+    pub(super) forces: Forces,
+    /// The effects' own derivatives where a pass does not write `dx` (rows, events).
+    pub(super) scratch: Vec<f64>,
+    /// The effects' requests at an event.
+    pub(super) requests: Vec<Request>,
+    /// Hold torques (see [`Context::hold_torque`](crate::effects::Context::hold_torque))
+    /// and their work buffers.
+    pub(super) hold: Vec<f64>,
+    pub(super) hold_mask: Vec<bool>,
+    pub(super) hold_ddq: Vec<f64>,
+    /// `q̈` where the dynamics cannot write it straight into the derivative.
+    pub(super) ddq: Vec<f64>,
+    /// Whether every pass runs kinematics: an effect asked for it, or wrote a wrench whose
+    /// power the energy budget needs (found at the first such pass).
+    pub(super) needs_kinematics: bool,
+    /// Which hinges (the scene's, then the rotors) are locked now, and how many.
+    pub(super) locked: Vec<bool>,
+    pub(super) n_locked: usize,
+    /// The constant hinge torques every pass starts from (N m, tree hinge order: the
+    /// initial state's `torque`, zero on the rotors).
+    pub(super) base_tau: Vec<f64>,
+}
+
+impl SimData {
+    /// Buffers for `tree` with `n_states` states and `n_rotors` rotors.
+    pub(super) fn new(tree: &Model, n_rotors: usize, n_states: usize) -> Self {
+        let (nh, nv) = (tree.n_hinges(), tree.nv());
+        Self {
+            tree: Data::new(tree),
+            q: tree.neutral(),
+            v: vec![0.0; nv],
+            tau: vec![0.0; nv],
+            forces: Forces::new(nh, tree.n_bodies(), n_rotors),
+            scratch: vec![0.0; n_states],
+            requests: Vec::new(),
+            hold: vec![f64::NAN; nh],
+            hold_mask: vec![false; nh],
+            hold_ddq: vec![0.0; nv],
+            ddq: vec![0.0; nv],
+            needs_kinematics: false,
+            locked: vec![false; nh],
+            n_locked: 0,
+            base_tau: vec![0.0; nh],
+        }
+    }
+    /// The loads the effects applied in the last pass.
+    pub fn forces(&self) -> &Forces {
+        &self.forces
+    }
+    /// The tree's workspace after the last pass (the poses of its kinematics, when it ran).
+    pub fn tree(&self) -> &Data {
+        &self.tree
+    }
+    /// Which hinges (the scene's, then the rotors) are locked now.
+    pub fn locked(&self) -> &[bool] {
+        &self.locked
+    }
+}

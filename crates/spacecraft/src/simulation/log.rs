@@ -1,0 +1,25 @@
+//! [`RunLog`]: what a run has done so far.
+
+/// Counters and the record of handled events; the only part of a
+/// [`Simulation`](super::Simulation) that outlives a pass as history.
+#[derive(Clone, Debug, Default)]
+pub struct RunLog {
+    /// Right-hand-side evaluations.
+    pub(super) rhs_evals: u64,
+    /// How many times each effect was applied by the right-hand side (the effects' order).
+    pub(super) calls: Vec<u64>,
+    /// Each handled event: `(t, description)`, and the effect whose event it was.
+    pub(super) events: Vec<(f64, String)>,
+    pub(super) event_effects: Vec<usize>,
+}
+
+impl RunLog {
+    /// Right-hand-side evaluations so far.
+    pub fn rhs_evals(&self) -> u64 {
+        self.rhs_evals
+    }
+    /// What happened at each handled event: `(t, description)`.
+    pub fn events(&self) -> &[(f64, String)] {
+        &self.events
+    }
+}

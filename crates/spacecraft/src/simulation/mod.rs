@@ -1,0 +1,303 @@
+//! [`Simulation`]: a tree, the enabled effects and the state layout derived from them,
+//! implementing [`satsim_integrate::System`].
+//!
+//! # State layout
+//!
+//! `x = [attitude q (4), hinge angles (n), ω (3), root-origin velocity (3), hinge rates (n)]`
+//! followed by each enabled effect's own states, in the effects' order (orbit: `r, v`;
+//! reaction wheels: one speed per wheel). A fixed-base model has no attitude, `ω` or
+//! velocity. Nothing else: a disabled effect is never constructed, adds no state and is never
+//! visited. See [`StateLayout`].
+//!
+//! - `q` is the root (bus) attitude, root to inertial, Hamilton `[w, x, y, z]`;
+//!   `q̇ = ½ q ⊗ (0, ω)`; [`System::project`](satsim_integrate::System::project) renormalises it after every step.
+//! - `ω` and the velocity of the root frame's origin are in root axes. The root's position is
+//!   not a state: no effect depends on it (the dynamics are invariant under translation and
+//!   the gravity-gradient models use positions relative to the centre of mass). With an
+//!   orbit, velocities are relative to the frame that falls with the centre of mass, and the
+//!   initial root velocity is corrected so that the centre of mass is at rest in it (the
+//!   orbit carries the centre of mass' motion).
+//! - Reaction-wheel rotors are extra bodies of the tree, hinged to the root; their spin rates
+//!   are the wheel effect's states and their (irrelevant) angles are not states.
+//!
+//! # Right-hand side
+//!
+//! unpack `x` → forward kinematics (only when an effect needs it; the centre of mass only
+//! when an effect reads it) → each enabled effect adds hinge torques, body wrenches and its
+//! own derivatives → ABA (hybrid ABA when hinges are locked; reusing the kinematics' hinge
+//! transforms when they ran; the unrolled kernel, hybrid too, where the model has the
+//! preprint's layout and no gimbal hinge is locked) → pack `dx`.
+//!
+//! # Event and output passes
+//!
+//! The event functions are evaluated at the end of every step. That pass computes only what
+//! they read ([`Effect::event_reads`]): hinge stops and
+//! slipping wheels read the state alone, so no effect is applied; a stuck wheel reads its
+//! hold torque, and only then are the effects applied and the hybrid-dynamics solve run.
+//! An output row applies the effects (their output columns may read what `apply` set) and
+//! runs kinematics once, but no hold-torque solve (nothing in a row reads it).
+//!
+//! # Energy budget
+//!
+//! `T + V` (kinetic energy of the tree, wheels included, plus the effects'
+//! [`Effect::potential_energy`]) changes by the work of the non-conservative forces. Two more
+//! states (after the effects' own, unless [`SimulationBuilder::energy_budget`] turns them
+//! off) integrate that work, exactly to the integrator's order: `W`, the work of the
+//! actuators (the constant hinge torques, and each effect's [`Power::actuator`](crate::effects::Power::actuator)), and `D`, the
+//! energy dissipated (each effect's [`Power::dissipated`](crate::effects::Power::dissipated)). Each effect's forces are measured
+//! by the simulation, `Σ Δτ_k q̇_k + Σ Δf_i · v_i` over what its `apply` added, and the effect
+//! splits that power in [`Effect::power`] (by default all of it is an actuator's), so a new
+//! effect needs no special case. A jump of `T + V` at an event (a latching or rebounding
+//! impact's impulse) is booked at the event: a loss into `D`, a gain into `W`. Then
+//!
+//! `energy_budget = T + V − W + D`
+//!
+//! is constant up to the integration error. `W` and `D` have zero weight in the error norm
+//! ([`System::error_weights`](satsim_integrate::System::error_weights)), so tracking them leaves every other state as it was.
+//!
+//! # Files
+//!
+//! - `rhs.rs`: **the right-hand side**, one pipeline read top to bottom (unpack → kinematics →
+//!   effects → dynamics → pack), and the stages every other pass runs;
+//! - `model.rs` ([`SimModel`], made once), `data.rs` ([`SimData`], written by every pass),
+//!   `log.rs` ([`RunLog`]), `layout.rs` ([`StateLayout`]), `build.rs` ([`SimulationBuilder`]);
+//! - `context.rs` (what the effects' hooks see and write), `hold.rs` (hold torques),
+//!   `events.rs` (the event functions' pass, requests, impulses, energy jumps), `system.rs`
+//!   (the [`System`](satsim_integrate::System) the integrators see), `rows.rs` (output rows,
+//!   [`Diagnostics`]), `run.rs` ([`Simulation::run`]).
+
+mod build;
+mod context;
+mod data;
+mod events;
+mod hold;
+mod layout;
+mod log;
+mod model;
+mod rhs;
+mod rows;
+mod run;
+mod system;
+
+pub use build::SimulationBuilder;
+pub use data::SimData;
+pub use layout::StateLayout;
+pub use log::RunLog;
+pub use model::SimModel;
+pub use rows::Diagnostics;
+pub use run::RunError;
+
+use crate::effects::{Effect, Rotor};
+use satsim_integrate::SystemError;
+use satsim_tree::spatial::{Mat3, Vec3};
+use satsim_tree::{DynamicsError, Model, ModelError, UnrolledAba};
+use thiserror::Error;
+
+/// Why a simulation could not be set up.
+#[derive(Debug, Error)]
+pub enum SimError {
+    /// An effect's needs are not met, or effects conflict.
+    #[error("{0}")]
+    Needs(String),
+    /// The initial state does not fit the model.
+    #[error("initial state: {0}")]
+    State(String),
+    /// The model with the effects' rotors added is invalid.
+    #[error("model with reaction-wheel rotors: {0}")]
+    Model(#[from] ModelError),
+    /// An effect rejected the initial state.
+    #[error("{0}")]
+    Start(SystemError),
+    /// The dynamics failed on the initial state.
+    #[error("initial state: {0}")]
+    Dynamics(#[from] DynamicsError),
+}
+
+/// A scene ready to integrate: see the module documentation.
+///
+/// As in `satsim-tree`, what is made once is apart from what a run writes: the
+/// [`SimModel`] (the tree with the effects' rotors, the state layout, the effects'
+/// places in it, the dynamics' kernel) is never written during a run; the [`SimData`] holds
+/// the scratch of every evaluation and the discrete state that `x` does not hold (locks,
+/// held torques); the [`RunLog`] counts evaluations and records the events. The effects,
+/// made once, change only their modes at events.
+pub struct Simulation {
+    model: SimModel,
+    effects: Vec<Box<dyn Effect>>,
+    data: SimData,
+    log: RunLog,
+    x0: Vec<f64>,
+    t0: f64,
+}
+
+impl Simulation {
+    /// What was made once: the tree with the rotors, the layout, the effects' places, the
+    /// kernel.
+    pub fn sim_model(&self) -> &SimModel {
+        &self.model
+    }
+    /// The buffers of the last pass and the discrete state (locks, constant torques).
+    pub fn data(&self) -> &SimData {
+        &self.data
+    }
+    /// Evaluations counted and events handled so far.
+    pub fn run_log(&self) -> &RunLog {
+        &self.log
+    }
+    /// The state layout.
+    pub fn layout(&self) -> &StateLayout {
+        &self.model.layout
+    }
+    /// The tree (the scene's model plus rotor bodies).
+    pub fn model(&self) -> &Model {
+        &self.model.tree
+    }
+    /// The initial state `x0`.
+    pub fn x0(&self) -> &[f64] {
+        &self.x0
+    }
+    /// The initial time.
+    pub fn t0(&self) -> f64 {
+        self.t0
+    }
+    /// Names of the enabled effects, in the order they are visited.
+    pub fn effect_names(&self) -> Vec<&str> {
+        self.effects.iter().map(|e| e.name()).collect()
+    }
+    /// How many times each enabled effect was applied by [`System::rhs`](satsim_integrate::System::rhs), in the order of
+    /// [`Simulation::effect_names`].
+    pub fn effect_calls(&self) -> &[u64] {
+        &self.log.calls
+    }
+    /// Right-hand-side evaluations so far.
+    pub fn rhs_evals(&self) -> u64 {
+        self.log.rhs_evals
+    }
+    /// Which hinges (model hinges, then rotors) are locked now.
+    pub fn locked(&self) -> &[bool] {
+        &self.data.locked
+    }
+    /// The constant hinge torques every evaluation starts from before the effects add
+    /// theirs (N m, tree hinge order: the model's hinges, then the rotors): the initial
+    /// state's `torque`, zero on the rotors. The linearisation (`satsim_tools::linearize`) perturbs them to form `B`.
+    pub fn constant_torques_mut(&mut self) -> &mut [f64] {
+        &mut self.data.base_tau
+    }
+    /// Unlocks hinge `h` (tree order) as if its effect had released it (a no-op when it is
+    /// not locked). The linearisation frees wheels held by static friction this way.
+    pub fn release(&mut self, h: usize) {
+        if self.data.locked.get(h).copied().unwrap_or(false) {
+            self.data.locked[h] = false;
+            self.data.n_locked -= 1;
+        }
+    }
+    /// What happened at each handled event: `(t, description)`.
+    pub fn event_log(&self) -> &[(f64, String)] {
+        &self.log.events
+    }
+    /// Every handled event as `(t, effect name, description)`, in order (the
+    /// [`event_log`](Self::event_log) with the effect whose event it was).
+    pub fn event_records(&self) -> impl Iterator<Item = (f64, &str, &str)> {
+        self.log
+            .events
+            .iter()
+            .zip(&self.log.event_effects)
+            .map(|((t, what), &i)| (*t, self.effects[i].name(), what.as_str()))
+    }
+    /// The effect called `name`, if enabled.
+    pub fn effect(&self, name: &str) -> Option<&dyn Effect> {
+        self.effects
+            .iter()
+            .find(|e| e.name() == name)
+            .map(|e| e.as_ref())
+    }
+    /// The enabled effects, in the order they are visited.
+    pub fn effects(&self) -> impl Iterator<Item = &dyn Effect> {
+        self.effects.iter().map(|e| e.as_ref())
+    }
+    /// The kernel unrolled for the model's layout, where it has the preprint's and the
+    /// dynamics take it (see [`Simulation::use_generic_dynamics`]).
+    pub fn kernel(&self) -> Option<&UnrolledAba> {
+        self.model.unrolled.as_ref()
+    }
+    /// Drops the layout's kernel: every solve from now on takes the generic ABA (to compare
+    /// the two, or to time the kernel's gain).
+    pub fn use_generic_dynamics(&mut self) {
+        self.model.unrolled = None;
+    }
+    /// Whether every evaluation runs the forward kinematics (an effect needs the poses).
+    pub fn runs_kinematics(&self) -> bool {
+        self.data.needs_kinematics
+    }
+    /// Whether an effect reads hold torques ([`Context::hold_torque`](crate::effects::Context::hold_torque)).
+    pub fn needs_hold_torques(&self) -> bool {
+        self.model.needs_hold
+    }
+    /// Whether the tree's velocity vector is one run of the state (the dynamics then write
+    /// `q̈` straight into the derivative).
+    pub fn velocity_is_one_run(&self) -> bool {
+        self.model.velocity_at.is_some()
+    }
+    /// The hold torques at `(t, x)` (N m, tree hinge order; NaN where not computed): those of
+    /// the locked hinges, and with `all` every hinge's (as at an event).
+    pub fn hold_torques(&mut self, t: f64, x: &[f64], all: bool) -> Result<&[f64], SystemError> {
+        self.check_len(x.len(), "hold_torques")?;
+        let hold = if all {
+            hold::Hold::All
+        } else {
+            hold::Hold::Locked
+        };
+        self.prepare_with(t, x, false, hold)?;
+        Ok(&self.data.hold)
+    }
+    /// The event functions with everything computed first (every effect applied, kinematics,
+    /// the locked hinges' hold torques): slower than [`System::events`](satsim_integrate::System::events), which computes only
+    /// what the effects' [`Effect::event_reads`] declare, and the reference it is tested
+    /// against.
+    pub fn reference_events(
+        &mut self,
+        t: f64,
+        x: &[f64],
+        g: &mut [f64],
+    ) -> Result<(), SystemError> {
+        self.check_len(x.len(), "reference_events")?;
+        if g.len() != self.model.n_events {
+            return Err(SystemError::new(format!(
+                "reference_events: g has length {} but the simulation has {} event functions",
+                g.len(),
+                self.model.n_events
+            )));
+        }
+        self.prepare_with(t, x, true, hold::Hold::Locked)?;
+        self.with_context(t, x, true, |ctx, h| {
+            for (i, (e, r)) in h.effects.iter().zip(h.own).enumerate() {
+                let s = h.event_start[i];
+                e.events(ctx, h.forces, &x[r.clone()], &mut g[s..s + e.n_events()]);
+            }
+        });
+        Ok(())
+    }
+}
+
+/// The unit quaternion norm check used by tests: `|‖q‖ − 1|` of the attitude in `x`.
+pub fn attitude_norm_error(layout: &StateLayout, x: &[f64]) -> f64 {
+    let n = x[layout.attitude.clone()]
+        .iter()
+        .map(|v| v * v)
+        .sum::<f64>()
+        .sqrt();
+    (n - 1.0).abs()
+}
+
+/// Rotor inertia helper re-exported for examples.
+pub fn rotor_inertia(axis: Vec3, axial: f64, transverse: f64) -> Mat3 {
+    Rotor {
+        name: String::new(),
+        axis,
+        at: Vec3::zeros(),
+        mass: 0.0,
+        axial,
+        transverse,
+    }
+    .inertia()
+}

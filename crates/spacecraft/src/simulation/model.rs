@@ -1,0 +1,58 @@
+//! [`SimModel`]: what a simulation makes once and never writes during a run.
+
+use super::StateLayout;
+use satsim_tree::{Model, UnrolledAba};
+use std::ops::Range;
+
+/// The immutable part of a [`Simulation`](super::Simulation): the tree (the scene's model
+/// plus the effects' rotor bodies), the state layout, where each effect's states and event
+/// functions lie, what the effects need computed, and the dynamics' kernel. Made by
+/// [`SimulationBuilder::build`](super::SimulationBuilder::build).
+pub struct SimModel {
+    /// The tree: the scene's model, then one rotor body per wheel hinged to its root.
+    pub(super) tree: Model,
+    pub(super) layout: StateLayout,
+    /// Each effect's own states in `x` (the effects' order).
+    pub(super) own: Vec<Range<usize>>,
+    /// Each effect's first event function; `n_events` in all.
+    pub(super) event_start: Vec<usize>,
+    pub(super) n_events: usize,
+    /// The scene's hinges (the tree's first hinges) and the rotors after them.
+    pub(super) n_user: usize,
+    pub(super) n_rotors: usize,
+    /// The effect that adds the rotors (its states are their spin rates).
+    pub(super) rotor_effect: Option<usize>,
+    /// Where the tree's whole velocity vector lies in the state, as one run (see
+    /// `velocity_in_state` in build.rs); `None`: in pieces.
+    pub(super) velocity_at: Option<usize>,
+    pub(super) orbit_effect: Option<usize>,
+    /// Whether an effect reads [`Context::com`](crate::effects::Context::com) (computed
+    /// only then), or hold torques.
+    pub(super) needs_com: bool,
+    pub(super) needs_hold: bool,
+    /// The energy budget's states in `x`: `[actuator work, dissipated energy]` (J), or
+    /// empty when not tracked.
+    pub(super) work: Range<usize>,
+    /// ABA unrolled for the model's layout, where it has the preprint's (the dynamics take
+    /// it for every lock mask it accepts).
+    pub(super) unrolled: Option<UnrolledAba>,
+}
+
+impl SimModel {
+    /// The tree (the scene's model plus rotor bodies).
+    pub fn tree(&self) -> &Model {
+        &self.tree
+    }
+    /// The state layout.
+    pub fn layout(&self) -> &StateLayout {
+        &self.layout
+    }
+    /// The number of the scene's hinges (the tree's first hinges; the rotors follow).
+    pub fn n_hinges(&self) -> usize {
+        self.n_user
+    }
+    /// The number of event functions of all the effects.
+    pub fn n_events(&self) -> usize {
+        self.n_events
+    }
+}

@@ -1,0 +1,277 @@
+//! The right-hand side, `dx = f(t, x)`, as one pipeline read top to bottom:
+//!
+//! 1. **unpack** `x` into the tree's `q` and `v`;
+//! 2. **kinematics**: the poses and velocities of every body, when an effect reads them;
+//! 3. **effects**: each enabled effect adds hinge torques and body wrenches and writes its
+//!    own states' derivatives (and, for the energy budget, the power of what it added);
+//! 4. **dynamics**: forward dynamics (ABA, hybrid when hinges are locked; the layout's
+//!    unrolled kernel where it takes the lock mask) for `q̈`;
+//! 5. **pack** `q̇ = ½ q ⊗ (0, ω)`, the hinge rates and `q̈` into `dx`.
+//!
+//! Every other pass runs the first three stages through [`Simulation::prepare_with`]: an
+//! output row, the event functions (only what they read, `events.rs`), the hold torques
+//! (`hold.rs`, which take the dynamics stage with other locks) and the linearisation (which
+//! calls the right-hand side itself).
+
+use super::Simulation;
+use super::hold::Hold;
+use super::model::SimModel;
+use crate::effects::Power;
+use satsim_integrate::SystemError;
+use satsim_tree::spatial::Force;
+use satsim_tree::{
+    Data, DynamicsError, aba, aba_hybrid, aba_hybrid_with_kinematics, aba_with_kinematics,
+    forward_kinematics,
+};
+
+impl Simulation {
+    /// `dx = f(t, x)`; slices of the wrong length are an error, not a panic.
+    pub(super) fn right_hand_side(
+        &mut self,
+        t: f64,
+        x: &[f64],
+        dx: &mut [f64],
+    ) -> Result<(), SystemError> {
+        self.check_len(x.len(), "rhs")?;
+        self.check_len(dx.len(), "rhs (derivative)")?;
+        self.log.rhs_evals += 1;
+        // 1-2.
+        self.unpack(x);
+        let kin = self.kinematics(false)?;
+        // 3. The effects write their own derivatives straight into `dx`.
+        let track = !self.model.work.is_empty();
+        let power = self.apply_effects(t, x, kin, Some(&mut *dx), true)?;
+        if track && !kin && self.data.forces.has_wrench {
+            // A wrench's power needs the bodies' velocities: an effect wrote one without
+            // asking for kinematics, so they are computed from now on (this evaluation again).
+            self.data.needs_kinematics = true;
+            self.log.rhs_evals -= 1;
+            return self.right_hand_side(t, x, dx);
+        }
+        if track {
+            dx[self.model.work.start] = power.actuator;
+            dx[self.model.work.start + 1] = power.dissipated;
+        }
+        // 4-5.
+        self.pack_positions(x, dx);
+        self.dynamics(kin, dx)
+    }
+
+    /// Stages 1-3 for every pass but the right-hand side (rows, events, hold torques, the
+    /// start): unpack, kinematics (`kinematics`: whether this pass needs the poses, beside the
+    /// effects' own needs), every effect's `apply` (own derivatives into a scratch buffer),
+    /// then the hold torques `hold` asks for.
+    pub(super) fn prepare_with(
+        &mut self,
+        t: f64,
+        x: &[f64],
+        kinematics: bool,
+        hold: Hold,
+    ) -> Result<(), SystemError> {
+        self.unpack(x);
+        let kin = self.kinematics(kinematics)?;
+        self.apply_effects(t, x, kin, None, false)?;
+        self.hold_torques_after_effects(kinematics, hold)
+    }
+
+    /// [`Self::prepare_with`] without hold torques.
+    pub(super) fn prepare(
+        &mut self,
+        t: f64,
+        x: &[f64],
+        kinematics: bool,
+    ) -> Result<(), SystemError> {
+        self.prepare_with(t, x, kinematics, Hold::None)
+    }
+
+    /// 1. `x` into the tree's `q` and `v`.
+    pub(super) fn unpack(&mut self, x: &[f64]) {
+        let (m, d) = (&self.model, &mut self.data);
+        let l = &m.layout;
+        let n = m.n_user;
+        if l.free {
+            // x = [attitude, angles, ω, v, rates, ...] (`StateLayout`); a fixed-size copy
+            // where the length is known (no `memcpy` call).
+            d.q[..4].copy_from_slice(&x[..4]);
+            d.q[7..7 + n].copy_from_slice(&x[4..4 + n]);
+        } else {
+            d.q[..n].copy_from_slice(&x[l.angles.clone()]);
+        }
+        if let Some(s) = m.velocity_at {
+            // The whole velocity vector is one run of the state: one copy.
+            let nv = d.v.len();
+            d.v.copy_from_slice(&x[s..s + nv]);
+            return;
+        }
+        let nb = m.tree.base_nv();
+        if l.free {
+            d.v[..6 + n].copy_from_slice(&x[l.omega.start..l.omega.start + 6 + n]);
+        } else {
+            d.v[..n].copy_from_slice(&x[l.rates.clone()]);
+        }
+        if let Some(i) = m.rotor_effect {
+            d.v[nb + n..nb + n + m.n_rotors].copy_from_slice(&x[m.own[i].clone()]);
+        }
+    }
+
+    /// 2. Forward kinematics when this pass asks for it or an effect needs it; returns
+    /// whether the poses are now current.
+    pub(super) fn kinematics(&mut self, asked: bool) -> Result<bool, SystemError> {
+        let kin = asked || self.data.needs_kinematics;
+        if kin {
+            let d = &mut self.data;
+            forward_kinematics(&self.model.tree, &mut d.tree, &d.q, &d.v)
+                .map_err(|e| SystemError::new(e.to_string()))?;
+        }
+        Ok(kin)
+    }
+
+    /// 3. Every effect's `apply`, in order, from the constant torques: own derivatives into
+    /// `own_dot` (the right-hand side's `dx`) or, when `None`, into the scratch buffer.
+    /// `rhs`: the right-hand side's pass, which counts the calls and, with the energy budget,
+    /// measures each effect's power (`Σ Δτ_k q̇_k + Σ Δf_i · v_i` over what it added) and
+    /// lets the effect split it.
+    pub(super) fn apply_effects(
+        &mut self,
+        t: f64,
+        x: &[f64],
+        kin: bool,
+        own_dot: Option<&mut [f64]>,
+        rhs: bool,
+    ) -> Result<Power, SystemError> {
+        let track = rhs && !self.model.work.is_empty();
+        let nb = self.model.tree.base_nv();
+        self.with_context(t, x, kin, |ctx, h| {
+            let own_dot = match own_dot {
+                Some(dx) => dx,
+                None => h.scratch,
+            };
+            h.forces.reset_to(h.base_tau);
+            // Energy budget: the constant torques are an actuator's; each effect's forces
+            // are measured by the change of the total power it makes.
+            let mut hinges = if track {
+                h.forces.hinge_power(ctx.v, nb)
+            } else {
+                0.0
+            };
+            let (mut wrenches, mut added) = (0.0, 0);
+            let mut power = Power::actuator(hinges);
+            for ((e, r), c) in h.effects.iter_mut().zip(h.own).zip(h.calls.iter_mut()) {
+                if rhs {
+                    *c += 1;
+                }
+                e.apply(ctx, h.forces, &x[r.clone()], &mut own_dot[r.clone()])?;
+                if track {
+                    let now = h.forces.hinge_power(ctx.v, nb);
+                    let mut applied = now - hinges;
+                    hinges = now;
+                    if h.forces.wrenches_added() != added {
+                        added = h.forces.wrenches_added();
+                        let now = h.forces.wrench_power(&ctx.data.v);
+                        applied += now - wrenches;
+                        wrenches = now;
+                    }
+                    let p = e.power(ctx, &x[r.clone()], applied);
+                    power.actuator += p.actuator;
+                    power.dissipated += p.dissipated;
+                }
+            }
+            Ok(power)
+        })
+    }
+
+    /// 5, the positions' part: `q̇ = ½ q ⊗ (0, ω)` and the hinge angles' rates.
+    fn pack_positions(&self, x: &[f64], dx: &mut [f64]) {
+        let l = &self.model.layout;
+        if l.free {
+            // x = [attitude, angles, ω, v, rates, ...] (`StateLayout`).
+            let (a, w) = (&x[..4], &x[l.omega.start..l.omega.start + 3]);
+            let qd = crate::effects::quat_mul(&[a[0], a[1], a[2], a[3]], &[0.0, w[0], w[1], w[2]]);
+            for (d, q) in dx[..4].iter_mut().zip(qd) {
+                *d = 0.5 * q;
+            }
+        }
+        dx[l.angles.clone()].copy_from_slice(&x[l.rates.clone()]);
+    }
+
+    /// 4-5, the velocities' part: the effects' hinge torques and wrenches, `q̈` by forward
+    /// dynamics with the hinges locked now, packed into `dx` (written straight into it where
+    /// the tree's velocity vector is one run of the state). `kin`: the poses are current,
+    /// so the generic ABA reuses their transforms (bit for bit the same result).
+    fn dynamics(&mut self, kin: bool, dx: &mut [f64]) -> Result<(), SystemError> {
+        let (m, d) = (&self.model, &mut self.data);
+        let nb = m.tree.base_nv();
+        d.tau[nb..].copy_from_slice(&d.forces.hinge_torque);
+        let solve = Solve {
+            q: &d.q,
+            v: &d.v,
+            tau: &d.tau,
+            fext: d
+                .forces
+                .has_wrench
+                .then_some(d.forces.body_wrench.as_slice()),
+            locked: (d.n_locked > 0).then_some(d.locked.as_slice()),
+            xup_ready: kin,
+        };
+        let err = |e: DynamicsError| SystemError::new(e.to_string());
+        if let Some(s) = m.velocity_at {
+            let nv = d.v.len();
+            return forward_dynamics(m, &mut d.tree, solve, &mut dx[s..s + nv]).map_err(err);
+        }
+        forward_dynamics(m, &mut d.tree, solve, &mut d.ddq).map_err(err)?;
+        let (l, n, ddq) = (&m.layout, m.n_user, &d.ddq);
+        if l.free {
+            dx[l.omega.start..l.omega.start + 6 + n].copy_from_slice(&ddq[..6 + n]);
+        } else {
+            dx[l.rates.clone()].copy_from_slice(&ddq[..n]);
+        }
+        if let Some(i) = m.rotor_effect {
+            let r = m.own[i].clone();
+            dx[r].copy_from_slice(&ddq[nb + n..nb + n + m.n_rotors]);
+        }
+        Ok(())
+    }
+}
+
+/// One forward-dynamics solve's inputs (tree coordinates).
+pub(super) struct Solve<'a> {
+    pub(super) q: &'a [f64],
+    pub(super) v: &'a [f64],
+    pub(super) tau: &'a [f64],
+    pub(super) fext: Option<&'a [Force]>,
+    /// The locked hinges (tree order); `None`: nothing locked.
+    pub(super) locked: Option<&'a [bool]>,
+    /// `data.xup` holds the transforms of this `q` (kinematics or a solve ran on it).
+    pub(super) xup_ready: bool,
+}
+
+/// `q̈` into `ddq`: the one place the dynamics are chosen. The layout's unrolled kernel
+/// where it takes the lock mask (not with a gimbal hinge locked); else the generic ABA,
+/// hybrid when hinges are locked, reusing the transforms when they are current. The kernel
+/// computes its own transforms and writes only `q̈` (nothing after it reads `data`'s other
+/// buffers that the generic ABA would have written).
+pub(super) fn forward_dynamics(
+    m: &SimModel,
+    data: &mut Data,
+    s: Solve,
+    ddq: &mut [f64],
+) -> Result<(), DynamicsError> {
+    if let Some(k) = &m.unrolled {
+        let locks = match s.locked {
+            None => Some(satsim_tree::Locks::NONE),
+            Some(mask) => k.locks(mask),
+        };
+        if let Some(locks) = locks {
+            return k.aba_hybrid_with_forces_into(s.q, s.v, s.tau, s.fext, locks, ddq);
+        }
+    }
+    let t = &m.tree;
+    let out = match (s.locked, s.xup_ready) {
+        (Some(l), true) => aba_hybrid_with_kinematics(t, data, s.q, s.v, s.tau, s.fext, l),
+        (Some(l), false) => aba_hybrid(t, data, s.q, s.v, s.tau, s.fext, l),
+        (None, true) => aba_with_kinematics(t, data, s.q, s.v, s.tau, s.fext),
+        (None, false) => aba(t, data, s.q, s.v, s.tau, s.fext),
+    }?;
+    ddq.copy_from_slice(out.as_slice());
+    Ok(())
+}

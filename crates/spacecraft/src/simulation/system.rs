@@ -1,0 +1,139 @@
+//! [`Simulation`] as a [`System`] for the integrators: the right-hand side (`rhs.rs`), the
+//! quaternion's projection, the event functions and the handling of their crossings.
+
+use super::Simulation;
+use super::hold::Hold;
+use satsim_integrate::{EventAction, EventDirection, System, SystemError};
+
+impl System for Simulation {
+    fn dim(&self) -> usize {
+        self.model.layout.len
+    }
+
+    /// `dx = f(t, x)`: the pipeline of `rhs.rs`.
+    fn rhs(&mut self, t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), SystemError> {
+        self.right_hand_side(t, x, dx)
+    }
+
+    /// The energy budget's work states are bookkeeping: they stay out of the error control,
+    /// so that tracking them leaves the steps (and every other state) as they were.
+    fn error_weights(&self, w: &mut [f64]) {
+        w.fill(1.0);
+        w[self.model.work.clone()].fill(0.0);
+    }
+
+    fn project(&mut self, x: &mut [f64]) {
+        if self.model.layout.free {
+            let a = self.model.layout.attitude.clone();
+            let norm = x[a.clone()].iter().map(|v| v * v).sum::<f64>().sqrt();
+            if norm > 0.0 {
+                for v in &mut x[a] {
+                    *v /= norm;
+                }
+            }
+        }
+    }
+
+    fn n_events(&self) -> usize {
+        self.model.n_events
+    }
+
+    /// The effects' event functions, computing first only what they read
+    /// ([`Effect::event_reads`](crate::effects::Effect::event_reads)). A state on which the
+    /// effects or the hold torques cannot be evaluated is an error (an event is never
+    /// skipped silently).
+    fn events(&mut self, t: f64, x: &[f64], g: &mut [f64]) -> Result<(), SystemError> {
+        if self.model.n_events == 0 {
+            return Ok(());
+        }
+        self.check_len(x.len(), "events")?;
+        if g.len() != self.model.n_events {
+            return Err(SystemError::new(format!(
+                "events: g has length {} but the simulation has {} event functions",
+                g.len(),
+                self.model.n_events
+            )));
+        }
+        let kin = self.prepare_events(t, x)?;
+        self.with_context(t, x, kin, |ctx, h| {
+            for (i, (e, r)) in h.effects.iter().zip(h.own).enumerate() {
+                let s = h.event_start[i];
+                e.events(ctx, h.forces, &x[r.clone()], &mut g[s..s + e.n_events()]);
+            }
+        });
+        Ok(())
+    }
+
+    fn event_direction(&self, k: usize) -> EventDirection {
+        let i = self.event_owner(k);
+        self.effects[i].event_direction(k - self.model.event_start[i])
+    }
+
+    fn on_event(&mut self, k: usize, t: f64, x: &mut [f64]) -> EventAction {
+        match self.on_events(&[k], t, x) {
+            Ok(a) => a,
+            Err(_) => EventAction::Stop,
+        }
+    }
+
+    /// Handles simultaneous events together: every owning effect's `on_event` sees the same
+    /// state (the one at the event), then all their requests are carried out at once, with
+    /// one impulse solve for all the impacts (see `Simulation::apply_requests`), so that a
+    /// symmetric pair of impacts stays symmetric to round-off.
+    fn on_events(
+        &mut self,
+        ks: &[usize],
+        t: f64,
+        x: &mut [f64],
+    ) -> Result<EventAction, SystemError> {
+        self.check_len(x.len(), "on_events")?;
+        let before = self.mechanical_energy(t, x)?;
+        if let Err(e) = self.prepare_with(t, x, false, Hold::All) {
+            let why = format!("event handling failed: {e}");
+            self.log.events.push((t, why.clone()));
+            self.log
+                .event_effects
+                .push(ks.first().map_or(0, |&k| self.event_owner(k)));
+            return Err(SystemError::new(why));
+        }
+        let kin = self.data.needs_kinematics;
+        let mut action = EventAction::Continue;
+        let mut own_state = Vec::new();
+        for &k in ks {
+            let i = self.event_owner(k);
+            let local = k - self.model.event_start[i];
+            let r = self.model.own[i].clone();
+            own_state.clear();
+            own_state.extend_from_slice(&x[r.clone()]);
+            let a = self.with_context(t, x, kin, |ctx, h| {
+                h.effects[i].on_event(local, ctx, h.forces, &mut own_state, h.requests)
+            });
+            x[r].copy_from_slice(&own_state);
+            action = action.combine(a);
+            let what = self.effects[i].describe_event(local);
+            if !what.is_empty() {
+                self.log.events.push((t, what));
+                self.log.event_effects.push(i);
+            }
+        }
+        let reqs = std::mem::take(&mut self.data.requests);
+        let changed = !reqs.is_empty();
+        let result = self.apply_requests(&reqs, x);
+        self.data.requests = reqs;
+        self.data.requests.clear();
+        if let Err(e) = result {
+            let why = format!("impact failed: {e}");
+            self.log.events.push((t, why.clone()));
+            self.log
+                .event_effects
+                .push(ks.first().map_or(0, |&k| self.event_owner(k)));
+            return Err(SystemError::new(why));
+        }
+        self.book_jump(t, x, before)?;
+        Ok(if changed {
+            action.combine(EventAction::Reset)
+        } else {
+            action
+        })
+    }
+}

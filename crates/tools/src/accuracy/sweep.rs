@@ -1,0 +1,91 @@
+//! The measuring loop ([`sweep()`]) over a [`Sweep`].
+
+use super::metrics::compare;
+use super::report::{Measured, Point, ReferenceRun, Report};
+use super::spec::{Setting, Sweep};
+use super::trajectory::{Trajectory, run};
+use crate::scene::Scene;
+use satsim_integrate::Method;
+
+/// Runs the sweep on `scene`. `progress` is told what is being run.
+pub fn sweep(
+    scene: &Scene,
+    sweep: &Sweep,
+    mut progress: impl FnMut(&str),
+) -> Result<Report, String> {
+    let layout = scene
+        .simulation()
+        .map_err(|e| e.to_string())?
+        .layout()
+        .clone();
+    let reference_run = |(method, tol): (Method, f64), progress: &mut dyn FnMut(&str)| {
+        progress(&format!("reference {method} tol={tol:e}"));
+        let opts = sweep.options(scene, method, Setting::Tolerance(tol));
+        let tr =
+            run(scene, &opts).map_err(|e| format!("reference run {method} at {tol:e}: {e}"))?;
+        let info = ReferenceRun {
+            method,
+            tol,
+            seconds: tr.seconds,
+            rhs_evals: tr.stats.rhs_evals,
+            steps: tr.stats.steps_accepted,
+        };
+        Ok::<_, String>((tr, info))
+    };
+    let (ref_main, ref_info) = reference_run(sweep.reference, &mut progress)?;
+    let (ref_cross, cross_info) = reference_run(sweep.cross_reference, &mut progress)?;
+    let floor = compare(&layout, &ref_main, &ref_cross)?;
+    let mut points = Vec::new();
+    for (method, setting) in sweep.settings() {
+        progress(&format!("{method} {}", setting.label()));
+        let reference = if method == sweep.reference.0 {
+            &ref_cross
+        } else {
+            &ref_main
+        };
+        let opts = sweep.options(scene, method, setting);
+        let mut best: Option<Trajectory> = None;
+        let mut failure = None;
+        for _ in 0..sweep.repeats.max(1) {
+            match run(scene, &opts) {
+                Ok(tr) => {
+                    if best.as_ref().is_none_or(|b| tr.seconds < b.seconds) {
+                        best = Some(tr);
+                    }
+                }
+                Err(e) => {
+                    failure = Some(e);
+                    break;
+                }
+            }
+        }
+        let result = match (failure, best) {
+            (Some(e), _) => Err(e),
+            (None, None) => Err("no run".into()),
+            (None, Some(tr)) => compare(&layout, reference, &tr).map(|errors| Measured {
+                errors,
+                seconds: tr.seconds,
+                rhs_evals: tr.stats.rhs_evals,
+                steps: tr.stats.steps_accepted,
+                rejected: tr.stats.steps_rejected,
+                events: tr.stats.events.len(),
+            }),
+        };
+        points.push(Point {
+            method,
+            setting,
+            result,
+        });
+    }
+    Ok(Report {
+        scene: scene.path.display().to_string(),
+        duration: scene.duration,
+        every: scene.every,
+        state_len: layout.len,
+        sweep: sweep.clone(),
+        reference: ref_info,
+        cross_reference: cross_info,
+        floor,
+        points,
+    })
+}

@@ -1,0 +1,553 @@
+//! The campaign folder: `runs.csv` (streamed, then sorted by `k`), `traces.csv` (envelope
+//! samples), `campaign.json`, `summary.json` and the plots; resuming and merging.
+//!
+//! `runs.csv` is plain CSV (RFC 4180): fields are separated by commas, and a field holding a
+//! comma, a quote or a line break is quoted with its quotes doubled (messages have their line
+//! breaks replaced by spaces, so a row is one line). Numbers are written in Rust's shortest
+//! round-trip form, so reading them back gives the same `f64` to the last bit.
+
+use super::stats::{ColumnStats, column_stats};
+use super::{CAMPAIGN_JSON, CampaignError, RUNS_CSV, SUMMARY_JSON, Shard, TRACES_CSV};
+use crate::output::quote;
+use std::collections::{BTreeMap, HashMap};
+use std::fmt::Write as _;
+use std::fs::{File, OpenOptions};
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+/// The fields of one CSV line (without its line break).
+pub fn split(line: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut field = String::new();
+    let mut quoted = false;
+    let mut chars = line.chars().peekable();
+    while let Some(c) = chars.next() {
+        match (quoted, c) {
+            (true, '"') if chars.peek() == Some(&'"') => {
+                field.push('"');
+                chars.next();
+            }
+            (true, '"') => quoted = false,
+            (false, '"') if field.is_empty() => quoted = true,
+            (false, ',') => out.push(std::mem::take(&mut field)),
+            (_, c) => field.push(c),
+        }
+    }
+    out.push(field);
+    out
+}
+
+/// A campaign folder's identity: what `campaign.json` holds.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Meta {
+    /// The scene file, as given.
+    pub scene: String,
+    /// Runs in the whole campaign.
+    pub runs: u64,
+    /// Master seed.
+    pub seed: u64,
+    /// The shard this folder holds (`0/1` for a whole or merged campaign).
+    pub shard: Shard,
+    /// The stat columns drawn as histograms.
+    pub histograms: Vec<String>,
+    /// [`super::Campaign::scene_digest`] of the scene the runs were made with (`None` in a
+    /// folder written before it was recorded).
+    pub scene_digest: Option<String>,
+}
+
+impl Meta {
+    /// How many runs this folder should hold.
+    pub fn expected(&self) -> u64 {
+        (0..self.runs).filter(|k| self.shard.contains(*k)).count() as u64
+    }
+
+    pub(crate) fn write(&self, dir: &Path) -> Result<(), CampaignError> {
+        let v = serde_json::json!({
+            "scene": self.scene,
+            "runs": self.runs,
+            "seed": self.seed,
+            "shard": self.shard.to_string(),
+            "histograms": self.histograms,
+            "scene_digest": self.scene_digest,
+        });
+        let path = dir.join(CAMPAIGN_JSON);
+        let text = serde_json::to_string_pretty(&v).expect("JSON serialises") + "\n";
+        std::fs::write(&path, text).map_err(|e| CampaignError::io(&path, e))
+    }
+
+    /// Reads `dir/campaign.json`.
+    pub fn read(dir: &Path) -> Result<Meta, CampaignError> {
+        let path = dir.join(CAMPAIGN_JSON);
+        let text = std::fs::read_to_string(&path).map_err(|e| CampaignError::io(&path, e))?;
+        let bad = |m: &str| CampaignError::io(&path, m);
+        let v: serde_json::Value =
+            serde_json::from_str(&text).map_err(|e| CampaignError::io(&path, e))?;
+        Ok(Meta {
+            scene: v["scene"].as_str().ok_or_else(|| bad("no `scene`"))?.into(),
+            runs: v["runs"].as_u64().ok_or_else(|| bad("no `runs`"))?,
+            seed: v["seed"].as_u64().ok_or_else(|| bad("no `seed`"))?,
+            shard: v["shard"]
+                .as_str()
+                .ok_or_else(|| bad("no `shard`"))?
+                .parse()
+                .map_err(|e: String| bad(&e))?,
+            histograms: v["histograms"]
+                .as_array()
+                .ok_or_else(|| bad("no `histograms`"))?
+                .iter()
+                .map(|h| {
+                    h.as_str()
+                        .map(str::to_owned)
+                        .ok_or_else(|| bad("bad `histograms`"))
+                })
+                .collect::<Result<_, _>>()?,
+            scene_digest: v["scene_digest"].as_str().map(str::to_owned),
+        })
+    }
+}
+
+/// A file appended to line by line, flushed after each append.
+pub(crate) struct Appender {
+    path: PathBuf,
+    out: BufWriter<File>,
+}
+
+impl Appender {
+    pub(crate) fn append(&mut self, text: &str) -> Result<(), CampaignError> {
+        if text.is_empty() {
+            return Ok(());
+        }
+        self.out
+            .write_all(text.as_bytes())
+            .and_then(|_| self.out.flush())
+            .map_err(|e| CampaignError::io(&self.path, e))
+    }
+}
+
+/// Complete lines of `text` (those ending in a line break) and the byte length they span.
+fn complete_lines(text: &str) -> (Vec<&str>, usize) {
+    let end = text.rfind('\n').map_or(0, |i| i + 1);
+    (text[..end].lines().collect(), end)
+}
+
+/// Opens `runs.csv` and `traces.csv` for streaming. Fresh (header written) unless `resume`
+/// and `runs.csv` exists; then its header must be `header`, a cut-off last line (a campaign
+/// killed mid-write) is removed, and the rows it holds are returned as `(k, fields)`.
+#[allow(clippy::type_complexity)]
+pub(crate) fn open_streams(
+    dir: &Path,
+    header: &[String],
+    resume: bool,
+) -> Result<(Appender, Appender, Vec<(u64, Vec<String>)>), CampaignError> {
+    let runs_path = dir.join(RUNS_CSV);
+    let traces_path = dir.join(TRACES_CSV);
+    let head = header
+        .iter()
+        .map(|h| quote(h))
+        .collect::<Vec<_>>()
+        .join(",");
+    let mut done = Vec::new();
+    let resuming = resume && runs_path.exists();
+    if resuming {
+        let text =
+            std::fs::read_to_string(&runs_path).map_err(|e| CampaignError::io(&runs_path, e))?;
+        let (lines, end) = complete_lines(&text);
+        if lines.first() != Some(&head.as_str()) {
+            return Err(CampaignError::Other(format!(
+                "{}: its header is not this campaign's (other dispersions or another scene): use another --out, or run without --resume to start again",
+                runs_path.display()
+            )));
+        }
+        for (n, line) in lines.iter().enumerate().skip(1) {
+            let fields = split(line);
+            let k = fields[0].parse::<u64>().map_err(|_| {
+                CampaignError::io(&runs_path, format!("line {}: bad run number", n + 1))
+            })?;
+            if fields.len() != header.len() {
+                return Err(CampaignError::io(
+                    &runs_path,
+                    format!(
+                        "line {}: {} fields, expected {}",
+                        n + 1,
+                        fields.len(),
+                        header.len()
+                    ),
+                ));
+            }
+            done.push((k, fields));
+        }
+        truncate(&runs_path, end)?;
+        if traces_path.exists() {
+            let t = std::fs::read_to_string(&traces_path)
+                .map_err(|e| CampaignError::io(&traces_path, e))?;
+            let (_, end) = complete_lines(&t);
+            truncate(&traces_path, end)?;
+        }
+    } else {
+        std::fs::write(&runs_path, format!("{head}\n"))
+            .map_err(|e| CampaignError::io(&runs_path, e))?;
+        std::fs::write(&traces_path, "").map_err(|e| CampaignError::io(&traces_path, e))?;
+    }
+    let open = |p: &Path| -> Result<Appender, CampaignError> {
+        let f = OpenOptions::new()
+            .append(true)
+            .create(true)
+            .open(p)
+            .map_err(|e| CampaignError::io(p, e))?;
+        Ok(Appender {
+            path: p.to_path_buf(),
+            out: BufWriter::new(f),
+        })
+    };
+    Ok((open(&runs_path)?, open(&traces_path)?, done))
+}
+
+fn truncate(path: &Path, len: usize) -> Result<(), CampaignError> {
+    let f = OpenOptions::new()
+        .write(true)
+        .open(path)
+        .map_err(|e| CampaignError::io(path, e))?;
+    f.set_len(len as u64)
+        .map_err(|e| CampaignError::io(path, e))
+}
+
+/// Writes `text` to `path` through a temporary file and a rename, so that a reader (or a
+/// crash) never sees half a file.
+fn replace(path: &Path, text: &str) -> Result<(), CampaignError> {
+    let tmp = path.with_extension("tmp");
+    std::fs::write(&tmp, text).map_err(|e| CampaignError::io(&tmp, e))?;
+    std::fs::rename(&tmp, path).map_err(|e| CampaignError::io(path, e))
+}
+
+/// What [`finish`] found and wrote.
+#[derive(Clone, Debug)]
+pub struct Finished {
+    /// Rows in `runs.csv`.
+    pub runs: u64,
+    /// Rows with status `ok`.
+    pub ok: u64,
+    /// Rows with status `failed`.
+    pub failed: u64,
+    /// Runs of the campaign (or shard) that `runs.csv` does not hold.
+    pub missing: u64,
+    /// The files written (names in the folder).
+    pub files: Vec<String>,
+}
+
+/// The rows of a `runs.csv`: header and `(k, line)` of each complete row.
+struct RunsFile {
+    header: String,
+    rows: Vec<(u64, String)>,
+}
+
+fn read_runs(path: &Path) -> Result<RunsFile, CampaignError> {
+    let text = std::fs::read_to_string(path).map_err(|e| CampaignError::io(path, e))?;
+    let (lines, _) = complete_lines(&text);
+    let Some((head, rest)) = lines.split_first() else {
+        return Err(CampaignError::io(path, "no header"));
+    };
+    let mut rows = Vec::with_capacity(rest.len());
+    for (n, line) in rest.iter().enumerate() {
+        let k = line
+            .split(',')
+            .next()
+            .and_then(|f| f.parse::<u64>().ok())
+            .ok_or_else(|| CampaignError::io(path, format!("line {}: bad run number", n + 2)))?;
+        rows.push((k, (*line).to_owned()));
+    }
+    Ok(RunsFile {
+        header: (*head).to_owned(),
+        rows,
+    })
+}
+
+/// Sorts by `k` and drops exact duplicates; two different rows for one run are an error.
+fn sort_rows(rows: &mut Vec<(u64, String)>, what: &Path) -> Result<(), CampaignError> {
+    rows.sort();
+    rows.dedup();
+    if let Some(w) = rows.windows(2).find(|w| w[0].0 == w[1].0) {
+        return Err(CampaignError::Other(format!(
+            "{}: run {} appears twice with different results (folders of different campaigns?)",
+            what.display(),
+            w[0].0
+        )));
+    }
+    Ok(())
+}
+
+/// Finishes a campaign folder: rewrites `runs.csv` and `traces.csv` sorted by `k` (the
+/// traces of runs not in `runs.csv` dropped), then writes `summary.json` and the plots, all
+/// computed from the sorted files.
+pub fn finish(dir: &Path, meta: &Meta) -> Result<Finished, CampaignError> {
+    let runs_path = dir.join(RUNS_CSV);
+    let mut runs = read_runs(&runs_path)?;
+    sort_rows(&mut runs.rows, &runs_path)?;
+    let mut text = String::with_capacity(runs.rows.iter().map(|r| r.1.len() + 1).sum());
+    text.push_str(&runs.header);
+    text.push('\n');
+    for (_, line) in &runs.rows {
+        text.push_str(line);
+        text.push('\n');
+    }
+    replace(&runs_path, &text)?;
+
+    let header = split(&runs.header);
+    let status = header
+        .iter()
+        .position(|h| h == "status")
+        .ok_or_else(|| CampaignError::io(&runs_path, "no `status` column"))?;
+    let first_stat = status + 2;
+    let stat_names = &header[first_stat..];
+    let mut ok_rows: Vec<(u64, Vec<f64>)> = Vec::new();
+    let mut failed = 0u64;
+    for (k, line) in &runs.rows {
+        let f = split(line);
+        if f.len() != header.len() {
+            return Err(CampaignError::io(
+                &runs_path,
+                format!("run {k}: {} fields, expected {}", f.len(), header.len()),
+            ));
+        }
+        if f[status] == "ok" {
+            let vals = f[first_stat..]
+                .iter()
+                .map(|x| x.parse::<f64>())
+                .collect::<Result<Vec<f64>, _>>()
+                .map_err(|_| CampaignError::io(&runs_path, format!("run {k}: bad number")))?;
+            ok_rows.push((*k, vals));
+        } else {
+            failed += 1;
+        }
+    }
+
+    // Traces: keep the finished ok runs', sorted by k then column.
+    let traces_path = dir.join(TRACES_CSV);
+    let mut traces: BTreeMap<u64, Vec<(String, Vec<f64>)>> = BTreeMap::new();
+    if traces_path.exists() {
+        let text = std::fs::read_to_string(&traces_path)
+            .map_err(|e| CampaignError::io(&traces_path, e))?;
+        let (lines, _) = complete_lines(&text);
+        let ok: HashMap<u64, ()> = ok_rows.iter().map(|(k, _)| (*k, ())).collect();
+        for line in lines {
+            let mut it = line.split(',');
+            let (Some(k), Some(col)) = (it.next().and_then(|k| k.parse::<u64>().ok()), it.next())
+            else {
+                continue;
+            };
+            if !ok.contains_key(&k) {
+                continue;
+            }
+            let vals: Vec<f64> = it.filter_map(|v| v.parse().ok()).collect();
+            let entry = traces.entry(k).or_default();
+            match entry.iter_mut().find(|(c, _)| c == col) {
+                Some(e) => e.1 = vals,
+                None => entry.push((col.to_owned(), vals)),
+            }
+        }
+    }
+    let mut t = String::new();
+    for (k, cols) in &traces {
+        for (c, vals) in cols {
+            let _ = write!(t, "{k},{c}");
+            for v in vals {
+                let _ = write!(t, ",{v:.7e}");
+            }
+            t.push('\n');
+        }
+    }
+    replace(&traces_path, &t)?;
+
+    // Summary.
+    let n_ok = ok_rows.len() as u64;
+    let n_runs = runs.rows.len() as u64;
+    let missing = meta.expected().saturating_sub(n_runs);
+    let mut all_stats: Vec<Option<ColumnStats>> = Vec::with_capacity(stat_names.len());
+    let mut column = Vec::with_capacity(ok_rows.len());
+    for c in 0..stat_names.len() {
+        column.clear();
+        column.extend(ok_rows.iter().map(|r| r.1[c]));
+        all_stats.push(column_stats(&column));
+    }
+    let summary = Summary {
+        counts: [
+            ("runs", n_runs),
+            ("ok", n_ok),
+            ("failed", failed),
+            ("missing", missing),
+            ("campaign_runs", meta.runs),
+            ("seed", meta.seed),
+        ],
+        shard: meta.shard.to_string(),
+        names: stat_names,
+        stats: &all_stats,
+    };
+    let mut s = serde_json::to_string_pretty(&summary)
+        .map_err(|e| CampaignError::io(&dir.join(SUMMARY_JSON), e))?;
+    s.push('\n');
+    std::fs::write(dir.join(SUMMARY_JSON), &s)
+        .map_err(|e| CampaignError::io(&dir.join(SUMMARY_JSON), e))?;
+
+    let mut files = vec![
+        RUNS_CSV.to_owned(),
+        TRACES_CSV.to_owned(),
+        SUMMARY_JSON.to_owned(),
+    ];
+    let plots = super::plots::write_all(dir, stat_names, &ok_rows, failed, &traces, meta)
+        .map_err(|e| CampaignError::io(dir, format!("cannot write the plots: {e}")))?;
+    files.extend(plots);
+    Ok(Finished {
+        runs: n_runs,
+        ok: n_ok,
+        failed,
+        missing,
+        files,
+    })
+}
+
+/// `summary.json`: the counts, the shard, then every statistics column's percentiles, mean
+/// and standard deviation in column order (`null` where no run finished or a value is not
+/// finite).
+struct Summary<'a> {
+    counts: [(&'static str, u64); 6],
+    shard: String,
+    names: &'a [String],
+    stats: &'a [Option<ColumnStats>],
+}
+
+impl serde::Serialize for Summary<'_> {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let finite = |x: f64| x.is_finite().then_some(x);
+        let mut map = s.serialize_map(Some(self.counts.len() + 1 + self.names.len()))?;
+        for (key, n) in &self.counts {
+            map.serialize_entry(key, n)?;
+        }
+        map.serialize_entry("shard", &self.shard)?;
+        for (name, st) in self.names.iter().zip(self.stats) {
+            let values: [Option<f64>; 7] = match st {
+                Some(st) => {
+                    let p = st.percentiles;
+                    [p[0], p[1], p[2], p[3], p[4], st.mean, st.std].map(finite)
+                }
+                None => [None; 7],
+            };
+            let keys = ["p1", "p5", "p50", "p95", "p99", "mean", "std"];
+            let entry: Vec<(&str, Option<f64>)> = keys.into_iter().zip(values).collect();
+            map.serialize_entry(name, &Ordered(&entry))?;
+        }
+        map.end()
+    }
+}
+
+/// A JSON object with its keys in the given order.
+struct Ordered<'a>(&'a [(&'a str, Option<f64>)]);
+
+impl serde::Serialize for Ordered<'_> {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let mut map = s.serialize_map(Some(self.0.len()))?;
+        for (k, v) in self.0 {
+            map.serialize_entry(k, v)?;
+        }
+        map.end()
+    }
+}
+
+/// Merges the campaign folders `dirs` (shards of one campaign) into `out`: their rows
+/// together, sorted by `k`, as one machine would have written them; then [`finish`]. The
+/// folders must be of one campaign (same header, runs, seed); a run held twice must hold the
+/// same row. Cut-off last lines (a shard killed mid-write) are left out.
+pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<Finished, CampaignError> {
+    if dirs.is_empty() {
+        return Err(CampaignError::Other(
+            "merge needs at least one folder".into(),
+        ));
+    }
+    let mut header: Option<(String, PathBuf)> = None;
+    let mut meta: Option<Meta> = None;
+    let mut rows = Vec::new();
+    let mut traces = String::new();
+    for d in dirs {
+        let m = Meta::read(d)?;
+        match &meta {
+            None => meta = Some(m),
+            Some(first)
+                if first.scene_digest.is_some()
+                    && m.scene_digest.is_some()
+                    && first.scene_digest != m.scene_digest =>
+            {
+                return Err(CampaignError::Other(format!(
+                    "{} was run with another scene than {} (scene digests {} and {}: a changed scene, model file or --set value)",
+                    d.display(),
+                    dirs[0].display(),
+                    m.scene_digest.as_deref().unwrap_or_default(),
+                    first.scene_digest.as_deref().unwrap_or_default()
+                )));
+            }
+            Some(first) if first.runs != m.runs || first.seed != m.seed => {
+                return Err(CampaignError::Other(format!(
+                    "{} is another campaign ({} runs, seed {}) than {} ({} runs, seed {})",
+                    d.display(),
+                    m.runs,
+                    m.seed,
+                    dirs[0].display(),
+                    first.runs,
+                    first.seed
+                )));
+            }
+            Some(_) => {}
+        }
+        let path = d.join(RUNS_CSV);
+        let r = read_runs(&path)?;
+        match &header {
+            None => header = Some((r.header.clone(), path.clone())),
+            Some((h, first)) if *h != r.header => {
+                return Err(CampaignError::Other(format!(
+                    "{}: its columns differ from {}'s (another campaign?)",
+                    path.display(),
+                    first.display()
+                )));
+            }
+            Some(_) => {}
+        }
+        rows.extend(r.rows);
+        let tp = d.join(TRACES_CSV);
+        if tp.exists() {
+            let t = std::fs::read_to_string(&tp).map_err(|e| CampaignError::io(&tp, e))?;
+            let (_, end) = complete_lines(&t);
+            traces.push_str(&t[..end]);
+        }
+    }
+    let (header, _) = header.expect("at least one folder");
+    let mut meta = meta.expect("at least one folder");
+    meta.shard = Shard::ALL;
+    sort_rows(&mut rows, out)?;
+    std::fs::create_dir_all(out).map_err(|e| CampaignError::io(out, e))?;
+    let mut text = header;
+    text.push('\n');
+    for (_, line) in &rows {
+        text.push_str(line);
+        text.push('\n');
+    }
+    replace(&out.join(RUNS_CSV), &text)?;
+    replace(&out.join(TRACES_CSV), &traces)?;
+    meta.write(out)?;
+    finish(out, &meta)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn quoting_round_trips() {
+        for f in ["plain", "a, b", "say \"no\"", "", "x\ny"] {
+            let line = format!("1,{},2", quote(f));
+            let back = split(&line);
+            assert_eq!(back.len(), 3, "{line}");
+            assert_eq!(back[1], f.replace('\n', " "));
+        }
+        assert_eq!(quote("a,b"), "\"a,b\"");
+        assert_eq!(quote("q\""), "\"q\"\"\"");
+    }
+}

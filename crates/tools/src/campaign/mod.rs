@@ -1,0 +1,737 @@
+//! Monte Carlo campaigns (contract section 8): a scene run many times with dispersed inputs,
+//! on every core ([rayon]) and across machines (shards merged afterwards).
+//!
+//! - [`Campaign::read`] reads a scene with a `[campaign]` table: the nominal scene (checked as
+//!   `satsim run` checks it), the runs, the seed and the dispersed numbers ([`spec`] says how
+//!   keys address the scene and how run `k` draws its values from `(seed, k)` alone).
+//! - [`Campaign::run_one`] runs one `k`: the scene as written with the drawn values
+//!   substituted is parsed by [`Scene::parse`] exactly as `satsim run` parses a file, built and
+//!   integrated with the same output times, and reduced to the final, minimum and maximum of
+//!   every trajectory column at the output times. A run that fails (a drawn value the scene
+//!   rejects, an integrator failure, a non-finite value, even a panic) is a failed record with
+//!   its message, never the end of the campaign.
+//! - [`run_campaign`] runs a shard on a local thread pool and streams `runs.csv` (and the
+//!   envelope samples `traces.csv`) as runs finish; [`finish`] then rewrites both sorted by
+//!   `k` and writes `summary.json` and the plots. Output is therefore in completion order
+//!   while a campaign runs (an interrupted campaign keeps every finished run, and `--resume`
+//!   skips them) and in `k` order once it is done, byte for byte the same whatever the thread
+//!   count or sharding: each row depends on its `k` alone, and the summary and plots are
+//!   computed from the sorted files.
+//! - [`merge`] combines shards' output folders into the folder one machine would have written.
+//!
+//! Per run, the scene is re-resolved from its substituted table (TOML text, parse, model and
+//! effects built afresh: about 0.3 to 0.6 ms for `examples/scenes/deploy_campaign.toml`,
+//! under 1 % of one of its runs; `cargo bench -p satsim-satellite --bench campaign` measures
+//! it); the integration itself does not allocate in its inner loop.
+
+pub mod files;
+pub mod plots;
+pub mod shard;
+pub mod spec;
+pub mod stats;
+
+pub use files::{Finished, finish, merge};
+pub use shard::{Shard, ShardChoice, choose_shard};
+pub use spec::{Dispersed, Law, Segment, draw, run_rng};
+
+use crate::scene::Scene;
+use crate::scene_keys::{KeyError, Override, inline_sources};
+use rayon::prelude::*;
+use satsim_integrate::Output as Times;
+use satsim_tree::io::{FileError, line_of, with_key};
+use serde::Deserialize;
+use spec::CampaignFile;
+use std::collections::HashSet;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicU64, Ordering};
+use thiserror::Error;
+use toml::{Spanned, Table};
+
+/// Why a campaign could not run (bad input or unusable output folder; exit status 2). A run
+/// that fails is not an error: it is a failed row.
+#[derive(Debug, Error)]
+pub enum CampaignError {
+    /// The scene, its model or state, or its `[campaign]` table is bad input.
+    #[error("{0}")]
+    File(#[from] FileError),
+    /// A file of the output folder could not be read or written.
+    #[error("{}: {message}", path.display())]
+    Output {
+        /// The file.
+        path: PathBuf,
+        /// What went wrong.
+        message: String,
+    },
+    /// Anything else (a thread pool that cannot start, shards that do not belong together…).
+    #[error("{0}")]
+    Other(String),
+    /// Stopped on request ([`Progress::cancelled`]): `runs.csv` holds every finished run,
+    /// in completion order, and `--resume` continues the campaign.
+    #[error(
+        "interrupted: {held} runs in {}, {left} not run; continue with --resume",
+        runs_csv.display()
+    )]
+    Interrupted {
+        /// The folder's `runs.csv`.
+        runs_csv: PathBuf,
+        /// Runs it holds.
+        held: u64,
+        /// Runs of the campaign (or shard) not run.
+        left: u64,
+    },
+}
+
+impl CampaignError {
+    pub(crate) fn io(path: &Path, e: impl std::fmt::Display) -> Self {
+        CampaignError::Output {
+            path: path.to_path_buf(),
+            message: e.to_string(),
+        }
+    }
+}
+
+/// A scene with a `[campaign]` table, read and checked.
+#[derive(Clone, Debug)]
+pub struct Campaign {
+    /// The scene file.
+    pub path: PathBuf,
+    /// Number of runs.
+    pub runs: u64,
+    /// Master seed.
+    pub seed: u64,
+    /// The dispersed numbers, in draw order.
+    pub dispersed: Vec<Dispersed>,
+    /// The stat columns drawn as histograms.
+    pub histograms: Vec<String>,
+    /// The trajectory columns (contract section 7) of the nominal scene, `t` first.
+    pub columns: Vec<String>,
+    /// The nominal scene.
+    pub nominal: Scene,
+    /// The scene as written, `[campaign]` removed, `model` and `initial` read in as tables.
+    base: Table,
+    /// Trajectory columns sampled for the envelope plots (`t` first).
+    trace_columns: Vec<usize>,
+    /// Every how many output rows a trace sample is kept.
+    stride: usize,
+}
+
+/// The largest number of samples of a run's trace for the envelope plots.
+const TRACE_POINTS: usize = 200;
+
+/// One run's statistics over its output rows (every trajectory column but `t`, in order).
+#[derive(Clone, Debug, PartialEq)]
+pub struct RunStats {
+    /// The value at the last output time.
+    pub last: Vec<f64>,
+    /// The minimum over the output times.
+    pub min: Vec<f64>,
+    /// The maximum over the output times.
+    pub max: Vec<f64>,
+}
+
+/// The outcome of run `k`.
+#[derive(Clone, Debug)]
+pub struct RunRecord {
+    /// The run.
+    pub k: u64,
+    /// The values it used, one per [`Campaign::dispersed`].
+    pub values: Vec<f64>,
+    /// Its statistics, or why it failed.
+    pub outcome: Result<RunStats, String>,
+    /// Samples of the trace columns (`t` first), every `stride` output rows.
+    pub trace: Vec<Vec<f64>>,
+}
+
+#[derive(Deserialize)]
+struct Top {
+    #[serde(default)]
+    campaign: Option<Spanned<CampaignFile>>,
+}
+
+fn reword(m: &str) -> String {
+    let m = m.trim_end().replace("expected f64", "expected a number");
+    if let Some(rest) = m.strip_prefix("unknown field ") {
+        format!("unknown key {rest}")
+    } else if let Some(rest) = m.strip_prefix("missing field ") {
+        format!("missing required key {rest}")
+    } else {
+        m
+    }
+}
+
+impl Campaign {
+    /// A fingerprint of the scene every run starts from (the scene after `--set`, with its
+    /// model file and initial state read in, `[campaign]` left out): 16 hex digits of the
+    /// 64-bit FNV-1a hash of its TOML. Recorded in `campaign.json`, so that `--resume` and
+    /// `merge` refuse runs made from another scene. FNV-1a rather than std's hasher, whose
+    /// output may change between Rust releases.
+    pub fn scene_digest(&self) -> String {
+        let text = toml::to_string(&self.base).expect("a TOML table serialises");
+        let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+        for b in text.bytes() {
+            h ^= u64::from(b);
+            h = h.wrapping_mul(0x0100_0000_01b3);
+        }
+        format!("{h:016x}")
+    }
+
+    /// Reads the scene file at `path` and its `[campaign]` table.
+    pub fn read(path: impl AsRef<Path>) -> Result<Campaign, FileError> {
+        let path = path.as_ref();
+        let text = std::fs::read_to_string(path).map_err(|source| FileError::Read {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Campaign::parse(&text, path)
+    }
+
+    /// Reads the scene file at `path` with `overrides` (`--set KEY=VALUE`, see
+    /// [`crate::scene_keys`]; `campaign.runs` and the like included) applied in order.
+    pub fn read_with(
+        path: impl AsRef<Path>,
+        overrides: &[Override],
+    ) -> Result<Campaign, FileError> {
+        let path = path.as_ref();
+        if overrides.is_empty() {
+            return Campaign::read(path);
+        }
+        let text = std::fs::read_to_string(path).map_err(|source| FileError::Read {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let rewritten = crate::scene_keys::overridden_text(&text, path, overrides)?;
+        Campaign::parse(&rewritten, path)
+            .map_err(|e| crate::scene_keys::after_overrides(e, path, overrides))
+    }
+
+    /// Parses a campaign scene's text; `path` names it in errors and anchors relative paths.
+    pub fn parse(text: &str, path: &Path) -> Result<Campaign, FileError> {
+        let nominal = Scene::parse(text, path)?;
+        let schema = |span: Option<std::ops::Range<usize>>, message: String| FileError::Schema {
+            path: path.to_path_buf(),
+            line: span.map(|s| line_of(text, s.start)),
+            message,
+        };
+        let top: Top = toml::from_str(text).map_err(|e| FileError::Schema {
+            path: path.to_path_buf(),
+            line: e.span().map(|s| line_of(text, s.start)),
+            message: with_key(&e, reword(e.message())),
+        })?;
+        let Some(file) = top.campaign else {
+            return Err(schema(
+                None,
+                "no [campaign] table: a campaign needs `[campaign]` with `runs` (see `satsim help campaign`)".into(),
+            ));
+        };
+        let file = file.into_inner();
+        let runs = *file.runs.get_ref();
+        if runs < 1 {
+            return Err(schema(
+                Some(file.runs.span()),
+                format!("`campaign.runs` must be a whole number >= 1, got {runs}"),
+            ));
+        }
+        let seed = match &file.seed {
+            Some(s) if *s.get_ref() < 0 => {
+                return Err(schema(
+                    Some(s.span()),
+                    format!(
+                        "`campaign.seed` must be a whole number >= 0, got {}",
+                        s.get_ref()
+                    ),
+                ));
+            }
+            Some(s) => *s.get_ref() as u64,
+            None => 0,
+        };
+
+        let mut base: Table = text
+            .parse()
+            .map_err(|e: toml::de::Error| FileError::Syntax {
+                path: path.to_path_buf(),
+                line: e.span().map(|s| line_of(text, s.start)),
+                message: e.message().trim_end().to_owned(),
+            })?;
+        base.remove("campaign");
+        inline_sources(&mut base, text, path)?;
+
+        let mut dispersed: Vec<Dispersed> = Vec::new();
+        for (i, d) in file.disperse.iter().enumerate() {
+            let span = Some(d.span());
+            let d = d.get_ref();
+            let key = d.key.get_ref();
+            let named = |m: String| {
+                schema(
+                    span.clone(),
+                    format!("`campaign.disperse[{i}]` (key `{key}`): {m}"),
+                )
+            };
+            let law = spec::law_of(d).map_err(named)?;
+            let index = d.index.as_ref().map(|x| *x.get_ref());
+            let found = spec::resolve(&base, key, index, law).map_err(|KeyError(m)| named(m))?;
+            for f in found {
+                if dispersed.iter().any(|o| o.path == f.path) {
+                    return Err(named(format!("`{}` is dispersed twice", f.column)));
+                }
+                dispersed.push(f);
+            }
+        }
+
+        let sim = nominal
+            .simulation()
+            .map_err(|e| schema(None, e.to_string()))?;
+        let columns = sim.columns();
+        let stat_names: Vec<String> = stat_columns(&columns);
+        let histograms = match &file.histograms {
+            Some(h) => {
+                for c in h.get_ref() {
+                    if !stat_names.contains(c) {
+                        return Err(schema(
+                            Some(h.span()),
+                            format!(
+                                "`campaign.histograms`: unknown column `{c}` (the columns are final_, min_ and max_ of: {})",
+                                columns[1..].join(", ")
+                            ),
+                        ));
+                    }
+                }
+                h.get_ref().clone()
+            }
+            None => columns[1..]
+                .iter()
+                .filter(|c| c.starts_with("angle_") || c.starts_with("omega_"))
+                .map(|c| format!("final_{c}"))
+                .collect(),
+        };
+        let trace_columns: Vec<usize> = (0..columns.len())
+            .filter(|&i| i == 0 || is_trace_column(&columns[i]))
+            .collect();
+        let rows = (nominal.duration / nominal.every).floor() as usize + 1;
+        let stride = rows.div_ceil(TRACE_POINTS).max(1);
+        Ok(Campaign {
+            path: path.to_path_buf(),
+            runs: runs as u64,
+            seed,
+            dispersed,
+            histograms,
+            columns,
+            nominal,
+            base,
+            trace_columns,
+            stride,
+        })
+    }
+
+    /// The `runs.csv` header.
+    pub fn header(&self) -> Vec<String> {
+        let mut h = vec!["run".to_owned()];
+        h.extend(self.dispersed.iter().map(|d| d.column.clone()));
+        h.push("status".into());
+        h.push("message".into());
+        h.extend(stat_columns(&self.columns));
+        h
+    }
+
+    /// The values run `k` uses.
+    pub fn draw(&self, k: u64) -> Vec<f64> {
+        draw(&self.dispersed, self.seed, k)
+    }
+
+    /// The scene as written with `values` substituted for the dispersed numbers (external
+    /// `model` and `initial` files inlined, no `[campaign]`), as TOML text.
+    pub fn scene_text(&self, values: &[f64]) -> String {
+        let mut t = self.base.clone();
+        for (d, v) in self.dispersed.iter().zip(values) {
+            spec::set(&mut t, &d.path, *v);
+        }
+        toml::to_string(&t).expect("a TOML table serialises")
+    }
+
+    /// Runs `k`.
+    pub fn run_one(&self, k: u64) -> RunRecord {
+        let values = self.draw(k);
+        // Sized for the nominal output times, so the sink does not reallocate as rows come.
+        let rows = (self.nominal.duration / self.nominal.every).floor() as usize + 1;
+        let mut trace = vec![Vec::with_capacity(rows / self.stride + 1); self.trace_columns.len()];
+        let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            self.integrate(&values, &mut trace)
+        }))
+        .unwrap_or_else(|p| {
+            let what = p
+                .downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| p.downcast_ref::<String>().cloned())
+                .unwrap_or_else(|| "unknown panic".into());
+            Err(format!("internal error (a bug in satsim): {what}"))
+        });
+        if outcome.is_err() {
+            trace.iter_mut().for_each(Vec::clear);
+        }
+        RunRecord {
+            k,
+            values,
+            outcome,
+            trace,
+        }
+    }
+
+    fn integrate(&self, values: &[f64], trace: &mut [Vec<f64>]) -> Result<RunStats, String> {
+        let text = self.scene_text(values);
+        let scene = Scene::parse(&text, &self.path).map_err(|e| match e {
+            FileError::Schema { message, .. } => format!("the drawn scene is invalid: {message}"),
+            other => format!("the drawn scene is invalid: {other}"),
+        })?;
+        let mut sim = scene.simulation().map_err(|e| e.to_string())?;
+        if sim.columns() != self.columns {
+            return Err(
+                "the drawn scene's trajectory columns differ from the nominal scene's".into(),
+            );
+        }
+        let n = self.columns.len() - 1;
+        let mut stats = RunStats {
+            last: vec![f64::NAN; n],
+            min: vec![f64::INFINITY; n],
+            max: vec![f64::NEG_INFINITY; n],
+        };
+        let mut rows = 0usize;
+        let t_end = sim.t0() + scene.duration;
+        let columns = &self.columns;
+        let result = sim.run(
+            &scene.options,
+            t_end,
+            &Times::Interval(scene.every),
+            |t, row| -> Result<(), String> {
+                for (c, &v) in row[1..].iter().enumerate() {
+                    if !v.is_finite() {
+                        return Err(format!("`{}` is {v} at t = {t} s", columns[c + 1]));
+                    }
+                    stats.last[c] = v;
+                    stats.min[c] = stats.min[c].min(v);
+                    stats.max[c] = stats.max[c].max(v);
+                }
+                if rows.is_multiple_of(self.stride) {
+                    for (s, &c) in trace.iter_mut().zip(&self.trace_columns) {
+                        s.push(row[c]);
+                    }
+                }
+                rows += 1;
+                Ok(())
+            },
+        );
+        match result {
+            Ok(_) if rows == 0 => Err("the run wrote no output row".into()),
+            Ok(_) => Ok(stats),
+            Err(satsim_spacecraft::simulation::RunError::Integrate(e)) => Err(e.to_string()),
+            Err(satsim_spacecraft::simulation::RunError::Sink { error, .. }) => {
+                Err(format!("non-finite result: {error}"))
+            }
+        }
+    }
+
+    /// The `runs.csv` row of a record (with its newline).
+    pub fn csv_row(&self, r: &RunRecord) -> String {
+        let mut s = String::new();
+        let _ = write!(s, "{}", r.k);
+        for v in &r.values {
+            let _ = write!(s, ",{v}");
+        }
+        match &r.outcome {
+            Ok(st) => {
+                s.push_str(",ok,");
+                for c in 0..st.last.len() {
+                    let _ = write!(s, ",{},{},{}", st.last[c], st.min[c], st.max[c]);
+                }
+            }
+            Err(m) => {
+                s.push_str(",failed,");
+                s.push_str(&crate::output::quote(m));
+                for _ in 1..self.columns.len() {
+                    s.push_str(",,,");
+                }
+            }
+        }
+        s.push('\n');
+        s
+    }
+
+    /// The `traces.csv` lines of a record: `k,column,values...` per trace column.
+    pub fn trace_lines(&self, r: &RunRecord) -> String {
+        let mut s = String::new();
+        if r.outcome.is_err() {
+            return s;
+        }
+        for (vals, &c) in r.trace.iter().zip(&self.trace_columns) {
+            let _ = write!(s, "{},{}", r.k, self.columns[c]);
+            for v in vals {
+                let _ = write!(s, ",{v:.7e}");
+            }
+            s.push('\n');
+        }
+        s
+    }
+}
+
+/// `final_c, min_c, max_c` for every column but the first (`t`).
+pub fn stat_columns(columns: &[String]) -> Vec<String> {
+    columns[1..]
+        .iter()
+        .flat_map(|c| [format!("final_{c}"), format!("min_{c}"), format!("max_{c}")])
+        .collect()
+}
+
+/// Whether a trajectory column gets an envelope plot: hinge angles and bus rates.
+pub fn is_trace_column(c: &str) -> bool {
+    c.starts_with("angle_") || c.starts_with("omega_")
+}
+
+/// How to run a campaign.
+#[derive(Clone, Debug)]
+pub struct RunOptions {
+    /// Worker threads (`None`: every core).
+    pub threads: Option<usize>,
+    /// Which runs.
+    pub shard: Shard,
+    /// Continue the campaign in the output folder, skipping the runs its `runs.csv` holds.
+    pub resume: bool,
+}
+
+/// Told about a campaign's progress (the command line draws a progress bar).
+pub trait Progress: Sync {
+    /// `todo` runs are about to start; `skipped` were already in `runs.csv` (`--resume`).
+    fn start(&self, _todo: u64, _skipped: u64) {}
+    /// One run finished.
+    fn finished(&self, _ok: bool) {}
+    /// Whether to stop: no run starts after this turns true (those running finish and are
+    /// written), and the campaign ends with [`CampaignError::Interrupted`].
+    fn cancelled(&self) -> bool {
+        false
+    }
+}
+
+/// No progress report.
+pub struct Quiet;
+impl Progress for Quiet {}
+
+/// What a campaign did.
+#[derive(Clone, Debug)]
+pub struct Report {
+    /// Runs executed now.
+    pub ran: u64,
+    /// Runs skipped because `runs.csv` already held them.
+    pub skipped: u64,
+    /// The finished folder.
+    pub finished: Finished,
+}
+
+/// The files of a campaign folder.
+pub const RUNS_CSV: &str = "runs.csv";
+/// Envelope samples of the finished runs.
+pub const TRACES_CSV: &str = "traces.csv";
+/// The campaign's identity (scene, runs, seed, shard, histograms).
+pub const CAMPAIGN_JSON: &str = "campaign.json";
+/// The statistics.
+pub const SUMMARY_JSON: &str = "summary.json";
+
+/// Runs the shard `opts.shard` of `campaign` into `dir`: see the module documentation.
+pub fn run_campaign(
+    campaign: &Campaign,
+    dir: &Path,
+    opts: &RunOptions,
+    progress: &dyn Progress,
+) -> Result<Report, CampaignError> {
+    std::fs::create_dir_all(dir).map_err(|e| CampaignError::io(dir, e))?;
+    let digest = campaign.scene_digest();
+    let meta = files::Meta {
+        scene: campaign.path.display().to_string(),
+        runs: campaign.runs,
+        seed: campaign.seed,
+        shard: opts.shard,
+        histograms: campaign.histograms.clone(),
+        scene_digest: Some(digest.clone()),
+    };
+    // A folder is resumed only with the scene its runs were made with: the drawn values
+    // alone would not notice a changed model file or a different `--set`.
+    let json = dir.join(CAMPAIGN_JSON);
+    if opts.resume && json.exists() {
+        let before = files::Meta::read(dir)?;
+        if before.scene_digest.as_ref().is_some_and(|d| *d != digest) {
+            return Err(CampaignError::Other(format!(
+                "{}: its runs were made with another scene (a changed scene, model file or --set value; scene digest {} here, {} now): resume with the same scene and --set, or use another --out",
+                json.display(),
+                before.scene_digest.as_deref().unwrap_or_default(),
+                digest
+            )));
+        }
+    }
+    meta.write(dir)?;
+    let header = campaign.header();
+    let (runs, traces, done) = files::open_streams(dir, &header, opts.resume)?;
+    // Rows already there must be this campaign's (same draws), and this shard's.
+    for (k, fields) in &done {
+        if *k >= campaign.runs || !opts.shard.contains(*k) {
+            return Err(CampaignError::Other(format!(
+                "{}: holds run {k}, which is not in shard {} of a {}-run campaign: resume with the same --shard, or use another --out",
+                dir.join(RUNS_CSV).display(),
+                opts.shard,
+                campaign.runs
+            )));
+        }
+        let drawn: Vec<String> = campaign.draw(*k).iter().map(|v| v.to_string()).collect();
+        if fields[1..=drawn.len()] != drawn[..] {
+            return Err(CampaignError::Other(format!(
+                "{}: run {k} holds other drawn values than this campaign draws (was the seed or a dispersion changed?): use another --out",
+                dir.join(RUNS_CSV).display()
+            )));
+        }
+    }
+    let done: HashSet<u64> = done.into_iter().map(|(k, _)| k).collect();
+    let todo: Vec<u64> = (0..campaign.runs)
+        .filter(|k| opts.shard.contains(*k) && !done.contains(k))
+        .collect();
+    progress.start(todo.len() as u64, done.len() as u64);
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(opts.threads.unwrap_or(0))
+        .build()
+        .map_err(|e| CampaignError::Other(format!("cannot start the thread pool: {e}")))?;
+    let sinks = Mutex::new((runs, traces));
+    let ran = AtomicU64::new(0);
+    pool.install(|| {
+        todo.par_iter()
+            .with_max_len(1)
+            .try_for_each(|&k| -> Result<(), CampaignError> {
+                if progress.cancelled() {
+                    return Ok(());
+                }
+                let r = campaign.run_one(k);
+                let row = campaign.csv_row(&r);
+                let lines = campaign.trace_lines(&r);
+                let mut s = sinks.lock().unwrap_or_else(|p| p.into_inner());
+                // Traces first: a row in runs.csv always has its traces.
+                s.1.append(&lines)?;
+                s.0.append(&row)?;
+                drop(s);
+                progress.finished(r.outcome.is_ok());
+                ran.fetch_add(1, Ordering::Relaxed);
+                Ok(())
+            })
+    })?;
+    drop(sinks);
+    let ran = ran.into_inner();
+    if ran < todo.len() as u64 {
+        // Stopped: runs.csv stays as streamed (complete rows, completion order), not
+        // sorted or summarised, so that --resume takes it up.
+        return Err(CampaignError::Interrupted {
+            runs_csv: dir.join(RUNS_CSV),
+            held: done.len() as u64 + ran,
+            left: todo.len() as u64 - ran,
+        });
+    }
+    let finished = finish(dir, &meta)?;
+    Ok(Report {
+        ran,
+        skipped: done.len() as u64,
+        finished,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn example() -> PathBuf {
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/scenes/deploy_campaign.toml")
+    }
+
+    #[test]
+    fn the_scene_digest_follows_the_scene_not_the_campaign_table() {
+        let text = std::fs::read_to_string(example()).unwrap();
+        let digest = |t: &str| Campaign::parse(t, &example()).unwrap().scene_digest();
+        let d = digest(&text);
+        assert_eq!(d.len(), 16);
+        assert_eq!(d, digest(&text), "deterministic");
+        // More runs or another seed: the same scene (a campaign may be extended).
+        assert_eq!(d, digest(&text.replace("runs = 64", "runs = 65")));
+        assert_eq!(d, digest(&text.replace("seed = 2015", "seed = 7")));
+        // Any change of what a run starts from: another digest.
+        assert_ne!(d, digest(&text.replace("duration = ", "duration = 1")));
+    }
+
+    #[test]
+    fn the_example_campaign_reads_and_every_draw_is_a_valid_scene() {
+        let c = Campaign::read(example()).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!((c.runs, c.seed), (64, 2015));
+        let columns: Vec<&str> = c.dispersed.iter().map(|d| d.column.as_str()).collect();
+        assert_eq!(
+            columns,
+            [
+                "effects.hinge_springs.stiffness[3]",
+                "effects.hinge_springs.stiffness[4]",
+                "effects.hinge_springs.damping[3]",
+                "effects.hinge_springs.damping[4]",
+                "initial.hinges.angle[3]",
+                "initial.hinges.angle[4]",
+                "model.body.4.mass",
+                "model.body.5.mass",
+                "effects.reaction_wheels.wheel.0.coulomb",
+                "effects.reaction_wheels.wheel.1.coulomb",
+                "effects.reaction_wheels.wheel.2.coulomb",
+            ]
+        );
+        // The nominal values are those written in the scene and its model file (the stowed
+        // fold angles are written as 3.14159, not pi).
+        let folded: f64 = "3.14159".parse().unwrap();
+        let nominal: Vec<f64> = c.dispersed.iter().map(|d| d.nominal).collect();
+        assert_eq!(
+            nominal,
+            [
+                2.0, 2.0, 4.0, 4.0, folded, -folded, 20.0, 20.0, 0.002, 0.002, 0.002
+            ]
+        );
+        for k in 0..16 {
+            let values = c.draw(k);
+            let scene = Scene::parse(&c.scene_text(&values), &c.path).unwrap();
+            // The substituted numbers arrive where the keys point.
+            let springs = scene
+                .effects
+                .get::<satsim_spacecraft::effects::HingeSprings>()
+                .unwrap();
+            assert_eq!(springs.stiffness[3], values[0]);
+            assert_eq!(springs.damping[4], values[3]);
+            assert_eq!(scene.initial.q[7 + 3], values[4]);
+            assert_eq!(scene.model.bodies()[4].mass(), values[6]);
+            let wheels = scene
+                .effects
+                .get::<satsim_spacecraft::effects::ReactionWheels>()
+                .unwrap();
+            assert_eq!(wheels.wheels[2].coulomb, values[10]);
+            // Untouched numbers stay as written.
+            assert_eq!(springs.stiffness[0], 50.0);
+            assert_eq!(scene.model.bodies()[3].mass(), 20.0);
+        }
+    }
+
+    #[test]
+    fn with_nothing_dispersed_a_run_is_the_nominal_scene() {
+        let text = std::fs::read_to_string(example()).unwrap();
+        let cut = text.find("[[campaign.disperse]]").unwrap();
+        let text = text[..cut].replace("duration = 60.0", "duration = 2.0");
+        let c = Campaign::parse(&text, &example()).unwrap();
+        let r = c.run_one(3);
+        let stats = r.outcome.unwrap();
+        let mut sim = c.nominal.simulation().unwrap();
+        let mut last = Vec::new();
+        sim.run(
+            &c.nominal.options,
+            c.nominal.duration,
+            &Times::Interval(c.nominal.every),
+            |_, row| {
+                last = row.to_vec();
+                Ok::<(), ()>(())
+            },
+        )
+        .unwrap();
+        assert_eq!(stats.last, last[1..]);
+    }
+}

@@ -1,0 +1,185 @@
+//! The scene file (TOML): a spacecraft model, its initial state, the effects to include,
+//! the integrator, the duration and the output. `docs/src/reference/scene.md` lists every key.
+//!
+//! ```toml
+//! model = "satellite.toml"     # or an inline [model] table (model-file keys)
+//! initial = "state.json"       # or an inline [initial] table (state-file keys); default: rest
+//! duration = 600.0             # s
+//!
+//! [integrator]
+//! method = "rk4"               # rk4, dp54, dop853, radau5
+//! step = 0.01                  # s
+//!
+//! [output]
+//! every = 1.0                  # s
+//!
+//! [effects.hinge_springs]
+//! stiffness = [50.0, 20.0]
+//! ```
+//!
+//! Parsing is strict: an unknown key, a missing required key or a value of the wrong type is
+//! an error naming the scene file and line; so is a negative duration, step, tolerance or
+//! output interval, and an effect whose needs are not met (the message says what to add).
+//! [`Scene::simulation`] turns a scene into a [`Simulation`] holding exactly the enabled
+//! effects.
+//!
+//! Each `[effects.<name>]` section is read by the effect registered under that name
+//! ([`satsim_spacecraft::effects::Registry`]; [`Scene::read`] knows the built-in ones,
+//! [`Scene::read_with_registry`] a registry with a user's effects too); the reader here
+//! handles the rest of the file:
+//!
+//! - [`file`](mod@file), the top level as written (serde structs);
+//! - [`parse`], the reader (model, initial state, armature, the effect sections);
+//! - [`integrator`], the `[integrator]` table;
+//! - [`orbit`], the `[orbit]` table.
+
+pub mod file;
+pub mod integrator;
+pub mod orbit;
+pub mod parse;
+
+pub use file::OrbitFile;
+pub use file::{ArmatureFile, IntegratorFile, ModelSource, OutputFile, SceneFile, StateSource};
+pub use orbit::MIN_ALTITUDE;
+pub use satsim_spacecraft::effects::SceneText;
+
+use crate::scene_keys::{self, Override};
+use satsim_integrate::Options;
+use satsim_spacecraft::effects::{EffectSet, Registry};
+use satsim_spacecraft::simulation::{SimError, Simulation};
+use satsim_tree::io::FileError;
+use satsim_tree::{Model, State};
+use std::path::{Path, PathBuf};
+
+/// A scene, read and checked.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    /// The scene file (for messages); `<inline>` for scenes built in code.
+    pub path: PathBuf,
+    /// The spacecraft.
+    pub model: Model,
+    /// Its initial state.
+    pub initial: State,
+    /// Duration (s).
+    pub duration: f64,
+    /// Integrator options.
+    pub options: Options,
+    /// Seconds between output rows.
+    pub every: f64,
+    /// Draw SVG plots.
+    pub plots: bool,
+    /// Write the 3-D playback `view.html` (and `poses.csv`, `view.json`): see [`crate::view`].
+    pub view: bool,
+    /// Integrate the energy budget (two more states) and write its columns `work_actuators`,
+    /// `energy_dissipated`, `energy_budget`: see [`satsim_spacecraft::simulation`].
+    pub energy_budget: bool,
+    /// The enabled effects (the orbit included): look one up by type,
+    /// `scene.effects.get::<HingeSprings>()`.
+    pub effects: EffectSet,
+    /// What the reader accepted but the user should hear about (a nearly unit attitude
+    /// quaternion normalised…), each naming the file; the command line prints them on
+    /// standard error.
+    pub warnings: Vec<String>,
+}
+
+impl Scene {
+    /// A torque-free scene of `model` from `initial`, integrated by DP54 at the given
+    /// tolerances, with rows every `duration / 100`. Add effects through [`Scene::effects`].
+    pub fn new(model: Model, initial: State, duration: f64) -> Self {
+        Self {
+            path: PathBuf::from("<inline>"),
+            model,
+            initial,
+            duration,
+            options: integrator::default_options(),
+            every: duration / 100.0,
+            plots: true,
+            view: true,
+            energy_budget: true,
+            effects: EffectSet::default(),
+            warnings: Vec::new(),
+        }
+    }
+
+    /// A fresh [`Simulation`] with exactly the enabled effects (fresh copies of them, in the
+    /// order their dependencies give, see [`satsim_spacecraft::effects::order`]).
+    pub fn simulation(&self) -> Result<Simulation, SimError> {
+        let mut b = Simulation::builder(self.model.clone())
+            .initial(self.initial.clone())
+            .energy_budget(self.energy_budget);
+        for e in self.effects.to_boxed() {
+            b = b.boxed(e);
+        }
+        b.build()
+    }
+
+    /// Reads the scene file at `path`, with the built-in effects.
+    pub fn read(path: impl AsRef<Path>) -> Result<Scene, FileError> {
+        Scene::read_with_registry(path, &Registry::with_builtins())
+    }
+
+    /// Reads the scene file at `path`; its `[effects.<name>]` sections are looked up in
+    /// `registry` (see [`satsim_spacecraft::effects::registry`]).
+    pub fn read_with_registry(
+        path: impl AsRef<Path>,
+        registry: &Registry,
+    ) -> Result<Scene, FileError> {
+        let path = path.as_ref();
+        let text = std::fs::read_to_string(path).map_err(|source| FileError::Read {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Scene::parse_with_registry(&text, path, registry)
+    }
+
+    /// Reads the scene file at `path` with `overrides` (`--set KEY=VALUE`, see
+    /// [`crate::scene_keys`]) applied in order. With overrides, an error found in the
+    /// rewritten scene names the scene file and says which overrides were applied.
+    pub fn read_with(path: impl AsRef<Path>, overrides: &[Override]) -> Result<Scene, FileError> {
+        Scene::read_overridden(path, overrides, &Registry::with_builtins())
+    }
+
+    /// [`Scene::read_with`] with the effects of `registry`.
+    pub fn read_overridden(
+        path: impl AsRef<Path>,
+        overrides: &[Override],
+        registry: &Registry,
+    ) -> Result<Scene, FileError> {
+        let path = path.as_ref();
+        if overrides.is_empty() {
+            return Scene::read_with_registry(path, registry);
+        }
+        let text = std::fs::read_to_string(path).map_err(|source| FileError::Read {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let rewritten = scene_keys::overridden_text(&text, path, overrides)?;
+        let mut scene = Scene::parse_with_registry(&rewritten, path, registry)
+            .map_err(|e| scene_keys::after_overrides(e, path, overrides))?;
+        // A line of the rewritten text means nothing to the user: drop it.
+        let prefix = format!("{}:", path.display());
+        for w in &mut scene.warnings {
+            if let Some(rest) = w.strip_prefix(&prefix)
+                && let Some((line, msg)) = rest.split_once(':')
+                && line.parse::<usize>().is_ok()
+            {
+                *w = format!("{} (with --set):{msg}", path.display());
+            }
+        }
+        Ok(scene)
+    }
+
+    /// Parses a scene's text; `path` names it in errors and anchors its relative paths.
+    pub fn parse(text: &str, path: &Path) -> Result<Scene, FileError> {
+        Scene::parse_with_registry(text, path, &Registry::with_builtins())
+    }
+
+    /// [`Scene::parse`] with the effects of `registry`.
+    pub fn parse_with_registry(
+        text: &str,
+        path: &Path,
+        registry: &Registry,
+    ) -> Result<Scene, FileError> {
+        parse::Parser::new(SceneText::new(text, path), registry).scene()
+    }
+}

@@ -1,0 +1,240 @@
+//! The scene reader: the top level, the model and initial state, `armature`, and the
+//! `[effects.<name>]` sections through the registry. [`SceneText`] carries the scene's text
+//! and path so that every check names the file and line.
+
+use super::Scene;
+use super::file::{ArmatureFile, ModelSource, SceneFile, StateSource};
+use crate::scene_keys;
+use satsim_spacecraft::effects::section::reword;
+use satsim_spacecraft::effects::{EffectSet, Registry, SceneText, Section};
+use satsim_tree::io::{FileError, line_of, with_key};
+use satsim_tree::{Model, State};
+
+use std::collections::BTreeMap;
+use std::ops::{Deref, Range};
+use std::path::{Path, PathBuf};
+use toml::Spanned;
+
+/// Reads a scene's text into a [`Scene`].
+pub(crate) struct Parser<'a> {
+    src: SceneText<'a>,
+    registry: &'a Registry,
+}
+
+impl<'a> Deref for Parser<'a> {
+    type Target = SceneText<'a>;
+    fn deref(&self) -> &SceneText<'a> {
+        &self.src
+    }
+}
+
+impl<'a> Parser<'a> {
+    pub(crate) fn new(src: SceneText<'a>, registry: &'a Registry) -> Self {
+        Self { src, registry }
+    }
+
+    pub(super) fn scene(&self) -> Result<Scene, FileError> {
+        let path = self.path().to_path_buf();
+        if self.text().trim().is_empty() {
+            return Err(FileError::Empty { path });
+        }
+        let located = |e: &toml::de::Error| e.span().map(|s| line_of(self.text(), s.start));
+        if let Err(e) = self.text().parse::<toml::Table>() {
+            return Err(FileError::Syntax {
+                line: located(&e),
+                message: e.message().trim_end().to_owned(),
+                path,
+            });
+        }
+        let file: SceneFile = toml::from_str(self.text()).map_err(|e| FileError::Schema {
+            line: located(&e),
+            message: with_key(&e, reword(e.message())),
+            path: path.clone(),
+        })?;
+        let dir = self.path().parent().unwrap_or(Path::new("")).to_path_buf();
+
+        // Model and initial state.
+        let model = match file.model.get_ref() {
+            ModelSource::Path(p) => {
+                satsim_tree::read_model(existing(self, &dir, p, file.model.span(), "model")?)?
+            }
+            ModelSource::Inline(m) => m.build().map_err(|e| e.in_file(self.text(), self.path()))?,
+        };
+        let model = match &file.armature {
+            Some(a) => self.armature(model, a)?,
+            None => model,
+        };
+        let mut warnings = Vec::new();
+        let initial = match file.initial.as_ref().map(|s| (s.get_ref(), s.span())) {
+            None => State::rest(&model),
+            Some((StateSource::Path(p), span)) => {
+                let state_path = existing(self, &dir, p, span, "initial")?;
+                let text =
+                    std::fs::read_to_string(&state_path).map_err(|source| FileError::Read {
+                        path: state_path.clone(),
+                        source,
+                    })?;
+                let sf = satsim_tree::io::parse_state_file(&text, &state_path)?;
+                warnings.extend(
+                    sf.warnings()
+                        .into_iter()
+                        .map(|w| format!("{}: {w}", state_path.display())),
+                );
+                sf.resolve(&model).map_err(|e| e.in_file(&state_path))?
+            }
+            Some((StateSource::Inline(s), span)) => {
+                warnings.extend(s.warnings().into_iter().map(|w| {
+                    format!(
+                        "{}:{}: initial.{w}",
+                        self.path().display(),
+                        line_of(self.text(), span.start)
+                    )
+                }));
+                s.resolve(&model).map_err(|e| {
+                    self.error(Some(span), format!("initial.{}: {}", e.field, e.message))
+                })?
+            }
+        };
+
+        let duration = self.positive(&file.duration, "duration")?;
+        let options = self.integrator(file.integrator.as_ref())?;
+        let (every, plots, view, energy_budget) = match &file.output {
+            None => (duration / 100.0, true, true, true),
+            Some(o) => {
+                let o = o.get_ref();
+                let every = match &o.every {
+                    Some(e) => self.positive(e, "output.every")?,
+                    None => duration / 100.0,
+                };
+                (
+                    every,
+                    o.plots.unwrap_or(true),
+                    o.view.unwrap_or(true),
+                    o.energy_budget.unwrap_or(true),
+                )
+            }
+        };
+        let mut effects = EffectSet::default();
+        if let Some(o) = &file.orbit {
+            effects.insert(self.orbit(o)?);
+        }
+        if let Some(e) = &file.effects {
+            self.effects(e, &model, &mut effects)?;
+        }
+        let scene = Scene {
+            path,
+            model,
+            initial,
+            duration,
+            options,
+            every,
+            plots,
+            view,
+            energy_budget,
+            effects,
+            warnings,
+        };
+        // Build once to surface any remaining setup error with the scene's name.
+        scene
+            .simulation()
+            .map_err(|e| self.error(None, e.to_string()))?;
+        Ok(scene)
+    }
+
+    /// Reads every `[effects.<name>]` section with the registry's effect of that name, in
+    /// the registry's order, then checks each against the others (at its section's line).
+    fn effects(
+        &self,
+        sections: &Spanned<BTreeMap<String, Spanned<toml::Value>>>,
+        model: &Model,
+        out: &mut EffectSet,
+    ) -> Result<(), FileError> {
+        // Unknown sections first, in file order.
+        let mut written: Vec<(&String, &Spanned<toml::Value>)> =
+            sections.get_ref().iter().collect();
+        written.sort_by_key(|(_, v)| v.span().start);
+        if let Some((name, v)) = written.iter().find(|(n, _)| !self.registry.contains(n)) {
+            return Err(self.error(
+                Some(v.span()),
+                format!(
+                    "unknown key `{name}` in [effects]: no effect of that name is registered (known: {})",
+                    self.registry.names().join(", ")
+                ),
+            ));
+        }
+        let mut spans = Vec::new();
+        for name in self.registry.names() {
+            let Some(raw) = sections.get_ref().get(name) else {
+                continue;
+            };
+            let enabled = raw.get_ref().get("enabled").and_then(|v| v.as_bool()) != Some(false);
+            let section = Section::new(self.src, name, raw.span(), model, enabled);
+            if let Some(e) = self.registry.read(&section)? {
+                spans.push((name, raw.span()));
+                out.insert_boxed(e);
+            }
+        }
+        for (name, span) in spans {
+            let e = out.find(name).expect("an effect read above");
+            self.registry
+                .check(e, out)
+                .map_err(|m| self.error(Some(span), m))?;
+        }
+        Ok(())
+    }
+
+    /// The model with the scene's `armature` on its hinges.
+    fn armature(&self, model: Model, a: &Spanned<ArmatureFile>) -> Result<Model, FileError> {
+        let n = model.n_hinges();
+        let values = match a.get_ref() {
+            ArmatureFile::All(v) => vec![*v; n],
+            ArmatureFile::PerHinge(v) if v.len() == n => v.clone(),
+            ArmatureFile::PerHinge(v) => {
+                return Err(self.error(
+                    Some(a.span()),
+                    format!(
+                        "`armature`: expected {n} entries (one per hinge, file order), got {}",
+                        v.len()
+                    ),
+                ));
+            }
+        };
+        if let Some(v) = values.iter().find(|v| !(**v >= 0.0 && v.is_finite())) {
+            return Err(self.error(
+                Some(a.span()),
+                format!("`armature` must be finite numbers >= 0 (kg m²), got {v}"),
+            ));
+        }
+        // A built model never changes: the armature goes through the builder (which also
+        // stops treating a rotor with armature as a gyrostat).
+        let mut builder = model.to_builder();
+        for (hinge, v) in builder.hinges_mut().iter_mut().zip(values) {
+            hinge.armature = v;
+        }
+        builder
+            .build()
+            .map_err(|e| self.error(Some(a.span()), format!("`armature`: {e}")))
+    }
+}
+
+/// `dir/written`, which must exist: else an error at the scene's line of `key`.
+fn existing(
+    text: &SceneText,
+    dir: &Path,
+    written: &str,
+    span: Range<usize>,
+    key: &str,
+) -> Result<PathBuf, FileError> {
+    let file = dir.join(written);
+    if file.is_file() {
+        Ok(file)
+    } else {
+        Err(scene_keys::missing_source(
+            text.path(),
+            Some(line_of(text.text(), span.start)),
+            key,
+            written,
+            &file,
+        ))
+    }
+}

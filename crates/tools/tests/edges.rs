@@ -1,0 +1,131 @@
+//! Small faults at the edges of the library API: a controller with gains for fewer wheels
+//! than the scene has, slices of the wrong length given to public functions (an error, never
+//! a panic), and output rows that allocate.
+
+use satsim_satellite::{PreprintParams, build_model, recognise, state_from_engine};
+use satsim_spacecraft::effects::{AttitudeControl, ReactionWheels, Target, Wheel};
+use satsim_spacecraft::simulation::Simulation;
+use satsim_tools::scene::Scene;
+use satsim_tree::spatial::{Mat3, Vec3};
+use satsim_tree::{BaseKind, Body, ModelBuilder};
+use std::alloc::{GlobalAlloc, Layout, System as Sys};
+use std::cell::Cell;
+use std::path::Path;
+
+use satsim_integrate::System;
+
+/// Counts this thread's allocations (tests run on parallel threads).
+struct Counting;
+thread_local! {
+    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
+}
+fn count() {
+    let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
+}
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        count();
+        unsafe { Sys.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        unsafe { Sys.dealloc(ptr, layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        count();
+        unsafe { Sys.realloc(ptr, layout, new_size) }
+    }
+}
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+fn allocations() -> usize {
+    ALLOCATIONS.with(|c| c.get())
+}
+
+fn bus() -> satsim_tree::Model {
+    ModelBuilder::new(BaseKind::Free)
+        .body(Body::new("bus", 100.0, Mat3::identity() * 10.0))
+        .build()
+        .unwrap()
+}
+
+#[test]
+fn a_controller_runs_before_the_wheels_it_commands_and_is_refused_without_them() {
+    let axes = [Vec3::x(), Vec3::y(), Vec3::z()];
+    let wheels: Vec<Wheel> = ["x", "y", "z"]
+        .iter()
+        .zip(axes)
+        .map(|(n, a)| Wheel::new(*n, a, 0.05))
+        .collect();
+    let control = AttitudeControl::new(Target::Inertial(Default::default()), 1.0, 10.0);
+    // Given after the wheels, the controller still runs first (it declares `before`).
+    let sim = Simulation::builder(bus())
+        .effect(ReactionWheels::new(wheels))
+        .effect(control.clone())
+        .build()
+        .unwrap();
+    assert_eq!(sim.effect_names(), ["attitude_control", "reaction_wheels"]);
+    let err = Simulation::builder(bus())
+        .effect(control)
+        .build()
+        .err()
+        .expect("a controller without wheels must be refused");
+    let msg = err.to_string();
+    assert!(
+        msg.contains("attitude_control") && msg.contains("`reaction_wheels`"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn public_functions_refuse_short_slices() {
+    let scene = Scene::read(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/scenes/deploy.toml"),
+    )
+    .unwrap();
+    let mut sim = scene.simulation().unwrap();
+    let n = sim.layout().len;
+    let x = sim.x0().to_vec();
+    let short = &x[..n - 1];
+    let mut dx = vec![0.0; n];
+    let mut row = Vec::new();
+    let e = sim.rhs(0.0, short, &mut dx).unwrap_err();
+    assert!(e.to_string().contains("rhs: state has length"), "{e}");
+    assert!(sim.rhs(0.0, &x, &mut dx[..n - 1]).is_err());
+    assert!(sim.row(0.0, short, &mut row).is_err());
+    assert!(sim.diagnostics(0.0, short).is_err());
+    let mut g = vec![0.0; sim.n_events()];
+    assert!(!g.is_empty(), "the default scene has events");
+    assert!(sim.events(0.0, short, &mut g).is_err());
+    // The full-length state still works.
+    sim.rhs(0.0, &x, &mut dx).unwrap();
+    sim.events(0.0, &x, &mut g).unwrap();
+
+    let e = state_from_engine(&[0.0; 11], &[0.0; 11], &[0.0; 11]).unwrap_err();
+    assert!(e.to_string().contains("q: expected 12"), "{e}");
+    assert!(state_from_engine(&[0.0; 12], &[0.0; 10], &[0.0; 11]).is_err());
+    assert!(state_from_engine(&[0.0; 12], &[0.0; 11], &[0.0; 11]).is_ok());
+    let layout = recognise(&build_model(&PreprintParams::default()).unwrap()).unwrap();
+    assert!(layout.body(1).is_some() && layout.body(4).is_some());
+    assert_eq!(layout.body(0), None);
+    assert_eq!(layout.body(5), None);
+}
+
+/// An output row (wheels, controller, orbit, springs, stops: the default scene) allocates
+/// nothing once its buffer has grown.
+#[test]
+fn output_rows_do_not_allocate() {
+    let scene = Scene::read(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/scenes/deploy.toml"),
+    )
+    .unwrap();
+    let mut sim = scene.simulation().unwrap();
+    let x = sim.x0().to_vec();
+    let mut row = Vec::new();
+    sim.row(0.0, &x, &mut row).unwrap();
+    let before = allocations();
+    for k in 0..10 {
+        sim.row(0.1 * k as f64, &x, &mut row).unwrap();
+    }
+    assert_eq!(allocations() - before, 0, "allocations in 10 rows");
+}
