@@ -1,60 +1,21 @@
 //! Forward dynamics by the mass matrix: `M q̈ = τ − C`, with `M` from CRBA, `C` from RNEA and
 //! a Cholesky solve (Featherstone §6.1). The second, independent path beside ABA.
 //!
-//! Small systems use an in-place factorisation written here (no allocation, no dispatch);
-//! from [`FAER_MIN_DOF`] degrees of freedom on, faer's blocked Cholesky takes over.
+//! Small systems use the in-place factorisation of [`crate::llt`] (no allocation, no
+//! dispatch); from [`crate::llt::FAER_MIN_DOF`] degrees of freedom on, faer's blocked
+//! Cholesky takes over.
 
 use crate::crba::mass_matrix;
 use crate::data::Data;
 use crate::error::DynamicsError;
+use crate::llt::{llt_in_place, llt_solve_in_place};
 use crate::model::Model;
 use crate::rnea::bias;
 use crate::spatial::Force;
-use faer::dyn_stack::{MemBuffer, MemStack};
-use faer::linalg::cholesky::llt::factor::{
-    LltError, LltRegularization, cholesky_in_place, cholesky_in_place_scratch,
-};
-use faer::{Mat, Par};
-use nalgebra::{DMatrix, DVector};
-
-/// From this many degrees of freedom on, the factorisation uses faer. Measured: with the
-/// in-house factorisation `crba_cholesky` is faster up to about 45 DOF, faer is faster from
-/// about 55-65 DOF on, and in between they are level within the noise (chains and binary
-/// trees; docs/src/results/performance.md, "Cholesky crossover").
-pub const FAER_MIN_DOF: usize = 48;
-
-/// faer's buffers, allocated once for large models.
-pub struct FaerWork {
-    l: Mat<f64>,
-    rhs: Mat<f64>,
-    stack: MemBuffer,
-}
-
-impl std::fmt::Debug for FaerWork {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "FaerWork({} dof)", self.l.nrows())
-    }
-}
-
-impl Clone for FaerWork {
-    fn clone(&self) -> Self {
-        FaerWork::new(self.l.nrows())
-    }
-}
-
-impl FaerWork {
-    /// Buffers for `n` degrees of freedom. [`Data::new`] sets `Data::faer` from
-    /// [`FAER_MIN_DOF`]; setting it to `Some(FaerWork::new(nv))` or `None` by hand forces either
-    /// factorisation (how the crossover was measured).
-    pub fn new(n: usize) -> Self {
-        let req = cholesky_in_place_scratch::<f64>(n, Par::Seq, Default::default());
-        Self {
-            l: Mat::zeros(n, n),
-            rhs: Mat::zeros(n, 1),
-            stack: MemBuffer::new(req),
-        }
-    }
-}
+use faer::Par;
+use faer::dyn_stack::MemStack;
+use faer::linalg::cholesky::llt::factor::{LltError, LltRegularization, cholesky_in_place};
+use nalgebra::DVector;
 
 /// Forward dynamics by CRBA + RNEA + Cholesky, into `data.ddq` (conventions of [`crate::aba()`]).
 ///
@@ -128,47 +89,4 @@ pub fn crba_cholesky<'d>(
         }
     }
     Ok(&data.ddq)
-}
-
-/// In-place Cholesky `A = L Lᵀ` on the lower triangle (the upper is left untouched).
-pub fn llt_in_place(a: &mut DMatrix<f64>) -> Result<(), DynamicsError> {
-    let n = a.nrows();
-    for j in 0..n {
-        let mut d = a[(j, j)];
-        for k in 0..j {
-            d -= a[(j, k)] * a[(j, k)];
-        }
-        if d.is_nan() || d <= 0.0 {
-            return Err(DynamicsError::NotPositiveDefinite { index: j, pivot: d });
-        }
-        let ljj = d.sqrt();
-        a[(j, j)] = ljj;
-        for i in j + 1..n {
-            let mut s = a[(i, j)];
-            for k in 0..j {
-                s -= a[(i, k)] * a[(j, k)];
-            }
-            a[(i, j)] = s / ljj;
-        }
-    }
-    Ok(())
-}
-
-/// Solves `L Lᵀ x = b` in place, `L` from [`llt_in_place`].
-pub fn llt_solve_in_place(l: &DMatrix<f64>, b: &mut DVector<f64>) {
-    let n = l.nrows();
-    for i in 0..n {
-        let mut s = b[i];
-        for k in 0..i {
-            s -= l[(i, k)] * b[k];
-        }
-        b[i] = s / l[(i, i)];
-    }
-    for i in (0..n).rev() {
-        let mut s = b[i];
-        for k in i + 1..n {
-            s -= l[(k, i)] * b[k];
-        }
-        b[i] = s / l[(i, i)];
-    }
 }

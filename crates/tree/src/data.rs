@@ -71,7 +71,7 @@ pub struct Data {
     /// [`crate::crba_cholesky`] and [`crate::impulse::hinge_impulse`]).
     pub mass_matrix: DMatrix<f64>,
     /// Cholesky factor of `M` (lower triangle). Filled by [`crate::crba_cholesky`] (models
-    /// under [`crate::cholesky::FAER_MIN_DOF`] DOF) and [`crate::impulse::hinge_impulse`].
+    /// under [`crate::llt::FAER_MIN_DOF`] DOF) and [`crate::impulse::hinge_impulse`].
     pub chol: DMatrix<f64>,
     /// Generalised forces, `nv`. Filled by [`crate::rnea()`].
     pub tau: DVector<f64>,
@@ -82,9 +82,9 @@ pub struct Data {
     /// and [`crate::crba_cholesky`]; [`crate::impulse::hinge_impulse`] writes `M⁻¹ e_k`
     /// here, and [`crate::bias`] uses it as zero acceleration.
     pub ddq: DVector<f64>,
-    /// faer's factorisation buffers, for models of [`crate::cholesky::FAER_MIN_DOF`] or more
+    /// faer's factorisation buffers, for models of [`crate::llt::FAER_MIN_DOF`] or more
     /// DOF (used by [`crate::crba_cholesky`]).
-    pub faer: Option<crate::cholesky::FaerWork>,
+    pub faer: Option<crate::llt::FaerWork>,
 }
 
 impl Data {
@@ -113,7 +113,7 @@ impl Data {
             tau: DVector::zeros(nv),
             bias: DVector::zeros(nv),
             ddq: DVector::zeros(nv),
-            faer: (nv >= crate::cholesky::FAER_MIN_DOF).then(|| crate::cholesky::FaerWork::new(nv)),
+            faer: (nv >= crate::llt::FAER_MIN_DOF).then(|| crate::llt::FaerWork::new(nv)),
         }
     }
 }

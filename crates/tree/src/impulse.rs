@@ -3,10 +3,10 @@
 //! change hinge `k`'s rate by `Δφ̇` applies the impulse `λ = Δφ̇ / (M⁻¹)_kk`, which conserves
 //! the system's momentum because it acts between the hinge's two bodies.
 
-use crate::cholesky::llt_solve_in_place;
 use crate::crba::crba;
 use crate::data::Data;
 use crate::error::DynamicsError;
+use crate::llt::{llt_in_place, llt_solve_in_place};
 use crate::model::Model;
 use nalgebra::DVector;
 
@@ -40,7 +40,7 @@ pub fn hinge_impulse<'d>(
     }
     crba(model, data, q)?;
     data.chol.copy_from(&data.mass_matrix);
-    crate::cholesky::llt_in_place(&mut data.chol)?;
+    llt_in_place(&mut data.chol)?;
     data.ddq.fill(0.0);
     data.ddq[model.base_nv() + k] = 1.0;
     llt_solve_in_place(&data.chol, &mut data.ddq);

@@ -44,6 +44,7 @@ pub mod impulse;
 #[cfg(feature = "files")]
 pub mod io;
 pub mod kinematics;
+pub mod llt;
 pub mod model;
 pub mod rnea;
 pub mod samples;
