@@ -1,39 +1,154 @@
 //! The [`System`] trait: what an integrator needs to know about an ODE.
 
+use std::error::Error;
 use std::fmt;
+use std::sync::Arc;
 
 /// A failure detected by a [`System`] while evaluating its right-hand side
 /// (e.g. a singular configuration).
 ///
-/// It is just a message so that the physics code can produce one with
-/// `SystemError::new(format!(...))` or `"text".into()`.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct SystemError(pub String);
-
-impl SystemError {
-    /// Wraps a message.
-    pub fn new(msg: impl Into<String>) -> Self {
-        Self(msg.into())
-    }
+/// It carries the system's own error, typed: [`SystemError::from_error`] takes any
+/// `std::error::Error + Send + Sync + 'static` (e.g. the engine's `DynamicsError`: this
+/// crate depends on no engine, so the wrapping is generic); [`SystemError::new`] takes a
+/// plain message (`SystemError::new(format!(...))`, or `"text".into()`). Its text is the
+/// wrapped error's (`from_error(e)` displays exactly as `new(e.to_string())` did); the
+/// typed error comes back by [`SystemError::downcast_ref`], [`SystemError::get_ref`] or
+/// [`std::error::Error::source`] (`None` for a plain message).
+///
+/// ```
+/// use satsim_integrate::SystemError;
+/// use std::error::Error;
+/// #[derive(Debug, PartialEq)]
+/// struct Singular(usize);
+/// impl std::fmt::Display for Singular {
+///     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+///         write!(f, "singular at hinge {}", self.0)
+///     }
+/// }
+/// impl Error for Singular {}
+/// let e = SystemError::from_error(Singular(3));
+/// assert_eq!(e.to_string(), "singular at hinge 3");
+/// assert_eq!(e.downcast_ref::<Singular>(), Some(&Singular(3)));
+/// assert!(e.source().is_some());
+/// let m = SystemError::new(format!("singular at hinge {}", 3));
+/// assert_eq!(m.to_string(), "singular at hinge 3");
+/// assert!(m.downcast_ref::<Singular>().is_none() && m.source().is_none());
+/// assert_eq!(e, m); // equal messages (see `PartialEq`)
+/// ```
+#[derive(Clone)]
+pub struct SystemError {
+    /// The wrapped error (a [`Message`] for plain text). Shared, so that the error (and
+    /// `IntegrateError`) stays `Clone`.
+    inner: Arc<dyn Error + Send + Sync + 'static>,
 }
 
-impl fmt::Display for SystemError {
+/// A plain-text [`SystemError`]: no typed error behind it.
+#[derive(Debug)]
+struct Message(String);
+
+impl fmt::Display for Message {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(&self.0)
     }
 }
 
-impl std::error::Error for SystemError {}
+impl Error for Message {}
+
+impl SystemError {
+    /// A plain message (`format!(...)`, a `&str`): no typed error behind it.
+    pub fn new(msg: impl Into<String>) -> Self {
+        Self {
+            inner: Arc::new(Message(msg.into())),
+        }
+    }
+
+    /// Wraps a typed error, kept as it is: its text is the error's text, and
+    /// [`SystemError::downcast_ref`] gives it back (e.g. `.map_err(SystemError::from_error)`
+    /// on the engine's `Result<_, DynamicsError>`).
+    pub fn from_error(error: impl Error + Send + Sync + 'static) -> Self {
+        Self {
+            inner: Arc::new(error),
+        }
+    }
+
+    /// The wrapped error as a `T`, if it is one (`None` for a plain message).
+    pub fn downcast_ref<T: Error + 'static>(&self) -> Option<&T> {
+        self.inner.downcast_ref::<T>()
+    }
+
+    /// Whether the wrapped error is a `T`.
+    pub fn is<T: Error + 'static>(&self) -> bool {
+        self.inner.is::<T>()
+    }
+
+    /// The wrapped error (for a plain message, an error whose text is the message).
+    pub fn get_ref(&self) -> &(dyn Error + Send + Sync + 'static) {
+        &*self.inner
+    }
+
+    /// Whether this is a plain message, with no typed error behind it.
+    pub fn is_message(&self) -> bool {
+        self.inner.is::<Message>()
+    }
+}
+
+impl fmt::Display for SystemError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        fmt::Display::fmt(&*self.inner, f)
+    }
+}
+
+impl fmt::Debug for SystemError {
+    /// `SystemError("text")` for a message, `SystemError(<the error's Debug>)` otherwise.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.inner.downcast_ref::<Message>() {
+            Some(Message(m)) => f.debug_tuple("SystemError").field(m).finish(),
+            None => f.debug_tuple("SystemError").field(&self.inner).finish(),
+        }
+    }
+}
+
+/// Two system errors are equal when their texts are (the wrapped errors' types and
+/// contents are not compared: `dyn Error` has no equality). For plain messages this is the
+/// equality of the messages, as before the errors were typed.
+impl PartialEq for SystemError {
+    fn eq(&self, other: &Self) -> bool {
+        self.to_string() == other.to_string()
+    }
+}
+
+impl Eq for SystemError {}
+
+impl Error for SystemError {
+    /// The wrapped typed error; `None` for a plain message.
+    fn source(&self) -> Option<&(dyn Error + 'static)> {
+        if self.is_message() {
+            None
+        } else {
+            Some(&*self.inner)
+        }
+    }
+}
 
 impl From<String> for SystemError {
     fn from(s: String) -> Self {
-        Self(s)
+        Self::new(s)
     }
 }
 
 impl From<&str> for SystemError {
     fn from(s: &str) -> Self {
-        Self(s.to_owned())
+        Self::new(s)
+    }
+}
+
+/// A boxed error, kept as it is (typed: it has a `source`, even when the box holds a
+/// string: use [`SystemError::new`] for messages).
+impl From<Box<dyn Error + Send + Sync + 'static>> for SystemError {
+    fn from(error: Box<dyn Error + Send + Sync + 'static>) -> Self {
+        Self {
+            inner: Arc::from(error),
+        }
     }
 }
 

@@ -302,7 +302,7 @@ fn a_failing_event_evaluation_is_an_error() {
     .0
     .unwrap_err();
     assert!(
-        matches!(&err, IntegrateError::System { source, .. } if source.0 == "cannot evaluate"),
+        matches!(&err, IntegrateError::System { source, .. } if source.to_string() == "cannot evaluate"),
         "{err:?}"
     );
 }

@@ -245,6 +245,65 @@ fn system_error_propagates_with_time() {
     }
 }
 
+/// The engine's error type, as a system's typed failure.
+#[derive(Debug, Clone, PartialEq)]
+struct Singular {
+    hinge: usize,
+}
+impl std::fmt::Display for Singular {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "singular configuration at hinge {}", self.hinge)
+    }
+}
+impl std::error::Error for Singular {}
+
+/// Fails with a typed error once t passes 0.5.
+struct TypedFailure;
+impl System for TypedFailure {
+    fn dim(&self) -> usize {
+        1
+    }
+    fn rhs(&mut self, t: f64, _x: &[f64], dx: &mut [f64]) -> Result<(), SystemError> {
+        if t > 0.5 {
+            return Err(SystemError::from_error(Singular { hinge: 4 }));
+        }
+        dx[0] = 1.0;
+        Ok(())
+    }
+}
+
+/// A typed system error reaches the caller typed, through every method, with the text it
+/// had as a message (the integration error's text unchanged).
+#[test]
+fn typed_system_error_propagates() {
+    use std::error::Error;
+    for method in Method::ALL {
+        let err = run(&mut TypedFailure, &options_for(method), &[0.0], 0.0, 1.0).unwrap_err();
+        let IntegrateError::System { t, source } = &err else {
+            panic!("{method}: expected System, got {err:?}");
+        };
+        assert_eq!(
+            source.downcast_ref::<Singular>(),
+            Some(&Singular { hinge: 4 })
+        );
+        assert!(!source.is_message());
+        let typed = source.source().expect("the typed error");
+        assert_eq!(typed.to_string(), "singular configuration at hinge 4");
+        let as_message = IntegrateError::System {
+            t: *t,
+            source: SystemError::new(Singular { hinge: 4 }.to_string()),
+        };
+        assert_eq!(err.to_string(), as_message.to_string());
+        assert_eq!(
+            err.to_string(),
+            format!("system error at t = {t}: singular configuration at hinge 4")
+        );
+        // Equal by text, and clones stay equal.
+        assert_eq!(err, as_message);
+        assert_eq!(err.clone(), err);
+    }
+}
+
 /// y' = y², y(0) = 1 blows up at t = 1.
 struct BlowUp;
 impl System for BlowUp {
