@@ -907,6 +907,19 @@ pub fn histogram_plot(
     f.finish()
 }
 
+/// A CSV field, quoted when it must be (line breaks become spaces).
+pub fn quote(field: &str) -> String {
+    let one_line: String = field
+        .chars()
+        .map(|c| if c == '\n' || c == '\r' { ' ' } else { c })
+        .collect();
+    if one_line.contains([',', '"']) {
+        format!("\"{}\"", one_line.replace('"', "\"\""))
+    } else {
+        one_line
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -931,18 +944,5 @@ mod tests {
             "t,effect,event\n0.5,hinge_stops,hinge a latched\n1.25,reaction_wheels,\"wheel 1, saturated \"\"hard\"\"\"\n"
         );
         std::fs::remove_dir_all(&dir).unwrap();
-    }
-}
-
-/// A CSV field, quoted when it must be (line breaks become spaces).
-pub fn quote(field: &str) -> String {
-    let one_line: String = field
-        .chars()
-        .map(|c| if c == '\n' || c == '\r' { ' ' } else { c })
-        .collect();
-    if one_line.contains([',', '"']) {
-        format!("\"{}\"", one_line.replace('"', "\"\""))
-    } else {
-        one_line
     }
 }

@@ -40,7 +40,7 @@ pub trait SceneEffect: Effect + Clone + fmt::Debug + Sync + 'static {
     /// section (the reader skips a section with `enabled = false`).
     type File: DeserializeOwned;
     /// The effect from its section, checked against the scene's model; errors name the
-    /// scene file and line ([`SceneText::error`], through the section).
+    /// scene file and line ([`SceneText::error`](super::SceneText::error), through the section).
     fn from_section(file: Self::File, section: &Section) -> Result<Self, FileError>;
     /// Checks the effect against the other enabled ones (the orbit included); `Err` is a
     /// message that the reader places at the section's line. The default checks

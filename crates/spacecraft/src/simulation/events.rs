@@ -33,7 +33,7 @@ impl Simulation {
                 &self.data.q,
                 &self.data.v,
             )
-            .map_err(|e| wrap(SystemError::new(e.to_string())))?;
+            .map_err(|e| wrap(SystemError::from_error(e)))?;
         }
         Ok(reads.kinematics)
     }

@@ -63,7 +63,7 @@ impl Simulation {
         xup_ready: bool,
     ) -> Result<(), SystemError> {
         let nb = self.model.tree.base_nv();
-        let err = |e: satsim_tree::DynamicsError| SystemError::new(e.to_string());
+        let err = |e: satsim_tree::DynamicsError| SystemError::from_error(e);
         let d = &mut self.data;
         let fext = d
             .forces

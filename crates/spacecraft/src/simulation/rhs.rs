@@ -84,7 +84,7 @@ impl Simulation {
         self.prepare_with(t, x, kinematics, Hold::None)
     }
 
-    /// 1. `x` into the tree's `q` and `v`.
+    /// Stage 1: `x` into the tree's `q` and `v`.
     pub(super) fn unpack(&mut self, x: &[f64]) {
         let (m, d) = (&self.model, &mut self.data);
         let l = &m.layout;
@@ -114,19 +114,19 @@ impl Simulation {
         }
     }
 
-    /// 2. Forward kinematics when this pass asks for it or an effect needs it; returns
+    /// Stage 2: forward kinematics when this pass asks for it or an effect needs it; returns
     /// whether the poses are now current.
     pub(super) fn kinematics(&mut self, asked: bool) -> Result<bool, SystemError> {
         let kin = asked || self.data.needs_kinematics;
         if kin {
             let d = &mut self.data;
             forward_kinematics(&self.model.tree, &mut d.tree, &d.q, &d.v)
-                .map_err(|e| SystemError::new(e.to_string()))?;
+                .map_err(SystemError::from_error)?;
         }
         Ok(kin)
     }
 
-    /// 3. Every effect's `apply`, in order, from the constant torques: own derivatives into
+    /// Stage 3: every effect's `apply`, in order, from the constant torques: own derivatives into
     /// `own_dot` (the right-hand side's `dx`) or, when `None`, into the scratch buffer.
     /// `rhs`: the right-hand side's pass, which counts the calls and, with the energy budget,
     /// measures each effect's power (`Σ Δτ_k q̇_k + Σ Δf_i · v_i` over what it added) and
@@ -180,7 +180,7 @@ impl Simulation {
         })
     }
 
-    /// 5, the positions' part: `q̇ = ½ q ⊗ (0, ω)` and the hinge angles' rates.
+    /// Stage 5, the positions' part: `q̇ = ½ q ⊗ (0, ω)` and the hinge angles' rates.
     fn pack_positions(&self, x: &[f64], dx: &mut [f64]) {
         let l = &self.model.layout;
         if l.free {
@@ -194,7 +194,7 @@ impl Simulation {
         dx[l.angles.clone()].copy_from_slice(&x[l.rates.clone()]);
     }
 
-    /// 4-5, the velocities' part: the effects' hinge torques and wrenches, `q̈` by forward
+    /// Stages 4 and 5, the velocities' part: the effects' hinge torques and wrenches, `q̈` by forward
     /// dynamics with the hinges locked now, packed into `dx` (written straight into it where
     /// the tree's velocity vector is one run of the state). `kin`: the poses are current,
     /// so the generic ABA reuses their transforms (bit for bit the same result).
@@ -213,7 +213,7 @@ impl Simulation {
             locked: (d.n_locked > 0).then_some(d.locked.as_slice()),
             xup_ready: kin,
         };
-        let err = |e: DynamicsError| SystemError::new(e.to_string());
+        let err = |e: DynamicsError| SystemError::from_error(e);
         if let Some(s) = m.velocity_at {
             let nv = d.v.len();
             return forward_dynamics(m, &mut d.tree, solve, &mut dx[s..s + nv]).map_err(err);
