@@ -18,7 +18,9 @@ use nalgebra::DVector;
 use satsim::integrate::{Output, Stats, StopReason};
 use satsim::spacecraft::simulation::{RunError, Simulation, attitude_norm_error};
 use satsim::tools::scene::Scene;
-use satsim::tree::{Data, aba, crba, crba_cholesky, rnea};
+use satsim::tree::aba::aba;
+use satsim::tree::cholesky::crba_cholesky;
+use satsim::tree::{Data, crba, rnea};
 use std::path::{Path, PathBuf};
 
 fn examples() -> PathBuf {

@@ -6,8 +6,9 @@
 //! dynamics (ABA and CRBA to 1e-12).
 
 use proptest::prelude::*;
+use satsim::tree::aba::aba;
 use satsim::tree::samples::{SplitMix, random_tree};
-use satsim::tree::{BaseKind, Data, Model, aba, crba, parse_model};
+use satsim::tree::{BaseKind, Data, Model, crba, parse_model};
 use std::fmt::Write;
 use std::path::Path;
 

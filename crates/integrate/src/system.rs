@@ -65,7 +65,7 @@ impl SystemError {
     /// Wraps a typed error, kept as it is: its text is the error's text, and
     /// [`SystemError::downcast_ref`] gives it back (e.g. `.map_err(SystemError::from_error)`
     /// on the engine's `Result<_, DynamicsError>`).
-    pub fn from_error(error: impl Error + Send + Sync + 'static) -> Self {
+    pub fn from_error<E: Error + Send + Sync + 'static>(error: E) -> Self {
         Self {
             inner: Arc::new(error),
         }

@@ -301,8 +301,8 @@ fn a_failing_event_evaluation_is_an_error() {
     )
     .0
     .unwrap_err();
-    assert!(
-        matches!(&err, IntegrateError::System { source, .. } if source.to_string() == "cannot evaluate"),
-        "{err:?}"
-    );
+    let IntegrateError::System { source, .. } = &err else {
+        panic!("{err:?}");
+    };
+    assert_eq!(source.to_string(), "cannot evaluate", "{err:?}");
 }

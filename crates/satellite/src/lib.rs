@@ -25,6 +25,7 @@
 pub mod checks;
 pub mod closed_form;
 pub mod engine;
+pub mod kernel;
 pub mod layout;
 pub mod params;
 pub mod table2;

@@ -8,7 +8,8 @@ use common::{Rng, couples, random_model, random_state, realistic};
 use nalgebra::{DMatrix, DVector};
 use proptest::prelude::*;
 use satsim_satellite::*;
-use satsim_tree::{Data, Model, aba, kinetic_energy, momentum};
+use satsim_tree::aba::aba;
+use satsim_tree::{Data, Model, kinetic_energy, momentum};
 
 const TOL: f64 = 1e-12;
 

@@ -9,8 +9,9 @@ use common::{Rng, random_model, random_state, realistic};
 use nalgebra::{Quaternion, UnitQuaternion, Vector4};
 use satsim_satellite::checks::*;
 use satsim_satellite::*;
+use satsim_tree::aba::aba;
 use satsim_tree::spatial::{Mat3, Vec3};
-use satsim_tree::{Data, Model, aba, center_of_mass, forward_kinematics, forward_kinematics_acc};
+use satsim_tree::{Data, Model, center_of_mass, forward_kinematics, forward_kinematics_acc};
 
 /// Rotation of each model body relative to the bus, from the engine.
 fn relative(data: &Data, i: usize) -> Mat3 {

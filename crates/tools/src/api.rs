@@ -23,7 +23,8 @@ use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 use satsim_integrate::Output as Times;
 use satsim_spacecraft::simulation::{RunError, SimError};
-use satsim_tree::{Data, DynamicsError, Model, State, aba, bias, crba, kinetic_energy};
+use satsim_tree::aba::aba;
+use satsim_tree::{Data, DynamicsError, Model, State, bias, crba, kinetic_energy};
 use std::fmt;
 use thiserror::Error;
 

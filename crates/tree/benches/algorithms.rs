@@ -1,10 +1,14 @@
 //! Per-call cost of the engine's algorithms: the preprint satellite (11 DOF; with the peer
 //! orbit's three wheels, 14 DOF) and chains and binary trees of 10, 100 and 1000 bodies;
-//! `aba_unrolled`: [`UnrolledAba`] where the model has its layout.
+//! `forward_dynamics`: ABA through the entry, [`ForwardDynamics::solve`] (the same call plus
+//! the copy into the caller's `q̈`). The preprint layout's unrolled kernel is
+//! `satsim-satellite`'s (`satsim bench` times it as `aba_unrolled`).
 //! `cargo bench -p satsim-tree --bench algorithms`.
 //! Results and the scaling slopes are in docs/src/results/performance.md.
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
+use satsim_tree::aba::aba;
+use satsim_tree::cholesky::crba_cholesky;
 use satsim_tree::samples::{binary_tree, chain};
 use satsim_tree::*;
 use std::hint::black_box;
@@ -78,16 +82,15 @@ fn bench_model(c: &mut Criterion, label: &str, model: &Model) {
             .unwrap();
         })
     });
-    // The straight-line kernel for the preprint's layout, where the model has it.
-    if let Some(kernel) = UnrolledAba::new(model) {
-        group.bench_function(BenchmarkId::new("aba_unrolled", model.nv()), |b| {
-            b.iter(|| {
-                kernel
-                    .aba(&mut data, black_box(&q), black_box(&v), black_box(&tau))
-                    .unwrap();
-            })
-        });
-    }
+    // The entry: the same ABA, its result copied into the caller's vector.
+    let fd = ForwardDynamics::new(model);
+    let mut ddq = vec![0.0; model.nv()];
+    group.bench_function(BenchmarkId::new("forward_dynamics", model.nv()), |b| {
+        b.iter(|| {
+            let input = Input::new(black_box(&q), black_box(&v), black_box(&tau));
+            fd.solve(model, &mut data, input, &mut ddq).unwrap();
+        })
+    });
     // The same calls made a chain: each call's base rate depends on the previous call's last
     // acceleration (`+ 0 · q̈`, which the compiler must keep), so no call can start before
     // the one before it ends, as in a simulation (each RK4 stage needs the last). The

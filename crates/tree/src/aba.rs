@@ -1,13 +1,18 @@
-//! The articulated-body algorithm (Featherstone §7.3): O(n) forward dynamics, the default.
+//! The articulated-body algorithm (Featherstone §7.3): O(n) forward dynamics, the default
+//! method of [`crate::ForwardDynamics`], the engine's entry, which calls these functions.
+//!
+//! This is the algorithm's page: [`aba`] (plain), [`aba_hybrid`] (locked hinges) and their
+//! forms reusing current transforms, [`aba_with_kinematics`] and
+//! [`aba_hybrid_with_kinematics`]; a caller describes its call by a
+//! [`crate::forward_dynamics::Input`] and lets [`crate::ForwardDynamics`] pick the form.
 
 use crate::axis::CoordAxis;
 use crate::data::{ChainWork, Data};
 use crate::error::DynamicsError;
+use crate::kernel_parts::{add_linear_inv_transform, massless_hinges_below, offset_scale};
 use crate::kinematics::{base_motion, check_len, update_transforms};
 use crate::model::{BaseKind, Chain, ChainPart, Model};
-use crate::spatial::{
-    ArticulatedInertia, Force, Mat3, Motion, Transform, Vec3, add_blocks, cross_columns, skew,
-};
+use crate::spatial::{ArticulatedInertia, Force, Mat3, Motion, Transform, Vec3, cross_columns};
 use nalgebra::DVector;
 
 /// Pivots `Dᵢ` below this fraction of the articulated inertia's scale are singular.
@@ -30,7 +35,7 @@ pub const SINGULAR_PIVOT_RELATIVE: f64 = 1e-13;
 /// of massless links).
 ///
 /// ```
-/// use satsim_tree::{BaseKind, Body, Data, ModelBuilder, aba, spatial::{Mat3, Vec3}};
+/// use satsim_tree::{BaseKind, Body, Data, ModelBuilder, aba::aba, spatial::{Mat3, Vec3}};
 /// let model = ModelBuilder::new(BaseKind::Free)
 ///     .body(Body::new("bus", 4.0, Mat3::from_diagonal(&Vec3::new(1.0, 2.0, 3.0))))
 ///     .build()?;
@@ -48,7 +53,7 @@ pub fn aba<'d>(
     tau: &[f64],
     fext: Option<&[Force]>,
 ) -> Result<&'d DVector<f64>, DynamicsError> {
-    plain_or_chains(model, data, q, v, tau, fext, false)
+    plain_or_chains(Instance::of(model), model, data, q, v, tau, fext, false)
 }
 
 /// Hybrid dynamics (Featherstone §9.2) with locked hinges: as [`aba`], except that a hinge
@@ -57,7 +62,7 @@ pub fn aba<'d>(
 /// This is how a latched hinge stop is simulated without rebuilding the model. O(n).
 ///
 /// ```
-/// use satsim_tree::{BaseKind, Body, Data, Hinge, ModelBuilder, aba_hybrid, spatial::{Mat3, Vec3}};
+/// use satsim_tree::{BaseKind, Body, Data, Hinge, ModelBuilder, aba::aba_hybrid, spatial::{Mat3, Vec3}};
 /// let model = ModelBuilder::new(BaseKind::Free)
 ///     .body(Body::new("bus", 4.0, Mat3::identity()))
 ///     .body(Body::new("arm", 1.0, Mat3::identity()).with_com(Vec3::x()))
@@ -78,8 +83,7 @@ pub fn aba_hybrid<'d>(
     fext: Option<&[Force]>,
     locked: &[bool],
 ) -> Result<&'d DVector<f64>, DynamicsError> {
-    check_len("locked", locked.len(), model.n_hinges())?;
-    articulated::<false, false>(model, data, q, v, tau, fext, Some(locked), false)
+    hybrid(model, data, q, v, tau, fext, locked, false)
 }
 
 /// As [`aba`], reusing the hinge transforms in `data.xup`: **`data.xup` must hold the
@@ -90,7 +94,8 @@ pub fn aba_hybrid<'d>(
 /// silently: call [`aba`] when unsure.
 ///
 /// ```
-/// use satsim_tree::{aba, aba_with_kinematics, forward_kinematics, samples::chain, BaseKind, Data};
+/// use satsim_tree::aba::{aba, aba_with_kinematics};
+/// use satsim_tree::{forward_kinematics, samples::chain, BaseKind, Data};
 /// let model = chain(4, BaseKind::Free);
 /// let mut data = Data::new(&model);
 /// let mut q = model.neutral();
@@ -109,7 +114,7 @@ pub fn aba_with_kinematics<'d>(
     tau: &[f64],
     fext: Option<&[Force]>,
 ) -> Result<&'d DVector<f64>, DynamicsError> {
-    plain_or_chains(model, data, q, v, tau, fext, true)
+    plain_or_chains(Instance::of(model), model, data, q, v, tau, fext, true)
 }
 
 /// As [`aba_hybrid`], reusing the hinge transforms in `data.xup`, which must hold those of
@@ -123,12 +128,41 @@ pub fn aba_hybrid_with_kinematics<'d>(
     fext: Option<&[Force]>,
     locked: &[bool],
 ) -> Result<&'d DVector<f64>, DynamicsError> {
-    check_len("locked", locked.len(), model.n_hinges())?;
-    articulated::<false, false>(model, data, q, v, tau, fext, Some(locked), true)
+    hybrid(model, data, q, v, tau, fext, locked, true)
 }
 
-/// [`aba`] and [`aba_with_kinematics`]: the instance for the model's gyrostats and chains.
-fn plain_or_chains<'d>(
+/// ABA's instance for a model's forms: with or without the gyrostat terms of its
+/// [`crate::Gyrostat`]s, with or without the multi-axis form of its [`Chain`]s (separate
+/// monomorphic instances of the passes). [`aba`] picks it per call, [`crate::ForwardDynamics`]
+/// once per model: the same instance for the same model, so bit for bit the same result.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Instance {
+    /// No gyrostats, no chains.
+    Plain,
+    /// Chains only.
+    Chains,
+    /// Gyrostats only.
+    Gyro,
+    /// Both.
+    GyroChains,
+}
+
+impl Instance {
+    /// The instance for `model`'s gyrostats and chains.
+    pub(crate) fn of(model: &Model) -> Self {
+        match (model.gyrostats.is_empty(), model.chains.is_empty()) {
+            (true, true) => Self::Plain,
+            (true, false) => Self::Chains,
+            (false, true) => Self::Gyro,
+            (false, false) => Self::GyroChains,
+        }
+    }
+}
+
+/// [`aba`] and [`aba_with_kinematics`] in `instance` (see [`Instance`]).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn plain_or_chains<'d>(
+    instance: Instance,
     model: &Model,
     data: &'d mut Data,
     q: &[f64],
@@ -138,12 +172,29 @@ fn plain_or_chains<'d>(
     xup_ready: bool,
 ) -> Result<&'d DVector<f64>, DynamicsError> {
     let x = xup_ready;
-    match (model.gyrostats.is_empty(), model.chains.is_empty()) {
-        (true, true) => articulated::<false, false>(model, data, q, v, tau, fext, None, x),
-        (true, false) => articulated::<false, true>(model, data, q, v, tau, fext, None, x),
-        (false, true) => articulated::<true, false>(model, data, q, v, tau, fext, None, x),
-        (false, false) => articulated::<true, true>(model, data, q, v, tau, fext, None, x),
+    match instance {
+        Instance::Plain => articulated::<false, false>(model, data, q, v, tau, fext, None, x),
+        Instance::Chains => articulated::<false, true>(model, data, q, v, tau, fext, None, x),
+        Instance::Gyro => articulated::<true, false>(model, data, q, v, tau, fext, None, x),
+        Instance::GyroChains => articulated::<true, true>(model, data, q, v, tau, fext, None, x),
     }
+}
+
+/// [`aba_hybrid`] and [`aba_hybrid_with_kinematics`]: the plain tree form (every rotor and
+/// link a body, so that any hinge can be locked), `locked` checked.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn hybrid<'d>(
+    model: &Model,
+    data: &'d mut Data,
+    q: &[f64],
+    v: &[f64],
+    tau: &[f64],
+    fext: Option<&[Force]>,
+    locked: &[bool],
+    xup_ready: bool,
+) -> Result<&'d DVector<f64>, DynamicsError> {
+    check_len("locked", locked.len(), model.n_hinges())?;
+    articulated::<false, false>(model, data, q, v, tau, fext, Some(locked), xup_ready)
 }
 
 /// ABA proper; `GYRO`: the gyrostat form, `CHAINS`: the multi-axis form of [`crate::Chain`]s
@@ -567,7 +618,7 @@ fn links_bias<const K: usize>(model: &Model, data: &mut Data, chain: &Chain, u: 
 /// The singular-hinge error of body `i`'s hinge (the tree form's, see [`aba`]).
 #[cold]
 #[inline(never)]
-pub(crate) fn singular(model: &Model, i: usize, d: f64, scale: f64) -> DynamicsError {
+fn singular(model: &Model, i: usize, d: f64, scale: f64) -> DynamicsError {
     let j = model.joints[i].as_ref().expect("joint");
     DynamicsError::SingularHinge {
         hinge: model.hinge_names[j.hinge].clone(),
@@ -608,47 +659,6 @@ fn to_point(ia: &ArticulatedInertia, r: &Vec3) -> (Mat3, Mat3) {
     (ah, bh)
 }
 
-/// `out += Xᵀ [0 0; 0 C] X` (or `out = start + ...`): a purely linear inertia (what a
-/// spherical joint passes on) moved by `X`, `Eᵀ C E` then the translation's two lever terms.
-#[inline(never)]
-pub(crate) fn add_linear_inv_transform(
-    c: &Mat3,
-    x: &Transform,
-    out: &mut ArticulatedInertia,
-    start: Option<&ArticulatedInertia>,
-) {
-    let c = x.rot.tr_mul(&(c * x.rot));
-    // [1 [r]×; 0 1] [0 0; 0 C] [1 0; −[r]× 1] = [−[r]×C[r]× [r]×C; −C[r]× C].
-    let nb = cross_columns(&x.trans, &c);
-    let na = cross_columns(&x.trans, &nb.transpose()).transpose();
-    add_blocks(&na, &nb, &c, out, start);
-}
-
-/// The tree form's singular-pivot scale of a chain's link whose origin lies at `d` from the
-/// hinge point (tip's axes): `tr A + |d|² tr C` of the link's articulated inertia about its
-/// origin, where the inertia at the point is `[A_h B_h; B_hᵀ C] − Σ w wᵀ / Δ` (the hinges
-/// eliminated before it) with `tr A` = `tr_a`, `tr C` = `tr_c` already projected.
-pub(crate) fn offset_scale(
-    d: &Vec3,
-    bh: &Mat3,
-    c: &Mat3,
-    w: &[Force],
-    piv: &[f64],
-    tr_a: f64,
-    tr_c: f64,
-) -> f64 {
-    // About the origin, A_o = A + B[d]× − [d]×Bᵀ − [d]×C[d]×, so
-    // tr A_o = tr A − 2 tr([d]×Bᵀ) − dᵀCd + |d|² tr C.
-    let mut tr_db = (skew(d) * bh.transpose()).trace();
-    let mut dcd = d.dot(&(c * d));
-    for (w, &p) in w.iter().zip(piv) {
-        tr_db -= w.ang.dot(&d.cross(&w.lin)) / p;
-        dcd -= d.dot(&w.lin).powi(2) / p;
-    }
-    let d2 = d.norm_squared();
-    tr_a - 2.0 * tr_db - dcd + d2 * tr_c + tr_c * d2
-}
-
 /// Pass 3 for a [`Chain`] of `K` hinges, at its tip: `q̈ = D⁻¹ (u − Uᵀ a′)` with `a′` the
 /// tip's acceleration at the hinge point before the hinges move
 /// (`L⁻ᵀ Δ⁻¹ (L⁻¹u − Wᵀ a′)`, outermost hinge first), then the links' and the tip's
@@ -681,24 +691,6 @@ fn chain_outward<const K: usize>(model: &Model, data: &mut Data, chain: &Chain) 
             + s * qdd[t];
         parent = i;
     }
-}
-
-/// The hinges reached from body `i` downwards through massless bodies: the other axes of a
-/// multi-axis hinge made of massless links (named in a singular-configuration error).
-pub(crate) fn massless_hinges_below(model: &Model, i: usize) -> Vec<String> {
-    let mut names = Vec::new();
-    let mut stack = vec![i];
-    while let Some(b) = stack.pop() {
-        if model.bodies[b].mass != 0.0 {
-            continue;
-        }
-        for c in model.children(b) {
-            let joint = model.joints[c].as_ref().expect("joint");
-            names.push(model.hinge_names[joint.hinge].clone());
-            stack.push(c);
-        }
-    }
-    names
 }
 
 #[cfg(test)]

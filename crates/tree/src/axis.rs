@@ -17,7 +17,7 @@ use crate::spatial::{
 
 /// A hinge about the coordinate axis `k` of its parent (and child) frame, with sign `sign`.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) struct CoordAxis {
+pub struct CoordAxis {
     /// The axis: 0, 1, 2 for x, y, z.
     k: usize,
     /// The two other axes in cyclic order: `(k + 1) % 3`, `(k + 2) % 3`.
@@ -30,7 +30,7 @@ pub(crate) struct CoordAxis {
 impl CoordAxis {
     /// The coordinate axis of a hinge about `axis` (unit, parent frame) with fixed rotation
     /// `rot0`, if the axis is exactly `±e_k` and `rot0` exactly the identity.
-    pub(crate) fn of(axis: &Vec3, rot0: &Mat3) -> Option<Self> {
+    pub fn of(axis: &Vec3, rot0: &Mat3) -> Option<Self> {
         if *rot0 != Mat3::identity() {
             return None;
         }
@@ -48,7 +48,7 @@ impl CoordAxis {
 
     /// `Xup` at hinge angle `phi`: `E = Rot(sign e_k, φ)ᵀ`, `r = at − Eᵀ child_at`.
     #[inline]
-    pub(crate) fn transform(&self, phi: f64, at: &Vec3, child_at: &Vec3) -> Transform {
+    pub fn transform(&self, phi: f64, at: &Vec3, child_at: &Vec3) -> Transform {
         // libm's (musl's) sincos, < 1 ulp: inlined, about 90 instructions against 130 for
         // the C library's through `f64::sin_cos` (callgrind), which also saves and restores
         // the rounding mode on every call. Five per right-hand side on the satellite.
@@ -94,7 +94,7 @@ impl CoordAxis {
 
     /// `X m` for this hinge's `Xup` (as [`Transform::apply_motion`]).
     #[inline(never)]
-    pub(crate) fn apply_motion(&self, x: &Transform, m: &Motion) -> Motion {
+    pub fn apply_motion(&self, x: &Transform, m: &Motion) -> Motion {
         Motion {
             ang: self.rotate(&x.rot, &m.ang),
             lin: self.rotate(&x.rot, &(m.lin - x.trans.cross(&m.ang))),
@@ -103,7 +103,7 @@ impl CoordAxis {
 
     /// `Xᵀ f` for this hinge's `Xup` (as [`Transform::inv_apply_force`]).
     #[inline(never)]
-    pub(crate) fn inv_apply_force(&self, x: &Transform, f: &Force) -> Force {
+    pub fn inv_apply_force(&self, x: &Transform, f: &Force) -> Force {
         self.inv_apply_force_inline(x, f)
     }
 
@@ -139,7 +139,7 @@ impl CoordAxis {
     /// `out += Xᵀ IA X` (or `out = start + Xᵀ IA X`) for this hinge's `Xup` (as
     /// [`ArticulatedInertia::inv_transform`], accumulated in place into the parent's inertia).
     #[inline(never)]
-    pub(crate) fn add_inv_transform(
+    pub fn add_inv_transform(
         &self,
         ia: &ArticulatedInertia,
         x: &Transform,
@@ -156,7 +156,7 @@ impl CoordAxis {
     /// row `k` of `B` zero exactly (`IAᵃ S = 0`), and the rotation about `e_k` keeps them
     /// zero: they are neither formed nor rotated (the unrolled ABA's serial bodies).
     #[inline(never)]
-    pub(crate) fn project_at_point(
+    pub fn project_at_point(
         &self,
         ia: &ArticulatedInertia,
         inv_d: f64,
@@ -174,7 +174,7 @@ impl CoordAxis {
 
     /// `U = IA S` for `S = [sign e_k; l]`, `l = child_at × sign e_k` (the joint's `s.lin`).
     #[inline(never)]
-    pub(crate) fn mul_subspace(&self, ia: &ArticulatedInertia, l: &Vec3) -> Force {
+    pub fn mul_subspace(&self, ia: &ArticulatedInertia, l: &Vec3) -> Force {
         let k = self.k;
         // The lever term unconditionally: a branch costs more than its 30 flops.
         Force {
@@ -186,7 +186,7 @@ impl CoordAxis {
     /// `M E` for this hinge's `E` (`x.rot`): only columns `i` and `j` of `M` mix (a
     /// composite rotation through a chain of massless links, see `aba.rs`).
     #[inline]
-    pub(crate) fn post_rotate(&self, m: &Mat3, e: &Mat3) -> Mat3 {
+    pub fn post_rotate(&self, m: &Mat3, e: &Mat3) -> Mat3 {
         let (i, j) = (self.i, self.j);
         let (eii, eij, eji, ejj) = (e[(i, i)], e[(i, j)], e[(j, i)], e[(j, j)]);
         let (mi, mj) = (m.column(i).into_owned(), m.column(j).into_owned());
@@ -198,31 +198,31 @@ impl CoordAxis {
 
     /// `M a` for this hinge's axis `a = sign e_k`: a signed column of `M`.
     #[inline]
-    pub(crate) fn times_axis(&self, m: &Mat3) -> Vec3 {
+    pub fn times_axis(&self, m: &Mat3) -> Vec3 {
         m.column(self.k) * self.sign
     }
 
     /// `Mᵀ a` for this hinge's axis `a = sign e_k`: a signed row of `M`.
     #[inline]
-    pub(crate) fn tr_times_axis(&self, m: &Mat3) -> Vec3 {
+    pub fn tr_times_axis(&self, m: &Mat3) -> Vec3 {
         m.row(self.k).transpose() * self.sign
     }
 
     /// `a · v` for this hinge's axis `a = sign e_k`: a signed entry of `v`.
     #[inline]
-    pub(crate) fn dot_axis(&self, v: &Vec3) -> f64 {
+    pub fn dot_axis(&self, v: &Vec3) -> f64 {
         self.sign * v[self.k]
     }
 
     /// The axis `sign e_k` times `x`.
     #[inline]
-    pub(crate) fn scaled_axis(&self, x: f64) -> Vec3 {
+    pub fn scaled_axis(&self, x: f64) -> Vec3 {
         Vec3::ith(self.k, self.sign * x)
     }
 
     /// `Sᵀ f` for `S = [sign e_k; l]`.
     #[inline]
-    pub(crate) fn dot_subspace(&self, l: &Vec3, f: &Force) -> f64 {
+    pub fn dot_subspace(&self, l: &Vec3, f: &Force) -> f64 {
         self.sign * f.ang[self.k] + l.dot(&f.lin)
     }
 }

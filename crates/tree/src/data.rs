@@ -36,54 +36,54 @@ pub struct Data {
     /// Body frame origin in inertial coordinates (m). Filled by [`crate::forward_kinematics`].
     pub position: Vec<Vec3>,
     /// Spatial velocity of each body. Filled by [`crate::forward_kinematics`],
-    /// [`crate::rnea()`], [`crate::aba()`] (not for gyrostat rotors in ABA).
+    /// [`crate::rnea()`], [`crate::aba::aba`] (not for gyrostat rotors in ABA).
     pub v: Vec<Motion>,
     /// Spatial acceleration of each body. Filled by [`crate::forward_kinematics_acc`],
-    /// [`crate::rnea()`], [`crate::aba()`] (not for gyrostat rotors in ABA).
+    /// [`crate::rnea()`], [`crate::aba::aba`] (not for gyrostat rotors in ABA).
     pub a: Vec<Motion>,
-    /// Velocity-product acceleration `cᵢ = vᵢ ×m Sᵢ q̇ᵢ`. Filled by [`crate::aba()`].
+    /// Velocity-product acceleration `cᵢ = vᵢ ×m Sᵢ q̇ᵢ`. Filled by [`crate::aba::aba`].
     pub c: Vec<Motion>,
     /// Spatial force transmitted across each body's hinge. Filled by [`crate::rnea()`].
     pub f: Vec<Force>,
-    /// Articulated-body inertias. Filled by [`crate::aba()`]: the root's `IA₀`; a hinged
+    /// Articulated-body inertias. Filled by [`crate::aba::aba`]: the root's `IA₀`; a hinged
     /// body's is left projected, `IAᵢ − Uᵢ Dᵢ⁻¹ Uᵢᵀ` (the inertia its parent receives; ABA
     /// projects in place); unspecified for gyrostat rotors, hinges locked in
-    /// [`crate::aba_hybrid`] and the links and tips of a [`crate::Chain`].
+    /// [`crate::aba::aba_hybrid`] and the links and tips of a [`crate::Chain`].
     pub ia: Vec<ArticulatedInertia>,
     /// Per body: whether ABA's pass 2 has started `ia[i]` (a child has added to it). The
     /// first child writes its parent's inertia as the rigid start plus its own part, so
     /// that no body's start is copied in first.
     pub(crate) ia_started: Vec<bool>,
-    /// Articulated bias forces. Filled by [`crate::aba()`].
+    /// Articulated bias forces. Filled by [`crate::aba::aba`].
     pub pa: Vec<Force>,
     /// Per chain tip ([`crate::Chain`]): what ABA's pass 3 reads of the chain's pass 2.
     pub(crate) chain: Vec<ChainWork>,
-    /// `Uᵢ = IAᵢ Sᵢ`. Filled by [`crate::aba()`] (for the hinges of a [`crate::Chain`]: the
+    /// `Uᵢ = IAᵢ Sᵢ`. Filled by [`crate::aba::aba`] (for the hinges of a [`crate::Chain`]: the
     /// columns of `U L⁻ᵀ` at the hinge point, `D = L Δ Lᵀ`).
     pub u_col: Vec<Force>,
-    /// `Dᵢ = Sᵢᵀ Uᵢ`. Filled by [`crate::aba()`] (for a chain's hinges: the pivots `Δ`).
+    /// `Dᵢ = Sᵢᵀ Uᵢ`. Filled by [`crate::aba::aba`] (for a chain's hinges: the pivots `Δ`).
     pub d: Vec<f64>,
-    /// `uᵢ = τᵢ − Sᵢᵀ pAᵢ`. Filled by [`crate::aba()`] (for a chain's hinges: `L⁻¹ u`).
+    /// `uᵢ = τᵢ − Sᵢᵀ pAᵢ`. Filled by [`crate::aba::aba`] (for a chain's hinges: `L⁻¹ u`).
     pub u: Vec<f64>,
     /// Composite rigid-body inertias. Filled by [`crate::crba()`].
     pub ic: Vec<RigidInertia>,
     /// Joint-space mass matrix `M`, `nv x nv`. Filled by [`crate::crba()`] (and so by
-    /// [`crate::crba_cholesky`] and [`crate::impulse::hinge_impulse`]).
+    /// [`crate::cholesky::crba_cholesky`] and [`crate::impulse::hinge_impulse`]).
     pub mass_matrix: DMatrix<f64>,
-    /// Cholesky factor of `M` (lower triangle). Filled by [`crate::crba_cholesky`] (models
-    /// under [`crate::llt::FAER_MIN_DOF`] DOF) and [`crate::impulse::hinge_impulse`].
+    /// Cholesky factor of `M` (lower triangle). Filled by [`crate::cholesky::crba_cholesky`]
+    /// (models under [`crate::llt::FAER_MIN_DOF`] DOF) and [`crate::impulse::hinge_impulse`].
     pub chol: DMatrix<f64>,
     /// Generalised forces, `nv`. Filled by [`crate::rnea()`].
     pub tau: DVector<f64>,
     /// Velocity-product (bias) forces `C(q, v)` with external forces, `nv`. Filled by
-    /// [`crate::bias`] (and so by [`crate::crba_cholesky`]).
+    /// [`crate::bias`] (and so by [`crate::cholesky::crba_cholesky`]).
     pub bias: DVector<f64>,
-    /// Generalised accelerations, `nv`. Filled by [`crate::aba()`], [`crate::aba_hybrid`]
-    /// and [`crate::crba_cholesky`]; [`crate::impulse::hinge_impulse`] writes `M⁻¹ e_k`
+    /// Generalised accelerations, `nv`. Filled by [`crate::aba::aba`], [`crate::aba::aba_hybrid`]
+    /// and [`crate::cholesky::crba_cholesky`]; [`crate::impulse::hinge_impulse`] writes `M⁻¹ e_k`
     /// here, and [`crate::bias`] uses it as zero acceleration.
     pub ddq: DVector<f64>,
     /// faer's factorisation buffers, for models of [`crate::llt::FAER_MIN_DOF`] or more
-    /// DOF (used by [`crate::crba_cholesky`]).
+    /// DOF (used by [`crate::cholesky::crba_cholesky`]).
     pub faer: Option<crate::llt::FaerWork>,
 }
 

@@ -7,20 +7,7 @@ use crate::model::{BaseKind, Model};
 use crate::spatial::{Motion, Vec3};
 use nalgebra::{Quaternion, UnitQuaternion};
 
-pub(crate) fn check_len(
-    what: &'static str,
-    got: usize,
-    expected: usize,
-) -> Result<(), DynamicsError> {
-    if got != expected {
-        return Err(DynamicsError::Dimension {
-            what,
-            expected,
-            got,
-        });
-    }
-    Ok(())
-}
+pub(crate) use crate::kernel_parts::check_len;
 
 /// Computes `Xup[i]` for every hinge from the angles in `q`.
 pub fn update_transforms(model: &Model, data: &mut Data, q: &[f64]) -> Result<(), DynamicsError> {
@@ -52,9 +39,9 @@ pub(crate) fn base_motion(model: &Model, s: &[f64]) -> Motion {
 }
 
 /// Poses (`data.rotation`, `data.position`), hinge transforms (`data.xup`) and spatial
-/// velocities (`data.v`) of all bodies. The transforms are those [`crate::aba()`] computes
+/// velocities (`data.v`) of all bodies. The transforms are those [`crate::aba::aba`] computes
 /// (the same [`Model`] function), so that ABA may reuse them
-/// ([`crate::aba_with_kinematics`]) when the caller has run kinematics for the same `q`;
+/// ([`crate::aba::aba_with_kinematics`]) when the caller has run kinematics for the same `q`;
 /// the velocities equal ABA's to the last bit (tested).
 ///
 /// ```
@@ -121,10 +108,10 @@ pub fn forward_kinematics_acc(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::aba::{aba, aba_hybrid, aba_hybrid_with_kinematics, aba_with_kinematics};
     use crate::model::{Body, Hinge, ModelBuilder};
     use crate::samples::{SplitMix, random_inertia, random_tree_with_rotors};
     use crate::spatial::{Force, Mat3};
-    use crate::{aba, aba_hybrid, aba_hybrid_with_kinematics, aba_with_kinematics};
 
     /// A tree whose hinges take both paths: coordinate axes (positive and negative, hinge
     /// points off the child origin) and a general axis, plus a balanced rotor (a gyrostat).

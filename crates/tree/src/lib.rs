@@ -5,10 +5,15 @@
 //!
 //! - [`ModelBuilder`] builds an immutable, validated [`Model`]; [`Data`] is its reusable
 //!   workspace: the per-call algorithms below allocate nothing.
-//! - One file per algorithm: [`forward_kinematics`], [`crba()`] (mass matrix), [`rnea()`]
-//!   (inverse dynamics, [`bias`]), [`aba()`] (O(n) forward dynamics, the default),
-//!   [`crba_cholesky`] (forward dynamics through the mass matrix), [`kinetic_energy`],
-//!   [`center_of_mass`], [`momentum`].
+//! - Forward dynamics has one entry, [`ForwardDynamics`]: made once per model (the method,
+//!   ABA or CRBA + Cholesky, and an optional specialised [`Kernel`]), it solves each call
+//!   ([`Input`]: external forces, locked hinges, transforms already current) by the form of
+//!   the algorithm that fits it, bit for bit that algorithm's result.
+//! - One file per algorithm, each the algorithm's page: [`forward_kinematics`], [`crba()`]
+//!   (mass matrix), [`rnea()`] (inverse dynamics, [`bias`]), [`aba`] (O(n) forward dynamics,
+//!   the default method), [`cholesky`] (forward dynamics through the mass matrix, with the
+//!   dense factorisation of [`llt`]), [`kinetic_energy`], [`center_of_mass`], [`momentum`].
+//!   [`kernel_parts`] holds the engine's pieces a specialised kernel needs.
 //! - [`io`] reads the model TOML and state JSON files of the command-line contract (cargo
 //!   feature `files`, on by default; `default-features = false` builds the engine without
 //!   serde, serde_json and toml).
@@ -18,17 +23,24 @@
 //! acts on the child and reacts on the parent. See [`model`] for the coordinates `q` and `v`.
 //!
 //! ```
-//! use satsim_tree::{BaseKind, Body, Data, Hinge, ModelBuilder, aba, spatial::{Mat3, Vec3}};
+//! use satsim_tree::{BaseKind, Body, Data, ForwardDynamics, Hinge, Input, ModelBuilder};
+//! use satsim_tree::spatial::{Mat3, Vec3};
 //! let model = ModelBuilder::new(BaseKind::Free)
 //!     .body(Body::new("bus", 500.0, Mat3::identity() * 40.0))
 //!     .body(Body::new("panel", 20.0, Mat3::from_diagonal(&Vec3::new(1.7, 6.7, 8.3))))
 //!     .hinge(Hinge::revolute("h", "bus", "panel", Vec3::x()).at(Vec3::y()).child_at(Vec3::new(0.0, -1.0, 0.0)))
 //!     .build()?;
+//! let fd = ForwardDynamics::new(&model); // once per model
 //! let mut data = Data::new(&model);
+//! let (q, v) = (model.neutral(), vec![0.0; model.nv()]);
 //! let mut tau = vec![0.0; model.nv()];
 //! tau[6] = 1.0; // 1 N m on the hinge
-//! let ddq = aba(&model, &mut data, &model.neutral(), &vec![0.0; model.nv()], &tau, None)?;
+//! let mut ddq = vec![0.0; model.nv()];
+//! fd.solve(&model, &mut data, Input::new(&q, &v, &tau), &mut ddq)?;
 //! assert!(ddq[6] > 0.0 && ddq[0] < 0.0); // the panel turns one way, the bus the other
+//! // The hinge locked: hybrid dynamics, the hinge torque held by the lock.
+//! fd.solve(&model, &mut data, Input::new(&q, &v, &tau).locked(Some(&[true])), &mut ddq)?;
+//! assert!(ddq.iter().all(|&a| a == 0.0));
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 #![warn(missing_docs)]
@@ -40,23 +52,23 @@ pub mod crba;
 pub mod data;
 pub mod energy;
 pub mod error;
+pub mod forward_dynamics;
 pub mod impulse;
 #[cfg(feature = "files")]
 pub mod io;
+pub mod kernel_parts;
 pub mod kinematics;
 pub mod llt;
 pub mod model;
 pub mod rnea;
 pub mod samples;
 pub mod spatial;
-pub mod unrolled;
 
-pub use aba::{aba, aba_hybrid, aba_hybrid_with_kinematics, aba_with_kinematics};
-pub use cholesky::crba_cholesky;
 pub use crba::crba;
 pub use data::Data;
 pub use energy::{center_of_mass, kinetic_energy, kinetic_energy_after_kinematics, momentum};
 pub use error::{DynamicsError, ModelError};
+pub use forward_dynamics::{ForwardDynamics, Input, Kernel, Method};
 #[cfg(feature = "files")]
 pub use io::{
     FileError, ModelFile, State, StateFile, parse_model, parse_state, read_model, read_state,
@@ -66,4 +78,3 @@ pub use model::{
     BaseKind, Body, BodyInfo, BoxShape, Chain, Gyrostat, Hinge, Joint, Model, ModelBuilder,
 };
 pub use rnea::{bias, rnea};
-pub use unrolled::{Locks, UnrolledAba};

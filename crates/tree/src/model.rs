@@ -418,7 +418,7 @@ pub const GYROSTAT_TOLERANCE: f64 = 1e-14;
 /// mass lies on the hinge axis and whose inertia about it is `J a aᵀ + Iₜ (1 − a aᵀ)`.
 ///
 /// Its inertia seen from the parent does not depend on the rotor angle, so the
-/// articulated-body algorithm ([`crate::aba()`]) folds it into its parent as a gyrostat: the
+/// articulated-body algorithm ([`crate::aba::aba`]) folds it into its parent as a gyrostat: the
 /// rotor, locked, is part of the parent's rigid inertia, and its spin adds the momentum
 /// `J Ω a` and the axial coupling. Exact for such rotors (same result as the rotor as a tree
 /// body, to round-off); the other algorithms keep the rotor as a body.
@@ -459,7 +459,7 @@ impl Gyrostat {
 /// through `link1`, `link2` to `panel1`). Each link has exactly one child (rotors count);
 /// links carry no rotors and the tip is no gyrostat rotor.
 ///
-/// [`crate::aba()`] processes such a chain as one multi-axis joint at its tip (a `6 x k`
+/// [`crate::aba::aba`] processes such a chain as one multi-axis joint at its tip (a `6 x k`
 /// motion subspace and a `k x k` pivot block), not as `k` bodies: same accelerations to
 /// round-off, and the same singular-hinge errors. The other algorithms keep the links as
 /// bodies; [`Model::without_chains`] gives the plain form.
@@ -522,11 +522,36 @@ impl Chain {
     pub fn parent(&self) -> usize {
         self.parent
     }
+    /// The bodies in ABA's elimination order: the tip, its link, ..., the outermost link.
+    pub fn order(&self) -> &[usize] {
+        &self.order[..self.k]
+    }
+    /// Each hinge's coordinate index in `v`, in [`Chain::order`] (each body's own hinge).
+    pub fn dofs(&self) -> &[usize] {
+        &self.dof[..self.k]
+    }
+    /// Whether the chain is a spherical joint: three hinges, no armature (ABA passes on only
+    /// a linear inertia through it).
+    pub fn is_spherical(&self) -> bool {
+        self.spherical
+    }
+    /// Whether some link's origin lies off the common hinge point.
+    pub fn has_offset_links(&self) -> bool {
+        self.offset_links
+    }
+    /// The common hinge point in the tip's frame (the tip's `child_at`).
+    pub fn tip_at(&self) -> &Vec3 {
+        &self.tip_at
+    }
+    /// The common hinge point in the parent's frame (the outermost link's `at`).
+    pub fn point(&self) -> &Vec3 {
+        &self.point
+    }
 }
 
 /// A body's part in a [`Chain`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum ChainPart {
+pub enum ChainPart {
     /// Not in a chain (or the chain's parent).
     None,
     /// A massless link: ABA processes it at its chain's tip.
@@ -737,6 +762,7 @@ impl Joint {
         &self.rotation
     }
     /// Motion subspace `S` (constant, child coordinates).
+    #[inline]
     pub fn s(&self) -> &Motion {
         &self.s
     }

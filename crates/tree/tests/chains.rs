@@ -8,6 +8,7 @@ use satsim_tree::spatial::{Force, Vec3};
 mod common;
 
 use common::satellite;
+use satsim_tree::aba::aba;
 use satsim_tree::*;
 use std::f64::consts::FRAC_PI_2;
 

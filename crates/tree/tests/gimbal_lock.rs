@@ -8,6 +8,8 @@ use nalgebra::DVector;
 mod common;
 
 use common::satellite;
+use satsim_tree::aba::aba;
+use satsim_tree::cholesky::crba_cholesky;
 use satsim_tree::*;
 use std::f64::consts::FRAC_PI_2;
 

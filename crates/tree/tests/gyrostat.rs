@@ -4,6 +4,8 @@
 //! body (rotors included), free and fixed roots.
 
 use nalgebra::DVector;
+use satsim_tree::aba::{aba, aba_hybrid};
+use satsim_tree::cholesky::crba_cholesky;
 use satsim_tree::samples::{SplitMix, random_q, random_tree_with_rotors};
 use satsim_tree::spatial::{Force, Mat3, Vec3};
 use satsim_tree::*;

@@ -8,8 +8,10 @@
 //! factor of 50 for other compilers and instruction sets (FMA), and is tight enough that a
 //! wrong sign or a dropped term anywhere (errors of order 1e-3 and more) fails.
 
+use satsim_tree::aba::aba;
+use satsim_tree::cholesky::crba_cholesky;
 use satsim_tree::io::{read_model, read_state};
-use satsim_tree::{Data, aba, bias, crba, crba_cholesky, kinetic_energy};
+use satsim_tree::{Data, ForwardDynamics, Input, Method, bias, crba, kinetic_energy};
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
 
@@ -107,6 +109,20 @@ fn against_pinocchio() {
             a.as_slice(),
             &exp.acceleration,
         );
+
+        // The entry, both methods (bit for bit the functions above: checked here too).
+        let input = Input::new(&state.q, &state.v, &state.tau);
+        for (method, what) in [
+            (Method::Aba, "ForwardDynamics (ABA) acceleration"),
+            (Method::CrbaCholesky, "ForwardDynamics (CRBA) acceleration"),
+        ] {
+            let mut ddq = vec![0.0; n];
+            ForwardDynamics::new(&model)
+                .with_method(method)
+                .solve(&model, &mut data, input, &mut ddq)
+                .unwrap();
+            check(&case, what, &ddq, &exp.acceleration);
+        }
 
         let ke = kinetic_energy(&model, &mut data, &state.q, &state.v).unwrap();
         check(&case, "kinetic_energy", &[ke], &[exp.kinetic_energy]);

@@ -5,6 +5,8 @@
 
 use nalgebra::{DMatrix, DVector, Quaternion, UnitQuaternion};
 use proptest::prelude::*;
+use satsim_tree::aba::{aba, aba_hybrid};
+use satsim_tree::cholesky::crba_cholesky;
 use satsim_tree::samples::{SplitMix, random_tree};
 use satsim_tree::*;
 

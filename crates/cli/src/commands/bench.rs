@@ -9,8 +9,11 @@
 //! benchmark take about [`TARGET_SECONDS`].
 
 use super::{CliError, Output, at_least_one, to_json};
+use satsim_satellite::kernel::UnrolledAba;
+use satsim_tree::aba::aba;
+use satsim_tree::cholesky::crba_cholesky;
 use satsim_tree::io::{State, read_model, read_state};
-use satsim_tree::{Data, Model, UnrolledAba, aba, crba, crba_cholesky, rnea};
+use satsim_tree::{Data, Model, crba, rnea};
 use serde::Serialize;
 use std::hint::black_box;
 use std::path::PathBuf;

@@ -4,8 +4,10 @@
 use super::hold::Hold;
 use super::{RunLog, SimData, SimError, SimModel, Simulation, StateLayout};
 use crate::effects::{Effect, Links, Rotor, order};
+use satsim_satellite::kernel::UnrolledAba;
 use satsim_tree::{
-    BaseKind, Body, Hinge, Model, ModelError, State, UnrolledAba, forward_kinematics, momentum,
+    BaseKind, Body, ForwardDynamics, Hinge, Kernel, Model, ModelError, State, forward_kinematics,
+    momentum,
 };
 use std::ops::Range;
 
@@ -218,7 +220,9 @@ impl Simulation {
             e.initial_state(&mut x0[r.clone()]);
         }
         let velocity_at = velocity_in_state(&layout, rotor_effect.map(|i| own[i].clone()));
-        let unrolled = UnrolledAba::new(&model);
+        // The preprint layout's unrolled kernel where the tree has that layout.
+        let kernel = UnrolledAba::new(&model).map(|k| Box::new(k) as Box<dyn Kernel>);
+        let fd = ForwardDynamics::new(&model).with_optional_kernel(kernel);
         let mut data = SimData::new(&model, n_rotors, layout.len);
         data.needs_kinematics = needs_kinematics;
         data.base_tau = base_tau;
@@ -237,7 +241,7 @@ impl Simulation {
                 needs_com,
                 needs_hold,
                 work,
-                unrolled,
+                fd,
             },
             log: RunLog {
                 calls: vec![0; effects.len()],

@@ -4,9 +4,9 @@
 //! solve with the hinges locked, then RNEA for the torques they receive.
 
 use super::Simulation;
-use super::rhs::{Solve, forward_dynamics};
+use super::rhs::forward_dynamics;
 use satsim_integrate::SystemError;
-use satsim_tree::rnea;
+use satsim_tree::{Input, rnea};
 
 /// Which hold torques [`Simulation::prepare_with`] computes (only when an effect declares
 /// [`Needs::hold_torques`](crate::effects::Needs::hold_torques)).
@@ -70,14 +70,10 @@ impl Simulation {
             .has_wrench
             .then_some(d.forces.body_wrench.as_slice());
         // The same solve as the right-hand side's, with `hold_mask` locked.
-        let solve = Solve {
-            q: &d.q,
-            v: &d.v,
-            tau: &d.tau,
-            fext,
-            locked: Some(&d.hold_mask),
-            xup_ready,
-        };
+        let solve = Input::new(&d.q, &d.v, &d.tau)
+            .fext(fext)
+            .locked(Some(&d.hold_mask))
+            .xup_current(xup_ready);
         forward_dynamics(&self.model, &mut d.tree, solve, &mut d.hold_ddq).map_err(err)?;
         let need =
             rnea(&self.model.tree, &mut d.tree, &d.q, &d.v, &d.hold_ddq, fext).map_err(err)?;

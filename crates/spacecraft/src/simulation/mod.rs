@@ -90,7 +90,7 @@ pub use run::RunError;
 use crate::effects::{Effect, Rotor};
 use satsim_integrate::SystemError;
 use satsim_tree::spatial::{Mat3, Vec3};
-use satsim_tree::{DynamicsError, Model, ModelError, UnrolledAba};
+use satsim_tree::{DynamicsError, ForwardDynamics, Model, ModelError};
 use thiserror::Error;
 
 /// Why a simulation could not be set up.
@@ -215,15 +215,10 @@ impl Simulation {
     pub fn effects(&self) -> impl Iterator<Item = &dyn Effect> {
         self.effects.iter().map(|e| e.as_ref())
     }
-    /// The kernel unrolled for the model's layout, where it has the preprint's and the
-    /// dynamics take it (see [`Simulation::use_generic_dynamics`]).
-    pub fn kernel(&self) -> Option<&UnrolledAba> {
-        self.model.unrolled.as_ref()
-    }
     /// Drops the layout's kernel: every solve from now on takes the generic ABA (to compare
     /// the two, or to time the kernel's gain).
     pub fn use_generic_dynamics(&mut self) {
-        self.model.unrolled = None;
+        self.model.fd = ForwardDynamics::new(&self.model.tree);
     }
     /// Whether every evaluation runs the forward kinematics (an effect needs the poses).
     pub fn runs_kinematics(&self) -> bool {

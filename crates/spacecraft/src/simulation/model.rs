@@ -1,7 +1,7 @@
 //! [`SimModel`]: what a simulation makes once and never writes during a run.
 
 use super::StateLayout;
-use satsim_tree::{Model, UnrolledAba};
+use satsim_tree::{ForwardDynamics, Model};
 use std::ops::Range;
 
 /// The immutable part of a [`Simulation`](super::Simulation): the tree (the scene's model
@@ -33,9 +33,10 @@ pub struct SimModel {
     /// The energy budget's states in `x`: `[actuator work, dissipated energy]` (J), or
     /// empty when not tracked.
     pub(super) work: Range<usize>,
-    /// ABA unrolled for the model's layout, where it has the preprint's (the dynamics take
-    /// it for every lock mask it accepts).
-    pub(super) unrolled: Option<UnrolledAba>,
+    /// The forward dynamics, chosen once: ABA, with the preprint layout's unrolled kernel
+    /// ([`satsim_satellite::kernel::UnrolledAba`]) where the tree has that layout (it takes
+    /// every lock mask it accepts).
+    pub(super) fd: ForwardDynamics,
 }
 
 impl SimModel {
@@ -50,6 +51,10 @@ impl SimModel {
     /// The number of the scene's hinges (the tree's first hinges; the rotors follow).
     pub fn n_hinges(&self) -> usize {
         self.n_user
+    }
+    /// The forward dynamics every solve goes through.
+    pub fn dynamics(&self) -> &ForwardDynamics {
+        &self.fd
     }
     /// The number of event functions of all the effects.
     pub fn n_events(&self) -> usize {

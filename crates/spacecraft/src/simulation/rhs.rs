@@ -18,11 +18,7 @@ use super::hold::Hold;
 use super::model::SimModel;
 use crate::effects::Power;
 use satsim_integrate::SystemError;
-use satsim_tree::spatial::Force;
-use satsim_tree::{
-    Data, DynamicsError, aba, aba_hybrid, aba_hybrid_with_kinematics, aba_with_kinematics,
-    forward_kinematics,
-};
+use satsim_tree::{Data, DynamicsError, Input, forward_kinematics};
 
 impl Simulation {
     /// `dx = f(t, x)`; slices of the wrong length are an error, not a panic.
@@ -202,17 +198,11 @@ impl Simulation {
         let (m, d) = (&self.model, &mut self.data);
         let nb = m.tree.base_nv();
         d.tau[nb..].copy_from_slice(&d.forces.hinge_torque);
-        let solve = Solve {
-            q: &d.q,
-            v: &d.v,
-            tau: &d.tau,
-            fext: d
-                .forces
-                .has_wrench
-                .then_some(d.forces.body_wrench.as_slice()),
-            locked: (d.n_locked > 0).then_some(d.locked.as_slice()),
-            xup_ready: kin,
-        };
+        let fext = d.forces.has_wrench;
+        let solve = Input::new(&d.q, &d.v, &d.tau)
+            .fext(fext.then_some(d.forces.body_wrench.as_slice()))
+            .locked((d.n_locked > 0).then_some(d.locked.as_slice()))
+            .xup_current(kin);
         let err = |e: DynamicsError| SystemError::from_error(e);
         if let Some(s) = m.velocity_at {
             let nv = d.v.len();
@@ -233,45 +223,15 @@ impl Simulation {
     }
 }
 
-/// One forward-dynamics solve's inputs (tree coordinates).
-pub(super) struct Solve<'a> {
-    pub(super) q: &'a [f64],
-    pub(super) v: &'a [f64],
-    pub(super) tau: &'a [f64],
-    pub(super) fext: Option<&'a [Force]>,
-    /// The locked hinges (tree order); `None`: nothing locked.
-    pub(super) locked: Option<&'a [bool]>,
-    /// `data.xup` holds the transforms of this `q` (kinematics or a solve ran on it).
-    pub(super) xup_ready: bool,
-}
-
-/// `q̈` into `ddq`: the one place the dynamics are chosen. The layout's unrolled kernel
-/// where it takes the lock mask (not with a gimbal hinge locked); else the generic ABA,
-/// hybrid when hinges are locked, reusing the transforms when they are current. The kernel
-/// computes its own transforms and writes only `q̈` (nothing after it reads `data`'s other
-/// buffers that the generic ABA would have written).
+/// `q̈` into `ddq`: the one place the dynamics are solved, through the model's
+/// [`ForwardDynamics`](satsim_tree::ForwardDynamics) (chosen once: the layout's unrolled
+/// kernel where it takes the lock mask, else the generic ABA, hybrid when hinges are locked,
+/// reusing the transforms when they are current; bit for bit the algorithm it calls).
 pub(super) fn forward_dynamics(
     m: &SimModel,
     data: &mut Data,
-    s: Solve,
+    input: Input,
     ddq: &mut [f64],
 ) -> Result<(), DynamicsError> {
-    if let Some(k) = &m.unrolled {
-        let locks = match s.locked {
-            None => Some(satsim_tree::Locks::NONE),
-            Some(mask) => k.locks(mask),
-        };
-        if let Some(locks) = locks {
-            return k.aba_hybrid_with_forces_into(s.q, s.v, s.tau, s.fext, locks, ddq);
-        }
-    }
-    let t = &m.tree;
-    let out = match (s.locked, s.xup_ready) {
-        (Some(l), true) => aba_hybrid_with_kinematics(t, data, s.q, s.v, s.tau, s.fext, l),
-        (Some(l), false) => aba_hybrid(t, data, s.q, s.v, s.tau, s.fext, l),
-        (None, true) => aba_with_kinematics(t, data, s.q, s.v, s.tau, s.fext),
-        (None, false) => aba(t, data, s.q, s.v, s.tau, s.fext),
-    }?;
-    ddq.copy_from_slice(out.as_slice());
-    Ok(())
+    m.fd.solve(&m.tree, data, input, ddq)
 }

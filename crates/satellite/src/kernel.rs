@@ -1,15 +1,20 @@
-//! ABA unrolled for one layout: the preprint satellite's (Featherstone §7.3, the chain form
-//! of `aba.rs`), straight-line code with everything constant folded in once.
+//! The preprint satellite's own forward-dynamics kernel: ABA unrolled for its layout
+//! (Featherstone §7.3, the chain form of `satsim-tree`'s `aba.rs`), straight-line code with
+//! everything constant folded in once. It implements the engine's [`Kernel`]: attached to a
+//! [`satsim_tree::ForwardDynamics`] (`.with_kernel(Box::new(kernel))`), it takes every call
+//! whose lock mask it accepts, the generic ABA the others. It lives here, not in the generic
+//! engine, because it knows one spacecraft's layout; it is built from the engine's
+//! [`satsim_tree::kernel_parts`].
 //!
 //! The layout ([`UnrolledAba::new`] recognises it): a free base; balanced rotors
-//! ([`crate::Gyrostat`]) on the base only; one spherical [`crate::Chain`] (three hinges, no
-//! armature, link origins on the hinge point) from the base to a tip body; then a serial
-//! chain of up to [`MAX_SERIAL`] bodies, each the only child of the one before (the tip's
-//! child first); every hinge of the chain and of the serial bodies about a coordinate axis
-//! without fixed rotation or armature; no other bodies. This is the preprint satellite (bus,
+//! ([`satsim_tree::Gyrostat`]) on the base only; one spherical [`satsim_tree::Chain`] (three
+//! hinges, no armature, link origins on the hinge point) from the base to a tip body; then a
+//! serial chain of up to [`MAX_SERIAL`] bodies, each the only child of the one before (the
+//! tip's child first); every hinge of the chain and of the serial bodies about a coordinate
+//! axis without fixed rotation or armature; no other bodies. This is the preprint satellite (bus,
 //! three reaction wheels, the 3-DOF gimbal to panel 1, panels 2 and 3).
 //!
-//! What is folded, and why it is the same algorithm as [`crate::aba()`]:
+//! What is folded, and why it is the same algorithm as [`satsim_tree::aba::aba`]:
 //! - Every body below the base is processed in a frame with its own axes and its origin at
 //!   its hinge point (the tip: the gimbal's common point). A constant change of origin: the
 //!   rigid inertias and the children's hinge points are moved once, here. Then each motion
@@ -29,32 +34,32 @@
 //!   wrenches (their origins are the gimbal's point: a rotation only) load the hinges
 //!   between them and the base and reach the base rigidly (`aba.rs`'s `links_bias`). A
 //!   const parameter keeps the force-free instance free of all this.
-//! - Locked hinges ([`Locks`], hybrid dynamics as [`crate::aba_hybrid()`]): a locked serial
-//!   body passes its inertia and bias to its parent unprojected; a locked rotor's axial
+//! - Locked hinges ([`Locks`], hybrid dynamics as [`satsim_tree::aba::aba_hybrid`]): a locked
+//!   serial body passes its inertia and bias to its parent unprojected; a locked rotor's axial
 //!   inertia is the base's again and its axial torque leaves the base's bias. A locked
 //!   gimbal hinge is not taken ([`UnrolledAba::locks`] says so).
 //! - The serial chain's length is a const parameter: its loops run over arrays of known
 //!   size (no per-body dispatch, no `Option`s, no index checks).
 //!
-//! Equal to [`crate::aba()`] to round-off (tested on the preprint satellite and on random
-//! models of the layout).
+//! Equal to [`satsim_tree::aba::aba`] to round-off (tested on the preprint satellite and on
+//! random models of the layout, below; through [`satsim_tree::ForwardDynamics`], bit for bit
+//! the kernel's own result, in `tests/kernel.rs`).
 
-use crate::aba::{
-    SINGULAR_PIVOT_RELATIVE, add_linear_inv_transform, massless_hinges_below, offset_scale,
-};
-use crate::axis::CoordAxis;
-use crate::data::Data;
-use crate::error::DynamicsError;
-use crate::kinematics::check_len;
-use crate::model::{BaseKind, ChainPart, Joint, Model};
-use crate::spatial::{ArticulatedInertia, Force, Mat3, Motion, RigidInertia, Transform, Vec3};
 use nalgebra::DVector;
+use satsim_tree::kernel_parts::{
+    self, ChainPart, CoordAxis, SINGULAR_PIVOT_RELATIVE, add_linear_inv_transform, check_len,
+    massless_hinges_below, offset_scale,
+};
+use satsim_tree::spatial::{
+    ArticulatedInertia, Force, Mat3, Motion, RigidInertia, Transform, Vec3,
+};
+use satsim_tree::{BaseKind, Data, DynamicsError, Input, Joint, Kernel, Model};
 
 /// The longest serial chain below the gimbal's tip that [`UnrolledAba`] takes.
 pub const MAX_SERIAL: usize = 6;
 
-/// Which of the kernel's hinges are locked (hybrid dynamics, as [`crate::aba_hybrid()`]): the
-/// rotors' and the serial bodies', one bit each (rotor `k` of the model's gyrostats, serial
+/// Which of the kernel's hinges are locked (hybrid dynamics, as
+/// [`satsim_tree::aba::aba_hybrid`]): the rotors' and the serial bodies', one bit each (rotor `k` of the model's gyrostats, serial
 /// body `j` from the tip). Made by [`UnrolledAba::locks`] from a lock mask.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Locks {
@@ -85,7 +90,7 @@ impl Locks {
     }
 }
 
-/// A balanced rotor on the base (a [`crate::Gyrostat`]).
+/// A balanced rotor on the base (a [`satsim_tree::Gyrostat`]).
 #[derive(Clone, Debug)]
 struct Rotor {
     /// Unit spin axis, base coordinates.
@@ -108,8 +113,7 @@ impl Rotor {
     /// `Xup` of the rotor's hinge at `q` (as `Model::xup`).
     #[inline]
     fn xup(&self, q: &[f64]) -> Transform {
-        self.joint
-            .transform_with(self.coord.as_ref(), q[self.angle])
+        kernel_parts::hinge_transform(&self.joint, self.coord.as_ref(), q[self.angle])
     }
 }
 
@@ -133,14 +137,16 @@ struct Serial {
     body: usize,
 }
 
-/// [`crate::aba()`] unrolled for one layout (see the module documentation), with external
+/// [`satsim_tree::aba::aba`] unrolled for one layout (see the module documentation), with external
 /// forces ([`UnrolledAba::aba_with_forces`]) or without ([`UnrolledAba::aba`]), and with
 /// locked hinges ([`UnrolledAba::aba_hybrid_with_forces`]): the
 /// preprint satellite's right-hand side at a fraction of the generic
 /// algorithm's instructions, with the same result to round-off and the same errors.
+/// Its place is behind the engine's entry, as a [`Kernel`] (see the impl below).
 ///
 /// ```
-/// use satsim_tree::{BaseKind, Body, Data, Hinge, ModelBuilder, UnrolledAba, aba};
+/// use satsim_satellite::kernel::UnrolledAba;
+/// use satsim_tree::{BaseKind, Body, Data, Hinge, ModelBuilder, aba::aba};
 /// use satsim_tree::spatial::{Mat3, Vec3};
 /// // A bus, a 3-DOF gimbal through two massless links to a panel, a second panel below it.
 /// let model = ModelBuilder::new(BaseKind::Free)
@@ -203,38 +209,44 @@ pub struct UnrolledAba {
 
 impl UnrolledAba {
     /// The kernel for `model` if it has the layout (see the module documentation), `None`
-    /// otherwise (the caller keeps [`crate::aba()`]).
+    /// otherwise (the caller keeps [`satsim_tree::aba::aba`]).
     pub fn new(model: &Model) -> Option<Self> {
-        if model.base != BaseKind::Free || model.chains.len() != 1 {
+        if model.base() != BaseKind::Free || model.chains().len() != 1 {
             return None;
         }
-        let chain = &model.chains[0];
-        if chain.k != 3 || !chain.spherical || chain.offset_links || chain.parent != 0 {
+        let chain = &model.chains()[0];
+        if chain.hinges() != 3
+            || !chain.is_spherical()
+            || chain.has_offset_links()
+            || chain.parent() != 0
+        {
             return None;
         }
-        if model.gyrostats.iter().any(|g| g.parent != 0) {
+        if model.gyrostats().iter().any(|g| g.parent() != 0) {
             return None;
         }
-        let joint = |i: usize| model.joints[i].as_ref().expect("non-root body has a joint");
+        let order: [usize; 3] = chain.order().try_into().expect("three hinges");
+        let dofs: [usize; 3] = chain.dofs().try_into().expect("three hinges");
+        let joint = |i: usize| model.joint(i).expect("non-root body has a joint");
         let mut gimbal = [None; 3];
         for (t, g) in gimbal.iter_mut().enumerate() {
-            *g = model.coord_axis[chain.order[t]];
+            *g = kernel_parts::coord_axis(model, order[t]);
         }
         let [Some(g0), Some(g1), Some(g2)] = gimbal else {
             return None;
         };
         // The serial chain: the tip's only child, its only child, ...
-        let tip = chain.order[0];
+        let tip = chain.tip();
         let mut body = tip;
         let mut serial_bodies = Vec::new();
         loop {
             let mut children = model.children(body);
             let Some(child) = children.next() else { break };
             if children.next().is_some()
-                || model.is_gyrostat[child]
-                || model.chain_part[child] != ChainPart::None
-                || model.coord_axis[child].is_none()
-                || joint(child).armature != 0.0
+                || kernel_parts::is_gyrostat(model, child)
+                || kernel_parts::chain_part(model, child) != ChainPart::None
+                || kernel_parts::coord_axis(model, child).is_none()
+                || joint(child).armature() != 0.0
                 || serial_bodies.len() == MAX_SERIAL
             {
                 return None;
@@ -243,81 +255,81 @@ impl UnrolledAba {
             body = child;
         }
         // No other bodies: the base, its rotors, the two links, the tip and the serial chain.
-        if model.n_bodies() != 1 + model.gyrostats.len() + 3 + serial_bodies.len() {
+        if model.n_bodies() != 1 + model.gyrostats().len() + 3 + serial_bodies.len() {
             return None;
         }
         let base_nq = model.base_nq();
-        let r = chain.tip_at;
-        let tip_body = &model.bodies[tip];
+        let r = *chain.tip_at();
+        let tip_body = &model.bodies()[tip];
         let tip_inertia =
-            RigidInertia::from_com(tip_body.mass, tip_body.com - r, tip_body.inertia_com);
+            RigidInertia::from_com(tip_body.mass(), tip_body.com() - r, *tip_body.inertia_com());
         let mut serial = Vec::new();
         let mut parent_origin = r; // the parent's hinge point in its own body frame
         for &i in &serial_bodies {
             let j = joint(i);
-            let b = &model.bodies[i];
-            let inertia = RigidInertia::from_com(b.mass, b.com - j.child_at, b.inertia_com);
+            let b = &model.bodies()[i];
+            let inertia =
+                RigidInertia::from_com(b.mass(), b.com() - j.child_at(), *b.inertia_com());
             serial.push(Serial {
-                axis: model.coord_axis[i].expect("checked above"),
-                at: j.at - parent_origin,
+                axis: kernel_parts::coord_axis(model, i).expect("checked above"),
+                at: j.at() - parent_origin,
                 inertia,
                 start: inertia.into(),
-                origin: -j.child_at,
-                angle: base_nq + j.hinge,
-                dof: model.base_nv() + j.hinge,
+                origin: -j.child_at(),
+                angle: base_nq + j.hinge(),
+                dof: model.base_nv() + j.hinge(),
                 body: i,
             });
-            parent_origin = j.child_at;
+            parent_origin = *j.child_at();
         }
         let name = |i: usize| {
             (
-                model.hinge_names[joint(i).hinge].clone(),
+                model.hinge_names()[joint(i).hinge()].clone(),
                 massless_hinges_below(model, i),
             )
         };
-        let names = chain
-            .order
+        let names = order
             .iter()
             .chain(&serial_bodies)
             .map(|&i| name(i))
             .collect();
         let rotors = model
-            .gyrostats
+            .gyrostats()
             .iter()
             .map(|g| Rotor {
-                axis: g.axis,
-                j_axis: g.axis * g.axial,
-                inv_j: 1.0 / g.axial,
-                dof: joint(g.body).dof,
-                body: g.body,
-                joint: joint(g.body).clone(),
-                coord: model.coord_axis[g.body],
-                angle: base_nq + joint(g.body).hinge,
+                axis: *g.axis(),
+                j_axis: g.axis() * g.axial(),
+                inv_j: 1.0 / g.axial(),
+                dof: joint(g.body()).dof(),
+                body: g.body(),
+                joint: joint(g.body()).clone(),
+                coord: kernel_parts::coord_axis(model, g.body()),
+                angle: base_nq + joint(g.body()).hinge(),
             })
             .collect();
         Some(Self {
             nq: model.nq(),
             nv: model.nv(),
-            base_inertia: model.carrier_inertia[0],
-            base_start: model.carrier_ia[0],
+            base_inertia: *kernel_parts::carrier_inertia(model, 0),
+            base_start: *kernel_parts::carrier_start(model, 0),
             rotors,
             gimbal: [g0, g1, g2],
-            gimbal_angle: chain.order.map(|i| base_nq + joint(i).hinge),
-            gimbal_dof: chain.dof,
-            point: chain.point,
+            gimbal_angle: order.map(|i| base_nq + joint(i).hinge()),
+            gimbal_dof: dofs,
+            point: *chain.point(),
             tip_inertia,
             tip_start: tip_inertia.into(),
             tip_origin: -r,
             serial,
-            chain_bodies: chain.order,
+            chain_bodies: order,
             n_bodies: model.n_bodies(),
-            gimbal_hinges: chain.order.map(|i| joint(i).hinge),
+            gimbal_hinges: order.map(|i| joint(i).hinge()),
             rotor_hinges: model
-                .gyrostats
+                .gyrostats()
                 .iter()
-                .map(|g| joint(g.body).hinge)
+                .map(|g| joint(g.body()).hinge())
                 .collect(),
-            serial_hinges: serial_bodies.iter().map(|&i| joint(i).hinge).collect(),
+            serial_hinges: serial_bodies.iter().map(|&i| joint(i).hinge()).collect(),
             n_hinges: model.n_hinges(),
             names,
         })
@@ -328,12 +340,12 @@ impl UnrolledAba {
         self.serial.len()
     }
 
-    /// Forward dynamics without external forces, as [`crate::aba()`] with `fext = None`:
+    /// Forward dynamics without external forces, as [`satsim_tree::aba::aba`] with `fext = None`:
     /// the accelerations `q̈` into `data.ddq` (same layout: the base's `[ω̇; v̇]` in its own
     /// axes, then the hinges in their order of addition, rotors included). `data` must be
     /// this model's; only `data.ddq` is written (the other buffers of `aba` are not, nor
     /// read: the kernel computes its own transforms, so a caller's forward kinematics in
-    /// `data` stays as it was). Fails as [`crate::aba()`] does:
+    /// `data` stays as it was). Fails as [`satsim_tree::aba::aba`] does:
     /// [`DynamicsError::SingularHinge`] at a gimbal lock (same hinge, same pivot),
     /// [`DynamicsError::SingularBase`], or a dimension error.
     pub fn aba<'d>(
@@ -346,9 +358,9 @@ impl UnrolledAba {
         self.aba_with_forces(data, q, v, tau, None)
     }
 
-    /// As [`UnrolledAba::aba`], with external body forces `fext` in [`crate::aba()`]'s
+    /// As [`UnrolledAba::aba`], with external body forces `fext` in [`satsim_tree::aba::aba`]'s
     /// convention (one wrench `[n; f]` per body in `model.bodies` order, body coordinates,
-    /// moment about the body's origin; see [`crate::rnea()`]), on any body: the base, its
+    /// moment about the body's origin; see [`satsim_tree::rnea()`]), on any body: the base, its
     /// rotors (the axial moment drives the spin, the rest acts on the base through the
     /// bearing), the gimbal's massless links, the tip and the serial bodies. `None` is the
     /// force-free instance, as cheap as [`UnrolledAba::aba`]. A `fext` of another length
@@ -356,7 +368,8 @@ impl UnrolledAba {
     ///
     /// ```
     /// use satsim_tree::spatial::{Force, Mat3, Vec3};
-    /// use satsim_tree::{BaseKind, Body, Data, Hinge, ModelBuilder, UnrolledAba, aba, samples};
+    /// use satsim_satellite::kernel::UnrolledAba;
+    /// use satsim_tree::{BaseKind, Body, Data, Hinge, ModelBuilder, aba::aba, samples};
     /// // A bus with three wheels, a 3-DOF gimbal through two massless links to a panel.
     /// let mut builder = ModelBuilder::new(BaseKind::Free)
     ///     .body(Body::new("bus", 800.0, Mat3::from_diagonal(&Vec3::new(900.0, 800.0, 600.0))))
@@ -394,9 +407,10 @@ impl UnrolledAba {
     }
 
     /// The kernel's form of a lock mask `locked` (one entry per hinge in the order of
-    /// addition, rotors included, as [`crate::aba_hybrid()`] takes it), or `None` where the
-    /// kernel does not take it: a gimbal hinge locked (the caller keeps
-    /// [`crate::aba_hybrid()`]), a mask of another length, or a locked rotor past the 64th.
+    /// addition, rotors included, as [`satsim_tree::aba::aba_hybrid`] takes it), or `None`
+    /// where the kernel does not take it: a gimbal hinge locked (the caller keeps
+    /// [`satsim_tree::aba::aba_hybrid`]), a mask of another length, or a locked rotor past
+    /// the 64th.
     pub fn locks(&self, locked: &[bool]) -> Option<Locks> {
         if locked.len() != self.n_hinges || self.gimbal_hinges.iter().any(|&h| locked[h]) {
             return None;
@@ -418,7 +432,7 @@ impl UnrolledAba {
         Some(locks)
     }
 
-    /// Hybrid dynamics (Featherstone §9.2), as [`crate::aba_hybrid()`]: as
+    /// Hybrid dynamics (Featherstone §9.2), as [`satsim_tree::aba::aba_hybrid`]: as
     /// [`UnrolledAba::aba_with_forces`], except that the hinges locked in `locks` (rotors,
     /// serial bodies; see [`UnrolledAba::locks`]) have zero acceleration, their `τ` ignored,
     /// and pass their child's inertia rigidly to the parent. A locked rotor rides on the
@@ -427,7 +441,8 @@ impl UnrolledAba {
     ///
     /// ```
     /// use satsim_tree::spatial::{Mat3, Vec3};
-    /// use satsim_tree::{BaseKind, Body, Data, Hinge, ModelBuilder, UnrolledAba, aba_hybrid};
+    /// use satsim_satellite::kernel::UnrolledAba;
+    /// use satsim_tree::{BaseKind, Body, Data, Hinge, ModelBuilder, aba::aba_hybrid};
     /// let mut builder = ModelBuilder::new(BaseKind::Free)
     ///     .body(Body::new("bus", 800.0, Mat3::from_diagonal(&Vec3::new(900.0, 800.0, 600.0))))
     ///     .body(Body::massless("link1"))
@@ -737,7 +752,7 @@ impl UnrolledAba {
     #[inline(always)]
     fn rotor_torque<const LOADED: bool>(&self, r: &Rotor, tau: &[f64], fext: &[Force]) -> f64 {
         if LOADED {
-            tau[r.dof] + r.joint.s.dot(&fext[r.body])
+            tau[r.dof] + r.joint.s().dot(&fext[r.body])
         } else {
             tau[r.dof]
         }
@@ -790,6 +805,55 @@ impl UnrolledAba {
     }
 }
 
+/// The engine's interface: a [`satsim_tree::ForwardDynamics`] with this kernel attached
+/// gives it every call whose lock mask [`UnrolledAba::locks`] takes (nothing locked, locked
+/// rotors and serial hinges; not a locked gimbal hinge), and solves it exactly as
+/// [`UnrolledAba::aba_hybrid_with_forces_into`] does: the same numbers, bit for bit.
+///
+/// ```
+/// use satsim_satellite::kernel::UnrolledAba;
+/// use satsim_tree::{Data, ForwardDynamics, Input, read_model, samples::push_wheels};
+/// let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+/// let path = dir.join("../../examples/satellite.toml");
+/// let mut builder = read_model(&path)?.to_builder();
+/// push_wheels(&mut builder, "bus");
+/// let model = builder.build()?;
+/// let kernel = UnrolledAba::new(&model).expect("the preprint's layout");
+/// let fd = ForwardDynamics::new(&model).with_kernel(Box::new(kernel));
+/// let mut data = Data::new(&model);
+/// let mut q = model.neutral();
+/// q[7..12].copy_from_slice(&[0.1, 0.2, 0.3, 1.2, -1.0]);
+/// let (v, tau) = (vec![0.01; model.nv()], vec![0.5; model.nv()]);
+/// let mut ddq = vec![0.0; model.nv()];
+/// // A wheel held: the kernel; a gimbal hinge held: the generic hybrid ABA.
+/// let mut locked = vec![false; model.n_hinges()];
+/// locked[5] = true;
+/// assert!(fd.uses_kernel(Some(&locked)));
+/// fd.solve(&model, &mut data, Input::new(&q, &v, &tau).locked(Some(&locked)), &mut ddq)?;
+/// assert_eq!(ddq[6 + 5], 0.0);
+/// locked[0] = true;
+/// assert!(!fd.uses_kernel(Some(&locked)));
+/// fd.solve(&model, &mut data, Input::new(&q, &v, &tau).locked(Some(&locked)), &mut ddq)?;
+/// assert_eq!((ddq[6], ddq[6 + 5]), (0.0, 0.0));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+impl Kernel for UnrolledAba {
+    fn accepts(&self, locked: Option<&[bool]>) -> bool {
+        locked.is_none_or(|mask| self.locks(mask).is_some())
+    }
+
+    fn try_solve(&self, input: &Input<'_>, ddq: &mut [f64]) -> Option<Result<(), DynamicsError>> {
+        let locks = match input.locked {
+            None => Locks::NONE,
+            Some(mask) => self.locks(mask)?,
+        };
+        let Input {
+            q, v, tau, fext, ..
+        } = *input;
+        Some(self.aba_hybrid_with_forces_into(q, v, tau, fext, locks, ddq))
+    }
+}
+
 /// A wrench `f` about a body's origin moved to its hinge point, the origin lying at `o` from
 /// the point (same axes): `[n + o × f; f]`.
 #[inline(always)]
@@ -800,10 +864,10 @@ fn at_hinge(f: &Force, o: &Vec3) -> Force {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::aba;
-    use crate::model::{Body, Hinge, ModelBuilder};
-    use crate::samples::{SplitMix, random_inertia, random_q};
     use nalgebra::Quaternion;
+    use satsim_tree::aba::aba;
+    use satsim_tree::samples::{SplitMix, random_inertia, random_q};
+    use satsim_tree::{Body, Hinge, ModelBuilder};
 
     /// A signed coordinate axis other than `not` (so that two consecutive gimbal axes are
     /// never parallel).
@@ -890,13 +954,12 @@ mod tests {
 
     /// The preprint satellite (`examples/satellite.toml`) plus the peer orbit's three
     /// reaction wheels on the bus, as `satsim-satellite` adds them.
-    #[cfg(feature = "files")]
     fn satellite_with_wheels() -> (Model, Model) {
         let path =
             std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/satellite.toml");
-        let plain = crate::read_model(&path).unwrap();
+        let plain = satsim_tree::read_model(&path).unwrap();
         let mut b = plain.to_builder();
-        crate::samples::push_wheels(&mut b, "bus");
+        satsim_tree::samples::push_wheels(&mut b, "bus");
         (plain, b.build().unwrap())
     }
 
@@ -938,7 +1001,7 @@ mod tests {
                 // where the mass matrix is ill-conditioned (close to a gimbal lock, where
                 // any two orders of the same arithmetic differ by that much; `aba`'s chain
                 // and tree forms too).
-                let m = crate::crba(model, &mut dg, q).unwrap().clone();
+                let m = satsim_tree::crba(model, &mut dg, q).unwrap().clone();
                 let eig = m.symmetric_eigenvalues();
                 let kappa_eps = eig.max() / eig.min() * f64::EPSILON;
                 let e = (&a - &b).amax() / b.amax();
@@ -947,7 +1010,7 @@ mod tests {
                     "relative difference {e:e}, κε {kappa_eps:e}\n{a}\n{b}"
                 );
                 // Backward (no κ): inverse dynamics of the kernel's result gives back τ.
-                let back = crate::rnea(model, &mut dg, q, v, a.as_slice(), fext).unwrap();
+                let back = satsim_tree::rnea(model, &mut dg, q, v, a.as_slice(), fext).unwrap();
                 let scale = (m.abs() * a.abs()).amax().max(1.0);
                 let r = (back - DVector::from_column_slice(tau)).amax();
                 assert!(r < 1e-12 * scale, "residual {r:e} of {scale:e}");
@@ -985,7 +1048,6 @@ mod tests {
         }
     }
 
-    #[cfg(feature = "files")]
     #[test]
     fn preprint_satellite_equals_generic_aba() {
         let (plain, wheels) = satellite_with_wheels();
@@ -1049,7 +1111,7 @@ mod tests {
         };
         // A fixed base.
         let mut b = ModelBuilder::new(BaseKind::Fixed);
-        for x in &base.to_builder().bodies {
+        for x in base.to_builder().bodies_mut() {
             b.push_body(x.clone());
         }
         for h in base.to_builder().hinges_mut() {
@@ -1107,13 +1169,18 @@ mod tests {
         assert!(r.is_none(), "offset links");
         // A link with mass: no chain.
         let r = variant(&|b| {
-            let k = b.bodies.iter().position(|x| x.name == "l1").unwrap();
+            let k = b.bodies_mut().iter().position(|x| x.name == "l1").unwrap();
             b.bodies_mut()[k] = Body::new("l1", 1.0, Mat3::identity());
         });
         assert!(r.is_none(), "no chain");
         // A 2-DOF gimbal: link 2 welded away (tip hinged on link 1).
         let mut b = ModelBuilder::new(BaseKind::Free);
-        for x in base.to_builder().bodies.iter().filter(|x| x.name != "l2") {
+        for x in base
+            .to_builder()
+            .bodies_mut()
+            .iter()
+            .filter(|x| x.name != "l2")
+        {
             b.push_body(x.clone());
         }
         for h in base.to_builder().hinges_mut() {
@@ -1138,7 +1205,6 @@ mod tests {
 
     /// A gimbal lock (the middle hinge at 90°) fails as in the generic ABA: the same hinge,
     /// the same hinges named through the links, the same pivot.
-    #[cfg(feature = "files")]
     #[test]
     fn gimbal_lock_fails_as_generic_aba() {
         let (_, model) = satellite_with_wheels();
@@ -1212,7 +1278,9 @@ mod tests {
                 let fast = kernel
                     .aba_hybrid_with_forces(&mut dk, &q, &v, &tau, f, locks)
                     .cloned();
-                let generic = crate::aba_hybrid(&model, &mut dg, &q, &v, &tau, f, &locked).cloned();
+                let generic =
+                    satsim_tree::aba::aba_hybrid(&model, &mut dg, &q, &v, &tau, f, &locked)
+                        .cloned();
                 let (a, b) = match (fast, generic) {
                     (Ok(a), Ok(b)) => (a, b),
                     (Err(x), Err(y)) => {
@@ -1222,12 +1290,12 @@ mod tests {
                     (a, b) => panic!("seed {seed}: kernel {a:?}, generic {b:?}"),
                 };
                 solved += 1;
-                let m = crate::crba(&model, &mut dg, &q).unwrap().clone();
+                let m = satsim_tree::crba(&model, &mut dg, &q).unwrap().clone();
                 let eig = m.symmetric_eigenvalues();
                 let kappa_eps = eig.max() / eig.min() * f64::EPSILON;
                 let e = (&a - &b).amax() / b.amax();
                 assert!(e < 1e-12_f64.max(kappa_eps), "seed {seed}: {e:e}\n{a}\n{b}");
-                let back = crate::rnea(&model, &mut dg, &q, &v, a.as_slice(), f).unwrap();
+                let back = satsim_tree::rnea(&model, &mut dg, &q, &v, a.as_slice(), f).unwrap();
                 let scale = (m.abs() * a.abs()).amax().max(1.0);
                 for (h, &l) in locked.iter().enumerate() {
                     let dof = model.base_nv() + h;
