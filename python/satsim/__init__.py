@@ -10,6 +10,7 @@ every number equals the command line's to the last bit::
     r = satsim.run("scene.toml")                  # nothing written to disk
     r.columns, r.data, r["angle_h4"], r.to_pandas()
     c = satsim.campaign("campaign.toml")          # runs.csv in memory: c.columns, c.data, c.status
+    r = satsim.read_trajectory("out/deploy/trajectory.csv")   # a run's CSV, read back
     satsim.modes("scene.toml"), satsim.linearize("scene.toml")   # dicts, numpy arrays
 
 Conventions (the contract's): SI units; quaternions Hamilton ``[w, x, y, z]``; the
@@ -25,7 +26,9 @@ run scenes at once.
 from __future__ import annotations
 
 import json
+import math
 import os
+import warnings
 from pathlib import Path
 from typing import Any, Dict, Iterator, List, Mapping, Optional, Union
 
@@ -42,6 +45,7 @@ __all__ = [
     "campaign",
     "linearize",
     "modes",
+    "read_trajectory",
     "run",
 ]
 
@@ -230,6 +234,55 @@ class Trajectory:
         return f"satsim.Trajectory({len(self)} rows x {len(self.columns)} columns{span})"
 
 
+def read_trajectory(path: PathLike) -> Trajectory:
+    """Reads a ``trajectory.csv`` that ``satsim run`` wrote (contract section 7).
+
+    A last line without its line end (a run killed while writing it) is left out with a
+    :class:`UserWarning`: the result holds every whole row. Anything else that is not a
+    header and rows of numbers (an empty file, a row of the wrong length, a field that is not
+    a number) raises :class:`SatsimError` naming the file and line. An empty field (a value
+    a failed run did not reach) reads as NaN.
+    """
+    name = os.fspath(path)
+    with open(name, "r", encoding="utf-8", newline="") as f:
+        text = f.read()
+    lines = text.split("\n")
+    # The text after the last line end is "" for a whole file, else a cut-off row.
+    cut = lines.pop()
+    if cut.strip():
+        warnings.warn(
+            f"{name}:{len(lines) + 1}: the last line has no line end (the run was stopped "
+            "while writing it?): left out; read the rows before it",
+            UserWarning,
+            stacklevel=2,
+        )
+    lines = [line.rstrip("\r") for line in lines]
+    if not lines or not lines[0].strip():
+        raise SatsimError(f"{name}: the file is empty")
+    columns = [c.strip() for c in lines[0].split(",")]
+    rows = []
+    for n, line in enumerate(lines[1:], start=2):
+        if not line.strip():
+            continue
+        fields = line.split(",")
+        if len(fields) != len(columns):
+            raise SatsimError(
+                f"{name}:{n}: {len(fields)} fields, the header has {len(columns)}"
+            )
+        row = []
+        for c, field in zip(columns, fields):
+            field = field.strip()
+            try:
+                row.append(float(field) if field else math.nan)
+            except ValueError:
+                raise SatsimError(
+                    f"{name}:{n}: `{field}` in column `{c}` is not a number"
+                ) from None
+        rows.append(row)
+    data = np.array(rows, dtype=np.float64).reshape(len(rows), len(columns))
+    return Trajectory(columns, data)
+
+
 def _run_partial(e: SatsimError) -> SatsimError:
     """Turns the native ``(columns, data)`` of a failed run into a :class:`Trajectory`."""
     partial = getattr(e, "partial", None)
@@ -390,7 +443,9 @@ def campaign(
 
     Nothing is written to disk (``satsim campaign`` writes the folder, summary and plots). A
     run that fails is a row with status ``failed``, not an error; bad input raises
-    :class:`SatsimError` with the command line's message.
+    :class:`SatsimError` with the command line's message. Ctrl-C stops a campaign (no run
+    starts, the running ones stop at their next output row) and raises
+    ``KeyboardInterrupt``.
     """
     origin, text = _scene_args(scene, base_dir)
     columns, data, status, messages = _satsim.campaign(origin, text, threads, _shard(shard))

@@ -23,6 +23,7 @@ use satsim_tools::output::{CsvWriter, write_plots};
 use satsim_tools::scene::Scene;
 use satsim_tree::io::{self as tio, FileError};
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 pyo3::create_exception!(
@@ -217,6 +218,10 @@ fn run_scene<'py>(
             SceneSource::Text(text, origin) => Scene::parse(text, origin),
         }
         .map_err(|e| e.to_string())?;
+        // The rows are held in memory: a tiny `output.every` is refused before the run.
+        scene
+            .check_rows(satsim_tools::scene::DEFAULT_MAX_ROWS)
+            .map_err(|e| e.to_string())?;
         let mut interrupted: Option<PyErr> = None;
         let mut last_check = Instant::now();
         let result = api::run_scene(&scene, || {
@@ -358,16 +363,38 @@ fn campaign<'py>(
         Some((i, n)) => Shard::new(i, n).map_err(|e| err(format!("shard: {e}")))?,
         None => Shard::ALL,
     };
-    let table = py
-        .detach(|| {
-            let c = match &text {
-                Some(t) => Campaign::parse(t, &origin),
-                None => Campaign::read(&origin),
-            }
-            .map_err(|e| e.to_string())?;
-            api::campaign_table(&c, threads, shard).map_err(|e| e.to_string())
+    let c = py
+        .detach(|| match &text {
+            Some(t) => Campaign::parse(t, &origin),
+            None => Campaign::read(&origin),
         })
-        .map_err(err)?;
+        .map_err(|e| err(e.to_string()))?;
+    // Ctrl-C: Python sees signals on this (the main) thread only, so the runs go on another
+    // one while this one checks for signals; on one, no run starts and the running ones stop
+    // at their next output row (as `satsim campaign` does), and Python raises.
+    let stop = AtomicBool::new(false);
+    let mut interrupted: Option<PyErr> = None;
+    let table = std::thread::scope(|s| {
+        let worker = s.spawn(|| {
+            api::campaign_table_until(&c, threads, shard, &|| stop.load(Ordering::Relaxed))
+        });
+        while !worker.is_finished() {
+            py.detach(|| std::thread::sleep(Duration::from_millis(20)));
+            if interrupted.is_none()
+                && let Err(e) = py.check_signals()
+            {
+                interrupted = Some(e);
+                stop.store(true, Ordering::Relaxed);
+            }
+        }
+        worker.join()
+    });
+    if let Some(e) = interrupted {
+        return Err(e);
+    }
+    let table = table
+        .map_err(|_| err("internal error (a bug in satsim): the campaign thread panicked"))?
+        .map_err(|e| err(e.to_string()))?;
     let (n, w) = (table.n_rows(), table.columns.len());
     let data = table.values.into_pyarray(py).reshape([n, w])?;
     Ok((table.columns, data, table.status, table.messages))

@@ -108,3 +108,24 @@ def test_bad_campaign_input(scene):
     assert bad != small_campaign_text()
     with pytest.raises(satsim.SatsimError, match=r"scenes/<scene text>:\d+: .*initial\.hinges\.angel"):
         satsim.campaign(bad, base_dir=SCENES)
+
+
+def test_ctrl_c_stops_a_campaign(tmp_path):
+    # 2000 runs of 60 s would take minutes: an interrupt 0.5 s in stops every run at its next
+    # output row and raises KeyboardInterrupt at once (the bound below is 100 times the time
+    # it takes, and far below what the campaign would take were the interrupt seen only at
+    # its end).
+    import _thread
+    import threading
+    import time
+
+    text = (SCENES / "deploy_campaign.toml").read_text().replace("runs = 64", "runs = 2000")
+    timer = threading.Timer(0.5, _thread.interrupt_main)
+    started = time.monotonic()
+    timer.start()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            satsim.campaign(text, base_dir=SCENES, threads=2)
+    finally:
+        timer.cancel()
+    assert time.monotonic() - started < 30.0

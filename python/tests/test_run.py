@@ -163,3 +163,36 @@ def test_a_run_that_fails_part_way_keeps_its_rows(cli, tmp_path):
     assert isinstance(partial, satsim.Trajectory)
     assert partial.columns == columns
     np.testing.assert_array_equal(bits(partial.data), bits(data))
+
+
+def test_read_trajectory_reads_what_run_wrote(tmp_path):
+    r = satsim.run(SCENES / "libration.toml", out=tmp_path / "out")
+    back = satsim.read_trajectory(tmp_path / "out" / "trajectory.csv")
+    assert back.columns == r.columns
+    np.testing.assert_array_equal(back.data, r.data)
+
+
+def test_read_trajectory_leaves_out_a_row_cut_by_a_kill(tmp_path):
+    # SIGKILL while a row is being written leaves the file ending mid-row: the whole rows
+    # before it are read, with a warning naming the line.
+    r = satsim.run(SCENES / "libration.toml", out=tmp_path / "out")
+    text = (tmp_path / "out" / "trajectory.csv").read_text()
+    lines = text.splitlines(keepends=True)
+    cut = "".join(lines[:6]) + lines[6][: len(lines[6]) // 2]
+    (tmp_path / "cut.csv").write_text(cut)
+    with pytest.warns(UserWarning, match=r"cut\.csv:7: the last line has no line end"):
+        back = satsim.read_trajectory(tmp_path / "cut.csv")
+    assert len(back) == 5
+    np.testing.assert_array_equal(back.data, r.data[:5])
+
+
+def test_read_trajectory_bad_input(tmp_path):
+    (tmp_path / "empty.csv").write_text("")
+    with pytest.raises(satsim.SatsimError, match="the file is empty"):
+        satsim.read_trajectory(tmp_path / "empty.csv")
+    (tmp_path / "short.csv").write_text("t,a\n0,1\n1\n")
+    with pytest.raises(satsim.SatsimError, match=r"short\.csv:3: 1 fields, the header has 2"):
+        satsim.read_trajectory(tmp_path / "short.csv")
+    (tmp_path / "text.csv").write_text("t,a\n0,x\n")
+    with pytest.raises(satsim.SatsimError, match=r"text\.csv:2: `x` in column `a`"):
+        satsim.read_trajectory(tmp_path / "text.csv")

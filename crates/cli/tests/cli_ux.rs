@@ -101,7 +101,7 @@ fn bad_set_exits_2_naming_the_key() {
     for (arg, why) in [
         (
             "effects.hinge_springs.stifness=3.0",
-            "has no key `stifness`",
+            "unknown key `stifness`",
         ),
         ("model.body.99.mass=1.0", "out of range"),
         ("duration=\"long\"", "wrong type"),
@@ -311,7 +311,7 @@ fn a_nearly_unit_attitude_is_normalised_with_a_warning() {
         err.contains("warning:") && err.contains("state.json") && err.contains("normalised"),
         "{err}"
     );
-    // With --set the state is read into the scene: the warning names the scene, no line.
+    // With --set the state is read into the scene: the warning names the state file, no line.
     let o = satsim_in(
         &dir,
         &["run", "scene.toml", "--set", "duration=1.0", "--out", "s"],
@@ -319,7 +319,7 @@ fn a_nearly_unit_attitude_is_normalised_with_a_warning() {
     assert!(o.status.success(), "{}", stderr(&o));
     let err = stderr(&o);
     assert!(
-        err.contains("warning: scene.toml (with --set): initial.base.attitude"),
+        err.contains("warning: state.json (with --set): initial.base.attitude"),
         "{err}"
     );
     let (header, row) = last_row(&dir.join("out/scene/trajectory.csv"));

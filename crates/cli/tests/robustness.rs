@@ -660,7 +660,8 @@ fn ctrl_c_stops_cleanly_and_keeps_the_csv() {
     )
     .unwrap();
     let child = Command::new(env!("CARGO_BIN_EXE_satsim"))
-        .args(["run", "long.toml"])
+        // 2·10⁸ rows: beyond the default row limit, which this endless run lifts.
+        .args(["run", "long.toml", "--max-rows", "1000000000"])
         .current_dir(&dir)
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())

@@ -250,8 +250,12 @@ impl<'a> OutputTimes<'a> {
             Output::Times(ts) => ts.get(self.i).copied(),
             Output::Interval(dt) => {
                 let t = self.t0 + self.i as f64 * dt;
-                // Snap to t_end when within rounding of it, so t_end is hit exactly once.
-                if t >= self.t_end - 1e-12 * self.t_end.abs().max(*dt) {
+                // Snap to t_end when within rounding of it, so t_end is hit exactly once. The
+                // rounding scale is that of the times themselves (and of the interval, capped
+                // at the span): an interval longer than the run still writes t0 and t_end.
+                let span = self.t_end - self.t0;
+                let scale = self.t_end.abs().max(self.t0.abs()).max(dt.min(span));
+                if t >= self.t_end - 1e-12 * scale {
                     Some(self.t_end)
                 } else {
                     Some(t)
@@ -269,5 +273,38 @@ impl<'a> OutputTimes<'a> {
 
     pub(crate) fn every_step(&self) -> bool {
         matches!(self.kind, Output::Steps)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn times(dt: f64, t0: f64, t_end: f64) -> Vec<f64> {
+        let kind = Output::Interval(dt);
+        let mut it = OutputTimes::new(&kind, t0, t_end).unwrap();
+        let mut out = Vec::new();
+        while let Some(t) = it.peek() {
+            out.push(t);
+            it.advance();
+        }
+        out
+    }
+
+    #[test]
+    fn an_interval_longer_than_the_run_writes_the_first_and_last_times() {
+        assert_eq!(times(1e16, 0.0, 2.0), [0.0, 2.0]);
+        assert_eq!(times(3.0, 0.0, 2.0), [0.0, 2.0]);
+        assert_eq!(times(1e16, 5.0, 7.0), [5.0, 7.0]);
+    }
+
+    #[test]
+    fn interval_times_hit_the_end_once() {
+        assert_eq!(times(0.5, 0.0, 2.0), [0.0, 0.5, 1.0, 1.5, 2.0]);
+        assert_eq!(times(0.75, 0.0, 2.0), [0.0, 0.75, 1.5, 2.0]);
+        // 0.1 * 30 rounds to 3.0000000000000004: snapped, not a second row.
+        let t = times(0.1, 0.0, 3.0);
+        assert_eq!(t.len(), 31);
+        assert_eq!(*t.last().unwrap(), 3.0);
     }
 }

@@ -222,18 +222,41 @@ pub fn campaign_table(
     threads: Option<usize>,
     shard: Shard,
 ) -> Result<CampaignTable, CampaignError> {
+    campaign_table_until(campaign, threads, shard, &|| false)
+}
+
+/// [`campaign_table`], checking `stop` before each run and at each output row: once it turns
+/// true no run starts, the running ones stop, and the result is
+/// [`CampaignError::Interrupted`] (the Python module's Ctrl-C).
+pub fn campaign_table_until(
+    campaign: &Campaign,
+    threads: Option<usize>,
+    shard: Shard,
+    stop: &(dyn Fn() -> bool + Sync),
+) -> Result<CampaignTable, CampaignError> {
     let todo: Vec<u64> = (0..campaign.runs).filter(|k| shard.contains(*k)).collect();
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads.unwrap_or(0))
         .build()
         .map_err(|e| CampaignError::Other(format!("cannot start the thread pool: {e}")))?;
     // `collect` keeps the order of `todo`: sorted by k.
-    let records: Vec<RunRecord> = pool.install(|| {
+    let records: Vec<Option<RunRecord>> = pool.install(|| {
         todo.par_iter()
             .with_max_len(1)
-            .map(|&k| campaign.run_one(k))
+            .map(|&k| match stop() {
+                true => None,
+                false => campaign.run_one_until(k, stop),
+            })
             .collect()
     });
+    let held = records.iter().flatten().count() as u64;
+    if held < todo.len() as u64 {
+        return Err(CampaignError::Other(format!(
+            "interrupted: {held} of {} runs finished",
+            todo.len()
+        )));
+    }
+    let records: Vec<RunRecord> = records.into_iter().flatten().collect();
     let columns = campaign.header();
     let n_stats = 3 * (campaign.columns.len() - 1);
     let mut out = CampaignTable {

@@ -7,16 +7,24 @@
 //! `orbit.altitude`. `satsim campaign` disperses the numbers such keys address; `satsim run
 //! --set` and `satsim campaign --set` replace any value by one written as a TOML value.
 //!
-//! An override may only replace a value that the scene (or its model or state file) already
-//! gives, by one of the same kind: a number by a number (an integer by an integer), a string
-//! by a string, a boolean by a boolean, an array by an array, a table by an inline table. A
-//! value that is not valid TOML replaces a string as that string (so `--set
-//! integrator.method=rk4` needs no quotes).
+//! An override replaces a value that the scene (or its model or state file) already gives by
+//! one of the same kind: a number by a number (an integer by an integer), a string by a
+//! string, a boolean by a boolean, an array by an array, a table by an inline table. A value
+//! that is not valid TOML replaces a string as that string (so `--set
+//! integrator.method=rk4` needs no quotes). A key the file leaves out (at its default) is
+//! added, with the tables on its way (`--set integrator.step=0.01`, `--set
+//! effects.gravity_gradient.model=full`): the scene reader then checks it against the schema
+//! like any written key, so a misspelt one is refused as an unknown key.
+//!
+//! An error the scene reader finds after the overrides names the file and line where the
+//! value is written (the model file's line for a `model.` key read from a model file), found
+//! with [`relocate`], and lists the overrides.
 
 use satsim_tree::io::{FileError, line_of};
 use serde::Deserialize;
 use std::fmt;
-use std::path::Path;
+use std::path::{Path, PathBuf};
+use toml::de::{DeTable, DeValue};
 use toml::{Spanned, Table, Value};
 
 /// One step of a path into the scene's tree.
@@ -168,8 +176,13 @@ impl Override {
         }
     }
 
-    /// Replaces the addressed value of `root` by this override's value, of the same kind.
+    /// Replaces the addressed value of `root` by this override's value, of the same kind; a
+    /// key that is not there is added (with the tables on its way), for the scene reader to
+    /// check against its schema.
     pub fn apply(&self, root: &mut Table) -> Result<(), KeyError> {
+        if walk(root, &self.key).is_err() {
+            return self.add(root);
+        }
         let (path, target) = walk(root, &self.key)
             .map_err(|KeyError(m)| KeyError(format!("`--set {}`: unknown key: {m}", self.key)))?;
         let value = self.value_for(target)?;
@@ -192,6 +205,76 @@ impl Override {
             }
         };
         set(root, &path, value);
+        Ok(())
+    }
+
+    /// Adds the key that [`walk`] did not find: every missing segment is a table key (an
+    /// array position cannot be added), the last one takes the value as written.
+    fn add(&self, root: &mut Table) -> Result<(), KeyError> {
+        let unknown = |m: String| KeyError(format!("`--set {}`: unknown key: {m}", self.key));
+        let segments: Vec<&str> = self.key.split('.').collect();
+        if segments.iter().any(|s| s.is_empty()) {
+            return Err(unknown(format!("`{}` has an empty segment", self.key)));
+        }
+        let (last, parents) = segments.split_last().expect("split gives one segment");
+        // The value first: a refused override changes nothing.
+        let value = self.value_for(&Value::String(String::new()))?;
+        let mut here = root;
+        let mut walked = String::new();
+        for seg in parents {
+            let next = match here.entry(seg.to_string()) {
+                toml::map::Entry::Vacant(v) => v.insert(Value::Table(Table::new())),
+                toml::map::Entry::Occupied(o) => o.into_mut(),
+            };
+            if !walked.is_empty() {
+                walked.push('.');
+            }
+            walked.push_str(seg);
+            here = match next {
+                Value::Table(t) => t,
+                Value::Array(a) => {
+                    // The rest of the key goes on inside an existing array element.
+                    let rest = &self.key[walked.len() + 1..];
+                    let (i, tail) = rest.split_once('.').unwrap_or((rest, ""));
+                    let i: usize = i.parse().map_err(|_| {
+                        unknown(format!(
+                            "`{walked}` is an array: expected a position (0-based), got `{i}`"
+                        ))
+                    })?;
+                    let n = a.len();
+                    let element = a.get_mut(i).ok_or_else(|| {
+                        unknown(format!(
+                            "position {i} is out of range: `{walked}` has {n} entries"
+                        ))
+                    })?;
+                    let Value::Table(t) = element else {
+                        return Err(unknown(format!(
+                            "`{walked}.{i}` is {}, not a table",
+                            kind(element)
+                        )));
+                    };
+                    if tail.is_empty() {
+                        return Err(unknown(format!("`{walked}.{i}` is already there")));
+                    }
+                    let inner = Override {
+                        key: tail.to_owned(),
+                        text: self.text.clone(),
+                    };
+                    return inner.apply(t).map_err(|KeyError(m)| {
+                        KeyError(
+                            m.replace(&format!("`--set {tail}`"), &format!("`--set {}`", self.key)),
+                        )
+                    });
+                }
+                other => {
+                    return Err(unknown(format!(
+                        "`{walked}` is {}, not a table",
+                        kind(other)
+                    )));
+                }
+            };
+        }
+        here.insert(last.to_string(), value);
         Ok(())
     }
 }
@@ -322,10 +405,182 @@ pub fn overridden_text(
     Ok(toml::to_string(&base).expect("a TOML table serialises"))
 }
 
-/// An error found in the overridden text of the scene at `path`: its line is one of the
-/// rewritten text, so it is dropped, and the message says the overrides were applied.
+/// A value's dotted key and its first and last line in a text.
+type KeyLines = (String, usize, usize);
+
+/// The dotted key, first line and last line of every value of a TOML `text` (each key from
+/// its name to the end of its value; arrays' elements by position), outermost first. Empty
+/// for a text that is not TOML.
+fn value_lines(text: &str) -> Vec<KeyLines> {
+    fn table(t: &DeTable, prefix: &str, text: &str, out: &mut Vec<KeyLines>) {
+        for (k, v) in t.iter() {
+            let key = if prefix.is_empty() {
+                k.get_ref().to_string()
+            } else {
+                format!("{prefix}.{}", k.get_ref())
+            };
+            value(v, key, k.span().start.min(v.span().start), text, out);
+        }
+    }
+    fn value(v: &Spanned<DeValue>, key: String, start: usize, text: &str, out: &mut Vec<KeyLines>) {
+        let end = v.span().end.saturating_sub(1).max(start);
+        out.push((key.clone(), line_of(text, start), line_of(text, end)));
+        match v.get_ref() {
+            DeValue::Table(t) => table(t, &key, text, out),
+            DeValue::Array(a) => {
+                for (i, e) in a.iter().enumerate() {
+                    value(e, format!("{key}.{i}"), e.span().start, text, out);
+                }
+            }
+            _ => {}
+        }
+    }
+    let mut out = Vec::new();
+    if let Ok(doc) = DeTable::parse(text) {
+        table(doc.get_ref(), "", text, &mut out);
+    }
+    out
+}
+
+/// The line of `key` in `lines` (from [`value_lines`]), else of its nearest ancestor there.
+fn line_of_key(lines: &[KeyLines], key: &str) -> Option<usize> {
+    let mut k = key;
+    loop {
+        if let Some((_, first, _)) = lines.iter().find(|(name, ..)| name == k) {
+            return Some(*first);
+        }
+        k = &k[..k.rfind('.')?];
+    }
+}
+
+/// Maps a line of the rewritten scene text ([`overridden_text`]) back to where the user
+/// wrote that value: a line of the scene file, a line of its model file for a `model.` key,
+/// the state file (no line: JSON spans are not kept) for an `initial.` key.
+pub struct Origins {
+    scene: PathBuf,
+    scene_lines: Vec<KeyLines>,
+    model: Option<(PathBuf, Vec<KeyLines>)>,
+    initial: Option<PathBuf>,
+    rewritten_lines: Vec<KeyLines>,
+}
+
+impl Origins {
+    /// The origins of the rewritten text `rewritten` of the scene `text` at `path`.
+    pub fn new(text: &str, path: &Path, rewritten: &str) -> Self {
+        let dir = path.parent().unwrap_or(Path::new(""));
+        let written: Option<Table> = text.parse().ok();
+        let source = |key: &str| match written.as_ref().and_then(|t| t.get(key)) {
+            Some(Value::String(p)) => Some(dir.join(p)),
+            _ => None,
+        };
+        let model = source("model").map(|file| {
+            let lines = std::fs::read_to_string(&file)
+                .map(|t| value_lines(&t))
+                .unwrap_or_default();
+            (file, lines)
+        });
+        Origins {
+            scene: path.to_path_buf(),
+            scene_lines: value_lines(text),
+            model,
+            initial: source("initial"),
+            rewritten_lines: value_lines(rewritten),
+        }
+    }
+
+    /// The dotted key whose value holds `line` of the rewritten text (the innermost one).
+    pub fn key_at(&self, line: usize) -> Option<&str> {
+        self.rewritten_lines
+            .iter()
+            .filter(|(_, first, last)| *first <= line && line <= *last)
+            .min_by_key(|(key, first, last)| (last - first, usize::MAX - key.len()))
+            .map(|(key, ..)| key.as_str())
+    }
+
+    /// Where the value at `line` of the rewritten text was written: the file and its line.
+    pub fn place(&self, line: usize) -> (PathBuf, Option<usize>) {
+        let Some(key) = self.key_at(line) else {
+            return (self.scene.clone(), None);
+        };
+        if let (Some(rest), Some((file, lines))) = (key.strip_prefix("model."), &self.model) {
+            return (file.clone(), line_of_key(lines, rest));
+        }
+        if let (Some(_), Some(file)) = (key.strip_prefix("initial."), &self.initial) {
+            return (file.clone(), None);
+        }
+        (self.scene.clone(), line_of_key(&self.scene_lines, key))
+    }
+
+    /// A warning `scene:line: message` of the rewritten text, placed where the value was
+    /// written and marked as read with `--set`.
+    pub fn warning(&self, w: &str) -> String {
+        let prefix = format!("{}:", self.scene.display());
+        if let Some(rest) = w.strip_prefix(&prefix)
+            && let Some((line, msg)) = rest.split_once(':')
+            && let Ok(line) = line.parse::<usize>()
+        {
+            let (file, line) = self.place(line);
+            return match line {
+                Some(l) => format!("{}:{l} (with --set):{msg}", file.display()),
+                None => format!("{} (with --set):{msg}", file.display()),
+            };
+        }
+        w.to_owned()
+    }
+}
+
+/// An error that the scene reader found in the rewritten text `rewritten` of the scene
+/// `text` at `path`: placed where the value was written (see [`Origins`]), and the message
+/// lists the overrides.
+pub fn relocate(
+    e: FileError,
+    text: &str,
+    path: &Path,
+    rewritten: &str,
+    overrides: &[Override],
+) -> FileError {
+    let line = match &e {
+        FileError::Schema { path: p, line, .. }
+        | FileError::Syntax { path: p, line, .. }
+        | FileError::Model { path: p, line, .. }
+            if p == path =>
+        {
+            *line
+        }
+        _ => return e,
+    };
+    let Some(line) = line else {
+        return after_overrides(e, path, overrides);
+    };
+    let (file, at) = Origins::new(text, path, rewritten).place(line);
+    match after_overrides(e, path, overrides) {
+        FileError::Schema { message, .. } => FileError::Schema {
+            path: file,
+            line: at,
+            message,
+        },
+        FileError::Syntax { message, .. } => FileError::Syntax {
+            path: file,
+            line: at,
+            message,
+        },
+        FileError::Model { source, .. } => FileError::Model {
+            path: file,
+            line: at,
+            source,
+        },
+        other => other,
+    }
+}
+
+/// An error found in the overridden text of the scene at `path`, without its line (one of
+/// the rewritten text); the message says the overrides were applied. [`relocate`] also
+/// finds the line where the value was written.
 pub fn after_overrides(e: FileError, path: &Path, overrides: &[Override]) -> FileError {
     let note = |m: String| {
+        if overrides.is_empty() {
+            return m;
+        }
         let list: Vec<String> = overrides
             .iter()
             .map(|o| format!("{}={}", o.key, o.text))
@@ -346,6 +601,14 @@ pub fn after_overrides(e: FileError, path: &Path, overrides: &[Override]) -> Fil
             path: p,
             line: None,
             message: note(message),
+        },
+        // The builder's typed error keeps its type (and so no note); the line goes.
+        FileError::Model {
+            path: p, source, ..
+        } if p == path => FileError::Model {
+            path: p,
+            line: None,
+            source,
         },
         other => other,
     }
@@ -389,13 +652,29 @@ mod tests {
     }
 
     #[test]
+    fn keys_the_scene_leaves_out_are_added() {
+        let mut r = root();
+        set_one(&mut r, "x.w=1").unwrap();
+        assert_eq!(r["x"]["w"].as_integer(), Some(1));
+        // With the tables on the way, and a bare word as a string.
+        set_one(&mut r, "integrator.method=rk4").unwrap();
+        assert_eq!(r["integrator"]["method"].as_str(), Some("rk4"));
+        set_one(&mut r, "a.b.c=[1.0, 2.0]").unwrap();
+        assert_eq!(r["a"]["b"]["c"].as_array().unwrap().len(), 2);
+        // Inside an existing element of an array of tables.
+        set_one(&mut r, "model.body.1.name=\"panel\"").unwrap();
+        assert_eq!(r["model"]["body"][1]["name"].as_str(), Some("panel"));
+        assert_eq!(r["model"]["body"][1]["mass"].as_float(), Some(2.5));
+    }
+
+    #[test]
     fn bad_overrides_name_the_key() {
         let mut r = root();
         for (s, why) in [
             ("model.body.2.mass=1", "out of range"),
-            ("x.w=1", "has no key `w`"),
-            ("y=1", "no `y`"),
-            ("x.name.z=1", "not a table or an array"),
+            ("model.body.2.extra=1", "out of range"),
+            ("model.body.x=1", "expected a position"),
+            ("x.name.z=1", "`x.name` is a string, not a table"),
             (
                 "x.v=1.0",
                 "wrong type: the scene has an array there, got a number",
@@ -407,6 +686,7 @@ mod tests {
             ("x.on=yes", "not a TOML value"),
             ("model.body.0.mass=\"heavy\"", "wrong type"),
             ("x.v", "expected KEY=VALUE"),
+            ("new.table=", "is not a TOML value"),
             ("=3", "the key is empty"),
         ] {
             let e = set_one(&mut r, s).unwrap_err().0;

@@ -30,6 +30,9 @@ pub struct Args {
     /// A short sweep (fewer settings): a quick look rather than the full figure
     #[arg(long)]
     pub quick: bool,
+    /// Override a scene value by its dotted path, e.g. `--set duration=60` (repeatable)
+    #[arg(long = "set", value_name = "KEY=VALUE", value_parser = super::run::parse_override)]
+    pub set: Vec<satsim_tools::scene_keys::Override>,
 }
 
 fn parse_method(s: &str) -> Result<Method, String> {
@@ -39,7 +42,7 @@ fn parse_method(s: &str) -> Result<Method, String> {
 /// Runs `satsim accuracy`.
 pub fn run(args: &Args) -> Result<Output, CliError> {
     let scene_path = &args.scene;
-    let scene = Scene::read(scene_path)?;
+    let scene = Scene::read_with(scene_path, &args.set)?;
     super::print_warnings(&scene.warnings);
     let mut plan = if args.quick {
         Sweep::quick(&scene)

@@ -51,6 +51,10 @@ pub struct Args {
     /// `--set campaign.runs=20` (repeatable)
     #[arg(long = "set", value_name = "KEY=VALUE", value_parser = super::run::parse_override)]
     pub set: Vec<Override>,
+    /// Refuse a campaign whose runs would each write more rows than this
+    /// (`duration / output.every`); a drawn scene beyond it is a failed run
+    #[arg(long, value_name = "N", default_value_t = satsim_tools::scene::DEFAULT_MAX_ROWS)]
+    pub max_rows: u64,
 }
 
 /// The subcommand of `satsim campaign`.
@@ -96,7 +100,8 @@ pub fn run(args: &Args) -> Result<Output, CliError> {
         std::env::var(n).ok()
     })
     .map_err(|e| usage(&["campaign"], e))?;
-    let c = Campaign::read_with(scene_path, &args.set)?;
+    let mut c = Campaign::read_with(scene_path, &args.set)?;
+    c.set_max_rows(args.max_rows);
     super::print_warnings(&c.nominal.warnings);
     let dir = args
         .out
@@ -113,7 +118,8 @@ pub fn run(args: &Args) -> Result<Output, CliError> {
     });
     let bar = Bar::new();
     let started = Instant::now();
-    // Ctrl-C: no new run starts, the running ones finish and are written, exit 130 (a
+    // Ctrl-C: no new run starts, the running ones stop at their next row and are left out
+    // (`--resume` runs them again), exit 130 (a
     // second Ctrl-C within 2 s is ignored, a later one ends the process at once).
     super::run::interrupt::install();
     let report = campaign::run_campaign(

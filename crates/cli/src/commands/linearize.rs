@@ -15,6 +15,9 @@ pub struct Args {
     /// The scene file (TOML, cli-contract section 7)
     #[arg(value_name = "SCENE.toml")]
     pub scene: PathBuf,
+    /// Override a scene value by its dotted path, e.g. `--set duration=60` (repeatable)
+    #[arg(long = "set", value_name = "KEY=VALUE", value_parser = super::run::parse_override)]
+    pub set: Vec<satsim_tools::scene_keys::Override>,
 }
 
 /// The printed object, in the contract's key order.
@@ -32,7 +35,7 @@ struct Json<'a> {
 
 /// Runs `satsim linearize`.
 pub fn run(args: &Args) -> Result<Output, CliError> {
-    let scene = Scene::read(&args.scene)?;
+    let scene = Scene::read_with(&args.scene, &args.set)?;
     super::print_warnings(&scene.warnings);
     let lin = linearize(&scene).map_err(|e| scene_error(&args.scene, e))?;
     to_json(&json(&lin))

@@ -37,6 +37,9 @@ pub struct Args {
     /// [default: out/<scene stem>-modes.svg]
     #[arg(long, value_name = "FILE.svg", requires = "along")]
     pub plot: Option<PathBuf>,
+    /// Override a scene value by its dotted path, e.g. `--set duration=60` (repeatable)
+    #[arg(long = "set", value_name = "KEY=VALUE", value_parser = super::run::parse_override)]
+    pub set: Vec<satsim_tools::scene_keys::Override>,
 }
 
 /// Parses `HINGE=FROM:TO[:N]` items separated by commas: the hinges and the number of
@@ -79,7 +82,7 @@ pub fn run(args: &Args) -> Result<Output, CliError> {
         .as_deref()
         .map(|a| parse_along(a).map_err(|e| usage(&["modes"], format!("`--along` {e}"))))
         .transpose()?;
-    let scene = Scene::read(path)?;
+    let scene = Scene::read_with(path, &args.set)?;
     super::print_warnings(&scene.warnings);
     let Some((along, steps)) = along else {
         let m = modes(&scene).map_err(|e| scene_error(path, e))?;

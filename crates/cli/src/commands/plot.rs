@@ -7,6 +7,8 @@
 //! Bad input (exit status 2): an unreadable or empty file, a file without a `t` column, a
 //! column that is not in the file (the message lists those that are), a range with
 //! `--from` >= `--to` or holding no row, and a row that is not numbers (file and line named).
+//! A last line without its line end (a run killed while writing it) is left out with a
+//! warning: the plot holds every whole row.
 
 use super::{CliError, Output, usage};
 use satsim_tools::output::{Decimation, column_matches, plot_curves};
@@ -57,7 +59,11 @@ pub fn run(args: &Args) -> Result<Output, CliError> {
     let path = &args.csv;
     let name = path.display();
     let file = File::open(path).map_err(|e| CliError::Other(format!("{name}: {e}")))?;
-    let mut lines = BufReader::new(file).lines();
+    let mut lines = WholeLines {
+        reader: BufReader::new(file),
+        read: 0,
+        cut: None,
+    };
     let header = match lines.next() {
         Some(Ok(h)) if !h.trim().is_empty() => h,
         Some(Err(e)) => return Err(CliError::Other(format!("{name}: {e}"))),
@@ -91,7 +97,7 @@ pub fn run(args: &Args) -> Result<Output, CliError> {
 
     let mut curves: Vec<Decimation> = plotted.iter().map(|_| Decimation::new()).collect();
     let (mut rows, mut first_t, mut last_t) = (0usize, f64::NAN, f64::NAN);
-    for (k, line) in lines.enumerate() {
+    for (k, line) in lines.by_ref().enumerate() {
         let line_no = k + 2;
         let line = line.map_err(|e| CliError::Other(format!("{name}:{line_no}: {e}")))?;
         if line.trim().is_empty() {
@@ -125,6 +131,11 @@ pub fn run(args: &Args) -> Result<Output, CliError> {
         }
         last_t = t;
         rows += 1;
+    }
+    if let Some(n) = lines.cut {
+        super::print_warnings(&[format!(
+            "{name}:{n}: the last line has no line end (the run was stopped while writing it?): left out; plotted the rows before it"
+        )]);
     }
     if rows == 0 {
         let range = match (args.from, args.to) {
@@ -161,6 +172,37 @@ pub fn run(args: &Args) -> Result<Output, CliError> {
         labels.join(", "),
         name
     ))
+}
+
+/// The lines of a file that end with a line end; a last line without one (cut off) is
+/// not given, and `cut` holds its line number.
+struct WholeLines<R> {
+    reader: R,
+    read: usize,
+    cut: Option<usize>,
+}
+
+impl<R: BufRead> Iterator for WholeLines<R> {
+    type Item = std::io::Result<String>;
+    fn next(&mut self) -> Option<Self::Item> {
+        let mut line = String::new();
+        self.read += 1;
+        match self.reader.read_line(&mut line) {
+            Ok(0) => None,
+            Ok(_) if line.ends_with('\n') => {
+                line.pop();
+                if line.ends_with('\r') {
+                    line.pop();
+                }
+                Some(Ok(line))
+            }
+            Ok(_) => {
+                self.cut = Some(self.read);
+                None
+            }
+            Err(e) => Some(Err(e)),
+        }
+    }
 }
 
 /// `<CSV stem>-plot.svg` in the CSV's folder.

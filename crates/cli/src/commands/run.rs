@@ -20,7 +20,7 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use satsim_integrate::Output as Times;
 use satsim_spacecraft::simulation::RunError;
 use satsim_tools::output::{CsvWriter, PlotRecorder, write_events};
-use satsim_tools::scene::Scene;
+use satsim_tools::scene::{DEFAULT_MAX_ROWS, Scene};
 use satsim_tools::scene_keys::Override;
 use satsim_tools::view::{PoseRecorder, ViewError};
 use std::fmt::Write as _;
@@ -41,6 +41,9 @@ pub struct Args {
     /// `--set duration=60` or `--set model.body.2.mass=3.5` (repeatable)
     #[arg(long = "set", value_name = "KEY=VALUE", value_parser = parse_override)]
     pub set: Vec<Override>,
+    /// Refuse a scene whose run would write more rows than this (`duration / output.every`)
+    #[arg(long, value_name = "N", default_value_t = DEFAULT_MAX_ROWS)]
+    pub max_rows: u64,
 }
 
 /// The value parser of `--set`: `KEY=VALUE` (the key and value are checked against the scene
@@ -118,7 +121,7 @@ pub fn run(args: &Args) -> Result<Output, CliError> {
 
 /// Runs `satsim run`.
 pub fn command(args: &Args) -> Result<Output, Failure> {
-    run_scene_with(&args.scene, args.out.clone(), &args.set)
+    run_limited(&args.scene, args.out.clone(), &args.set, args.max_rows)
 }
 
 /// Runs the scene at `scene_path`, writing into `out` (default `out/<scene stem>`).
@@ -132,8 +135,19 @@ pub fn run_scene_with(
     out: Option<PathBuf>,
     overrides: &[Override],
 ) -> Result<Output, Failure> {
+    run_limited(scene_path, out, overrides, DEFAULT_MAX_ROWS)
+}
+
+/// [`run_scene_with`], refusing a run of more than `max_rows` rows before it starts.
+pub fn run_limited(
+    scene_path: &Path,
+    out: Option<PathBuf>,
+    overrides: &[Override],
+    max_rows: u64,
+) -> Result<Output, Failure> {
     let scene = Scene::read_with(scene_path, overrides).map_err(CliError::File)?;
     super::print_warnings(&scene.warnings);
+    scene.check_rows(max_rows).map_err(CliError::File)?;
     let mut sim = scene
         .simulation()
         .map_err(|e| CliError::Other(format!("{}: {e}", scene_path.display())))?;

@@ -100,13 +100,20 @@ impl SceneEffect for HingeSprings {
     type File = SpringsFile;
     fn from_section(s: SpringsFile, section: &Section) -> Result<Self, FileError> {
         let n = section.model().n_hinges();
-        let stiffness = section.per_hinge(&s.stiffness, "effects.hinge_springs.stiffness")?;
+        let stiffness =
+            section.per_hinge_non_negative(&s.stiffness, "effects.hinge_springs.stiffness")?;
         let damping = match &s.damping {
-            Some(d) => section.per_hinge(d, "effects.hinge_springs.damping")?,
+            Some(d) => section.per_hinge_non_negative(d, "effects.hinge_springs.damping")?,
             None => vec![0.0; n],
         };
         let reference = match &s.reference {
-            Some(r) => section.per_hinge(r, "effects.hinge_springs.reference")?,
+            Some(r) => {
+                let v = section.per_hinge(r, "effects.hinge_springs.reference")?;
+                for &a in &v {
+                    section.check_angle(r.span(), "effects.hinge_springs.reference", a);
+                }
+                v
+            }
             None => vec![0.0; n],
         };
         Ok(HingeSprings {

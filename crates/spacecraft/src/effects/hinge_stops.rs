@@ -242,6 +242,11 @@ impl SceneEffect for HingeStops {
                     ("min_rebound_rate", sf.min_rebound_rate, true),
                 ],
             )?;
+            for (key, v) in [("lower", sf.lower), ("upper", sf.upper)] {
+                if let Some(v) = v {
+                    section.check_angle(st.span(), &format!("effects.hinge_stops.stop.{key}"), v);
+                }
+            }
             if sf.lower.is_none() && sf.upper.is_none() {
                 return Err(section.error(Some(st.span()), "a stop needs `lower`, `upper` or both"));
             }

@@ -8,6 +8,7 @@
 use satsim_tree::Model;
 use satsim_tree::io::{FileError, line_of, with_key};
 use serde::de::{self, DeserializeOwned, DeserializeSeed, IgnoredAny, MapAccess, Visitor};
+use std::cell::RefCell;
 use std::fmt;
 use std::marker::PhantomData;
 use std::ops::{Deref, Range};
@@ -162,6 +163,7 @@ pub struct Section<'a> {
     span: Range<usize>,
     model: &'a Model,
     enabled: bool,
+    warnings: RefCell<Vec<String>>,
 }
 
 impl<'a> Deref for Section<'a> {
@@ -187,7 +189,36 @@ impl<'a> Section<'a> {
             span,
             model,
             enabled,
+            warnings: RefCell::new(Vec::new()),
         }
+    }
+    /// Notes something the reader accepts but the user should hear about (an implausible
+    /// value), at the line of `span`: `file:line: message`. The scene reader collects them
+    /// into the scene's warnings, which the command line prints on standard error.
+    pub fn warn(&self, span: Range<usize>, message: impl Into<String>) {
+        let line = line_of(self.text.text, span.start);
+        self.warnings.borrow_mut().push(format!(
+            "{}:{line}: {}",
+            self.text.path.display(),
+            message.into()
+        ));
+    }
+    /// Warns when the angle `value` (rad) of `what` lies beyond ±2π: most likely degrees
+    /// written where radians are meant (90 for a right angle).
+    pub fn check_angle(&self, span: Range<usize>, what: &str, value: f64) {
+        if value.abs() > std::f64::consts::TAU {
+            self.warn(
+                span,
+                format!(
+                    "`{what}` is {value} rad, beyond ±2π: angles are in radians (for {value} degrees write {:.6})",
+                    value.to_radians()
+                ),
+            );
+        }
+    }
+    /// The warnings noted while reading the section, in order.
+    pub fn take_warnings(&self) -> Vec<String> {
+        std::mem::take(&mut *self.warnings.borrow_mut())
     }
     /// Whether the section is switched on (a section switched off is still checked against
     /// its schema, and makes no effect).
@@ -242,6 +273,25 @@ impl<'a> Section<'a> {
                 .error(Some(x.span()), format!("`{what}`: entries must be finite")));
         }
         Ok(x.get_ref().clone())
+    }
+    /// [`Section::per_hinge`] whose entries must also be `>= 0` (a stiffness, a damping):
+    /// the error names the key, the hinge and the value.
+    pub fn per_hinge_non_negative(
+        &self,
+        x: &Spanned<Vec<f64>>,
+        what: &str,
+    ) -> Result<Vec<f64>, FileError> {
+        let v = self.per_hinge(x, what)?;
+        if let Some((k, bad)) = v.iter().enumerate().find(|(_, v)| **v < 0.0) {
+            return Err(self.text.error(
+                Some(x.span()),
+                format!(
+                    "`{what}`: entry {k} (hinge `{}`) is {bad}: it must be >= 0",
+                    self.model.hinge_names()[k]
+                ),
+            ));
+        }
+        Ok(v)
     }
 }
 

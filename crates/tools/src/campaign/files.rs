@@ -469,13 +469,16 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<Finished, CampaignError> {
     let mut traces = String::new();
     for d in dirs {
         let m = Meta::read(d)?;
+        // Shards are merged only when their digests say they ran the same scene.
+        if m.scene_digest.is_none() {
+            return Err(CampaignError::Other(format!(
+                "{}: has no scene digest (written by an older satsim), so nothing says which scene its runs were made with: rerun that shard",
+                d.join(CAMPAIGN_JSON).display()
+            )));
+        }
         match &meta {
             None => meta = Some(m),
-            Some(first)
-                if first.scene_digest.is_some()
-                    && m.scene_digest.is_some()
-                    && first.scene_digest != m.scene_digest =>
-            {
+            Some(first) if first.scene_digest != m.scene_digest => {
                 return Err(CampaignError::Other(format!(
                     "{} was run with another scene than {} (scene digests {} and {}: a changed scene, model file or --set value)",
                     d.display(),

@@ -34,7 +34,7 @@ pub use files::{Finished, finish, merge};
 pub use shard::{Shard, ShardChoice, choose_shard};
 pub use spec::{Dispersed, Law, Segment, draw, run_rng};
 
-use crate::scene::Scene;
+use crate::scene::{DEFAULT_MAX_ROWS, Scene};
 use crate::scene_keys::{KeyError, Override, inline_sources};
 use rayon::prelude::*;
 use satsim_integrate::Output as Times;
@@ -111,10 +111,14 @@ pub struct Campaign {
     pub nominal: Scene,
     /// The scene as written, `[campaign]` removed, `model` and `initial` read in as tables.
     base: Table,
+    /// The scene file's text as written (before `--set`), to place a drawn scene's errors.
+    source: String,
     /// Trajectory columns sampled for the envelope plots (`t` first).
     trace_columns: Vec<usize>,
     /// Every how many output rows a trace sample is kept.
     stride: usize,
+    /// The most output rows one run may have.
+    max_rows: u64,
 }
 
 /// The largest number of samples of a run's trace for the envelope plots.
@@ -202,8 +206,10 @@ impl Campaign {
             source,
         })?;
         let rewritten = crate::scene_keys::overridden_text(&text, path, overrides)?;
-        Campaign::parse(&rewritten, path)
-            .map_err(|e| crate::scene_keys::after_overrides(e, path, overrides))
+        let mut c = Campaign::parse(&rewritten, path)
+            .map_err(|e| crate::scene_keys::relocate(e, &text, path, &rewritten, overrides))?;
+        c.source = text;
+        Ok(c)
     }
 
     /// Parses a campaign scene's text; `path` names it in errors and anchors relative paths.
@@ -319,9 +325,22 @@ impl Campaign {
             columns,
             nominal,
             base,
+            source: text.to_owned(),
             trace_columns,
             stride,
+            max_rows: DEFAULT_MAX_ROWS,
         })
+    }
+
+    /// The most output rows one run may have (default [`DEFAULT_MAX_ROWS`]): the nominal
+    /// scene beyond it is refused when the campaign starts, a drawn one is a failed run.
+    pub fn max_rows(&self) -> u64 {
+        self.max_rows
+    }
+
+    /// Sets [`Campaign::max_rows`] (`satsim campaign --max-rows`).
+    pub fn set_max_rows(&mut self, max_rows: u64) {
+        self.max_rows = max_rows;
     }
 
     /// The `runs.csv` header.
@@ -351,12 +370,21 @@ impl Campaign {
 
     /// Runs `k`.
     pub fn run_one(&self, k: u64) -> RunRecord {
+        self.run_one_until(k, &|| false)
+            .expect("a run that is never stopped finishes")
+    }
+
+    /// Runs `k`, checking `stop` at every output row: `None` when it turned true before the
+    /// run ended (the run is left out, to be run again by `--resume`, as `satsim run` stops
+    /// at the next row on Ctrl-C).
+    pub fn run_one_until(&self, k: u64, stop: &(dyn Fn() -> bool + Sync)) -> Option<RunRecord> {
         let values = self.draw(k);
+        let mut stopped = false;
         // Sized for the nominal output times, so the sink does not reallocate as rows come.
         let rows = (self.nominal.duration / self.nominal.every).floor() as usize + 1;
         let mut trace = vec![Vec::with_capacity(rows / self.stride + 1); self.trace_columns.len()];
         let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-            self.integrate(&values, &mut trace)
+            self.integrate(&values, &mut trace, stop, &mut stopped)
         }))
         .unwrap_or_else(|p| {
             let what = p
@@ -366,22 +394,36 @@ impl Campaign {
                 .unwrap_or_else(|| "unknown panic".into());
             Err(format!("internal error (a bug in satsim): {what}"))
         });
+        if stopped {
+            return None;
+        }
         if outcome.is_err() {
             trace.iter_mut().for_each(Vec::clear);
         }
-        RunRecord {
+        Some(RunRecord {
             k,
             values,
             outcome,
             trace,
-        }
+        })
     }
 
-    fn integrate(&self, values: &[f64], trace: &mut [Vec<f64>]) -> Result<RunStats, String> {
+    fn integrate(
+        &self,
+        values: &[f64],
+        trace: &mut [Vec<f64>],
+        stop: &(dyn Fn() -> bool + Sync),
+        stopped: &mut bool,
+    ) -> Result<RunStats, String> {
         let text = self.scene_text(values);
-        let scene = Scene::parse(&text, &self.path).map_err(|e| match e {
-            FileError::Schema { message, .. } => format!("the drawn scene is invalid: {message}"),
-            other => format!("the drawn scene is invalid: {other}"),
+        // The drawn text is rewritten: its errors are placed where the value is written.
+        let scene = Scene::parse(&text, &self.path).map_err(|e| {
+            let e = crate::scene_keys::relocate(e, &self.source, &self.path, &text, &[]);
+            format!("the drawn scene is invalid: {e}")
+        })?;
+        scene.check_rows(self.max_rows).map_err(|e| match e {
+            FileError::Schema { message, .. } => format!("the drawn scene is refused: {message}"),
+            other => other.to_string(),
         })?;
         let mut sim = scene.simulation().map_err(|e| e.to_string())?;
         if sim.columns() != self.columns {
@@ -403,6 +445,10 @@ impl Campaign {
             t_end,
             &Times::Interval(scene.every),
             |t, row| -> Result<(), String> {
+                if stop() {
+                    *stopped = true;
+                    return Err("stopped".into());
+                }
                 for (c, &v) in row[1..].iter().enumerate() {
                     if !v.is_finite() {
                         return Err(format!("`{}` is {v} at t = {t} s", columns[c + 1]));
@@ -503,8 +549,9 @@ pub trait Progress: Sync {
     fn start(&self, _todo: u64, _skipped: u64) {}
     /// One run finished.
     fn finished(&self, _ok: bool) {}
-    /// Whether to stop: no run starts after this turns true (those running finish and are
-    /// written), and the campaign ends with [`CampaignError::Interrupted`].
+    /// Whether to stop, asked before each run and at each run's output rows: once it turns
+    /// true no run starts, those running stop at their next row and are left out (`--resume`
+    /// runs them again), and the campaign ends with [`CampaignError::Interrupted`].
     fn cancelled(&self) -> bool {
         false
     }
@@ -541,6 +588,7 @@ pub fn run_campaign(
     opts: &RunOptions,
     progress: &dyn Progress,
 ) -> Result<Report, CampaignError> {
+    campaign.nominal.check_rows(campaign.max_rows)?;
     std::fs::create_dir_all(dir).map_err(|e| CampaignError::io(dir, e))?;
     let digest = campaign.scene_digest();
     let meta = files::Meta {
@@ -554,15 +602,29 @@ pub fn run_campaign(
     // A folder is resumed only with the scene its runs were made with: the drawn values
     // alone would not notice a changed model file or a different `--set`.
     let json = dir.join(CAMPAIGN_JSON);
-    if opts.resume && json.exists() {
-        let before = files::Meta::read(dir)?;
-        if before.scene_digest.as_ref().is_some_and(|d| *d != digest) {
+    // Without a digest nothing says which scene the runs there were made with: refused.
+    if opts.resume && (json.exists() || dir.join(RUNS_CSV).exists()) {
+        if !json.exists() {
             return Err(CampaignError::Other(format!(
-                "{}: its runs were made with another scene (a changed scene, model file or --set value; scene digest {} here, {} now): resume with the same scene and --set, or use another --out",
-                json.display(),
-                before.scene_digest.as_deref().unwrap_or_default(),
-                digest
+                "{}: no {CAMPAIGN_JSON} beside it, so nothing says which scene its runs were made with: --resume needs the folder a campaign wrote whole; use another --out",
+                dir.join(RUNS_CSV).display()
             )));
+        }
+        let before = files::Meta::read(dir)?;
+        match &before.scene_digest {
+            None => {
+                return Err(CampaignError::Other(format!(
+                    "{}: has no scene digest (written by an older satsim), so nothing says which scene its runs were made with: use another --out",
+                    json.display()
+                )));
+            }
+            Some(d) if *d != digest => {
+                return Err(CampaignError::Other(format!(
+                    "{}: its runs were made with another scene (a changed scene, model file or --set value; scene digest {d} here, {digest} now): resume with the same scene and --set, or use another --out",
+                    json.display(),
+                )));
+            }
+            Some(_) => {}
         }
     }
     meta.write(dir)?;
@@ -604,7 +666,9 @@ pub fn run_campaign(
                 if progress.cancelled() {
                     return Ok(());
                 }
-                let r = campaign.run_one(k);
+                let Some(r) = campaign.run_one_until(k, &|| progress.cancelled()) else {
+                    return Ok(());
+                };
                 let row = campaign.csv_row(&r);
                 let lines = campaign.trace_lines(&r);
                 let mut s = sinks.lock().unwrap_or_else(|p| p.into_inner());

@@ -82,7 +82,40 @@ pub struct Scene {
     pub warnings: Vec<String>,
 }
 
+/// The most output rows a run writes unless told otherwise (`satsim run --max-rows`): about
+/// 1 GB of `trajectory.csv` for the preprint satellite. A row costs a right-hand side and a
+/// line of text whatever the step, so a tiny `output.every` is refused before the run starts
+/// rather than filling the disk.
+pub const DEFAULT_MAX_ROWS: u64 = 1_000_000;
+
 impl Scene {
+    /// How many rows a run writes: `t = 0, every, 2 every, …` and the end (counted as a
+    /// float, since `duration / every` may exceed every integer type).
+    pub fn output_rows(&self) -> f64 {
+        let intervals = (self.duration / self.every).floor();
+        let on_grid = intervals * self.every >= self.duration;
+        intervals + if on_grid { 1.0 } else { 2.0 }
+    }
+
+    /// Refuses a scene whose run would write more than `max_rows` rows, naming
+    /// `output.every`, the row count and the limit.
+    pub fn check_rows(&self, max_rows: u64) -> Result<(), FileError> {
+        let rows = self.output_rows();
+        if rows <= max_rows as f64 {
+            return Ok(());
+        }
+        Err(FileError::Schema {
+            path: self.path.clone(),
+            line: None,
+            message: format!(
+                "`output.every` = {} s over `duration` = {} s makes {rows:.0} rows, more than the limit of {max_rows}: raise `output.every` (at least {:.3e} s) or the limit (`--max-rows`)",
+                self.every,
+                self.duration,
+                self.duration / (max_rows.max(2) - 1) as f64
+            ),
+        })
+    }
+
     /// A torque-free scene of `model` from `initial`, integrated by DP54 at the given
     /// tolerances, with rows every `duration / 100`. Add effects through [`Scene::effects`].
     pub fn new(model: Model, initial: State, duration: f64) -> Self {
@@ -155,16 +188,11 @@ impl Scene {
         })?;
         let rewritten = scene_keys::overridden_text(&text, path, overrides)?;
         let mut scene = Scene::parse_with_registry(&rewritten, path, registry)
-            .map_err(|e| scene_keys::after_overrides(e, path, overrides))?;
-        // A line of the rewritten text means nothing to the user: drop it.
-        let prefix = format!("{}:", path.display());
+            .map_err(|e| scene_keys::relocate(e, &text, path, &rewritten, overrides))?;
+        // A line of the rewritten text means nothing to the user: name where it was written.
+        let origins = scene_keys::Origins::new(&text, path, &rewritten);
         for w in &mut scene.warnings {
-            if let Some(rest) = w.strip_prefix(&prefix)
-                && let Some((line, msg)) = rest.split_once(':')
-                && line.parse::<usize>().is_ok()
-            {
-                *w = format!("{} (with --set):{msg}", path.display());
-            }
+            *w = origins.warning(w);
         }
         Ok(scene)
     }

@@ -5,6 +5,7 @@
 use super::Scene;
 use super::file::{ArmatureFile, ModelSource, SceneFile, StateSource};
 use crate::scene_keys;
+use satsim_integrate::Options;
 use satsim_spacecraft::effects::section::reword;
 use satsim_spacecraft::effects::{EffectSet, Registry, SceneText, Section};
 use satsim_tree::io::{FileError, line_of, with_key};
@@ -114,12 +115,15 @@ impl<'a> Parser<'a> {
                 )
             }
         };
+        if let Some(w) = self.step_warning(&file, &options, duration, every) {
+            warnings.push(w);
+        }
         let mut effects = EffectSet::default();
         if let Some(o) = &file.orbit {
             effects.insert(self.orbit(o)?);
         }
         if let Some(e) = &file.effects {
-            self.effects(e, &model, &mut effects)?;
+            self.effects(e, &model, &mut effects, &mut warnings)?;
         }
         let scene = Scene {
             path,
@@ -141,6 +145,36 @@ impl<'a> Parser<'a> {
         Ok(scene)
     }
 
+    /// A fixed step longer than the duration or the output interval is silently cut to it
+    /// (steps land on output times), so the run is not at the step the user chose: say so,
+    /// naming the keys, at `integrator.step`'s line.
+    fn step_warning(
+        &self,
+        file: &SceneFile,
+        options: &Options,
+        duration: f64,
+        every: f64,
+    ) -> Option<String> {
+        let h = options.fixed_step?;
+        let (other, limit) = if h > duration {
+            ("duration", duration)
+        } else if h > every {
+            ("output.every", every)
+        } else {
+            return None;
+        };
+        let line = file
+            .integrator
+            .as_ref()
+            .and_then(|i| i.get_ref().step.as_ref())
+            .map(|s| format!(":{}", line_of(self.text(), s.span().start)))
+            .unwrap_or_default();
+        Some(format!(
+            "{}{line}: `integrator.step` ({h} s) is longer than `{other}` ({limit} s): every step is cut to {limit} s, so the accuracy is that of a {limit} s step; set `integrator.step` at most {limit}",
+            self.path().display()
+        ))
+    }
+
     /// Reads every `[effects.<name>]` section with the registry's effect of that name, in
     /// the registry's order, then checks each against the others (at its section's line).
     fn effects(
@@ -148,6 +182,7 @@ impl<'a> Parser<'a> {
         sections: &Spanned<BTreeMap<String, Spanned<toml::Value>>>,
         model: &Model,
         out: &mut EffectSet,
+        warnings: &mut Vec<String>,
     ) -> Result<(), FileError> {
         // Unknown sections first, in file order.
         let mut written: Vec<(&String, &Spanned<toml::Value>)> =
@@ -169,7 +204,9 @@ impl<'a> Parser<'a> {
             };
             let enabled = raw.get_ref().get("enabled").and_then(|v| v.as_bool()) != Some(false);
             let section = Section::new(self.src, name, raw.span(), model, enabled);
-            if let Some(e) = self.registry.read(&section)? {
+            let read = self.registry.read(&section)?;
+            warnings.extend(section.take_warnings());
+            if let Some(e) = read {
                 spans.push((name, raw.span()));
                 out.insert_boxed(e);
             }

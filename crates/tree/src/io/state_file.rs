@@ -127,7 +127,8 @@ pub const STATE_ATTITUDE_TOLERANCE: f64 = 1e-3;
 
 impl StateFile {
     /// What [`StateFile::resolve`] accepts but a user should hear about: an attitude
-    /// quaternion normalised from a norm more than [`UNIT_NORM_TOLERANCE`] away from 1.
+    /// quaternion normalised from a norm more than [`UNIT_NORM_TOLERANCE`] away from 1, a
+    /// hinge angle beyond ±2π (degrees written as radians?).
     pub fn warnings(&self) -> Vec<String> {
         let mut out = Vec::new();
         if let Some(Attitude::Quaternion(a)) = self.base.as_ref().and_then(|b| b.attitude.as_ref())
@@ -140,6 +141,19 @@ impl StateFile {
                     "base.attitude: quaternion norm {norm} is not 1; normalised"
                 ));
             }
+        }
+        // An angle beyond a turn is most likely degrees written where radians are meant.
+        if let Some(h) = &self.hinges
+            && let Some((k, a)) = h
+                .angle
+                .iter()
+                .enumerate()
+                .find(|(_, a)| a.abs() > std::f64::consts::TAU)
+        {
+            out.push(format!(
+                "hinges.angle: entry {k} is {a} rad, beyond ±2π: angles are in radians (for {a} degrees write {:.6})",
+                a.to_radians()
+            ));
         }
         out
     }

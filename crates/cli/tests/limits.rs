@@ -1,0 +1,619 @@
+//! The limits a user hits (issue 28): outputs that do not fit, values that make no sense,
+//! resumes that mix scenes, errors placed where the value is written, `--set` on every
+//! command, Ctrl-C in a campaign's long runs, a trajectory cut by a kill.
+
+mod common;
+
+use common::root;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+/// A short scene of the preprint satellite (its model file beside it): 2 s of RK4 at 0.01 s,
+/// rows every 0.5 s, springs on every hinge, the panels stowed.
+const SHORT: &str = r#"model = "satellite.toml"
+duration = 2.0
+
+[initial]
+hinges = { angle = [0.0, 0.0, 0.0, 3.0, -3.0], rate = [0.0, 0.0, 0.0, 0.0, 0.0] }
+
+[integrator]
+method = "rk4"
+step = 0.01
+
+[output]
+every = 0.5
+plots = false
+view = false
+
+[effects.hinge_springs]
+stiffness = [50.0, 50.0, 50.0, 2.0, 2.0]
+damping = [40.0, 40.0, 40.0, 4.0, 4.0]
+
+[effects.hinge_stops]
+[[effects.hinge_stops.stop]]
+hinge = "h4"
+lower = 0.0
+"#;
+
+/// The campaign table added to [`SHORT`] for the campaign tests.
+const CAMPAIGN: &str = r#"
+[campaign]
+runs = 6
+seed = 7
+
+[[campaign.disperse]]
+key = "effects.hinge_springs.stiffness"
+index = 3
+normal = { sigma = 1.0 }
+"#;
+
+fn temp_dir(test: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("satsim-limits-{test}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::copy(
+        root().join("examples/satellite.toml"),
+        dir.join("satellite.toml"),
+    )
+    .unwrap();
+    dir
+}
+
+fn scene(dir: &Path, text: &str) -> PathBuf {
+    let p = dir.join("short.toml");
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+fn satsim(dir: &Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_satsim"))
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .expect("run satsim")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// Exit status 2 (bad input): its standard error.
+fn refused(o: &Output) -> String {
+    let err = stderr(o);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    err
+}
+
+fn ok(o: &Output) -> String {
+    let err = stderr(o);
+    assert!(o.status.success(), "{err}");
+    err
+}
+
+fn rows(dir: &Path, out: &str) -> Vec<Vec<f64>> {
+    let text = std::fs::read_to_string(dir.join(out).join("trajectory.csv")).unwrap();
+    text.lines()
+        .skip(1)
+        .map(|l| l.split(',').map(|f| f.parse().unwrap()).collect())
+        .collect()
+}
+
+/// The line (1-based) of the first line of `text` that starts with `start` after `after`.
+fn line_of(text: &str, after: &str, start: &str) -> usize {
+    let from = text.find(after).expect("anchor");
+    let before = text[..from].lines().count();
+    before
+        + text[from..]
+            .lines()
+            .position(|l| l.trim_start().starts_with(start))
+            .expect("line")
+        + 1
+}
+
+#[test]
+fn a_run_whose_rows_exceed_the_limit_is_refused_before_it_starts() {
+    let dir = temp_dir("rows");
+    scene(&dir, SHORT);
+    let started = Instant::now();
+    let err = refused(&satsim(
+        &dir,
+        &[
+            "run",
+            "short.toml",
+            "--out",
+            "o",
+            "--set",
+            "output.every=1e-9",
+        ],
+    ));
+    assert!(
+        err.contains("`output.every` = 0.000000001 s over `duration` = 2 s makes 2000000001 rows, more than the limit of 1000000"),
+        "{err}"
+    );
+    assert!(err.contains("--max-rows"), "{err}");
+    assert!(
+        !dir.join("o/trajectory.csv").exists(),
+        "refused before writing"
+    );
+    // Refused at once, not after writing gigabytes.
+    assert!(started.elapsed() < Duration::from_secs(30));
+    // The limit is a flag: 2 s at 1e-3 s is 2001 rows.
+    let err = refused(&satsim(
+        &dir,
+        &[
+            "run",
+            "short.toml",
+            "--out",
+            "o",
+            "--set",
+            "output.every=1e-3",
+            "--max-rows",
+            "2000",
+        ],
+    ));
+    assert!(
+        err.contains("makes 2001 rows, more than the limit of 2000"),
+        "{err}"
+    );
+    ok(&satsim(
+        &dir,
+        &[
+            "run",
+            "short.toml",
+            "--out",
+            "o",
+            "--set",
+            "output.every=1e-3",
+            "--max-rows",
+            "2001",
+        ],
+    ));
+    assert_eq!(rows(&dir, "o").len(), 2001);
+    // A campaign too, before its first run.
+    scene(&dir, &format!("{SHORT}{CAMPAIGN}"));
+    let err = refused(&satsim(
+        &dir,
+        &[
+            "campaign",
+            "short.toml",
+            "--out",
+            "c",
+            "--set",
+            "output.every=1e-7",
+        ],
+    ));
+    assert!(err.contains("makes 20000001 rows"), "{err}");
+    assert!(!dir.join("c/runs.csv").exists());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn an_output_interval_longer_than_the_run_still_writes_the_first_and_last_rows() {
+    let dir = temp_dir("every");
+    scene(&dir, SHORT);
+    ok(&satsim(
+        &dir,
+        &[
+            "run",
+            "short.toml",
+            "--out",
+            "o",
+            "--set",
+            "output.every=1e16",
+        ],
+    ));
+    let r = rows(&dir, "o");
+    assert_eq!(r.len(), 2);
+    assert_eq!((r[0][0], r[1][0]), (0.0, 2.0));
+    // The start is the initial state (the panel stowed at 3 rad), the end is not.
+    let h4 = 8 + 3;
+    assert_eq!(r[0][h4], 3.0);
+    assert_ne!(r[1][h4], 3.0);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn negative_spring_stiffness_and_damping_are_refused_at_their_line() {
+    let dir = temp_dir("negative");
+    for (key, bad) in [
+        ("stiffness", "stiffness = [50.0, 50.0, 50.0, -2.0, 2.0]"),
+        ("damping", "damping = [40.0, 40.0, -40.0, 4.0, 4.0]"),
+    ] {
+        let original = SHORT
+            .lines()
+            .find(|l| l.starts_with(key))
+            .expect("the key's line");
+        let text = SHORT.replace(original, bad);
+        scene(&dir, &text);
+        let err = refused(&satsim(&dir, &["run", "short.toml", "--out", "o"]));
+        let line = line_of(&text, "[effects.hinge_springs]", key);
+        assert!(
+            err.contains(&format!("short.toml:{line}: `effects.hinge_springs.{key}`")),
+            "{err}"
+        );
+        assert!(err.contains("must be >= 0"), "{err}");
+    }
+    // A campaign whose draws go negative: those runs are failed rows naming the key and value.
+    scene(
+        &dir,
+        &format!("{SHORT}{CAMPAIGN}").replace("sigma = 1.0", "sigma = 4.0"),
+    );
+    ok(&satsim(
+        &dir,
+        &["campaign", "short.toml", "--out", "c", "--threads", "1"],
+    ));
+    let runs = std::fs::read_to_string(dir.join("c/runs.csv")).unwrap();
+    let mut failed = 0;
+    for line in runs.lines().skip(1) {
+        let drawn: f64 = line.split(',').nth(1).unwrap().parse().unwrap();
+        let status = line.split(',').nth(2).unwrap();
+        assert_eq!(status == "failed", drawn < 0.0, "{line}");
+        if drawn < 0.0 {
+            failed += 1;
+            assert!(
+                line.contains(&format!(
+                    "`effects.hinge_springs.stiffness`: entry 3 (hinge `h4`) is {drawn}: it must be >= 0"
+                )),
+                "{line}"
+            );
+        }
+    }
+    assert!(
+        failed > 0,
+        "the seed draws some negative stiffnesses:\n{runs}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn resume_and_merge_refuse_folders_without_a_scene_digest() {
+    let dir = temp_dir("digest");
+    scene(&dir, &format!("{SHORT}{CAMPAIGN}"));
+    ok(&satsim(&dir, &["campaign", "short.toml", "--out", "a"]));
+    ok(&satsim(&dir, &["campaign", "short.toml", "--out", "b"]));
+    // No campaign.json: nothing says which scene the runs came from.
+    std::fs::remove_file(dir.join("a/campaign.json")).unwrap();
+    let err = refused(&satsim(
+        &dir,
+        &["campaign", "short.toml", "--out", "a", "--resume"],
+    ));
+    assert!(err.contains("no campaign.json beside it"), "{err}");
+    // A campaign.json without the digest (an older satsim's), and another scene's runs.
+    let json_path = dir.join("b/campaign.json");
+    let json = std::fs::read_to_string(&json_path).unwrap();
+    let mut v: serde_json::Value = serde_json::from_str(&json).unwrap();
+    v.as_object_mut().unwrap().remove("scene_digest");
+    std::fs::write(&json_path, v.to_string()).unwrap();
+    let text = std::fs::read_to_string(dir.join("short.toml")).unwrap();
+    std::fs::write(
+        dir.join("short.toml"),
+        text.replace("duration = 2.0", "duration = 1.0"),
+    )
+    .unwrap();
+    let err = refused(&satsim(
+        &dir,
+        &["campaign", "short.toml", "--out", "b", "--resume"],
+    ));
+    assert!(err.contains("has no scene digest"), "{err}");
+    ok(&satsim(&dir, &["campaign", "short.toml", "--out", "d"]));
+    let o = satsim(&dir, &["campaign", "merge", "d", "b", "--out", "m"]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("has no scene digest"), "{}", stderr(&o));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn an_error_after_set_names_the_line_where_the_value_is_written() {
+    let dir = temp_dir("place");
+    scene(&dir, SHORT);
+    let model = std::fs::read_to_string(dir.join("satellite.toml")).unwrap();
+    // Body 4 (panel2): its `mass` line in the model file.
+    let mass_line = {
+        let body4 = model.match_indices("[[body]]").nth(4).unwrap().0;
+        line_of(&model[body4..], "[[body]]", "mass") + model[..body4].lines().count()
+    };
+    let err = refused(&satsim(
+        &dir,
+        &[
+            "run",
+            "short.toml",
+            "--out",
+            "o",
+            "--set",
+            "model.body.4.mass=-5",
+        ],
+    ));
+    assert!(
+        err.contains(&format!(
+            "satellite.toml:{mass_line}: body `panel2`: mass -5 is negative"
+        )),
+        "{err}"
+    );
+    // A scene key: its line in the scene file, and the overrides listed.
+    let err = refused(&satsim(
+        &dir,
+        &[
+            "run",
+            "short.toml",
+            "--out",
+            "o",
+            "--set",
+            "effects.hinge_springs.damping=[1.0]",
+        ],
+    ));
+    let line = line_of(SHORT, "[effects.hinge_springs]", "damping");
+    assert!(
+        err.contains(&format!(
+            "short.toml:{line}: `effects.hinge_springs.damping`: expected 5 entries"
+        )),
+        "{err}"
+    );
+    assert!(
+        err.contains("(with --set effects.hinge_springs.damping=[1.0])"),
+        "{err}"
+    );
+    // A campaign's failed row names the model file's line too.
+    let campaign = format!(
+        "{SHORT}\n[campaign]\nruns = 1\n[[campaign.disperse]]\nkey = \"model.body.4.mass\"\nuniform = {{ low = -30.0, high = -25.0 }}\n"
+    );
+    scene(&dir, &campaign);
+    ok(&satsim(&dir, &["campaign", "short.toml", "--out", "c"]));
+    let runs = std::fs::read_to_string(dir.join("c/runs.csv")).unwrap();
+    assert!(
+        runs.contains(&format!(
+            "satellite.toml:{mass_line}: body `panel2`: mass -"
+        )),
+        "{runs}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_fixed_step_longer_than_the_run_or_the_output_interval_warns() {
+    let dir = temp_dir("step");
+    scene(&dir, SHORT);
+    let line = line_of(SHORT, "[integrator]", "step");
+    let err = ok(&satsim(
+        &dir,
+        &[
+            "run",
+            "short.toml",
+            "--out",
+            "o",
+            "--set",
+            "integrator.step=5.0",
+        ],
+    ));
+    assert!(
+        err.contains(&format!(
+            "warning: short.toml:{line} (with --set): `integrator.step` (5 s) is longer than `duration` (2 s)"
+        )),
+        "{err}"
+    );
+    let err = ok(&satsim(
+        &dir,
+        &[
+            "run",
+            "short.toml",
+            "--out",
+            "o",
+            "--set",
+            "integrator.step=0.8",
+        ],
+    ));
+    assert!(
+        err.contains("`integrator.step` (0.8 s) is longer than `output.every` (0.5 s)"),
+        "{err}"
+    );
+    let err = ok(&satsim(&dir, &["run", "short.toml", "--out", "o"]));
+    assert!(!err.contains("warning"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn ctrl_c_stops_a_campaigns_running_runs_at_their_next_row() {
+    let dir = temp_dir("sigint");
+    // Two runs of 20000 s on one thread: minutes each. Ctrl-C stops the running one at its
+    // next row instead of waiting for it to end.
+    scene(
+        &dir,
+        &format!("{SHORT}{CAMPAIGN}")
+            .replace("duration = 2.0", "duration = 20000.0")
+            .replace("every = 0.5", "every = 1.0")
+            .replace("runs = 6", "runs = 2"),
+    );
+    let child = Command::new(env!("CARGO_BIN_EXE_satsim"))
+        .args(["campaign", "short.toml", "--out", "c", "--threads", "1"])
+        .current_dir(&dir)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // The campaign has started when its folder holds campaign.json.
+    let start = Instant::now();
+    while !dir.join("c/campaign.json").exists() {
+        assert!(
+            start.elapsed() < Duration::from_secs(60),
+            "no campaign.json"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    std::thread::sleep(Duration::from_millis(300));
+    let interrupted = Instant::now();
+    let kill = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(kill.success());
+    let o = child.wait_with_output().unwrap();
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(130), "{err}");
+    // Stopped promptly (a run would take minutes), with no run written.
+    assert!(interrupted.elapsed() < Duration::from_secs(30));
+    let runs = std::fs::read_to_string(dir.join("c/runs.csv")).unwrap();
+    assert_eq!(runs.lines().count(), 1, "{runs}");
+    assert!(err.contains("interrupted: 0 runs in"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn plot_reads_a_trajectory_cut_mid_row_up_to_its_last_whole_row() {
+    let dir = temp_dir("cut");
+    scene(&dir, SHORT);
+    ok(&satsim(&dir, &["run", "short.toml", "--out", "o"]));
+    let text = std::fs::read_to_string(dir.join("o/trajectory.csv")).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines.len(), 6);
+    // Killed while writing the row of t = 1.5 s: half of it is there, without its line end.
+    let cut = format!(
+        "{}\n{}",
+        lines[..4].join("\n"),
+        &lines[4][..lines[4].len() / 2]
+    );
+    std::fs::write(dir.join("cut.csv"), cut).unwrap();
+    let o = satsim(
+        &dir,
+        &["plot", "cut.csv", "--columns", "angle_h4", "-o", "cut.svg"],
+    );
+    let err = ok(&o);
+    assert!(
+        err.contains("cut.csv:5: the last line has no line end"),
+        "{err}"
+    );
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("3 rows, t = 0 .. 1 s"), "{out}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn set_adds_keys_the_schema_knows_on_every_command_that_reads_a_scene() {
+    let dir = temp_dir("set");
+    let no_step = SHORT.replace("method = \"rk4\"\nstep = 0.01\n", "method = \"dp54\"\n");
+    scene(&dir, &no_step);
+    // `integrator.step` is left at its default: added, it switches to its value.
+    ok(&satsim(
+        &dir,
+        &[
+            "run",
+            "short.toml",
+            "--out",
+            "o",
+            "--set",
+            "integrator.method=rk4",
+            "--set",
+            "integrator.step=0.25",
+        ],
+    ));
+    assert_eq!(rows(&dir, "o").len(), 5);
+    // A table the scene does not have, and a key inside an array's table: both read.
+    ok(&satsim(
+        &dir,
+        &[
+            "run",
+            "short.toml",
+            "--out",
+            "o",
+            "--set",
+            "orbit.altitude=500e3",
+            "--set",
+            "effects.hinge_stops.stop.0.action=rebound",
+        ],
+    ));
+    let err = refused(&satsim(
+        &dir,
+        &[
+            "run",
+            "short.toml",
+            "--out",
+            "o",
+            "--set",
+            "orbit.altitude=50",
+        ],
+    ));
+    assert!(
+        err.contains("`orbit.altitude` is 50 m, below 100 km"),
+        "{err}"
+    );
+    // A key the schema does not know is refused by the reader, naming it.
+    let err = refused(&satsim(
+        &dir,
+        &[
+            "run",
+            "short.toml",
+            "--out",
+            "o",
+            "--set",
+            "integrator.stepp=0.25",
+        ],
+    ));
+    assert!(err.contains("unknown key `stepp`"), "{err}");
+    // modes, linearize and accuracy take --set too.
+    let stiff = "effects.hinge_springs.stiffness=[5.0, 5.0, 5.0, 2.0, 2.0]";
+    let a = satsim(&dir, &["modes", "short.toml"]);
+    let b = satsim(&dir, &["modes", "short.toml", "--set", stiff]);
+    ok(&a);
+    ok(&b);
+    assert_ne!(
+        a.stdout, b.stdout,
+        "the softer gimbal springs change the modes"
+    );
+    let a = satsim(&dir, &["linearize", "short.toml"]);
+    let b = satsim(&dir, &["linearize", "short.toml", "--set", stiff]);
+    ok(&a);
+    ok(&b);
+    assert_ne!(a.stdout, b.stdout);
+    let err = refused(&satsim(
+        &dir,
+        &[
+            "accuracy",
+            "short.toml",
+            "--quick",
+            "--out",
+            "acc",
+            "--set",
+            "duration=-1",
+        ],
+    ));
+    assert!(
+        err.contains("`duration` must be a finite number > 0, got -1"),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn angles_beyond_a_turn_warn_as_degrees_written_for_radians() {
+    let dir = temp_dir("angles");
+    let text = SHORT.replace("lower = 0.0", "lower = -90.0");
+    scene(&dir, &text);
+    let err = ok(&satsim(&dir, &["run", "short.toml", "--out", "o"]));
+    let line = line_of(
+        &text,
+        "[[effects.hinge_stops.stop]]",
+        "[[effects.hinge_stops.stop]]",
+    );
+    assert!(
+        err.contains(&format!(
+            ":{line}: `effects.hinge_stops.stop.lower` is -90 rad, beyond ±2π"
+        )),
+        "{err}"
+    );
+    assert!(err.contains("write -1.570796"), "{err}");
+    let text = SHORT.replace(
+        "angle = [0.0, 0.0, 0.0, 3.0, -3.0]",
+        "angle = [0.0, 0.0, 0.0, 180.0, -3.0]",
+    );
+    scene(&dir, &text);
+    let o = satsim(&dir, &["run", "short.toml", "--out", "o"]);
+    assert!(
+        stderr(&o).contains("hinges.angle: entry 3 is 180 rad, beyond ±2π"),
+        "{}",
+        stderr(&o)
+    );
+    // Angles within a turn say nothing.
+    scene(&dir, SHORT);
+    let err = ok(&satsim(&dir, &["run", "short.toml", "--out", "o"]));
+    assert!(!err.contains("warning"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
