@@ -83,7 +83,7 @@ impl Simulation {
                 None => counts.push((i, 1)),
             }
         }
-        counts.sort_by(|a, b| b.1.cmp(&a.1));
+        counts.sort_by_key(|&(_, c)| std::cmp::Reverse(c));
         let names: Vec<String> = counts
             .iter()
             .map(|&(i, c)| {
