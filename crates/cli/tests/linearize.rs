@@ -216,3 +216,24 @@ fn bad_input_exits_2_naming_the_file() {
         &["--plot", "--along"],
     );
 }
+
+#[test]
+fn a_linearisation_beyond_the_range_of_f64_exits_2_not_0() {
+    // A gimbal spring of 1e308 printed frequencies of 1e296 Hz with negative damping
+    // ratios and exit status 0.
+    let dir = setup("range");
+    std::fs::write(
+        dir.join("extreme.toml"),
+        SCENE.replace(
+            "stiffness = [50.0, 50.0, 50.0,",
+            "stiffness = [1e308, 1e308, 1e308,",
+        ),
+    )
+    .unwrap();
+    for cmd in ["linearize", "modes"] {
+        fails(
+            &satsim_in(&dir, &[cmd, "extreme.toml"]),
+            &["extreme.toml", "out of range", "1.3e154"],
+        );
+    }
+}

@@ -73,7 +73,10 @@ impl Ctx {
     #[inline]
     pub fn check_budget(&self, t: f64) -> Result<(), IntegrateError> {
         if self.steps_accepted + self.steps_rejected >= self.max_steps {
-            Err(IntegrateError::MaxSteps { t })
+            Err(IntegrateError::MaxSteps {
+                t,
+                stepping: String::new(),
+            })
         } else {
             Ok(())
         }

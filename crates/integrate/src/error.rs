@@ -20,10 +20,13 @@ pub enum IntegrateError {
     },
     /// More step attempts than `Options::max_steps` (typically: a stiff
     /// problem given to an explicit method).
-    #[error("maximum number of steps exceeded at t = {t}")]
+    #[error("maximum number of steps exceeded at t = {t}{stepping}")]
     MaxSteps {
         /// Time reached.
         t: f64,
+        /// What the steps were spent on, as the caller that knows the system tells it
+        /// (`"; …"`, appended to the message), or empty: the integrator leaves it empty.
+        stepping: String,
     },
     /// The system returned a non-finite derivative for a finite state, or a
     /// fixed-step run produced a non-finite state.

@@ -69,7 +69,7 @@ fn radau5_stable_on_stiff_scalar_with_large_steps() {
 fn dp54_on_stiff_problem_hits_max_steps() {
     let opts = Options::new(Method::Dp54).with_max_steps(5000);
     match run(&mut StiffScalar, &opts, &[0.0], 0.0, 10.0) {
-        Err(IntegrateError::MaxSteps { t }) => assert!(t > 0.0 && t < 10.0),
+        Err(IntegrateError::MaxSteps { t, .. }) => assert!(t > 0.0 && t < 10.0),
         other => panic!("expected MaxSteps, got {other:?}"),
     }
 }

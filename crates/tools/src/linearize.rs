@@ -44,6 +44,11 @@
 //! as [`Linearization::error_estimate`]; on the test scenes the extrapolated Jacobian
 //! agrees with the analytic one to about 10⁻⁹ relative.
 //!
+//! A linearisation whose error estimate is more than [`ACCURACY`] (10⁻³) of its largest
+//! entry is an error ([`LinearizeError::Inaccurate`]), and so is one with an entry beyond
+//! [`LARGEST_ENTRY`] (`√(f64::MAX)`, [`LinearizeError::OutOfRange`]): neither describes
+//! the dynamics, and printing it would pass for a result.
+//!
 //! The alternative, exact derivatives (the analytic derivatives of ABA of Carpentier and
 //! Mansard 2018, or forward-mode dual numbers through the engine), would need every effect
 //! (each behind the open [`satsim_spacecraft::effects::Effect`] trait, with its own code for wheels,
@@ -84,6 +89,21 @@ use thiserror::Error;
 /// Relative step of the finite differences (see the module documentation).
 const STEP: f64 = 1e-3;
 
+/// The largest [`Linearization::error_estimate`] accepted, as a fraction of the largest
+/// entry of `A` and `B`. Smooth dynamics give 10⁻⁸ of it or less (the example scenes, a
+/// gimbal spring of 10¹²); an estimate of 10⁻³ of it or more means the central differences
+/// straddle a kink or a jump of the right-hand side (a limit, a stop, a sign switch at the
+/// initial state) or a sum that lost its digits, and the entries (and the frequencies
+/// from them) have fewer than three correct digits.
+pub const ACCURACY: f64 = 1e-3;
+
+/// The largest entry of `A` and `B` accepted: `√(f64::MAX)` ≈ 1.3·10¹⁵⁴. The model is
+/// used by multiplying its entries together (the eigenvalue decomposition of
+/// [`crate::modes`], `A z`, `A²` of a discretisation), and a product of two larger entries
+/// overflows: with a spring of 10³⁰⁸ the eigenvalues come out as 10²⁹⁸ where they are
+/// 10¹⁵³, with negative damping ratios.
+pub const LARGEST_ENTRY: f64 = 1.3407807929942596e154;
+
 /// Why a scene could not be linearised.
 #[derive(Debug, Error)]
 pub enum LinearizeError {
@@ -102,6 +122,32 @@ pub enum LinearizeError {
         col: String,
         /// The value.
         value: f64,
+    },
+    /// An entry beyond [`LARGEST_ENTRY`].
+    #[error(
+        "the linearisation is out of range: d({row})/d({col}) = {value:e} is beyond {LARGEST_ENTRY:.1e} \
+         (the square root of the largest f64), so products of its entries overflow and its \
+         eigenvalues are meaningless; the scene's values (a stiffness, an inertia) are too extreme"
+    )]
+    OutOfRange {
+        /// The state whose derivative it is.
+        row: String,
+        /// The state or input it is differentiated by.
+        col: String,
+        /// The value.
+        value: f64,
+    },
+    /// The error estimate is not small against the entries ([`ACCURACY`]).
+    #[error(
+        "the linearisation is not accurate: its error estimate {estimate:e} is more than \
+         {ACCURACY:e} of its largest entry, {largest:e} (the dynamics are not smooth at the \
+         initial state, such as a state on a limit or a stop, or lose their digits)"
+    )]
+    Inaccurate {
+        /// [`Linearization::error_estimate`].
+        estimate: f64,
+        /// The largest entry of `A` and `B` (modulus).
+        largest: f64,
     },
 }
 
@@ -367,6 +413,14 @@ pub fn linearize_simulation(sim: &mut Simulation) -> Result<Linearization, Linea
             }
         }
     }
+    check_range(&a, &b, &states, &inputs)?;
+    let largest = a.amax().max(b.amax());
+    if error_estimate > ACCURACY * largest {
+        return Err(LinearizeError::Inaccurate {
+            estimate: error_estimate,
+            largest,
+        });
+    }
     let locked_names = (0..model.n_hinges())
         .filter(|&k| locked[k])
         .map(|k| hinge_names[k].clone())
@@ -381,6 +435,30 @@ pub fn linearize_simulation(sim: &mut Simulation) -> Result<Linearization, Linea
         locked: locked_names,
         released,
     })
+}
+
+/// An error naming the first entry of `A` (then `B`) beyond [`LARGEST_ENTRY`].
+fn check_range(
+    a: &DMatrix<f64>,
+    b: &DMatrix<f64>,
+    states: &[String],
+    inputs: &[String],
+) -> Result<(), LinearizeError> {
+    for (m, cols) in [(a, states), (b, inputs)] {
+        for r in 0..m.nrows() {
+            for c in 0..m.ncols() {
+                let value = m[(r, c)];
+                if value.abs() > LARGEST_ENTRY {
+                    return Err(LinearizeError::OutOfRange {
+                        row: states[r].clone(),
+                        col: cols[c].clone(),
+                        value,
+                    });
+                }
+            }
+        }
+    }
+    Ok(())
 }
 
 /// `J_r⁻¹(φ)`: the inverse of the right Jacobian of SO(3), mapping the body angular velocity

@@ -4,9 +4,17 @@
 //! From `A` of [`crate::linearize`] (the frozen states of locked hinges left out), the
 //! eigenvalues `λ` of the remaining matrix are sorted into
 //!
-//! - **rigid**: `|λ| ≤ 10⁻⁶ · max |λ|` (all of them when `A` is zero). A free body has
-//!   three double zeros (attitude and angular velocity) and three simple ones (velocity);
-//!   a hinge with neither spring nor controller adds a double zero;
+//! - **rigid**: `|λ| ≤ √(ε · max |Aᵢⱼ|)` with `ε` = [`RIGID_TOLERANCE`] = 10⁻¹⁴ (all of
+//!   them when `A` is zero). A free body has three double zeros (attitude and angular
+//!   velocity) and three simple ones (velocity); a hinge with neither spring nor controller
+//!   adds a double zero. Why this scale: the decomposition returns the eigenvalues of `A`
+//!   perturbed by about `n · 2⁻⁵² · max |Aᵢⱼ|` (its backward error, `ε` above for the
+//!   tens of states of a spacecraft), and a double zero (a free coordinate and its rate,
+//!   `q̇ = v`, `v̇ = 0`) perturbed by `δ` splits into `±√δ`: that is how far from zero a
+//!   rigid mode can land. A tolerance relative to the largest eigenvalue instead grows
+//!   with the stiffest spring: a gimbal spring of 10¹² N m/rad (eigenvalues of 10⁵ 1/s)
+//!   made it 0.1 1/s and hid the panels' 0.03 Hz mode, which this one (0.04 1/s there,
+//!   3·10⁻⁷ 1/s for the example scenes) keeps;
 //! - **oscillatory**: a pair `λ, λ̄` with non-zero imaginary part, one [`Mode`] per pair
 //!   with frequency `f = |Im λ| / 2π` (Hz) and damping ratio `ζ = −Re λ / |λ|`
 //!   (negative: the mode grows);
@@ -31,8 +39,9 @@ use crate::output::{Series, line_plot};
 use crate::scene::Scene;
 use thiserror::Error;
 
-/// Eigenvalues below this fraction of the largest modulus count as zero (rigid).
-pub const RIGID_TOLERANCE: f64 = 1e-6;
+/// The eigenvalues' relative backward error `ε`: an eigenvalue with
+/// `|λ| ≤ √(ε · max |Aᵢⱼ|)` counts as zero (rigid; see the module documentation).
+pub const RIGID_TOLERANCE: f64 = 1e-14;
 
 /// Why modes could not be computed.
 #[derive(Debug, Error)]
@@ -107,11 +116,11 @@ pub fn modes_of(lin: &Linearization) -> Result<Modes, ModesError> {
     {
         return Err(ModesError::Eigen);
     }
-    let largest = values
+    let largest = active
         .iter()
-        .map(|(re, im)| re.hypot(*im))
+        .flat_map(|&r| active.iter().map(move |&c| lin.a[(r, c)].abs()))
         .fold(0.0f64, f64::max);
-    let zero = RIGID_TOLERANCE * largest;
+    let zero = (RIGID_TOLERANCE * largest).sqrt();
     // The frozen states' rows of `A` are zero: each is an eigenvalue at zero of the printed
     // `A`, counted as such.
     let mut rigid = lin.states.len() - n;

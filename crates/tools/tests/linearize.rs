@@ -583,3 +583,62 @@ action = "latch"
     assert_eq!(md.rigid_modes, 2);
     assert_eq!(md.locked, ["a"]);
 }
+
+/// The example satellite of `deployment_modes.toml` with the gimbal springs (h1, h2, h3)
+/// set to `k`.
+fn satellite_with_gimbal_stiffness(k: &str) -> Scene {
+    let path =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/scenes/deployment_modes.toml");
+    let text = std::fs::read_to_string(&path).unwrap().replace(
+        "stiffness = [50.0, 50.0, 50.0,",
+        &format!("stiffness = [{k}, {k}, {k},"),
+    );
+    assert!(text.contains(k), "the scene's stiffness line changed");
+    Scene::parse(&text, &path).expect("valid scene")
+}
+
+#[test]
+fn a_stiff_gimbal_does_not_hide_the_panel_modes() {
+    // With the gimbal springs at 1e6 and at 1e12 N m/rad the gimbal is rigid to the panels
+    // either way: the same panel modes below 1 Hz, the same 9 rigid modes of a free body.
+    // A rigid tolerance relative to the largest eigenvalue (1e5 1/s at 1e12) took the
+    // lower panel mode for a rigid one.
+    let soft = |m: &satsim_tools::modes::Modes| -> Vec<f64> {
+        m.frequencies_hz
+            .iter()
+            .copied()
+            .filter(|f| *f < 1.0)
+            .collect()
+    };
+    let stiff = modes(&satellite_with_gimbal_stiffness("1e6")).unwrap();
+    let stiffer = modes(&satellite_with_gimbal_stiffness("1e12")).unwrap();
+    assert_eq!(stiff.rigid_modes, 9, "{stiff:?}");
+    assert_eq!(stiffer.rigid_modes, 9, "{stiffer:?}");
+    let (a, b) = (soft(&stiff), soft(&stiffer));
+    assert_eq!(a.len(), 2, "{a:?}");
+    assert_eq!(b.len(), a.len(), "{a:?} against {b:?}");
+    for (x, y) in a.iter().zip(&b) {
+        assert!(rel(*y, *x) < 1e-3, "{a:?} against {b:?}");
+    }
+}
+
+#[test]
+fn a_spring_beyond_the_range_of_f64_products_is_an_error() {
+    // A spring of 1e308 gave eigenvalues of 1e298 (they are 1e153) and negative damping
+    // ratios, exit status 0.
+    let s = satellite_with_gimbal_stiffness("1e308");
+    let e = linearize(&s).unwrap_err();
+    assert!(
+        matches!(e, satsim_tools::linearize::LinearizeError::OutOfRange { value, .. } if value.abs() > 1e300),
+        "{e}"
+    );
+    let text = e.to_string();
+    assert!(
+        text.contains("out of range") && text.contains("/d(angle_h"),
+        "{text}"
+    );
+    let e = modes(&s).unwrap_err().to_string();
+    assert!(e.contains("out of range"), "{e}");
+    // A stiff but representable spring is not.
+    assert!(linearize(&satellite_with_gimbal_stiffness("1e12")).is_ok());
+}

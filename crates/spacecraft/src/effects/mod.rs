@@ -367,6 +367,15 @@ pub enum Request {
     /// Bring hinge `h` (tree order) to rest by a plastic, momentum-conserving impulse, then
     /// lock it (it transmits rigidly until unlocked).
     Lock(usize),
+    /// Bring hinge `hinge` (tree order) to `rate` by a momentum-conserving impulse, then lock
+    /// it there: it turns at that rate, transmitting rigidly, until unlocked (a wheel held
+    /// at its speed limit).
+    Hold {
+        /// The hinge, tree order.
+        hinge: usize,
+        /// Its rate while locked (rad/s).
+        rate: f64,
+    },
     /// Release a locked hinge.
     Unlock(usize),
     /// Change hinge `h`'s rate to `rate` by a momentum-conserving impulse between its two

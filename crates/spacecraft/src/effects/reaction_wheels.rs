@@ -32,7 +32,26 @@
 //! chatter about zero speed). Wheels without Coulomb or Stribeck friction have no events.
 //!
 //! Limits: the command is clamped to `±max_torque`; a wheel at or beyond `max_speed` gets
-//! no torque that would speed it up further.
+//! no torque that would speed it up further. The speed limit is a discontinuity of the
+//! motor torque too, and is treated with events and a mode held between them in the same
+//! way (cutting the torque wherever `|Ω| ≥ max_speed` made the adaptive integrators chatter
+//! on the limit: a wheel driven into it slowed by friction, got its torque back, sped up,
+//! lost it, and a run stalled on millions of rejected steps):
+//!
+//! - each wheel with `0 < max_speed < ∞` is **inside** its limits or **at** one, `s = ±1`
+//!   (`s·Ω ≥ max_speed`), a mode held between events; at a limit, a command `c` with
+//!   `c·s > 0` gives no torque. Inside, the event is `max_speed − |Ω| = 0` (falling: the
+//!   wheel reaches a limit), at a limit `s·Ω − max_speed = 0` (falling: it leaves it);
+//! - a wheel that reaches a limit with a command that would drive it further is **held**
+//!   there when the motor can do it, as a speed controller would: with `H` its hold torque
+//!   and `f` its friction, the motor torque that keeps its speed, `τₘ = H + f`, must lie
+//!   between 0 and the command (`0 ≤ s·τₘ ≤ s·c`). A held wheel's hinge is locked at its
+//!   limit speed (the sliding motion of the limit, made exact) until the command falls
+//!   below `τₘ` (it slows down with the command's torque) or `τₘ` changes sign (the bus
+//!   drives it beyond the limit with no motor torque): event
+//!   `min(s·(c − τₘ), s·τₘ) = 0`, falling. Both releases leave the motor torque continuous.
+//!
+//! A wheel with `max_speed` 0 keeps the plain rule (no torque that speeds it up).
 
 use super::{
     Context, Effect, EventReads, Forces, Links, Needs, Power, Request, Rotor, SceneEffect, Section,
@@ -112,7 +131,9 @@ impl Wheel {
         };
         (self.coulomb + stribeck) * s + self.viscous * omega
     }
-    /// The motor torque after the torque and speed limits.
+    /// The motor torque after the torque and speed limits, the limit decided by the
+    /// speed `omega` itself (what [`ReactionWheels`] does for a wheel with `max_speed` 0;
+    /// the others hold the limit's side as a mode between events).
     pub fn limited(&self, command: f64, omega: f64) -> f64 {
         let t = command.clamp(-self.max_torque, self.max_torque);
         if omega.abs() >= self.max_speed && t * omega > 0.0 {
@@ -120,6 +141,10 @@ impl Wheel {
         } else {
             t
         }
+    }
+    /// Whether the speed limit is handled with events (`0 < max_speed < ∞`).
+    fn limit_events(&self) -> bool {
+        self.max_speed > 0.0 && self.max_speed.is_finite()
     }
 }
 
@@ -135,6 +160,11 @@ pub struct ReactionWheels {
     /// Slip direction of each slipping wheel (±1).
     dir: Vec<f64>,
     motor: Vec<f64>,
+    /// The speed limit each wheel is at (±1) or 0 inside its limits (wheels with
+    /// [`Wheel::limit_events`]; see the module documentation).
+    side: Vec<f64>,
+    /// Whether each wheel is held at its speed limit (its hinge locked there).
+    held: Vec<bool>,
     last: String,
 }
 
@@ -148,6 +178,8 @@ impl ReactionWheels {
             stuck: vec![false; n],
             dir: vec![1.0; n],
             motor: vec![0.0; n],
+            side: vec![0.0; n],
+            held: vec![false; n],
             last: String::new(),
         }
     }
@@ -155,8 +187,81 @@ impl ReactionWheels {
     pub fn is_stuck(&self, j: usize) -> bool {
         self.stuck[j]
     }
+    /// Whether wheel `j` is held at its speed limit.
+    pub fn is_held(&self, j: usize) -> bool {
+        self.held[j]
+    }
     fn has_stiction(&self) -> bool {
         self.wheels.iter().any(|w| w.static_friction() > 0.0)
+    }
+    fn has_limits(&self) -> bool {
+        self.wheels.iter().any(Wheel::limit_events)
+    }
+    /// Events before the speed limits' (one per wheel with stiction anywhere, else none).
+    fn n_stick_events(&self) -> usize {
+        if self.has_stiction() {
+            self.wheels.len()
+        } else {
+            0
+        }
+    }
+    /// The motor torque of wheel `j` for the command `c` at speed `omega` in its mode.
+    fn torque(&self, j: usize, c: f64, omega: f64) -> f64 {
+        let w = &self.wheels[j];
+        if !w.limit_events() {
+            return w.limited(c, omega);
+        }
+        let t = c.clamp(-w.max_torque, w.max_torque);
+        if t * self.side[j] > 0.0 { 0.0 } else { t }
+    }
+    /// The clamped command of wheel `j` (before the speed limit).
+    fn clamped(&self, j: usize, forces: &Forces) -> f64 {
+        let w = &self.wheels[j];
+        let c = if self.commanded {
+            forces.rotor_command[j]
+        } else {
+            w.torque
+        };
+        c.clamp(-w.max_torque, w.max_torque)
+    }
+    /// The motor torque that keeps wheel `j` at its speed `omega`: `τₘ = H + f` (NaN if
+    /// the hold torque is unknown).
+    fn holding_torque(&self, j: usize, ctx: &Context, omega: f64) -> f64 {
+        ctx.hold_torque[ctx.rotor_hinge(j)] + self.wheels[j].friction(omega, self.dir[j])
+    }
+    /// Wheel `j` at its limit `s` (speed `s·max_speed`): held there when the command drives
+    /// it outwards and the motor can keep its speed (`0 ≤ s·τₘ ≤ s·c`), otherwise at the
+    /// limit (no torque outwards) when the bus drives it beyond, otherwise inside.
+    fn settle_at_limit(
+        &mut self,
+        j: usize,
+        s: f64,
+        ctx: &Context,
+        forces: &Forces,
+        omega: f64,
+        requests: &mut Vec<Request>,
+    ) {
+        let c = self.clamped(j, forces);
+        let tm = self.holding_torque(j, ctx, omega);
+        let name = &self.wheels[j].name;
+        let limit = s * self.wheels[j].max_speed;
+        if c * s > 0.0 && s * tm >= 0.0 && s * tm <= s * c {
+            self.held[j] = true;
+            self.side[j] = s;
+            requests.push(Request::Hold {
+                hinge: ctx.rotor_hinge(j),
+                rate: limit,
+            });
+            self.last = format!(
+                "wheel `{name}` reached its speed limit {limit} rad/s and is held there ({tm:.4} N m of {c:.4} commanded)"
+            );
+        } else if s * tm < 0.0 {
+            self.side[j] = s;
+            self.last = format!("wheel `{name}` is driven beyond its speed limit {limit} rad/s");
+        } else {
+            self.side[j] = 0.0;
+            self.last = format!("wheel `{name}` is inside its speed limits");
+        }
     }
     /// The friction wheel `j` needs to stay at rest, `H − τ` (NaN if the hold torque is
     /// unknown).
@@ -169,7 +274,7 @@ impl ReactionWheels {
         } else {
             self.wheels[j].torque
         };
-        self.wheels[j].limited(c, omega)
+        self.torque(j, c, omega)
     }
 }
 
@@ -179,7 +284,7 @@ impl Effect for ReactionWheels {
     }
     fn needs(&self) -> Needs {
         Needs {
-            hold_torques: self.has_stiction(),
+            hold_torques: self.has_stiction() || self.has_limits(),
             ..Needs::default()
         }
     }
@@ -221,6 +326,7 @@ impl Effect for ReactionWheels {
         let n = ctx.rotor_hinge(0);
         let rotors = forces.hinge_torque[n..].iter_mut().zip(&ctx.locked[n..]);
         let commands = &forces.rotor_command;
+        let side = &self.side;
         let wheels = self
             .wheels
             .iter()
@@ -234,7 +340,12 @@ impl Effect for ReactionWheels {
             } else {
                 w.torque
             };
-            let tau = w.limited(c, omega);
+            let tau = if !w.limit_events() {
+                w.limited(c, omega)
+            } else {
+                let t = c.clamp(-w.max_torque, w.max_torque);
+                if t * side[j] > 0.0 { 0.0 } else { t }
+            };
             *motor = tau;
             if !locked {
                 *torque += tau - w.friction(omega, dir);
@@ -247,10 +358,16 @@ impl Effect for ReactionWheels {
     fn power(&self, ctx: &Context, own: &[f64], _applied: f64) -> Power {
         let mut p = Power::default();
         for (j, w) in self.wheels.iter().enumerate() {
+            let omega = own[j];
             if !ctx.locked[ctx.rotor_hinge(j)] {
-                let omega = own[j];
                 p.actuator += self.motor[j] * omega;
                 p.dissipated += w.friction(omega, self.dir[j]) * omega;
+            } else if self.held[j] {
+                // The simulation books the locked hinge's work `H Ω`; the motor also
+                // supplies the friction's loss, `τₘ Ω = H Ω + f Ω`.
+                let loss = w.friction(omega, self.dir[j]) * omega;
+                p.actuator += loss;
+                p.dissipated += loss;
             }
         }
         p
@@ -276,6 +393,16 @@ impl Effect for ReactionWheels {
         requests: &mut Vec<Request>,
     ) -> Result<(), SystemError> {
         for (j, &speed) in own.iter().enumerate().take(self.wheels.len()) {
+            let (limited, max) = (self.wheels[j].limit_events(), self.wheels[j].max_speed);
+            if limited && speed.abs() >= max {
+                self.dir[j] = speed.signum();
+                self.settle_at_limit(j, speed.signum(), ctx, forces, speed, requests);
+                if !self.held[j] && speed.abs() > max {
+                    // Beyond the limit from the start: at it until it comes back.
+                    self.side[j] = speed.signum();
+                }
+                continue;
+            }
             let fs = self.wheels[j].static_friction();
             if speed != 0.0 {
                 self.dir[j] = speed.signum();
@@ -294,16 +421,36 @@ impl Effect for ReactionWheels {
         }
         Ok(())
     }
+    /// One stick/slip event per wheel when any has stiction, then one speed-limit event per
+    /// wheel when any has a limit (see the module documentation).
     fn n_events(&self) -> usize {
-        if self.has_stiction() {
-            self.wheels.len()
-        } else {
-            0
-        }
+        self.n_stick_events()
+            + if self.has_limits() {
+                self.wheels.len()
+            } else {
+                0
+            }
     }
     fn events(&self, ctx: &Context, forces: &Forces, own: &[f64], g: &mut [f64]) {
-        // Without stiction the wheels have no events (and `g` is empty).
-        if !self.has_stiction() {
+        let n = self.n_stick_events();
+        if self.has_limits() {
+            for (j, w) in self.wheels.iter().enumerate() {
+                let s = self.side[j];
+                g[n + j] = if !w.limit_events() {
+                    1.0
+                } else if self.held[j] {
+                    let c = self.clamped(j, forces);
+                    let tm = self.holding_torque(j, ctx, own[j]);
+                    (s * (c - tm)).min(s * tm)
+                } else if s == 0.0 {
+                    (w.max_speed - own[j]).min(w.max_speed + own[j])
+                } else {
+                    s * own[j] - w.max_speed
+                };
+            }
+        }
+        // Without stiction the wheels have no stick/slip events.
+        if n == 0 {
             return;
         }
         for (j, w) in self.wheels.iter().enumerate() {
@@ -317,14 +464,16 @@ impl Effect for ReactionWheels {
             };
         }
     }
-    /// A slipping wheel's event is `d·Ω` (its own state); a stuck wheel's reads its hold
-    /// torque and its motor command (the controller's, in `forces`).
+    /// A slipping wheel's event is `d·Ω` (its own state), a free wheel's speed limit too; a
+    /// stuck wheel's, or one held at its speed limit, reads its hold torque and its motor
+    /// command (the controller's, in `forces`).
     fn event_reads(&self) -> EventReads {
         let stuck = self
             .wheels
             .iter()
             .zip(&self.stuck)
-            .any(|(w, &s)| s && w.static_friction() > 0.0);
+            .any(|(w, &s)| s && w.static_friction() > 0.0)
+            || self.held.iter().any(|&h| h);
         EventReads {
             forces: stuck,
             hold_torques: stuck,
@@ -339,6 +488,11 @@ impl Effect for ReactionWheels {
         own: &mut [f64],
         requests: &mut Vec<Request>,
     ) -> EventAction {
+        let n = self.n_stick_events();
+        if j >= n {
+            self.on_limit(j - n, ctx, forces, own, requests);
+            return EventAction::Reset;
+        }
         let fs = self.wheels[j].static_friction();
         let need = self.needed_friction(j, ctx, forces);
         let h = ctx.rotor_hinge(j);
@@ -368,11 +522,57 @@ impl Effect for ReactionWheels {
         EventAction::Reset
     }
     fn event_direction(&self, _k: usize) -> EventDirection {
-        // Stuck: the needed friction grows past the static one; slipping: d·Ω falls through 0.
+        // Stuck: the needed friction grows past the static one; slipping: d·Ω falls through 0;
+        // the speed limits' functions fall through 0 when the mode ends.
         EventDirection::Falling
     }
     fn describe_event(&self, _k: usize) -> String {
         self.last.clone()
+    }
+}
+
+impl ReactionWheels {
+    /// Wheel `j`'s speed-limit event: a held wheel is released (inside its limits when the
+    /// command no longer keeps its speed, at the limit when the bus drives it beyond);
+    /// a free wheel reaching a limit, or coming back to it from beyond, is settled there.
+    fn on_limit(
+        &mut self,
+        j: usize,
+        ctx: &Context,
+        forces: &Forces,
+        own: &mut [f64],
+        requests: &mut Vec<Request>,
+    ) {
+        let omega = own[j];
+        let name = self.wheels[j].name.clone();
+        if self.held[j] {
+            let s = self.side[j];
+            let c = self.clamped(j, forces);
+            let tm = self.holding_torque(j, ctx, omega);
+            self.held[j] = false;
+            requests.push(Request::Unlock(ctx.rotor_hinge(j)));
+            if s * (c - tm) <= s * tm {
+                self.side[j] = 0.0;
+                self.last = format!(
+                    "wheel `{name}` left its speed limit (command {c:.4} N m below the {tm:.4} that held it)"
+                );
+            } else {
+                self.last = format!("wheel `{name}` is driven beyond its speed limit");
+            }
+            return;
+        }
+        if self.side[j] != 0.0 {
+            let s = self.side[j];
+            // Back inside from beyond: the limit again, held if the command drives it.
+            self.settle_at_limit(j, s, ctx, forces, omega, requests);
+            if !self.held[j] {
+                self.side[j] = 0.0;
+                self.last = format!("wheel `{name}` came back inside its speed limits");
+            }
+            return;
+        }
+        let s = if omega == 0.0 { 1.0 } else { omega.signum() };
+        self.settle_at_limit(j, s, ctx, forces, omega, requests);
     }
 }
 

@@ -40,8 +40,8 @@ impl Simulation {
 
     /// Carries out requests made together (at one event instant, or at the start) on the
     /// state `x`: unlocks first, then one momentum-conserving impulse solve for every hinge
-    /// whose rate must change (a `Lock` wants rate 0, a `SetRate` its rate; a `Lock` wins
-    /// when one hinge gets both), then the locks.
+    /// whose rate must change (a `Lock` wants rate 0, a `Hold` or a `SetRate` its rate; a
+    /// `Lock` or `Hold` wins over a `SetRate` of the same hinge), then the locks.
     pub(crate) fn apply_requests(
         &mut self,
         reqs: &[Request],
@@ -61,6 +61,11 @@ impl Simulation {
                     locks.push(h);
                     targets.retain(|&(g, _)| g != h);
                     targets.push((h, 0.0));
+                }
+                Request::Hold { hinge, rate } => {
+                    locks.push(hinge);
+                    targets.retain(|&(g, _)| g != hinge);
+                    targets.push((hinge, rate));
                 }
                 Request::SetRate { hinge, rate } => {
                     if !locks.contains(&hinge) {

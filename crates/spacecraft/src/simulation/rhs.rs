@@ -18,7 +18,7 @@ use super::hold::Hold;
 use super::model::SimModel;
 use crate::effects::Power;
 use satsim_integrate::SystemError;
-use satsim_tree::{Data, DynamicsError, Input, forward_kinematics};
+use satsim_tree::{Data, DynamicsError, Input, forward_kinematics, rnea};
 
 impl Simulation {
     /// `dx = f(t, x)`; slices of the wrong length are an error, not a panic.
@@ -50,7 +50,50 @@ impl Simulation {
         }
         // 4-5.
         self.pack_positions(x, dx);
-        self.dynamics(kin, dx)
+        self.dynamics(kin, dx)?;
+        if track {
+            dx[self.model.work.start] += self.locked_hinges_power(dx)?;
+        }
+        Ok(())
+    }
+
+    /// The power of the torques that keep the locked hinges locked, `Σ (H_k − τ_k) q̇_k`:
+    /// zero unless a hinge is locked while it turns (a wheel held at its speed limit), whose
+    /// constraint does work on the tree that no effect applied. An actuator's for the
+    /// energy budget (the effect holding it books its friction's share). One RNEA with the
+    /// accelerations just solved, only then.
+    fn locked_hinges_power(&mut self, dx: &[f64]) -> Result<f64, SystemError> {
+        let (m, d) = (&self.model, &mut self.data);
+        let nb = m.tree.base_nv();
+        if d.n_locked == 0
+            || !d
+                .locked
+                .iter()
+                .enumerate()
+                .any(|(k, &l)| l && d.v[nb + k] != 0.0)
+        {
+            return Ok(0.0);
+        }
+        match m.velocity_at {
+            Some(s) => {
+                let nv = d.v.len();
+                d.hold_ddq.copy_from_slice(&dx[s..s + nv]);
+            }
+            None => d.hold_ddq.copy_from_slice(&d.ddq),
+        }
+        let fext = d
+            .forces
+            .has_wrench
+            .then_some(d.forces.body_wrench.as_slice());
+        let need = rnea(&m.tree, &mut d.tree, &d.q, &d.v, &d.hold_ddq, fext)
+            .map_err(SystemError::from_error)?;
+        let mut power = 0.0;
+        for (k, &locked) in d.locked.iter().enumerate() {
+            if locked {
+                power += (need[nb + k] - d.tau[nb + k]) * d.v[nb + k];
+            }
+        }
+        Ok(power)
     }
 
     /// Stages 1-3 for every pass but the right-hand side (rows, events, hold torques, the

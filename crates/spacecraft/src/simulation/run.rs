@@ -52,10 +52,58 @@ impl Simulation {
         match (result, failure) {
             (_, Some(f)) => Err(f),
             (Ok(stats), None) => Ok(stats),
+            (Err(IntegrateError::MaxSteps { t, .. }), None) => {
+                Err(RunError::Integrate(IntegrateError::MaxSteps {
+                    t,
+                    stepping: cell.borrow().stepping_through(),
+                }))
+            }
             (Err(e), None) => Err(RunError::Integrate(e)),
         }
     }
+
+    /// What a run that ran out of steps was stepping through, for its message: the effects
+    /// whose events fired among the last [`STALL_EVENTS`] handled, with their counts and
+    /// the time they span (events crowding a short span are a switching the steps could
+    /// not get past), or that no event fired.
+    fn stepping_through(&self) -> String {
+        let events = &self.log.events;
+        let owners = &self.log.event_effects;
+        let n = events.len().min(owners.len());
+        if n == 0 {
+            return "; no event fired: the steps went into the dynamics themselves (a stiff \
+                    spring or damper, or a discontinuity no effect makes an event of)"
+                .into();
+        }
+        let from = n - n.min(STALL_EVENTS);
+        let mut counts: Vec<(usize, usize)> = Vec::new();
+        for &i in &owners[from..n] {
+            match counts.iter_mut().find(|(e, _)| *e == i) {
+                Some((_, c)) => *c += 1,
+                None => counts.push((i, 1)),
+            }
+        }
+        counts.sort_by_key(|&(_, c)| std::cmp::Reverse(c));
+        let names: Vec<String> = counts
+            .iter()
+            .map(|&(i, c)| {
+                let name = self.effects.get(i).map_or("?", |e| e.name());
+                format!("{name} {c}")
+            })
+            .collect();
+        format!(
+            "; the last {} events (t = {} to {}) were {}; the last: {}",
+            n - from,
+            events[from].0,
+            events[n - 1].0,
+            names.join(", "),
+            events[n - 1].1
+        )
+    }
 }
+
+/// How many of the last handled events a run out of steps reports on.
+pub const STALL_EVENTS: usize = 1000;
 
 /// Why [`Simulation::run`] stopped early.
 #[derive(Debug, Error)]
