@@ -7,6 +7,7 @@
 //! - [`spacecraft`]: the spacecraft engine (effects, the simulation and its right-hand side);
 //! - [`tools`]: scene files, campaigns, accuracy sweeps, linearisation and modes, output, the
 //!   3-D view.
+#![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
 pub use satsim_integrate as integrate;

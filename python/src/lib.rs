@@ -11,6 +11,8 @@
 //! field, and what is wrong. The friendly argument handling (a path, a text or a dict) lives in
 //! `python/satsim/__init__.py`.
 
+#![forbid(unsafe_code)]
+
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;

@@ -9,6 +9,7 @@
 
 // The flags' doc comments are their `--help` text, written for a terminal (`out/<scene stem>`),
 // not for HTML.
+#![forbid(unsafe_code)]
 #![allow(rustdoc::invalid_html_tags)]
 
 mod commands;

@@ -28,6 +28,7 @@
 //! assert!((stats.x_final[0] - 1f64.cos()).abs() < 1e-8);
 //! # Ok::<(), satsim_integrate::IntegrateError>(())
 //! ```
+#![forbid(unsafe_code)]
 #![warn(missing_docs)]
 // Index loops over stage/component arrays read like the published formulas.
 #![allow(clippy::needless_range_loop)]

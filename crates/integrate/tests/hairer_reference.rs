@@ -153,7 +153,9 @@ fn radau5_van_der_pol_matches_the_test_set_reference() {
             stats.x_final, stats.steps_accepted
         );
         errors.push(abs);
-        assert!(err < 10.0, "tol {tol:e}: error {err} tolerances");
+        // Measured 0.09 (tol 1e-6) and 0.19 (tol 1e-9) scaled units; the bound is under 10×
+        // the smaller.
+        assert!(err < 0.9, "tol {tol:e}: error {err} tolerances");
     }
     assert!(errors[1] < errors[0] / 100.0, "not converging: {errors:?}");
 }

@@ -20,6 +20,7 @@
 //!   equations (5)-(10));
 //! - [`compare`]: what `satsim preprint` prints.
 
+#![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
 pub mod checks;

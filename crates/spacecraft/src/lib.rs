@@ -13,6 +13,7 @@
 //! The scene files, campaigns, accuracy sweeps, linearisation, output and the 3-D view are
 //! the tools around this engine (`satsim-tools`); the preprint's layout and its closed-form
 //! equations are `satsim-satellite`.
+#![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
 pub mod effects;

@@ -152,8 +152,9 @@ fn gravity_gradient_sign() {
     eprintln!(
         "gravity-gradient couple: model {torque_model:?}, point masses {torque_bus:?}, relative error {err:.2e}"
     );
+    // Measured 3.74e-9 (the point masses' higher-order terms in ρ/r); the bound is under 10×.
     assert!(
-        err < 1e-5,
+        err < 3e-8,
         "model {torque_model} vs point masses {torque_bus}: {err}"
     );
     // The printed sign (−3μ/r³ E × I E) is the opposite.
@@ -289,8 +290,10 @@ fn pitch_libration_frequency() {
     let period = (crossings[crossings.len() - 1] - crossings[0]) / (crossings.len() - 1) as f64;
     let err = (period - expected).abs() / expected;
     eprintln!("libration period {period:.3} s, expected {expected:.3} s, relative error {err:.2e}");
+    // Measured 1.00e-4 (the linearised period against the 0.02 rad libration sampled every
+    // 5 s); the bound is 10×.
     assert!(
-        err < 0.005,
+        err < 1e-3,
         "libration period {period} s, expected {expected} s ({err})"
     );
     // Roll and yaw stay at rounding level; the quaternion stays normalised.

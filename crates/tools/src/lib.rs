@@ -10,6 +10,7 @@
 //! - [`linearize`] and [`modes`]: linear models about a state, and their modes;
 //! - [`output`]: CSV and SVG output; [`view`]: the 3-D view (`view.html`);
 //! - [`api`]: the one-call entry points the Python module wraps.
+#![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
 pub mod accuracy;

@@ -1,6 +1,6 @@
 //! Small faults at the edges of the library API: a controller with gains for fewer wheels
 //! than the scene has, slices of the wrong length given to public functions (an error, never
-//! a panic), and output rows that allocate.
+//! a panic), and output rows or whole runs that allocate.
 
 use satsim_satellite::{PreprintParams, build_model, recognise, state_from_engine};
 use satsim_spacecraft::effects::{AttitudeControl, ReactionWheels, Target, Wheel};
@@ -128,4 +128,77 @@ fn output_rows_do_not_allocate() {
         sim.row(0.1 * k as f64, &x, &mut row).unwrap();
     }
     assert_eq!(allocations() - before, 0, "allocations in 10 rows");
+}
+
+/// A whole run of the default scene (wheels with friction, controller, orbit, gravity
+/// gradient, springs, latching stops: the latches and the wheels' stick-slip are events)
+/// allocates nothing per step, for a fixed-step, two explicit adaptive and the implicit
+/// method: from the first output row past the start (the first step has grown the buffers)
+/// to the last row, the allocations between two rows are counted, and every stretch of steps
+/// without an event allocates nothing. The rows go to a sink that copies them into a buffer
+/// reserved beforehand, so the count is the integrator loop's, the right-hand side's, the
+/// event functions' and the row's. Handling an event (the impulse solve, the event log's
+/// message) allocates once per event, not per step: those stretches are only printed.
+#[test]
+fn a_whole_run_allocates_nothing_per_step() {
+    use satsim_integrate::{Method, Options, Output};
+    let scene = Scene::read(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/scenes/deploy.toml"),
+    )
+    .unwrap();
+    let methods = [
+        Options::new(Method::Rk4).with_fixed_step(0.01),
+        Options::new(Method::Dp54).with_tolerances(1e-9, 1e-9),
+        Options::new(Method::Dop853).with_tolerances(1e-9, 1e-9),
+        Options::new(Method::Radau5).with_tolerances(1e-6, 1e-6),
+    ];
+    for options in methods {
+        let mut sim = scene.simulation().unwrap();
+        let mut last_row = Vec::with_capacity(256);
+        // (t, allocations since the previous row), from the first row past the start.
+        let mut deltas: Vec<(f64, usize)> = Vec::with_capacity(1000);
+        let mut previous: Option<usize> = None;
+        let stats = sim
+            .run(&options, 60.0, &Output::Interval(0.5), |t, row| {
+                let now = allocations();
+                if let Some(p) = previous {
+                    deltas.push((t, now - p));
+                }
+                if t > 0.0 {
+                    previous = Some(now);
+                }
+                last_row.clear();
+                last_row.extend_from_slice(row);
+                Ok::<(), std::convert::Infallible>(())
+            })
+            .unwrap();
+        assert!(stats.events.len() >= 2, "the latches are in the run");
+        assert!(deltas.len() > 100, "{} rows", deltas.len());
+        let mut t_previous = 0.5;
+        let (mut quiet, mut at_events) = (0, 0);
+        for &(t, n) in &deltas {
+            let event = stats
+                .events
+                .iter()
+                .any(|&(te, _)| te > t_previous && te <= t);
+            if event {
+                at_events += n;
+            } else {
+                quiet += n;
+                assert_eq!(
+                    n, 0,
+                    "{:?}: {n} allocations in ({t_previous}, {t}] s",
+                    options.method
+                );
+            }
+            t_previous = t;
+        }
+        println!(
+            "{:?}: {} steps, {} events; allocations: {quiet} between events, {at_events} in the \
+             stretches with an event",
+            options.method,
+            stats.steps_accepted,
+            stats.events.len()
+        );
+    }
 }

@@ -56,8 +56,8 @@ pub use model_file::{
     parse_model_file, read_model, with_key,
 };
 pub use state_file::{
-    BaseStateFile, FieldError, HingesStateFile, STATE_ATTITUDE_TOLERANCE, State, StateFile,
-    parse_state, parse_state_file, read_state,
+    BaseFrame, BaseStateFile, FieldError, FrameMotion, HingesStateFile, STATE_ATTITUDE_TOLERANCE,
+    State, StateFile, parse_state, parse_state_file, read_state,
 };
 
 use std::path::Path;

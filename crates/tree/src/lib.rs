@@ -43,6 +43,7 @@
 //! assert!(ddq.iter().all(|&a| a == 0.0));
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
+#![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
 pub mod aba;

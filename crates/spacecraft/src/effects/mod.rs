@@ -129,6 +129,14 @@ impl OrbitState {
             Mat3::from_columns(&[x, y, z]),
         ))
     }
+    /// The orbital frame's angular velocity, inertial axes (rad/s): `r × v / r²`, the rate
+    /// [`crate::effects::AttitudeControl`]'s orbital target turns at. Exact on a Keplerian
+    /// orbit; a perturbation's acceleration along the orbit normal (J2) also turns the frame
+    /// about the vertical, at `r (a·ĥ)/h`, which this leaves out (for J2 in a low orbit, of
+    /// order 1e-3 of the orbital rate).
+    pub fn orbital_rate(&self) -> Vec3 {
+        self.r.cross(&self.v) / self.r.norm_squared()
+    }
 }
 
 /// Everything an effect may read during an evaluation.

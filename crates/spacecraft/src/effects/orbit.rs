@@ -7,7 +7,7 @@
 //! first order in size/r that the gravity-gradient models keep, the two motions decouple: the
 //! tidal forces sum to zero, so the centre of mass follows eq. (17) or (18) exactly.
 //!
-//! Output: the orbit's radius and position, and the bus' `roll`, `pitch`, `yaw` (rad)
+//! Output: the orbit's radius, position and velocity, and the bus' `roll`, `pitch`, `yaw` (rad)
 //! relative to the local orbital frame (LVLH, [`OrbitState::orbital_frame`]: z to nadir,
 //! y along the negative orbit normal, x completing the triad, along-track on a circular
 //! orbit), sequence z-y'-x'' (yaw, then pitch, then roll).
@@ -200,7 +200,8 @@ impl Effect for Orbit {
         own_dot[3..].copy_from_slice(a.as_slice());
         Ok(())
     }
-    /// The radius, the position, and the bus' roll, pitch and yaw (rad) relative to the
+    /// The radius, the position and velocity (the orbit's whole state, so that a run can be
+    /// restarted from a row), and the bus' roll, pitch and yaw (rad) relative to the
     /// local orbital frame ([`OrbitState::orbital_frame`]), sequence z-y'-x'': the bus is the
     /// orbital frame turned by yaw about its z, then pitch about the new y, then roll about
     /// the newest x.
@@ -210,6 +211,9 @@ impl Effect for Orbit {
             "orbit_r_x",
             "orbit_r_y",
             "orbit_r_z",
+            "orbit_v_x",
+            "orbit_v_y",
+            "orbit_v_z",
             "roll",
             "pitch",
             "yaw",
@@ -220,7 +224,7 @@ impl Effect for Orbit {
     }
     fn output(&self, ctx: &Context, own: &[f64], row: &mut Vec<f64>) {
         row.push(Vec3::new(own[0], own[1], own[2]).norm());
-        row.extend_from_slice(&own[..3]);
+        row.extend_from_slice(&own[..6]);
         let (roll, pitch, yaw) = self.attitude_in_orbit(ctx.attitude, own);
         row.extend_from_slice(&[roll, pitch, yaw]);
     }

@@ -8,7 +8,7 @@ use crate::scene_keys;
 use satsim_integrate::Options;
 use satsim_spacecraft::effects::section::reword;
 use satsim_spacecraft::effects::{EffectSet, Registry, SceneText, Section};
-use satsim_tree::io::{FileError, line_of, with_key};
+use satsim_tree::io::{FileError, FrameMotion, line_of, with_key};
 use satsim_tree::{Model, State};
 
 use std::collections::BTreeMap;
@@ -65,6 +65,18 @@ impl<'a> Parser<'a> {
             Some(a) => self.armature(model, a)?,
             None => model,
         };
+        // The orbit first: a state relative to the orbital frame needs its frame at t = 0.
+        let orbit = match &file.orbit {
+            Some(o) => Some(self.orbit(o)?),
+            None => None,
+        };
+        let orbital = orbit.as_ref().map(|o| {
+            let at_start = o.state(&[o.r0.x, o.r0.y, o.r0.z, o.v0.x, o.v0.y, o.v0.z]);
+            FrameMotion {
+                attitude: at_start.orbital_frame(),
+                angular_velocity: at_start.orbital_rate(),
+            }
+        });
         let mut warnings = Vec::new();
         let initial = match file.initial.as_ref().map(|s| (s.get_ref(), s.span())) {
             None => State::rest(&model),
@@ -81,7 +93,8 @@ impl<'a> Parser<'a> {
                         .into_iter()
                         .map(|w| format!("{}: {w}", state_path.display())),
                 );
-                sf.resolve(&model).map_err(|e| e.in_file(&state_path))?
+                sf.resolve_in_frame(&model, orbital.as_ref())
+                    .map_err(|e| e.in_file(&state_path))?
             }
             Some((StateSource::Inline(s), span)) => {
                 warnings.extend(s.warnings().into_iter().map(|w| {
@@ -91,7 +104,7 @@ impl<'a> Parser<'a> {
                         line_of(self.text(), span.start)
                     )
                 }));
-                s.resolve(&model).map_err(|e| {
+                s.resolve_in_frame(&model, orbital.as_ref()).map_err(|e| {
                     self.error(Some(span), format!("initial.{}: {}", e.field, e.message))
                 })?
             }
@@ -119,8 +132,8 @@ impl<'a> Parser<'a> {
             warnings.push(w);
         }
         let mut effects = EffectSet::default();
-        if let Some(o) = &file.orbit {
-            effects.insert(self.orbit(o)?);
+        if let Some(o) = orbit {
+            effects.insert(o);
         }
         if let Some(e) = &file.effects {
             self.effects(e, &model, &mut effects, &mut warnings)?;

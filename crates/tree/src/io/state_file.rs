@@ -6,6 +6,8 @@ use super::error::FileError;
 use super::model_file::schema_message;
 use super::read_text;
 use crate::model::{BaseKind, Model, UNIT_NORM_TOLERANCE};
+use crate::spatial::Vec3;
+use nalgebra::UnitQuaternion;
 use serde::Deserialize;
 use std::path::Path;
 use thiserror::Error;
@@ -62,6 +64,37 @@ pub struct BaseStateFile {
     /// Velocity of the root frame's origin in root axes (m/s), default zero.
     #[serde(default)]
     pub velocity: Option<Vec<f64>>,
+    /// What `attitude` and `angular_velocity` are relative to; default
+    /// [`BaseFrame::Inertial`].
+    #[serde(default)]
+    pub frame: Option<BaseFrame>,
+}
+
+/// The frame a state's `base.attitude` and `base.angular_velocity` are given in
+/// (`base.frame`). `velocity` is the root origin's in root axes either way.
+#[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum BaseFrame {
+    /// `"inertial"`: the attitude maps root-body coordinates to inertial ones, the angular
+    /// velocity is the root's inertial rate in root axes.
+    #[default]
+    Inertial,
+    /// `"orbital"`: relative to the local orbital frame at the start (which only a scene with
+    /// an orbit knows, see [`StateFile::resolve_in_frame`]): the attitude maps root-body
+    /// coordinates to orbital ones, the angular velocity is the root's rate relative to the
+    /// orbital frame, in root axes. Identity and zero rate point the root at nadir and keep
+    /// it there on a circular orbit.
+    Orbital,
+}
+
+/// A moving reference frame at the start: its attitude (frame to inertial) and angular
+/// velocity (inertial axes, rad/s), for [`StateFile::resolve_in_frame`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FrameMotion {
+    /// Maps the frame's coordinates to inertial ones.
+    pub attitude: UnitQuaternion<f64>,
+    /// The frame's angular velocity, inertial axes (rad/s).
+    pub angular_velocity: Vec3,
 }
 
 /// `hinges` of a state file.
@@ -158,8 +191,51 @@ impl StateFile {
         out
     }
 
+    /// The frame of `base.attitude` and `base.angular_velocity` (default inertial).
+    pub fn base_frame(&self) -> BaseFrame {
+        self.base.as_ref().and_then(|b| b.frame).unwrap_or_default()
+    }
+
     /// Checks the state against `model` and lays it out as the engine's `q`, `v`, `tau`.
+    /// A state relative to the orbital frame (`base.frame = "orbital"`, free base) is an
+    /// error here: only [`StateFile::resolve_in_frame`] with the orbit's frame resolves it.
     pub fn resolve(&self, model: &Model) -> Result<State, FieldError> {
+        self.resolve_in_frame(model, None)
+    }
+
+    /// [`StateFile::resolve`], with `orbital`, the local orbital frame at the start, for a
+    /// state given relative to it (`base.frame = "orbital"`): the root's inertial attitude
+    /// is `q = q_orbital ⊗ q_given` and its inertial rate, root axes,
+    /// `ω = ω_given + q⁻¹ ω_orbital q`. Without `orbital`, such a state is an error; with it,
+    /// an inertial state is unchanged.
+    pub fn resolve_in_frame(
+        &self,
+        model: &Model,
+        orbital: Option<&FrameMotion>,
+    ) -> Result<State, FieldError> {
+        let mut state = self.resolve_as_given(model)?;
+        if self.base_frame() == BaseFrame::Orbital && model.base == BaseKind::Free {
+            let Some(frame) = orbital else {
+                return Err(FieldError::new(
+                    "base.frame",
+                    "\"orbital\" needs an orbit: the attitude and angular velocity are then \
+                     relative to the local orbital frame, which a scene's [orbit] table gives",
+                ));
+            };
+            let a = &state.q[..4];
+            let given =
+                UnitQuaternion::new_normalize(nalgebra::Quaternion::new(a[0], a[1], a[2], a[3]));
+            let q = frame.attitude * given;
+            let omega = Vec3::new(state.v[0], state.v[1], state.v[2])
+                + q.inverse_transform_vector(&frame.angular_velocity);
+            state.q[..4].copy_from_slice(&[q.w, q.i, q.j, q.k]);
+            state.v[..3].copy_from_slice(omega.as_slice());
+        }
+        Ok(state)
+    }
+
+    /// The state laid out as written, whatever its frame.
+    fn resolve_as_given(&self, model: &Model) -> Result<State, FieldError> {
         let mut state = State::rest(model);
         let nh = model.n_hinges();
         let (nq0, nv0) = (model.base_nq(), model.base_nv());
