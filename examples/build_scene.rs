@@ -2,7 +2,7 @@
 //! parameters), stowed, deploying on hinge springs while three reaction wheels hold the bus,
 //! on a circular orbit under the full gravity-gradient model.
 //!
-//! `cargo run --example build_scene`
+//! `cargo run --release --example build_scene`
 
 use satsim::integrate::{Method, Options, Output};
 use satsim::satellite::{Deployment, PreprintParams, build_model};

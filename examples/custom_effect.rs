@@ -7,8 +7,8 @@
 //! ([`SceneEffect`]). It is registered next to the built-in effects, exactly as they are
 //! registered, and `examples/scenes/magnetic_torquer.toml` uses it.
 //!
-//! `cargo run --example custom_effect` runs that scene; `cargo test --example custom_effect`
-//! checks the turn against the analytic one.
+//! `cargo run --release --example custom_effect` runs that scene; `cargo test --release
+//! --example custom_effect` checks the turn against the analytic one.
 //!
 //! Field model: a centred dipole aligned with the Earth's axis (inertial z, the Earth's
 //! rotation ignored), `B(r) = μ0/(4π r³) (3 (m_E·r̂) r̂ − m_E)` with `m_E = −M_E ẑ`

@@ -10,7 +10,7 @@ Run k draws its inputs from (seed, k) alone (contract section 8), so the merged 
 the single-process one to the last bit whatever the sharding. The scene's paths must be
 readable by the workers (a shared file system), or pass the scene's text instead of a path.
 
-Needs: `pip install ./python dask distributed`.
+Needs: `pip install "./python[examples]"` (Dask, distributed, pandas and matplotlib).
 """
 
 from __future__ import annotations

@@ -6,7 +6,7 @@ on hinge springs, latching at the stops, with reaction wheels holding the bus), 
 hinge angles and the bus rates with matplotlib into `out/python/deploy.png` (or the folder
 given as the first argument), and prints the structural modes of the stowed configuration.
 
-Needs: `pip install ./python matplotlib` (pandas optional).
+Needs: `pip install "./python[examples]"` (matplotlib; pandas and Dask come with it).
 """
 
 # %%

@@ -27,8 +27,7 @@ fuzz_target!(|bytes: &[u8]| {
     if scene.model.n_bodies() > 64
         || scene
             .effects
-            .reaction_wheels
-            .as_ref()
+            .get::<satsim_spacecraft::effects::ReactionWheels>()
             .is_some_and(|w| w.wheels.len() > 16)
     {
         return;

@@ -9,12 +9,19 @@ static MODEL: OnceLock<satsim_tree::Model> = OnceLock::new();
 
 fuzz_target!(|bytes: &[u8]| {
     let model = MODEL.get_or_init(|| {
-        satsim_tree::parse_model(include_str!("../../examples/satellite.toml"), Path::new("satellite.toml"))
-            .expect("the example model loads")
-            .0
+        satsim_tree::parse_model(
+            include_str!("../../examples/satellite.toml"),
+            Path::new("satellite.toml"),
+        )
+        .expect("the example model loads")
+        .0
     });
-    let Ok(text) = std::str::from_utf8(bytes) else { return };
-    let Ok(state) = satsim_tree::parse_state(text, Path::new("fuzz.json"), model) else { return };
+    let Ok(text) = std::str::from_utf8(bytes) else {
+        return;
+    };
+    let Ok(state) = satsim_tree::parse_state(text, Path::new("fuzz.json"), model) else {
+        return;
+    };
     let mut data = satsim_tree::Data::new(model);
-    let _ = satsim_tree::aba(model, &mut data, &state.q, &state.v, &state.tau, None);
+    let _ = satsim_tree::aba::aba(model, &mut data, &state.q, &state.v, &state.tau, None);
 });
