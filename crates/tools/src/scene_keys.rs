@@ -412,7 +412,14 @@ type KeyLines = (String, usize, usize);
 /// its name to the end of its value; arrays' elements by position), outermost first. Empty
 /// for a text that is not TOML.
 fn value_lines(text: &str) -> Vec<KeyLines> {
-    fn table(t: &DeTable, prefix: &str, text: &str, out: &mut Vec<KeyLines>) {
+    /// The offsets where lines start: a line number is a binary search, not a scan.
+    struct Lines(Vec<usize>);
+    impl Lines {
+        fn of(&self, offset: usize) -> usize {
+            self.0.partition_point(|&start| start <= offset)
+        }
+    }
+    fn table(t: &DeTable, prefix: &str, text: &Lines, out: &mut Vec<KeyLines>) {
         for (k, v) in t.iter() {
             let key = if prefix.is_empty() {
                 k.get_ref().to_string()
@@ -422,9 +429,15 @@ fn value_lines(text: &str) -> Vec<KeyLines> {
             value(v, key, k.span().start.min(v.span().start), text, out);
         }
     }
-    fn value(v: &Spanned<DeValue>, key: String, start: usize, text: &str, out: &mut Vec<KeyLines>) {
+    fn value(
+        v: &Spanned<DeValue>,
+        key: String,
+        start: usize,
+        text: &Lines,
+        out: &mut Vec<KeyLines>,
+    ) {
         let end = v.span().end.saturating_sub(1).max(start);
-        out.push((key.clone(), line_of(text, start), line_of(text, end)));
+        out.push((key.clone(), text.of(start), text.of(end)));
         match v.get_ref() {
             DeValue::Table(t) => table(t, &key, text, out),
             DeValue::Array(a) => {
@@ -437,7 +450,10 @@ fn value_lines(text: &str) -> Vec<KeyLines> {
     }
     let mut out = Vec::new();
     if let Ok(doc) = DeTable::parse(text) {
-        table(doc.get_ref(), "", text, &mut out);
+        let starts = std::iter::once(0)
+            .chain(text.match_indices('\n').map(|(i, _)| i + 1))
+            .collect();
+        table(doc.get_ref(), "", &Lines(starts), &mut out);
     }
     out
 }

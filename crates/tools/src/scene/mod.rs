@@ -190,9 +190,11 @@ impl Scene {
         let mut scene = Scene::parse_with_registry(&rewritten, path, registry)
             .map_err(|e| scene_keys::relocate(e, &text, path, &rewritten, overrides))?;
         // A line of the rewritten text means nothing to the user: name where it was written.
-        let origins = scene_keys::Origins::new(&text, path, &rewritten);
-        for w in &mut scene.warnings {
-            *w = origins.warning(w);
+        if !scene.warnings.is_empty() {
+            let origins = scene_keys::Origins::new(&text, path, &rewritten);
+            for w in &mut scene.warnings {
+                *w = origins.warning(w);
+            }
         }
         Ok(scene)
     }
