@@ -1,0 +1,40 @@
+//! The spacecraft's world: what surrounds an orbit at a date, as pure functions of time and
+//! position. No state, no allocation; the effects that load the spacecraft
+//! (`satsim_spacecraft::effects::{solar_radiation, drag, magnetic}`) call them.
+//!
+//! # Conventions
+//!
+//! - **Frames.** The inertial frame is the GCRF: Earth-centred, axes those of the J2000 mean
+//!   equator and equinox to the precision of these models. The Earth-fixed frame (ITRF, for
+//!   the field and the turning atmosphere) is reached by [`earth`]'s rotation.
+//! - **Time.** An [`Epoch`] (hifitime) is t = 0 of a scene; a time `t` (s) of a run is the
+//!   epoch plus `t` SI seconds. UT1 is taken equal to UTC: |UT1 − UTC| < 0.9 s, so the Earth's
+//!   rotation angle is off by at most 0.0038 degrees.
+//! - **Units.** SI throughout: metres, seconds, kilograms, tesla.
+//!
+//! # Files
+//!
+//! - `epoch.rs`: reading an epoch, and the time arguments the series take;
+//! - `atmosphere.rs`: the exponential atmosphere (Vallado's table);
+
+#![forbid(unsafe_code)]
+#![warn(missing_docs)]
+
+pub mod atmosphere;
+pub mod epoch;
+
+pub use epoch::{Epoch, parse_epoch};
+
+/// A 3-vector (m, m/s, T: see each function).
+pub type Vec3 = nalgebra::Vector3<f64>;
+
+/// The Earth's equatorial radius (m, WGS-84).
+pub const R_EARTH: f64 = 6_378_137.0;
+/// The Earth's gravitational parameter μ (m³/s²).
+pub const MU_EARTH: f64 = 3.986004418e14;
+/// The Earth's rotation rate (rad/s).
+pub const OMEGA_EARTH: f64 = 7.292115e-5;
+/// The astronomical unit (m, IAU 2012).
+pub const AU: f64 = 149_597_870_700.0;
+/// Solar radiation pressure at 1 AU (N/m²): the solar flux over the speed of light.
+pub const SOLAR_PRESSURE_1AU: f64 = 4.56e-6;
