@@ -117,6 +117,60 @@ pub enum ModelError {
         /// The sizes given.
         size: [f64; 3],
     },
+    /// A facet whose area is not positive.
+    #[error("body `{body}`: facet {index}: area {area} must be positive")]
+    FacetArea {
+        /// The body.
+        body: String,
+        /// The facet's index in the body's facets.
+        index: usize,
+        /// The area given.
+        area: f64,
+    },
+    /// A facet normal whose norm is not 1 (within 1e-6).
+    #[error("body `{body}`: facet {index}: normal norm {norm} is not 1 (within 1e-6)")]
+    FacetNormal {
+        /// The body.
+        body: String,
+        /// The facet's index in the body's facets.
+        index: usize,
+        /// The norm given.
+        norm: f64,
+    },
+    /// A facet's reflection fractions outside `[0, 1]` or summing to more than 1.
+    #[error(
+        "body `{body}`: facet {index}: specular {specular} and diffuse {diffuse} must each lie in [0, 1] and sum to at most 1"
+    )]
+    FacetOptical {
+        /// The body.
+        body: String,
+        /// The facet's index in the body's facets.
+        index: usize,
+        /// The specular fraction given.
+        specular: f64,
+        /// The diffuse fraction given.
+        diffuse: f64,
+    },
+    /// A negative drag coefficient.
+    #[error("body `{body}`: facet {index}: drag coefficient {drag} is negative")]
+    FacetDrag {
+        /// The body.
+        body: String,
+        /// The facet's index in the body's facets.
+        index: usize,
+        /// The drag coefficient given.
+        drag: f64,
+    },
+    /// Facet edges that are not finite, leave the facet's plane or do not span its area.
+    #[error(
+        "body `{body}`: facet {index}: edges must lie in the facet's plane with edges[0] × edges[1] = area · normal (an edge direction along the normal has no direction in the plane)"
+    )]
+    FacetEdges {
+        /// The body.
+        body: String,
+        /// The facet's index in the body's facets.
+        index: usize,
+    },
     /// A leaf body with zero mass and zero inertia: its hinge acceleration is undetermined.
     #[error(
         "body `{0}` is a leaf with zero mass and zero inertia: its hinge acceleration would be undetermined"

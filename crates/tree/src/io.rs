@@ -52,8 +52,8 @@ mod state_file;
 pub use attitude::{Attitude, EULER_SEQUENCES, EulerSequence};
 pub use error::{FileError, SpannedError, line_of};
 pub use model_file::{
-    BaseFile, BaseKindFile, BodyFile, HingeFile, ModelFile, ShapeFile, parse_model,
-    parse_model_file, read_model, with_key,
+    BaseFile, BaseKindFile, BodyFile, CoefficientsFile, FacetFile, HingeFile, ModelFile, ShapeFile,
+    parse_model, parse_model_file, read_model, with_key,
 };
 pub use state_file::{
     BaseFrame, BaseStateFile, FieldError, FrameMotion, HingesStateFile, STATE_ATTITUDE_TOLERANCE,

@@ -14,6 +14,9 @@
 //!   the default method), [`cholesky`] (forward dynamics through the mass matrix, with the
 //!   dense factorisation of [`llt`]), [`kinetic_energy`], [`center_of_mass`], [`momentum`].
 //!   [`kernel_parts`] holds the engine's pieces a specialised kernel needs.
+//! - [`facet`]: the flat one-sided [`Facet`]s of a body's surface (area, normal, centroid,
+//!   optical and drag coefficients) that the surface-force models read; data only, no
+//!   algorithm of the tree reads them.
 //! - [`io`] reads the model TOML and state JSON files of the command-line contract (cargo
 //!   feature `files`, on by default; `default-features = false` builds the engine without
 //!   serde, serde_json and toml).
@@ -53,6 +56,7 @@ pub mod crba;
 pub mod data;
 pub mod energy;
 pub mod error;
+pub mod facet;
 pub mod forward_dynamics;
 pub mod impulse;
 #[cfg(feature = "files")]
@@ -69,6 +73,7 @@ pub use crba::crba;
 pub use data::Data;
 pub use energy::{center_of_mass, kinetic_energy, kinetic_energy_after_kinematics, momentum};
 pub use error::{DynamicsError, ModelError};
+pub use facet::{Facet, facets_of_box};
 pub use forward_dynamics::{ForwardDynamics, Input, Kernel, Method};
 #[cfg(feature = "files")]
 pub use io::{

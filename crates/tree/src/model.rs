@@ -13,6 +13,7 @@
 
 use crate::axis::CoordAxis;
 use crate::error::ModelError;
+use crate::facet::Facet;
 use crate::spatial::{
     ArticulatedInertia, Mat3, Motion, RigidInertia, Transform, Vec3, rotation_about,
 };
@@ -49,6 +50,9 @@ pub struct Body {
     pub inertia: Mat3,
     /// How to draw the body (the model file's optional `shape`); no algorithm reads it.
     pub shape: Option<BoxShape>,
+    /// The body's surface facets (body frame), for the surface-force models (solar
+    /// radiation pressure, drag); default none. No algorithm of the tree reads them.
+    pub facets: Vec<Facet>,
 }
 
 /// A box drawn for a body (the model file's `shape = { box = [lx, ly, lz], at = [x, y, z] }`).
@@ -94,6 +98,7 @@ impl Body {
             com: Vec3::zeros(),
             inertia,
             shape: None,
+            facets: Vec::new(),
         }
     }
     /// A massless, inertia-free link (to build multi-axis hinges from 1-DOF hinges).
@@ -108,6 +113,11 @@ impl Body {
     /// Sets the box drawn for the body (drawing only).
     pub fn with_shape(mut self, shape: BoxShape) -> Self {
         self.shape = Some(shape);
+        self
+    }
+    /// Sets the body's surface facets (body frame), replacing any given before.
+    pub fn with_facets(mut self, facets: impl IntoIterator<Item = Facet>) -> Self {
+        self.facets = facets.into_iter().collect();
         self
     }
 }
@@ -256,6 +266,18 @@ impl ModelBuilder {
             }
             check_body(b)?;
         }
+        // Facets with unit normals, per body in the order given.
+        let facets = self
+            .bodies
+            .iter()
+            .map(|b| {
+                b.facets
+                    .iter()
+                    .enumerate()
+                    .map(|(k, f)| f.checked(&b.name, k))
+                    .collect::<Result<Vec<Facet>, ModelError>>()
+            })
+            .collect::<Result<Vec<_>, ModelError>>()?;
         let mut hinge_names: HashMap<&str, ()> = HashMap::new();
         // parent_hinge[b] = index of the hinge whose child is body b (file order)
         let mut parent_hinge: Vec<Option<usize>> = vec![None; self.bodies.len()];
@@ -353,6 +375,7 @@ impl ModelBuilder {
                     inertia_com: body.inertia,
                     inertia: RigidInertia::from_com(body.mass, body.com, body.inertia),
                     shape: body.shape,
+                    facets: facets[b].clone(),
                 }
             })
             .collect();
@@ -678,6 +701,8 @@ pub struct BodyInfo {
     pub(crate) inertia: RigidInertia,
     /// The box drawn for the body, if the model gave one (drawing only).
     pub(crate) shape: Option<BoxShape>,
+    /// The body's surface facets (body frame, unit normals).
+    pub(crate) facets: Vec<Facet>,
 }
 
 impl BodyInfo {
@@ -704,6 +729,11 @@ impl BodyInfo {
     /// The box drawn for the body, if the model gave one (drawing only).
     pub fn shape(&self) -> Option<&BoxShape> {
         self.shape.as_ref()
+    }
+    /// The body's surface facets (body frame, unit normals), in the order given; no
+    /// algorithm of the tree reads them.
+    pub fn facets(&self) -> &[Facet] {
+        &self.facets
     }
 }
 
@@ -928,6 +958,7 @@ impl Model {
         for b in &self.bodies {
             let mut body = Body::new(b.name.clone(), b.mass, b.inertia_com).with_com(b.com);
             body.shape = b.shape;
+            body.facets = b.facets.clone();
             builder.push_body(body);
         }
         for (k, name) in self.hinge_names.iter().enumerate() {

@@ -4,7 +4,8 @@
 use super::error::{FileError, SpannedError, line_of};
 use super::read_text;
 use crate::error::ModelError;
-use crate::model::{BaseKind, Body, BoxShape, Hinge, Model, ModelBuilder};
+use crate::facet::{DEFAULT_DRAG, Facet, facets_of_box};
+use crate::model::{BaseKind, Body, BoxShape, Hinge, Model, ModelBuilder, UNIT_NORM_TOLERANCE};
 use crate::spatial::{Mat3, Vec3};
 use nalgebra::Quaternion;
 use serde::Deserialize;
@@ -78,6 +79,60 @@ pub struct BodyFile {
     /// no algorithm reads it).
     #[serde(default)]
     pub shape: Option<Spanned<ShapeFile>>,
+    /// `facets = [{ area, normal, at, specular, diffuse, drag, size, edge }, …]`: the body's
+    /// surface facets, body frame (optional).
+    #[serde(default)]
+    pub facets: Vec<Spanned<FacetFile>>,
+    /// `facets_from_shape = { specular, diffuse, drag }`: the six faces of `shape`'s box as
+    /// facets with these coefficients, after the listed `facets` (requires `shape`).
+    #[serde(default)]
+    pub facets_from_shape: Option<Spanned<CoefficientsFile>>,
+}
+
+/// One of a body's `facets`: a flat one-sided rectangle, body frame. Written with `area`,
+/// `normal` and `at` alone it is a square (see [`Facet::new`]); `size = [a, b]` makes it an
+/// `a × b` rectangle (then `area`, if given, must be `a · b` within 1e-9 relative) and
+/// `edge` turns its side `a` along `edge` projected onto the facet's plane.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct FacetFile {
+    /// Area (m²), required unless `size` is given.
+    #[serde(default)]
+    pub area: Option<Spanned<f64>>,
+    /// Outward unit normal (normalised if within 1e-6 of unit).
+    pub normal: Spanned<[f64; 3]>,
+    /// Centroid (m).
+    pub at: Spanned<[f64; 3]>,
+    /// Fraction of the light reflected specularly, default 0.
+    #[serde(default)]
+    pub specular: Option<Spanned<f64>>,
+    /// Fraction of the light reflected diffusely, default 0.
+    #[serde(default)]
+    pub diffuse: Option<Spanned<f64>>,
+    /// Drag coefficient, default [`DEFAULT_DRAG`].
+    #[serde(default)]
+    pub drag: Option<Spanned<f64>>,
+    /// `[a, b]` (m): the rectangle's sides (an extension of the contract).
+    #[serde(default)]
+    pub size: Option<Spanned<[f64; 2]>>,
+    /// The direction of side `a` (an extension of the contract).
+    #[serde(default)]
+    pub edge: Option<Spanned<[f64; 3]>>,
+}
+
+/// `facets_from_shape`: the coefficients of the six faces of a body's `shape` box.
+#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct CoefficientsFile {
+    /// Fraction of the light reflected specularly, default 0.
+    #[serde(default)]
+    pub specular: Option<Spanned<f64>>,
+    /// Fraction of the light reflected diffusely, default 0.
+    #[serde(default)]
+    pub diffuse: Option<Spanned<f64>>,
+    /// Drag coefficient, default [`DEFAULT_DRAG`].
+    #[serde(default)]
+    pub drag: Option<Spanned<f64>>,
 }
 
 /// A body's `shape`: a box of edge lengths `box` (m, body axes, each positive) centred at
@@ -118,6 +173,158 @@ pub struct HingeFile {
     /// contract, used to regularise a gimbal lock).
     #[serde(default)]
     pub armature: Option<Spanned<f64>>,
+}
+
+/// Relative tolerance between a facet's `area` and the product of its `size`.
+const AREA_TOLERANCE: f64 = 1e-9;
+
+/// A coefficient (`specular`, `diffuse`, `drag`) given or its default, checked finite.
+fn coefficient(
+    x: &Option<Spanned<f64>>,
+    default: f64,
+    nonfinite: impl Fn(Option<Range<usize>>) -> SpannedError,
+) -> Result<f64, SpannedError> {
+    match x {
+        Some(v) if !v.get_ref().is_finite() => Err(nonfinite(span_of(v))),
+        Some(v) => Ok(*v.get_ref()),
+        None => Ok(default),
+    }
+}
+
+/// The facets of `body` (the file entry `b`, the body read so far `entry`): the listed
+/// `facets`, then the faces of `facets_from_shape`. Non-finite numbers, `size` and `edge`
+/// are checked here with their spans; the builder checks the rest (its errors are located
+/// by [`ModelFile::locate`]).
+fn facets_of(b: &Spanned<BodyFile>, entry: &Body) -> Result<Vec<Facet>, SpannedError> {
+    let body = b.get_ref();
+    let name = &entry.name;
+    let mut facets = Vec::with_capacity(body.facets.len() + 6);
+    for (k, f) in body.facets.iter().enumerate() {
+        let spec = f.get_ref();
+        let nonfinite = |field: &str| {
+            let what = format!("body `{name}`: facet {k}: {field}");
+            move |span| SpannedError::Model {
+                span,
+                error: ModelError::NonFinite(what.clone()),
+            }
+        };
+        let schema = |span: Range<usize>, message: String| SpannedError::Schema {
+            span: Some(span),
+            message: format!("body `{name}`: facet {k}: {message}"),
+        };
+        let vec = |field: &str, x: &Spanned<[f64; 3]>| {
+            if x.get_ref().iter().all(|x| x.is_finite()) {
+                Ok(v3(x.get_ref()))
+            } else {
+                Err(nonfinite(field)(span_of(x)))
+            }
+        };
+        let normal = vec("normal", &spec.normal)?;
+        let at = vec("at", &spec.at)?;
+        let edge = match &spec.edge {
+            Some(e) => {
+                let dir = vec("edge", e)?;
+                // An edge along the normal has no direction in the plane (with a normal
+                // that is not unit, the builder reports the normal instead).
+                let unit = (normal.norm() - 1.0).abs() <= UNIT_NORM_TOLERANCE;
+                let n = normal / normal.norm();
+                if unit && (dir - n * n.dot(&dir)).norm() <= 1e-9 * dir.norm() {
+                    return Err(schema(
+                        e.span(),
+                        format!(
+                            "edge {:?} has no direction in the facet's plane",
+                            e.get_ref()
+                        ),
+                    ));
+                }
+                Some(dir)
+            }
+            None => None,
+        };
+        let given = match &spec.area {
+            Some(a) => Some((coefficient(&spec.area, 0.0, nonfinite("area"))?, a)),
+            None => None,
+        };
+        let size = match &spec.size {
+            Some(size) => {
+                let [a, b] = *size.get_ref();
+                if !(a.is_finite() && b.is_finite()) {
+                    return Err(nonfinite("size")(span_of(size)));
+                }
+                if a <= 0.0 || b <= 0.0 {
+                    return Err(schema(
+                        size.span(),
+                        format!("size [{a}, {b}] must be positive"),
+                    ));
+                }
+                if let Some((area, key)) = given
+                    && (area - a * b).abs() > AREA_TOLERANCE * (a * b)
+                {
+                    return Err(schema(
+                        key.span(),
+                        format!(
+                            "area {area} is not size[0] · size[1] = {} (within 1e-9 relative)",
+                            a * b
+                        ),
+                    ));
+                }
+                Some((a, b))
+            }
+            None => None,
+        };
+        let area = match (given, size) {
+            (Some((area, _)), _) => area,
+            (None, Some((a, b))) => a * b,
+            (None, None) => {
+                return Err(SpannedError::Schema {
+                    span: span_of(f),
+                    message: format!(
+                        "body `{name}`: facet {k}: missing key `area` (required unless `size` is given)"
+                    ),
+                });
+            }
+        };
+        let mut facet = Facet::new(area, normal, at)
+            .with_specular(coefficient(&spec.specular, 0.0, nonfinite("specular"))?)
+            .with_diffuse(coefficient(&spec.diffuse, 0.0, nonfinite("diffuse"))?)
+            .with_drag(coefficient(&spec.drag, DEFAULT_DRAG, nonfinite("drag"))?);
+        match (size, edge) {
+            (Some((a, b)), dir) => facet = facet.with_size(a, b, dir.unwrap_or(facet.edges[0])),
+            (None, Some(dir)) => {
+                // A square turned to `edge`; its area stays exactly as written.
+                let side = area.sqrt();
+                facet = facet.with_size(side, side, dir);
+                facet.area = area;
+            }
+            (None, None) => {}
+        }
+        facets.push(facet);
+    }
+    if let Some(c) = &body.facets_from_shape {
+        let Some(shape) = &entry.shape else {
+            return Err(SpannedError::Schema {
+                span: span_of(c),
+                message: format!("body `{name}`: `facets_from_shape` requires a `shape`"),
+            });
+        };
+        let spec = c.get_ref();
+        let nonfinite = |field: &str| {
+            let what = format!("body `{name}`: facets_from_shape.{field}");
+            move |span| SpannedError::Model {
+                span,
+                error: ModelError::NonFinite(what.clone()),
+            }
+        };
+        let specular = coefficient(&spec.specular, 0.0, nonfinite("specular"))?;
+        let diffuse = coefficient(&spec.diffuse, 0.0, nonfinite("diffuse"))?;
+        let drag = coefficient(&spec.drag, DEFAULT_DRAG, nonfinite("drag"))?;
+        facets.extend(facets_of_box(shape, &entry.com).map(|f| {
+            f.with_specular(specular)
+                .with_diffuse(diffuse)
+                .with_drag(drag)
+        }));
+    }
+    Ok(facets)
 }
 
 fn v3(a: &[f64; 3]) -> Vec3 {
@@ -197,6 +404,7 @@ impl ModelFile {
                 }
                 entry = entry.with_shape(drawn);
             }
+            entry.facets = facets_of(b, &entry)?;
             builder.push_body(entry);
         }
         for h in &self.hinge {
@@ -269,6 +477,25 @@ impl ModelFile {
         self.hinge_named(name, 0).map(|h| h.name.span())
     }
 
+    /// The span of `body`'s facet `index`: the key `key` picks where given, else the facet's
+    /// entry; an index past the listed facets is one of `facets_from_shape`'s faces.
+    fn facet_span(
+        &self,
+        body: &str,
+        index: usize,
+        key: impl Fn(&FacetFile) -> Option<Range<usize>>,
+    ) -> Option<Range<usize>> {
+        let b = self.body_named(body, 0)?;
+        match b.facets.get(index) {
+            Some(f) => key(f.get_ref()).or_else(|| Some(f.span())),
+            None => b
+                .facets_from_shape
+                .as_ref()
+                .map(Spanned::span)
+                .or_else(|| Some(b.name.span())),
+        }
+    }
+
     /// The span of the body, hinge or key a [`ModelError`] is about. The builder checks the
     /// entries in file order, so the first entry of a name is the one concerned (the second
     /// for duplicates).
@@ -322,6 +549,24 @@ impl ModelFile {
                     .map(|s| s.get_ref().size.span())
                     .unwrap_or_else(|| b.name.span())
             }),
+            ModelError::FacetArea { body, index, .. } => {
+                self.facet_span(body, *index, |f| f.area.as_ref().map(Spanned::span))
+            }
+            ModelError::FacetNormal { body, index, .. } => {
+                self.facet_span(body, *index, |f| Some(f.normal.span()))
+            }
+            ModelError::FacetOptical { body, index, .. } => self.facet_span(body, *index, |f| {
+                f.specular
+                    .as_ref()
+                    .or(f.diffuse.as_ref())
+                    .map(Spanned::span)
+            }),
+            ModelError::FacetDrag { body, index, .. } => {
+                self.facet_span(body, *index, |f| f.drag.as_ref().map(Spanned::span))
+            }
+            ModelError::FacetEdges { body, index } => {
+                self.facet_span(body, *index, |f| f.edge.as_ref().map(Spanned::span))
+            }
             ModelError::NegativeArmature { hinge, .. } => self.hinge_named(hinge, 0).map(|h| {
                 h.armature
                     .as_ref()

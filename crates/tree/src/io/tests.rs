@@ -78,6 +78,75 @@ fn shapes_are_read_and_default_to_the_com() {
 }
 
 #[test]
+fn facets_are_read_in_the_body_frame() {
+    let text = with_shape(
+        r#"com = [0, 1, 0]
+shape = { box = [0.02, 2, 1] }
+facets = [
+  { area = 1.2, normal = [0.0, 0.0, 1.0000005], at = [0.0, 0.8, 0.0],
+    specular = 0.3, diffuse = 0.1, drag = 2.0 },
+  { size = [2, 0.5], edge = [0.3, 1, 0], normal = [1, 0, 0], at = [0.01, 1, 0] },
+  { area = 2.0, size = [4, 0.5], normal = [0, -1, 0], at = [0, 0, 0] },
+  { area = 9, edge = [1, 1, 0], normal = [0, 0, -1], at = [0, 0, -1] },
+]
+facets_from_shape = { specular = 0.5, diffuse = 0.25, drag = 1.5 }"#,
+    );
+    let (m, _) = parse_model(&text, Path::new("ok.toml")).unwrap();
+    assert!(m.bodies[0].facets().is_empty());
+    let f = m.bodies[1].facets();
+    assert_eq!(f.len(), 4 + 6);
+    // The contract's form: a square of side √1.2 on the least aligned axis (x), the
+    // normal normalised from within 1e-6 of unit.
+    assert_eq!(f[0].area, 1.2);
+    assert_eq!(f[0].normal, Vec3::z());
+    assert_eq!(f[0].at, Vec3::new(0.0, 0.8, 0.0));
+    assert_eq!((f[0].specular, f[0].diffuse, f[0].drag), (0.3, 0.1, 2.0));
+    let side = 1.2f64.sqrt();
+    assert!((f[0].edges[0] - Vec3::x() * side).norm() < 1e-15);
+    assert!((f[0].edges[1] - Vec3::y() * side).norm() < 1e-6 * side);
+    // `size` with `edge`: 2 m along y (the edge projected into the plane), 0.5 m along
+    // x × y = z; the area is their product; coefficients default.
+    assert_eq!(f[1].area, 1.0);
+    assert_eq!(
+        f[1].edges,
+        [Vec3::new(0.0, 2.0, 0.0), Vec3::new(0.0, 0.0, 0.5)]
+    );
+    assert_eq!((f[1].specular, f[1].diffuse, f[1].drag), (0.0, 0.0, 2.2));
+    // `size` with a matching `area` and no `edge`: side a along the square's first side
+    // (x, the least aligned axis with -y), side b along -y × x = z.
+    assert_eq!(f[2].area, 2.0);
+    assert_eq!(
+        f[2].edges,
+        [Vec3::new(4.0, 0.0, 0.0), Vec3::new(0.0, 0.0, 0.5)]
+    );
+    // `edge` alone: a square of the given area turned to the edge.
+    assert_eq!(f[3].area, 9.0);
+    let d = Vec3::new(1.0, 1.0, 0.0).normalize() * 3.0;
+    assert!((f[3].edges[0] - d).norm() < 1e-15);
+    assert!((f[3].edges[1] - (-Vec3::z()).cross(&d)).norm() < 1e-15);
+    // The six faces of the shape box (centred on the com), after the listed facets.
+    let faces = crate::facet::facets_of_box(&m.bodies[1].shape.unwrap(), &m.bodies[1].com);
+    for (k, face) in faces.iter().enumerate() {
+        let g = &f[4 + k];
+        assert_eq!(
+            (g.area, g.normal, g.at, g.edges),
+            (face.area, face.normal, face.at, face.edges)
+        );
+        assert_eq!((g.specular, g.diffuse, g.drag), (0.5, 0.25, 1.5));
+    }
+    assert_eq!(f[4].at, Vec3::new(0.01, 1.0, 0.0));
+    assert_eq!(f[4].area, 2.0);
+    // Facets are data: the dynamics are those of the model without them.
+    let plain = parse_model(&with_shape("com = [0, 1, 0]"), Path::new("p.toml"))
+        .unwrap()
+        .0;
+    assert_eq!(plain.bodies[1].inertia, m.bodies[1].inertia);
+    assert_eq!(plain.joints, m.joints);
+    // Rebuilding keeps them.
+    assert_eq!(m.to_builder().build().unwrap(), m);
+}
+
+#[test]
 fn model_error_table() {
     // (description, edited text, kind, line, substring of the message)
     let body3 =
@@ -347,6 +416,206 @@ fn model_error_table() {
             Kind::Model,
             Some(13),
             "body `panel`: shape.box: value is not finite",
+        ),
+        (
+            "facet with zero area",
+            with_shape("facets = [{ area = 0, normal = [0, 0, 1], at = [0, 0, 0] }]"),
+            Kind::Model,
+            Some(13),
+            "body `panel`: facet 0: area 0 must be positive",
+        ),
+        (
+            "facet with negative area",
+            with_shape("facets = [{ area = -1.5, normal = [0, 0, 1], at = [0, 0, 0] }]"),
+            Kind::Model,
+            Some(13),
+            "facet 0: area -1.5 must be positive",
+        ),
+        (
+            "facet area not finite",
+            with_shape("facets = [{ area = nan, normal = [0, 0, 1], at = [0, 0, 0] }]"),
+            Kind::Model,
+            Some(13),
+            "body `panel`: facet 0: area: value is not finite",
+        ),
+        (
+            "facet normal not unit",
+            with_shape("facets = [{ area = 1, normal = [0, 0, 2], at = [0, 0, 0] }]"),
+            Kind::Model,
+            Some(13),
+            "body `panel`: facet 0: normal norm 2 is not 1 (within 1e-6)",
+        ),
+        (
+            "facet normal zero",
+            with_shape("facets = [{ area = 1, normal = [0, 0, 0], at = [0, 0, 0] }]"),
+            Kind::Model,
+            Some(13),
+            "facet 0: normal norm 0 is not 1",
+        ),
+        (
+            "facet normal not finite",
+            with_shape("facets = [{ area = 1, normal = [0, inf, 1], at = [0, 0, 0] }]"),
+            Kind::Model,
+            Some(13),
+            "body `panel`: facet 0: normal: value is not finite",
+        ),
+        (
+            "facet centroid not finite",
+            with_shape("facets = [{ area = 1, normal = [0, 0, 1], at = [nan, 0, 0] }]"),
+            Kind::Model,
+            Some(13),
+            "body `panel`: facet 0: at: value is not finite",
+        ),
+        (
+            "facet specular above 1",
+            with_shape(
+                "facets = [{ area = 1, normal = [0, 0, 1], at = [0, 0, 0], specular = 1.2 }]",
+            ),
+            Kind::Model,
+            Some(13),
+            "facet 0: specular 1.2 and diffuse 0 must each lie in [0, 1] and sum to at most 1",
+        ),
+        (
+            "facet diffuse negative",
+            with_shape(
+                "facets = [{ area = 1, normal = [0, 0, 1], at = [0, 0, 0], diffuse = -0.1 }]",
+            ),
+            Kind::Model,
+            Some(13),
+            "specular 0 and diffuse -0.1 must each lie in [0, 1]",
+        ),
+        (
+            "facet reflecting more than it receives",
+            with_shape(
+                "facets = [{ area = 1, normal = [0, 0, 1], at = [0, 0, 0], specular = 0.6, diffuse = 0.5 }]",
+            ),
+            Kind::Model,
+            Some(13),
+            "specular 0.6 and diffuse 0.5 must each lie in [0, 1] and sum to at most 1",
+        ),
+        (
+            "facet specular not finite",
+            with_shape(
+                "facets = [{ area = 1, normal = [0, 0, 1], at = [0, 0, 0], specular = nan }]",
+            ),
+            Kind::Model,
+            Some(13),
+            "body `panel`: facet 0: specular: value is not finite",
+        ),
+        (
+            "facet drag negative",
+            with_shape("facets = [{ area = 1, normal = [0, 0, 1], at = [0, 0, 0], drag = -2.2 }]"),
+            Kind::Model,
+            Some(13),
+            "body `panel`: facet 0: drag coefficient -2.2 is negative",
+        ),
+        (
+            "facet drag not finite",
+            with_shape("facets = [{ area = 1, normal = [0, 0, 1], at = [0, 0, 0], drag = inf }]"),
+            Kind::Model,
+            Some(13),
+            "facet 0: drag: value is not finite",
+        ),
+        (
+            "facet with an unknown key",
+            with_shape("facets = [{ area = 1, normal = [0, 0, 1], at = [0, 0, 0], colour = 1 }]"),
+            Kind::Schema,
+            Some(13),
+            "unknown key `colour`",
+        ),
+        (
+            "facet without normal",
+            with_shape("facets = [{ area = 1, at = [0, 0, 0] }]"),
+            Kind::Schema,
+            Some(13),
+            "missing required key `normal`",
+        ),
+        (
+            "facet without area or size",
+            with_shape("facets = [{ normal = [0, 0, 1], at = [0, 0, 0] }]"),
+            Kind::Schema,
+            Some(13),
+            "body `panel`: facet 0: missing key `area` (required unless `size` is given)",
+        ),
+        (
+            "facet area not size[0] size[1]",
+            with_shape(
+                "facets = [{ area = 1.2, size = [1, 1.3], normal = [0, 0, 1], at = [0, 0, 0] }]",
+            ),
+            Kind::Schema,
+            Some(13),
+            "body `panel`: facet 0: area 1.2 is not size[0] · size[1] = 1.3",
+        ),
+        (
+            "facet size not positive",
+            with_shape("facets = [{ size = [1, 0], normal = [0, 0, 1], at = [0, 0, 0] }]"),
+            Kind::Schema,
+            Some(13),
+            "facet 0: size [1, 0] must be positive",
+        ),
+        (
+            "facet size not finite",
+            with_shape("facets = [{ size = [1, inf], normal = [0, 0, 1], at = [0, 0, 0] }]"),
+            Kind::Model,
+            Some(13),
+            "facet 0: size: value is not finite",
+        ),
+        (
+            "facet edge along the normal",
+            with_shape(
+                "facets = [{ size = [1, 2], edge = [0, 0, -3], normal = [0, 0, 1], at = [0, 0, 0] }]",
+            ),
+            Kind::Schema,
+            Some(13),
+            "facet 0: edge [0.0, 0.0, -3.0] has no direction in the facet's plane",
+        ),
+        (
+            "the second facet of a list, on its own line",
+            with_shape(
+                "facets = [\n  { area = 1, normal = [0, 0, 1], at = [0, 0, 0] },\n  { area = 1, normal = [0, 1, 1], at = [0, 0, 0] },\n]",
+            ),
+            Kind::Model,
+            Some(15),
+            "body `panel`: facet 1: normal norm 1.41",
+        ),
+        (
+            "facets_from_shape without shape",
+            with_shape("facets_from_shape = { specular = 0.3 }"),
+            Kind::Schema,
+            Some(13),
+            "body `panel`: `facets_from_shape` requires a `shape`",
+        ),
+        (
+            "facets_from_shape with an unknown key",
+            with_shape(
+                "shape = { box = [0.02, 2, 1] }\nfacets_from_shape = { specular = 0.3, absorbed = 0.7 }",
+            ),
+            Kind::Schema,
+            Some(14),
+            "unknown key `absorbed`",
+        ),
+        (
+            "facets_from_shape with bad coefficients, after a listed facet",
+            with_shape(
+                "shape = { box = [0.02, 2, 1] }\nfacets = [{ area = 1, normal = [1, 0, 0], at = [0, 0, 0] }]\nfacets_from_shape = { specular = 0.7, diffuse = 0.7 }",
+            ),
+            Kind::Model,
+            Some(15),
+            "body `panel`: facet 1: specular 0.7 and diffuse 0.7",
+        ),
+        (
+            "facets_from_shape with a negative drag",
+            with_shape("shape = { box = [0.02, 2, 1] }\nfacets_from_shape = { drag = -1 }"),
+            Kind::Model,
+            Some(14),
+            "body `panel`: facet 0: drag coefficient -1 is negative",
+        ),
+        (
+            "facets_from_shape with a coefficient not finite",
+            with_shape("shape = { box = [0.02, 2, 1] }\nfacets_from_shape = { diffuse = nan }"),
+            Kind::Model,
+            Some(14),
+            "body `panel`: facets_from_shape.diffuse: value is not finite",
         ),
         (
             "massless leaf",
