@@ -51,11 +51,15 @@ pub fn days_ut1(epoch: Epoch, t: f64) -> f64 {
     (epoch.to_utc_seconds() - j2000.to_utc_seconds() + t) / 86_400.0
 }
 
-/// Decimal year of `epoch + t` (UTC), the argument of the geomagnetic model's coefficients.
+/// Decimal year of `epoch + t` (UTC, calendar): the year plus the fraction of it elapsed, the
+/// argument of the geomagnetic model's coefficients (IGRF's models stand at 1900.0, 1905.0,
+/// …: 1 January, 00:00).
 pub fn decimal_year(epoch: Epoch, t: f64) -> f64 {
-    // A Julian year of 365.25 days from J2000.0: within a day of the calendar's, which
-    // moves the field by its secular variation over a day (a few nT at most).
-    2000.0 + days_ut1(epoch, t) / 365.25
+    let e = at(epoch, t);
+    let year = e.to_gregorian_utc().0;
+    let start = Epoch::from_gregorian_utc_at_midnight(year, 1, 1);
+    let end = Epoch::from_gregorian_utc_at_midnight(year + 1, 1, 1);
+    f64::from(year) + (e - start).to_seconds() / (end - start).to_seconds()
 }
 
 #[cfg(test)]
@@ -91,6 +95,11 @@ mod tests {
         // UTC - TT at J2000 was -64.184 s.
         let d = days_ut1(e, 0.0);
         assert!((d * 86_400.0 + 64.184).abs() < 1e-6, "{}", d * 86_400.0);
-        assert!((decimal_year(e, 0.0) - 2000.0).abs() < 1e-5);
+        // J2000 is 2000-01-01T11:58:55.816 UTC: 0.4993 days into a leap year.
+        let expected = 2000.0 + (0.5 - 64.184 / 86_400.0) / 366.0;
+        assert!((decimal_year(e, 0.0) - expected).abs() < 1e-12);
+        let new_year = parse_epoch("2026-01-01T00:00:00 UTC").unwrap();
+        assert_eq!(decimal_year(new_year, 0.0), 2026.0);
+        assert!((decimal_year(new_year, 365.0 * 43_200.0) - 2026.5).abs() < 1e-12);
     }
 }
