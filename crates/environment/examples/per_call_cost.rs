@@ -29,6 +29,18 @@ fn main() -> Result<(), String> {
         Vec3::new(u.cos(), u.sin() * 0.8, u.sin() * 0.6) * 6.9e6
     };
     let n = 200_000;
+    per_call("centuries_tt", n, |t| {
+        satsim_environment::epoch::centuries_tt(epoch, t)
+    });
+    per_call("days_ut1", n, |t| {
+        satsim_environment::epoch::days_ut1(epoch, t)
+    });
+    per_call("decimal_year", n, |t| {
+        satsim_environment::epoch::decimal_year(epoch, t)
+    });
+    per_call("gcrf_to_itrf", n, |t| {
+        satsim_environment::earth::gcrf_to_itrf(epoch, t).matrix()[0]
+    });
     per_call("sun_position", n, |t| sun_position(epoch, t).x);
     per_call("shadow_fraction conical", n, |t| {
         shadow_fraction(ShadowModel::Conical, &orbit(t), &sun)

@@ -35,6 +35,10 @@ pub(super) struct Table {
     h: [Coeffs; MODELS],
     g_rate: [Coeffs; MODELS],
     h_rate: [Coeffs; MODELS],
+    /// The recursion's factors (see [`Table::field`]): `k1[n][m] = (2n−1)/sqrt(n²−m²)`,
+    /// `k2[n][m] = sqrt(((n−1)²−m²)/(n²−m²))`, `k1[m][m] = sqrt((2m−1)/2m)` (sectoral).
+    k1: Coeffs,
+    k2: Coeffs,
 }
 
 /// The table, parsed at the first call.
@@ -56,7 +60,17 @@ fn parse(text: &str) -> Result<Box<Table>, String> {
         h: [zero; MODELS],
         g_rate: [zero; MODELS],
         h_rate: [zero; MODELS],
+        k1: zero,
+        k2: zero,
     });
+    for m in 0..=N_MAX {
+        t.k1[m][m] = ((2 * m) as f64 - 1.0).max(0.0).sqrt() / ((2 * m) as f64).max(1.0).sqrt();
+        for n in (m + 1)..=N_MAX {
+            let nm = (n * n - m * m) as f64;
+            t.k1[n][m] = (2 * n - 1) as f64 / nm.sqrt();
+            t.k2[n][m] = (((n - 1) * (n - 1) - m * m) as f64 / nm).sqrt();
+        }
+    }
     let (mut sv_g, mut sv_h) = (zero, zero);
     let mut rows = 0;
     let mut header = false;
@@ -180,16 +194,14 @@ impl Table {
                 q[m][m] = if m == 1 {
                     1.0
                 } else {
-                    ((2 * m - 1) as f64 / (2 * m) as f64).sqrt() * st * q[m - 1][m - 1]
+                    self.k1[m][m] * st * q[m - 1][m - 1]
                 };
                 p[m][m] = st * q[m][m];
                 dp[m][m] = m as f64 * ct * q[m][m];
             }
             // P_n^m = ((2n−1) cos θ P_{n−1}^m − sqrt((n−1)²−m²) P_{n−2}^m) / sqrt(n²−m²).
             for n in (m + 1)..=N_MAX {
-                let nm = (n * n - m * m) as f64;
-                let k1 = (2 * n - 1) as f64 / nm.sqrt();
-                let k2 = (((n - 1) * (n - 1) - m * m) as f64 / nm).sqrt();
+                let (k1, k2) = (self.k1[n][m], self.k2[n][m]);
                 let (p2, q2, d2) = if n >= m + 2 {
                     (p[n - 2][m], q[n - 2][m], dp[n - 2][m])
                 } else {
