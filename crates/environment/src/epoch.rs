@@ -75,6 +75,10 @@ fn new_year_day(year: i64) -> i64 {
 /// …: 1 January, 00:00). A leap second counts as the next day's first.
 pub fn decimal_year(epoch: Epoch, t: f64) -> f64 {
     let days = (epoch.to_utc_seconds() + t) / DAY;
+    if days.is_nan() || days.abs() >= 1e11 {
+        // NaN, infinite or past any calendar: no year to find (and no overflow on the way).
+        return 1900.0 + days / 365.2425;
+    }
     let mut year = 1900 + (days / 365.2425).floor() as i64;
     while (new_year_day(year) as f64) > days {
         year -= 1;
@@ -125,6 +129,14 @@ mod tests {
         let new_year = parse_epoch("2026-01-01T00:00:00 UTC").unwrap();
         assert_eq!(decimal_year(new_year, 0.0), 2026.0);
         assert!((decimal_year(new_year, 365.0 * 43_200.0) - 2026.5).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_time_past_any_calendar_gives_no_panic() {
+        let e = parse_epoch("2026-03-20T12:00:00 UTC").unwrap();
+        assert!(decimal_year(e, f64::NAN).is_nan());
+        assert_eq!(decimal_year(e, f64::INFINITY), f64::INFINITY);
+        assert!(decimal_year(e, -1e300) < -1e290);
     }
 
     #[test]

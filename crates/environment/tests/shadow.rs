@@ -133,7 +133,8 @@ fn the_conical_shadow_is_continuous_monotone_and_bounded_by_the_cones() {
 
         // Continuous and monotone through the penumbra: with N samples a step of the orbit
         // moves ν by at most (4/π) × step / penumbra (the fastest change, at mid-penumbra,
-        // is 4/π times the mean).
+        // is 4/π times the mean); 5% more for the Sun's disk crossing the Earth's limb at a
+        // rate that varies a little over the penumbra.
         let n = 200_000;
         let step = 2.0 * PI / n as f64;
         let bound = 4.0 / PI * step / (in0 - in1) * 1.05;
