@@ -30,32 +30,64 @@ pub fn parse_epoch(text: &str) -> Result<Epoch, String> {
     })
 }
 
-/// `epoch + t` seconds (SI seconds, the run's time).
+/// `epoch + t` seconds (SI seconds, the run's time), as a TAI epoch.
 pub fn at(epoch: Epoch, t: f64) -> Epoch {
-    epoch + Duration::from_seconds(t)
+    // Added in TAI: hifitime adds to a UTC epoch in UTC's count, which skips leap seconds.
+    epoch.to_time_scale(TimeScale::TAI) + Duration::from_seconds(t)
 }
+
+/// Seconds in a day.
+const DAY: f64 = 86_400.0;
+/// hifitime's TAI seconds (from 1900-01-01T00:00:00 TAI) at J2000.0, 2000-01-01T12:00:00 TT
+/// = TAI + 32.184 s.
+const J2000_TAI_SECONDS: f64 = 36_524.5 * DAY - 32.184;
+/// hifitime's UTC seconds (86 400 a day, leap seconds left out, from 1900-01-01T00:00:00 UTC)
+/// at J2000 noon UTC: 36 524.5 days.
+const J2000_UTC_SECONDS: f64 = 36_524.5 * DAY;
+
+// These run at every right-hand side of an ODE: each converts the epoch once (no calendar
+// dates built per call, which cost hifitime ~0.3 µs each).
 
 /// Julian centuries of TT from J2000.0 (2000-01-01T12:00:00 TT) to `epoch + t`: the time
 /// argument of the Sun's series and of precession.
 pub fn centuries_tt(epoch: Epoch, t: f64) -> f64 {
-    // Elapsed SI seconds (the same in every scale but UTC), exact in hifitime's integers.
-    let j2000 = Epoch::from_gregorian_hms(2000, 1, 1, 12, 0, 0, TimeScale::TT);
-    ((epoch - j2000).to_seconds() + t) / (36_525.0 * 86_400.0)
+    // Elapsed SI seconds, counted in TAI (leap seconds included). Not `to_tt_since_j2k`:
+    // from a UTC epoch hifitime 4.3 leaves out the leap seconds since J2000 there.
+    (epoch.to_tai_seconds() - J2000_TAI_SECONDS + t) / (36_525.0 * DAY)
 }
 
 /// Days of UT1 (= UTC) from J2000.0 (2000-01-01T12:00:00 UT1) to `epoch + t`: the argument of
-/// the Earth's rotation angle.
+/// the Earth's rotation angle. UT1 is the epoch's UTC plus the `t` SI seconds elapsed: it runs
+/// on through a leap second within a run, as UT1 does.
 pub fn days_ut1(epoch: Epoch, t: f64) -> f64 {
     // UTC seconds (leap seconds left out, as UT1 leaves them out) from the UTC J2000 noon.
-    let j2000 = Epoch::from_gregorian_hms(2000, 1, 1, 12, 0, 0, TimeScale::UTC);
-    (epoch.to_utc_seconds() - j2000.to_utc_seconds() + t) / 86_400.0
+    (epoch.to_utc_seconds() - J2000_UTC_SECONDS + t) / DAY
 }
 
-/// Decimal year of `epoch + t` (UTC), the argument of the geomagnetic model's coefficients.
+/// The day (from 1900-01-01, UTC) on which `year` begins, in the Gregorian calendar.
+fn new_year_day(year: i64) -> i64 {
+    let leaps = |y: i64| y.div_euclid(4) - y.div_euclid(100) + y.div_euclid(400);
+    365 * (year - 1900) + leaps(year - 1) - leaps(1899)
+}
+
+/// Decimal year of `epoch + t` (UTC, calendar): the year plus the fraction of it elapsed, the
+/// argument of the geomagnetic model's coefficients (IGRF's models stand at 1900.0, 1905.0,
+/// …: 1 January, 00:00). A leap second counts as the next day's first.
 pub fn decimal_year(epoch: Epoch, t: f64) -> f64 {
-    // A Julian year of 365.25 days from J2000.0: within a day of the calendar's, which
-    // moves the field by its secular variation over a day (a few nT at most).
-    2000.0 + days_ut1(epoch, t) / 365.25
+    let days = (epoch.to_utc_seconds() + t) / DAY;
+    if days.is_nan() || days.abs() >= 1e11 {
+        // NaN, infinite or past any calendar: no year to find (and no overflow on the way).
+        return 1900.0 + days / 365.2425;
+    }
+    let mut year = 1900 + (days / 365.2425).floor() as i64;
+    while (new_year_day(year) as f64) > days {
+        year -= 1;
+    }
+    while (new_year_day(year + 1) as f64) <= days {
+        year += 1;
+    }
+    let (start, end) = (new_year_day(year) as f64, new_year_day(year + 1) as f64);
+    year as f64 + (days - start) / (end - start)
 }
 
 #[cfg(test)]
@@ -91,6 +123,88 @@ mod tests {
         // UTC - TT at J2000 was -64.184 s.
         let d = days_ut1(e, 0.0);
         assert!((d * 86_400.0 + 64.184).abs() < 1e-6, "{}", d * 86_400.0);
-        assert!((decimal_year(e, 0.0) - 2000.0).abs() < 1e-5);
+        // J2000 is 2000-01-01T11:58:55.816 UTC: 0.4993 days into a leap year.
+        let expected = 2000.0 + (0.5 - 64.184 / 86_400.0) / 366.0;
+        assert!((decimal_year(e, 0.0) - expected).abs() < 1e-12);
+        let new_year = parse_epoch("2026-01-01T00:00:00 UTC").unwrap();
+        assert_eq!(decimal_year(new_year, 0.0), 2026.0);
+        assert!((decimal_year(new_year, 365.0 * 43_200.0) - 2026.5).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_time_past_any_calendar_gives_no_panic() {
+        let e = parse_epoch("2026-03-20T12:00:00 UTC").unwrap();
+        assert!(decimal_year(e, f64::NAN).is_nan());
+        assert_eq!(decimal_year(e, f64::INFINITY), f64::INFINITY);
+        assert!(decimal_year(e, -1e300) < -1e290);
+    }
+
+    #[test]
+    fn at_counts_leap_seconds() {
+        // 2016-12-31 had a leap second: 23:59:59 UTC plus 2 s is 00:00:00 UTC.
+        let e = parse_epoch("2016-12-31T23:59:59 UTC").unwrap();
+        let next = parse_epoch("2017-01-01T00:00:00 UTC").unwrap();
+        assert_eq!((at(e, 2.0) - next).to_seconds(), 0.0);
+    }
+
+    #[test]
+    fn one_instant_written_in_two_scales_has_one_time_argument() {
+        // 2026-03-20T12:00:00 UTC is 12:01:09.184 TT (TAI − UTC = 37 s since 2017): the
+        // leap seconds since J2000 (5) are elapsed time.
+        let utc = parse_epoch("2026-03-20T12:00:00 UTC").unwrap();
+        let tt = parse_epoch("2026-03-20T12:01:09.184 TT").unwrap();
+        assert_eq!(centuries_tt(utc, 0.0), centuries_tt(tt, 0.0));
+        // 9575 days of UTC from J2000 noon UTC, plus the 64.184 s J2000 TT is ahead of it
+        // and the 5 leap seconds.
+        let expected = (9575.0 * 86_400.0 + 64.184 + 5.0) / (36_525.0 * 86_400.0);
+        assert!((centuries_tt(utc, 0.0) - expected).abs() < 1e-16);
+        assert!((days_ut1(utc, 0.0) - 9575.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_fast_time_arguments_agree_with_hifitimes_calendar() {
+        // The arguments as hifitime's calendar gives them: the dates built, then subtracted.
+        let j2000_tt = Epoch::from_gregorian_hms(2000, 1, 1, 12, 0, 0, TimeScale::TT);
+        let j2000_utc = Epoch::from_gregorian_hms(2000, 1, 1, 12, 0, 0, TimeScale::UTC);
+        for text in [
+            "1900-01-01T00:00:00 UTC",
+            "1951-07-04T03:17:00 UTC",
+            "1972-06-30T23:50:00 UTC",
+            "2000-02-29T12:00:00 TT",
+            "2016-12-31T23:59:59 UTC",
+            "2024-12-31T18:00:00 GPST",
+            "2026-03-20T12:00:00 UTC",
+            "2049-12-31T23:59:00 TAI",
+        ] {
+            let e = parse_epoch(text).unwrap();
+            for t in [0.0, 1234.5, 40.0 * 86_400.0] {
+                let later = at(e, t);
+                // In TT: `utc_epoch - tt_epoch` would count UTC's seconds, leap seconds left out.
+                let c = (later.to_time_scale(TimeScale::TT) - j2000_tt).to_seconds()
+                    / (36_525.0 * 86_400.0);
+                assert!(
+                    (centuries_tt(e, t) - c).abs() < 1e-15,
+                    "{text} {t}: {} vs {c}",
+                    centuries_tt(e, t)
+                );
+                // UT1 runs on through a leap second, UTC's calendar does not: they part by
+                // the leap seconds within the run.
+                let leaps = |x: Epoch| x.to_tai_seconds() - x.to_utc_seconds();
+                let leapt = (leaps(later) - leaps(e)) / 86_400.0;
+                let d = (later.to_utc_seconds() - j2000_utc.to_utc_seconds()) / 86_400.0;
+                let gap = days_ut1(e, t) - d;
+                assert!((gap - leapt).abs() < 1e-10, "{text} {t}: {gap} days");
+                let year = later.to_gregorian_utc().0;
+                let start = Epoch::from_gregorian_utc_at_midnight(year, 1, 1);
+                let end = Epoch::from_gregorian_utc_at_midnight(year + 1, 1, 1);
+                let y = f64::from(year) + (later - start).to_seconds() / (end - start).to_seconds();
+                // Within the leap seconds of that year (1 s in 3e7).
+                assert!(
+                    (decimal_year(e, t) - y).abs() < 1e-7,
+                    "{text} {t}: {} vs {y}",
+                    decimal_year(e, t)
+                );
+            }
+        }
     }
 }

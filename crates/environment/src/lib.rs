@@ -16,12 +16,21 @@
 //!
 //! - `epoch.rs`: reading an epoch, and the time arguments the series take;
 //! - `atmosphere.rs`: the exponential atmosphere (Vallado's table);
+//! - `sun.rs`: the Sun's position (truncated VSOP87, Meeus);
+//! - `shadow.rs`: the Earth's shadow, conical or cylindrical (Montenbruck & Gill 3.4.2);
+//! - `earth.rs`: GCRF to ITRF (IAU-1976 precession, IAU-82 GMST) and the Earth's spin;
+//! - `magnetic/`: the geomagnetic field, IGRF-14 (`igrf.rs`, the coefficients in
+//!   `data/igrf14coeffs.txt`) or its tilted dipole (`dipole.rs`);
 
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
 pub mod atmosphere;
+pub mod earth;
 pub mod epoch;
+pub mod magnetic;
+pub mod shadow;
+pub mod sun;
 
 pub use epoch::{Epoch, parse_epoch};
 
