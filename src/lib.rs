@@ -3,6 +3,8 @@
 //! This facade re-exports the workspace crates:
 //! - [`tree`]: the generic recursive multibody engine (CRBA, RNEA, ABA);
 //! - [`integrate`]: ODE integrators and event location;
+//! - [`environment`]: the spacecraft's world (epoch, Sun and shadow, atmosphere, the Earth's
+//!   rotation and magnetic field);
 //! - [`satellite`]: the Keldysh preprint's layout and its closed-form equations, checked;
 //! - [`spacecraft`]: the spacecraft engine (effects, the simulation and its right-hand side);
 //! - [`tools`]: scene files, campaigns, accuracy sweeps, linearisation and modes, output, the
@@ -10,6 +12,7 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+pub use satsim_environment as environment;
 pub use satsim_integrate as integrate;
 pub use satsim_satellite as satellite;
 pub use satsim_spacecraft as spacecraft;

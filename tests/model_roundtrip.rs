@@ -50,6 +50,28 @@ fn to_toml(m: &Model) -> String {
                 .map_or(String::new(), |a| format!(", at = {}", v3(&a)));
             writeln!(s, "shape = {{ box = {}{at} }}", v3(&shape.size)).unwrap();
         }
+        // Every facet explicitly (those of `facets_from_shape` too), its rectangle by
+        // `size` and `edge`.
+        let facets: Vec<String> = b
+            .facets()
+            .iter()
+            .map(|f| {
+                let (a, c) = (f.edges[0].norm(), f.edges[1].norm());
+                format!(
+                    "{{ area = {}, normal = {}, at = {}, specular = {}, diffuse = {}, drag = {}, size = [{a}, {c}], edge = {} }}",
+                    f.area,
+                    v3(&f.normal),
+                    v3(&f.at),
+                    f.specular,
+                    f.diffuse,
+                    f.drag,
+                    v3(&(f.edges[0] / a))
+                )
+            })
+            .collect();
+        if !facets.is_empty() {
+            writeln!(s, "facets = [{}]", facets.join(", ")).unwrap();
+        }
     }
     for (k, name) in m.hinge_names().iter().enumerate() {
         let i = m.hinge_body()[k];
@@ -160,7 +182,8 @@ proptest! {
     }
 }
 
-/// The example satellite (massless links, armature-free) round-trips too.
+/// The example satellite (massless links, armature-free, facets from its shapes)
+/// round-trips too.
 #[test]
 fn the_example_satellite_round_trips() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/satellite.toml");

@@ -16,6 +16,7 @@
 pub mod accuracy;
 pub mod api;
 pub mod campaign;
+pub mod environment;
 pub mod linearize;
 pub mod modes;
 pub mod output;

@@ -549,7 +549,7 @@ pub fn plot_curves(title: &str, xlabel: &str, curves: &[(&str, Vec<(f64, f64)>)]
 
 /// The plots `satsim run` draws from a finished trajectory: `(file name, title, columns)`.
 /// Groups whose columns are absent are skipped.
-pub const PLOT_GROUPS: [(&str, &str, &[&str]); 6] = [
+pub const PLOT_GROUPS: [(&str, &str, &[&str]); 9] = [
     (
         "attitude.svg",
         "Attitude quaternion",
@@ -581,6 +581,26 @@ pub const PLOT_GROUPS: [(&str, &str, &[&str]); 6] = [
         "momentum.svg",
         "Angular momentum about the centre of mass (N m s)",
         &["h_x", "h_y", "h_z"],
+    ),
+    (
+        "disturbances.svg",
+        "Disturbance torques about the centre of mass, bus axes (N m)",
+        &[
+            "gg_torque_*",
+            "srp_torque_*",
+            "drag_torque_*",
+            "magnetic_torque_*",
+        ],
+    ),
+    (
+        "environment.svg",
+        "Sunlight (fraction of the Sun's disk visible)",
+        &["shadow"],
+    ),
+    (
+        "magnetic_field.svg",
+        "Geomagnetic field, bus axes (T)",
+        &["magnetic_field_*"],
     ),
 ];
 

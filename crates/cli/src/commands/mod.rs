@@ -7,6 +7,7 @@ pub mod bench;
 pub mod campaign;
 pub mod completions;
 pub mod dynamics;
+pub mod environment;
 pub mod linearize;
 pub mod modes;
 pub mod plot;
@@ -64,6 +65,8 @@ pub enum Command {
     Linearize(linearize::Args),
     /// Structural frequencies, damping ratios and mode shapes (one JSON object)
     Modes(modes::Args),
+    /// Orbit, Sun, shadow, density, field and every effect's loads at a time (one JSON object)
+    Environment(environment::Args),
     /// Re-create a run's 3-D playback DIR/view.html from its kept poses
     View(view::Args),
     /// Re-plot columns of a run's CSV against t (an SVG), without running again
@@ -84,6 +87,7 @@ pub fn dispatch(command: Command) -> Result<Output, CliError> {
         Command::Campaign(a) => campaign::run(&a),
         Command::Linearize(a) => linearize::run(&a),
         Command::Modes(a) => modes::run(&a),
+        Command::Environment(a) => environment::run(&a),
         Command::View(a) => view::run(&a),
         Command::Plot(a) => plot::run(&a),
         Command::Completions(a) => completions::run(&a),

@@ -58,6 +58,8 @@ pub struct GravityGradient {
     pub model: GravityModel,
     /// `∂V/∂t` at the last `apply` (W), computed there from the same per-body terms.
     field_power: f64,
+    /// The moment of the last `apply`'s loads about the centre of mass, bus axes (N m).
+    torque: Vec3,
 }
 
 impl GravityGradient {
@@ -66,6 +68,7 @@ impl GravityGradient {
         Self {
             model,
             field_power: 0.0,
+            torque: Vec3::zeros(),
         }
     }
 }
@@ -103,6 +106,9 @@ impl Effect for GravityGradient {
             GravityModel::Preprint => Vec3::zeros(), // not read
         };
         let mut field_power = 0.0;
+        // The moment about the centre of mass (inertial axes): the couples, plus for `full`
+        // the tidal forces' moments `ρ_i × F_i` (they sum to zero, so any point would do).
+        let mut moment = Vec3::zeros();
         for (i, body) in ctx.model.bodies().iter().enumerate() {
             if body.mass() == 0.0 && body.inertia_com().norm() == 0.0 {
                 continue;
@@ -113,11 +119,13 @@ impl Effect for GravityGradient {
             let mut ang = 3.0 * k * eb.cross(&ie);
             field_power += 0.5 * k_dot * (3.0 * eb.dot(&ie) - body.inertia_com().trace())
                 + 3.0 * k * rot.tr_mul(&e_dot).dot(&ie);
+            moment += rot * ang;
             let mut lin = Vec3::zeros();
             if self.model == GravityModel::Full && body.mass() > 0.0 {
                 let rho = ctx.data.position[i] + rot * body.com() - com;
                 let er = e.dot(&rho);
                 let f = k * body.mass() * (3.0 * er * e - rho);
+                moment += rho.cross(&f);
                 lin = rot.tr_mul(&f);
                 ang += body.com().cross(&lin);
                 field_power -= 0.5
@@ -128,12 +136,23 @@ impl Effect for GravityGradient {
             forces.add_wrench(i, Force::new(ang, lin));
         }
         self.field_power = field_power;
+        self.torque = ctx.attitude.inverse_transform_vector(&moment);
         Ok(())
     }
     /// `∂V/∂t`: the work rate of the field turning with the orbit (the rest of the forces'
     /// power is `−dV/dt` at fixed time, counted in the potential), computed by `apply`.
     fn power(&self, _ctx: &Context, _own: &[f64], _applied: f64) -> Power {
         Power::actuator(self.field_power)
+    }
+    /// `gg_torque_x/y/z`: the moment of the couples and tidal forces about the centre of
+    /// mass, bus axes (N m), beside the other disturbances' columns.
+    fn output_columns(&self) -> Vec<String> {
+        ["gg_torque_x", "gg_torque_y", "gg_torque_z"]
+            .map(String::from)
+            .into()
+    }
+    fn output(&self, _ctx: &Context, _own: &[f64], row: &mut Vec<f64>) {
+        row.extend_from_slice(self.torque.as_slice());
     }
     fn potential_energy(&self, ctx: &Context, _own: &[f64]) -> f64 {
         let Some(orbit) = ctx.orbit else { return 0.0 };

@@ -25,25 +25,35 @@
 //! it with [`crate::simulation::SimulationBuilder::effect`].
 
 pub mod attitude_control;
+pub mod bdot;
+pub mod drag;
+pub mod facets;
 pub mod gravity_gradient;
 pub mod hinge_control;
 pub mod hinge_springs;
 pub mod hinge_stops;
+pub mod magnetic;
 pub mod orbit;
 pub mod order;
 pub mod reaction_wheels;
 pub mod registry;
 pub mod section;
+pub mod solar_radiation;
 
 pub use attitude_control::{AttitudeControl, Target};
+pub use bdot::Bdot;
+pub use drag::Drag;
+pub use facets::Facets;
 pub use gravity_gradient::{GravityGradient, GravityModel};
 pub use hinge_control::{HingeControl, HingeProfile};
 pub use hinge_springs::HingeSprings;
 pub use hinge_stops::{HingeStop, HingeStops, StopAction};
+pub use magnetic::Magnetic;
 pub use orbit::{Elements, Orbit, OrbitModel};
 pub use reaction_wheels::{ReactionWheels, Wheel};
 pub use registry::{AnyEffect, EffectSet, Registry, SceneEffect, needs_met};
 pub use section::{SceneText, Section};
+pub use solar_radiation::SolarRadiation;
 
 use nalgebra::UnitQuaternion;
 use satsim_integrate::{EventAction, EventDirection, SystemError};
@@ -70,6 +80,15 @@ pub struct Needs {
     /// [`Context::hold_torque`] in `events`, `on_event` and `start` (stick/slip decisions).
     /// It costs a hybrid-dynamics solve and an RNEA per evaluation, never in the rhs.
     pub hold_torques: bool,
+    /// Its wrenches have a net force that moves the centre of mass (solar pressure, drag).
+    /// The attitude and hinges are integrated in the frame that falls with the centre of
+    /// mass; when an enabled effect declares this (and the scene has an orbit), the
+    /// simulation moves the net external force `F` to the orbit after every effect has
+    /// applied its loads: the orbit's acceleration gains `F / M`, and each body `i` receives
+    /// the frame's inertial force `−m_i F / M` at its centre of mass, so the centre of mass
+    /// stays at rest in that frame while the torques about it are unchanged. Implies
+    /// `kinematics`.
+    pub net_force: bool,
 }
 
 /// An axisymmetric rotor body that an effect adds to the tree (a reaction wheel, a momentum
@@ -100,6 +119,20 @@ impl Rotor {
         let aat = a * a.transpose();
         aat * self.axial + (Mat3::identity() - aat) * self.transverse
     }
+}
+
+/// A magnetic torquer that an effect owns (`[[effects.magnetic.torquer]]`): a coil of
+/// dipole along `axis` of `body`, commanded through [`Forces::dipole_command`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct Torquer {
+    /// Its name (columns `dipole_<name>`).
+    pub name: String,
+    /// The body that carries it (index in the model's bodies).
+    pub body: usize,
+    /// Unit axis, that body's axes.
+    pub axis: Vec3,
+    /// The largest dipole it makes (A m²).
+    pub max_dipole: f64,
 }
 
 /// The orbit of the system's centre of mass at the time of evaluation (inertial frame, SI).
@@ -222,6 +255,11 @@ pub struct Forces {
     /// the rotors, which runs after it ([`Effect::before`]) and decides what to do with it
     /// (limits, friction). Zeroed before every evaluation.
     pub rotor_command: Vec<f64>,
+    /// Dipole (A m²) commanded to each magnetic torquer (in [`Links::torquers`] order): the
+    /// same channel for torquers, from a controller ([`Effect::commands_dipoles`]) to the
+    /// effect that owns them ([`Effect::torquers`]), which clamps it. Zeroed before every
+    /// evaluation; empty without torquers.
+    pub dipole_command: Vec<f64>,
 }
 
 impl Forces {
@@ -233,7 +271,13 @@ impl Forces {
             has_wrench: false,
             wrenches_added: 0,
             rotor_command: vec![0.0; n_rotors],
+            dipole_command: Vec::new(),
         }
+    }
+    /// Room for `n` torquers' commands.
+    pub fn with_torquers(mut self, n: usize) -> Self {
+        self.dipole_command = vec![0.0; n];
+        self
     }
     /// Clears everything to zero.
     pub fn clear(&mut self) {
@@ -244,6 +288,7 @@ impl Forces {
         }
         self.wrenches_added = 0;
         self.rotor_command.fill(0.0);
+        self.dipole_command.fill(0.0);
     }
     /// As [`Forces::clear`], with the hinge torques set to `hinge_torque` (one copy rather
     /// than zeroing first: this runs at every right-hand side).
@@ -255,6 +300,7 @@ impl Forces {
         }
         self.wrenches_added = 0;
         self.rotor_command.fill(0.0);
+        self.dipole_command.fill(0.0);
     }
     /// The power (W) of the hinge torques, `Σ_k τ_k q̇_k`, with `v` the tree's velocity
     /// vector (its first `n_base` entries the root's). The wheel commands are not forces
@@ -327,6 +373,10 @@ pub struct Links<'a> {
     pub rotors: &'a [Rotor],
     /// Whether an enabled effect writes [`Forces::rotor_command`] ([`Effect::commands_rotors`]).
     pub rotors_commanded: bool,
+    /// The magnetic torquers, one entry of [`Forces::dipole_command`] each.
+    pub torquers: &'a [Torquer],
+    /// Whether an enabled effect writes [`Forces::dipole_command`] ([`Effect::commands_dipoles`]).
+    pub dipoles_commanded: bool,
 }
 
 /// What an effect's event functions ([`Effect::events`]) read beyond the state, so that the
@@ -426,6 +476,15 @@ pub trait Effect: Send {
     /// Whether it writes motor commands into [`Forces::rotor_command`] (one per rotor of the
     /// tree, see [`Effect::connect`]).
     fn commands_rotors(&self) -> bool {
+        false
+    }
+    /// Magnetic torquers it owns (at most one enabled effect owns torquers).
+    fn torquers(&self) -> Vec<Torquer> {
+        Vec::new()
+    }
+    /// Whether it writes dipole commands into [`Forces::dipole_command`] (one per torquer,
+    /// see [`Effect::connect`]); it must run before the effect that owns the torquers.
+    fn commands_dipoles(&self) -> bool {
         false
     }
     /// Effects (by [`Effect::name`]) that must run before this one in every evaluation, e.g.

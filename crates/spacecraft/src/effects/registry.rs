@@ -21,8 +21,8 @@
 
 use super::Section;
 use super::{
-    AttitudeControl, Effect, GravityGradient, HingeControl, HingeSprings, HingeStops,
-    ReactionWheels,
+    AttitudeControl, Bdot, Drag, Effect, GravityGradient, HingeControl, HingeSprings, HingeStops,
+    Magnetic, ReactionWheels, SolarRadiation,
 };
 
 use satsim_tree::io::FileError;
@@ -237,7 +237,11 @@ impl Registry {
             .register::<HingeControl>()
             .register::<HingeStops>()
             .register::<AttitudeControl>()
-            .register::<ReactionWheels>();
+            .register::<ReactionWheels>()
+            .register::<SolarRadiation>()
+            .register::<Drag>()
+            .register::<Bdot>()
+            .register::<Magnetic>();
         r
     }
     /// Registers `E` under [`SceneEffect::SECTION`], replacing an effect registered under

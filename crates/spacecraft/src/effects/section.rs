@@ -5,6 +5,7 @@
 //! [`SceneEffect::from_section`](super::SceneEffect::from_section); no effect imports the
 //! scene reader.
 
+use satsim_environment::Epoch;
 use satsim_tree::Model;
 use satsim_tree::io::{FileError, line_of, with_key};
 use serde::de::{self, DeserializeOwned, DeserializeSeed, IgnoredAny, MapAccess, Visitor};
@@ -163,6 +164,7 @@ pub struct Section<'a> {
     span: Range<usize>,
     model: &'a Model,
     enabled: bool,
+    epoch: Option<Epoch>,
     warnings: RefCell<Vec<String>>,
 }
 
@@ -189,8 +191,25 @@ impl<'a> Section<'a> {
             span,
             model,
             enabled,
+            epoch: None,
             warnings: RefCell::new(Vec::new()),
         }
+    }
+    /// The section of a scene whose `epoch` (t = 0 as a date) is `epoch`.
+    pub fn with_epoch(mut self, epoch: Option<Epoch>) -> Self {
+        self.epoch = epoch;
+        self
+    }
+    /// The scene's epoch, for an effect that needs a date (the Sun, the Earth's rotation,
+    /// the field's secular variation); without one, an error at the section's line saying
+    /// what to add.
+    pub fn epoch(&self) -> Result<Epoch, FileError> {
+        self.epoch.ok_or_else(|| {
+            self.error_here(format!(
+                "[effects.{}] needs the scene's `epoch` (t = 0 as a date): add e.g. `epoch = \"2026-03-20T12:00:00 UTC\"` at the top of the scene",
+                self.name
+            ))
+        })
     }
     /// Notes something the reader accepts but the user should hear about (an implausible
     /// value), at the line of `span`: `file:line: message`. The scene reader collects them

@@ -3,7 +3,7 @@
 
 use super::hold::Hold;
 use super::{RunLog, SimData, SimError, SimModel, Simulation, StateLayout};
-use crate::effects::{Effect, Links, Rotor, order};
+use crate::effects::{Effect, Forces, Links, Rotor, Torquer, order};
 use satsim_satellite::kernel::UnrolledAba;
 use satsim_tree::{
     BaseKind, Body, ForwardDynamics, Hinge, Kernel, Model, ModelError, State, forward_kinematics,
@@ -173,9 +173,17 @@ impl Simulation {
                 effects[i].name()
             )));
         }
+        let torquers: Vec<Torquer> = effects.iter().flat_map(|e| e.torquers()).collect();
+        if effects.iter().filter(|e| !e.torquers().is_empty()).count() > 1 {
+            return Err(SimError::Needs(
+                "more than one effect owns magnetic torquers: give them all to one".into(),
+            ));
+        }
         let links = Links {
             rotors: &rotors,
             rotors_commanded: effects.iter().any(|e| e.commands_rotors()),
+            torquers: &torquers,
+            dipoles_commanded: effects.iter().any(|e| e.commands_dipoles()),
         };
         for e in &mut effects {
             e.connect(&links);
@@ -203,7 +211,10 @@ impl Simulation {
             n_events += e.n_events();
         }
         let needs_com = effects.iter().any(|e| e.needs().com);
-        let needs_kinematics = needs_com || effects.iter().any(|e| e.needs().kinematics);
+        let net_force_to =
+            orbit_effect.filter(|_| free && effects.iter().any(|e| e.needs().net_force));
+        let needs_kinematics =
+            needs_com || net_force_to.is_some() || effects.iter().any(|e| e.needs().kinematics);
         let needs_hold = effects.iter().any(|e| e.needs().hold_torques);
         let nh = model.n_hinges();
         let mut base_tau = vec![0.0; nh];
@@ -224,6 +235,8 @@ impl Simulation {
         let kernel = UnrolledAba::new(&model).map(|k| Box::new(k) as Box<dyn Kernel>);
         let fd = ForwardDynamics::new(&model).with_optional_kernel(kernel);
         let mut data = SimData::new(&model, n_rotors, layout.len);
+        data.forces =
+            std::mem::replace(&mut data.forces, Forces::new(0, 0, 0)).with_torquers(torquers.len());
         data.needs_kinematics = needs_kinematics;
         data.base_tau = base_tau;
         let mut sim = Self {
@@ -238,6 +251,7 @@ impl Simulation {
                 rotor_effect,
                 velocity_at,
                 orbit_effect,
+                net_force_to,
                 needs_com,
                 needs_hold,
                 work,

@@ -30,6 +30,7 @@ pub(super) struct Hooks<'a> {
     pub(super) scratch: &'a mut [f64],
     pub(super) base_tau: &'a [f64],
     pub(super) event_start: &'a [usize],
+    pub(super) net_force_to: Option<usize>,
 }
 
 impl Simulation {
@@ -57,6 +58,7 @@ impl Simulation {
             layout,
             n_user,
             needs_com,
+            net_force_to,
             ..
         } = &*model;
         let SimData {
@@ -109,6 +111,7 @@ impl Simulation {
                 scratch,
                 base_tau,
                 event_start,
+                net_force_to: *net_force_to,
             },
         )
     }

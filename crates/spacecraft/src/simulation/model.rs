@@ -26,6 +26,9 @@ pub struct SimModel {
     /// `velocity_in_state` in build.rs); `None`: in pieces.
     pub(super) velocity_at: Option<usize>,
     pub(super) orbit_effect: Option<usize>,
+    /// The orbit effect, when an effect declares [`Needs::net_force`](crate::effects::Needs::net_force):
+    /// the effects' net force then moves the orbit (see `carry_net_force` in rhs.rs).
+    pub(super) net_force_to: Option<usize>,
     /// Whether an effect reads [`Context::com`](crate::effects::Context::com) (computed
     /// only then), or hold torques.
     pub(super) needs_com: bool,

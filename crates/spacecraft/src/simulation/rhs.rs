@@ -16,8 +16,9 @@
 use super::Simulation;
 use super::hold::Hold;
 use super::model::SimModel;
-use crate::effects::Power;
+use crate::effects::{Context, Forces, Power};
 use satsim_integrate::SystemError;
+use satsim_tree::spatial::{Force, Vec3};
 use satsim_tree::{Data, DynamicsError, Input, forward_kinematics, rnea};
 
 impl Simulation {
@@ -215,6 +216,15 @@ impl Simulation {
                     power.dissipated += p.dissipated;
                 }
             }
+            if let Some(o) = h.net_force_to
+                && h.forces.has_wrench
+            {
+                carry_net_force(
+                    ctx,
+                    h.forces,
+                    &mut own_dot[h.own[o].start + 3..h.own[o].end],
+                );
+            }
             Ok(power)
         })
     }
@@ -263,6 +273,32 @@ impl Simulation {
             dx[r].copy_from_slice(&ddq[nb + n..nb + n + m.n_rotors]);
         }
         Ok(())
+    }
+}
+
+/// Moves the net external force of the body wrenches to the orbit ([`Needs::net_force`]):
+/// `F = Σ R_i f_i` (inertial), the orbit's acceleration `orbit_dv` gains `F / M`, and each
+/// body receives `−m_i F / M` at its centre of mass (the falling frame's inertial force), so
+/// the tree's centre of mass stays at rest in that frame. The added forces sum to `−F` and
+/// their moment about the centre of mass is zero; their power is `−(F/M)·p`, zero for the
+/// tree's momentum `p` (zero in that frame).
+///
+/// [`Needs::net_force`]: crate::effects::Needs::net_force
+fn carry_net_force(ctx: &Context, forces: &mut Forces, orbit_dv: &mut [f64]) {
+    let bodies = ctx.model.bodies();
+    let mut f = Vec3::zeros();
+    for (w, rot) in forces.body_wrench.iter().zip(&ctx.data.rotation) {
+        f += rot * w.lin;
+    }
+    let a = f / ctx.model.total_mass();
+    for (d, ai) in orbit_dv.iter_mut().zip(a.iter()) {
+        *d += ai;
+    }
+    for (i, body) in bodies.iter().enumerate() {
+        if body.mass() > 0.0 {
+            let lin = ctx.data.rotation[i].tr_mul(&(-body.mass() * a));
+            forces.add_wrench(i, Force::new(body.com().cross(&lin), lin));
+        }
     }
 }
 

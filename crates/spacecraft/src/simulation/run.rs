@@ -121,7 +121,7 @@ pub enum RunError<E> {
     },
 }
 
-pub(super) struct Shared<'a, 'b>(&'a RefCell<&'b mut Simulation>);
+pub(super) struct Shared<'a, 'b>(pub(super) &'a RefCell<&'b mut Simulation>);
 
 impl System for Shared<'_, '_> {
     fn dim(&self) -> usize {

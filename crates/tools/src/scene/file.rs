@@ -79,6 +79,10 @@ pub struct SceneFile {
     pub initial: Option<Spanned<StateSource>>,
     /// Duration (s, > 0).
     pub duration: Spanned<f64>,
+    /// `epoch = "2026-03-20T12:00:00 UTC"`: t = 0 as a date (UTC, TAI, TT or GPST), needed
+    /// by the effects that depend on the date (the Sun, the Earth's rotation, the field).
+    #[serde(default)]
+    pub epoch: Option<Spanned<String>>,
     /// Hinge armature (kg m², >= 0) replacing the model's: one number for every hinge, or one
     /// per hinge (file order). The opt-in regularisation of a gimbal lock.
     #[serde(default)]

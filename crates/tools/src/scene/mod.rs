@@ -62,6 +62,8 @@ pub struct Scene {
     pub initial: State,
     /// Duration (s).
     pub duration: f64,
+    /// t = 0 as a date (the scene's `epoch`), when it has one.
+    pub epoch: Option<satsim_environment::Epoch>,
     /// Integrator options.
     pub options: Options,
     /// Seconds between output rows.
@@ -124,6 +126,7 @@ impl Scene {
             model,
             initial,
             duration,
+            epoch: None,
             options: integrator::default_options(),
             every: duration / 100.0,
             plots: true,

@@ -111,6 +111,13 @@ impl<'a> Parser<'a> {
         };
 
         let duration = self.positive(&file.duration, "duration")?;
+        let epoch = match &file.epoch {
+            Some(e) => Some(
+                satsim_environment::parse_epoch(e.get_ref())
+                    .map_err(|m| self.error(Some(e.span()), format!("`epoch`: {m}")))?,
+            ),
+            None => None,
+        };
         let options = self.integrator(file.integrator.as_ref())?;
         let (every, plots, view, energy_budget) = match &file.output {
             None => (duration / 100.0, true, true, true),
@@ -136,13 +143,14 @@ impl<'a> Parser<'a> {
             effects.insert(o);
         }
         if let Some(e) = &file.effects {
-            self.effects(e, &model, &mut effects, &mut warnings)?;
+            self.effects(e, &model, epoch, &mut effects, &mut warnings)?;
         }
         let scene = Scene {
             path,
             model,
             initial,
             duration,
+            epoch,
             options,
             every,
             plots,
@@ -194,6 +202,7 @@ impl<'a> Parser<'a> {
         &self,
         sections: &Spanned<BTreeMap<String, Spanned<toml::Value>>>,
         model: &Model,
+        epoch: Option<satsim_environment::Epoch>,
         out: &mut EffectSet,
         warnings: &mut Vec<String>,
     ) -> Result<(), FileError> {
@@ -216,7 +225,8 @@ impl<'a> Parser<'a> {
                 continue;
             };
             let enabled = raw.get_ref().get("enabled").and_then(|v| v.as_bool()) != Some(false);
-            let section = Section::new(self.src, name, raw.span(), model, enabled);
+            let section =
+                Section::new(self.src, name, raw.span(), model, enabled).with_epoch(epoch);
             let read = self.registry.read(&section)?;
             warnings.extend(section.take_warnings());
             if let Some(e) = read {

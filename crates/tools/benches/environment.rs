@@ -1,0 +1,70 @@
+//! Cost of one right-hand side with each environment effect, on the preprint satellite with
+//! the 24 facets of `examples/satellite.toml` (the bus' and the three panels' box faces),
+//! panels half open (so that they shade each other and the bus), on a 500 km orbit in
+//! sunlight: the orbit alone, then each effect added to it alone, solar pressure with and
+//! without self-shadowing at 4, 8 and 16 rays per facet side, and everything together.
+//!
+//! `cargo bench -p satsim-tools --bench environment`
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use satsim_integrate::System;
+use satsim_tools::scene::Scene;
+use std::hint::black_box;
+use std::path::Path;
+
+const BASE: &str = r#"model = "../satellite.toml"
+epoch = "2026-03-20T12:00:00 UTC"
+duration = 600.0
+[initial]
+hinges = { angle = [0.0, 0.0, 0.0, 1.2, -1.0], rate = [0.01, 0.0, 0.0, 0.05, -0.04] }
+base = { attitude = [0.9, 0.1, 0.3, 0.2], angular_velocity = [0.001, -0.002, 0.0015] }
+[orbit]
+altitude = 500e3
+inclination_deg = 51.6
+true_anomaly_deg = 0.0
+"#;
+
+fn srp(self_shadowing: bool, resolution: usize) -> String {
+    format!(
+        "[effects.solar_radiation]\nshadow = \"conical\"\nself_shadowing = {self_shadowing}\nresolution = {resolution}\n"
+    )
+}
+
+const DRAG: &str = "[effects.drag]\n";
+const IGRF: &str = "[effects.magnetic]\nfield = \"igrf14\"\nresidual_dipole = [0.5, 0.5, 1.0]\n";
+const DIPOLE: &str = "[effects.magnetic]\nfield = \"dipole\"\nresidual_dipole = [0.5, 0.5, 1.0]\n";
+const GG: &str = "[effects.gravity_gradient]\nmodel = \"full\"\n";
+
+fn scene(extra: &str) -> Scene {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/scenes/bench.toml");
+    Scene::parse(&format!("{BASE}{extra}"), &path).expect("bench scene")
+}
+
+fn rhs(c: &mut Criterion) {
+    let mut g = c.benchmark_group("environment_rhs");
+    let all = format!("{GG}{}{DRAG}{IGRF}", srp(true, 8));
+    let cases: Vec<(&str, String)> = vec![
+        ("orbit_only", String::new()),
+        ("gravity_gradient_full", GG.into()),
+        ("srp", srp(false, 8)),
+        ("srp_self_shadowing_4", srp(true, 4)),
+        ("srp_self_shadowing_8", srp(true, 8)),
+        ("srp_self_shadowing_16", srp(true, 16)),
+        ("drag", DRAG.into()),
+        ("magnetic_igrf14", IGRF.into()),
+        ("magnetic_dipole", DIPOLE.into()),
+        ("all", all),
+    ];
+    for (name, extra) in cases {
+        let mut sim = scene(&extra).simulation().unwrap();
+        let x = sim.x0().to_vec();
+        let mut dx = vec![0.0; x.len()];
+        g.bench_function(name, |b| {
+            b.iter(|| sim.rhs(0.0, black_box(&x), &mut dx).unwrap());
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, rhs);
+criterion_main!(benches);
