@@ -25,6 +25,7 @@
 //! it with [`crate::simulation::SimulationBuilder::effect`].
 
 pub mod attitude_control;
+pub mod facets;
 pub mod gravity_gradient;
 pub mod hinge_control;
 pub mod hinge_springs;
