@@ -17,7 +17,7 @@ epoch = "2026-03-20T12:00:00 UTC"
 duration = 600.0
 [initial]
 hinges = { angle = [0.0, 0.0, 0.0, 1.2, -1.0], rate = [0.01, 0.0, 0.0, 0.05, -0.04] }
-base = { attitude = [0.9, 0.1, 0.3, 0.2], angular_velocity = [0.001, -0.002, 0.0015] }
+base = { attitude = [0.9, 0.1, 0.3, 0.3], angular_velocity = [0.001, -0.002, 0.0015] }
 [orbit]
 altitude = 500e3
 inclination_deg = 51.6

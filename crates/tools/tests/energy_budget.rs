@@ -604,3 +604,84 @@ fn without_the_budget_the_run_is_unchanged() {
         assert_eq!(a[..b.len()], b[..], "the shared columns differ");
     }
 }
+
+// ---- the environment: solar pressure, drag and the field do work -------------------------
+
+/// A spinning 1 m cube bus with a 2 m x 1 m panel on a sprung hinge, both with their box
+/// faces as facets, on an orbit at `altitude` (m) with the scene's epoch, and `extra`.
+fn environment_scene(altitude: f64, extra: &str) -> Scene {
+    let text = format!(
+        r#"epoch = "2026-03-20T12:00:00 UTC"
+duration = 1.0
+[model]
+[[model.body]]
+name = "bus"
+mass = 100.0
+inertia = [[20.0, 1.0, 0.0], [1.0, 25.0, 0.0], [0.0, 0.0, 15.0]]
+shape = {{ box = [1.0, 1.0, 1.0] }}
+facets_from_shape = {{ specular = 0.3, diffuse = 0.2, drag = 2.2 }}
+[[model.body]]
+name = "panel"
+mass = 10.0
+inertia = [[1.7, 0.0, 0.0], [0.0, 3.4, 0.0], [0.0, 0.0, 5.0]]
+com = [0.0, 1.0, 0.0]
+shape = {{ box = [2.0, 2.0, 0.02] }}
+facets_from_shape = {{ specular = 0.05, diffuse = 0.1, drag = 2.2 }}
+[[model.hinge]]
+name = "h"
+parent = "bus"
+child = "panel"
+axis = [1.0, 0.0, 0.0]
+at = [0.0, 0.5, 0.0]
+[initial]
+base = {{ angular_velocity = [0.01, 0.02, -0.015] }}
+hinges = {{ angle = [0.3], rate = [0.05] }}
+[orbit]
+altitude = {altitude}
+inclination_deg = 51.6
+{extra}
+"#
+    );
+    Scene::parse(&text, &examples().join("scenes/test.toml")).expect("scene")
+}
+
+fn environment_budget(altitude: f64, extra: &str, knock: &str) -> Budget {
+    let scene = environment_scene(
+        altitude,
+        &format!("[effects.hinge_springs]\nstiffness = [0.05]\n{extra}"),
+    );
+    check_effect(
+        knock,
+        (scene.model.clone(), scene.initial.clone()),
+        || scene.effects.to_boxed(),
+        knock,
+        &dp54(1e-10),
+        600.0,
+    )
+}
+
+#[test]
+fn solar_pressure_does_work_on_the_turning_panels() {
+    let b = environment_budget(
+        500e3,
+        "[effects.solar_radiation]\nshadow = \"none\"\n",
+        "solar_radiation",
+    );
+    assert!(b.work != 0.0 && b.dissipated == 0.0, "{b:?}");
+}
+
+#[test]
+fn drag_does_work_by_the_flow_and_dissipates_by_the_motion() {
+    let b = environment_budget(300e3, "[effects.drag]\n", "drag");
+    assert!(b.work != 0.0 && b.dissipated > 0.0, "{b:?}");
+}
+
+#[test]
+fn the_field_does_work_on_a_torquer() {
+    let b = environment_budget(
+        500e3,
+        "[effects.magnetic]\nresidual_dipole = [2.0, -1.0, 3.0]\n[[effects.magnetic.torquer]]\nname = \"x\"\naxis = [1.0, 0.0, 0.0]\nmax_dipole = 10.0\ndipole = 8.0\n",
+        "magnetic",
+    );
+    assert!(b.work != 0.0 && b.dissipated == 0.0, "{b:?}");
+}

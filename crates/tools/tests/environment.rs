@@ -353,3 +353,42 @@ fn the_shadow_column_goes_dark_once_an_orbit() {
     // Penumbra: a few rows strictly between.
     assert!(nu.iter().any(|v| *v > 0.0 && *v < 1.0));
 }
+
+#[test]
+fn the_gravity_gradient_column_is_the_couple_about_the_centre_of_mass() {
+    let text = r#"
+duration = 1.0
+[model]
+[[model.body]]
+name = "bus"
+mass = 100.0
+inertia = [[20.0, 1.0, 0.5], [1.0, 25.0, -2.0], [0.5, -2.0, 15.0]]
+[initial]
+base = { attitude = [0.9, 0.1, 0.3, 0.3] }
+[orbit]
+altitude = 500e3
+inclination_deg = 30.0
+true_anomaly_deg = 40.0
+[effects.gravity_gradient]
+"#;
+    let sc = scene(text);
+    let tr = satsim_tools::api::run_scene(&sc, || false).unwrap();
+    let row = tr.rows().next().unwrap().to_vec();
+    let col = |n: &str| row[tr.columns.iter().position(|c| c == n).unwrap()];
+    let r = Vec3::new(col("orbit_r_x"), col("orbit_r_y"), col("orbit_r_z"));
+    let q = nalgebra::UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(
+        col("q_w"),
+        col("q_x"),
+        col("q_y"),
+        col("q_z"),
+    ));
+    let e = q.inverse_transform_vector(&r.normalize());
+    let inertia = nalgebra::Matrix3::new(20.0, 1.0, 0.5, 1.0, 25.0, -2.0, 0.5, -2.0, 15.0);
+    let k = 3.986004418e14 / r.norm().powi(3);
+    let expect = 3.0 * k * e.cross(&(inertia * e));
+    let got = Vec3::new(col("gg_torque_x"), col("gg_torque_y"), col("gg_torque_z"));
+    assert!(
+        (got - expect).norm() < 1e-12 * expect.norm(),
+        "{got} vs {expect}"
+    );
+}

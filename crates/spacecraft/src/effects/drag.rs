@@ -17,8 +17,11 @@
 //! Output: `density` (kg/m³) and `drag_torque_x/y/z`, the moment of all the facets' forces
 //! about the spacecraft's centre of mass, bus axes (N m).
 //!
-//! Energy: drag is booked as dissipation (`−` the power of its forces on the motion in the
-//! falling frame).
+//! Energy: the power of the drag forces on the motion in the falling frame (the bodies'
+//! own velocities `u` at the centroids) is split in two. The steady flow (the orbit's
+//! velocity and the Earth's rotation alone, `V`) does the work `Σ F(V)·u`, booked as an
+//! actuator's: the wind that turns a panel. The rest, `Σ (F(V + u) − F(V))·u`, the damping
+//! by the bodies' own motion through the air, is booked as dissipation.
 
 use super::facets::Facets;
 use super::{Context, Effect, Forces, Needs, Power, SceneEffect, Section};
@@ -49,6 +52,8 @@ pub struct Drag {
     facets: Facets,
     density: f64,
     torque: Vec3,
+    /// `Σ F(V)·u` at the last `apply` (W): the steady flow's work rate (see the module docs).
+    flow_power: f64,
 }
 
 /// The drag force (N) on a flat surface of area `area`, outward unit normal `n` and drag
@@ -85,6 +90,7 @@ impl Drag {
             facets,
             density: 0.0,
             torque: Vec3::zeros(),
+            flow_power: 0.0,
         }
     }
     /// The density (kg/m³) at distance `r` (m) from the Earth's centre.
@@ -129,6 +135,7 @@ impl Effect for Drag {
         };
         self.facets.place(ctx.data);
         let mut moment = Vec3::zeros();
+        let mut flow_power = 0.0;
         for k in 0..self.facets.len() {
             let facet = self.facets.facet(k);
             let i = self.facets.body(k);
@@ -137,14 +144,10 @@ impl Effect for Drag {
             let vb = &ctx.data.v[i];
             let own = rot * (vb.lin + vb.ang.cross(&facet.at));
             let c = self.facets.centroid(k) - com;
-            let v = orbit.v + own - earth.cross(&(orbit.r + c));
-            let f = plate_force(
-                &v,
-                self.facets.normal(k),
-                facet.area,
-                facet.drag,
-                self.density,
-            );
+            let flow = orbit.v - earth.cross(&(orbit.r + c));
+            let (n, area, cd) = (self.facets.normal(k), facet.area, facet.drag);
+            let f = plate_force(&(flow + own), n, area, cd, self.density);
+            flow_power += plate_force(&flow, n, area, cd, self.density).dot(&own);
             if f == Vec3::zeros() {
                 continue;
             }
@@ -153,11 +156,15 @@ impl Effect for Drag {
             moment += c.cross(&f);
         }
         self.torque = ctx.attitude.inverse_transform_vector(&moment);
+        self.flow_power = flow_power;
         Ok(())
     }
-    /// All of drag's power is booked as dissipation.
+    /// The steady flow's work is an actuator's, the rest dissipation (see the module docs).
     fn power(&self, _ctx: &Context, _own: &[f64], applied: f64) -> Power {
-        Power::dissipated(-applied)
+        Power {
+            actuator: self.flow_power,
+            dissipated: self.flow_power - applied,
+        }
     }
     fn output_columns(&self) -> Vec<String> {
         ["density", "drag_torque_x", "drag_torque_y", "drag_torque_z"]

@@ -37,7 +37,7 @@
 use super::{Context, Effect, Forces, Needs, Power, SceneEffect, Section};
 use satsim_integrate::SystemError;
 use satsim_tree::io::FileError;
-use satsim_tree::spatial::{Force, Vec3};
+use satsim_tree::spatial::{Force, Mat3, Vec3};
 use serde::Deserialize;
 use toml::Spanned;
 
@@ -58,8 +58,18 @@ pub struct GravityGradient {
     pub model: GravityModel,
     /// `∂V/∂t` at the last `apply` (W), computed there from the same per-body terms.
     field_power: f64,
-    /// The moment of the last `apply`'s loads about the centre of mass, bus axes (N m).
-    torque: Vec3,
+}
+
+/// The couple `3 k E × I E` on a body of inertia `inertia` (about its centre of mass) with
+/// the local vertical `eb`, both in its axes.
+fn couple(k: f64, eb: &Vec3, inertia: &Mat3) -> Vec3 {
+    3.0 * k * eb.cross(&(inertia * eb))
+}
+
+/// The tidal force `k m (3 (E·ρ) E − ρ)` on a body of mass `m` whose centre of mass is at
+/// `rho` from the system's, inertial axes.
+fn tidal(k: f64, e: &Vec3, m: f64, rho: &Vec3) -> Vec3 {
+    k * m * (3.0 * e.dot(rho) * e - rho)
 }
 
 impl GravityGradient {
@@ -68,7 +78,6 @@ impl GravityGradient {
         Self {
             model,
             field_power: 0.0,
-            torque: Vec3::zeros(),
         }
     }
 }
@@ -106,9 +115,6 @@ impl Effect for GravityGradient {
             GravityModel::Preprint => Vec3::zeros(), // not read
         };
         let mut field_power = 0.0;
-        // The moment about the centre of mass (inertial axes): the couples, plus for `full`
-        // the tidal forces' moments `ρ_i × F_i` (they sum to zero, so any point would do).
-        let mut moment = Vec3::zeros();
         for (i, body) in ctx.model.bodies().iter().enumerate() {
             if body.mass() == 0.0 && body.inertia_com().norm() == 0.0 {
                 continue;
@@ -116,16 +122,14 @@ impl Effect for GravityGradient {
             let rot = &ctx.data.rotation[i];
             let eb = rot.tr_mul(&e);
             let ie = body.inertia_com() * eb;
-            let mut ang = 3.0 * k * eb.cross(&ie);
+            let mut ang = couple(k, &eb, body.inertia_com());
             field_power += 0.5 * k_dot * (3.0 * eb.dot(&ie) - body.inertia_com().trace())
                 + 3.0 * k * rot.tr_mul(&e_dot).dot(&ie);
-            moment += rot * ang;
             let mut lin = Vec3::zeros();
             if self.model == GravityModel::Full && body.mass() > 0.0 {
                 let rho = ctx.data.position[i] + rot * body.com() - com;
                 let er = e.dot(&rho);
-                let f = k * body.mass() * (3.0 * er * e - rho);
-                moment += rho.cross(&f);
+                let f = tidal(k, &e, body.mass(), &rho);
                 lin = rot.tr_mul(&f);
                 ang += body.com().cross(&lin);
                 field_power -= 0.5
@@ -136,7 +140,6 @@ impl Effect for GravityGradient {
             forces.add_wrench(i, Force::new(ang, lin));
         }
         self.field_power = field_power;
-        self.torque = ctx.attitude.inverse_transform_vector(&moment);
         Ok(())
     }
     /// `∂V/∂t`: the work rate of the field turning with the orbit (the rest of the forces'
@@ -151,8 +154,27 @@ impl Effect for GravityGradient {
             .map(String::from)
             .into()
     }
-    fn output(&self, _ctx: &Context, _own: &[f64], row: &mut Vec<f64>) {
-        row.extend_from_slice(self.torque.as_slice());
+    /// Computed here rather than in `apply`, so that the right-hand side does not pay for
+    /// a column: the couples, plus for `full` the tidal forces' moments `ρ_i × F_i`.
+    fn output(&self, ctx: &Context, _own: &[f64], row: &mut Vec<f64>) {
+        let Some(orbit) = ctx.orbit else {
+            row.extend_from_slice(&[f64::NAN; 3]);
+            return;
+        };
+        // Declared in `needs` for the full model; NaN (never a silent zero) if it were not.
+        let com = ctx.com.unwrap_or(Vec3::repeat(f64::NAN));
+        let r = orbit.r.norm();
+        let (k, e) = (orbit.mu / (r * r * r), orbit.r / r);
+        let mut moment = Vec3::zeros();
+        for (i, body) in ctx.model.bodies().iter().enumerate() {
+            let rot = &ctx.data.rotation[i];
+            moment += rot * couple(k, &rot.tr_mul(&e), body.inertia_com());
+            if self.model == GravityModel::Full && body.mass() > 0.0 {
+                let rho = ctx.data.position[i] + rot * body.com() - com;
+                moment += rho.cross(&tidal(k, &e, body.mass(), &rho));
+            }
+        }
+        row.extend_from_slice(ctx.attitude.inverse_transform_vector(&moment).as_slice());
     }
     fn potential_energy(&self, ctx: &Context, _own: &[f64]) -> f64 {
         let Some(orbit) = ctx.orbit else { return 0.0 };
