@@ -10,7 +10,7 @@
 
 use crate::scene::Scene;
 use satsim_environment::shadow::{ShadowModel, shadow_fraction};
-use satsim_environment::sun::sun_position;
+use satsim_environment::sun::SunTrack;
 use satsim_integrate::SystemError;
 use satsim_spacecraft::effects::{Drag, Magnetic, SolarRadiation};
 use satsim_spacecraft::simulation::{RunError, SimError};
@@ -125,7 +125,8 @@ pub fn environment(scene: &Scene, at: f64) -> Result<Environment, EnvironmentErr
     let srp = scene.effects.get::<SolarRadiation>();
     let sun = match (orbit, scene.epoch) {
         (Some((r, _)), Some(epoch)) => {
-            let r_sun = sun_position(epoch, t);
+            // As the solar-pressure effect sees it (the same knots, the same bits).
+            let r_sun = SunTrack::new(epoch).position(t);
             let to_sun = r_sun - r;
             let model = srp.map_or(ShadowModel::Conical, |s| s.shadow_model());
             Some((

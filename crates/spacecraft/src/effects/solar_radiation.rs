@@ -23,7 +23,7 @@
 use super::facets::Facets;
 use super::{Context, Effect, Forces, Needs, OrbitState, SceneEffect, Section};
 use satsim_environment::shadow::{ShadowModel, shadow_fraction};
-use satsim_environment::sun::sun_position;
+use satsim_environment::sun::SunTrack;
 use satsim_environment::{AU, Epoch, SOLAR_PRESSURE_1AU};
 use satsim_integrate::SystemError;
 use satsim_tree::io::FileError;
@@ -51,7 +51,7 @@ pub struct Sunlight {
 /// The solar-radiation-pressure effect.
 #[derive(Clone, Debug)]
 pub struct SolarRadiation {
-    epoch: Epoch,
+    sun: SunTrack,
     shadow: ShadowModel,
     self_shadowing: bool,
     resolution: usize,
@@ -73,7 +73,7 @@ impl SolarRadiation {
         facets: Facets,
     ) -> Self {
         Self {
-            epoch,
+            sun: SunTrack::new(epoch),
             shadow,
             self_shadowing,
             resolution: resolution.max(1),
@@ -83,8 +83,8 @@ impl SolarRadiation {
         }
     }
     /// The Sun, the shadow and the pressure at time `t` for the orbit `orbit`.
-    pub fn sunlight(&self, t: f64, orbit: &OrbitState) -> Sunlight {
-        let r_sun = sun_position(self.epoch, t);
+    pub fn sunlight(&mut self, t: f64, orbit: &OrbitState) -> Sunlight {
+        let r_sun = self.sun.position(t);
         let to_sun = r_sun - orbit.r;
         let distance = to_sun.norm();
         Sunlight {
