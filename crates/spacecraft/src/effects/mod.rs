@@ -33,6 +33,7 @@ pub mod orbit;
 pub mod order;
 pub mod reaction_wheels;
 pub mod registry;
+pub mod sampling;
 pub mod section;
 
 pub use attitude_control::{AttitudeControl, Target};
@@ -43,6 +44,7 @@ pub use hinge_stops::{HingeStop, HingeStops, StopAction};
 pub use orbit::{Elements, Orbit, OrbitModel};
 pub use reaction_wheels::{ReactionWheels, Wheel};
 pub use registry::{AnyEffect, EffectSet, Registry, SceneEffect, needs_met};
+pub use sampling::Sampling;
 pub use section::{SceneText, Section};
 
 use nalgebra::UnitQuaternion;
@@ -222,6 +224,11 @@ pub struct Forces {
     /// the rotors, which runs after it ([`Effect::before`]) and decides what to do with it
     /// (limits, friction). Zeroed before every evaluation.
     pub rotor_command: Vec<f64>,
+    /// Motor commands held from outside the effects (N m, one per rotor, tree order: the
+    /// stepping API's `wheel_<name>` inputs), added by the effect that owns the rotors to
+    /// its command (the controller's, or its constant `torque`) before its limits. Kept
+    /// between evaluations (zero unless set).
+    pub rotor_input: Vec<f64>,
 }
 
 impl Forces {
@@ -233,6 +240,7 @@ impl Forces {
             has_wrench: false,
             wrenches_added: 0,
             rotor_command: vec![0.0; n_rotors],
+            rotor_input: vec![0.0; n_rotors],
         }
     }
     /// Clears everything to zero.
@@ -442,6 +450,19 @@ pub trait Effect: Send {
     /// Called once when the simulation is built, before [`Effect::start`]: what the rest of
     /// the simulation provides (the tree's rotors, whether a controller commands them).
     fn connect(&mut self, _links: &Links) {}
+    /// The next sample instant of a discrete-time law (a controller with a `period`):
+    /// the simulation lands a step exactly there and calls [`Effect::sample`].
+    /// `f64::INFINITY` (the default) for an effect that samples nothing.
+    fn next_sample(&self) -> f64 {
+        f64::INFINITY
+    }
+    /// Evaluates the law at its sample instant `ctx.t` (due per
+    /// [`satsim_integrate::stop_due`]) and holds its output until the next: `apply` then
+    /// applies the held output, exactly constant over the sample interval. Must move
+    /// [`Effect::next_sample`] past `ctx.t`.
+    fn sample(&mut self, _ctx: &Context) -> Result<(), SystemError> {
+        Ok(())
+    }
     /// Adds its hinge torques and body wrenches to `forces` and writes the derivatives of its
     /// own states (`own`) into `own_dot`.
     fn apply(

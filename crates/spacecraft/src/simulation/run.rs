@@ -121,7 +121,7 @@ pub enum RunError<E> {
     },
 }
 
-pub(super) struct Shared<'a, 'b>(&'a RefCell<&'b mut Simulation>);
+pub(super) struct Shared<'a, 'b>(pub(super) &'a RefCell<&'b mut Simulation>);
 
 impl System for Shared<'_, '_> {
     fn dim(&self) -> usize {
@@ -155,5 +155,11 @@ impl System for Shared<'_, '_> {
         x: &mut [f64],
     ) -> Result<EventAction, SystemError> {
         self.0.borrow_mut().on_events(ks, t, x)
+    }
+    fn next_stop(&self) -> f64 {
+        self.0.borrow().next_stop()
+    }
+    fn on_stop(&mut self, t: f64, x: &mut [f64]) -> Result<bool, SystemError> {
+        self.0.borrow_mut().on_stop(t, x)
     }
 }
