@@ -12,6 +12,8 @@ every number equals the command line's to the last bit::
     c = satsim.campaign("campaign.toml")          # runs.csv in memory: c.columns, c.data, c.status
     r = satsim.read_trajectory("out/deploy/trajectory.csv")   # a run's CSV, read back
     satsim.modes("scene.toml"), satsim.linearize("scene.toml")   # dicts, numpy arrays
+    with satsim.Simulation("scene.toml") as sim:  # stepped from your code (section 13)
+        sim.set_inputs({"wheel_x": 0.01}); events = sim.advance(0.1); sim.row()
 
 Conventions (the contract's): SI units; quaternions Hamilton ``[w, x, y, z]``; the
 generalised velocity of a free base is ``[angular_velocity (3), velocity (3), hinge rates]``
@@ -30,7 +32,7 @@ import math
 import os
 import warnings
 from pathlib import Path
-from typing import Any, Dict, Iterator, List, Mapping, Optional, Union
+from typing import Any, Dict, Iterator, List, Mapping, Optional, Tuple, Union
 
 import numpy as np
 
@@ -41,6 +43,7 @@ __all__ = [
     "CampaignResult",
     "Model",
     "SatsimError",
+    "Simulation",
     "Trajectory",
     "campaign",
     "linearize",
@@ -466,3 +469,135 @@ def linearize(scene: PathLike, *, base_dir: Optional[PathLike] = None) -> Dict[s
     linearize`` (contract section 9): a dict with ``states`` and ``inputs`` (lists of str),
     ``A`` and ``B`` (2-D numpy arrays), ``error_estimate``, ``locked`` and ``released``."""
     return _satsim.linearize(*_scene_args(scene, base_dir))
+
+
+class Simulation:
+    """A scene stepped from your code: flight software in the loop (contract section 13).
+
+    ::
+
+        sim = satsim.Simulation("scene.toml")   # a path or the scene's text; base_dir= as run()
+        sim.t                                   # s
+        sim.columns                             # the trajectory's columns (trajectory.csv's)
+        sim.row()                               # dict: those columns at sim.t (the truth)
+        sim.inputs                              # e.g. "torque_h4", "wheel_x"
+        sim.set_inputs({"wheel_x": 0.01})       # held until changed (zero-order hold)
+        events = sim.advance(0.1)               # [(t, effect, text)] that fired on the way
+        sim.measure()                           # every sensor's latest reading
+        r = sim.trajectory()                    # the rows so far, a Trajectory as run() gives
+        sim.close()                             # or use ``with satsim.Simulation(...) as sim:``
+
+    ``advance(dt)`` integrates from ``t`` to ``t + dt`` with the scene's integrator, events
+    handled inside. A fixed-step method (``rk4``) takes steps of its ``step`` on the grid from
+    the start, the last one shortened to land on ``t + dt``; an end within round-off of an
+    output time or a grid point is that point. With the inputs never set, stepping to the end
+    in any pieces gives ``satsim.run``'s rows: to the last bit for a fixed-step method when
+    every piece is a whole number of steps, within the tolerance for an adaptive one. The GIL
+    is released while it integrates.
+
+    Inputs (the linear model's, ``satsim.linearize``): ``torque_<hinge>`` for each model
+    hinge, a torque added to the initial state's constant ``torque`` (held, it acts exactly
+    as that constant would); and ``wheel_<name>`` for each reaction wheel, a motor command
+    (N m) added to the wheel's command (the attitude controller's, or its ``torque`` key)
+    before its torque and speed limits. Inputs are held until changed and added to what the
+    enabled effects apply.
+
+    Rows are recorded as in a run, on the scene's ``output.every`` grid (continued past the
+    scene's ``duration`` when you step beyond it). With ``out=DIR`` they are streamed to
+    ``DIR/trajectory.csv`` as ``satsim run`` writes it; :meth:`close` then writes
+    ``events.csv``, the plots the scene asks for and ``view.html`` (when the scene's view is
+    on) beside it.
+
+    Bad input raises :class:`SatsimError` and changes nothing: an unknown input name, a
+    non-finite input value, a ``dt`` that is not a finite number > 0. A failed integration
+    raises :class:`SatsimError`; the simulation cannot go on after it.
+
+    ``measure()`` returns every sensor's latest reading; the scenes have no sensors yet, so
+    it is an empty dict.
+    """
+
+    __slots__ = ("_native", "_columns")
+
+    def __init__(
+        self,
+        scene: PathLike,
+        out: Optional[PathLike] = None,
+        *,
+        base_dir: Optional[PathLike] = None,
+    ) -> None:
+        origin, text = _scene_args(scene, base_dir)
+        out_path = None if out is None else os.fspath(out)
+        self._native = _satsim.NativeSimulation(origin, text, out_path)
+        self._columns: List[str] = list(self._native.columns)
+
+    @property
+    def t(self) -> float:
+        """The time (s)."""
+        return float(self._native.t)
+
+    @property
+    def columns(self) -> List[str]:
+        """The trajectory's column names (``satsim run``'s ``trajectory.csv`` header)."""
+        return list(self._columns)
+
+    @property
+    def inputs(self) -> List[str]:
+        """The input names: ``torque_<hinge>`` per model hinge, ``wheel_<name>`` per wheel."""
+        return list(self._native.inputs)
+
+    @property
+    def closed(self) -> bool:
+        """Whether :meth:`close` was called."""
+        return bool(self._native.closed)
+
+    def row(self) -> Dict[str, float]:
+        """The columns at :attr:`t` (the true state, not a measurement), as a dict."""
+        return dict(zip(self._columns, self._native.row()))
+
+    def set_inputs(self, values: Mapping[str, float]) -> None:
+        """Sets inputs by name, held until changed. An unknown name or a non-finite value
+        raises :class:`SatsimError` and sets none of them."""
+        pairs: List[Tuple[str, float]] = []
+        for name, value in values.items():
+            if not isinstance(name, str):
+                raise SatsimError(f"input names are strings, got {name!r}")
+            try:
+                v = float(value)
+            except (TypeError, ValueError):
+                raise SatsimError(f"input `{name}` must be a number, got {value!r}") from None
+            pairs.append((name, v))
+        self._native.set_inputs(pairs)
+
+    def advance(self, dt: float) -> List[Tuple[float, str, str]]:
+        """Integrates from :attr:`t` to ``t + dt``; returns the events that fired, as
+        ``(t, effect, text)``. ``dt`` must be a finite number > 0."""
+        try:
+            dt = float(dt)
+        except (TypeError, ValueError):
+            raise SatsimError(f"dt must be a number, got {dt!r}") from None
+        return [(float(t), e, what) for t, e, what in self._native.advance(dt)]
+
+    def measure(self) -> Dict[str, float]:
+        """Every sensor's latest reading, by column name. No sensors exist yet: an empty
+        dict."""
+        return {}
+
+    def trajectory(self) -> Trajectory:
+        """The rows so far, as :func:`run` returns them."""
+        columns, data = self._native.trajectory()
+        return Trajectory(columns, data)
+
+    def close(self) -> None:
+        """Ends the simulation and, with ``out=DIR``, writes the rest of the folder
+        (``events.csv``, the plots, ``view.html``). Calling it again does nothing; after
+        it, :meth:`advance` and :meth:`set_inputs` raise :class:`SatsimError`."""
+        self._native.close()
+
+    def __enter__(self) -> "Simulation":
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        self.close()
+
+    def __repr__(self) -> str:
+        return f"<satsim.Simulation t={self.t} inputs={self.inputs}>"

@@ -23,9 +23,11 @@ use satsim_tools::linearize::linearize as linearize_scene;
 use satsim_tools::modes::{Mode, modes as modes_of_scene};
 use satsim_tools::output::{CsvWriter, write_plots};
 use satsim_tools::scene::Scene;
+use satsim_tools::stepping::SceneStepper;
 use satsim_tree::io::{self as tio, FileError};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Mutex, MutexGuard};
 use std::time::{Duration, Instant};
 
 pyo3::create_exception!(
@@ -491,11 +493,116 @@ fn matrix<'py>(py: Python<'py>, m: &nalgebra::DMatrix<f64>) -> PyResult<Bound<'p
     rows.into_pyarray(py).reshape([r, c])
 }
 
+/// A scene stepped from Python (`satsim.Simulation`, contract section 13): see
+/// [`satsim_tools::stepping`]. The GIL is released while it reads the scene and while it
+/// integrates; a mutex makes it safe to share between Python threads (one call at a time).
+#[pyclass(module = "satsim._satsim", name = "NativeSimulation", frozen)]
+struct NativeSimulation {
+    inner: Mutex<SceneStepper>,
+    origin: PathBuf,
+}
+
+impl NativeSimulation {
+    fn lock(&self) -> PyResult<MutexGuard<'_, SceneStepper>> {
+        self.inner
+            .lock()
+            .map_err(|_| err("the simulation failed in another thread"))
+    }
+}
+
+#[pymethods]
+impl NativeSimulation {
+    /// Reads the scene file at `origin` (or parses `text`, named `origin`); with `out`,
+    /// streams `out/trajectory.csv`.
+    #[new]
+    #[pyo3(signature = (origin, text=None, out=None))]
+    fn new(
+        py: Python<'_>,
+        origin: PathBuf,
+        text: Option<String>,
+        out: Option<PathBuf>,
+    ) -> PyResult<Self> {
+        let inner = py
+            .detach(|| {
+                let scene = read_scene(&origin, text.as_deref())?;
+                let title = origin.file_name().map_or_else(
+                    || origin.display().to_string(),
+                    |n| n.to_string_lossy().into(),
+                );
+                SceneStepper::new(&scene, out.as_deref(), &title)
+                    .map_err(|e| format!("{}: {e}", origin.display()))
+            })
+            .map_err(err)?;
+        Ok(Self {
+            inner: Mutex::new(inner),
+            origin,
+        })
+    }
+    /// The time (s).
+    #[getter]
+    fn t(&self) -> PyResult<f64> {
+        Ok(self.lock()?.t())
+    }
+    /// The trajectory's column names.
+    #[getter]
+    fn columns(&self) -> PyResult<Vec<String>> {
+        Ok(self.lock()?.columns().to_vec())
+    }
+    /// The input names.
+    #[getter]
+    fn inputs(&self) -> PyResult<Vec<String>> {
+        Ok(self.lock()?.inputs().to_vec())
+    }
+    /// The row at the current time, in the columns' order.
+    fn row(&self) -> PyResult<Vec<f64>> {
+        self.lock()?.row().map_err(|e| err(e.to_string()))
+    }
+    /// Sets inputs by name (all checked before any is set).
+    fn set_inputs(&self, values: Vec<(String, f64)>) -> PyResult<()> {
+        let values: Vec<(&str, f64)> = values.iter().map(|(n, v)| (n.as_str(), *v)).collect();
+        self.lock()?
+            .set_inputs(&values)
+            .map_err(|e| err(e.to_string()))
+    }
+    /// Integrates from `t` to `t + dt` (GIL released); the events that fired.
+    fn advance(&self, py: Python<'_>, dt: f64) -> PyResult<Vec<(f64, String, String)>> {
+        let origin = &self.origin;
+        py.detach(|| match self.inner.lock() {
+            Ok(mut inner) => inner
+                .advance(dt)
+                .map_err(|e| format!("{}: {e}", origin.display())),
+            Err(_) => Err("the simulation failed in another thread".to_owned()),
+        })
+        .map_err(err)
+    }
+    /// The rows so far: `(columns, data)`.
+    fn trajectory<'py>(&self, py: Python<'py>) -> PyResult<RunOut<'py>> {
+        let t = self.lock()?.trajectory().clone();
+        to_python(py, t)
+    }
+    /// Ends the simulation; writes the rest of the output folder. The files written.
+    fn close(&self, py: Python<'_>) -> PyResult<Vec<String>> {
+        let written = py
+            .detach(|| match self.inner.lock() {
+                Ok(mut inner) => inner.close().map_err(|e| e.to_string()),
+                Err(_) => Err("the simulation failed in another thread".to_owned()),
+            })
+            .map_err(err)?;
+        Ok(written.iter().map(|p| p.display().to_string()).collect())
+    }
+    /// Whether `close` was called.
+    #[getter]
+    fn closed(&self) -> PyResult<bool> {
+        Ok(self.lock()?.is_closed())
+    }
+}
+
 /// The native module.
 #[pymodule]
 fn _satsim(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("SatsimError", m.py().get_type::<SatsimError>())?;
     m.add_class::<NativeModel>()?;
+    m.add_class::<NativeSimulation>()?;
     m.add_function(wrap_pyfunction!(run_file, m)?)?;
     m.add_function(wrap_pyfunction!(run_text, m)?)?;
     m.add_function(wrap_pyfunction!(campaign, m)?)?;

@@ -12,7 +12,7 @@ use crate::{
     options::{Method, Options, Output, OutputTimes},
     radau5::Radau5,
     rk4::Rk4,
-    system::{EventAction, System},
+    system::{EventAction, System, SystemError, stop_due},
 };
 
 /// Why an integration ended without error.
@@ -59,6 +59,9 @@ pub struct Stats {
 /// Adaptive methods produce outputs by dense output (they do not shorten
 /// steps for them); fixed-step runs land steps exactly on output times.
 /// Outputs up to an event are emitted before [`System::on_events`] is called.
+/// A fixed-step run steps on the grid `origin + n · step` ([`Options::grid_origin`]).
+/// Every method lands exactly on the system's time stops ([`System::next_stop`]) and
+/// calls [`System::on_stop`] there, after the outputs up to the stop.
 /// Every event whose function changes sign within a step is handled, in time
 /// order; events that coincide to within `Options::event_tol` are handled
 /// together at one instant (see [`System::on_events`]).
@@ -148,6 +151,8 @@ struct Run<'a, S: ?Sized, St, F> {
     outs: OutputTimes<'a>,
     observer: F,
     event_tol: f64,
+    /// The fixed-step grid's origin (`None`: the run's start).
+    grid_origin: Option<f64>,
     events: Vec<(f64, usize)>,
     /// Event function values at the left end of the unprocessed interval,
     /// at the step end, and at a trial point.
@@ -201,6 +206,7 @@ where
             outs,
             observer,
             event_tol: opts.event_tol,
+            grid_origin: opts.grid_origin,
             events: Vec::new(),
             g_left: vec![0.0; ne],
             g_right: vec![0.0; ne],
@@ -230,6 +236,7 @@ where
 
     fn go(mut self, t0: f64, x0: &[f64], t_end: f64) -> Result<Stats, IntegrateError> {
         let fixed = self.ctx.fixed.is_some();
+        let grid = self.ctx.fixed.map(|h| (self.grid_origin.unwrap_or(t0), h));
         let has_events = !self.g_left.is_empty();
         self.st.restart(self.sys, &mut self.ctx, t0, x0)?;
         while let Some(to) = self.outs.peek().filter(|to| *to <= t0) {
@@ -244,11 +251,23 @@ where
         if has_events {
             Self::eval_events(self.sys, t0, x0, &mut self.g_left)?;
         }
-        while self.st.t() < t_end {
-            let limit = match self.outs.peek() {
+        loop {
+            let stop = self.sys.next_stop();
+            if stop_due(self.st.t(), stop) {
+                self.handle_stop(has_events)?;
+                continue;
+            }
+            if self.st.t() >= t_end {
+                break;
+            }
+            let mut limit = match self.outs.peek() {
                 Some(to) if fixed => to.min(t_end),
                 _ => t_end,
             };
+            limit = limit.min(stop);
+            if let Some((origin, h)) = grid {
+                limit = limit.min(next_grid_point(origin, h, self.st.t()));
+            }
             self.st.step(self.sys, &mut self.ctx, limit)?;
 
             // Projection; the copy tells whether cached derivatives went stale.
@@ -279,6 +298,36 @@ where
         }
         let (t, x) = (self.st.t(), self.st.x().to_vec());
         Ok(self.finish(t, &x, StopReason::Finished))
+    }
+
+    /// Handles the time stop due at the stepper's time (see [`System::on_stop`]): restarts
+    /// the stepper there when the system changed.
+    fn handle_stop(&mut self, has_events: bool) -> Result<(), IntegrateError> {
+        let t = self.st.t();
+        self.x_ev.copy_from_slice(self.st.x());
+        let changed = self
+            .sys
+            .on_stop(t, &mut self.x_ev)
+            .map_err(|source| IntegrateError::System { t, source })?;
+        let next = self.sys.next_stop();
+        if stop_due(t, next) {
+            return Err(IntegrateError::System {
+                t,
+                source: SystemError::new(format!(
+                    "the time stop at {next} was handled at t = {t} but did not move past it"
+                )),
+            });
+        }
+        if changed {
+            if !all_finite(&self.x_ev) {
+                return Err(IntegrateError::NonFinite { t });
+            }
+            self.st.restart(self.sys, &mut self.ctx, t, &self.x_ev)?;
+            if has_events {
+                Self::eval_events(self.sys, t, &self.x_ev, &mut self.g_left)?;
+            }
+        }
+        Ok(())
     }
 
     /// State at `t` within the last step into `self.buf`.
@@ -471,4 +520,12 @@ where
             std::mem::swap(&mut self.g_left, &mut self.g_mid);
         }
     }
+}
+
+/// The first point of the fixed-step grid `origin + n · h` after `t`, skipping one within
+/// `1e-9 h` of it (no sliver steps). Computed from `n`, never accumulated, so that every run
+/// on the same grid meets the same points bit for bit.
+fn next_grid_point(origin: f64, h: f64, t: f64) -> f64 {
+    let n = ((t - origin) / h + 1e-9).floor() + 1.0;
+    origin + n * h
 }

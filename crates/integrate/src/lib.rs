@@ -50,4 +50,4 @@ mod tests;
 pub use driver::{Stats, StopReason, integrate};
 pub use error::IntegrateError;
 pub use options::{Method, Options, Output, UnknownMethod};
-pub use system::{EventAction, EventDirection, System, SystemError};
+pub use system::{EventAction, EventDirection, STOP_ROUNDOFF, System, SystemError, stop_due};

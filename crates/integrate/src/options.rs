@@ -92,8 +92,15 @@ pub struct Options {
     pub max_steps: usize,
     /// Run at this constant step without error control. Required by
     /// [`Method::Rk4`]; optional for the others (used to measure their order).
-    /// Steps are shortened to land exactly on output times and on `t_end`.
+    /// The steps end on the grid `origin + n · step` ([`Options::grid_origin`]); a step is
+    /// split where an output time, a time stop or `t_end` falls inside it, and an event
+    /// that restarts the run is followed by the rest of its grid interval. The grid does
+    /// not move with outputs or events, so a run cut into pieces of whole steps (each
+    /// piece started with the same origin) takes the same steps as one run.
     pub fixed_step: Option<f64>,
+    /// The origin of the fixed-step grid; `None` (the default): the run's start `t0`. A
+    /// run resumed at a later time passes the first run's `t0` here to keep its steps.
+    pub grid_origin: Option<f64>,
     /// Events are located to within this time (s).
     pub event_tol: f64,
 }
@@ -108,6 +115,7 @@ impl Default for Options {
             h_max: f64::INFINITY,
             max_steps: 1_000_000,
             fixed_step: None,
+            grid_origin: None,
             event_tol: 1e-10,
         }
     }
@@ -130,6 +138,11 @@ impl Options {
     /// Sets the fixed step (see [`Options::fixed_step`]).
     pub fn with_fixed_step(mut self, h: f64) -> Self {
         self.fixed_step = Some(h);
+        self
+    }
+    /// Sets the origin of the fixed-step grid (see [`Options::grid_origin`]).
+    pub fn with_grid_origin(mut self, origin: f64) -> Self {
+        self.grid_origin = Some(origin);
         self
     }
     /// Sets the first step.
@@ -181,6 +194,9 @@ impl Options {
                 return bad("rk4 is a fixed-step method: set fixed_step".into());
             }
             _ => {}
+        }
+        if let Some(o) = self.grid_origin.filter(|o| !o.is_finite()) {
+            return bad(format!("grid_origin must be finite, got {o}"));
         }
         if !(self.event_tol > 0.0 && self.event_tol.is_finite()) {
             return bad(format!(

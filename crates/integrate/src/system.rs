@@ -295,7 +295,50 @@ pub trait System {
         }
         Ok(action)
     }
+
+    /// The next **time stop**: an instant, known in advance, at which the right-hand side
+    /// changes (the sample instant of a discrete-time controller). `f64::INFINITY` (the
+    /// default) for none.
+    ///
+    /// Every method lands a step exactly on it (adaptive methods shorten the step; a fixed
+    /// step is split there), then, after the outputs up to that instant and the events
+    /// within the step, calls [`System::on_stop`] with the state at the stop. A stop at the
+    /// start time is handled before the first step. The value must move past `t` once
+    /// [`System::on_stop`] has run at `t` (the driver reports a stop that does not as an
+    /// error rather than loop). A stop within round-off of the current time
+    /// ([`stop_due`](crate::stop_due)) is due there, so that no sliver step is taken to reach it.
+    fn next_stop(&self) -> f64 {
+        f64::INFINITY
+    }
+
+    /// Handles the time stop [`System::next_stop`] at `t` with the state `x` (the state at
+    /// the end of the step that landed there, bit for bit). Returns whether the right-hand
+    /// side (or `x`, modified in place) changed: the integrator then restarts from `(t, x)`
+    /// as after an [`EventAction::Reset`], so that no stage of the old right-hand side is
+    /// reused. Returning `Err` stops the integration with
+    /// [`IntegrateError::System`](crate::IntegrateError::System).
+    fn on_stop(&mut self, _t: f64, _x: &mut [f64]) -> Result<bool, SystemError> {
+        Ok(false)
+    }
 }
+
+/// Whether a time stop at `stop` is due at time `t`: `t` has reached it, or lies within
+/// round-off of it (`1e-12` relative to `max(|stop|, 1)`), so that a stop computed as
+/// `k · period` is met by a time reached as a sum of steps.
+///
+/// ```
+/// use satsim_integrate::stop_due;
+/// assert!(stop_due(0.3, 0.1 + 0.1 + 0.1)); // 0.30000000000000004
+/// assert!(stop_due(0.4, 0.3));
+/// assert!(!stop_due(0.3, 0.31));
+/// assert!(!stop_due(0.0, f64::INFINITY));
+/// ```
+pub fn stop_due(t: f64, stop: f64) -> bool {
+    t >= stop || (stop.is_finite() && stop - t <= STOP_ROUNDOFF * stop.abs().max(1.0))
+}
+
+/// The relative round-off within which a time stop counts as reached ([`stop_due`]).
+pub const STOP_ROUNDOFF: f64 = 1e-12;
 
 impl EventAction {
     /// The action of a group of events: `Stop` wins over `Reset`, which wins
@@ -345,5 +388,11 @@ impl<S: System + ?Sized> System for &mut S {
         x: &mut [f64],
     ) -> Result<EventAction, SystemError> {
         (**self).on_events(ks, t, x)
+    }
+    fn next_stop(&self) -> f64 {
+        (**self).next_stop()
+    }
+    fn on_stop(&mut self, t: f64, x: &mut [f64]) -> Result<bool, SystemError> {
+        (**self).on_stop(t, x)
     }
 }

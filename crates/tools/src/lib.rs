@@ -9,7 +9,8 @@
 //! - [`accuracy`]: what accuracy costs in time (sweeps of integrators and tolerances);
 //! - [`linearize`] and [`modes`]: linear models about a state, and their modes;
 //! - [`output`]: CSV and SVG output; [`view`]: the 3-D view (`view.html`);
-//! - [`api`]: the one-call entry points the Python module wraps.
+//! - [`api`]: the one-call entry points the Python module wraps; [`stepping`]: a scene
+//!   stepped from the caller's code (`satsim.Simulation`).
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
@@ -22,4 +23,5 @@ pub mod modes;
 pub mod output;
 pub mod scene;
 pub mod scene_keys;
+pub mod stepping;
 pub mod view;

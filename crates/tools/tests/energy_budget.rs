@@ -331,6 +331,7 @@ fn hinge_control_does_work() {
                     kd: 60.0,
                     torque_limit: 5.0,
                 }],
+                ..Default::default()
             })]
         },
         "hinge_control",

@@ -13,12 +13,19 @@
 //! controller runs before the wheels ([`Effect::before`]) and takes their axes from the
 //! rotors when the simulation is built ([`Effect::connect`]).
 //!
+//! With a `period` ([`AttitudeControl::with_period`]) the law is discrete-time: evaluated
+//! at the sample instants (`t = 0, period, 2 period, …`, see [`Sampling`]) and the bus
+//! torque `u` held in between (zero-order hold); the allocation to the wheels and their
+//! limits still act continuously on the held `u`.
+//!
 //! Targets: [`Target::Inertial`] (a fixed attitude, `ω_t = 0`) or [`Target::Orbital`]: the
 //! local orbital frame (z towards the Earth's centre, y along the negative orbit normal, x
 //! completing the triad, close to the velocity) times a fixed offset, turning at the orbit's
 //! rate `ω_t = r × v / r²`.
 
-use super::{Context, Effect, EffectSet, Forces, Links, Needs, SceneEffect, Section, needs_met};
+use super::{
+    Context, Effect, EffectSet, Forces, Links, Needs, Sampling, SceneEffect, Section, needs_met,
+};
 use nalgebra::{DMatrix, Matrix3, Quaternion, Rotation3, UnitQuaternion};
 use satsim_integrate::SystemError;
 use satsim_tree::io::FileError;
@@ -46,6 +53,10 @@ pub struct AttitudeControl {
     pub kd: f64,
     /// `A⁺` (k x 3), from the rotor axes ([`Effect::connect`]).
     allocation: DMatrix<f64>,
+    /// The sample instants of the discrete-time law (`None`: continuous).
+    sampling: Option<Sampling>,
+    /// The torque `u` held since the last sample (`None` before the first).
+    held: Option<Vec3>,
 }
 
 impl AttitudeControl {
@@ -57,7 +68,19 @@ impl AttitudeControl {
             kp,
             kd,
             allocation: DMatrix::zeros(0, 3),
+            sampling: None,
+            held: None,
         }
+    }
+    /// The same law, discrete-time: evaluated every `period` seconds and held in between
+    /// (see the module documentation); `None` unless `period` is finite and > 0.
+    pub fn with_period(mut self, period: f64) -> Option<Self> {
+        self.sampling = Some(Sampling::new(period)?);
+        Some(self)
+    }
+    /// The sample period (s) of a discrete-time law; `None` for a continuous one.
+    pub fn period(&self) -> Option<f64> {
+        self.sampling.map(|s| s.period())
     }
     /// Sets the allocation `A⁺` for rotors with these axes (bus frame), in their order.
     pub fn allocate(&mut self, axes: &[Vec3]) {
@@ -122,7 +145,10 @@ impl Effect for AttitudeControl {
                 forces.rotor_command.len()
             )));
         }
-        let u = self.torque(ctx)?;
+        let u = match self.held {
+            Some(u) if self.sampling.is_some() => u,
+            _ => self.torque(ctx)?,
+        };
         for (j, c) in forces.rotor_command.iter_mut().enumerate() {
             let row = self.allocation.row(j);
             *c = -(row[0] * u.x + row[1] * u.y + row[2] * u.z);
@@ -131,6 +157,18 @@ impl Effect for AttitudeControl {
     }
     fn commands_rotors(&self) -> bool {
         true
+    }
+    fn next_sample(&self) -> f64 {
+        self.sampling.map_or(f64::INFINITY, |s| s.next())
+    }
+    fn sample(&mut self, ctx: &Context) -> Result<(), SystemError> {
+        if self.sampling.is_some() {
+            self.held = Some(self.torque(ctx)?);
+        }
+        if let Some(s) = &mut self.sampling {
+            s.taken(ctx.t);
+        }
+        Ok(())
     }
     fn before(&self) -> &[&str] {
         &["reaction_wheels"]
@@ -165,6 +203,9 @@ pub struct AttitudeFile {
     pub kp: f64,
     /// Derivative gain (N m s/rad).
     pub kd: f64,
+    /// Sample period (s) of a discrete-time law (default: continuous).
+    #[serde(default)]
+    pub period: Option<Spanned<f64>>,
     /// Off without removing the table (default true).
     #[serde(default)]
     pub enabled: Option<bool>,
@@ -205,7 +246,11 @@ impl SceneEffect for AttitudeControl {
                 ));
             }
         };
-        Ok(AttitudeControl::new(target, af.kp, af.kd))
+        let mut control = AttitudeControl::new(target, af.kp, af.kd);
+        if let Some(p) = &af.period {
+            control.sampling = Sampling::new(section.positive(p, "period")?);
+        }
+        Ok(control)
     }
     fn check(&self, enabled: &EffectSet) -> Result<(), String> {
         if matches!(self.target, Target::Orbital(_)) && !enabled.contains("orbit") {

@@ -4,8 +4,12 @@
 //! `t_start`: with `s = clamp((t − t_start) / duration, 0, 1)`,
 //! `φ_ref = start + (end − start) (1 − cos π s) / 2`, `φ̇_ref = (end − start) π/(2 duration) sin π s`.
 //! The torque `clamp(kp (φ_ref − φ) + kd (φ̇_ref − φ̇), ±torque_limit)` acts on the hinge.
+//!
+//! With a `period` ([`HingeControl::period`]) the law is discrete-time: evaluated at the
+//! sample instants (`t = 0, period, 2 period, …`, see [`Sampling`]) and each torque held
+//! in between (zero-order hold).
 
-use super::{Context, Effect, Forces, SceneEffect, Section};
+use super::{Context, Effect, Forces, Sampling, SceneEffect, Section};
 use satsim_integrate::SystemError;
 use satsim_tree::io::FileError;
 use serde::Deserialize;
@@ -62,6 +66,20 @@ impl HingeProfile {
 pub struct HingeControl {
     /// The controlled hinges.
     pub hinges: Vec<HingeProfile>,
+    /// The sample instants of a discrete-time law (`None`: continuous).
+    pub period: Option<Sampling>,
+    /// The torques held since the last sample, one per entry of `hinges` (empty before the
+    /// first).
+    pub held: Vec<f64>,
+}
+
+impl HingeProfile {
+    /// The torque at time `t` for the hinge at `angle` turning at `rate`.
+    fn torque(&self, t: f64, angle: f64, rate: f64) -> f64 {
+        let (reference, reference_rate) = self.reference(t);
+        let u = self.kp * (reference - angle) + self.kd * (reference_rate - rate);
+        u.clamp(-self.torque_limit, self.torque_limit)
+    }
 }
 
 impl Effect for HingeControl {
@@ -75,10 +93,30 @@ impl Effect for HingeControl {
         _own: &[f64],
         _own_dot: &mut [f64],
     ) -> Result<(), SystemError> {
+        if self.period.is_some() && self.held.len() == self.hinges.len() {
+            for (p, u) in self.hinges.iter().zip(&self.held) {
+                forces.hinge_torque[p.hinge] += u;
+            }
+            return Ok(());
+        }
         for p in &self.hinges {
-            let (angle, rate) = p.reference(ctx.t);
-            let u = p.kp * (angle - ctx.angles[p.hinge]) + p.kd * (rate - ctx.rates[p.hinge]);
-            forces.hinge_torque[p.hinge] += u.clamp(-p.torque_limit, p.torque_limit);
+            forces.hinge_torque[p.hinge] +=
+                p.torque(ctx.t, ctx.angles[p.hinge], ctx.rates[p.hinge]);
+        }
+        Ok(())
+    }
+    fn next_sample(&self) -> f64 {
+        self.period.map_or(f64::INFINITY, |s| s.next())
+    }
+    fn sample(&mut self, ctx: &Context) -> Result<(), SystemError> {
+        if let Some(s) = &mut self.period {
+            self.held.clear();
+            self.held.extend(
+                self.hinges
+                    .iter()
+                    .map(|p| p.torque(ctx.t, ctx.angles[p.hinge], ctx.rates[p.hinge])),
+            );
+            s.taken(ctx.t);
         }
         Ok(())
     }
@@ -91,6 +129,9 @@ pub struct HingeControlFile {
     /// `[[effects.hinge_control.hinge]]`.
     #[serde(default)]
     pub hinge: Vec<Spanned<HingeProfileFile>>,
+    /// Sample period (s) of a discrete-time law (default: continuous).
+    #[serde(default)]
+    pub period: Option<Spanned<f64>>,
     /// Off without removing the table (default true).
     #[serde(default)]
     pub enabled: Option<bool>,
@@ -161,6 +202,14 @@ impl SceneEffect for HingeControl {
                 torque_limit,
             });
         }
-        Ok(HingeControl { hinges })
+        let period = match &c.period {
+            Some(p) => Sampling::new(section.positive(p, "period")?),
+            None => None,
+        };
+        Ok(HingeControl {
+            hinges,
+            period,
+            held: Vec::new(),
+        })
     }
 }

@@ -37,6 +37,7 @@ pub mod orbit;
 pub mod order;
 pub mod reaction_wheels;
 pub mod registry;
+pub mod sampling;
 pub mod section;
 pub mod solar_radiation;
 
@@ -52,6 +53,7 @@ pub use magnetic::Magnetic;
 pub use orbit::{Elements, Orbit, OrbitModel};
 pub use reaction_wheels::{ReactionWheels, Wheel};
 pub use registry::{AnyEffect, EffectSet, Registry, SceneEffect, needs_met};
+pub use sampling::Sampling;
 pub use section::{SceneText, Section};
 pub use solar_radiation::SolarRadiation;
 
@@ -260,6 +262,11 @@ pub struct Forces {
     /// effect that owns them ([`Effect::torquers`]), which clamps it. Zeroed before every
     /// evaluation; empty without torquers.
     pub dipole_command: Vec<f64>,
+    /// Motor commands held from outside the effects (N m, one per rotor, tree order: the
+    /// stepping API's `wheel_<name>` inputs), added by the effect that owns the rotors to
+    /// its command (the controller's, or its constant `torque`) before its limits. Kept
+    /// between evaluations (zero unless set).
+    pub rotor_input: Vec<f64>,
 }
 
 impl Forces {
@@ -272,6 +279,7 @@ impl Forces {
             wrenches_added: 0,
             rotor_command: vec![0.0; n_rotors],
             dipole_command: Vec::new(),
+            rotor_input: vec![0.0; n_rotors],
         }
     }
     /// Room for `n` torquers' commands.
@@ -501,6 +509,19 @@ pub trait Effect: Send {
     /// Called once when the simulation is built, before [`Effect::start`]: what the rest of
     /// the simulation provides (the tree's rotors, whether a controller commands them).
     fn connect(&mut self, _links: &Links) {}
+    /// The next sample instant of a discrete-time law (a controller with a `period`):
+    /// the simulation lands a step exactly there and calls [`Effect::sample`].
+    /// `f64::INFINITY` (the default) for an effect that samples nothing.
+    fn next_sample(&self) -> f64 {
+        f64::INFINITY
+    }
+    /// Evaluates the law at its sample instant `ctx.t` (due per
+    /// [`satsim_integrate::stop_due`]) and holds its output until the next: `apply` then
+    /// applies the held output, exactly constant over the sample interval. Must move
+    /// [`Effect::next_sample`] past `ctx.t`.
+    fn sample(&mut self, _ctx: &Context) -> Result<(), SystemError> {
+        Ok(())
+    }
     /// Adds its hinge torques and body wrenches to `forces` and writes the derivatives of its
     /// own states (`own`) into `own_dot`.
     fn apply(

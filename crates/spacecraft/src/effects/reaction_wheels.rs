@@ -155,6 +155,8 @@ pub struct ReactionWheels {
     pub wheels: Vec<Wheel>,
     /// Whether a controller writes the commands into [`Forces::rotor_command`] (otherwise
     /// each wheel's `torque`); set when the simulation is built ([`Effect::connect`]).
+    /// Either way [`Forces::rotor_input`] (the stepping API's held inputs) is added to the
+    /// command before the limits.
     pub commanded: bool,
     stuck: Vec<bool>,
     /// Slip direction of each slipping wheel (±1).
@@ -221,7 +223,7 @@ impl ReactionWheels {
             forces.rotor_command[j]
         } else {
             w.torque
-        };
+        } + forces.rotor_input.get(j).copied().unwrap_or(0.0);
         c.clamp(-w.max_torque, w.max_torque)
     }
     /// The motor torque that keeps wheel `j` at its speed `omega`: `τₘ = H + f` (NaN if
@@ -273,7 +275,7 @@ impl ReactionWheels {
             forces.rotor_command[j]
         } else {
             self.wheels[j].torque
-        };
+        } + forces.rotor_input.get(j).copied().unwrap_or(0.0);
         self.torque(j, c, omega)
     }
 }
@@ -326,6 +328,7 @@ impl Effect for ReactionWheels {
         let n = ctx.rotor_hinge(0);
         let rotors = forces.hinge_torque[n..].iter_mut().zip(&ctx.locked[n..]);
         let commands = &forces.rotor_command;
+        let inputs = &forces.rotor_input;
         let side = &self.side;
         let wheels = self
             .wheels
@@ -339,7 +342,7 @@ impl Effect for ReactionWheels {
                 commands[j]
             } else {
                 w.torque
-            };
+            } + inputs.get(j).copied().unwrap_or(0.0);
             let tau = if !w.limit_events() {
                 w.limited(c, omega)
             } else {

@@ -64,7 +64,9 @@
 //! - `context.rs` (what the effects' hooks see and write), `hold.rs` (hold torques),
 //!   `events.rs` (the event functions' pass, requests, impulses, energy jumps), `system.rs`
 //!   (the [`System`](satsim_integrate::System) the integrators see), `rows.rs` (output rows,
-//!   [`Diagnostics`]), `run.rs` ([`Simulation::run`]).
+//!   [`Diagnostics`]), `run.rs` ([`Simulation::run`]), `stepping.rs` ([`Stepping`]: the
+//!   simulation advanced a piece at a time from outside, with inputs held between pieces;
+//!   and the time stops of the effects' discrete-time laws).
 
 mod build;
 mod context;
@@ -78,6 +80,7 @@ mod model;
 mod rhs;
 mod rows;
 mod run;
+mod stepping;
 mod system;
 
 pub use build::SimulationBuilder;
@@ -88,6 +91,7 @@ pub use log::RunLog;
 pub use model::SimModel;
 pub use rows::Diagnostics;
 pub use run::RunError;
+pub use stepping::{EventRecord, OutputGrid, StepError, Stepping};
 
 use crate::effects::{Effect, Rotor};
 use satsim_integrate::SystemError;

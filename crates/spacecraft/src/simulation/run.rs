@@ -156,4 +156,10 @@ impl System for Shared<'_, '_> {
     ) -> Result<EventAction, SystemError> {
         self.0.borrow_mut().on_events(ks, t, x)
     }
+    fn next_stop(&self) -> f64 {
+        self.0.borrow().next_stop()
+    }
+    fn on_stop(&mut self, t: f64, x: &mut [f64]) -> Result<bool, SystemError> {
+        self.0.borrow_mut().on_stop(t, x)
+    }
 }

@@ -64,6 +64,16 @@ impl System for Simulation {
         Ok(())
     }
 
+    /// The next sample instant of the effects' discrete-time laws (`stepping.rs`).
+    fn next_stop(&self) -> f64 {
+        self.next_sample_stop()
+    }
+
+    /// The effects whose sample is due latch their laws' outputs (`stepping.rs`).
+    fn on_stop(&mut self, t: f64, x: &mut [f64]) -> Result<bool, SystemError> {
+        self.sample_effects(t, x)
+    }
+
     fn event_direction(&self, k: usize) -> EventDirection {
         let i = self.event_owner(k);
         self.effects[i].event_direction(k - self.model.event_start[i])

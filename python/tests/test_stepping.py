@@ -1,0 +1,138 @@
+"""satsim.Simulation: a scene stepped from Python (contract section 13)."""
+
+from __future__ import annotations
+
+import math
+import random
+
+import numpy as np
+import pytest
+
+import satsim
+from conftest import SCENES
+
+DEPLOY = SCENES / "deploy.toml"
+KD_LINE = "kd = 150.0               # N m s/rad"
+
+
+def deploy_text(duration: float, attitude: str = "") -> str:
+    text = DEPLOY.read_text()
+    assert "duration = 300.0" in text and KD_LINE in text
+    text = text.replace("duration = 300.0", f"duration = {duration}", 1)
+    return text.replace(KD_LINE, "kd = 150.0\n" + attitude, 1)
+
+
+def bits(a):
+    return np.ascontiguousarray(a, dtype=np.float64).view(np.uint64)
+
+
+def test_pieces_of_whole_steps_give_the_run_to_the_last_bit():
+    text = deploy_text(60.0)
+    run = satsim.run(text, base_dir=SCENES)
+    rng = random.Random(5)
+    events = []
+    with satsim.Simulation(text, base_dir=SCENES) as sim:
+        assert sim.t == 0.0
+        assert sim.columns == run.columns
+        while sim.t < 60.0:
+            events += sim.advance(min(rng.randint(1, 300) * 0.01, 60.0 - sim.t))
+        r = sim.trajectory()
+    assert isinstance(r, satsim.Trajectory)
+    assert r.columns == run.columns
+    assert np.array_equal(bits(r.data), bits(run.data))
+    assert any(e == "hinge_stops" for _, e, _ in events), events
+
+
+def test_row_inputs_and_measure():
+    with satsim.Simulation(DEPLOY) as sim:
+        row = sim.row()
+        assert list(row) == sim.columns
+        assert row["t"] == 0.0 and row["angle_h4"] == 3.14159
+        assert sim.inputs == [
+            "torque_h1",
+            "torque_h2",
+            "torque_h3",
+            "torque_h4",
+            "torque_h5",
+            "wheel_x",
+            "wheel_y",
+            "wheel_z",
+        ]
+        assert sim.measure() == {}
+        sim.advance(0.5)
+        assert sim.t == 0.5
+        assert sim.row()["t"] == 0.5
+        assert len(sim.trajectory()) == 1  # rows every 1 s: only t = 0 so far
+
+
+def test_bad_input_raises_and_changes_nothing():
+    with satsim.Simulation(DEPLOY) as sim:
+        sim.set_inputs({"wheel_x": 0.01})
+        sim.advance(0.3)
+        t, row, n = sim.t, sim.row(), len(sim.trajectory())
+        with pytest.raises(satsim.SatsimError, match="wheel_q"):
+            sim.set_inputs({"wheel_q": 1.0})
+        with pytest.raises(satsim.SatsimError, match="wheel_x"):
+            sim.set_inputs({"wheel_y": 0.2, "wheel_x": math.nan})
+        with pytest.raises(satsim.SatsimError, match="torque_h4"):
+            sim.set_inputs({"torque_h4": math.inf})
+        with pytest.raises(satsim.SatsimError, match="must be a number"):
+            sim.set_inputs({"torque_h4": "a lot"})
+        for dt in (0.0, -1.0, math.nan, math.inf):
+            with pytest.raises(satsim.SatsimError, match="dt"):
+                sim.advance(dt)
+        assert sim.t == t and sim.row() == row and len(sim.trajectory()) == n
+        # wheel_y was not set by the refused call.
+        with satsim.Simulation(DEPLOY) as ref:
+            ref.set_inputs({"wheel_x": 0.01})
+            ref.advance(0.3)
+            ref.advance(0.4)
+            sim.advance(0.4)
+            assert sim.row() == ref.row()
+    with pytest.raises(satsim.SatsimError, match="closed"):
+        sim.advance(0.1)
+
+
+def test_a_python_controller_mirroring_the_discrete_attitude_controller_gives_its_trajectory():
+    """deploy.toml's attitude law, `period = 0.1`, against the same law in Python: the
+    target is the identity, so the error quaternion is the attitude; the wheels lie along the
+    bus axes, so their commands are `-u`."""
+    builtin = satsim.run(deploy_text(30.0, "period = 0.1"), base_dir=SCENES)
+    kp, kd = 9.0, 150.0
+    with satsim.Simulation(deploy_text(30.0, "enabled = false"), base_dir=SCENES) as sim:
+        while sim.t < 30.0 - 1e-9:
+            r = sim.row()
+            s = -1.0 if r["q_w"] < 0.0 else 1.0
+            u = [
+                -kp * 2.0 * s * r["q_" + a] - kd * r["omega_" + a] for a in ("x", "y", "z")
+            ]
+            sim.set_inputs({"wheel_x": -u[0], "wheel_y": -u[1], "wheel_z": -u[2]})
+            sim.advance(0.1)
+        mine = sim.trajectory()
+    assert len(mine) == len(builtin)
+    common = [c for c in mine.columns if c in builtin]
+    assert len(common) > 20
+    for c in common:
+        scale = np.maximum(np.abs(builtin[c]), 1.0)
+        worst = np.max(np.abs(mine[c] - builtin[c]) / scale)
+        assert worst <= 1e-12, (c, worst)
+
+
+def test_out_writes_what_satsim_run_writes(tmp_path):
+    out = tmp_path / "fsw"
+    with satsim.Simulation(deploy_text(3.0), out, base_dir=SCENES) as sim:
+        while sim.t < 3.0:
+            sim.advance(0.5)
+        # Streamed: the rows so far are in the file before close().
+        assert (out / "trajectory.csv").exists()
+    assert sim.closed
+    r = satsim.read_trajectory(out / "trajectory.csv")
+    assert np.array_equal(bits(r.data), bits(sim.trajectory().data))
+    assert (out / "events.csv").exists() and (out / "view.html").exists()
+
+
+def test_a_bad_scene_or_period_is_an_error_naming_it():
+    with pytest.raises(satsim.SatsimError, match="period"):
+        satsim.Simulation(deploy_text(3.0, "period = 0.0"), base_dir=SCENES)
+    with pytest.raises(satsim.SatsimError):
+        satsim.Simulation(SCENES / "no_such_scene.toml")
