@@ -392,3 +392,24 @@ true_anomaly_deg = 40.0
         "{got} vs {expect}"
     );
 }
+
+#[test]
+fn a_torquer_dipole_held_through_the_stepping_inputs_equals_its_constant_command() {
+    let torquer = |dipole: f64| {
+        cube(
+            &format!(
+                "[effects.magnetic]\n[[effects.magnetic.torquer]]\nname = \"x\"\naxis = [1.0, 0.0, 0.0]\nmax_dipole = 10.0\ndipole = {dipole}\n[integrator]\nmethod = \"rk4\"\nstep = 0.5\n"
+            ),
+            ID,
+        )
+    };
+    let run = satsim_tools::api::run_scene(&scene(&torquer(6.0)), || false).unwrap();
+    let mut stepper =
+        satsim_tools::stepping::SceneStepper::new(&scene(&torquer(0.0)), None, "t").unwrap();
+    assert!(stepper.inputs().iter().any(|i| i == "dipole_x"));
+    stepper.set_inputs(&[("dipole_x", 6.0)]).unwrap();
+    stepper.advance(10.0).unwrap();
+    let stepped = stepper.trajectory();
+    let (a, b) = (run.rows().last().unwrap(), stepped.rows().last().unwrap());
+    assert_eq!(a, b);
+}

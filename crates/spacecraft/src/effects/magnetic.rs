@@ -11,7 +11,8 @@
 //! - Torquers (`[[effects.magnetic.torquer]]`): a dipole along `axis` of `body`, of strength
 //!   the command clamped to `±max_dipole`. The command is `dipole` (a constant, default 0)
 //!   plus what a controller writes into [`Forces::dipole_command`] (the channel the wheels'
-//!   commands use: e.g. [`super::Bdot`]).
+//!   commands use: e.g. [`super::Bdot`]) plus the stepping API's held `dipole_<name>` input
+//!   ([`Forces::dipole_input`]).
 //!
 //! Output: `magnetic_field_x/y/z` (bus axes, T), `magnetic_torque_x/y/z` (the sum of the
 //! couples, bus axes, N m) and each torquer's dipole `dipole_<name>` (A m², clamped).
@@ -110,6 +111,7 @@ impl Effect for Magnetic {
         }
         for (j, t) in self.torquers.iter().enumerate() {
             let wanted = self.command[j]
+                + forces.dipole_input.get(j).copied().unwrap_or(0.0)
                 + if self.commanded {
                     forces.dipole_command[j]
                 } else {

@@ -267,6 +267,10 @@ pub struct Forces {
     /// its command (the controller's, or its constant `torque`) before its limits. Kept
     /// between evaluations (zero unless set).
     pub rotor_input: Vec<f64>,
+    /// Dipoles held from outside the effects (A m², one per torquer, [`Links::torquers`]
+    /// order: the stepping API's `dipole_<name>` inputs), added by the effect that owns the
+    /// torquers to its command before it clamps it. Kept between evaluations.
+    pub dipole_input: Vec<f64>,
 }
 
 impl Forces {
@@ -280,11 +284,13 @@ impl Forces {
             rotor_command: vec![0.0; n_rotors],
             dipole_command: Vec::new(),
             rotor_input: vec![0.0; n_rotors],
+            dipole_input: Vec::new(),
         }
     }
     /// Room for `n` torquers' commands.
     pub fn with_torquers(mut self, n: usize) -> Self {
         self.dipole_command = vec![0.0; n];
+        self.dipole_input = vec![0.0; n];
         self
     }
     /// Clears everything to zero.

@@ -21,7 +21,8 @@
 //!   [`Simulation::constant_torques_mut`]): held `u` acts exactly as the same constant in
 //!   the initial state; and the rotors' hinge names (`wheel_<name>`), a motor command added
 //!   to the wheel's command (the controller's, or its constant `torque`) before its torque
-//!   and speed limits. Held until changed (zero-order hold). An event whose function the
+//!   and speed limits; and `dipole_<torquer>` for each magnetic torquer, a dipole (A m²)
+//!   added to its command before its clamp. Held until changed (zero-order hold). An event whose function the
 //!   change moves across zero (a wheel held at its speed limit whose command drops) is
 //!   handled at once and reported by the next `advance`.
 //! - **Errors**: an unknown input name, a non-finite value, a `dt` that is not a finite
@@ -177,6 +178,12 @@ impl Stepping {
             .map(|h| format!("torque_{h}"))
             .collect();
         inputs.extend(names[n_user..].iter().cloned());
+        inputs.extend(
+            sim.effects
+                .iter()
+                .flat_map(|e| e.torquers())
+                .map(|t| format!("dipole_{}", t.name)),
+        );
         let base_tau = sim.constant_torques_mut().to_vec();
         let (t, x) = (sim.t0(), sim.x0().to_vec());
         let reported = sim.event_log().len();
@@ -219,7 +226,8 @@ impl Stepping {
     pub fn output_grid(&self) -> OutputGrid {
         self.grid
     }
-    /// The input names: `torque_<hinge>` per model hinge, then the rotors' hinge names.
+    /// The input names: `torque_<hinge>` per model hinge, then the rotors' hinge names, then
+    /// `dipole_<torquer>` per magnetic torquer (A m², added to its command before the clamp).
     pub fn inputs(&self) -> &[String] {
         &self.inputs
     }
@@ -269,12 +277,14 @@ impl Stepping {
         for (k, v) in at {
             self.values[k] = v;
         }
-        let n_user = self.sim.model.n_user;
+        let (n_user, n_rotors) = (self.sim.model.n_user, self.sim.model.n_rotors);
         for (k, &v) in self.values.iter().enumerate() {
             if k < n_user {
                 self.sim.data.base_tau[k] = self.base_tau[k] + v;
-            } else {
+            } else if k < n_user + n_rotors {
                 self.sim.data.forces.rotor_input[k - n_user] = v;
+            } else {
+                self.sim.data.forces.dipole_input[k - n_user - n_rotors] = v;
             }
         }
         let (t, mut x) = (self.t, std::mem::take(&mut self.x));
