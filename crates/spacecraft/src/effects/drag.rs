@@ -110,14 +110,7 @@ impl Effect for Drag {
         "drag"
     }
     fn needs(&self) -> Needs {
-        Needs {
-            orbit: true,
-            free_base: true,
-            kinematics: true,
-            com: true,
-            net_force: true,
-            ..Needs::default()
-        }
+        Needs::SURFACE_LOADS
     }
     fn apply(
         &mut self,
@@ -209,12 +202,7 @@ impl SceneEffect for Drag {
                 ));
             }
         };
-        let facets = Facets::of_model(section.model());
-        if facets.is_empty() {
-            return Err(section.error_here(
-                "[effects.drag] needs facets: give a body `facets = [...]` or `facets_from_shape = { ... }` in the model file",
-            ));
-        }
+        let facets = Facets::of_section(section)?;
         let co_rotating = match file.co_rotating.unwrap_or(true) {
             true => Some(section.epoch()?),
             false => None,

@@ -167,6 +167,18 @@ pub struct Facets {
 }
 
 impl Facets {
+    /// The facets of the model an `[effects.<name>]` section applies to; none is an error at
+    /// the section's line saying how to give some.
+    pub fn of_section(section: &super::Section) -> Result<Self, satsim_tree::io::FileError> {
+        let facets = Self::of_model(section.model());
+        if facets.is_empty() {
+            return Err(section.error_here(format!(
+                "[effects.{}] needs facets: give a body `facets = [...]` or `facets_from_shape = {{ ... }}` in the model file",
+                section.name()
+            )));
+        }
+        Ok(facets)
+    }
     /// Every body's facets, in body order (the model's depth-first order, each body's facets
     /// in the order given), with the index of the body carrying each. Their world geometry
     /// is unset until [`Facets::place`]; every facet is lit until [`Facets::shade`].

@@ -217,6 +217,21 @@ pub struct Context<'a> {
     pub hold_torque: &'a [f64],
 }
 
+impl Needs {
+    /// What an effect that loads the bodies' facets from the environment needs (solar
+    /// pressure, drag): an orbit, a free base, the poses and the centre of mass, and its net
+    /// force carried to the orbit.
+    pub const SURFACE_LOADS: Needs = Needs {
+        orbit: true,
+        free_base: true,
+        kinematics: true,
+        com: true,
+        hold_torques: false,
+        rotors: false,
+        net_force: true,
+    };
+}
+
 impl Context<'_> {
     /// Index (in the tree's hinge order) of rotor `j`'s hinge.
     pub fn rotor_hinge(&self, j: usize) -> usize {

@@ -132,14 +132,7 @@ impl Effect for SolarRadiation {
         "solar_radiation"
     }
     fn needs(&self) -> Needs {
-        Needs {
-            orbit: true,
-            free_base: true,
-            kinematics: true,
-            com: true,
-            net_force: true,
-            ..Needs::default()
-        }
+        Needs::SURFACE_LOADS
     }
     fn apply(
         &mut self,
@@ -245,12 +238,7 @@ impl SceneEffect for SolarRadiation {
                 ));
             }
         };
-        let facets = Facets::of_model(section.model());
-        if facets.is_empty() {
-            return Err(section.error_here(
-                "[effects.solar_radiation] needs facets: give a body `facets = [...]` or `facets_from_shape = { ... }` in the model file",
-            ));
-        }
+        let facets = Facets::of_section(section)?;
         Ok(SolarRadiation::new(
             section.epoch()?,
             shadow,
