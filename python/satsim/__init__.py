@@ -541,6 +541,12 @@ class Simulation:
         return list(self._columns)
 
     @property
+    def t_end(self) -> float:
+        """The scene's end, its start plus ``duration`` (s): where ``satsim.run`` stops.
+        :meth:`advance` may go on past it (the rows continue on the same grid)."""
+        return float(self._native.t_end)
+
+    @property
     def inputs(self) -> List[str]:
         """The input names: ``torque_<hinge>`` per model hinge, ``wheel_<name>`` per wheel."""
         return list(self._native.inputs)
