@@ -94,6 +94,7 @@ fn beta_roots_and_frequencies() {
             body: "beam".into(),
             modes: Modes::Beam(bm.clone()),
             damping: 0.0,
+            stiffening: false,
         }],
     )
     .unwrap();
@@ -207,12 +208,13 @@ fn random_flexible(n: usize, base: BaseKind, seed: u64) -> FlexModel {
             body: b.name().to_string(),
             modes,
             damping,
+            stiffening: seed % 4 != 0,
         });
     }
     FlexModel::build(builder, &flex).expect("random flexible trees are valid")
 }
 
-/// A random state: attitude, hinge angles, deformations (large: the formulas are exact),
+/// A random state: attitude, hinge angles, deformations,
 /// rates, accelerations, external forces.
 #[allow(clippy::type_complexity)]
 fn random_state(
@@ -232,8 +234,10 @@ fn random_state(
     for x in &mut q[nb..r.nq()] {
         *x = rng.range(-3.0, 3.0);
     }
+    // Small deformations (the model's premise; the foreshortening of stiffened beams keeps
+    // their inertia positive only there).
     for x in &mut q[r.nq()..] {
-        *x = rng.range(-0.2, 0.2);
+        *x = rng.range(-0.02, 0.02);
     }
     let v = (0..model.nv()).map(|_| rng.range(-2.0, 2.0)).collect();
     let a = (0..model.nv()).map(|_| rng.range(-2.0, 2.0)).collect();
@@ -382,11 +386,13 @@ fn bus_with_two_beams(m: usize, damping: f64) -> FlexModel {
             body: "panel1".into(),
             modes: Modes::Beam(beam(Vec3::y(), Vec3::z(), m)),
             damping,
+            stiffening: true,
         },
         Flexible {
             body: "panel2".into(),
             modes: Modes::Beam(beam(-Vec3::y(), Vec3::z(), m)),
             damping,
+            stiffening: true,
         },
     ];
     FlexModel::build(builder, &flex).unwrap()
@@ -658,6 +664,7 @@ fn modal_damping_and_tip_deflection() {
             body: "beam".into(),
             modes: Modes::Beam(bm.clone()),
             damping: 0.05,
+            stiffening: true,
         }],
     )
     .unwrap();
@@ -698,4 +705,60 @@ beam = { root = [0.0, 0.0, 0.0], axis = [0.0, 1.0, 0.0], bend = [0.0, 0.0, 1.0],
         err.contains("flexible") && err.contains("flex.toml"),
         "{err}"
     );
+}
+
+// Geometric stiffening: Southwell's coefficient of a uniform cantilever's first flapwise
+// mode on a hub spinning about an axis through its root (one mode, the Rayleigh value):
+// ω² = ω₀² + 1.193 Ω².
+#[test]
+fn centrifugal_stiffening_gives_southwell_coefficient() {
+    let spin = 3.0; // rad/s
+    let model = FlexModel::build(
+        ModelBuilder::new(BaseKind::Fixed)
+            .body(Body::new("ground", 0.0, Mat3::zeros()))
+            .body(Body::new(
+                "hub",
+                1.0,
+                Mat3::from_diagonal(&Vec3::new(5e5, 5e5, 1e6)),
+            ))
+            .hinge(Hinge::revolute("spin", "ground", "hub", Vec3::z())),
+        &[Flexible {
+            body: "hub".into(),
+            modes: Modes::Beam(beam(Vec3::y(), Vec3::z(), 1)),
+            damping: 0.0,
+            stiffening: true,
+        }],
+    )
+    .unwrap();
+    let mut data = FlexData::new(&model);
+    let v = [spin, 0.0];
+    let d = 1e-6;
+    let mut acc =
+        |eta: f64| flexible::aba(&model, &mut data, &[0.3, eta], &v, &[0.0; 2], None).unwrap()[1];
+    let k = -(acc(d) - acc(-d)) / (2.0 * d);
+    let w0 = beam(Vec3::y(), Vec3::z(), 1).omega(1);
+    let coefficient = (k - w0 * w0) / (spin * spin);
+    println!("Southwell coefficient (one mode): {coefficient:.5}");
+    assert!((coefficient - 1.193).abs() < 1e-3, "{coefficient}");
+    // Spun about the beam's own axis, nothing stiffens it.
+    let hinged = FlexModel::build(
+        ModelBuilder::new(BaseKind::Fixed)
+            .body(Body::new("ground", 0.0, Mat3::zeros()))
+            .body(Body::new(
+                "hub",
+                1.0,
+                Mat3::from_diagonal(&Vec3::new(5e5, 1e6, 5e5)),
+            ))
+            .hinge(Hinge::revolute("spin", "ground", "hub", Vec3::y())),
+        &[Flexible {
+            body: "hub".into(),
+            modes: Modes::Beam(beam(Vec3::y(), Vec3::z(), 1)),
+            damping: 0.0,
+            stiffening: true,
+        }],
+    )
+    .unwrap();
+    let mut data = FlexData::new(&hinged);
+    let a = flexible::aba(&hinged, &mut data, &[0.0, 0.01], &v, &[0.0; 2], None).unwrap()[1];
+    assert!(rel(-a / 0.01, w0 * w0) < 1e-3, "{}", -a / 0.01);
 }

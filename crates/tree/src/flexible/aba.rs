@@ -41,7 +41,7 @@ pub fn aba<'d>(
     let (nq, nv) = (rigid.nq(), rigid.nv());
     // Pass 1 (after the velocities): each body's own extended inertia and bias.
     for i in 0..n {
-        let inertia = &rigid.bodies[i].inertia;
+        let inertia = &model.inertia_at(i, q);
         let (o, m) = (model.offset[i], model.modes[i]);
         let vi = data.v[i];
         let mut h = inertia.mul_motion(&vi);
@@ -58,6 +58,7 @@ pub fn aba<'d>(
         }
         data.ia[i] = ArticulatedInertia::from(*inertia);
         data.pa[i] = vi.cross_force(&h);
+        model.add_stiffening(i, q, v, &vi.ang, &mut data.pa[i], &mut data.pe[o..o + m]);
         if let Some(fe) = fext {
             data.pa[i] -= fe[i];
         }

@@ -219,3 +219,95 @@ impl Beam {
         super::NodeShape { phi, psi }
     }
 }
+
+/// The centrifugal stiffening of a beam on a body spinning at `ω` (body axes): the axial
+/// force `N(x) = ρA ∫ₓᴸ ωᵀ A(ξ) ω dξ` of the centrifugal field `−ω × (ω × r)` along the beam
+/// (`A(ξ) = A₀ + ξ A₁`, `A₀ = (r₀·a) 1 − sym(r₀ aᵀ)`, `A₁ = 1 − a aᵀ`) gives the geometric
+/// stiffness `K_g(ω) = ∫ N φᵢ' φⱼ' dx = (ωᵀ A₀ ω) J₀ + (ωᵀ A₁ ω) J₁`, with
+/// `J₀ = ρA ∫ (L − x) φᵢ' φⱼ' dx` and `J₁ = ρA ∫ (L² − x²)/2 φᵢ' φⱼ' dx` (row-major `m x m`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Stiffening {
+    /// `A₀` (m), body axes.
+    pub a0: crate::spatial::Mat3,
+    /// `A₁`, body axes.
+    pub a1: crate::spatial::Mat3,
+    /// `J₀` (1/m), row-major.
+    pub j0: Vec<f64>,
+    /// `J₁` (dimensionless), row-major.
+    pub j1: Vec<f64>,
+}
+
+impl Beam {
+    /// The beam's centrifugal-stiffening integrals.
+    pub fn stiffening(&self) -> Stiffening {
+        let rule = gauss_legendre(POINTS);
+        let modes = self.cantilever_modes();
+        let m = modes.len();
+        let (mut j0, mut j1) = (vec![0.0; m * m], vec![0.0; m * m]);
+        let l = self.length;
+        for i in 0..m {
+            for j in 0..=i {
+                let (a, b) = (&modes[i], &modes[j]);
+                let d = |x: f64| a.shape(x)[1] * b.shape(x)[1];
+                let x0 = self.rho_a * integrate(l, PANELS, &rule, |x| (l - x) * d(x));
+                let x1 = self.rho_a * integrate(l, PANELS, &rule, |x| 0.5 * (l * l - x * x) * d(x));
+                for (k, v) in [(i * m + j, x0), (j * m + i, x0)] {
+                    j0[k] = v;
+                }
+                for (k, v) in [(i * m + j, x1), (j * m + i, x1)] {
+                    j1[k] = v;
+                }
+            }
+        }
+        let a = self.axis;
+        let ra = self.root * a.transpose();
+        let id = crate::spatial::Mat3::identity();
+        Stiffening {
+            a0: id * self.root.dot(&a) - (ra + ra.transpose()) * 0.5,
+            a1: id - a * a.transpose(),
+            j0,
+            j1,
+        }
+    }
+}
+
+// Row-major m x m matrices against m-vectors: index loops read best.
+#[allow(clippy::needless_range_loop)]
+impl Stiffening {
+    /// `(ηᵀ J₀ η, ηᵀ J₁ η)` and, with `x = η̇`, `(2 η̇ᵀ J₀ η, 2 η̇ᵀ J₁ η)`.
+    #[inline]
+    pub(crate) fn forms(&self, eta: &[f64], etad: &[f64]) -> [f64; 4] {
+        let m = eta.len();
+        let mut out = [0.0; 4];
+        for k in 0..m {
+            let (mut a, mut b) = (0.0, 0.0);
+            for l in 0..m {
+                a += self.j0[k * m + l] * eta[l];
+                b += self.j1[k * m + l] * eta[l];
+            }
+            out[0] += eta[k] * a;
+            out[1] += eta[k] * b;
+            out[2] += 2.0 * etad[k] * a;
+            out[3] += 2.0 * etad[k] * b;
+        }
+        out
+    }
+    /// `G = A₀ s₀ + A₁ s₁`: the kinetic energy lost to foreshortening is `½ ωᵀ G ω`.
+    #[inline]
+    pub(crate) fn g(&self, s0: f64, s1: f64) -> crate::spatial::Mat3 {
+        self.a0 * s0 + self.a1 * s1
+    }
+    /// `out[k] += (K_g(ω) η)ₖ`.
+    #[inline]
+    pub(crate) fn add_force(&self, omega: &Vec3, eta: &[f64], out: &mut [f64]) {
+        let m = eta.len();
+        let (w0, w1) = (omega.dot(&(self.a0 * omega)), omega.dot(&(self.a1 * omega)));
+        for k in 0..m {
+            let mut s = 0.0;
+            for l in 0..m {
+                s += (w0 * self.j0[k * m + l] + w1 * self.j1[k * m + l]) * eta[l];
+            }
+            out[k] += s;
+        }
+    }
+}

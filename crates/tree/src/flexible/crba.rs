@@ -29,7 +29,7 @@ pub fn crba<'d>(
     }
     data.ddq = zero;
     checked?;
-    mass_matrix(model, data);
+    mass_matrix(model, data, q);
     Ok(&data.mass_matrix)
 }
 
@@ -69,12 +69,12 @@ fn walk(model: &FlexModel, data: &FlexData, m: &mut DMatrix<f64>, col: usize, j:
     }
 }
 
-fn mass_matrix(model: &FlexModel, data: &mut FlexData) {
+fn mass_matrix(model: &FlexModel, data: &mut FlexData, q: &[f64]) {
     let rigid = &model.rigid;
     let n = rigid.n_bodies();
     let nv = rigid.nv();
     for i in 0..n {
-        data.ic[i] = rigid.bodies[i].inertia;
+        data.ic[i] = model.inertia_at(i, q);
     }
     for i in (1..n).rev() {
         let p = rigid.parent[i].expect("parent");

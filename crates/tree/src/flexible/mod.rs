@@ -10,7 +10,8 @@
 //! Coordinates: `q = [rigid q…, η…]`, `v = [rigid v…, η̇…]` (see [`model`]). The model is
 //! linear in the deformation (modal integrals evaluated undeformed) and exactly Lagrangian:
 //! with no damping, kinetic plus strain energy is conserved. The derivation is the theory
-//! page "Flexible bodies". Geometric (centrifugal) stiffening is not modelled yet.
+//! page "Flexible bodies". A beam's centrifugal stiffening is in the same Lagrangian (the
+//! foreshortening's kinetic energy `−½ ωᵀ G(η) ω`).
 //!
 //! ```
 //! use satsim_tree::{BaseKind, Body, Hinge, ModelBuilder, spatial::{Mat3, Vec3}};
@@ -21,7 +22,8 @@
 //!     .hinge(Hinge::revolute("h", "bus", "panel", Vec3::z()).at(Vec3::y()));
 //! let beam = Beam { root: Vec3::zeros(), axis: Vec3::y(), bend: Vec3::z(), length: 2.0,
 //!                   ei: 500.0, rho_a: 5.0, modes: 3 };
-//! let flex = [Flexible { body: "panel".into(), modes: Modes::Beam(beam), damping: 0.0 }];
+//! let flex = [Flexible { body: "panel".into(), modes: Modes::Beam(beam), damping: 0.0,
+//!                        stiffening: true }];
 //! let model = FlexModel::build(builder, &flex)?;
 //! assert_eq!((model.nq(), model.nv()), (8 + 3, 7 + 3));
 //! let mut data = FlexData::new(&model);
@@ -67,7 +69,7 @@ pub fn energy(
     let mut t = 0.0;
     for i in 0..rigid.n_bodies() {
         let vi = data.v[i];
-        let mut h = rigid.bodies[i].inertia.mul_motion(&vi);
+        let mut h = model.inertia_at(i, q).mul_motion(&vi);
         for k in 0..model.modes[i] {
             let e = model.offset[i] + k;
             // ½ (vᵀ P η̇ + η̇ᵀ Pᵀ v) adds vᵀ P η̇ once: half of it through h.

@@ -4,12 +4,12 @@
 //! elastic coordinates of each flexible body together, bodies in the model's (depth-first)
 //! order, modes from 1 within a body.
 
-use super::beam::Beam;
+use super::beam::{Beam, Stiffening};
 use super::modal::{ModalData, NodeShape};
 use super::node::Node;
 use crate::error::ModelError;
 use crate::model::{Model, ModelBuilder, UNIT_NORM_TOLERANCE};
-use crate::spatial::{Force, Mat3, RigidInertia};
+use crate::spatial::{Force, Mat3, RigidInertia, Vec3};
 use thiserror::Error;
 
 /// Largest number of beam modes (the beam integrals' quadrature is sized for it).
@@ -39,6 +39,8 @@ pub struct Flexible {
     pub modes: Modes,
     /// Modal damping ratio `ζ` of every mode, `>= 0`.
     pub damping: f64,
+    /// Geometric (centrifugal) stiffening of a beam (ignored for given modes).
+    pub stiffening: bool,
 }
 
 /// Why a flexible model could not be built.
@@ -97,6 +99,8 @@ pub struct FlexModel {
     pub(crate) beams: Vec<Option<Beam>>,
     /// Per body: its children.
     pub(crate) children: Vec<Vec<usize>>,
+    /// Per body: its beam's centrifugal stiffening, when on.
+    pub(crate) stiffening: Vec<Option<Stiffening>>,
 }
 
 fn invalid(body: &str, what: impl Into<String>) -> FlexError {
@@ -185,6 +189,7 @@ impl FlexModel {
         let n = rigid.n_bodies();
         let mut data: Vec<Option<(ModalData, f64)>> = vec![None; n];
         let mut beams: Vec<Option<Beam>> = vec![None; n];
+        let mut stiffening: Vec<Option<Stiffening>> = vec![None; n];
         for f in flexible {
             let b = rigid
                 .body_index(&f.body)
@@ -196,6 +201,9 @@ impl FlexModel {
                 Modes::Beam(beam) => {
                     check_beam(&f.body, beam)?;
                     beams[b] = Some(beam.clone());
+                    if f.stiffening {
+                        stiffening[b] = Some(beam.stiffening());
+                    }
                     ModalData {
                         momentum: beam.momentum_coefficients(),
                         omega: (1..=beam.modes).map(|k| beam.omega(k)).collect(),
@@ -292,6 +300,7 @@ impl FlexModel {
             nodes,
             beams,
             children,
+            stiffening,
         })
     }
 
@@ -346,6 +355,40 @@ impl FlexModel {
                 .map(|(m, e)| m.shape(beam.length)[0] * e)
                 .sum(),
         )
+    }
+    /// Body `i`'s rigid inertia at the deformation in `q`: with stiffening, the angular block
+    /// less `G(η)` (the foreshortened beam's kinetic energy `−½ ωᵀ G ω`); else the rigid
+    /// model's.
+    #[inline]
+    pub(crate) fn inertia_at(&self, i: usize, q: &[f64]) -> RigidInertia {
+        let mut inertia = self.rigid.bodies[i].inertia;
+        if let Some(s) = &self.stiffening[i] {
+            let eta = &q[self.rigid.nq() + self.offset[i]..][..self.modes[i]];
+            let f = s.forms(eta, eta);
+            inertia.inertia -= s.g(f[0], f[1]);
+        }
+        inertia
+    }
+    /// With stiffening, the foreshortening's terms in body `i`'s equations: the frame force
+    /// `−Ġ ω` (moment) and the modal forces `K_g(ω) η`, added to `frame` and `modal`.
+    #[inline]
+    pub(crate) fn add_stiffening(
+        &self,
+        i: usize,
+        q: &[f64],
+        v: &[f64],
+        omega: &Vec3,
+        frame: &mut Force,
+        modal: &mut [f64],
+    ) {
+        if let Some(s) = &self.stiffening[i] {
+            let (o, m) = (self.offset[i], self.modes[i]);
+            let eta = &q[self.rigid.nq() + o..][..m];
+            let etad = &v[self.rigid.nv() + o..][..m];
+            let f = s.forms(eta, etad);
+            frame.ang -= s.g(f[2], f[3]) * omega;
+            s.add_force(omega, eta, modal);
+        }
     }
     /// Largest number of modes of one body.
     pub(crate) fn max_modes(&self) -> usize {

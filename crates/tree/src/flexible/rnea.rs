@@ -43,7 +43,7 @@ pub fn rnea<'d>(
             }
             data.a[i] = ai;
         }
-        let inertia = &rigid.bodies[i].inertia;
+        let inertia = &model.inertia_at(i, q);
         let (o, m) = (model.offset[i], model.modes[i]);
         let vi = data.v[i];
         let mut h = inertia.mul_motion(&vi);
@@ -58,6 +58,8 @@ pub fn rnea<'d>(
                 + model.stiffness[o + k] * q[nq + o + k];
         }
         data.f[i] = f + vi.cross_force(&h);
+        let modal = &mut data.tau.as_mut_slice()[nv + o..nv + o + m];
+        model.add_stiffening(i, q, v, &vi.ang, &mut data.f[i], modal);
         if let Some(fe) = fext {
             data.f[i] -= fe[i];
         }
