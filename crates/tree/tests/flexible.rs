@@ -208,7 +208,7 @@ fn random_flexible(n: usize, base: BaseKind, seed: u64) -> FlexModel {
             body: b.name().to_string(),
             modes,
             damping,
-            stiffening: seed % 4 != 0,
+            stiffening: !seed.is_multiple_of(4),
         });
     }
     FlexModel::build(builder, &flex).expect("random flexible trees are valid")
