@@ -361,7 +361,7 @@ fn without_modes_the_rigid_algorithms() {
             .unwrap()
             .clone();
         assert!(
-            (&dd_f - &dd_r).amax() <= 1e-13 * dd_r.amax(),
+            (&dd_f - &dd_r).amax() <= 1e-14 * dd_r.amax(),
             "seed {seed}: ABA {:e}",
             (&dd_f - &dd_r).amax() / dd_r.amax()
         );
