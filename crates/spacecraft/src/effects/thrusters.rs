@@ -14,7 +14,9 @@
 //! At the start of the run and at every multiple of `period` after it (`t = 0, period,
 //! 2 period, …`, the time stops of a [`Sampling`] clock) each thruster latches its duty
 //! `d = clamp(duty + input, 0, 1)`, `duty` its constant and `input` the stepping API's held
-//! `thrust_<name>` (0 unless set), and holds it for the period. Its on-time is then
+//! `thrust_<name>` (0 unless set: [`Effect::hold_thrust_input`], latched at the first period
+//! start at or after the time it is set, so that a loop stepping by whole periods commands
+//! each period from its start), and holds it for the period. Its on-time is then
 //!
 //! - `"pwm"` (default): `d · period`, from the period's start;
 //! - `"on_off"`: the whole period when `d >= 0.5`, else none;
