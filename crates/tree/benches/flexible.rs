@@ -5,7 +5,7 @@
 //! - `modal`: each panel half rigid (10 kg) and half a beam clamped at its inboard edge
 //!   (`root = (0, −0.5, 0)`, along y, bending along z, L = 1 m, EI = 500 N m², ρA = 10 kg/m,
 //!   3 modes, stiffening on): the flexible ABA, and the flexible CRBA + bias + dense Cholesky;
-//! - `chain40`: each beam a chain of 40 rigid segments with hinge springs (the discretisation
+//! - `chain40`, `chain80`: each beam a chain of 40 (80) rigid segments with hinge springs (the discretisation
 //!   of tests/flexible.rs, which gives the first two frequencies within 1 % at N = 40 after
 //!   extrapolation), the next panel hinged at the last segment's tip: the rigid ABA.
 //!
@@ -161,17 +161,19 @@ fn flexible(c: &mut Criterion) {
         })
     });
 
-    let chain = chain(40);
-    let (q, v, tau) = state(chain.nq(), chain.nv(), chain.base_nq());
-    let fd = ForwardDynamics::new(&chain);
-    let mut data = Data::new(&chain);
-    let mut ddq = vec![0.0; chain.nv()];
-    group.bench_function(format!("chain40_aba/{}", chain.nv()), |b| {
-        b.iter(|| {
-            let input = Input::new(black_box(&q), black_box(&v), black_box(&tau));
-            fd.solve(&chain, &mut data, input, &mut ddq).unwrap();
-        })
-    });
+    for n in [40, 80] {
+        let chain = chain(n);
+        let (q, v, tau) = state(chain.nq(), chain.nv(), chain.base_nq());
+        let fd = ForwardDynamics::new(&chain);
+        let mut data = Data::new(&chain);
+        let mut ddq = vec![0.0; chain.nv()];
+        group.bench_function(format!("chain{n}_aba/{}", chain.nv()), |b| {
+            b.iter(|| {
+                let input = Input::new(black_box(&q), black_box(&v), black_box(&tau));
+                fd.solve(&chain, &mut data, input, &mut ddq).unwrap();
+            })
+        });
+    }
     group.finish();
 }
 

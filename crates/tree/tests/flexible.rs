@@ -710,8 +710,10 @@ fn per_call_algorithms_do_not_allocate() {
         let mut rng = SplitMix(seed);
         let (q, v, a, fext) = random_state(&model, &mut rng);
         let mut data = FlexData::new(&model);
+        let locked: Vec<bool> = (0..model.rigid().n_hinges()).map(|k| k % 2 == 0).collect();
         let before = allocations();
         for _ in 0..3 {
+            flexible::aba_hybrid(&model, &mut data, &q, &v, &a, Some(&fext), &locked).unwrap();
             flexible::rnea(&model, &mut data, &q, &v, &a, Some(&fext)).unwrap();
             flexible::bias(&model, &mut data, &q, &v, None).unwrap();
             flexible::crba(&model, &mut data, &q).unwrap();
