@@ -9,6 +9,10 @@
 //!   The root's attitude is a quaternion, Euler angles in a stated sequence or an axis and
 //!   angle ([`Attitude`]).
 //!
+//! - [`read_flex_model`] / [`parse_flex_model`]: a model file whose bodies may carry
+//!   `[body.flexible]` (contract section 14) into a [`FlexModel`](crate::flexible::FlexModel);
+//!   [`parse_modes_file`] / [`write_modes_file`]: the modes file such a body may name.
+//!
 //! Every [`FileError`] displays as `PATH:LINE: message` (or `PATH: field: message` where
 //! only the field is known, as for JSON arrays of the wrong length).
 //!
@@ -46,11 +50,16 @@
 
 mod attitude;
 mod error;
+mod flex_file;
 mod model_file;
 mod state_file;
 
 pub use attitude::{Attitude, EULER_SEQUENCES, EulerSequence};
 pub use error::{FileError, SpannedError, line_of};
+pub use flex_file::{
+    BeamFile, FlexibleFile, MODES_FILE_NODE_TOLERANCE, ModesFile, NodeFile, parse_flex_model,
+    parse_modes_file, read_flex_model, write_modes_file,
+};
 pub use model_file::{
     BaseFile, BaseKindFile, BodyFile, CoefficientsFile, FacetFile, HingeFile, ModelFile, ShapeFile,
     parse_model, parse_model_file, read_model, with_key,

@@ -78,7 +78,8 @@ pub use facet::{Facet, facets_of_box};
 pub use forward_dynamics::{ForwardDynamics, Input, Kernel, Method};
 #[cfg(feature = "files")]
 pub use io::{
-    FileError, ModelFile, State, StateFile, parse_model, parse_state, read_model, read_state,
+    FileError, ModelFile, State, StateFile, parse_flex_model, parse_model, parse_state,
+    read_flex_model, read_model, read_state,
 };
 pub use kinematics::{base_pose, forward_kinematics, forward_kinematics_acc, update_transforms};
 pub use model::{

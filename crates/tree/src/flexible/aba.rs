@@ -20,8 +20,6 @@ use nalgebra::DVector;
 /// `D = [[Sᵀ IA S, Sᵀ B], [Bᵀ S, C]]`); what is left acts only on the frame (`6 x 6`) and
 /// reaches the parent through `[Xupᵢ, Gᵢ]`. The root solves its `6 + m₀` system (free) or
 /// its modes (fixed). See the theory page "Flexible bodies".
-// The index loops run over several arrays at once (coordinates, buffers, offsets).
-#[allow(clippy::needless_range_loop)]
 pub fn aba<'d>(
     model: &FlexModel,
     data: &'d mut FlexData,
@@ -29,6 +27,38 @@ pub fn aba<'d>(
     v: &[f64],
     tau: &[f64],
     fext: Option<&[Force]>,
+) -> Result<&'d DVector<f64>, DynamicsError> {
+    articulated(model, data, q, v, tau, fext, None)
+}
+
+/// Hybrid dynamics with locked hinges (as the rigid [`crate::aba::aba_hybrid`]): a hinge
+/// whose entry in `locked` (one per hinge, in the order of addition) is `true` has zero
+/// acceleration and its torque is ignored; the modes stay free. Each body eliminates its
+/// modes alone where its hinge is locked (pivot `C`, columns `B`), nothing where it also has
+/// no modes (welded to its parent). O(n), no allocation.
+pub fn aba_hybrid<'d>(
+    model: &FlexModel,
+    data: &'d mut FlexData,
+    q: &[f64],
+    v: &[f64],
+    tau: &[f64],
+    fext: Option<&[Force]>,
+    locked: &[bool],
+) -> Result<&'d DVector<f64>, DynamicsError> {
+    check_len("locked", locked.len(), model.rigid.n_hinges())?;
+    articulated(model, data, q, v, tau, fext, Some(locked))
+}
+
+// The index loops run over several arrays at once (coordinates, buffers, offsets).
+#[allow(clippy::needless_range_loop)]
+fn articulated<'d>(
+    model: &FlexModel,
+    data: &'d mut FlexData,
+    q: &[f64],
+    v: &[f64],
+    tau: &[f64],
+    fext: Option<&[Force]>,
+    locked: Option<&[bool]>,
 ) -> Result<&'d DVector<f64>, DynamicsError> {
     check_state(model, q, v)?;
     check_len("tau", tau.len(), model.nv())?;
@@ -67,29 +97,36 @@ pub fn aba<'d>(
     for i in (1..n).rev() {
         let joint = rigid.joints[i].as_ref().expect("joint");
         let (o, m) = (model.offset[i], model.modes[i]);
-        let d = 1 + m;
+        // The hinge's column, unless locked: then only the modes are eliminated.
+        let h = usize::from(!locked.is_some_and(|l| l[joint.hinge()]));
+        let d = h + m;
         let (uo, dof, co) = (data.u_offset[i], data.d_offset[i], data.c_offset[i]);
         let s = joint.s;
-        let u0 = data.ia[i].mul_motion(&s);
-        data.u_col[uo] = u0;
-        data.u[uo] = tau[joint.dof] - s.dot(&data.pa[i]);
         let dm = &mut data.d[dof..dof + d * d];
-        dm[0] = s.dot(&u0) + joint.armature();
+        if h == 1 {
+            let u0 = data.ia[i].mul_motion(&s);
+            data.u_col[uo] = u0;
+            data.u[uo] = tau[joint.dof] - s.dot(&data.pa[i]);
+            dm[0] = s.dot(&u0) + joint.armature();
+        }
         for k in 0..m {
             let bk = data.b[o + k];
-            data.u_col[uo + 1 + k] = bk;
-            data.u[uo + 1 + k] = tau[nv + o + k] - data.pe[o + k];
-            let sb = s.dot(&bk);
-            dm[(1 + k) * d] = sb;
-            dm[1 + k] = sb;
+            data.u_col[uo + h + k] = bk;
+            data.u[uo + h + k] = tau[nv + o + k] - data.pe[o + k];
+            if h == 1 {
+                let sb = s.dot(&bk);
+                dm[(1 + k) * d] = sb;
+                dm[1 + k] = sb;
+            }
             for l in 0..m {
-                dm[(1 + k) * d + 1 + l] = data.cm[co + k * m + l];
+                dm[(h + k) * d + h + l] = data.cm[co + k * m + l];
             }
         }
-        if !dense::cholesky(dm, d) {
+        let pivot = if d > 0 { dm[0] } else { 0.0 };
+        if d > 0 && !dense::cholesky(dm, d) {
             return Err(DynamicsError::NotPositiveDefinite {
-                index: joint.dof,
-                pivot: s.dot(&u0) + joint.armature(),
+                index: if h == 1 { joint.dof } else { nv + o },
+                pivot,
             });
         }
         // IA − U D⁻¹ Uᵀ = IA − W Wᵀ with W Lᵀ = U (forward substitution on the columns).
@@ -107,7 +144,9 @@ pub fn aba<'d>(
         // pa = pA + IAᵃ c + U D⁻¹ u.
         let y = &mut data.tmp[..d];
         y.copy_from_slice(&data.u[uo..uo + d]);
-        dense::solve(l, d, y);
+        if d > 0 {
+            dense::solve(l, d, y);
+        }
         let mut pa = data.pa[i] + ia.mul_motion(&data.c[i]);
         for j in 0..d {
             pa += data.u_col[uo + j] * data.tmp[j];
@@ -194,7 +233,8 @@ pub fn aba<'d>(
         let joint = rigid.joints[i].as_ref().expect("joint");
         let p = rigid.parent[i].expect("parent");
         let (o, m) = (model.offset[i], model.modes[i]);
-        let d = 1 + m;
+        let h = usize::from(!locked.is_some_and(|l| l[joint.hinge()]));
+        let d = h + m;
         let (uo, dof) = (data.u_offset[i], data.d_offset[i]);
         let (op, mp, go) = (model.offset[p], model.modes[p], data.g_offset[i]);
         let mut a = data.xup[i].apply_motion(&data.a[p]) + data.c[i];
@@ -205,12 +245,19 @@ pub fn aba<'d>(
         for j in 0..d {
             y[j] = data.u[uo + j] - a.dot(&data.u_col[uo + j]);
         }
-        dense::solve(&data.d[dof..dof + d * d], d, y);
-        data.ddq[joint.dof] = y[0];
-        for k in 0..m {
-            data.ddq[nv + o + k] = y[1 + k];
+        if d > 0 {
+            dense::solve(&data.d[dof..dof + d * d], d, y);
         }
-        data.a[i] = a + joint.s * y[0];
+        if h == 1 {
+            data.ddq[joint.dof] = y[0];
+            data.a[i] = a + joint.s * y[0];
+        } else {
+            data.ddq[joint.dof] = 0.0;
+            data.a[i] = a;
+        }
+        for k in 0..m {
+            data.ddq[nv + o + k] = y[h + k];
+        }
     }
     Ok(&data.ddq)
 }

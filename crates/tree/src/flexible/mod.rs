@@ -5,7 +5,7 @@
 //!   given) and, for each hinge on a flexible parent, the [`NodeShape`]s at its point that
 //!   carry it. [`FlexData`] is its workspace: the per-call algorithms allocate nothing.
 //! - [`rnea()`] (inverse dynamics, [`bias`]), [`crba()`] (mass matrix), [`aba()`] (O(n)
-//!   forward dynamics), [`energy`].
+//!   forward dynamics; [`aba_hybrid`] with locked hinges), [`energy`].
 //!
 //! Coordinates: `q = [rigid q…, η…]`, `v = [rigid v…, η̇…]` (see [`model`]). The model is
 //! linear in the deformation (modal integrals evaluated undeformed) and exactly Lagrangian:
@@ -44,7 +44,7 @@ pub mod model;
 mod node;
 pub mod rnea;
 
-pub use aba::aba;
+pub use aba::{aba, aba_hybrid};
 pub use beam::Beam;
 pub use crba::crba;
 pub use data::FlexData;

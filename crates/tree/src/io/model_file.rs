@@ -2,6 +2,7 @@
 //! a validated [`Model`].
 
 use super::error::{FileError, SpannedError, line_of};
+use super::flex_file::FlexibleFile;
 use super::read_text;
 use crate::error::ModelError;
 use crate::facet::{DEFAULT_DRAG, Facet, facets_of_box};
@@ -87,6 +88,10 @@ pub struct BodyFile {
     /// facets with these coefficients, after the listed `facets` (requires `shape`).
     #[serde(default)]
     pub facets_from_shape: Option<Spanned<CoefficientsFile>>,
+    /// `[body.flexible]` (contract section 14): the body's elastic coordinates. Read by
+    /// [`super::read_flex_model`] only; [`ModelFile::build`] refuses it.
+    #[serde(default)]
+    pub flexible: Option<Spanned<FlexibleFile>>,
 }
 
 /// One of a body's `facets`: a flat one-sided rectangle, body frame. Written with `area`,
@@ -345,8 +350,31 @@ impl ModelFile {
     }
 
     /// Validates and builds the model. Errors carry the span of the body, hinge or key
-    /// concerned; [`SpannedError::in_file`] names the file and line.
+    /// concerned; [`SpannedError::in_file`] names the file and line. A file with flexible
+    /// bodies is refused (the rigid [`Model`] has no elastic coordinates): it is
+    /// [`super::read_flex_model`]'s.
     pub fn build(&self) -> Result<Model, SpannedError> {
+        if let Some((name, f)) = self.body.iter().find_map(|b| {
+            let b = b.get_ref();
+            b.flexible.as_ref().map(|f| (b.name.get_ref(), f))
+        }) {
+            return Err(SpannedError::Schema {
+                span: Some(f.get_ref().key_span().unwrap_or_else(|| f.span())),
+                message: format!(
+                    "body `{name}`: flexible bodies are read only by the flexible reader \
+                     (`read_flex_model`); the rigid model and `satsim run` do not support them yet"
+                ),
+            });
+        }
+        let builder = self.builder()?;
+        builder.build().map_err(|error| SpannedError::Model {
+            span: self.locate(&error),
+            error,
+        })
+    }
+
+    /// The validated entries as a [`ModelBuilder`] (not yet built; `[body.flexible]` not read).
+    pub(crate) fn builder(&self) -> Result<ModelBuilder, SpannedError> {
         let mut builder = ModelBuilder::new(self.base_kind());
         for b in &self.body {
             let body = b.get_ref();
@@ -447,10 +475,7 @@ impl ModelFile {
                 .armature(hinge.armature.as_ref().map_or(0.0, |a| *a.get_ref())),
             );
         }
-        builder.build().map_err(|error| SpannedError::Model {
-            span: self.locate(&error),
-            error,
-        })
+        Ok(builder)
     }
 
     fn body_named(&self, name: &str, occurrence: usize) -> Option<&BodyFile> {
@@ -499,7 +524,7 @@ impl ModelFile {
     /// The span of the body, hinge or key a [`ModelError`] is about. The builder checks the
     /// entries in file order, so the first entry of a name is the one concerned (the second
     /// for duplicates).
-    fn locate(&self, error: &ModelError) -> Option<Range<usize>> {
+    pub(crate) fn locate(&self, error: &ModelError) -> Option<Range<usize>> {
         match error {
             ModelError::NoBodies => None,
             ModelError::DuplicateBody(n) => self.body_named(n, 1).map(|b| b.name.span()),

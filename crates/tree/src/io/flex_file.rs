@@ -1,0 +1,565 @@
+//! The model file's `[body.flexible]` (contract section 14), the modes file a body may name
+//! instead of a `beam`, and their reading into a [`FlexModel`].
+//!
+//! The modes file (TOML, body frame of the body that names it, SI units):
+//! `frequencies_hz` (natural frequencies with the body frame held, Hz, one per mode),
+//! optional `damping` (modal damping ratio per mode), `mass`, `com`, `inertia` (the mass, centre
+//! of mass and inertia about it of the structure the modes describe, added to the body's own
+//! as a beam's are), `momentum` (per mode, the column of `P`: the spatial momentum
+//! `[n; p]` = `[angular; linear]` about the body origin that a unit modal rate gives, modes
+//! mass-normalised), and `[[node]]` entries (`name`, `at`, per mode the `translation` and
+//! `rotation` of the structure at `at`). A hinge whose parent is the body is carried by the
+//! node whose `at` equals its own `at` within [`MODES_FILE_NODE_TOLERANCE`].
+
+use super::error::{FileError, SpannedError, line_of};
+use super::model_file::{parse_model_file, schema_message, with_key};
+use super::read_text;
+use crate::flexible::model::MAX_BEAM_MODES;
+use crate::flexible::{Beam, FlexError, FlexModel, Flexible, ModalData, Modes, NodeShape};
+use crate::model::{Body, UNIT_NORM_TOLERANCE};
+use crate::spatial::{Force, Mat3, RigidInertia, Vec3, skew};
+use serde::Deserialize;
+use std::fmt::Write;
+use std::ops::Range;
+use std::path::Path;
+use toml::Spanned;
+
+/// Largest distance (m) between a child hinge's `at` and the modes-file node that carries it.
+pub const MODES_FILE_NODE_TOLERANCE: f64 = 1e-6;
+
+/// `[body.flexible]`: `beam` or `modes_file` (exactly one), `damping`, `stiffening`.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct FlexibleFile {
+    /// An Euler-Bernoulli cantilever.
+    #[serde(default)]
+    pub beam: Option<Spanned<BeamFile>>,
+    /// A modes file, relative to the model file's folder.
+    #[serde(default)]
+    pub modes_file: Option<Spanned<String>>,
+    /// Modal damping ratio of every mode, `>= 0` (default 0, or the modes file's).
+    #[serde(default)]
+    pub damping: Option<Spanned<f64>>,
+    /// Centrifugal stiffening of a beam (default true; no effect on a modes file's modes).
+    #[serde(default)]
+    pub stiffening: Option<Spanned<bool>>,
+}
+
+impl FlexibleFile {
+    /// The span of `beam` or `modes_file`, whichever is given first.
+    pub(crate) fn key_span(&self) -> Option<Range<usize>> {
+        self.beam
+            .as_ref()
+            .map(Spanned::span)
+            .or_else(|| self.modes_file.as_ref().map(Spanned::span))
+    }
+}
+
+/// `beam = { root, axis, bend, length, EI, rho_A, modes }` (see [`Beam`]).
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct BeamFile {
+    /// The clamped end, body frame (m).
+    pub root: Spanned<[f64; 3]>,
+    /// Unit direction root to tip (normalised if within 1e-6 of unit).
+    pub axis: Spanned<[f64; 3]>,
+    /// Unit direction of the deflection, perpendicular to `axis` within 1e-6.
+    pub bend: Spanned<[f64; 3]>,
+    /// Length (m), positive.
+    pub length: Spanned<f64>,
+    /// Bending stiffness (N m²), positive.
+    #[serde(rename = "EI")]
+    pub ei: Spanned<f64>,
+    /// Mass per length (kg/m), positive.
+    #[serde(rename = "rho_A")]
+    pub rho_a: Spanned<f64>,
+    /// Number of cantilever modes, 1 to [`MAX_BEAM_MODES`].
+    pub modes: Spanned<i64>,
+}
+
+/// A modes file (see the module documentation), as written.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ModesFile {
+    /// Natural frequencies with the body frame held (Hz), positive, one per mode.
+    pub frequencies_hz: Spanned<Vec<f64>>,
+    /// Modal damping ratio per mode, `>= 0` (optional).
+    #[serde(default)]
+    pub damping: Option<Spanned<Vec<f64>>>,
+    /// Mass of the structure (kg), positive.
+    pub mass: Spanned<f64>,
+    /// Its centre of mass, body frame (m), default zero.
+    #[serde(default)]
+    pub com: Option<Spanned<[f64; 3]>>,
+    /// Its inertia about its centre of mass, body axes (kg m²), rows.
+    pub inertia: Spanned<[[f64; 3]; 3]>,
+    /// Per mode, `[n_x, n_y, n_z, p_x, p_y, p_z]`: the column of `P` (kg^½ m, kg^½).
+    pub momentum: Spanned<Vec<[f64; 6]>>,
+    /// The nodes where hinges may sit.
+    #[serde(default)]
+    pub node: Vec<Spanned<NodeFile>>,
+}
+
+/// A modes file's `[[node]]`.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct NodeFile {
+    /// Unique name.
+    pub name: Spanned<String>,
+    /// The point, body frame (m).
+    pub at: Spanned<[f64; 3]>,
+    /// Per mode, the point's translation (m/√kg).
+    pub translation: Spanned<Vec<[f64; 3]>>,
+    /// Per mode, the small rotation of the structure there (rad/√kg).
+    pub rotation: Spanned<Vec<[f64; 3]>>,
+}
+
+fn v3(a: &[f64; 3]) -> Vec3 {
+    Vec3::new(a[0], a[1], a[2])
+}
+
+impl ModesFile {
+    /// Number of modes.
+    pub fn modes(&self) -> usize {
+        self.frequencies_hz.get_ref().len()
+    }
+    /// The modal data (`ω = 2π f`).
+    pub fn modal_data(&self) -> ModalData {
+        ModalData {
+            momentum: self
+                .momentum
+                .get_ref()
+                .iter()
+                .map(|c| Force::from_slice(c))
+                .collect(),
+            omega: self
+                .frequencies_hz
+                .get_ref()
+                .iter()
+                .map(|f| 2.0 * std::f64::consts::PI * f)
+                .collect(),
+        }
+    }
+    /// The shapes at node `k`.
+    pub fn node_shape(&self, k: usize) -> NodeShape {
+        let n = self.node[k].get_ref();
+        NodeShape {
+            phi: n.translation.get_ref().iter().map(v3).collect(),
+            psi: n.rotation.get_ref().iter().map(v3).collect(),
+        }
+    }
+    /// The structure's inertia about the body origin.
+    pub fn inertia(&self) -> RigidInertia {
+        let r = self.inertia.get_ref();
+        RigidInertia::from_com(
+            *self.mass.get_ref(),
+            self.com.as_ref().map_or(Vec3::zeros(), |c| v3(c.get_ref())),
+            Mat3::new(
+                r[0][0], r[0][1], r[0][2], r[1][0], r[1][1], r[1][2], r[2][0], r[2][1], r[2][2],
+            ),
+        )
+    }
+
+    /// Checks counts, signs and finiteness; the span and message of the first fault.
+    fn validate(&self) -> Result<(), (Range<usize>, String)> {
+        let m = self.modes();
+        let finite = |x: &[f64]| x.iter().all(|x| x.is_finite());
+        let f = &self.frequencies_hz;
+        if m == 0 {
+            return Err((f.span(), "`frequencies_hz`: at least one mode".into()));
+        }
+        if !f.get_ref().iter().all(|x| x.is_finite() && *x > 0.0) {
+            return Err((f.span(), "`frequencies_hz`: each must be positive".into()));
+        }
+        if let Some(d) = &self.damping {
+            if d.get_ref().len() != m {
+                return Err((d.span(), format!("`damping`: {m} entries expected")));
+            }
+            if !d.get_ref().iter().all(|x| x.is_finite() && *x >= 0.0) {
+                return Err((d.span(), "`damping`: each must be finite and >= 0".into()));
+            }
+        }
+        let mass = *self.mass.get_ref();
+        if !(mass.is_finite() && mass > 0.0) {
+            return Err((self.mass.span(), "`mass` must be positive".into()));
+        }
+        if let Some(c) = &self.com
+            && !finite(c.get_ref())
+        {
+            return Err((c.span(), "`com` is not finite".into()));
+        }
+        if !finite(self.inertia.get_ref().as_flattened()) {
+            return Err((self.inertia.span(), "`inertia` is not finite".into()));
+        }
+        let p = &self.momentum;
+        if p.get_ref().len() != m {
+            return Err((
+                p.span(),
+                format!("`momentum`: {m} rows (one per mode) expected"),
+            ));
+        }
+        if !finite(p.get_ref().as_flattened()) {
+            return Err((p.span(), "`momentum` is not finite".into()));
+        }
+        for (k, n) in self.node.iter().enumerate() {
+            let node = n.get_ref();
+            let name = node.name.get_ref();
+            if self.node[..k]
+                .iter()
+                .any(|o| o.get_ref().name.get_ref() == name)
+            {
+                return Err((node.name.span(), format!("node `{name}` is given twice")));
+            }
+            if !finite(node.at.get_ref()) {
+                return Err((node.at.span(), format!("node `{name}`: `at` is not finite")));
+            }
+            for (key, rows) in [
+                ("translation", &node.translation),
+                ("rotation", &node.rotation),
+            ] {
+                if rows.get_ref().len() != m {
+                    return Err((
+                        rows.span(),
+                        format!("node `{name}`: `{key}`: {m} rows (one per mode) expected"),
+                    ));
+                }
+                if !finite(rows.get_ref().as_flattened()) {
+                    return Err((rows.span(), format!("node `{name}`: `{key}` is not finite")));
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Parses and validates a modes file's text; `origin` names the file in errors.
+pub fn parse_modes_file(text: &str, origin: &Path) -> Result<ModesFile, FileError> {
+    let path = origin.to_path_buf();
+    if text.trim().is_empty() {
+        return Err(FileError::Empty { path });
+    }
+    let located = |e: &toml::de::Error| e.span().map(|s| line_of(text, s.start));
+    if let Err(e) = text.parse::<toml::Table>() {
+        return Err(FileError::Syntax {
+            line: located(&e),
+            message: e.message().trim_end().to_owned(),
+            path,
+        });
+    }
+    let file = toml::from_str::<ModesFile>(text).map_err(|e| FileError::Schema {
+        line: located(&e),
+        message: with_key(&e, schema_message(e.message())),
+        path: path.clone(),
+    })?;
+    file.validate()
+        .map_err(|(span, message)| FileError::Schema {
+            line: Some(line_of(text, span.start)),
+            message,
+            path,
+        })?;
+    Ok(file)
+}
+
+/// A modes file describing `beam`'s modes (its rod mass, `P`, and the shapes at `nodes`, by
+/// name and point), as the reader takes it back: numbers in shortest round-trip form.
+pub fn write_modes_file(beam: &Beam, damping: Option<f64>, nodes: &[(&str, Vec3)]) -> String {
+    let list = |x: &[f64]| {
+        let items: Vec<String> = x.iter().map(|x| format!("{x:?}")).collect();
+        format!("[{}]", items.join(", "))
+    };
+    let m = beam.modes;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "# Modes of an Euler-Bernoulli cantilever (satsim modes file, body frame, SI units):\n\
+         # root {:?}, axis {:?}, bend {:?}, L = {:?} m, EI = {:?} N m^2, rho_A = {:?} kg/m.\n\
+         # Written by satsim_tree::io::write_modes_file.",
+        beam.root.as_slice(),
+        beam.axis.as_slice(),
+        beam.bend.as_slice(),
+        beam.length,
+        beam.ei,
+        beam.rho_a
+    );
+    let hz: Vec<f64> = (1..=m)
+        .map(|k| beam.omega(k) / (2.0 * std::f64::consts::PI))
+        .collect();
+    let _ = writeln!(s, "frequencies_hz = {}", list(&hz));
+    if let Some(z) = damping {
+        let _ = writeln!(s, "damping = {}", list(&vec![z; m]));
+    }
+    let mass = beam.mass();
+    let com = beam.root + beam.axis * (0.5 * beam.length);
+    let ic = (Mat3::identity() - beam.axis * beam.axis.transpose())
+        * (mass * beam.length * beam.length / 12.0);
+    let _ = writeln!(s, "mass = {mass:?}");
+    let _ = writeln!(s, "com = {}", list(com.as_slice()));
+    let rows: Vec<String> = (0..3)
+        .map(|r| list(&[ic[(r, 0)], ic[(r, 1)], ic[(r, 2)]]))
+        .collect();
+    let _ = writeln!(s, "inertia = [{}]", rows.join(", "));
+    let _ = writeln!(s, "# per mode: [n_x, n_y, n_z, p_x, p_y, p_z]");
+    let p: Vec<String> = beam
+        .momentum_coefficients()
+        .iter()
+        .map(|c| format!("  {},", list(&c.to_array())))
+        .collect();
+    let _ = writeln!(s, "momentum = [\n{}\n]", p.join("\n"));
+    for (name, at) in nodes {
+        let shape = beam.node(at);
+        let rows = |x: &[Vec3]| {
+            let r: Vec<String> = x.iter().map(|v| list(v.as_slice())).collect();
+            format!("[{}]", r.join(", "))
+        };
+        let _ = writeln!(
+            s,
+            "\n[[node]]\nname = {name:?}\nat = {}\ntranslation = {}\nrotation = {}",
+            list(at.as_slice()),
+            rows(&shape.phi),
+            rows(&shape.psi)
+        );
+    }
+    s
+}
+
+/// The beam of `b`, each value checked at its key; `axis` and `bend` normalised when within
+/// [`UNIT_NORM_TOLERANCE`] of unit.
+fn beam_of(
+    b: &BeamFile,
+    schema: &dyn Fn(Range<usize>, String) -> FileError,
+) -> Result<Beam, FileError> {
+    let vec = |key: &str, x: &Spanned<[f64; 3]>| {
+        if x.get_ref().iter().all(|x| x.is_finite()) {
+            Ok(v3(x.get_ref()))
+        } else {
+            Err(schema(x.span(), format!("beam.{key} is not finite")))
+        }
+    };
+    let unit = |key: &str, x: &Spanned<[f64; 3]>| {
+        let v = vec(key, x)?;
+        let n = v.norm();
+        if (n - 1.0).abs() > UNIT_NORM_TOLERANCE {
+            return Err(schema(
+                x.span(),
+                format!(
+                    "beam.{key} {:?} must be a unit vector (norm {n}; within {UNIT_NORM_TOLERANCE} of 1 it is normalised)",
+                    x.get_ref()
+                ),
+            ));
+        }
+        Ok(v / n)
+    };
+    let root = vec("root", &b.root)?;
+    let axis = unit("axis", &b.axis)?;
+    let bend = unit("bend", &b.bend)?;
+    let dot = axis.dot(&bend);
+    if dot.abs() > UNIT_NORM_TOLERANCE {
+        return Err(schema(
+            b.bend.span(),
+            format!(
+                "beam.bend must be perpendicular to beam.axis (axis · bend = {dot}, tolerance {UNIT_NORM_TOLERANCE})"
+            ),
+        ));
+    }
+    let positive = |key: &str, x: &Spanned<f64>| {
+        let v = *x.get_ref();
+        if v.is_finite() && v > 0.0 {
+            Ok(v)
+        } else {
+            Err(schema(
+                x.span(),
+                format!("beam.{key} = {v} must be positive"),
+            ))
+        }
+    };
+    let length = positive("length", &b.length)?;
+    let ei = positive("EI", &b.ei)?;
+    let rho_a = positive("rho_A", &b.rho_a)?;
+    let modes = *b.modes.get_ref();
+    if !(1..=MAX_BEAM_MODES as i64).contains(&modes) {
+        return Err(schema(
+            b.modes.span(),
+            format!("beam.modes = {modes}: 1 to {MAX_BEAM_MODES} modes are supported"),
+        ));
+    }
+    Ok(Beam {
+        root,
+        axis,
+        bend,
+        length,
+        ei,
+        rho_a,
+        modes: modes as usize,
+    })
+}
+
+/// Adds a structure's inertia `add` (body frame) to `body`'s.
+fn add_inertia(body: &mut Body, add: RigidInertia) {
+    let sum = RigidInertia::from_com(body.mass, body.com, body.inertia) + add;
+    let com = sum.h / sum.mass;
+    let cx = skew(&com);
+    body.mass = sum.mass;
+    body.com = com;
+    let ic = sum.inertia + cx * cx * sum.mass;
+    body.inertia = (ic + ic.transpose()) * 0.5;
+}
+
+/// The body a [`FlexError`] is about.
+fn body_of(e: &FlexError) -> Option<&str> {
+    match e {
+        FlexError::Model(_) => None,
+        FlexError::UnknownBody(b) | FlexError::Duplicate(b) | FlexError::NotPositiveDefinite(b) => {
+            Some(b)
+        }
+        FlexError::Invalid { body, .. } | FlexError::MissingNode { body, .. } => Some(body),
+    }
+}
+
+/// Parses a model file's text whose bodies may carry `[body.flexible]` into a [`FlexModel`].
+/// `origin` names the file in errors; a `modes_file` is read relative to its folder.
+pub fn parse_flex_model(text: &str, origin: &Path) -> Result<FlexModel, FileError> {
+    let file = parse_model_file(text, origin)?;
+    let mut builder = file.builder().map_err(|e| e.in_file(text, origin))?;
+    let mut flex = Vec::new();
+    let mut per_mode_damping: Vec<(String, Vec<f64>)> = Vec::new();
+    for b in &file.body {
+        let body = b.get_ref();
+        let Some(f) = &body.flexible else { continue };
+        let name = body.name.get_ref();
+        let spec = f.get_ref();
+        let schema = |span: Range<usize>, message: String| {
+            SpannedError::Schema {
+                span: Some(span),
+                message: format!("body `{name}`: {message}"),
+            }
+            .in_file(text, origin)
+        };
+        let damping = match &spec.damping {
+            Some(d) => {
+                let z = *d.get_ref();
+                if !(z.is_finite() && z >= 0.0) {
+                    return Err(schema(d.span(), format!("damping = {z} must be >= 0")));
+                }
+                Some(z)
+            }
+            None => None,
+        };
+        let modes = match (&spec.beam, &spec.modes_file) {
+            (Some(_), Some(m)) => {
+                return Err(schema(
+                    m.span(),
+                    "give `beam` or `modes_file`, not both".into(),
+                ));
+            }
+            (None, None) => {
+                return Err(schema(
+                    f.span(),
+                    "[body.flexible] needs `beam` or `modes_file`".into(),
+                ));
+            }
+            (Some(beam), None) => Modes::Beam(beam_of(beam.get_ref(), &schema)?),
+            (None, Some(m)) => {
+                let path = origin.parent().unwrap_or(Path::new("")).join(m.get_ref());
+                let modes = parse_modes_file(&read_text(&path)?, &path)?;
+                if let (Some(_), Some(d)) = (&modes.damping, &spec.damping) {
+                    return Err(schema(
+                        d.span(),
+                        "damping is given both here and per mode in the modes file".into(),
+                    ));
+                }
+                if let Some(zeta) = &modes.damping {
+                    per_mode_damping.push((name.clone(), zeta.get_ref().clone()));
+                }
+                let entry = builder
+                    .bodies_mut()
+                    .iter_mut()
+                    .find(|e| &e.name == name)
+                    .expect("the reader pushed every body");
+                add_inertia(entry, modes.inertia());
+                let mut nodes = Vec::new();
+                for h in file.hinge.iter().map(|h| h.get_ref()) {
+                    if h.parent.get_ref() != name {
+                        continue;
+                    }
+                    let at = h.at.as_ref().map_or(Vec3::zeros(), |a| v3(a.get_ref()));
+                    let Some(k) = modes.node.iter().position(|n| {
+                        (v3(n.get_ref().at.get_ref()) - at).norm() <= MODES_FILE_NODE_TOLERANCE
+                    }) else {
+                        let names: Vec<String> = modes
+                            .node
+                            .iter()
+                            .map(|n| {
+                                let n = n.get_ref();
+                                format!("`{}` at {:?}", n.name.get_ref(), n.at.get_ref())
+                            })
+                            .collect();
+                        return Err(SpannedError::Schema {
+                            span: Some(h.at.as_ref().map_or(h.name.span(), Spanned::span)),
+                            message: format!(
+                                "hinge `{}`: its point {:?} on the flexible body `{name}` is none of the nodes of {} (within {MODES_FILE_NODE_TOLERANCE} m): {}",
+                                h.name.get_ref(),
+                                at.as_slice(),
+                                path.display(),
+                                if names.is_empty() { "none".to_string() } else { names.join(", ") }
+                            ),
+                        }
+                        .in_file(text, origin));
+                    };
+                    nodes.push((h.name.get_ref().clone(), modes.node_shape(k)));
+                }
+                Modes::Given {
+                    data: modes.modal_data(),
+                    nodes,
+                }
+            }
+        };
+        flex.push(Flexible {
+            body: name.clone(),
+            modes,
+            damping: damping.unwrap_or(0.0),
+            stiffening: spec.stiffening.as_ref().is_none_or(|s| *s.get_ref()),
+        });
+    }
+    let mut model = FlexModel::build(builder, &flex).map_err(|e| {
+        match e {
+            FlexError::Model(error) => SpannedError::Model {
+                span: file.locate(&error),
+                error,
+            },
+            other => {
+                let span = body_of(&other).and_then(|name| {
+                    file.body
+                        .iter()
+                        .map(|b| b.get_ref())
+                        .find(|b| b.name.get_ref() == name)
+                        .map(|b| {
+                            b.flexible
+                                .as_ref()
+                                .and_then(|f| f.get_ref().key_span())
+                                .unwrap_or_else(|| b.name.span())
+                        })
+                });
+                SpannedError::Schema {
+                    span,
+                    message: other.to_string(),
+                }
+            }
+        }
+        .in_file(text, origin)
+    })?;
+    for (name, zeta) in per_mode_damping {
+        let i = model.rigid.body_index(&name).expect("a flexible body");
+        let o = model.offset[i];
+        for (k, z) in zeta.iter().enumerate() {
+            model.damping[o + k] = 2.0 * z * model.stiffness[o + k].sqrt();
+        }
+    }
+    Ok(model)
+}
+
+/// Reads the model file at `path`, flexible bodies included.
+pub fn read_flex_model(path: impl AsRef<Path>) -> Result<FlexModel, FileError> {
+    let path = path.as_ref();
+    let text = read_text(path)?;
+    parse_flex_model(&text, path)
+}

@@ -1,0 +1,390 @@
+//! The model file's `[body.flexible]` and the modes file: read into the same `FlexModel` as
+//! the API builds, every bad value reported at its file and line, the rigid reader refusing
+//! flexible bodies, and the beam's modes written as a modes file giving the same dynamics.
+
+use satsim_tree::flexible::{self, Beam, FlexData, FlexModel, Flexible, Modes};
+use satsim_tree::io::{parse_flex_model, parse_model, write_modes_file};
+use satsim_tree::spatial::{Mat3, Vec3};
+use satsim_tree::{BaseKind, Body, Hinge, ModelBuilder};
+use std::path::{Path, PathBuf};
+
+/// Line numbers matter: the text starts on line 1.
+const MODEL: &str = r#"[[body]]
+name = "bus"
+mass = 100.0
+inertia = [[10, 0, 0], [0, 10, 0], [0, 0, 10]]
+
+[[body]]
+name = "panel"
+mass = 0.0
+[body.flexible]
+beam = { root = [0.0, 0.0, 0.0], axis = [0.0, 1.0, 0.0], bend = [0.0, 0.0, 1.0], length = 2.0, EI = 500.0, rho_A = 5.0, modes = 3 }
+damping = 0.005
+stiffening = true
+
+[[body]]
+name = "tip"
+mass = 1.0
+inertia = [[0.01, 0, 0], [0, 0.01, 0], [0, 0, 0.01]]
+
+[[hinge]]
+name = "h1"
+parent = "bus"
+child = "panel"
+axis = [1.0, 0.0, 0.0]
+at = [0.0, 0.5, 0.0]
+
+[[hinge]]
+name = "h2"
+parent = "panel"
+child = "tip"
+axis = [1.0, 0.0, 0.0]
+at = [0.0, 2.0, 0.0]
+"#;
+
+fn contract_beam() -> Beam {
+    Beam {
+        root: Vec3::zeros(),
+        axis: Vec3::y(),
+        bend: Vec3::z(),
+        length: 2.0,
+        ei: 500.0,
+        rho_a: 5.0,
+        modes: 3,
+    }
+}
+
+fn builder() -> ModelBuilder {
+    ModelBuilder::new(BaseKind::Free)
+        .body(Body::new("bus", 100.0, Mat3::identity() * 10.0))
+        .body(Body::new("panel", 0.0, Mat3::zeros()))
+        .body(Body::new("tip", 1.0, Mat3::identity() * 0.01))
+        .hinge(Hinge::revolute("h1", "bus", "panel", Vec3::x()).at(Vec3::new(0.0, 0.5, 0.0)))
+        .hinge(Hinge::revolute("h2", "panel", "tip", Vec3::x()).at(Vec3::new(0.0, 2.0, 0.0)))
+}
+
+#[test]
+fn the_contract_beam_reads_as_the_api_builds_it() {
+    let read = parse_flex_model(MODEL, Path::new("flex.toml")).unwrap();
+    let flex = [Flexible {
+        body: "panel".into(),
+        modes: Modes::Beam(contract_beam()),
+        damping: 0.005,
+        stiffening: true,
+    }];
+    let built = FlexModel::build(builder(), &flex).unwrap();
+    assert_eq!(read, built);
+    // Defaults: no damping, stiffening on.
+    let bare = MODEL.replace("damping = 0.005\nstiffening = true\n", "");
+    let read = parse_flex_model(&bare, Path::new("flex.toml")).unwrap();
+    let flex = [Flexible {
+        damping: 0.0,
+        ..flex[0].clone()
+    }];
+    assert_eq!(read, FlexModel::build(builder(), &flex).unwrap());
+    // An axis within 1e-6 of unit is normalised.
+    let near = MODEL.replace(
+        "axis = [0.0, 1.0, 0.0], bend",
+        "axis = [0.0, 1.0000005, 0.0], bend",
+    );
+    assert_eq!(
+        parse_flex_model(&near, Path::new("flex.toml")).unwrap(),
+        built
+    );
+}
+
+#[test]
+fn the_rigid_reader_refuses_flexible_bodies_at_their_line() {
+    let err = parse_model(MODEL, Path::new("flex.toml"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.starts_with(
+            "flex.toml:10: body `panel`: flexible bodies are read only by the flexible reader"
+        ),
+        "{err}"
+    );
+    assert!(
+        err.contains("`satsim run` do not support them yet"),
+        "{err}"
+    );
+}
+
+fn error_of(text: &str) -> String {
+    match parse_flex_model(text, Path::new("flex.toml")) {
+        Ok(_) => panic!("accepted:\n{text}"),
+        Err(e) => e.to_string(),
+    }
+}
+
+#[test]
+fn bad_flexible_values_name_file_and_line() {
+    let cases: [(&str, &str, &str); 11] = [
+        (
+            "EI = 500.0",
+            "EI = -500.0",
+            "flex.toml:10: body `panel`: beam.EI = -500 must be positive",
+        ),
+        (
+            "rho_A = 5.0",
+            "rho_A = 0.0",
+            "flex.toml:10: body `panel`: beam.rho_A = 0 must be positive",
+        ),
+        (
+            "length = 2.0",
+            "length = -2.0",
+            "flex.toml:10: body `panel`: beam.length = -2 must be positive",
+        ),
+        (
+            "bend = [0.0, 0.0, 1.0]",
+            "bend = [0.0, 0.6, 0.8]",
+            "flex.toml:10: body `panel`: beam.bend must be perpendicular to beam.axis",
+        ),
+        (
+            "axis = [0.0, 1.0, 0.0], bend",
+            "axis = [0.0, 2.0, 0.0], bend",
+            "flex.toml:10: body `panel`: beam.axis [0.0, 2.0, 0.0] must be a unit vector",
+        ),
+        (
+            "modes = 3",
+            "modes = 0",
+            "flex.toml:10: body `panel`: beam.modes = 0: 1 to 12 modes are supported",
+        ),
+        (
+            "modes = 3",
+            "modes = 13",
+            "flex.toml:10: body `panel`: beam.modes = 13: 1 to 12 modes are supported",
+        ),
+        (
+            "damping = 0.005",
+            "damping = -0.1",
+            "flex.toml:11: body `panel`: damping = -0.1 must be >= 0",
+        ),
+        (
+            "stiffening = true",
+            "stiffening = true\nmodes_file = \"m.toml\"",
+            "flex.toml:13: body `panel`: give `beam` or `modes_file`, not both",
+        ),
+        ("stiffening = true", "stiffening = 1", "flex.toml:12: "),
+        ("EI = 500.0", "EI = 500.0, ei = 1.0", "flex.toml:10: "),
+    ];
+    for (from, to, expected) in cases {
+        assert!(MODEL.contains(from));
+        let err = error_of(&MODEL.replacen(from, to, 1));
+        assert!(err.starts_with(expected), "{to}: {err}");
+    }
+    // Neither `beam` nor `modes_file`.
+    let beam_line = MODEL.lines().nth(9).unwrap();
+    let err = error_of(&MODEL.replace(beam_line, "# no beam"));
+    // At the table's header.
+    assert!(
+        err.starts_with("flex.toml:9: body `panel`: [body.flexible] needs `beam` or `modes_file`"),
+        "{err}"
+    );
+}
+
+/// A scratch folder of this test process.
+fn scratch(tag: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("satsim_flex_io_{}_{tag}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn example_path() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/modes/panel_beam_modes.toml")
+}
+
+fn example_nodes() -> [(&'static str, Vec3); 3] {
+    [
+        ("root", Vec3::zeros()),
+        ("middle", Vec3::new(0.0, 1.0, 0.0)),
+        ("tip", Vec3::new(0.0, 2.0, 0.0)),
+    ]
+}
+
+/// The ABA's and CRBA's results of two models agree to `1e-12` of their scale at a state
+/// away from symmetry.
+fn same_dynamics(a: &FlexModel, b: &FlexModel) {
+    assert_eq!((a.nq(), a.nv()), (b.nq(), b.nv()));
+    let mut q = a.neutral();
+    let nq = a.rigid().nq();
+    q[7..nq].copy_from_slice(&[0.3, -0.2]);
+    for (k, x) in q[nq..].iter_mut().enumerate() {
+        *x = 0.01 * (1.0 + k as f64).cos();
+    }
+    let v: Vec<f64> = (0..a.nv()).map(|k| 0.2 * (1.0 + k as f64).sin()).collect();
+    let tau: Vec<f64> = (0..a.nv()).map(|k| (2.0 + k as f64).cos()).collect();
+    let (mut da, mut db) = (FlexData::new(a), FlexData::new(b));
+    let xa = flexible::aba(a, &mut da, &q, &v, &tau, None)
+        .unwrap()
+        .clone();
+    let xb = flexible::aba(b, &mut db, &q, &v, &tau, None)
+        .unwrap()
+        .clone();
+    let scale = xa.amax();
+    assert!((&xa - &xb).amax() <= 1e-12 * scale, "{xa} vs {xb}");
+    let ma = flexible::crba(a, &mut da, &q).unwrap().clone();
+    let mb = flexible::crba(b, &mut db, &q).unwrap().clone();
+    assert!((&ma - &mb).amax() <= 1e-12 * ma.amax());
+}
+
+#[test]
+fn the_beam_as_a_modes_file_gives_the_same_dynamics() {
+    let written = write_modes_file(&contract_beam(), None, &example_nodes());
+    if std::env::var_os("SATSIM_WRITE_EXAMPLES").is_some() {
+        std::fs::write(example_path(), &written).unwrap();
+    }
+    let committed = std::fs::read_to_string(example_path()).unwrap();
+    assert_eq!(
+        written, committed,
+        "examples/modes/panel_beam_modes.toml is stale"
+    );
+
+    // Modes files carry no stiffening: compare with the beam's stiffening off.
+    let beam = MODEL.replace("stiffening = true", "stiffening = false");
+    let a = parse_flex_model(&beam, Path::new("flex.toml")).unwrap();
+    let beam_line = MODEL.lines().nth(9).unwrap();
+    let given = beam.replace(beam_line, "modes_file = \"modes/panel_beam_modes.toml\"");
+    let origin = example_path()
+        .parent()
+        .unwrap()
+        .parent()
+        .unwrap()
+        .join("flex.toml");
+    let b = parse_flex_model(&given, &origin).unwrap();
+    same_dynamics(&a, &b);
+    assert_eq!(a.damping().len(), 3);
+    for (x, y) in a.damping().iter().zip(b.damping()) {
+        assert!((x - y).abs() <= 1e-12 * x, "{x} vs {y}");
+    }
+
+    // Per-mode damping from the file.
+    let dir = scratch("damped");
+    let damped = write_modes_file(&contract_beam(), Some(0.005), &example_nodes());
+    std::fs::write(dir.join("m.toml"), damped).unwrap();
+    let given = beam
+        .replace(beam_line, "modes_file = \"m.toml\"")
+        .replace("damping = 0.005\n", "");
+    let c = parse_flex_model(&given, &dir.join("flex.toml")).unwrap();
+    same_dynamics(&a, &c);
+    for (x, y) in a.damping().iter().zip(c.damping()) {
+        assert!((x - y).abs() <= 1e-12 * x, "{x} vs {y}");
+    }
+    // Both the body's and the file's damping: refused at the body's key.
+    let both = beam.replace(beam_line, "modes_file = \"m.toml\"");
+    let err = parse_flex_model(&both, &dir.join("flex.toml"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("flex.toml:11: body `panel`: damping is given both"),
+        "{err}"
+    );
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn bad_modes_files_name_their_file_and_line() {
+    let dir = scratch("bad");
+    let good = write_modes_file(&contract_beam(), None, &example_nodes());
+    let beam_line = MODEL.lines().nth(9).unwrap();
+    let model = MODEL
+        .replace(beam_line, "modes_file = \"m.toml\"")
+        .replace("damping = 0.005\n", "");
+    let origin = dir.join("flex.toml");
+    let m = dir.join("m.toml");
+    let line_of =
+        |text: &str, key: &str| text.lines().position(|l| l.starts_with(key)).unwrap() + 1;
+    let read = |text: &str| {
+        std::fs::write(&m, text).unwrap();
+        parse_flex_model(&model, &origin).unwrap_err().to_string()
+    };
+    let path = m.display().to_string();
+    // The good file reads.
+    std::fs::write(&m, &good).unwrap();
+    parse_flex_model(&model, &origin).unwrap();
+    // `key = value` in place of the line starting with `key = `.
+    let set = |key: &str, value: &str| {
+        let line = good
+            .lines()
+            .find(|l| l.starts_with(&format!("{key} = ")))
+            .unwrap();
+        good.replacen(line, &format!("{key} = {value}"), 1)
+    };
+    for (text, key, expected) in [
+        (
+            set("frequencies_hz", "[]"),
+            "frequencies_hz",
+            "`frequencies_hz`: at least one mode",
+        ),
+        (
+            set("frequencies_hz", "[-1.0, 2.0, 3.0]"),
+            "frequencies_hz",
+            "`frequencies_hz`: each must be positive",
+        ),
+        (set("mass", "0.0"), "mass", "`mass` must be positive"),
+        (
+            good.replacen("mass = ", "damping = [0.1]\nmass = ", 1),
+            "damping",
+            "`damping`: 3 entries expected",
+        ),
+    ] {
+        let err = read(&text);
+        let line = line_of(&text, key);
+        assert!(
+            err.starts_with(&format!("{path}:{line}: {expected}")),
+            "{err}"
+        );
+    }
+    let cases = [
+        (
+            "momentum = [\n",
+            "momentum = [\n  [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],\n",
+            "momentum",
+            "`momentum`: 3 rows (one per mode) expected",
+        ),
+        (
+            "translation = [",
+            "translation = [[0.0, 0.0, 0.0], ",
+            "translation",
+            "node `root`: `translation`: 3 rows (one per mode) expected",
+        ),
+    ];
+    for (from, to, key, expected) in cases {
+        let text = good.replacen(from, to, 1);
+        let err = read(&text);
+        let line = line_of(&text, key);
+        assert!(
+            err.starts_with(&format!("{path}:{line}: {expected}")),
+            "{err}"
+        );
+    }
+    // Syntax and schema errors.
+    let err = read(&good.replacen("mass = ", "mass = = ", 1));
+    assert!(
+        err.starts_with(&format!("{path}:{}: syntax error", line_of(&good, "mass"))),
+        "{err}"
+    );
+    let err = read(&good.replacen("mass = ", "weight = 1.0\nmass = ", 1));
+    assert!(
+        err.starts_with(&format!("{path}:")) && err.contains("unknown key `weight`"),
+        "{err}"
+    );
+    // A child hinge at no node: at the hinge's `at` line of the model file.
+    let err = read(
+        &good
+            .replace("name = \"tip\"", "name = \"end\"")
+            .replace("at = [0.0, 2.0, 0.0]", "at = [0.0, 1.9, 0.0]"),
+    );
+    assert!(
+        err.starts_with(&format!("{}:30: hinge `h2`: its point [0.0, 2.0, 0.0] on the flexible body `panel` is none of the nodes", origin.display())),
+        "{err}"
+    );
+    // A missing modes file.
+    std::fs::remove_file(&m).unwrap();
+    let err = parse_flex_model(&model, &origin).unwrap_err().to_string();
+    assert!(
+        err.starts_with(&format!("{path}: cannot read the file")),
+        "{err}"
+    );
+    std::fs::remove_dir_all(dir).unwrap();
+}
