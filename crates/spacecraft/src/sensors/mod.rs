@@ -406,3 +406,74 @@ impl Effect for Sensors {
         out.extend(self.readings(ctx));
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn pose(attitude: UnitQuaternion<f64>, omega: Vec3) -> Pose<'static> {
+        Pose {
+            t: 0.0,
+            attitude,
+            omega,
+            rotation: None,
+            orbit: None,
+        }
+    }
+
+    #[test]
+    fn a_samples_draws_are_standard_normal_and_depend_on_its_index_alone() {
+        let noise = Noise::new(42, 3);
+        let z: Vec<f64> = (0..10_000).map(|k| noise.sample(k).normal(2.0)).collect();
+        let n = z.len() as f64;
+        let mean = z.iter().sum::<f64>() / n;
+        let var = z.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0);
+        assert!(mean.abs() < 4.0 * 2.0 / n.sqrt(), "mean {mean}");
+        assert!((var.sqrt() / 2.0 - 1.0).abs() < 0.03, "std {}", var.sqrt());
+        // Sample 7's draws whatever was drawn before; another seed or stream, other draws.
+        let mut d = noise.sample(7);
+        let first = d.normal(1.0);
+        assert_eq!(noise.sample(7).normal(1.0), first);
+        assert_ne!(Noise::new(43, 3).sample(7).normal(1.0), first);
+        assert_ne!(Noise::new(42, 4).sample(7).normal(1.0), first);
+        assert_eq!(noise.sample(7).normal(0.0), 0.0);
+    }
+
+    #[test]
+    fn a_star_tracker_without_noise_gives_the_attitude_with_w_non_negative() {
+        let st = StarTracker::from_arcsec([0.0; 3]);
+        let q = UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(-0.5, 0.5, -0.5, 0.5));
+        let mut out = [0.0; 4];
+        st.read(
+            &pose(q, Vec3::zeros()),
+            &mut Noise::new(1, 0).sample(0),
+            &mut out,
+        );
+        assert_eq!(out, [0.5, -0.5, 0.5, -0.5]);
+    }
+
+    #[test]
+    fn a_gyro_reads_rate_plus_bias_and_its_bias_walks_by_the_stated_step() {
+        let mut g = Gyro::new(0.0, 1e-3, Vec3::new(1e-3, 0.0, 0.0));
+        let omega = Vec3::new(0.1, 0.2, 0.3);
+        let mut out = [0.0; 4];
+        let noise = Noise::new(5, 0);
+        let mut d = noise.sample(0);
+        g.read(
+            &pose(UnitQuaternion::identity(), omega),
+            0.25,
+            &mut d,
+            &mut out,
+        );
+        assert_eq!(&out[..3], (omega + Vec3::new(1e-3, 0.0, 0.0)).as_slice());
+        let b0 = g.bias;
+        g.walk(0.25, &mut d);
+        // The step is the sample's next three draws, scaled by bias_walk √period.
+        let mut again = noise.sample(0);
+        again.vec3([0.0; 3]);
+        let step = again.vec3([1e-3 * 0.5; 3]);
+        assert_eq!(g.bias, b0 + step);
+        assert_eq!(g.white_std(0.25), 0.0);
+        assert_eq!(Gyro::new(1e-4, 0.0, Vec3::zeros()).white_std(0.25), 2e-4);
+    }
+}
