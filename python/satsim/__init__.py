@@ -480,7 +480,7 @@ class Simulation:
         sim.t                                   # s
         sim.columns                             # the trajectory's columns (trajectory.csv's)
         sim.row()                               # dict: those columns at sim.t (the truth)
-        sim.inputs                              # e.g. "torque_h4", "wheel_x"
+        sim.inputs                              # e.g. "torque_h4", "wheel_x", "thrust_roll"
         sim.set_inputs({"wheel_x": 0.01})       # held until changed (zero-order hold)
         events = sim.advance(0.1)               # [(t, effect, text)] that fired on the way
         sim.measure()                           # every sensor's latest reading
@@ -499,8 +499,12 @@ class Simulation:
     hinge, a torque added to the initial state's constant ``torque`` (held, it acts exactly
     as that constant would); and ``wheel_<name>`` for each reaction wheel, a motor command
     (N m) added to the wheel's command (the attitude controller's, or its ``torque`` key)
-    before its torque and speed limits. Inputs are held until changed and added to what the
-    enabled effects apply.
+    before its torque and speed limits. Beyond the linear model's: ``dipole_<torquer>`` for
+    each magnetic torquer (A m², added to its command before its clamp) and
+    ``thrust_<thruster>`` for each thruster, a duty cycle in [0, 1] added to its ``duty`` key
+    and latched at the first period start at or after the time it is set (so a loop advancing
+    by whole periods commands each period from its start). Inputs are held until changed and
+    added to what the enabled effects apply.
 
     Rows are recorded as in a run, on the scene's ``output.every`` grid (continued past the
     scene's ``duration`` when you step beyond it). With ``out=DIR`` they are streamed to
@@ -509,7 +513,7 @@ class Simulation:
     on) beside it.
 
     Bad input raises :class:`SatsimError` and changes nothing: an unknown input name, a
-    non-finite input value, a ``dt`` that is not a finite number > 0. A failed integration
+    non-finite input value, a thruster's duty outside [0, 1], a ``dt`` that is not a finite number > 0. A failed integration
     raises :class:`SatsimError`; the simulation cannot go on after it.
 
     ``measure()`` returns every sensor's latest reading (the scene's ``[sensors]``: gyros,
@@ -547,6 +551,12 @@ class Simulation:
     def columns(self) -> List[str]:
         """The trajectory's column names (``satsim run``'s ``trajectory.csv`` header)."""
         return list(self._columns)
+
+    @property
+    def t_end(self) -> float:
+        """The scene's end, its start plus ``duration`` (s): where ``satsim.run`` stops.
+        :meth:`advance` may go on past it (the rows continue on the same grid)."""
+        return float(self._native.t_end)
 
     @property
     def inputs(self) -> List[str]:

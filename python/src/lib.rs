@@ -550,6 +550,11 @@ impl NativeSimulation {
     fn columns(&self) -> PyResult<Vec<String>> {
         Ok(self.lock()?.columns().to_vec())
     }
+    /// The scene's end, `t0 + duration` (s): where `satsim run` stops.
+    #[getter]
+    fn t_end(&self) -> PyResult<f64> {
+        Ok(self.lock()?.stepping().output_grid().t_end)
+    }
     /// The input names.
     #[getter]
     fn inputs(&self) -> PyResult<Vec<String>> {

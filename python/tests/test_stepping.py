@@ -136,3 +136,45 @@ def test_a_bad_scene_or_period_is_an_error_naming_it():
         satsim.Simulation(deploy_text(3.0, "period = 0.0"), base_dir=SCENES)
     with pytest.raises(satsim.SatsimError):
         satsim.Simulation(SCENES / "no_such_scene.toml")
+
+
+THRUSTER_SCENE = """
+duration = 1.0
+[model]
+[[model.body]]
+name = "bus"
+mass = 50.0
+inertia = [[4.0, 0.0, 0.0], [0.0, 5.0, 0.0], [0.0, 0.0, 6.0]]
+[integrator]
+method = "rk4"
+step = 0.01
+[output]
+every = 0.1
+plots = false
+view = false
+[effects.thrusters]
+period = 0.1
+[[effects.thrusters.thruster]]
+name = "roll"
+body = "bus"
+at = [0.0, 0.5, 0.0]
+direction = [0.0, 0.0, 1.0]
+thrust = 2.0
+duty = DUTY
+"""
+
+
+def test_a_thruster_duty_set_from_python_acts_as_the_same_constant_duty():
+    # r x F = (0.5 m) y x (2 N) z = (1, 0, 0) N m: h_x grows by 1 N m per second fired.
+    run = satsim.run(THRUSTER_SCENE.replace("DUTY", "0.3"))
+    with satsim.Simulation(THRUSTER_SCENE.replace("DUTY", "0.0")) as sim:
+        assert sim.inputs == ["thrust_roll"]
+        sim.set_inputs({"thrust_roll": 0.3})
+        for _ in range(10):
+            sim.advance(0.1)
+        r = sim.trajectory()
+        assert r.columns == run.columns
+        assert np.array_equal(bits(r.data), bits(run.data))
+        assert abs(sim.row()["h_x"] - 10 * 0.3 * 0.1) < 1e-14
+        with pytest.raises(satsim.SatsimError, match="thrust_roll"):
+            sim.set_inputs({"thrust_roll": 1.5})

@@ -57,6 +57,7 @@ pub mod data;
 pub mod energy;
 pub mod error;
 pub mod facet;
+pub mod flexible;
 pub mod forward_dynamics;
 pub mod impulse;
 #[cfg(feature = "files")]

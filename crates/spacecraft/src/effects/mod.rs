@@ -40,6 +40,7 @@ pub mod registry;
 pub mod sampling;
 pub mod section;
 pub mod solar_radiation;
+pub mod thrusters;
 
 pub use attitude_control::{AttitudeControl, Target};
 pub use bdot::Bdot;
@@ -56,6 +57,7 @@ pub use registry::{AnyEffect, EffectSet, Registry, SceneEffect, needs_met};
 pub use sampling::Sampling;
 pub use section::{SceneText, Section};
 pub use solar_radiation::SolarRadiation;
+pub use thrusters::{ThrustMode, Thruster, Thrusters};
 
 use nalgebra::UnitQuaternion;
 use satsim_integrate::{EventAction, EventDirection, SystemError};
@@ -516,6 +518,15 @@ pub trait Effect: Send {
     fn commands_dipoles(&self) -> bool {
         false
     }
+    /// Thrusters it owns (the stepping API's `thrust_<name>` inputs, in this order).
+    fn thrusters(&self) -> Vec<Thruster> {
+        Vec::new()
+    }
+    /// Holds the stepping API's duty `duty` (in [0, 1]) for its thruster `j` (in
+    /// [`Effect::thrusters`] order), set at time `t`: added to the thruster's constant duty
+    /// from the first period start at or after `t` (a period start at `t` already latched
+    /// is latched again).
+    fn hold_thrust_input(&mut self, _j: usize, _duty: f64, _t: f64) {}
     /// Effects (by [`Effect::name`]) that must run before this one in every evaluation, e.g.
     /// because it reads what they write into [`Forces`]. Each must be enabled: a missing one
     /// or a cycle is a setup error.

@@ -22,7 +22,7 @@
 use super::Section;
 use super::{
     AttitudeControl, Bdot, Drag, Effect, GravityGradient, HingeControl, HingeSprings, HingeStops,
-    Magnetic, ReactionWheels, SolarRadiation,
+    Magnetic, ReactionWheels, SolarRadiation, Thrusters,
 };
 
 use satsim_tree::io::FileError;
@@ -241,7 +241,8 @@ impl Registry {
             .register::<SolarRadiation>()
             .register::<Drag>()
             .register::<Bdot>()
-            .register::<Magnetic>();
+            .register::<Magnetic>()
+            .register::<Thrusters>();
         r
     }
     /// Registers `E` under [`SceneEffect::SECTION`], replacing an effect registered under

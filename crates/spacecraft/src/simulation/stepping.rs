@@ -21,11 +21,15 @@
 //!   [`Simulation::constant_torques_mut`]): held `u` acts exactly as the same constant in
 //!   the initial state; and the rotors' hinge names (`wheel_<name>`), a motor command added
 //!   to the wheel's command (the controller's, or its constant `torque`) before its torque
-//!   and speed limits; and `dipole_<torquer>` for each magnetic torquer, a dipole (A m²)
-//!   added to its command before its clamp. Held until changed (zero-order hold). An event whose function the
+//!   and speed limits; `dipole_<torquer>` for each magnetic torquer, a dipole (A m²)
+//!   added to its command before its clamp; and `thrust_<thruster>` for each thruster, a
+//!   duty in [0, 1] added to its constant `duty` and latched at the first period start at
+//!   or after the current time (set at a period start, it acts from that start).
+//!   Held until changed (zero-order hold). An event whose function the
 //!   change moves across zero (a wheel held at its speed limit whose command drops) is
 //!   handled at once and reported by the next `advance`.
-//! - **Errors**: an unknown input name, a non-finite value, a `dt` that is not a finite
+//! - **Errors**: an unknown input name, a non-finite value, a thruster's duty outside
+//!   [0, 1], a `dt` that is not a finite
 //!   number > 0: [`StepError::Input`], the simulation unchanged. A failure of the
 //!   integration ([`StepError::Integrate`]) leaves the simulation at no consistent state:
 //!   every later `advance` fails with [`StepError::Failed`].
@@ -129,7 +133,8 @@ impl OutputGrid {
 /// Why [`Stepping::advance`] or [`Stepping::set_inputs`] refused or failed.
 #[derive(Debug, Error)]
 pub enum StepError<E> {
-    /// Bad input (an unknown input name, a non-finite value, a bad `dt`); nothing changed.
+    /// Bad input (an unknown input name, a non-finite value, a thruster's duty outside
+    /// [0, 1], a bad `dt`); nothing changed.
     #[error("{0}")]
     Input(String),
     /// The integration failed part-way (the simulation cannot continue).
@@ -161,6 +166,9 @@ pub struct Stepping {
     inputs: Vec<String>,
     values: Vec<f64>,
     base_tau: Vec<f64>,
+    /// Where the `thrust_<name>` inputs start, and each one's (effect, thruster) pair.
+    first_thrust: usize,
+    thrusters: Vec<(usize, usize)>,
     /// How many of the simulation's logged events were returned already.
     reported: usize,
     failed: Option<String>,
@@ -184,12 +192,27 @@ impl Stepping {
                 .flat_map(|e| e.torquers())
                 .map(|t| format!("dipole_{}", t.name)),
         );
+        let thrusters: Vec<(usize, usize)> = sim
+            .effects
+            .iter()
+            .enumerate()
+            .flat_map(|(i, e)| (0..e.thrusters().len()).map(move |j| (i, j)))
+            .collect();
+        let first_thrust = inputs.len();
+        inputs.extend(
+            sim.effects
+                .iter()
+                .flat_map(|e| e.thrusters())
+                .map(|t| format!("thrust_{}", t.name)),
+        );
         let base_tau = sim.constant_torques_mut().to_vec();
         let (t, x) = (sim.t0(), sim.x0().to_vec());
         let reported = sim.event_log().len();
         Self {
             values: vec![0.0; inputs.len()],
             inputs,
+            first_thrust,
+            thrusters,
             base_tau,
             sim,
             t,
@@ -227,7 +250,9 @@ impl Stepping {
         self.grid
     }
     /// The input names: `torque_<hinge>` per model hinge, then the rotors' hinge names, then
-    /// `dipole_<torquer>` per magnetic torquer (A m², added to its command before the clamp).
+    /// `dipole_<torquer>` per magnetic torquer (A m², added to its command before the clamp),
+    /// then `thrust_<thruster>` per thruster (a duty in [0, 1], added to its constant duty
+    /// and latched at the first period start at or after the time it is set).
     pub fn inputs(&self) -> &[String] {
         &self.inputs
     }
@@ -284,6 +309,11 @@ impl Stepping {
                     "input `{name}` must be a finite number, got {v}"
                 )));
             }
+            if k >= self.first_thrust && !(0.0..=1.0).contains(&v) {
+                return Err(StepError::Input(format!(
+                    "input `{name}` is a thruster's duty cycle, in [0, 1], got {v}"
+                )));
+            }
             at.push((k, v));
         }
         if at.iter().all(|&(k, v)| self.values[k] == v) {
@@ -299,8 +329,11 @@ impl Stepping {
                 self.sim.data.base_tau[k] = self.base_tau[k] + v;
             } else if k < n_user + n_rotors {
                 self.sim.data.forces.rotor_input[k - n_user] = v;
-            } else {
+            } else if k < self.first_thrust {
                 self.sim.data.forces.dipole_input[k - n_user - n_rotors] = v;
+            } else {
+                let (i, j) = self.thrusters[k - self.first_thrust];
+                self.sim.effects[i].hold_thrust_input(j, v, self.t);
             }
         }
         let (t, mut x) = (self.t, std::mem::take(&mut self.x));

@@ -1,0 +1,216 @@
+//! Forward dynamics of a tree with flexible bodies: the articulated-body algorithm with each
+//! body's hinge and modes eliminated together as one `(1 + m)`-DOF joint. O(n) in bodies.
+
+use super::data::{FlexData, check_state, velocities};
+use super::dense;
+use super::model::FlexModel;
+use crate::error::DynamicsError;
+use crate::kinematics::check_len;
+use crate::model::BaseKind;
+use crate::spatial::{ArticulatedInertia, Force, Motion};
+use nalgebra::DVector;
+
+/// The generalised accelerations `M⁻¹ (τ − b)` into `data.ddq` (conventions of
+/// [`super::rnea()`]), in O(n).
+///
+/// A flexible body's velocity is extended to `[vᵢ; η̇ᵢ]` with the inertia
+/// `[[I, P], [Pᵀ, 1]]`; a child on its node moves with `Xupᵢ v + Gᵢ η̇`. Pass 2 carries the
+/// extended articulated inertia `[[IA, B], [Bᵀ, C]]` and bias `[pA; pₑ]` inward and
+/// eliminates each body's hinge and modes together (subspace `[[S, 0], [0, 1]]`, pivot
+/// `D = [[Sᵀ IA S, Sᵀ B], [Bᵀ S, C]]`); what is left acts only on the frame (`6 x 6`) and
+/// reaches the parent through `[Xupᵢ, Gᵢ]`. The root solves its `6 + m₀` system (free) or
+/// its modes (fixed). See the theory page "Flexible bodies".
+// The index loops run over several arrays at once (coordinates, buffers, offsets).
+#[allow(clippy::needless_range_loop)]
+pub fn aba<'d>(
+    model: &FlexModel,
+    data: &'d mut FlexData,
+    q: &[f64],
+    v: &[f64],
+    tau: &[f64],
+    fext: Option<&[Force]>,
+) -> Result<&'d DVector<f64>, DynamicsError> {
+    check_state(model, q, v)?;
+    check_len("tau", tau.len(), model.nv())?;
+    let rigid = &model.rigid;
+    let n = rigid.n_bodies();
+    if let Some(f) = fext {
+        check_len("fext", f.len(), n)?;
+    }
+    velocities(model, data, q, v);
+    let (nq, nv) = (rigid.nq(), rigid.nv());
+    // Pass 1 (after the velocities): each body's own extended inertia and bias.
+    for i in 0..n {
+        let inertia = &model.inertia_at(i, q);
+        let (o, m) = (model.offset[i], model.modes[i]);
+        let vi = data.v[i];
+        let mut h = inertia.mul_motion(&vi);
+        let co = data.c_offset[i];
+        for k in 0..m {
+            let pk = model.momentum[o + k];
+            h += pk * v[nv + o + k];
+            data.b[o + k] = pk;
+            data.pe[o + k] =
+                model.damping[o + k] * v[nv + o + k] + model.stiffness[o + k] * q[nq + o + k];
+            for l in 0..m {
+                data.cm[co + k * m + l] = if k == l { 1.0 } else { 0.0 };
+            }
+        }
+        data.ia[i] = ArticulatedInertia::from(*inertia);
+        data.pa[i] = vi.cross_force(&h);
+        model.add_stiffening(i, q, v, &vi.ang, &mut data.pa[i], &mut data.pe[o..o + m]);
+        if let Some(fe) = fext {
+            data.pa[i] -= fe[i];
+        }
+    }
+    // Pass 2, inward.
+    for i in (1..n).rev() {
+        let joint = rigid.joints[i].as_ref().expect("joint");
+        let (o, m) = (model.offset[i], model.modes[i]);
+        let d = 1 + m;
+        let (uo, dof, co) = (data.u_offset[i], data.d_offset[i], data.c_offset[i]);
+        let s = joint.s;
+        let u0 = data.ia[i].mul_motion(&s);
+        data.u_col[uo] = u0;
+        data.u[uo] = tau[joint.dof] - s.dot(&data.pa[i]);
+        let dm = &mut data.d[dof..dof + d * d];
+        dm[0] = s.dot(&u0) + joint.armature();
+        for k in 0..m {
+            let bk = data.b[o + k];
+            data.u_col[uo + 1 + k] = bk;
+            data.u[uo + 1 + k] = tau[nv + o + k] - data.pe[o + k];
+            let sb = s.dot(&bk);
+            dm[(1 + k) * d] = sb;
+            dm[1 + k] = sb;
+            for l in 0..m {
+                dm[(1 + k) * d + 1 + l] = data.cm[co + k * m + l];
+            }
+        }
+        if !dense::cholesky(dm, d) {
+            return Err(DynamicsError::NotPositiveDefinite {
+                index: joint.dof,
+                pivot: s.dot(&u0) + joint.armature(),
+            });
+        }
+        // IA − U D⁻¹ Uᵀ = IA − W Wᵀ with W Lᵀ = U (forward substitution on the columns).
+        let l = &data.d[dof..dof + d * d];
+        let mut ia = data.ia[i];
+        for j in 0..d {
+            let mut w = data.u_col[uo + j];
+            for k in 0..j {
+                w -= data.cols[k] * l[j * d + k];
+            }
+            w = w * (1.0 / l[j * d + j]);
+            data.cols[j] = w;
+            ia.sub_outer(&w, 1.0);
+        }
+        // pa = pA + IAᵃ c + U D⁻¹ u.
+        let y = &mut data.tmp[..d];
+        y.copy_from_slice(&data.u[uo..uo + d]);
+        dense::solve(l, d, y);
+        let mut pa = data.pa[i] + ia.mul_motion(&data.c[i]);
+        for j in 0..d {
+            pa += data.u_col[uo + j] * data.tmp[j];
+        }
+        let p = rigid.parent[i].expect("parent");
+        let x = data.xup[i];
+        let moved = ia.inv_transform(&x);
+        data.ia[p] += moved;
+        data.pa[p] += x.inv_apply_force(&pa);
+        let (op, mp, cp) = (model.offset[p], model.modes[p], data.c_offset[p]);
+        let go = data.g_offset[i];
+        for k in 0..mp {
+            let h = ia.mul_motion(&data.g[go + k]);
+            data.b[op + k] += x.inv_apply_force(&h);
+            data.pe[op + k] += data.g[go + k].dot(&pa);
+            for l in 0..mp {
+                data.cm[cp + l * mp + k] += data.g[go + l].dot(&h);
+            }
+        }
+    }
+    // The root.
+    let (m0, c0) = (model.modes[0], data.c_offset[0]);
+    match rigid.base {
+        BaseKind::Free => {
+            let r = 6 + m0;
+            let ia = data.ia[0].to_matrix();
+            let root = &mut data.root[..r * r];
+            for a in 0..6 {
+                for b in 0..6 {
+                    root[a * r + b] = ia[(a, b)];
+                }
+            }
+            for k in 0..m0 {
+                let bk = data.b[k].to_array();
+                for (a, x) in bk.into_iter().enumerate() {
+                    root[a * r + 6 + k] = x;
+                    root[(6 + k) * r + a] = x;
+                }
+                for l in 0..m0 {
+                    root[(6 + k) * r + 6 + l] = data.cm[c0 + k * m0 + l];
+                }
+            }
+            if !dense::cholesky(root, r) {
+                return Err(DynamicsError::SingularBase);
+            }
+            let pa = data.pa[0].to_array();
+            let rhs = &mut data.tmp[..r];
+            for a in 0..6 {
+                rhs[a] = tau[a] - pa[a];
+            }
+            for k in 0..m0 {
+                rhs[6 + k] = tau[nv + k] - data.pe[k];
+            }
+            dense::solve(&data.root[..r * r], r, rhs);
+            for a in 0..6 {
+                data.ddq[a] = rhs[a];
+            }
+            for k in 0..m0 {
+                data.ddq[nv + k] = rhs[6 + k];
+            }
+            data.a[0] = Motion::from_slice(&rhs[..6]);
+        }
+        BaseKind::Fixed => {
+            data.a[0] = Motion::zero();
+            if m0 > 0 {
+                let root = &mut data.root[..m0 * m0];
+                root.copy_from_slice(&data.cm[c0..c0 + m0 * m0]);
+                if !dense::cholesky(root, m0) {
+                    return Err(DynamicsError::SingularBase);
+                }
+                let rhs = &mut data.tmp[..m0];
+                for k in 0..m0 {
+                    rhs[k] = tau[nv + k] - data.pe[k];
+                }
+                dense::solve(&data.root[..m0 * m0], m0, rhs);
+                for k in 0..m0 {
+                    data.ddq[nv + k] = rhs[k];
+                }
+            }
+        }
+    }
+    // Pass 3, outward.
+    for i in 1..n {
+        let joint = rigid.joints[i].as_ref().expect("joint");
+        let p = rigid.parent[i].expect("parent");
+        let (o, m) = (model.offset[i], model.modes[i]);
+        let d = 1 + m;
+        let (uo, dof) = (data.u_offset[i], data.d_offset[i]);
+        let (op, mp, go) = (model.offset[p], model.modes[p], data.g_offset[i]);
+        let mut a = data.xup[i].apply_motion(&data.a[p]) + data.c[i];
+        for k in 0..mp {
+            a += data.g[go + k] * data.ddq[nv + op + k];
+        }
+        let y = &mut data.tmp[..d];
+        for j in 0..d {
+            y[j] = data.u[uo + j] - a.dot(&data.u_col[uo + j]);
+        }
+        dense::solve(&data.d[dof..dof + d * d], d, y);
+        data.ddq[joint.dof] = y[0];
+        for k in 0..m {
+            data.ddq[nv + o + k] = y[1 + k];
+        }
+        data.a[i] = a + joint.s * y[0];
+    }
+    Ok(&data.ddq)
+}

@@ -1,0 +1,162 @@
+//! [`FlexData`]: the reusable workspace of the flexible algorithms, and their shared first
+//! pass (transforms, velocities, the node subspaces `G`, velocity-product accelerations).
+
+use super::model::FlexModel;
+use crate::error::DynamicsError;
+use crate::kinematics::{base_motion, check_len};
+use crate::spatial::{ArticulatedInertia, Force, Motion, RigidInertia, Transform};
+use nalgebra::{DMatrix, DVector};
+
+/// Scratch buffers and results for one [`FlexModel`], allocated once by [`FlexData::new`].
+/// Per-body vectors are indexed like the rigid model's bodies, in each body's own frame.
+/// As [`crate::Data`], scratch and not state.
+#[derive(Clone, Debug)]
+pub struct FlexData {
+    /// `Xup[i]`: from `λ(i)`'s coordinates to body `i`'s, the parent's deformation included.
+    pub xup: Vec<Transform>,
+    /// Spatial velocity of each body's frame.
+    pub v: Vec<Motion>,
+    /// Spatial acceleration of each body's frame (RNEA, ABA).
+    pub a: Vec<Motion>,
+    /// Velocity-product acceleration of each body's frame (its node's and its hinge's).
+    pub c: Vec<Motion>,
+    /// Spatial force across each body's hinge (RNEA).
+    pub f: Vec<Force>,
+    /// Per body whose parent is flexible: `G`, the body's motion per unit parent `η̇ₖ`
+    /// (body coordinates), at `g_offset[i]`.
+    pub(crate) g: Vec<Motion>,
+    pub(crate) g_offset: Vec<usize>,
+    /// Composite rigid inertias (CRBA).
+    pub(crate) ic: Vec<RigidInertia>,
+    /// Articulated inertias' frame block `IA` (ABA).
+    pub(crate) ia: Vec<ArticulatedInertia>,
+    /// Articulated bias forces' frame part `pA` (ABA).
+    pub(crate) pa: Vec<Force>,
+    /// Articulated coupling columns `B` (frame x modes), at the model's `offset`.
+    pub(crate) b: Vec<Force>,
+    /// Articulated modal blocks `C` (modes x modes, row-major), at `c_offset`.
+    pub(crate) cm: Vec<f64>,
+    pub(crate) c_offset: Vec<usize>,
+    /// Articulated modal bias `pₑ`, at the model's `offset`.
+    pub(crate) pe: Vec<f64>,
+    /// Per body: Cholesky factor of its `(1 + m)` pivot `D`, at `d_offset`.
+    pub(crate) d: Vec<f64>,
+    pub(crate) d_offset: Vec<usize>,
+    /// Per body: the frame rows of `U` (`1 + m` columns) and `u`, at `u_offset`.
+    pub(crate) u_col: Vec<Force>,
+    pub(crate) u: Vec<f64>,
+    pub(crate) u_offset: Vec<usize>,
+    /// The root's `(6 + m₀)` system (ABA, free base).
+    pub(crate) root: Vec<f64>,
+    /// Scratch of `6 + max modes` entries.
+    pub(crate) tmp: Vec<f64>,
+    /// Scratch columns, `1 + max modes` (CRBA, ABA).
+    pub(crate) cols: Vec<Force>,
+    /// Mass matrix `M`, `nv x nv` (CRBA).
+    pub mass_matrix: DMatrix<f64>,
+    /// Generalised forces, `nv` (RNEA).
+    pub tau: DVector<f64>,
+    /// Generalised accelerations, `nv` (ABA; zero acceleration for the bias).
+    pub ddq: DVector<f64>,
+    /// Bias forces `b = τ(q, v, 0)`, `nv`.
+    pub bias: DVector<f64>,
+}
+
+impl FlexData {
+    /// Allocates the workspace for `model`.
+    pub fn new(model: &FlexModel) -> Self {
+        let n = model.rigid.n_bodies();
+        let nv = model.nv();
+        let mut g_offset = vec![0; n];
+        let mut c_offset = vec![0; n];
+        let mut d_offset = vec![0; n];
+        let mut u_offset = vec![0; n];
+        let (mut ng, mut nc, mut nd, mut nu) = (0, 0, 0, 0);
+        for i in 0..n {
+            g_offset[i] = ng;
+            if let Some(p) = model.rigid.parent()[i] {
+                ng += model.modes[p];
+            }
+            let m = model.modes[i];
+            c_offset[i] = nc;
+            nc += m * m;
+            d_offset[i] = nd;
+            nd += (1 + m) * (1 + m);
+            u_offset[i] = nu;
+            nu += 1 + m;
+        }
+        let mm = model.max_modes();
+        let r = 6 + model.modes[0];
+        Self {
+            xup: vec![Transform::identity(); n],
+            v: vec![Motion::zero(); n],
+            a: vec![Motion::zero(); n],
+            c: vec![Motion::zero(); n],
+            f: vec![Force::zero(); n],
+            g: vec![Motion::zero(); ng],
+            g_offset,
+            ic: vec![RigidInertia::default(); n],
+            ia: vec![ArticulatedInertia::default(); n],
+            pa: vec![Force::zero(); n],
+            b: vec![Force::zero(); model.n_elastic],
+            cm: vec![0.0; nc],
+            c_offset,
+            pe: vec![0.0; model.n_elastic],
+            d: vec![0.0; nd],
+            d_offset,
+            u_col: vec![Force::zero(); nu],
+            u: vec![0.0; nu],
+            u_offset,
+            root: vec![0.0; r * r],
+            tmp: vec![0.0; 6 + mm],
+            cols: vec![Force::zero(); 1 + mm],
+            mass_matrix: DMatrix::zeros(nv, nv),
+            tau: DVector::zeros(nv),
+            ddq: DVector::zeros(nv),
+            bias: DVector::zeros(nv),
+        }
+    }
+}
+
+/// Checks the lengths of `q` and `v`.
+pub(crate) fn check_state(model: &FlexModel, q: &[f64], v: &[f64]) -> Result<(), DynamicsError> {
+    check_len("q", q.len(), model.nq())?;
+    check_len("v", v.len(), model.nv())
+}
+
+/// Pass 1 of every flexible algorithm: `Xup`, `G`, body velocities `v` and velocity-product
+/// accelerations `c` (`aᵢ = Xupᵢ a_λ + Gᵢ η̈_λ + Sᵢ φ̈ᵢ + cᵢ`). A body on a rigid parent gets
+/// exactly the rigid algorithms' `Xup`, `v` and `c`.
+pub(crate) fn velocities(model: &FlexModel, data: &mut FlexData, q: &[f64], v: &[f64]) {
+    let rigid = &model.rigid;
+    let (nq, nv) = (rigid.nq(), rigid.nv());
+    let (eta, etad) = (&q[nq..], &v[nv..]);
+    data.v[0] = base_motion(rigid, v);
+    data.c[0] = Motion::zero();
+    for i in 1..rigid.n_bodies() {
+        let p = rigid.parent[i].expect("non-root body has a parent");
+        let joint = rigid.joints[i].as_ref().expect("joint");
+        let x = rigid.xup(i, q);
+        let vj = joint.s * v[joint.dof];
+        match &model.nodes[i] {
+            None => {
+                data.xup[i] = x;
+                data.v[i] = x.apply_motion(&data.v[p]) + vj;
+                data.c[i] = data.v[i].cross_motion(&vj);
+            }
+            Some(node) => {
+                let (o, m) = (model.offset[p], model.modes[p]);
+                let g = &mut data.g[data.g_offset[i]..][..m];
+                let st = node.state(&eta[o..o + m], &etad[o..o + m], &data.v[p], g);
+                // The hinge from the node frame (its origin the hinge point) to the child.
+                let xc = Transform::new(x.rot, x.trans - node.at);
+                for gk in g.iter_mut() {
+                    *gk = xc.apply_motion(gk);
+                }
+                data.xup[i] = xc.compose(&st.x);
+                data.v[i] = xc.apply_motion(&st.w) + vj;
+                data.c[i] = xc.apply_motion(&st.c) + data.v[i].cross_motion(&vj);
+            }
+        }
+    }
+}

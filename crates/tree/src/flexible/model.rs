@@ -1,0 +1,397 @@
+//! [`FlexModel`]: a rigid [`Model`] whose bodies may carry elastic coordinates.
+//!
+//! Coordinates: `q = [the rigid model's q…, η…]`, `v = [the rigid model's v…, η̇…]`, the
+//! elastic coordinates of each flexible body together, bodies in the model's (depth-first)
+//! order, modes from 1 within a body.
+
+use super::beam::{Beam, Stiffening};
+use super::modal::{ModalData, NodeShape};
+use super::node::Node;
+use crate::error::ModelError;
+use crate::model::{Model, ModelBuilder, UNIT_NORM_TOLERANCE};
+use crate::spatial::{Force, Mat3, RigidInertia, Vec3};
+use thiserror::Error;
+
+/// Largest number of beam modes (the beam integrals' quadrature is sized for it).
+pub const MAX_BEAM_MODES: usize = 12;
+
+/// Where a flexible body's modes come from.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Modes {
+    /// An Euler-Bernoulli cantilever; its mass `ρA L` (a uniform thin rod) adds to the body's.
+    Beam(Beam),
+    /// Given modal data (the body's inertia already includes the deformable part) and the
+    /// mode shapes at each child hinge's point, by hinge name.
+    Given {
+        /// The modal integrals.
+        data: ModalData,
+        /// Per child hinge (its name): the shapes at its `at`.
+        nodes: Vec<(String, NodeShape)>,
+    },
+}
+
+/// A flexible body as given to [`FlexModel::build`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct Flexible {
+    /// The body's name.
+    pub body: String,
+    /// Its modes.
+    pub modes: Modes,
+    /// Modal damping ratio `ζ` of every mode, `>= 0`.
+    pub damping: f64,
+    /// Geometric (centrifugal) stiffening of a beam (ignored for given modes).
+    pub stiffening: bool,
+}
+
+/// Why a flexible model could not be built.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum FlexError {
+    /// The rigid model is invalid.
+    #[error(transparent)]
+    Model(#[from] ModelError),
+    /// A flexible body names no body of the model.
+    #[error("flexible body `{0}`: no body of that name")]
+    UnknownBody(String),
+    /// Two flexible entries name one body.
+    #[error("body `{0}` is given flexible twice")]
+    Duplicate(String),
+    /// A parameter is out of range.
+    #[error("flexible body `{body}`: {what}")]
+    Invalid {
+        /// The body.
+        body: String,
+        /// What is wrong.
+        what: String,
+    },
+    /// Given modes lack the shapes at a child hinge's point.
+    #[error("flexible body `{body}`: no mode shapes at the point of its child hinge `{hinge}`")]
+    MissingNode {
+        /// The body.
+        body: String,
+        /// The hinge.
+        hinge: String,
+    },
+    /// `[[I, P], [Pᵀ, 1]]` is not positive semidefinite.
+    #[error("flexible body `{0}`: its mass matrix [[I, P], [Pᵀ, 1]] is not positive semidefinite")]
+    NotPositiveDefinite(String),
+}
+
+/// A rigid [`Model`] plus, per body, optional modal data, and per hinge whose parent is
+/// flexible, the [`Node`] that carries it. Immutable; [`super::FlexData`] is its workspace.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FlexModel {
+    pub(crate) rigid: Model,
+    /// Per body: number of modes `mᵢ` (0 for a rigid body).
+    pub(crate) modes: Vec<usize>,
+    /// Per body: the index of its first mode among all elastic coordinates.
+    pub(crate) offset: Vec<usize>,
+    /// Total number of elastic coordinates.
+    pub(crate) n_elastic: usize,
+    /// `P` columns, all bodies (at `offset`).
+    pub(crate) momentum: Vec<Force>,
+    /// `ωₖ²` (1/s²), all modes.
+    pub(crate) stiffness: Vec<f64>,
+    /// `2 ζ ωₖ` (1/s), all modes.
+    pub(crate) damping: Vec<f64>,
+    /// Per body: the node carrying its hinge when its parent is flexible.
+    pub(crate) nodes: Vec<Option<Node>>,
+    /// Per body: its beam, if its modes are a beam's (for the tip deflection).
+    pub(crate) beams: Vec<Option<Beam>>,
+    /// Per body: its children.
+    pub(crate) children: Vec<Vec<usize>>,
+    /// Per body: its beam's centrifugal stiffening, when on.
+    pub(crate) stiffening: Vec<Option<Stiffening>>,
+}
+
+fn invalid(body: &str, what: impl Into<String>) -> FlexError {
+    FlexError::Invalid {
+        body: body.to_string(),
+        what: what.into(),
+    }
+}
+
+fn check_beam(body: &str, b: &Beam) -> Result<(), FlexError> {
+    let finite = [b.length, b.ei, b.rho_a]
+        .iter()
+        .chain(b.root.iter())
+        .chain(b.axis.iter())
+        .chain(b.bend.iter())
+        .all(|x| x.is_finite());
+    if !finite {
+        return Err(invalid(body, "beam: a value is not finite"));
+    }
+    if !(b.length > 0.0 && b.ei > 0.0 && b.rho_a > 0.0) {
+        return Err(invalid(body, "beam: length, EI and rho_A must be positive"));
+    }
+    if (b.axis.norm() - 1.0).abs() > UNIT_NORM_TOLERANCE
+        || (b.bend.norm() - 1.0).abs() > UNIT_NORM_TOLERANCE
+    {
+        return Err(invalid(body, "beam: axis and bend must be unit vectors"));
+    }
+    if b.axis.dot(&b.bend).abs() > UNIT_NORM_TOLERANCE {
+        return Err(invalid(body, "beam: axis and bend must be perpendicular"));
+    }
+    if b.modes == 0 || b.modes > MAX_BEAM_MODES {
+        return Err(invalid(
+            body,
+            format!("beam: modes must be 1 to {MAX_BEAM_MODES}, got {}", b.modes),
+        ));
+    }
+    Ok(())
+}
+
+impl FlexModel {
+    /// Builds the rigid model from `builder` (a beam's mass added to its body first) and
+    /// attaches the flexible bodies' modes.
+    pub fn build(builder: ModelBuilder, flexible: &[Flexible]) -> Result<FlexModel, FlexError> {
+        let mut builder = builder;
+        let mut beams_by_name: Vec<(String, Beam)> = Vec::new();
+        for f in flexible {
+            if flexible.iter().filter(|g| g.body == f.body).count() > 1 {
+                return Err(FlexError::Duplicate(f.body.clone()));
+            }
+            if !(f.damping >= 0.0 && f.damping.is_finite()) {
+                return Err(invalid(&f.body, "damping must be finite and >= 0"));
+            }
+            let body = builder
+                .bodies_mut()
+                .iter_mut()
+                .find(|b| b.name == f.body)
+                .ok_or_else(|| FlexError::UnknownBody(f.body.clone()))?;
+            if let Modes::Beam(beam) = &f.modes {
+                check_beam(&f.body, beam)?;
+                // A uniform thin rod of the beam's mass along its axis.
+                let bm = beam.mass();
+                let rod = RigidInertia::from_com(
+                    bm,
+                    beam.root + beam.axis * (0.5 * beam.length),
+                    (Mat3::identity() - beam.axis * beam.axis.transpose())
+                        * (bm * beam.length * beam.length / 12.0),
+                );
+                let own = RigidInertia::from_com(body.mass, body.com, body.inertia);
+                let sum = own + rod;
+                let com = sum.h / sum.mass;
+                let cx = crate::spatial::skew(&com);
+                body.mass = sum.mass;
+                body.com = com;
+                let ic = sum.inertia + cx * cx * sum.mass;
+                body.inertia = (ic + ic.transpose()) * 0.5;
+                beams_by_name.push((f.body.clone(), beam.clone()));
+            }
+        }
+        let rigid = builder.build()?;
+        FlexModel::attach(rigid, flexible)
+    }
+
+    /// Attaches flexible bodies to a built rigid model whose inertias already include them
+    /// (as [`FlexModel::build`] makes it). With no flexible body, the rigid model itself.
+    pub fn attach(rigid: Model, flexible: &[Flexible]) -> Result<FlexModel, FlexError> {
+        let n = rigid.n_bodies();
+        let mut data: Vec<Option<(ModalData, f64)>> = vec![None; n];
+        let mut beams: Vec<Option<Beam>> = vec![None; n];
+        let mut stiffening: Vec<Option<Stiffening>> = vec![None; n];
+        for f in flexible {
+            let b = rigid
+                .body_index(&f.body)
+                .ok_or_else(|| FlexError::UnknownBody(f.body.clone()))?;
+            if data[b].is_some() {
+                return Err(FlexError::Duplicate(f.body.clone()));
+            }
+            let md = match &f.modes {
+                Modes::Beam(beam) => {
+                    check_beam(&f.body, beam)?;
+                    beams[b] = Some(beam.clone());
+                    if f.stiffening {
+                        stiffening[b] = Some(beam.stiffening());
+                    }
+                    ModalData {
+                        momentum: beam.momentum_coefficients(),
+                        omega: (1..=beam.modes).map(|k| beam.omega(k)).collect(),
+                    }
+                }
+                Modes::Given { data, .. } => {
+                    if data.momentum.len() != data.omega.len() {
+                        return Err(invalid(&f.body, "momentum and omega lengths differ"));
+                    }
+                    if !data.omega.iter().all(|w| *w > 0.0 && w.is_finite()) {
+                        return Err(invalid(&f.body, "frequencies must be positive and finite"));
+                    }
+                    data.clone()
+                }
+            };
+            // [[I, P], [Pᵀ, 1]] ≥ 0 ⟺ I − P Pᵀ ≥ 0 (semidefinite: a bare beam has no
+            // inertia about its own axis), to round-off of the body's inertia scale.
+            let inertia = rigid.bodies()[b].inertia.to_matrix();
+            let mut schur = inertia;
+            for p in &md.momentum {
+                let c = p.to_vector();
+                schur -= c * c.transpose();
+            }
+            let lowest = schur.symmetric_eigenvalues().min();
+            if lowest.is_nan() || lowest < -1e-12 * inertia.amax() {
+                return Err(FlexError::NotPositiveDefinite(f.body.clone()));
+            }
+            data[b] = Some((md, f.damping));
+        }
+        let modes: Vec<usize> = data
+            .iter()
+            .map(|d| d.as_ref().map_or(0, |(m, _)| m.modes()))
+            .collect();
+        let mut offset = vec![0; n];
+        let mut total = 0;
+        for i in 0..n {
+            offset[i] = total;
+            total += modes[i];
+        }
+        let mut momentum = Vec::with_capacity(total);
+        let mut stiffness = Vec::with_capacity(total);
+        let mut damping = Vec::with_capacity(total);
+        for (md, zeta) in data.iter().flatten() {
+            momentum.extend_from_slice(&md.momentum);
+            stiffness.extend(md.omega.iter().map(|w| w * w));
+            damping.extend(md.omega.iter().map(|w| 2.0 * zeta * w));
+        }
+        let mut nodes = vec![None; n];
+        let mut children = vec![Vec::new(); n];
+        for i in 1..n {
+            let p = rigid.parent()[i].expect("non-root body has a parent");
+            children[p].push(i);
+            if modes[p] == 0 {
+                continue;
+            }
+            let joint = rigid.joint(i).expect("joint");
+            let hinge = &rigid.hinge_names()[joint.hinge()];
+            let pname = &rigid.bodies()[p].name;
+            let shape = if let Some(beam) = &beams[p] {
+                beam.node(joint.at())
+            } else {
+                let f = flexible
+                    .iter()
+                    .find(|f| &f.body == pname)
+                    .expect("flexible");
+                let Modes::Given { nodes, .. } = &f.modes else {
+                    unreachable!("a body without a beam has given modes")
+                };
+                nodes
+                    .iter()
+                    .find(|(h, _)| h == hinge)
+                    .map(|(_, s)| s.clone())
+                    .ok_or_else(|| FlexError::MissingNode {
+                        body: pname.clone(),
+                        hinge: hinge.clone(),
+                    })?
+            };
+            if shape.phi.len() != modes[p] || shape.psi.len() != modes[p] {
+                return Err(invalid(
+                    pname,
+                    format!("hinge `{hinge}`: one shape per mode"),
+                ));
+            }
+            nodes[i] = Some(Node::new(*joint.at(), &shape));
+        }
+        Ok(FlexModel {
+            rigid,
+            modes,
+            offset,
+            n_elastic: total,
+            momentum,
+            stiffness,
+            damping,
+            nodes,
+            beams,
+            children,
+            stiffening,
+        })
+    }
+
+    /// The rigid model (the flexible bodies' undeformed inertias).
+    pub fn rigid(&self) -> &Model {
+        &self.rigid
+    }
+    /// Number of position coordinates: the rigid model's plus the elastic ones.
+    pub fn nq(&self) -> usize {
+        self.rigid.nq() + self.n_elastic
+    }
+    /// Number of velocity coordinates: the rigid model's plus the elastic ones.
+    pub fn nv(&self) -> usize {
+        self.rigid.nv() + self.n_elastic
+    }
+    /// Number of elastic coordinates.
+    pub fn n_elastic(&self) -> usize {
+        self.n_elastic
+    }
+    /// Modes of body `i` (0 when rigid).
+    pub fn modes(&self, i: usize) -> usize {
+        self.modes[i]
+    }
+    /// Index of body `i`'s first mode among the elastic coordinates (add `rigid().nq()` for
+    /// `q`, `rigid().nv()` for `v`).
+    pub fn elastic_offset(&self, i: usize) -> usize {
+        self.offset[i]
+    }
+    /// `ωₖ²` of all modes, in coordinate order (1/s²).
+    pub fn stiffness(&self) -> &[f64] {
+        &self.stiffness
+    }
+    /// `2 ζ ωₖ` of all modes (1/s).
+    pub fn damping(&self) -> &[f64] {
+        &self.damping
+    }
+    /// The neutral configuration: the rigid model's, zero deformation.
+    pub fn neutral(&self) -> Vec<f64> {
+        let mut q = self.rigid.neutral();
+        q.resize(self.nq(), 0.0);
+        q
+    }
+    /// The deflection of body `i`'s beam tip along `bend` (m) in `q`; `None` unless its
+    /// modes are a beam's.
+    pub fn tip_deflection(&self, i: usize, q: &[f64]) -> Option<f64> {
+        let beam = self.beams[i].as_ref()?;
+        let eta = &q[self.rigid.nq() + self.offset[i]..][..self.modes[i]];
+        Some(
+            beam.cantilever_modes()
+                .iter()
+                .zip(eta)
+                .map(|(m, e)| m.shape(beam.length)[0] * e)
+                .sum(),
+        )
+    }
+    /// Body `i`'s rigid inertia at the deformation in `q`: with stiffening, the angular block
+    /// less `G(η)` (the foreshortened beam's kinetic energy `−½ ωᵀ G ω`); else the rigid
+    /// model's.
+    #[inline]
+    pub(crate) fn inertia_at(&self, i: usize, q: &[f64]) -> RigidInertia {
+        let mut inertia = self.rigid.bodies[i].inertia;
+        if let Some(s) = &self.stiffening[i] {
+            let eta = &q[self.rigid.nq() + self.offset[i]..][..self.modes[i]];
+            let f = s.forms(eta, eta);
+            inertia.inertia -= s.g(f[0], f[1]);
+        }
+        inertia
+    }
+    /// With stiffening, the foreshortening's terms in body `i`'s equations: the frame force
+    /// `−Ġ ω` (moment) and the modal forces `K_g(ω) η`, added to `frame` and `modal`.
+    #[inline]
+    pub(crate) fn add_stiffening(
+        &self,
+        i: usize,
+        q: &[f64],
+        v: &[f64],
+        omega: &Vec3,
+        frame: &mut Force,
+        modal: &mut [f64],
+    ) {
+        if let Some(s) = &self.stiffening[i] {
+            let (o, m) = (self.offset[i], self.modes[i]);
+            let eta = &q[self.rigid.nq() + o..][..m];
+            let etad = &v[self.rigid.nv() + o..][..m];
+            let f = s.forms(eta, etad);
+            frame.ang -= s.g(f[2], f[3]) * omega;
+            s.add_force(omega, eta, modal);
+        }
+    }
+    /// Largest number of modes of one body.
+    pub(crate) fn max_modes(&self) -> usize {
+        self.modes.iter().copied().max().unwrap_or(0)
+    }
+}

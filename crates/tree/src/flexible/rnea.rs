@@ -1,0 +1,106 @@
+//! Inverse dynamics of a tree with flexible bodies (RNEA extended by the modal equations).
+
+use super::data::{FlexData, check_state, velocities};
+use super::model::FlexModel;
+use crate::error::DynamicsError;
+use crate::kinematics::{base_motion, check_len};
+use crate::model::BaseKind;
+use crate::spatial::Force;
+use nalgebra::DVector;
+
+/// The generalised forces `τ = M(q) a + b(q, v)` into `data.tau`, `b` the velocity products,
+/// the modal stiffness `ωₖ² ηₖ` and damping `2 ζ ωₖ η̇ₖ`, less `Jᵀ fext` (`fext` as in
+/// [`crate::rnea()`], one per body, on the body's frame). A mode's entry is the modal force
+/// that must act on it. Outward: each body's `aᵢ = Xupᵢ a_λ + Gᵢ η̈_λ + Sᵢ φ̈ᵢ + cᵢ`, its
+/// frame force `fᵢ = I aᵢ + P η̈ᵢ + vᵢ ×* (I vᵢ + P η̇ᵢ)` and its own modal forces
+/// `Pᵀ aᵢ + η̈ᵢ + D η̇ᵢ + K ηᵢ`; inward: `τ_hinge = Sᵀ fᵢ`, `f_λ += Xupᵀ fᵢ`, and a
+/// flexible parent's modes take `Gᵢᵀ fᵢ`.
+pub fn rnea<'d>(
+    model: &FlexModel,
+    data: &'d mut FlexData,
+    q: &[f64],
+    v: &[f64],
+    a: &[f64],
+    fext: Option<&[Force]>,
+) -> Result<&'d DVector<f64>, DynamicsError> {
+    check_state(model, q, v)?;
+    check_len("a", a.len(), model.nv())?;
+    let rigid = &model.rigid;
+    if let Some(f) = fext {
+        check_len("fext", f.len(), rigid.n_bodies())?;
+    }
+    velocities(model, data, q, v);
+    let (nq, nv) = (rigid.nq(), rigid.nv());
+    let n = rigid.n_bodies();
+    data.a[0] = base_motion(rigid, a);
+    for i in 0..n {
+        if let Some(joint) = &rigid.joints[i] {
+            let p = rigid.parent[i].expect("parent");
+            let mut ai = data.xup[i].apply_motion(&data.a[p]) + joint.s * a[joint.dof] + data.c[i];
+            let (op, mp) = (model.offset[p], model.modes[p]);
+            for (k, g) in data.g[data.g_offset[i]..][..mp].iter().enumerate() {
+                ai += *g * a[nv + op + k];
+            }
+            data.a[i] = ai;
+        }
+        let inertia = &model.inertia_at(i, q);
+        let (o, m) = (model.offset[i], model.modes[i]);
+        let vi = data.v[i];
+        let mut h = inertia.mul_motion(&vi);
+        let mut f = inertia.mul_motion(&data.a[i]);
+        for k in 0..m {
+            let pk = model.momentum[o + k];
+            h += pk * v[nv + o + k];
+            f += pk * a[nv + o + k];
+            data.tau[nv + o + k] = data.a[i].dot(&pk)
+                + a[nv + o + k]
+                + model.damping[o + k] * v[nv + o + k]
+                + model.stiffness[o + k] * q[nq + o + k];
+        }
+        data.f[i] = f + vi.cross_force(&h);
+        let modal = &mut data.tau.as_mut_slice()[nv + o..nv + o + m];
+        model.add_stiffening(i, q, v, &vi.ang, &mut data.f[i], modal);
+        if let Some(fe) = fext {
+            data.f[i] -= fe[i];
+        }
+    }
+    for i in (1..n).rev() {
+        let joint = rigid.joints[i].as_ref().expect("joint");
+        let fi = data.f[i];
+        data.tau[joint.dof] = joint.s.dot(&fi) + joint.armature() * a[joint.dof];
+        let p = rigid.parent[i].expect("parent");
+        let (op, mp) = (model.offset[p], model.modes[p]);
+        for (k, g) in data.g[data.g_offset[i]..][..mp].iter().enumerate() {
+            data.tau[nv + op + k] += g.dot(&fi);
+        }
+        let fp = data.xup[i].inv_apply_force(&fi);
+        data.f[p] += fp;
+    }
+    if rigid.base == BaseKind::Free {
+        let f0 = data.f[0];
+        for (r, x) in [f0.ang.x, f0.ang.y, f0.ang.z, f0.lin.x, f0.lin.y, f0.lin.z]
+            .into_iter()
+            .enumerate()
+        {
+            data.tau[r] = x;
+        }
+    }
+    Ok(&data.tau)
+}
+
+/// The bias forces `b(q, v)` (RNEA at zero acceleration) into `data.bias`.
+pub fn bias<'d>(
+    model: &FlexModel,
+    data: &'d mut FlexData,
+    q: &[f64],
+    v: &[f64],
+    fext: Option<&[Force]>,
+) -> Result<&'d DVector<f64>, DynamicsError> {
+    data.ddq.fill(0.0);
+    let zero = std::mem::take(&mut data.ddq);
+    let result = rnea(model, data, q, v, zero.as_slice(), fext).map(|_| ());
+    data.ddq = zero;
+    result?;
+    data.bias.copy_from(&data.tau);
+    Ok(&data.bias)
+}
