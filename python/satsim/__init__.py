@@ -516,8 +516,10 @@ class Simulation:
     non-finite input value, a thruster's duty outside [0, 1], a ``dt`` that is not a finite number > 0. A failed integration
     raises :class:`SatsimError`; the simulation cannot go on after it.
 
-    ``measure()`` returns every sensor's latest reading; the scenes have no sensors yet, so
-    it is an empty dict.
+    ``measure()`` returns every sensor's latest reading (the scene's ``[sensors]``: gyros,
+    star trackers, Sun sensors, magnetometers, contract section 13), by sensor name and by
+    column name. ``seed=`` replaces the scene's ``[sensors] seed`` (e.g. a Gymnasium
+    ``reset(seed=...)`` drawing new noise); a scene without sensors ignores it.
     """
 
     __slots__ = ("_native", "_columns")
@@ -528,10 +530,16 @@ class Simulation:
         out: Optional[PathLike] = None,
         *,
         base_dir: Optional[PathLike] = None,
+        seed: Optional[int] = None,
     ) -> None:
         origin, text = _scene_args(scene, base_dir)
         out_path = None if out is None else os.fspath(out)
-        self._native = _satsim.NativeSimulation(origin, text, out_path)
+        if seed is not None:
+            if isinstance(seed, bool) or not isinstance(seed, int):
+                raise SatsimError(f"seed must be an integer, got {seed!r}")
+            if not 0 <= seed < 2**64:
+                raise SatsimError(f"seed must be an integer in [0, 2**64), got {seed}")
+        self._native = _satsim.NativeSimulation(origin, text, out_path, seed)
         self._columns: List[str] = list(self._native.columns)
 
     @property
@@ -587,10 +595,30 @@ class Simulation:
             raise SatsimError(f"dt must be a number, got {dt!r}") from None
         return [(float(t), e, what) for t, e, what in self._native.advance(dt)]
 
-    def measure(self) -> Dict[str, float]:
-        """Every sensor's latest reading, by column name. No sensors exist yet: an empty
-        dict."""
-        return {}
+    def measure(self) -> Dict[str, Union[float, List[float]]]:
+        """Every sensor's latest reading at :attr:`t`: for each sensor, its name -> the
+        reading as a list (gyro, Sun sensor, magnetometer ``[x, y, z]`` in the body's axes, in
+        rad/s, a unit vector, T; star tracker ``[w, x, y, z]``, body to inertial, ``w >= 0``),
+        and each of its columns -> a float (``"gyro_x"``, ``"st_q_w"``: the trajectory's
+        columns). Each is the reading last taken (sensors sample every ``period`` from the
+        start, so there is always one); an empty dict for a scene without sensors.
+
+        ::
+
+            m = sim.measure()
+            m["gyro"]      # [wx, wy, wz]
+            m["gyro_x"]    # wx
+        """
+        out: Dict[str, Union[float, List[float]]] = {}
+        suffixes3 = ("_x", "_y", "_z")
+        suffixes4 = ("_q_w", "_q_x", "_q_y", "_q_z")
+        for name, values in self._native.measure():
+            reading = [float(v) for v in values]
+            out[name] = reading
+            suffixes = suffixes4 if len(reading) == 4 else suffixes3
+            for suffix, v in zip(suffixes, reading):
+                out[name + suffix] = v
+        return out
 
     def trajectory(self) -> Trajectory:
         """The rows so far, as :func:`run` returns them."""

@@ -513,14 +513,16 @@ impl NativeSimulation {
 #[pymethods]
 impl NativeSimulation {
     /// Reads the scene file at `origin` (or parses `text`, named `origin`); with `out`,
-    /// streams `out/trajectory.csv`.
+    /// streams `out/trajectory.csv`; with `seed`, the sensors' noise is drawn from it
+    /// instead of the scene's `[sensors] seed`.
     #[new]
-    #[pyo3(signature = (origin, text=None, out=None))]
+    #[pyo3(signature = (origin, text=None, out=None, seed=None))]
     fn new(
         py: Python<'_>,
         origin: PathBuf,
         text: Option<String>,
         out: Option<PathBuf>,
+        seed: Option<u64>,
     ) -> PyResult<Self> {
         let inner = py
             .detach(|| {
@@ -529,7 +531,7 @@ impl NativeSimulation {
                     || origin.display().to_string(),
                     |n| n.to_string_lossy().into(),
                 );
-                SceneStepper::new(&scene, out.as_deref(), &title)
+                SceneStepper::with_seed(&scene, out.as_deref(), &title, seed)
                     .map_err(|e| format!("{}: {e}", origin.display()))
             })
             .map_err(err)?;
@@ -561,6 +563,10 @@ impl NativeSimulation {
     /// The row at the current time, in the columns' order.
     fn row(&self) -> PyResult<Vec<f64>> {
         self.lock()?.row().map_err(|e| err(e.to_string()))
+    }
+    /// Every sensor's reading at the current time: `(name, values)` in the scene's order.
+    fn measure(&self) -> PyResult<Vec<(String, Vec<f64>)>> {
+        self.lock()?.measure().map_err(|e| err(e.to_string()))
     }
     /// Sets inputs by name (all checked before any is set).
     fn set_inputs(&self, values: Vec<(String, f64)>) -> PyResult<()> {

@@ -6,6 +6,8 @@
 //!   hinge control, hinge springs and stops) behind one small trait, [`effects::Effect`]; the
 //!   [`effects::Registry`] of the effects a scene may enable, each reading its own
 //!   `[effects.<name>]` section ([`effects::Section`]);
+//! - [`sensors`]: gyros, star trackers, Sun sensors and magnetometers sampled on their own
+//!   clocks with seeded noise, as one effect that applies nothing ([`sensors::Sensors`]);
 //! - [`simulation`]: [`simulation::Simulation`], the tree, the enabled effects and the state
 //!   layout derived from them; the right-hand side the integrators call, events, output rows,
 //!   the energy budget, and runs.
@@ -17,4 +19,5 @@
 #![warn(missing_docs)]
 
 pub mod effects;
+pub mod sensors;
 pub mod simulation;

@@ -15,6 +15,7 @@ use crate::output::{CsvWriter, PlotRecorder, write_events};
 use crate::scene::Scene;
 use crate::view::PoseRecorder;
 use satsim_integrate::Options;
+use satsim_spacecraft::sensors::Sensors;
 use satsim_spacecraft::simulation::{EventRecord, OutputGrid, SimError, StepError, Stepping};
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -70,6 +71,25 @@ impl SceneStepper {
     /// `out`, `out/trajectory.csv` is created now (its header and the first row) and
     /// streamed to. `title` names the scene in `view.html`.
     pub fn new(scene: &Scene, out: Option<&Path>, title: &str) -> Result<Self, StepFailure> {
+        Self::with_seed(scene, out, title, None)
+    }
+
+    /// [`SceneStepper::new`] with the sensors' noise drawn from `seed` instead of the scene's
+    /// `[sensors] seed` (when given; a scene without sensors ignores it).
+    pub fn with_seed(
+        scene: &Scene,
+        out: Option<&Path>,
+        title: &str,
+        seed: Option<u64>,
+    ) -> Result<Self, StepFailure> {
+        let mut effects = scene.effects.clone();
+        if let (Some(seed), Some(s)) = (seed, effects.get_mut::<Sensors>()) {
+            s.set_seed(seed);
+        }
+        let scene = &Scene {
+            effects,
+            ..scene.clone()
+        };
         let sim = scene
             .simulation()
             .map_err(|e: SimError| StepFailure::Failed(e.to_string()))?;
@@ -175,6 +195,14 @@ impl SceneStepper {
             .row(&mut row)
             .map_err(|e| StepFailure::Failed(e.to_string()))?;
         Ok(row)
+    }
+    /// Every sensor's reading at the current time, `(name, values)` in the scene's order
+    /// ([`Stepping::measure`]): gyro, Sun sensor, magnetometer `[x, y, z]`, star tracker
+    /// `[w, x, y, z]`.
+    pub fn measure(&mut self) -> Result<Vec<(String, Vec<f64>)>, StepFailure> {
+        self.stepping
+            .measure()
+            .map_err(|e| StepFailure::Failed(e.to_string()))
     }
     /// The input names ([`Stepping::inputs`]).
     pub fn inputs(&self) -> &[String] {

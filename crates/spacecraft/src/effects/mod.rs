@@ -554,6 +554,22 @@ pub trait Effect: Send {
     fn sample(&mut self, _ctx: &Context) -> Result<(), SystemError> {
         Ok(())
     }
+    /// Whether it only observes (a sensor): `apply` adds nothing and `sample` changes nothing
+    /// the dynamics read, so that a sample of it alone does not restart the integrator (the
+    /// steps stay those of a run without it).
+    fn observes_only(&self) -> bool {
+        false
+    }
+    /// Whether [`Effect::sample`] reads the body poses and velocities in [`Context::data`]:
+    /// the simulation then runs forward kinematics at its sample instants (not in every
+    /// right-hand side). The default: [`Needs::kinematics`].
+    fn sample_reads_kinematics(&self) -> bool {
+        self.needs().kinematics
+    }
+    /// The readings of the sensors it models, appended to `out` as `(name, values)`: each
+    /// the reading last taken or, where a sample is due at `ctx.t`, the one taken there
+    /// (see [`crate::sensors`]). An effect that measures nothing appends nothing.
+    fn measure(&self, _ctx: &Context, _out: &mut Vec<(String, Vec<f64>)>) {}
     /// Adds its hinge torques and body wrenches to `forces` and writes the derivatives of its
     /// own states (`own`) into `own_dot`.
     fn apply(

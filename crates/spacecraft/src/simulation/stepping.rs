@@ -272,6 +272,22 @@ impl Stepping {
         self.sim.row(self.t, &self.x, row)
     }
 
+    /// Every sensor's reading at [`Stepping::t`] (see [`crate::sensors`]), `(name, values)`
+    /// in the scene's order: the reading last taken, or the one a sample due now takes (the
+    /// first sample is at the start, so there is always one).
+    pub fn measure(&mut self) -> Result<Vec<(String, Vec<f64>)>, SystemError> {
+        let (t, x) = (self.t, &self.x);
+        self.sim.check_len(x.len(), "measure")?;
+        self.sim.prepare(t, x, true)?;
+        let mut out = Vec::new();
+        self.sim.with_context(t, x, true, |ctx, h| {
+            for e in h.effects.iter() {
+                e.measure(ctx, &mut out);
+            }
+        });
+        Ok(out)
+    }
+
     /// Sets inputs by name, held from now until changed. Every name and value is checked
     /// first: an unknown name or a non-finite value is an error naming it, and nothing is
     /// set. An event whose function the change moves across zero is handled now and
@@ -480,18 +496,29 @@ impl Simulation {
     }
 
     /// The time stop at `t`: every effect whose sample is due latches its law's output; then
-    /// the events the change moved across zero are handled. Returns whether anything was
-    /// sampled.
+    /// the events the change moved across zero are handled. Returns whether the dynamics
+    /// changed (an effect that does not only observe was sampled: the integrator restarts).
     pub(super) fn sample_effects(&mut self, t: f64, x: &mut [f64]) -> Result<bool, SystemError> {
-        if !self.effects.iter().any(|e| stop_due(t, e.next_sample())) {
+        let due = |e: &dyn crate::effects::Effect| stop_due(t, e.next_sample());
+        if !self.effects.iter().any(|e| due(e.as_ref())) {
             return Ok(false);
         }
         self.check_len(x.len(), "on_stop")?;
-        let mut before = vec![0.0; self.model.n_events];
+        // A sensor's sample changes nothing the dynamics read: no events to settle, no
+        // restart of the integrator.
+        let changes = self
+            .effects
+            .iter()
+            .any(|e| due(e.as_ref()) && !e.observes_only());
+        let mut before = vec![0.0; if changes { self.model.n_events } else { 0 }];
         if !before.is_empty() {
             self.events(t, x, &mut before)?;
         }
-        let kin = self.data.needs_kinematics;
+        let kin = self.data.needs_kinematics
+            || self
+                .effects
+                .iter()
+                .any(|e| due(e.as_ref()) && e.sample_reads_kinematics());
         self.prepare(t, x, kin)?;
         self.with_context(t, x, kin, |ctx, h| {
             for e in h.effects.iter_mut() {
@@ -502,7 +529,7 @@ impl Simulation {
             Ok::<(), SystemError>(())
         })?;
         self.settle_events(t, x, &before)?;
-        Ok(true)
+        Ok(changes)
     }
 
     /// Handles, at once, the events whose functions went from `before` to their values now

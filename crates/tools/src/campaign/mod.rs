@@ -368,6 +368,34 @@ impl Campaign {
         toml::to_string(&t).expect("a TOML table serialises")
     }
 
+    /// The sensors' noise seed of run `k` (its scene's `sensors.seed`): the next 63 bits of
+    /// run `k`'s generator ([`run_rng`]) after its dispersed values, so that each run draws
+    /// its own noise from `(seed, k)` alone (63 bits: a TOML integer is signed).
+    pub fn sensor_seed(&self, k: u64) -> u64 {
+        let mut rng = run_rng(self.seed, k);
+        for d in &self.dispersed {
+            d.law.draw(d.nominal, &mut rng);
+        }
+        rand_core::Rng::next_u64(&mut rng) >> 1
+    }
+
+    /// Run `k`'s scene: [`Campaign::scene_text`] of its drawn values, and, when the scene has
+    /// `[sensors]`, its own `sensors.seed` ([`Campaign::sensor_seed`]). `satsim run` of this
+    /// text gives run `k`'s row of `runs.csv`.
+    pub fn run_text(&self, k: u64, values: &[f64]) -> String {
+        let mut t = self.base.clone();
+        for (d, v) in self.dispersed.iter().zip(values) {
+            spec::set(&mut t, &d.path, *v);
+        }
+        if let Some(toml::Value::Table(s)) = t.get_mut("sensors") {
+            s.insert(
+                "seed".into(),
+                toml::Value::Integer(self.sensor_seed(k) as i64),
+            );
+        }
+        toml::to_string(&t).expect("a TOML table serialises")
+    }
+
     /// Runs `k`.
     pub fn run_one(&self, k: u64) -> RunRecord {
         self.run_one_until(k, &|| false)
@@ -384,7 +412,7 @@ impl Campaign {
         let rows = (self.nominal.duration / self.nominal.every).floor() as usize + 1;
         let mut trace = vec![Vec::with_capacity(rows / self.stride + 1); self.trace_columns.len()];
         let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-            self.integrate(&values, &mut trace, stop, &mut stopped)
+            self.integrate(k, &values, &mut trace, stop, &mut stopped)
         }))
         .unwrap_or_else(|p| {
             let what = p
@@ -410,12 +438,13 @@ impl Campaign {
 
     fn integrate(
         &self,
+        k: u64,
         values: &[f64],
         trace: &mut [Vec<f64>],
         stop: &(dyn Fn() -> bool + Sync),
         stopped: &mut bool,
     ) -> Result<RunStats, String> {
-        let text = self.scene_text(values);
+        let text = self.run_text(k, values);
         // The drawn text is rewritten: its errors are placed where the value is written.
         let scene = Scene::parse(&text, &self.path).map_err(|e| {
             let e = crate::scene_keys::relocate(e, &self.source, &self.path, &text, &[]);

@@ -1,5 +1,5 @@
 //! The scene file's top level as written: `model`, `initial`, `duration`, `armature`,
-//! `[integrator]`, `[output]`, `[orbit]` and the `[effects.<name>]` sections (read by the
+//! `[integrator]`, `[output]`, `[orbit]`, `[sensors]` and the `[effects.<name>]` sections (read by the
 //! effects themselves, see [`satsim_spacecraft::effects::registry`]).
 
 use satsim_tree::io::{ModelFile, StateFile};
@@ -100,6 +100,9 @@ pub struct SceneFile {
     /// its name ([`satsim_spacecraft::effects::Registry`]).
     #[serde(default)]
     pub effects: Option<Spanned<BTreeMap<String, Spanned<toml::Value>>>>,
+    /// `[sensors]`: gyros, star trackers, Sun sensors, magnetometers ([`super::sensors`]).
+    #[serde(default)]
+    pub sensors: Option<Spanned<super::sensors::SensorsFile>>,
     /// `[campaign]`: read by `satsim campaign` ([`crate::campaign`]); a single run ignores it
     /// and runs the nominal scene.
     #[serde(default)]

@@ -31,12 +31,14 @@
 //! - [`file`](mod@file), the top level as written (serde structs);
 //! - [`parse`], the reader (model, initial state, armature, the effect sections);
 //! - [`integrator`], the `[integrator]` table;
-//! - [`orbit`], the `[orbit]` table.
+//! - [`orbit`], the `[orbit]` table;
+//! - [`sensors`](mod@sensors), the `[sensors]` table.
 
 pub mod file;
 pub mod integrator;
 pub mod orbit;
 pub mod parse;
+pub mod sensors;
 
 pub use file::OrbitFile;
 pub use file::{ArmatureFile, IntegratorFile, ModelSource, OutputFile, SceneFile, StateSource};

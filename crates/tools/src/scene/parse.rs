@@ -1,6 +1,7 @@
-//! The scene reader: the top level, the model and initial state, `armature`, and the
-//! `[effects.<name>]` sections through the registry. [`SceneText`] carries the scene's text
-//! and path so that every check names the file and line.
+//! The scene reader: the top level, the model and initial state, `armature`, the
+//! `[effects.<name>]` sections through the registry, and `[sensors]` ([`super::sensors`]).
+//! [`SceneText`] carries the scene's text and path so that every check names the file and
+//! line.
 
 use super::Scene;
 use super::file::{ArmatureFile, ModelSource, SceneFile, StateSource};
@@ -145,6 +146,11 @@ impl<'a> Parser<'a> {
         if let Some(e) = &file.effects {
             self.effects(e, &model, epoch, &mut effects, &mut warnings)?;
         }
+        if let Some(s) = &file.sensors
+            && let Some(set) = super::sensors::read(self, s, &model, epoch, &effects)?
+        {
+            effects.insert(set);
+        }
         let scene = Scene {
             path,
             model,
@@ -160,9 +166,12 @@ impl<'a> Parser<'a> {
             warnings,
         };
         // Build once to surface any remaining setup error with the scene's name.
-        scene
+        let sim = scene
             .simulation()
             .map_err(|e| self.error(None, e.to_string()))?;
+        if let Some(s) = &file.sensors {
+            super::sensors::check_columns(self, s, &sim.columns())?;
+        }
         Ok(scene)
     }
 
