@@ -1,0 +1,167 @@
+"""A satsim scene as a Gymnasium environment (optional extra: ``pip install ./python[gym]``).
+
+::
+
+    import satsim.gym
+
+    env = satsim.gym.Env(
+        "examples/scenes/fsw_in_the_loop.toml",
+        actions={"wheel_x": (-0.05, 0.05), "wheel_y": (-0.05, 0.05), "wheel_z": (-0.05, 0.05)},
+        observation="sensors",                # or "row", or a list of column names
+        reward=lambda row, reading, action: -row["omega_x"] ** 2,
+    )
+    obs, info = env.reset(seed=1)
+    obs, reward, terminated, truncated, info = env.step(env.action_space.sample())
+
+One ``step`` is one control period: the action is set as the simulation's inputs (held, zero-
+order hold, see :class:`satsim.Simulation`), then the simulation advances ``period`` seconds.
+
+- **Actions**: a ``Box`` over the named inputs (``sim.inputs``: ``torque_<hinge>``,
+  ``wheel_<name>``, ``dipole_<torquer>``, ``thrust_<thruster>``), in the order given, with the
+  bounds given. An action outside its bounds is clipped to them (a saturating actuator).
+- **Observations**: ``"sensors"`` the sensors' readings (``sim.measure()``'s columns, in the
+  order of the trajectory's columns: what flight software sees), ``"row"`` every column of
+  the row except ``t`` (the truth), or a list of column names. ``float64``.
+- **Reward and termination** are the caller's: ``reward(row, reading, action)`` with the row
+  and the readings as dicts and the action as a dict of input values (default: 0), and
+  ``terminated(row, reading)`` (default: never). The episode is truncated at the scene's
+  ``duration`` (``max_time`` to change it).
+- **Seeding**: ``reset(seed=...)`` seeds the environment's generator, and each episode's
+  sensor noise is drawn from a seed it takes from there (``satsim.Simulation(seed=...)``), so
+  the same seed gives the same episode and episodes differ.
+
+``info`` holds ``t`` and the ``events`` that fired during the step (``(t, effect, text)``).
+"""
+
+from __future__ import annotations
+
+from typing import Any, Callable, Dict, List, Mapping, Optional, Sequence, Tuple, Union
+
+import numpy as np
+
+try:
+    import gymnasium
+    from gymnasium import spaces
+except ImportError as e:  # pragma: no cover - exercised only without the extra
+    raise ImportError(
+        "satsim.gym needs Gymnasium: pip install './python[gym]' (or pip install gymnasium)"
+    ) from e
+
+from . import PathLike, SatsimError, Simulation
+
+__all__ = ["Env"]
+
+Reward = Callable[[Dict[str, float], Dict[str, Any], Dict[str, float]], float]
+Terminated = Callable[[Dict[str, float], Dict[str, Any]], bool]
+
+
+class Env(gymnasium.Env):
+    """A satsim scene as a Gymnasium ``Env``; see the module documentation."""
+
+    metadata: Dict[str, Any] = {"render_modes": []}
+
+    def __init__(
+        self,
+        scene: PathLike,
+        actions: Mapping[str, Tuple[float, float]],
+        *,
+        observation: Union[str, Sequence[str]] = "sensors",
+        period: float = 0.1,
+        reward: Optional[Reward] = None,
+        terminated: Optional[Terminated] = None,
+        max_time: Optional[float] = None,
+        base_dir: Optional[PathLike] = None,
+    ) -> None:
+        super().__init__()
+        self._scene, self._base_dir = scene, base_dir
+        if not (isinstance(period, (int, float)) and np.isfinite(period) and period > 0):
+            raise SatsimError(f"period must be a finite number > 0, got {period!r}")
+        self._period = float(period)
+        self._reward = reward
+        self._terminated = terminated
+        # A first simulation, to check the names against the scene and size the spaces.
+        self._sim: Optional[Simulation] = self._new_simulation(None)
+        sim = self._sim
+        if not actions:
+            raise SatsimError(f"no actions given; the scene's inputs are {sim.inputs}")
+        self._actions: List[str] = list(actions)
+        low, high = [], []
+        for name, bounds in actions.items():
+            if name not in sim.inputs:
+                raise SatsimError(f"unknown input `{name}`; the scene's inputs are {sim.inputs}")
+            try:
+                lo, hi = (float(b) for b in bounds)
+            except (TypeError, ValueError):
+                raise SatsimError(f"bounds of `{name}` must be (low, high), got {bounds!r}") from None
+            if not (np.isfinite(lo) and np.isfinite(hi) and lo < hi):
+                raise SatsimError(f"bounds of `{name}` must be finite with low < high, got {bounds!r}")
+            low.append(lo)
+            high.append(hi)
+        self.action_space = spaces.Box(np.array(low), np.array(high), dtype=np.float64)
+        self._observe: List[str] = self._observation_columns(observation, sim)
+        n = len(self._observe)
+        self.observation_space = spaces.Box(-np.inf, np.inf, shape=(n,), dtype=np.float64)
+        self._max_time = sim.t_end if max_time is None else float(max_time)
+
+    def _new_simulation(self, seed: Optional[int]) -> Simulation:
+        return Simulation(self._scene, base_dir=self._base_dir, seed=seed)
+
+    def _observation_columns(self, observation: Union[str, Sequence[str]], sim: Simulation) -> List[str]:
+        if isinstance(observation, str):
+            if observation == "row":
+                return [c for c in sim.columns if c != "t"]
+            if observation == "sensors":
+                reading = sim.measure()
+                names = [c for c in sim.columns if c in reading]
+                if not names:
+                    raise SatsimError(
+                        "observation = 'sensors' but the scene has no [sensors]: add them, or "
+                        "use observation = 'row' or a list of columns"
+                    )
+                return names
+            raise SatsimError(
+                f"observation must be 'sensors', 'row' or a list of columns, got {observation!r}"
+            )
+        names = list(observation)
+        for c in names:
+            if c not in sim.columns:
+                raise SatsimError(f"unknown column `{c}` in observation")
+        if not names:
+            raise SatsimError("observation lists no columns")
+        return names
+
+    def _obs(self, row: Dict[str, float], reading: Dict[str, Any]) -> np.ndarray:
+        source = {**row, **{k: v for k, v in reading.items() if isinstance(v, float)}}
+        return np.array([source[c] for c in self._observe], dtype=np.float64)
+
+    def reset(
+        self, *, seed: Optional[int] = None, options: Optional[Dict[str, Any]] = None
+    ) -> Tuple[np.ndarray, Dict[str, Any]]:
+        super().reset(seed=seed)
+        if self._sim is not None:
+            self._sim.close()
+        episode_seed = int(self.np_random.integers(0, 2**63 - 1))
+        self._sim = self._new_simulation(episode_seed)
+        row, reading = self._sim.row(), self._sim.measure()
+        return self._obs(row, reading), {"t": self._sim.t, "events": []}
+
+    def step(self, action: Any) -> Tuple[np.ndarray, float, bool, bool, Dict[str, Any]]:
+        if self._sim is None or self._sim.closed:
+            raise SatsimError("step() before reset()")
+        a = np.clip(np.asarray(action, dtype=np.float64).reshape(-1), self.action_space.low, self.action_space.high)
+        if a.shape != (len(self._actions),):
+            raise SatsimError(f"an action has {len(self._actions)} values, got {np.shape(action)}")
+        values = dict(zip(self._actions, (float(x) for x in a)))
+        self._sim.set_inputs(values)
+        events = self._sim.advance(self._period)
+        row, reading = self._sim.row(), self._sim.measure()
+        reward = 0.0 if self._reward is None else float(self._reward(row, reading, values))
+        done = False if self._terminated is None else bool(self._terminated(row, reading))
+        truncated = self._sim.t >= self._max_time - 1e-9 * max(1.0, abs(self._max_time))
+        return self._obs(row, reading), reward, done, truncated, {"t": self._sim.t, "events": events}
+
+    def close(self) -> None:
+        if self._sim is not None:
+            self._sim.close()
+            self._sim = None
+

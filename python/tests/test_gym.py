@@ -1,0 +1,126 @@
+"""satsim.gym: a scene as a Gymnasium Env (the optional `gym` extra)."""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+import pytest
+
+import satsim
+from conftest import SCENES
+
+# CI installs the `gym` extra and sets SATSIM_REQUIRE_GYM=1: there these tests fail rather
+# than skip when Gymnasium is missing.
+if os.environ.get("SATSIM_REQUIRE_GYM") == "1":
+    import gymnasium  # noqa: F401
+else:
+    pytest.importorskip("gymnasium")
+
+import satsim.gym  # noqa: E402
+from gymnasium.utils.env_checker import check_env  # noqa: E402
+
+DEPLOY = SCENES / "deploy.toml"
+KD_LINE = "kd = 150.0               # N m s/rad"
+WHEELS = {f"wheel_{a}": (-0.05, 0.05) for a in "xyz"}
+
+
+def deploy_text(duration: float, extra: str = "") -> str:
+    text = DEPLOY.read_text()
+    assert "duration = 300.0" in text and KD_LINE in text
+    text = text.replace("duration = 300.0", f"duration = {duration}", 1)
+    return text.replace(KD_LINE, "kd = 150.0\nenabled = false\n", 1) + extra
+
+
+SENSORS = """
+[sensors]
+seed = 3
+[[sensors.gyro]]
+name = "gyro"
+body = "bus"
+period = 0.1
+noise_density = 1e-4
+bias_walk = 1e-6
+[[sensors.star_tracker]]
+name = "st"
+body = "bus"
+period = 0.1
+noise_arcsec = [5.0, 5.0, 40.0]
+"""
+
+
+def env(observation="row", **kw) -> "satsim.gym.Env":
+    extra = SENSORS if observation == "sensors" else ""
+    return satsim.gym.Env(
+        deploy_text(2.0, extra), WHEELS, observation=observation, base_dir=SCENES, **kw
+    )
+
+
+@pytest.mark.parametrize("observation", ["row", "sensors"])
+def test_the_env_passes_gymnasiums_checker(observation):
+    e = env(observation)
+    check_env(e, skip_render_check=True)
+    e.close()
+
+
+def test_a_step_is_a_control_period_with_the_action_held():
+    """Three steps of a held action are the same as the simulation with the inputs set."""
+    e = env(reward=lambda row, reading, action: -row["omega_x"] ** 2)
+    obs, info = e.reset(seed=0)
+    a = np.array([0.01, -0.02, 0.03])
+    for _ in range(3):
+        obs, reward, terminated, truncated, info = e.step(a)
+    assert info["t"] == pytest.approx(0.3, abs=1e-12)
+    with satsim.Simulation(deploy_text(2.0), base_dir=SCENES) as sim:
+        sim.set_inputs({"wheel_x": 0.01, "wheel_y": -0.02, "wheel_z": 0.03})
+        for _ in range(3):
+            sim.advance(0.1)
+        row = sim.row()
+    columns = [c for c in sim.columns if c != "t"]
+    assert np.array_equal(obs, np.array([row[c] for c in columns]))
+    assert reward == -row["omega_x"] ** 2
+    assert not terminated and not truncated
+
+
+def test_actions_are_clipped_to_their_bounds():
+    e = env()
+    e.reset(seed=0)
+    e.step(np.array([1.0, -1.0, 0.0]))
+    clipped = e.step(np.array([1.0, -1.0, 0.0]))[0]
+    e2 = env()
+    e2.reset(seed=0)
+    e2.step(np.array([0.05, -0.05, 0.0]))
+    held = e2.step(np.array([0.05, -0.05, 0.0]))[0]
+    assert np.array_equal(clipped, held)
+
+
+def test_the_episode_is_truncated_at_the_scenes_duration():
+    e = env()
+    e.reset(seed=0)
+    truncated, n = False, 0
+    while not truncated:
+        truncated = e.step(np.zeros(3))[3]
+        n += 1
+    assert n == 20
+
+
+def test_sensor_noise_follows_the_reset_seed():
+    e = env("sensors")
+    first = e.reset(seed=7)[0]
+    again = e.reset(seed=7)[0]
+    other = e.reset(seed=8)[0]
+    assert np.array_equal(first, again)
+    assert not np.array_equal(first, other)
+
+
+def test_bad_arguments_name_what_is_wrong():
+    with pytest.raises(satsim.SatsimError, match="unknown input `wheel_q`"):
+        satsim.gym.Env(deploy_text(2.0), {"wheel_q": (-1, 1)}, observation="row", base_dir=SCENES)
+    with pytest.raises(satsim.SatsimError, match="low < high"):
+        satsim.gym.Env(deploy_text(2.0), {"wheel_x": (1, -1)}, observation="row", base_dir=SCENES)
+    with pytest.raises(satsim.SatsimError, match="no \\[sensors\\]"):
+        satsim.gym.Env(deploy_text(2.0), WHEELS, observation="sensors", base_dir=SCENES)
+    with pytest.raises(satsim.SatsimError, match="unknown column `nope`"):
+        satsim.gym.Env(deploy_text(2.0), WHEELS, observation=["nope"], base_dir=SCENES)
+    with pytest.raises(satsim.SatsimError, match="period"):
+        satsim.gym.Env(deploy_text(2.0), WHEELS, observation="row", period=0.0, base_dir=SCENES)
