@@ -77,7 +77,8 @@ pub enum FlexError {
 }
 
 /// A rigid [`Model`] plus, per body, optional modal data, and per hinge whose parent is
-/// flexible, the [`Node`] that carries it. Immutable; [`super::FlexData`] is its workspace.
+/// flexible, the node (its virtual joints, `node.rs`) that carries it. Immutable;
+/// [`super::FlexData`] is its workspace.
 #[derive(Clone, Debug, PartialEq)]
 pub struct FlexModel {
     pub(crate) rigid: Model,
