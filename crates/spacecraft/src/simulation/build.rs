@@ -1,14 +1,13 @@
 //! [`SimulationBuilder`] and the one-time set-up of a [`Simulation`]: rotors into the tree,
 //! effects in dependency order, the state layout, the initial state.
 
+use super::data::FlexWork;
 use super::hold::Hold;
 use super::{RunLog, SimData, SimError, SimModel, Simulation, StateLayout};
 use crate::effects::{Effect, Forces, Links, Rotor, Torquer, order};
 use satsim_satellite::kernel::UnrolledAba;
-use satsim_tree::{
-    BaseKind, Body, ForwardDynamics, Hinge, Kernel, Model, ModelError, State, forward_kinematics,
-    momentum,
-};
+use satsim_tree::flexible::FlexModel;
+use satsim_tree::{BaseKind, Body, ForwardDynamics, Hinge, Kernel, Model, ModelError, State};
 use std::ops::Range;
 
 /// Builds a [`Simulation`] from a model, an initial state and effects.
@@ -30,6 +29,8 @@ use std::ops::Range;
 /// ```
 pub struct SimulationBuilder {
     model: Model,
+    flex: Option<FlexModel>,
+    elastic: Option<(Vec<f64>, Vec<f64>)>,
     state: Option<State>,
     effects: Vec<Box<dyn Effect>>,
     t0: f64,
@@ -50,6 +51,22 @@ impl SimulationBuilder {
     /// Adds a boxed effect.
     pub fn boxed(mut self, e: Box<dyn Effect>) -> Self {
         self.effects.push(e);
+        self
+    }
+    /// Makes the tree flexible: the simulation's model becomes `model.rigid()` (replacing the
+    /// one given to [`Simulation::builder`]) with `model`'s modes attached, and every solve
+    /// goes through the flexible algorithms. The state gains `η` and `η̇` (see
+    /// [`StateLayout`]); the initial state's `q`, `v` and `tau` are the rigid tree's.
+    pub fn flexible(mut self, model: FlexModel) -> Self {
+        self.model = model.rigid().clone();
+        self.flex = Some(model);
+        self
+    }
+    /// The initial elastic coordinates and rates (default zero), in the flexible model's
+    /// order ([`StateLayout::eta`]); lengths other than its number of modes are an error at
+    /// [`build`](Self::build).
+    pub fn elastic(mut self, eta: Vec<f64>, etadot: Vec<f64>) -> Self {
+        self.elastic = Some((eta, etadot));
         self
     }
     /// The initial time (default 0).
@@ -89,6 +106,8 @@ impl Simulation {
     pub fn builder(model: Model) -> SimulationBuilder {
         SimulationBuilder {
             model,
+            flex: None,
+            elastic: None,
             state: None,
             effects: Vec::new(),
             t0: 0.0,
@@ -99,6 +118,8 @@ impl Simulation {
     pub(super) fn new(b: SimulationBuilder) -> Result<Self, SimError> {
         let SimulationBuilder {
             model: user,
+            flex,
+            elastic,
             state,
             effects,
             t0,
@@ -194,13 +215,28 @@ impl Simulation {
         } else {
             with_rotors(&user, &rotors)?
         };
+        let flex = match flex {
+            Some(f) if rotors.is_empty() => Some(f),
+            Some(f) => Some(f.with_rigid(model.clone())?),
+            None => None,
+        };
+        let n_elastic = flex.as_ref().map_or(0, |f| f.n_elastic());
+        let (eta0, etadot0) =
+            elastic.unwrap_or_else(|| (vec![0.0; n_elastic], vec![0.0; n_elastic]));
+        if eta0.len() != n_elastic || etadot0.len() != n_elastic {
+            return Err(SimError::State(format!(
+                "expected eta and etadot of length {n_elastic} (the flexible bodies' modes); got {} and {}",
+                eta0.len(),
+                etadot0.len()
+            )));
+        }
         let n_user = user.n_hinges();
         let n_rotors = rotors.len();
         let own_sizes: Vec<(String, usize)> = effects
             .iter()
             .map(|e| (e.name().to_owned(), e.n_states()))
             .collect();
-        let mut layout = StateLayout::new(free, n_user, &own_sizes);
+        let mut layout = StateLayout::new(free, n_user, n_elastic, &own_sizes);
         let work = layout.len..layout.len + if energy_budget { 2 } else { 0 };
         layout.len = work.end;
         let own: Vec<Range<usize>> = layout.effects.iter().map(|(_, r)| r.clone()).collect();
@@ -227,21 +263,30 @@ impl Simulation {
         }
         x0[layout.angles.clone()].copy_from_slice(&state.q[user.base_nq()..]);
         x0[layout.rates.clone()].copy_from_slice(&state.v[user.base_nv()..]);
+        x0[layout.eta.clone()].copy_from_slice(&eta0);
+        x0[layout.etadot.clone()].copy_from_slice(&etadot0);
         for (e, r) in effects.iter().zip(&own) {
             e.initial_state(&mut x0[r.clone()]);
         }
-        let velocity_at = velocity_in_state(&layout, rotor_effect.map(|i| own[i].clone()));
-        // The preprint layout's unrolled kernel where the tree has that layout.
-        let kernel = UnrolledAba::new(&model).map(|k| Box::new(k) as Box<dyn Kernel>);
+        // A flexible tree's velocity vector has η̇ after the rotors' rates: in pieces.
+        let velocity_at = velocity_in_state(&layout, rotor_effect.map(|i| own[i].clone()))
+            .filter(|_| flex.is_none());
+        // The preprint layout's unrolled kernel where the tree has that layout (and no
+        // flexible body: the flexible algorithms solve those).
+        let kernel = UnrolledAba::new(&model)
+            .filter(|_| flex.is_none())
+            .map(|k| Box::new(k) as Box<dyn Kernel>);
         let fd = ForwardDynamics::new(&model).with_optional_kernel(kernel);
         let mut data = SimData::new(&model, n_rotors, layout.len);
         data.forces =
             std::mem::replace(&mut data.forces, Forces::new(0, 0, 0)).with_torquers(torquers.len());
         data.needs_kinematics = needs_kinematics;
         data.base_tau = base_tau;
+        data.flex = flex.as_ref().map(FlexWork::new);
         let mut sim = Self {
             model: SimModel {
                 tree: model,
+                flex,
                 layout,
                 own,
                 event_start,
@@ -269,13 +314,8 @@ impl Simulation {
         // With an orbit, put the centre of mass at rest in the orbit's frame.
         if free && sim.model.orbit_effect.is_some() && sim.model.tree.total_mass() > 0.0 {
             sim.unpack(&x0);
-            forward_kinematics(
-                &sim.model.tree,
-                &mut sim.data.tree,
-                &sim.data.q,
-                &sim.data.v,
-            )?;
-            let (p, _) = momentum(&sim.model.tree, &sim.data.tree);
+            sim.kinematics(true).map_err(SimError::Start)?;
+            let (p, _) = sim.momentum();
             let du = sim.data.tree.rotation[0].tr_mul(&p) / sim.model.tree.total_mass();
             for k in 0..3 {
                 x0[sim.model.layout.velocity.start + k] -= du[k];
@@ -334,18 +374,20 @@ mod tests {
 
     #[test]
     fn the_velocity_vector_is_one_run_only_when_the_rotor_rates_follow_the_hinge_rates() {
-        let wheels_first = StateLayout::new(true, 5, &[("wheels".into(), 3), ("orbit".into(), 6)]);
+        let wheels_first =
+            StateLayout::new(true, 5, 0, &[("wheels".into(), 3), ("orbit".into(), 6)]);
         assert_eq!(
             velocity_in_state(&wheels_first, wheels_first.effect("wheels")),
             Some(9)
         );
-        let orbit_first = StateLayout::new(true, 5, &[("orbit".into(), 6), ("wheels".into(), 3)]);
+        let orbit_first =
+            StateLayout::new(true, 5, 0, &[("orbit".into(), 6), ("wheels".into(), 3)]);
         assert_eq!(
             velocity_in_state(&orbit_first, orbit_first.effect("wheels")),
             None
         );
         assert_eq!(velocity_in_state(&orbit_first, None), Some(9));
-        let fixed = StateLayout::new(false, 2, &[("wheels".into(), 1)]);
+        let fixed = StateLayout::new(false, 2, 0, &[("wheels".into(), 1)]);
         assert_eq!(velocity_in_state(&fixed, fixed.effect("wheels")), Some(2));
     }
 }

@@ -1,7 +1,33 @@
 //! [`SimData`]: the scratch of every evaluation, and the discrete state.
 
 use crate::effects::{Forces, Request};
+use satsim_tree::flexible::{FlexData, FlexModel};
 use satsim_tree::{Data, Model};
+
+/// The flexible algorithms' workspace and their full coordinates: `q = [the rigid tree's q,
+/// η]`, `v = [its v, η̇]`, `tau` likewise (no generalised force on the modes from the
+/// effects: their wrenches act on the bodies' frames).
+pub(super) struct FlexWork {
+    pub(super) data: FlexData,
+    pub(super) q: Vec<f64>,
+    pub(super) v: Vec<f64>,
+    pub(super) tau: Vec<f64>,
+    /// Accelerations by RNEA's caller (the locked hinges' power, hold torques).
+    pub(super) a: Vec<f64>,
+}
+
+impl FlexWork {
+    pub(super) fn new(model: &FlexModel) -> Self {
+        let nv = model.nv();
+        Self {
+            data: FlexData::new(model),
+            q: model.neutral(),
+            v: vec![0.0; nv],
+            tau: vec![0.0; nv],
+            a: vec![0.0; nv],
+        }
+    }
+}
 
 /// The written part of a [`Simulation`](super::Simulation), allocated once by the builder:
 /// the buffers every pass of the right-hand-side pipeline writes, and the discrete state that
@@ -10,6 +36,8 @@ use satsim_tree::{Data, Model};
 pub struct SimData {
     /// The tree's workspace (poses after kinematics, ABA's and RNEA's buffers).
     pub(super) tree: Data,
+    /// With flexible bodies, their workspace and coordinates.
+    pub(super) flex: Option<FlexWork>,
     /// `x` unpacked into the tree's coordinates and velocities, and its generalized forces.
     pub(super) q: Vec<f64>,
     pub(super) v: Vec<f64>,
@@ -44,6 +72,7 @@ impl SimData {
         let (nh, nv) = (tree.n_hinges(), tree.nv());
         Self {
             tree: Data::new(tree),
+            flex: None,
             q: tree.neutral(),
             v: vec![0.0; nv],
             tau: vec![0.0; nv],

@@ -5,7 +5,7 @@ use super::{SimError, Simulation};
 use crate::effects::{EventReads, Request};
 use nalgebra::{DMatrix, DVector};
 use satsim_integrate::SystemError;
-use satsim_tree::{crba, forward_kinematics};
+use satsim_tree::{crba, flexible};
 
 impl Simulation {
     /// Before the event functions: what they read, and no more (the union of the
@@ -27,13 +27,7 @@ impl Simulation {
         self.unpack(x);
         self.data.hold.fill(f64::NAN);
         if reads.kinematics {
-            forward_kinematics(
-                &self.model.tree,
-                &mut self.data.tree,
-                &self.data.q,
-                &self.data.v,
-            )
-            .map_err(|e| wrap(SystemError::from_error(e)))?;
+            self.kinematics(true).map_err(wrap)?;
         }
         Ok(reads.kinematics)
     }
@@ -106,16 +100,19 @@ impl Simulation {
         x: &mut [f64],
     ) -> Result<(), SimError> {
         self.unpack(x);
-        crba(&self.model.tree, &mut self.data.tree, &self.data.q)?;
+        // The flexible tree's mass matrix has the modes after the rigid coordinates: they
+        // are always free (an impact excites them).
+        let mass = match (&self.model.flex, &mut self.data.flex) {
+            (Some(f), Some(w)) => flexible::crba(f, &mut w.data, &w.q)?,
+            _ => crba(&self.model.tree, &mut self.data.tree, &self.data.q)?,
+        };
         let nb = self.model.tree.base_nv();
         let nv = self.model.tree.nv();
         let is_target = |d: usize| d >= nb && targets.iter().any(|&(h, _)| h == d - nb);
-        let free: Vec<usize> = (0..nv)
-            .filter(|&d| d < nb || is_target(d) || !self.data.locked[d - nb])
+        let free: Vec<usize> = (0..mass.nrows())
+            .filter(|&d| d < nb || d >= nv || is_target(d) || !self.data.locked[d - nb])
             .collect();
-        let m = DMatrix::from_fn(free.len(), free.len(), |r, c| {
-            self.data.tree.mass_matrix[(free[r], free[c])]
-        });
+        let m = DMatrix::from_fn(free.len(), free.len(), |r, c| mass[(free[r], free[c])]);
         let singular = || SimError::State("singular mass matrix at an impact".into());
         let chol = m.cholesky().ok_or_else(singular)?;
         // Positions of the targets among the free dofs.
@@ -140,7 +137,9 @@ impl Simulation {
             ));
         }
         for (c, &d) in free.iter().enumerate() {
-            let idx = if d < nb {
+            let idx = if d >= nv {
+                self.model.layout.etadot.start + d - nv
+            } else if d < nb {
                 if d < 3 {
                     self.model.layout.omega.start + d
                 } else {

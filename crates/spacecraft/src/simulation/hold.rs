@@ -4,8 +4,9 @@
 //! solve with the hinges locked, then RNEA for the torques they receive.
 
 use super::Simulation;
-use super::rhs::forward_dynamics;
+use super::rhs::{flexible_dynamics, forward_dynamics};
 use satsim_integrate::SystemError;
+use satsim_tree::flexible;
 use satsim_tree::{Input, rnea};
 
 /// Which hold torques [`Simulation::prepare_with`] computes (only when an effect declares
@@ -70,13 +71,30 @@ impl Simulation {
             .has_wrench
             .then_some(d.forces.body_wrench.as_slice());
         // The same solve as the right-hand side's, with `hold_mask` locked.
-        let solve = Input::new(&d.q, &d.v, &d.tau)
-            .fext(fext)
-            .locked(Some(&d.hold_mask))
-            .xup_current(xup_ready);
-        forward_dynamics(&self.model, &mut d.tree, solve, &mut d.hold_ddq).map_err(err)?;
-        let need =
-            rnea(&self.model.tree, &mut d.tree, &d.q, &d.v, &d.hold_ddq, fext).map_err(err)?;
+        let need = match (&self.model.flex, &mut d.flex) {
+            (Some(f), Some(w)) => {
+                // The accelerations go to `a`, which RNEA then reads beside `w`'s buffers.
+                let mut a = std::mem::take(&mut w.a);
+                let solved = flexible_dynamics(f, w, &d.tau, fext, Some(&d.hold_mask))
+                    .map(|ddq| a.copy_from_slice(ddq));
+                let need = solved.and_then(|()| {
+                    flexible::rnea(f, &mut w.data, &w.q, &w.v, &a, fext).map(|_| ())
+                });
+                w.a = a;
+                need.map_err(err)?;
+                w.data.tau.as_slice()
+            }
+            _ => {
+                let solve = Input::new(&d.q, &d.v, &d.tau)
+                    .fext(fext)
+                    .locked(Some(&d.hold_mask))
+                    .xup_current(xup_ready);
+                forward_dynamics(&self.model, &mut d.tree, solve, &mut d.hold_ddq).map_err(err)?;
+                rnea(&self.model.tree, &mut d.tree, &d.q, &d.v, &d.hold_ddq, fext)
+                    .map_err(err)?
+                    .as_slice()
+            }
+        };
         match only {
             Some(k) => d.hold[k] = need[nb + k],
             None => {

@@ -95,6 +95,7 @@ pub use stepping::{EventRecord, OutputGrid, StepError, Stepping};
 
 use crate::effects::{Effect, Rotor};
 use satsim_integrate::SystemError;
+use satsim_tree::flexible::{FlexError, FlexModel};
 use satsim_tree::spatial::{Mat3, Vec3};
 use satsim_tree::{DynamicsError, ForwardDynamics, Model, ModelError};
 use thiserror::Error;
@@ -114,6 +115,9 @@ pub enum SimError {
     /// An effect rejected the initial state.
     #[error("{0}")]
     Start(SystemError),
+    /// The flexible bodies do not fit the tree with the effects' rotors.
+    #[error("flexible bodies: {0}")]
+    Flexible(#[from] FlexError),
     /// The dynamics failed on the initial state.
     #[error("initial state: {0}")]
     Dynamics(#[from] DynamicsError),
@@ -157,6 +161,21 @@ impl Simulation {
     /// The tree (the scene's model plus rotor bodies).
     pub fn model(&self) -> &Model {
         &self.model.tree
+    }
+    /// The tree with its flexible bodies' modes, when it has any.
+    pub fn flex_model(&self) -> Option<&FlexModel> {
+        self.model.flex.as_ref()
+    }
+    /// `<body>_<k>` for every elastic coordinate, in the state's order (`eta_` and `etadot_`
+    /// prefix them in the columns; `k` from 1).
+    pub fn elastic_names(&self) -> Vec<String> {
+        let Some(f) = &self.model.flex else {
+            return Vec::new();
+        };
+        let tree = f.rigid();
+        (0..tree.n_bodies())
+            .flat_map(|i| (1..=f.modes(i)).map(move |k| format!("{}_{k}", tree.bodies()[i].name())))
+            .collect()
     }
     /// The initial state `x0`.
     pub fn x0(&self) -> &[f64] {

@@ -1,6 +1,7 @@
 //! [`SimModel`]: what a simulation makes once and never writes during a run.
 
 use super::StateLayout;
+use satsim_tree::flexible::FlexModel;
 use satsim_tree::{ForwardDynamics, Model};
 use std::ops::Range;
 
@@ -11,6 +12,10 @@ use std::ops::Range;
 pub struct SimModel {
     /// The tree: the scene's model, then one rotor body per wheel hinged to its root.
     pub(super) tree: Model,
+    /// The same tree with its flexible bodies' modes, when it has any: every solve then
+    /// goes through the flexible algorithms (`satsim_tree::flexible`), and the effects see
+    /// the poses of its kinematics.
+    pub(super) flex: Option<FlexModel>,
     pub(super) layout: StateLayout,
     /// Each effect's own states in `x` (the effects' order).
     pub(super) own: Vec<Range<usize>>,
@@ -50,6 +55,10 @@ impl SimModel {
     /// The state layout.
     pub fn layout(&self) -> &StateLayout {
         &self.layout
+    }
+    /// The tree with its flexible bodies' modes, when it has any.
+    pub fn flex(&self) -> Option<&FlexModel> {
+        self.flex.as_ref()
     }
     /// The number of the scene's hinges (the tree's first hinges; the rotors follow).
     pub fn n_hinges(&self) -> usize {

@@ -5,8 +5,9 @@
 //! 3. **effects**: each enabled effect adds hinge torques and body wrenches and writes its
 //!    own states' derivatives (and, for the energy budget, the power of what it added);
 //! 4. **dynamics**: forward dynamics (ABA, hybrid when hinges are locked; the layout's
-//!    unrolled kernel where it takes the lock mask) for `q̈`;
-//! 5. **pack** `q̇ = ½ q ⊗ (0, ω)`, the hinge rates and `q̈` into `dx`.
+//!    unrolled kernel where it takes the lock mask; the flexible ABA with elastic
+//!    coordinates) for `q̈` (and `η̈`);
+//! 5. **pack** `q̇ = ½ q ⊗ (0, ω)`, the hinge rates, `η̇` and the accelerations into `dx`.
 //!
 //! Every other pass runs the first three stages through [`Simulation::prepare_with`]: an
 //! output row, the event functions (only what they read, `events.rs`), the hold torques
@@ -14,12 +15,14 @@
 //! calls the right-hand side itself).
 
 use super::Simulation;
+use super::data::FlexWork;
 use super::hold::Hold;
 use super::model::SimModel;
 use crate::effects::{Context, Forces, Power};
 use satsim_integrate::SystemError;
+use satsim_tree::flexible::{self, FlexModel};
 use satsim_tree::spatial::{Force, Vec3};
-use satsim_tree::{Data, DynamicsError, Input, forward_kinematics, rnea};
+use satsim_tree::{Data, DynamicsError, Input, forward_kinematics, momentum, rnea};
 
 impl Simulation {
     /// `dx = f(t, x)`; slices of the wrong length are an error, not a panic.
@@ -54,6 +57,16 @@ impl Simulation {
         self.dynamics(kin, dx)?;
         if track {
             dx[self.model.work.start] += self.locked_hinges_power(dx)?;
+            if let Some(f) = &self.model.flex {
+                // Modal damping dissipates `Σ 2 ζ ωₖ η̇ₖ²`.
+                let etadot = &x[self.model.layout.etadot.clone()];
+                dx[self.model.work.start + 1] += f
+                    .damping()
+                    .iter()
+                    .zip(etadot)
+                    .map(|(c, e)| c * e * e)
+                    .sum::<f64>();
+            }
         }
         Ok(())
     }
@@ -86,8 +99,19 @@ impl Simulation {
             .forces
             .has_wrench
             .then_some(d.forces.body_wrench.as_slice());
-        let need = rnea(&m.tree, &mut d.tree, &d.q, &d.v, &d.hold_ddq, fext)
-            .map_err(SystemError::from_error)?;
+        let need = match (&m.flex, &mut d.flex) {
+            (Some(f), Some(w)) => {
+                let nv = d.v.len();
+                w.a[..nv].copy_from_slice(&d.hold_ddq);
+                w.a[nv..].copy_from_slice(&dx[m.layout.etadot.clone()]);
+                flexible::rnea(f, &mut w.data, &w.q, &w.v, &w.a, fext)
+                    .map_err(SystemError::from_error)?
+                    .as_slice()
+            }
+            _ => rnea(&m.tree, &mut d.tree, &d.q, &d.v, &d.hold_ddq, fext)
+                .map_err(SystemError::from_error)?
+                .as_slice(),
+        };
         let mut power = 0.0;
         for (k, &locked) in d.locked.iter().enumerate() {
             if locked {
@@ -152,6 +176,15 @@ impl Simulation {
         if let Some(i) = m.rotor_effect {
             d.v[nb + n..nb + n + m.n_rotors].copy_from_slice(&x[m.own[i].clone()]);
         }
+        // A flexible tree's coordinates: the rigid ones, then η and η̇ (its velocity vector is
+        // never one run of the state, so the early return above is not taken).
+        if let Some(w) = &mut d.flex {
+            let (nq, nv) = (d.q.len(), d.v.len());
+            w.q[..nq].copy_from_slice(&d.q);
+            w.q[nq..].copy_from_slice(&x[l.eta.clone()]);
+            w.v[..nv].copy_from_slice(&d.v);
+            w.v[nv..].copy_from_slice(&x[l.etadot.clone()]);
+        }
     }
 
     /// Stage 2: forward kinematics when this pass asks for it or an effect needs it; returns
@@ -160,10 +193,24 @@ impl Simulation {
         let kin = asked || self.data.needs_kinematics;
         if kin {
             let d = &mut self.data;
-            forward_kinematics(&self.model.tree, &mut d.tree, &d.q, &d.v)
-                .map_err(SystemError::from_error)?;
+            match (&self.model.flex, &mut d.flex) {
+                (Some(f), Some(w)) => {
+                    flexible::forward_kinematics(f, &mut w.data, &mut d.tree, &w.q, &w.v)
+                }
+                _ => forward_kinematics(&self.model.tree, &mut d.tree, &d.q, &d.v),
+            }
+            .map_err(SystemError::from_error)?;
         }
         Ok(kin)
+    }
+
+    /// Linear momentum and angular momentum about the centre of mass (inertial axes) after
+    /// [`Self::kinematics`] on the unpacked state.
+    pub(super) fn momentum(&self) -> (Vec3, Vec3) {
+        match (&self.model.flex, &self.data.flex) {
+            (Some(f), Some(w)) => flexible::momentum(f, &self.data.tree, &w.q, &w.v),
+            _ => momentum(&self.model.tree, &self.data.tree),
+        }
     }
 
     /// Stage 3: every effect's `apply`, in order, from the constant torques: own derivatives into
@@ -241,6 +288,9 @@ impl Simulation {
             }
         }
         dx[l.angles.clone()].copy_from_slice(&x[l.rates.clone()]);
+        if !l.eta.is_empty() {
+            dx[l.eta.clone()].copy_from_slice(&x[l.etadot.clone()]);
+        }
     }
 
     /// Stages 4 and 5, the velocities' part: the effects' hinge torques and wrenches, `q̈` by forward
@@ -261,7 +311,17 @@ impl Simulation {
             let nv = d.v.len();
             return forward_dynamics(m, &mut d.tree, solve, &mut dx[s..s + nv]).map_err(err);
         }
-        forward_dynamics(m, &mut d.tree, solve, &mut d.ddq).map_err(err)?;
+        match (&m.flex, &mut d.flex) {
+            (Some(f), Some(w)) => {
+                let locked = (d.n_locked > 0).then_some(d.locked.as_slice());
+                let fext = fext.then_some(d.forces.body_wrench.as_slice());
+                let ddq = flexible_dynamics(f, w, &d.tau, fext, locked).map_err(err)?;
+                let nv = d.ddq.len();
+                d.ddq.copy_from_slice(&ddq[..nv]);
+                dx[m.layout.etadot.clone()].copy_from_slice(&ddq[nv..]);
+            }
+            _ => forward_dynamics(m, &mut d.tree, solve, &mut d.ddq).map_err(err)?,
+        }
         let (l, n, ddq) = (&m.layout, m.n_user, &d.ddq);
         if l.free {
             dx[l.omega.start..l.omega.start + 6 + n].copy_from_slice(&ddq[..6 + n]);
@@ -300,6 +360,26 @@ fn carry_net_force(ctx: &Context, forces: &mut Forces, orbit_dv: &mut [f64]) {
             forces.add_wrench(i, Force::new(body.com().cross(&lin), lin));
         }
     }
+}
+
+/// The flexible tree's accelerations `[q̈; η̈]` for the rigid generalised forces `tau` (the
+/// modes take none from the effects), hybrid with `locked`.
+pub(super) fn flexible_dynamics<'w>(
+    model: &FlexModel,
+    work: &'w mut FlexWork,
+    tau: &[f64],
+    fext: Option<&[Force]>,
+    locked: Option<&[bool]>,
+) -> Result<&'w [f64], DynamicsError> {
+    work.tau[..tau.len()].copy_from_slice(tau);
+    let FlexWork {
+        data, q, v, tau, ..
+    } = work;
+    let ddq = match locked {
+        Some(l) => flexible::aba_hybrid(model, data, q, v, tau, fext, l)?,
+        None => flexible::aba(model, data, q, v, tau, fext)?,
+    };
+    Ok(ddq.as_slice())
 }
 
 /// `q̈` into `ddq`: the one place the dynamics are solved, through the model's

@@ -2,12 +2,15 @@
 
 use super::Simulation;
 use satsim_integrate::SystemError;
+use satsim_tree::flexible;
+use satsim_tree::kinetic_energy_after_kinematics;
 use satsim_tree::spatial::Vec3;
-use satsim_tree::{kinetic_energy_after_kinematics, momentum};
 
 impl Simulation {
-    /// Output column names: `t`, attitude, rates, hinge angles and rates, the effects'
-    /// columns, energies and angular momentum.
+    /// Output column names: `t`, attitude, rates, hinge angles and rates, the elastic
+    /// coordinates `eta_<body>_<k>`, their rates `etadot_<body>_<k>` and each beam's tip
+    /// deflection `tip_<body>` (m, along its `bend`), the effects' columns, energies and
+    /// angular momentum.
     pub fn columns(&self) -> Vec<String> {
         let mut c: Vec<String> = [
             "t", "q_w", "q_x", "q_y", "q_z", "omega_x", "omega_y", "omega_z",
@@ -20,6 +23,16 @@ impl Simulation {
         }
         for name in &self.model.tree.hinge_names()[..self.model.n_user] {
             c.push(format!("rate_{name}"));
+        }
+        let elastic = self.elastic_names();
+        c.extend(elastic.iter().map(|n| format!("eta_{n}")));
+        c.extend(elastic.iter().map(|n| format!("etadot_{n}")));
+        if let Some(f) = &self.model.flex {
+            for i in 0..f.rigid().n_bodies() {
+                if f.beam(i).is_some() {
+                    c.push(format!("tip_{}", f.rigid().bodies()[i].name()));
+                }
+            }
         }
         for e in &self.effects {
             if !e.rotors().is_empty() {
@@ -66,7 +79,13 @@ impl Simulation {
         }
         row.extend_from_slice(&x[l.angles.clone()]);
         row.extend_from_slice(&x[l.rates.clone()]);
-        let d = self.diagnostics_prepared(t, x, Some(row));
+        row.extend_from_slice(&x[l.eta.clone()]);
+        row.extend_from_slice(&x[l.etadot.clone()]);
+        if let (Some(f), Some(w)) = (&self.model.flex, &self.data.flex) {
+            // `prepare` unpacked this state.
+            row.extend((0..f.rigid().n_bodies()).filter_map(|i| f.tip_deflection(i, &w.q)));
+        }
+        let d = self.diagnostics_prepared(t, x, Some(row))?;
         row.push(d.kinetic);
         row.push(d.potential);
         row.push(d.kinetic + d.potential);
@@ -85,7 +104,7 @@ impl Simulation {
     pub fn diagnostics(&mut self, t: f64, x: &[f64]) -> Result<Diagnostics, SystemError> {
         self.check_len(x.len(), "diagnostics")?;
         self.prepare(t, x, true)?;
-        Ok(self.diagnostics_prepared(t, x, None))
+        self.diagnostics_prepared(t, x, None)
     }
 
     pub(super) fn diagnostics_prepared(
@@ -93,11 +112,18 @@ impl Simulation {
         t: f64,
         x: &[f64],
         row: Option<&mut Vec<f64>>,
-    ) -> Diagnostics {
+    ) -> Result<Diagnostics, SystemError> {
         // `prepare` ran kinematics on this state.
-        let kinetic =
-            kinetic_energy_after_kinematics(&self.model.tree, &self.data.tree, &self.data.v);
-        let (p, h) = momentum(&self.model.tree, &self.data.tree);
+        let (kinetic, strain) = match (&self.model.flex, &mut self.data.flex) {
+            (Some(f), Some(w)) => {
+                flexible::energy(f, &mut w.data, &w.q, &w.v).map_err(SystemError::from_error)?
+            }
+            _ => (
+                kinetic_energy_after_kinematics(&self.model.tree, &self.data.tree, &self.data.v),
+                0.0,
+            ),
+        };
+        let (p, h) = self.momentum();
         let rotor_effect = self.model.rotor_effect;
         let potential = self.with_context(t, x, true, |ctx, hooks| {
             let mut potential = 0.0;
@@ -115,12 +141,12 @@ impl Simulation {
             }
             potential
         });
-        Diagnostics {
+        Ok(Diagnostics {
             kinetic,
-            potential,
+            potential: potential + strain,
             h,
             p,
-        }
+        })
     }
 }
 
@@ -129,7 +155,8 @@ impl Simulation {
 pub struct Diagnostics {
     /// Kinetic energy (relative to the centre-of-mass frame when there is an orbit).
     pub kinetic: f64,
-    /// Potential energy of the effects (springs, gravity gradient).
+    /// Potential energy of the effects (springs, gravity gradient) and the flexible bodies'
+    /// strain energy `½ Σ ωₖ² ηₖ²`.
     pub potential: f64,
     /// Angular momentum about the centre of mass (N m s).
     pub h: Vec3,

@@ -34,6 +34,8 @@ fn layout_free_2() -> StateLayout {
         omega: 6..9,
         velocity: 9..12,
         rates: 12..14,
+        eta: 14..14,
+        etadot: 14..14,
         effects: vec![],
         len: 14,
     }

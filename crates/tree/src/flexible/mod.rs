@@ -5,7 +5,9 @@
 //!   given) and, for each hinge on a flexible parent, the [`NodeShape`]s at its point that
 //!   carry it. [`FlexData`] is its workspace: the per-call algorithms allocate nothing.
 //! - [`rnea()`] (inverse dynamics, [`bias`]), [`crba()`] (mass matrix), [`aba()`] (O(n)
-//!   forward dynamics; [`aba_hybrid`] with locked hinges), [`energy`].
+//!   forward dynamics; [`aba_hybrid`] with locked hinges), [`energy`]; for a simulation's
+//!   effects, [`forward_kinematics`] (the bodies' poses, into a rigid [`crate::Data`]) and
+//!   [`momentum`].
 //!
 //! Coordinates: `q = [rigid q…, η…]`, `v = [rigid v…, η̇…]` (see [`model`]). The model is
 //! linear in the deformation (modal integrals evaluated undeformed) and exactly Lagrangian:
@@ -39,6 +41,7 @@ pub mod beam;
 pub mod crba;
 pub mod data;
 mod dense;
+pub mod kinematics;
 pub mod modal;
 pub mod model;
 mod node;
@@ -48,6 +51,7 @@ pub use aba::{aba, aba_hybrid};
 pub use beam::Beam;
 pub use crba::crba;
 pub use data::FlexData;
+pub use kinematics::{forward_kinematics, momentum};
 pub use modal::{ModalData, NodeShape};
 pub use model::{FlexError, FlexModel, Flexible, Modes};
 pub use rnea::{bias, rnea};

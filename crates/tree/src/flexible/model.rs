@@ -71,6 +71,9 @@ pub enum FlexError {
         /// The hinge.
         hinge: String,
     },
+    /// [`FlexModel::with_rigid`] was given a tree that does not start with the model's bodies.
+    #[error("a grown tree must keep the flexible model's bodies first, unchanged")]
+    Grown,
     /// `[[I, P], [Pᵀ, 1]]` is not positive semidefinite.
     #[error("flexible body `{0}`: its mass matrix [[I, P], [Pᵀ, 1]] is not positive semidefinite")]
     NotPositiveDefinite(String),
@@ -102,6 +105,8 @@ pub struct FlexModel {
     pub(crate) children: Vec<Vec<usize>>,
     /// Per body: its beam's centrifugal stiffening, when on.
     pub(crate) stiffening: Vec<Option<Stiffening>>,
+    /// The flexible bodies as given (to attach them again to a grown tree).
+    pub(crate) spec: Vec<Flexible>,
 }
 
 fn invalid(body: &str, what: impl Into<String>) -> FlexError {
@@ -302,12 +307,43 @@ impl FlexModel {
             beams,
             children,
             stiffening,
+            spec: flexible.to_vec(),
         })
+    }
+
+    /// The same flexible bodies attached to `rigid`, a tree grown from this one by bodies
+    /// appended after its own (a simulation's reaction-wheel rotors): the first bodies must
+    /// be this model's, in order, with the same names and inertias. The modal damping
+    /// (per mode, as a modes file may give it) is kept. A body added on a flexible parent
+    /// rides on the deformation at its hinge point like any other.
+    pub fn with_rigid(&self, rigid: Model) -> Result<FlexModel, FlexError> {
+        let n = self.rigid.n_bodies();
+        let same = rigid.n_bodies() >= n
+            && self
+                .rigid
+                .bodies()
+                .iter()
+                .zip(rigid.bodies())
+                .all(|(a, b)| a.name == b.name && a.inertia == b.inertia);
+        if !same {
+            return Err(FlexError::Grown);
+        }
+        let mut grown = FlexModel::attach(rigid, &self.spec)?;
+        grown.damping.copy_from_slice(&self.damping);
+        Ok(grown)
     }
 
     /// The rigid model (the flexible bodies' undeformed inertias).
     pub fn rigid(&self) -> &Model {
         &self.rigid
+    }
+    /// The flexible bodies as given to [`FlexModel::build`] or [`FlexModel::attach`].
+    pub fn flexible(&self) -> &[Flexible] {
+        &self.spec
+    }
+    /// Body `i`'s beam, when its modes are a beam's.
+    pub fn beam(&self, i: usize) -> Option<&Beam> {
+        self.beams[i].as_ref()
     }
     /// Number of position coordinates: the rigid model's plus the elastic ones.
     pub fn nq(&self) -> usize {

@@ -407,7 +407,7 @@ fn add_inertia(body: &mut Body, add: RigidInertia) {
 /// The body a [`FlexError`] is about.
 fn body_of(e: &FlexError) -> Option<&str> {
     match e {
-        FlexError::Model(_) => None,
+        FlexError::Model(_) | FlexError::Grown => None,
         FlexError::UnknownBody(b) | FlexError::Duplicate(b) | FlexError::NotPositiveDefinite(b) => {
             Some(b)
         }

@@ -1,0 +1,67 @@
+//! Forward kinematics and momentum of a tree with flexible bodies, into the rigid
+//! [`Data`]'s poses: what the effects of a simulation read of each body.
+
+use super::data::{FlexData, check_state, velocities};
+use super::model::FlexModel;
+use crate::data::Data;
+use crate::energy::center_of_mass;
+use crate::error::DynamicsError;
+use crate::kinematics::base_pose;
+use crate::spatial::Vec3;
+
+/// Poses (`data.rotation`, `data.position`), hinge transforms (`data.xup`) and spatial
+/// velocities (`data.v`) of every body of `model`'s rigid tree, with each hinge on a
+/// flexible parent carried by the deformation at its point (as [`super::aba()`] moves it).
+/// A body's frame is its floating reference frame: its own deformation moves its material,
+/// not its frame. Fills `flex`'s first pass as well.
+pub fn forward_kinematics(
+    model: &FlexModel,
+    flex: &mut FlexData,
+    data: &mut Data,
+    q: &[f64],
+    v: &[f64],
+) -> Result<(), DynamicsError> {
+    check_state(model, q, v)?;
+    velocities(model, flex, q, v);
+    let rigid = &model.rigid;
+    let (att, pos) = base_pose(rigid, q);
+    data.rotation[0] = att.to_rotation_matrix().into_inner();
+    data.position[0] = pos;
+    data.v[0] = flex.v[0];
+    for i in 1..rigid.n_bodies() {
+        let p = rigid.parent[i].expect("non-root body has a parent");
+        let x = flex.xup[i];
+        data.xup[i] = x;
+        data.rotation[i] = data.rotation[p] * x.rot.transpose();
+        data.position[i] = data.position[p] + data.rotation[p] * x.trans;
+        data.v[i] = flex.v[i];
+    }
+    Ok(())
+}
+
+/// Total linear momentum (N s) and angular momentum about the system's centre of mass
+/// (N m s), inertial axes, after [`forward_kinematics`] on `(q, v)`: each body's
+/// `[[I, P], [Pᵀ, 1]] [vᵢ; η̇ᵢ]`'s frame part, `I vᵢ + P η̇ᵢ` (with stiffening, `I` less
+/// `G(η)`), the momentum conjugate to the frame's motion. The centre of mass is the
+/// undeformed bodies' (the model is linear in the deformation: its first moment `P η`
+/// moves the centre of mass to first order, and that shift is left out consistently with
+/// the kinetic energy).
+pub fn momentum(model: &FlexModel, data: &Data, q: &[f64], v: &[f64]) -> (Vec3, Vec3) {
+    let rigid = &model.rigid;
+    let nv = rigid.nv();
+    let mut p = Vec3::zeros();
+    let mut h_origin = Vec3::zeros();
+    for i in 0..rigid.n_bodies() {
+        let mut f = model.inertia_at(i, q).mul_motion(&data.v[i]);
+        for k in 0..model.modes[i] {
+            let e = model.offset[i] + k;
+            f += model.momentum[e] * v[nv + e];
+        }
+        let r = &data.rotation[i];
+        let lin = r * f.lin;
+        p += lin;
+        h_origin += r * f.ang + data.position[i].cross(&lin);
+    }
+    let c = center_of_mass(rigid, data);
+    (p, h_origin - c.cross(&p))
+}
