@@ -153,13 +153,13 @@ impl Scene {
     /// A fresh [`Simulation`] with exactly the enabled effects (fresh copies of them, in the
     /// order their dependencies give, see [`satsim_spacecraft::effects::order`]).
     pub fn simulation(&self) -> Result<Simulation, SimError> {
-        if self.flexible.is_some() {
-            // Until the simulation carries elastic coordinates (`SimulationBuilder::flexible`).
-            return Err(SimError::State(
-                "flexible bodies are not simulated yet".into(),
-            ));
+        let mut b = Simulation::builder(self.model.clone());
+        if let Some(f) = &self.flexible {
+            b = b
+                .flexible(f.clone())
+                .elastic(self.elastic.eta.clone(), self.elastic.etadot.clone());
         }
-        let mut b = Simulation::builder(self.model.clone())
+        let mut b = b
             .initial(self.initial.clone())
             .energy_budget(self.energy_budget);
         for e in self.effects.to_boxed() {

@@ -317,13 +317,11 @@ impl<'a> Parser<'a> {
             .build()
             .map_err(|e| self.error(Some(a.span()), format!("`armature`: {e}")))?;
         let flex = match flex {
-            // MERGE: FlexModel::attach(model.clone(), f.flexible()) once main has it.
-            Some(_) => {
-                return Err(self.error(
-                    Some(a.span()),
-                    "`armature` on a model with flexible bodies is not supported yet",
-                ));
-            }
+            // The same modes (and per-mode damping) on the tree with the armature.
+            Some(f) => Some(
+                f.with_rigid(model.clone())
+                    .map_err(|e| self.error(Some(a.span()), format!("`armature`: {e}")))?,
+            ),
             None => None,
         };
         Ok((model, flex))

@@ -31,7 +31,7 @@
 //! page can show and what the tests check (1e-6 m).
 
 use nalgebra::{Rotation3, SymmetricEigen, UnitQuaternion};
-use satsim_tree::flexible::Beam;
+use satsim_tree::flexible::{self, Beam, FlexData, FlexModel};
 use satsim_tree::spatial::{Mat3, Vec3};
 use satsim_tree::{BaseKind, Data, Model, center_of_mass, forward_kinematics};
 use serde::{Deserialize, Serialize};
@@ -511,6 +511,16 @@ impl ViewScene {
     }
 }
 
+/// The flexible kinematics of [`PoseRecorder::with_flexible`]: the model, its workspace, the
+/// `eta_<body>_<k>` column of every elastic coordinate, and `q`, `v` with them.
+struct FlexPoses {
+    model: FlexModel,
+    data: FlexData,
+    cols: Vec<usize>,
+    q: Vec<f64>,
+    v: Vec<f64>,
+}
+
 /// Records body poses from output rows (see the module's conventions), keeping at most
 /// `NUMBER_BUDGET / width` frames (at least 64).
 ///
@@ -542,6 +552,9 @@ pub struct PoseRecorder {
     orbit: Option<[usize; 3]>,
     /// Each beam's `eta_<body>_<k>` columns, in the frames' order.
     eta_cols: Vec<usize>,
+    /// With flexible bodies, their kinematics (a hinge on a flexible parent rides on its
+    /// deformation).
+    flex: Option<FlexPoses>,
     width: usize,
     max_frames: usize,
     stride: usize,
@@ -601,6 +614,7 @@ impl PoseRecorder {
             plotted,
             orbit,
             eta_cols: Vec::new(),
+            flex: None,
             width,
             max_frames: (NUMBER_BUDGET / width).max(64),
             stride: 1,
@@ -645,6 +659,42 @@ impl PoseRecorder {
         Ok(self)
     }
 
+    /// The poses of a tree with flexible bodies (`model`, whose rigid tree is the recorder's):
+    /// each hinge on a flexible parent carried by the deformation at its point, and each
+    /// beam drawn bent ([`PoseRecorder::with_beams`]). Every `eta_<body>_<k>` column must
+    /// be among `columns`.
+    pub fn with_flexible(self, model: &FlexModel, columns: &[String]) -> Result<Self, ViewError> {
+        let rigid = model.rigid();
+        if rigid.n_bodies() != self.model.n_bodies() {
+            return Err(ViewError::Record(
+                "the flexible model is not the recorder's tree".into(),
+            ));
+        }
+        let beams: Vec<(usize, Beam)> = (0..rigid.n_bodies())
+            .filter_map(|i| model.beam(i).map(|b| (i, b.clone())))
+            .collect();
+        let mut rec = self.with_beams(&beams, columns)?;
+        let mut cols = Vec::with_capacity(model.n_elastic());
+        for i in 0..rigid.n_bodies() {
+            for k in 1..=model.modes(i) {
+                let c = format!("eta_{}_{k}", rigid.bodies()[i].name());
+                cols.push(
+                    columns.iter().position(|n| *n == c).ok_or_else(|| {
+                        ViewError::Record(format!("the rows have no `{c}` column"))
+                    })?,
+                );
+            }
+        }
+        rec.flex = Some(FlexPoses {
+            data: FlexData::new(model),
+            q: model.neutral(),
+            v: vec![0.0; model.nv()],
+            model: model.clone(),
+            cols,
+        });
+        Ok(rec)
+    }
+
     /// Sets the most frames kept (at least 2); the recorder halves its frames when full.
     pub fn with_max_frames(mut self, max_frames: usize) -> Self {
         self.max_frames = max_frames.max(2);
@@ -663,8 +713,18 @@ impl PoseRecorder {
         for (k, c) in self.angle_cols.iter().enumerate() {
             self.q[nq0 + k] = c.map_or(0.0, |c| row[c]);
         }
-        forward_kinematics(&self.model, &mut self.data, &self.q, &self.v)
-            .map_err(|e| ViewError::Record(e.to_string()))?;
+        match &mut self.flex {
+            Some(fx) => {
+                let nq = self.q.len();
+                fx.q[..nq].copy_from_slice(&self.q);
+                for (j, &c) in fx.cols.iter().enumerate() {
+                    fx.q[nq + j] = row[c];
+                }
+                flexible::forward_kinematics(&fx.model, &mut fx.data, &mut self.data, &fx.q, &fx.v)
+            }
+            None => forward_kinematics(&self.model, &mut self.data, &self.q, &self.v),
+        }
+        .map_err(|e| ViewError::Record(e.to_string()))?;
         let origin = match self.model.base() {
             BaseKind::Free => center_of_mass(&self.model, &self.data),
             BaseKind::Fixed => Vec3::zeros(),
