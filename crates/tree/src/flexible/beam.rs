@@ -306,7 +306,7 @@ impl Stiffening {
         }
         (out, rate)
     }
-    /// `G = A₀ s₀ + A₁ s₁ − A₂ s₂` (`s` from [`Stiffening::forms`]): the body's inertia is
+    /// `G = A₀ s₀ + A₁ s₁ − A₂ s₂` (`s` from `forms`): the body's inertia is
     /// `I − G`, the foreshortening taking `½ ωᵀ (A₀ s₀ + A₁ s₁) ω` of kinetic energy and the
     /// deflection adding `½ ωᵀ A₂ ω s₂`.
     #[inline]
