@@ -176,8 +176,18 @@ impl Simulation {
         if let Some(i) = m.rotor_effect {
             d.v[nb + n..nb + n + m.n_rotors].copy_from_slice(&x[m.own[i].clone()]);
         }
-        // A flexible tree's coordinates: the rigid ones, then η and η̇ (its velocity vector is
-        // never one run of the state, so the early return above is not taken).
+        // A flexible tree's velocity vector is never one run of the state, so the early
+        // return above is not taken.
+        if d.flex.is_some() {
+            self.unpack_elastic(x);
+        }
+    }
+
+    /// A flexible tree's coordinates: the rigid ones, then `η` and `η̇`. Apart, so that the
+    /// rigid path's `unpack` stays as small as it was (inlined, instruction for instruction).
+    #[inline(never)]
+    fn unpack_elastic(&mut self, x: &[f64]) {
+        let (l, d) = (&self.model.layout, &mut self.data);
         if let Some(w) = &mut d.flex {
             let (nq, nv) = (d.q.len(), d.v.len());
             w.q[..nq].copy_from_slice(&d.q);
@@ -189,19 +199,31 @@ impl Simulation {
 
     /// Stage 2: forward kinematics when this pass asks for it or an effect needs it; returns
     /// whether the poses are now current.
+    #[inline]
     pub(super) fn kinematics(&mut self, asked: bool) -> Result<bool, SystemError> {
         let kin = asked || self.data.needs_kinematics;
         if kin {
-            let d = &mut self.data;
-            match (&self.model.flex, &mut d.flex) {
-                (Some(f), Some(w)) => {
-                    flexible::forward_kinematics(f, &mut w.data, &mut d.tree, &w.q, &w.v)
-                }
-                _ => forward_kinematics(&self.model.tree, &mut d.tree, &d.q, &d.v),
+            if self.model.flex.is_some() {
+                self.flexible_kinematics()?;
+            } else {
+                let d = &mut self.data;
+                forward_kinematics(&self.model.tree, &mut d.tree, &d.q, &d.v)
+                    .map_err(SystemError::from_error)?;
             }
-            .map_err(SystemError::from_error)?;
         }
         Ok(kin)
+    }
+
+    /// The poses of a flexible tree (its hinges carried by the deformation). Apart, so that
+    /// the rigid path's `kinematics` stays inlined.
+    #[inline(never)]
+    fn flexible_kinematics(&mut self) -> Result<(), SystemError> {
+        let d = &mut self.data;
+        if let (Some(f), Some(w)) = (&self.model.flex, &mut d.flex) {
+            flexible::forward_kinematics(f, &mut w.data, &mut d.tree, &w.q, &w.v)
+                .map_err(SystemError::from_error)?;
+        }
+        Ok(())
     }
 
     /// Linear momentum and angular momentum about the centre of mass (inertial axes) after

@@ -220,11 +220,19 @@ impl Beam {
     }
 }
 
-/// The centrifugal stiffening of a beam on a body spinning at `ω` (body axes): the axial
-/// force `N(x) = ρA ∫ₓᴸ ωᵀ A(ξ) ω dξ` of the centrifugal field `−ω × (ω × r)` along the beam
-/// (`A(ξ) = A₀ + ξ A₁`, `A₀ = (r₀·a) 1 − sym(r₀ aᵀ)`, `A₁ = 1 − a aᵀ`) gives the geometric
-/// stiffness `K_g(ω) = ∫ N φᵢ' φⱼ' dx = (ωᵀ A₀ ω) J₀ + (ωᵀ A₁ ω) J₁`, with
-/// `J₀ = ρA ∫ (L − x) φᵢ' φⱼ' dx` and `J₁ = ρA ∫ (L² − x²)/2 φᵢ' φⱼ' dx` (row-major `m x m`).
+/// The second-order (in `η`) inertia of a beam on a body spinning at `ω` (body axes), both
+/// parts or neither (`stiffening`): with the first alone, bending in the plane of the spin
+/// stiffens as `ω₀² + 1.193 Ω²` instead of `ω₀² + 0.193 Ω²`; with the second alone it softens
+/// as `ω₀² − Ω²` and diverges once `Ω > ω₀`.
+///
+/// - The centrifugal stiffening: the axial force `N(x) = ρA ∫ₓᴸ ωᵀ A(ξ) ω dξ` of the
+///   centrifugal field `−ω × (ω × r)` along the beam (`A(ξ) = A₀ + ξ A₁`,
+///   `A₀ = (r₀·a) 1 − sym(r₀ aᵀ)`, `A₁ = 1 − a aᵀ`) gives the geometric stiffness
+///   `K_g(ω) = ∫ N φᵢ' φⱼ' dx = (ωᵀ A₀ ω) J₀ + (ωᵀ A₁ ω) J₁`, with
+///   `J₀ = ρA ∫ (L − x) φᵢ' φⱼ' dx` and `J₁ = ρA ∫ (L² − x²)/2 φᵢ' φⱼ' dx` (row-major `m x m`).
+/// - The deflection's own rotational inertia `∫ ρA (|u|² 1 − u uᵀ) = A₂ ηᵀη`,
+///   `A₂ = 1 − b bᵀ` (mass-orthonormal modes along one `bend` `b`): the deflected sections'
+///   centrifugal load, `−(ωᵀ A₂ ω) η` on the modes (the softening of in-plane bending).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Stiffening {
     /// `A₀` (m), body axes.
@@ -235,10 +243,13 @@ pub struct Stiffening {
     pub j0: Vec<f64>,
     /// `J₁` (dimensionless), row-major.
     pub j1: Vec<f64>,
+    /// `A₂ = 1 − b bᵀ`, body axes.
+    pub a2: crate::spatial::Mat3,
 }
 
 impl Beam {
-    /// The beam's centrifugal-stiffening integrals.
+    /// The beam's second-order inertia: the centrifugal-stiffening integrals and the
+    /// deflection's own inertia.
     pub fn stiffening(&self) -> Stiffening {
         let rule = gauss_legendre(POINTS);
         let modes = self.cantilever_modes();
@@ -267,6 +278,7 @@ impl Beam {
             a1: id - a * a.transpose(),
             j0,
             j1,
+            a2: id - self.bend * self.bend.transpose(),
         }
     }
 }
@@ -274,11 +286,11 @@ impl Beam {
 // Row-major m x m matrices against m-vectors: index loops read best.
 #[allow(clippy::needless_range_loop)]
 impl Stiffening {
-    /// `(ηᵀ J₀ η, ηᵀ J₁ η)` and, with `x = η̇`, `(2 η̇ᵀ J₀ η, 2 η̇ᵀ J₁ η)`.
+    /// `[ηᵀ J₀ η, ηᵀ J₁ η, ηᵀ η]` and their rates `[2 η̇ᵀ J₀ η, 2 η̇ᵀ J₁ η, 2 η̇ᵀ η]`.
     #[inline]
-    pub(crate) fn forms(&self, eta: &[f64], etad: &[f64]) -> [f64; 4] {
+    pub(crate) fn forms(&self, eta: &[f64], etad: &[f64]) -> ([f64; 3], [f64; 3]) {
         let m = eta.len();
-        let mut out = [0.0; 4];
+        let (mut out, mut rate) = ([0.0; 3], [0.0; 3]);
         for k in 0..m {
             let (mut a, mut b) = (0.0, 0.0);
             for l in 0..m {
@@ -287,23 +299,28 @@ impl Stiffening {
             }
             out[0] += eta[k] * a;
             out[1] += eta[k] * b;
-            out[2] += 2.0 * etad[k] * a;
-            out[3] += 2.0 * etad[k] * b;
+            out[2] += eta[k] * eta[k];
+            rate[0] += 2.0 * etad[k] * a;
+            rate[1] += 2.0 * etad[k] * b;
+            rate[2] += 2.0 * etad[k] * eta[k];
         }
-        out
+        (out, rate)
     }
-    /// `G = A₀ s₀ + A₁ s₁`: the kinetic energy lost to foreshortening is `½ ωᵀ G ω`.
+    /// `G = A₀ s₀ + A₁ s₁ − A₂ s₂` (`s` from `forms`): the body's inertia is
+    /// `I − G`, the foreshortening taking `½ ωᵀ (A₀ s₀ + A₁ s₁) ω` of kinetic energy and the
+    /// deflection adding `½ ωᵀ A₂ ω s₂`.
     #[inline]
-    pub(crate) fn g(&self, s0: f64, s1: f64) -> crate::spatial::Mat3 {
-        self.a0 * s0 + self.a1 * s1
+    pub(crate) fn g(&self, s: &[f64; 3]) -> crate::spatial::Mat3 {
+        self.a0 * s[0] + self.a1 * s[1] - self.a2 * s[2]
     }
-    /// `out[k] += (K_g(ω) η)ₖ`.
+    /// `out[k] += (K_g(ω) η − (ωᵀ A₂ ω) η)ₖ` (`−∂T/∂η` of the second-order inertia).
     #[inline]
     pub(crate) fn add_force(&self, omega: &Vec3, eta: &[f64], out: &mut [f64]) {
         let m = eta.len();
         let (w0, w1) = (omega.dot(&(self.a0 * omega)), omega.dot(&(self.a1 * omega)));
+        let w2 = omega.dot(&(self.a2 * omega));
         for k in 0..m {
-            let mut s = 0.0;
+            let mut s = -w2 * eta[k];
             for l in 0..m {
                 s += (w0 * self.j0[k * m + l] + w1 * self.j1[k * m + l]) * eta[l];
             }

@@ -13,7 +13,8 @@
 //! linear in the deformation (modal integrals evaluated undeformed) and exactly Lagrangian:
 //! with no damping, kinetic plus strain energy is conserved. The derivation is the theory
 //! page "Flexible bodies". A beam's centrifugal stiffening is in the same Lagrangian (the
-//! foreshortening's kinetic energy `−½ ωᵀ G(η) ω`).
+//! foreshortening's kinetic energy and the deflection's own rotational inertia,
+//! `−½ ωᵀ G(η) ω`).
 //!
 //! ```
 //! use satsim_tree::{BaseKind, Body, Hinge, ModelBuilder, spatial::{Mat3, Vec3}};

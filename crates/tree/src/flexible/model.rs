@@ -39,7 +39,9 @@ pub struct Flexible {
     pub modes: Modes,
     /// Modal damping ratio `ζ` of every mode, `>= 0`.
     pub damping: f64,
-    /// Geometric (centrifugal) stiffening of a beam (ignored for given modes).
+    /// Geometric (centrifugal) stiffening of a beam (ignored for given modes): its
+    /// second-order inertia, the foreshortening's axial load and the deflection's own
+    /// centrifugal load (the softening of bending across the spin).
     pub stiffening: bool,
 }
 
@@ -103,7 +105,7 @@ pub struct FlexModel {
     pub(crate) beams: Vec<Option<Beam>>,
     /// Per body: its children.
     pub(crate) children: Vec<Vec<usize>>,
-    /// Per body: its beam's centrifugal stiffening, when on.
+    /// Per body: its beam's second-order inertia (centrifugal stiffening), when on.
     pub(crate) stiffening: Vec<Option<Stiffening>>,
     /// The flexible bodies as given (to attach them again to a grown tree).
     pub(crate) spec: Vec<Flexible>,
@@ -394,20 +396,21 @@ impl FlexModel {
         )
     }
     /// Body `i`'s rigid inertia at the deformation in `q`: with stiffening, the angular block
-    /// less `G(η)` (the foreshortened beam's kinetic energy `−½ ωᵀ G ω`); else the rigid
-    /// model's.
+    /// less `G(η)` (the foreshortening's kinetic energy `−½ ωᵀ (A₀ s₀ + A₁ s₁) ω` and the
+    /// deflection's own `½ ωᵀ A₂ ω ηᵀη`); else the rigid model's.
     #[inline]
     pub(crate) fn inertia_at(&self, i: usize, q: &[f64]) -> RigidInertia {
         let mut inertia = self.rigid.bodies[i].inertia;
         if let Some(s) = &self.stiffening[i] {
             let eta = &q[self.rigid.nq() + self.offset[i]..][..self.modes[i]];
-            let f = s.forms(eta, eta);
-            inertia.inertia -= s.g(f[0], f[1]);
+            let (f, _) = s.forms(eta, eta);
+            inertia.inertia -= s.g(&f);
         }
         inertia
     }
-    /// With stiffening, the foreshortening's terms in body `i`'s equations: the frame force
-    /// `−Ġ ω` (moment) and the modal forces `K_g(ω) η`, added to `frame` and `modal`.
+    /// With stiffening, the second-order inertia's terms in body `i`'s equations: the frame
+    /// force `−Ġ ω` (moment) and the modal forces `K_g(ω) η − (ωᵀ A₂ ω) η`, added to `frame`
+    /// and `modal`.
     #[inline]
     pub(crate) fn add_stiffening(
         &self,
@@ -422,8 +425,8 @@ impl FlexModel {
             let (o, m) = (self.offset[i], self.modes[i]);
             let eta = &q[self.rigid.nq() + o..][..m];
             let etad = &v[self.rigid.nv() + o..][..m];
-            let f = s.forms(eta, etad);
-            frame.ang -= s.g(f[2], f[3]) * omega;
+            let (_, rate) = s.forms(eta, etad);
+            frame.ang -= s.g(&rate) * omega;
             s.add_force(omega, eta, modal);
         }
     }
