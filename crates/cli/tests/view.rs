@@ -556,3 +556,68 @@ fn the_page_plays_the_run_in_a_real_browser() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A cantilever on a fixed base (its root body's frame is the inertial one), along y, bending
+/// along z, its first mode deflected at the start.
+const CANTILEVER_SCENE: &str = r#"duration = 0.5
+[model]
+base = { kind = "fixed" }
+[[model.body]]
+name = "beam"
+mass = 1.0
+inertia = [[0.1, 0.0, 0.0], [0.0, 0.1, 0.0], [0.0, 0.0, 0.1]]
+[model.body.flexible]
+beam = { root = [0.0, 0.0, 0.0], axis = [0.0, 1.0, 0.0], bend = [0.0, 0.0, 1.0],
+         length = 2.0, EI = 500.0, rho_A = 5.0, modes = 3 }
+[initial]
+flexible = { beam = { eta = [0.01, 0.0, 0.0], etadot = [0.0, 0.02, 0.0] } }
+[output]
+every = 0.05
+plots = false
+"#;
+
+#[test]
+fn the_page_draws_the_beam_bent_by_its_modes() {
+    let Some(chromium) = chromium() else {
+        return;
+    };
+    let dir = temp_dir("beam");
+    std::fs::write(dir.join("beam.toml"), CANTILEVER_SCENE).unwrap();
+    let o = satsim_in(&dir, &["run", "beam.toml", "--out", "out"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let page = dir.join("out/view.html").canonicalize().unwrap();
+    let work = dir.join("browser");
+    std::fs::create_dir_all(&work).unwrap();
+    let (header, rows) = csv(&dir.join("out/trajectory.csv"));
+    let tip = header.iter().position(|c| c == "tip_beam").unwrap();
+    let picks = [0, 3, rows.len() - 1];
+    let times: Vec<String> = picks.iter().map(|&k| rows[k][0].to_string()).collect();
+    let report = selftest(
+        &chromium,
+        &work,
+        &page,
+        &format!("bend=10&selftest={}", times.join(",")),
+    );
+    assert_eq!(report["bend"], 10.0, "{report}");
+    for (n, &k) in picks.iter().enumerate() {
+        let line = report["beams"][n][0].as_array().unwrap();
+        let at = |j: usize, c: usize| line[j][c].as_f64().unwrap();
+        // The clamped root stays put; the tip is at the beam's length along y, deflected along
+        // z by ten times the run's `tip_beam` (the poses keep 1e-9 of the modal coordinates).
+        for c in 0..3 {
+            assert!(at(0, c).abs() < 1e-12, "{line:?}");
+        }
+        let last = line.len() - 1;
+        assert!(at(last, 0).abs() < 1e-12 && (at(last, 1) - 2.0).abs() < 1e-12);
+        let expected = 10.0 * rows[k][tip];
+        assert!(
+            (at(last, 2) - expected).abs() < 1e-7,
+            "t = {}: {} vs {expected}",
+            rows[k][0],
+            at(last, 2)
+        );
+    }
+    // The tip moves: the drawing is not the straight beam.
+    assert!(rows.iter().map(|r| r[tip].abs()).fold(0.0, f64::max) > 1e-3);
+    let _ = std::fs::remove_dir_all(&dir);
+}

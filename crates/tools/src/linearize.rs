@@ -12,7 +12,10 @@
 //!    and `vel_x, vel_y, vel_z` (velocity of the root frame's origin, root axes, m/s);
 //! 3. `angle_<hinge>` for every hinge, file order (rad);
 //! 4. `rate_<hinge>` for every hinge, file order (rad/s);
-//! 5. every state of an enabled effect, in the run's order, named by the effect
+//! 5. with flexible bodies (contract section 14), `eta_<body>_<k>` for every elastic
+//!    coordinate (the modal coordinate of mode `k` from 1, √kg m; bodies in the model's
+//!    depth-first order), then `etadot_<body>_<k>` (√kg m/s);
+//! 6. every state of an enabled effect, in the run's order, named by the effect
 //!    (`orbit_r_x` … `orbit_v_z` in m and m/s, `wheel_<name>_speed` in rad/s).
 //!
 //! Every part but the attitude is the deviation of the run's state from the reference
@@ -264,6 +267,16 @@ pub fn linearize_simulation(sim: &mut Simulation) -> Result<Linearization, Linea
             x_index.push(Some(range.start + k));
             scale.push(1.0);
             frozen.push(locked[k]);
+        }
+    }
+    // A flexible body's modal coordinates and rates (√kg m, √kg m/s), after the hinge rates.
+    let elastic = sim.elastic_names();
+    for (prefix, range) in [("eta", &layout.eta), ("etadot", &layout.etadot)] {
+        for (name, i) in elastic.iter().zip(range.clone()) {
+            states.push(format!("{prefix}_{name}"));
+            x_index.push(Some(i));
+            scale.push(1.0);
+            frozen.push(false);
         }
     }
     for (name, range) in &layout.effects {

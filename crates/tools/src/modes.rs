@@ -24,7 +24,8 @@
 //! A mode's shape is the eigenvector of `λ` (the member of the pair with `Im λ > 0`),
 //! divided by its hinge-angle entry of largest modulus, so that this entry is exactly
 //! `1 + 0i`; when the mode moves no hinge (all hinge-angle entries below 10⁻⁹ of its
-//! largest entry, or a model without hinges) by its largest entry instead. [`Mode::shape`]
+//! largest entry, or a model without hinges) by its modal-coordinate (`eta_`, flexible
+//! bodies) entry of largest modulus, and when it moves neither, by its largest entry. [`Mode::shape`]
 //! holds the real parts, [`Mode::shape_imag`] the imaginary parts (zero for undamped or
 //! proportionally damped structures), both by state name.
 //!
@@ -129,6 +130,9 @@ pub fn modes_of(lin: &Linearization) -> Result<Modes, ModesError> {
     let angle_rows: Vec<usize> = (0..n)
         .filter(|&r| lin.states[active[r]].starts_with("angle_"))
         .collect();
+    let eta_rows: Vec<usize> = (0..n)
+        .filter(|&r| lin.states[active[r]].starts_with("eta_"))
+        .collect();
     for (i, &(re, im)) in values.iter().enumerate() {
         let modulus = re.hypot(im);
         if modulus <= zero {
@@ -143,8 +147,13 @@ pub fn modes_of(lin: &Linearization) -> Result<Modes, ModesError> {
                 .iter()
                 .copied()
                 .max_by(|&p, &q| magnitude(p).total_cmp(&magnitude(q)));
-            let pivot = match best_angle {
-                Some(p) if magnitude(p) > 1e-9 * overall => p,
+            let best_eta = eta_rows
+                .iter()
+                .copied()
+                .max_by(|&p, &q| magnitude(p).total_cmp(&magnitude(q)));
+            let pivot = match (best_angle, best_eta) {
+                (Some(p), _) if magnitude(p) > 1e-9 * overall => p,
+                (_, Some(p)) if magnitude(p) > 1e-9 * overall => p,
                 _ => (0..n)
                     .max_by(|&p, &q| magnitude(p).total_cmp(&magnitude(q)))
                     .unwrap_or(0),

@@ -4,7 +4,8 @@
 //! or `initial` file (JSON) has been read in as if it were an inline table. A segment names a
 //! table key, or, in an array (of tables or of numbers), a 0-based position:
 //! `model.body.2.mass`, `effects.hinge_springs.stiffness`, `initial.hinges.angle`,
-//! `orbit.altitude`. `satsim campaign` disperses the numbers such keys address; `satsim run
+//! `orbit.altitude`, a flexible body's `model.body.1.flexible.beam.EI`,
+//! `model.body.1.flexible.damping` and `initial.flexible.panel1.eta`. `satsim campaign` disperses the numbers such keys address; `satsim run
 //! --set` and `satsim campaign --set` replace any value by one written as a TOML value.
 //!
 //! An override replaces a value that the scene (or its model or state file) already gives by

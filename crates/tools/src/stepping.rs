@@ -115,6 +115,10 @@ impl SceneStepper {
                 let poses = match scene.view {
                     true => Some(
                         PoseRecorder::new(sim.model(), &columns, title)
+                            .and_then(|r| match sim.flex_model() {
+                                Some(f) => r.with_flexible(f, &columns),
+                                None => Ok(r),
+                            })
                             .map_err(|e| StepFailure::Failed(e.to_string()))?,
                     ),
                     false => None,

@@ -12,7 +12,7 @@ use super::{CliError, Output, at_least_one, to_json};
 use satsim_satellite::kernel::UnrolledAba;
 use satsim_tree::aba::aba;
 use satsim_tree::cholesky::crba_cholesky;
-use satsim_tree::io::{State, read_model, read_state};
+use satsim_tree::io::{State, read_state};
 use satsim_tree::{Data, Model, crba, rnea};
 use serde::Serialize;
 use std::hint::black_box;
@@ -83,7 +83,7 @@ pub fn default_state(model: &Model) -> State {
 pub fn run(args: &Args) -> Result<Output, CliError> {
     let model_path = &args.model;
     let calls = args.calls;
-    let model = read_model(model_path)?;
+    let model = super::read_rigid_model(model_path, "bench")?;
     let state_path = args.state.as_ref();
     let state = match state_path {
         Some(p) => read_state(p, &model)?,

@@ -26,7 +26,7 @@ pub fn run(args: &Args) -> Result<Output, CliError> {
         state_path,
         model,
         state,
-    } = ModelAndState::read(args)?;
+    } = ModelAndState::read(args, "dynamics")?;
     let Dynamics {
         dof,
         mass_matrix,

@@ -17,9 +17,9 @@ pub mod view;
 
 use clap::error::ErrorKind;
 use clap::{CommandFactory, Parser, Subcommand};
-use satsim_tree::io::FileError;
+use satsim_tree::io::{FileError, line_of};
 use std::fmt;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// The exit status of every error (bad input, usage, unavailable command).
 pub const EXIT_BAD_INPUT: u8 = 2;
@@ -172,10 +172,42 @@ pub struct ModelAndState {
     pub state: satsim_tree::State,
 }
 
+/// Reads the rigid model file at `path` for `satsim <command>`. A model with flexible bodies
+/// (`[body.flexible]`) is refused at the body's line: `dynamics`, `preprint` and `bench`
+/// evaluate the rigid algorithms; a flexible model runs in a scene.
+pub fn read_rigid_model(path: &Path, command: &str) -> Result<satsim_tree::Model, CliError> {
+    let e = match satsim_tree::io::read_model(path) {
+        Ok(m) => return Ok(m),
+        Err(e) => e,
+    };
+    let flexible = std::fs::read_to_string(path).ok().and_then(|text| {
+        let file = satsim_tree::io::parse_model_file(&text, path).ok()?;
+        file.body.iter().find_map(|b| {
+            let b = b.get_ref();
+            b.flexible
+                .as_ref()
+                .map(|f| (b.name.get_ref().clone(), line_of(&text, f.span().start)))
+        })
+    });
+    Err(match flexible {
+        Some((body, line)) => FileError::Schema {
+            path: path.to_path_buf(),
+            line: Some(line),
+            message: format!(
+                "body `{body}` is flexible: `satsim {command}` takes rigid models only; \
+                 run a model with flexible bodies in a scene (`satsim run`, `satsim modes`, \
+                 `satsim linearize`)"
+            ),
+        },
+        None => e,
+    }
+    .into())
+}
+
 impl ModelAndState {
-    /// Reads both files.
-    pub fn read(args: &ModelStateArgs) -> Result<Self, CliError> {
-        let model = satsim_tree::io::read_model(&args.model)?;
+    /// Reads both files (`command` names the command in messages).
+    pub fn read(args: &ModelStateArgs, command: &str) -> Result<Self, CliError> {
+        let model = read_rigid_model(&args.model, command)?;
         let state = satsim_tree::io::read_state(&args.state, &model)?;
         Ok(Self {
             model_path: args.model.clone(),

@@ -27,7 +27,7 @@ pub fn run(args: &Args) -> Result<Output, CliError> {
         state_path,
         model,
         state,
-    } = ModelAndState::read(args)?;
+    } = ModelAndState::read(args, "preprint")?;
     // Every number printed is finite: an overflow is an error naming the quantity (and the
     // state file), a singular (massless) model one naming the model file.
     let report = compare(&model, &state.q, &state.v, &state.tau).map_err(|e| {

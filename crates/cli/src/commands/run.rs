@@ -171,6 +171,10 @@ pub fn run_limited(
     let mut poses = match scene.view {
         true => Some(
             PoseRecorder::new(sim.model(), &columns, &title)
+                .and_then(|r| match sim.flex_model() {
+                    Some(f) => r.with_flexible(f, &columns),
+                    None => Ok(r),
+                })
                 .map_err(|e| CliError::Other(e.to_string()))?,
         ),
         false => None,

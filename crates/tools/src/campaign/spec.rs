@@ -4,7 +4,8 @@
 //! # Addressing
 //!
 //! A `key` is a dotted path into the scene's TOML tree ([`crate::scene_keys`], shared with
-//! `--set`): `model.body.2.mass`, `effects.hinge_springs.stiffness`, `initial.hinges.angle`.
+//! `--set`): `model.body.2.mass`, `effects.hinge_springs.stiffness`, `initial.hinges.angle`,
+//! a flexible body's `model.body.1.flexible.beam.EI` (`rho_A`) and `.flexible.damping`.
 //! The value at the end must be a number or an array of numbers; `index` picks one element
 //! of an array.
 //!

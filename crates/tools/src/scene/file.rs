@@ -2,7 +2,8 @@
 //! `[integrator]`, `[output]`, `[orbit]`, `[sensors]` and the `[effects.<name>]` sections (read by the
 //! effects themselves, see [`satsim_spacecraft::effects::registry`]).
 
-use satsim_tree::io::{ModelFile, StateFile};
+use super::flexible::ElasticFile;
+use satsim_tree::io::{BaseStateFile, HingesStateFile, ModelFile, StateFile};
 use serde::de::{self, MapAccess, Visitor};
 use serde::{Deserialize, Deserializer};
 use std::collections::BTreeMap;
@@ -23,8 +24,21 @@ pub enum ModelSource {
 pub enum StateSource {
     /// A state file, relative to the scene file.
     Path(String),
-    /// An inline state (the state file's keys).
-    Inline(StateFile),
+    /// An inline state (the state file's keys) and its `flexible` entries (see
+    /// [`super::flexible`]), in the order of their bodies' names.
+    Inline(StateFile, Vec<(String, Spanned<ElasticFile>)>),
+}
+
+/// An inline `[initial]` table: the state file's keys and `flexible`.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct InitialTable {
+    #[serde(default)]
+    base: Option<BaseStateFile>,
+    #[serde(default)]
+    hinges: Option<HingesStateFile>,
+    #[serde(default)]
+    flexible: Option<BTreeMap<String, Spanned<ElasticFile>>>,
 }
 
 struct SourceVisitor<T>(std::marker::PhantomData<T>);
@@ -52,7 +66,13 @@ impl<'de> Visitor<'de> for SourceVisitor<StateSource> {
         Ok(StateSource::Path(v.to_owned()))
     }
     fn visit_map<A: MapAccess<'de>>(self, map: A) -> Result<Self::Value, A::Error> {
-        StateFile::deserialize(de::value::MapAccessDeserializer::new(map)).map(StateSource::Inline)
+        InitialTable::deserialize(de::value::MapAccessDeserializer::new(map)).map(|t| {
+            let state = StateFile {
+                base: t.base,
+                hinges: t.hinges,
+            };
+            StateSource::Inline(state, t.flexible.unwrap_or_default().into_iter().collect())
+        })
     }
 }
 

@@ -29,12 +29,14 @@
 //! handles the rest of the file:
 //!
 //! - [`file`](mod@file), the top level as written (serde structs);
+//! - [`flexible`](mod@flexible), flexible bodies and their initial elastic state;
 //! - [`parse`], the reader (model, initial state, armature, the effect sections);
 //! - [`integrator`], the `[integrator]` table;
 //! - [`orbit`], the `[orbit]` table;
 //! - [`sensors`](mod@sensors), the `[sensors]` table.
 
 pub mod file;
+pub mod flexible;
 pub mod integrator;
 pub mod orbit;
 pub mod parse;
@@ -42,6 +44,7 @@ pub mod sensors;
 
 pub use file::OrbitFile;
 pub use file::{ArmatureFile, IntegratorFile, ModelSource, OutputFile, SceneFile, StateSource};
+pub use flexible::Elastic;
 pub use orbit::MIN_ALTITUDE;
 pub use satsim_spacecraft::effects::SceneText;
 
@@ -49,6 +52,7 @@ use crate::scene_keys::{self, Override};
 use satsim_integrate::Options;
 use satsim_spacecraft::effects::{EffectSet, Registry};
 use satsim_spacecraft::simulation::{SimError, Simulation};
+use satsim_tree::flexible::FlexModel;
 use satsim_tree::io::FileError;
 use satsim_tree::{Model, State};
 use std::path::{Path, PathBuf};
@@ -58,10 +62,15 @@ use std::path::{Path, PathBuf};
 pub struct Scene {
     /// The scene file (for messages); `<inline>` for scenes built in code.
     pub path: PathBuf,
-    /// The spacecraft.
+    /// The spacecraft (with flexible bodies, their rigid tree: `flexible`'s `rigid()`).
     pub model: Model,
-    /// Its initial state.
+    /// Its flexible bodies' modes (`[body.flexible]`), when it has any.
+    pub flexible: Option<FlexModel>,
+    /// Its initial state (the rigid coordinates).
     pub initial: State,
+    /// Its initial elastic state (`[initial] flexible`), in `flexible`'s coordinate order;
+    /// empty without flexible bodies.
+    pub elastic: Elastic,
     /// Duration (s).
     pub duration: f64,
     /// t = 0 as a date (the scene's `epoch`), when it has one.
@@ -126,7 +135,9 @@ impl Scene {
         Self {
             path: PathBuf::from("<inline>"),
             model,
+            flexible: None,
             initial,
+            elastic: Elastic::default(),
             duration,
             epoch: None,
             options: integrator::default_options(),
@@ -142,7 +153,13 @@ impl Scene {
     /// A fresh [`Simulation`] with exactly the enabled effects (fresh copies of them, in the
     /// order their dependencies give, see [`satsim_spacecraft::effects::order`]).
     pub fn simulation(&self) -> Result<Simulation, SimError> {
-        let mut b = Simulation::builder(self.model.clone())
+        let mut b = Simulation::builder(self.model.clone());
+        if let Some(f) = &self.flexible {
+            b = b
+                .flexible(f.clone())
+                .elastic(self.elastic.eta.clone(), self.elastic.etadot.clone());
+        }
+        let mut b = b
             .initial(self.initial.clone())
             .energy_budget(self.energy_budget);
         for e in self.effects.to_boxed() {

@@ -5,11 +5,13 @@
 
 use super::Scene;
 use super::file::{ArmatureFile, ModelSource, SceneFile, StateSource};
+use super::flexible::{Elastic, elastic_state, json_line, parse_state_json};
 use crate::scene_keys;
 use satsim_integrate::Options;
 use satsim_spacecraft::effects::section::reword;
 use satsim_spacecraft::effects::{EffectSet, Registry, SceneText, Section};
-use satsim_tree::io::{FileError, FrameMotion, line_of, with_key};
+use satsim_tree::flexible::FlexModel;
+use satsim_tree::io::{FileError, FrameMotion, ModelFile, flex_model_of, line_of, with_key};
 use satsim_tree::{Model, State};
 
 use std::collections::BTreeMap;
@@ -56,15 +58,22 @@ impl<'a> Parser<'a> {
         let dir = self.path().parent().unwrap_or(Path::new("")).to_path_buf();
 
         // Model and initial state.
-        let model = match file.model.get_ref() {
+        let (model, flex) = match file.model.get_ref() {
             ModelSource::Path(p) => {
-                satsim_tree::read_model(existing(self, &dir, p, file.model.span(), "model")?)?
+                let model_path = existing(self, &dir, p, file.model.span(), "model")?;
+                let text =
+                    std::fs::read_to_string(&model_path).map_err(|source| FileError::Read {
+                        path: model_path.clone(),
+                        source,
+                    })?;
+                let mf = satsim_tree::io::parse_model_file(&text, &model_path)?;
+                built(&mf, &text, &model_path)?
             }
-            ModelSource::Inline(m) => m.build().map_err(|e| e.in_file(self.text(), self.path()))?,
+            ModelSource::Inline(m) => built(m, self.text(), self.path())?,
         };
-        let model = match &file.armature {
-            Some(a) => self.armature(model, a)?,
-            None => model,
+        let (model, flex) = match &file.armature {
+            Some(a) => self.armature(model, flex, a)?,
+            None => (model, flex),
         };
         // The orbit first: a state relative to the orbital frame needs its frame at t = 0.
         let orbit = match &file.orbit {
@@ -79,6 +88,7 @@ impl<'a> Parser<'a> {
             }
         });
         let mut warnings = Vec::new();
+        let mut elastic = Elastic::rest(flex.as_ref());
         let initial = match file.initial.as_ref().map(|s| (s.get_ref(), s.span())) {
             None => State::rest(&model),
             Some((StateSource::Path(p), span)) => {
@@ -88,7 +98,17 @@ impl<'a> Parser<'a> {
                         path: state_path.clone(),
                         source,
                     })?;
-                let sf = satsim_tree::io::parse_state_file(&text, &state_path)?;
+                let (sf, given) = parse_state_json(&text, &state_path)?;
+                elastic = elastic_state(
+                    flex.as_ref(),
+                    &model,
+                    given.iter().map(|(b, e)| (b.as_str(), e)),
+                )
+                .map_err(|(k, message)| FileError::Schema {
+                    path: state_path.clone(),
+                    line: json_line(&text, &given[k].0),
+                    message,
+                })?;
                 warnings.extend(
                     sf.warnings()
                         .into_iter()
@@ -97,7 +117,13 @@ impl<'a> Parser<'a> {
                 sf.resolve_in_frame(&model, orbital.as_ref())
                     .map_err(|e| e.in_file(&state_path))?
             }
-            Some((StateSource::Inline(s), span)) => {
+            Some((StateSource::Inline(s, given), span)) => {
+                elastic = elastic_state(
+                    flex.as_ref(),
+                    &model,
+                    given.iter().map(|(b, e)| (b.as_str(), e.get_ref())),
+                )
+                .map_err(|(k, m)| self.error(Some(given[k].1.span()), format!("initial.{m}")))?;
                 warnings.extend(s.warnings().into_iter().map(|w| {
                     format!(
                         "{}:{}: initial.{w}",
@@ -154,7 +180,9 @@ impl<'a> Parser<'a> {
         let scene = Scene {
             path,
             model,
+            flexible: flex,
             initial,
+            elastic,
             duration,
             epoch,
             options,
@@ -252,8 +280,13 @@ impl<'a> Parser<'a> {
         Ok(())
     }
 
-    /// The model with the scene's `armature` on its hinges.
-    fn armature(&self, model: Model, a: &Spanned<ArmatureFile>) -> Result<Model, FileError> {
+    /// The model (and its flexible bodies) with the scene's `armature` on its hinges.
+    fn armature(
+        &self,
+        model: Model,
+        flex: Option<FlexModel>,
+        a: &Spanned<ArmatureFile>,
+    ) -> Result<(Model, Option<FlexModel>), FileError> {
         let n = model.n_hinges();
         let values = match a.get_ref() {
             ArmatureFile::All(v) => vec![*v; n],
@@ -280,10 +313,35 @@ impl<'a> Parser<'a> {
         for (hinge, v) in builder.hinges_mut().iter_mut().zip(values) {
             hinge.armature = v;
         }
-        builder
+        let model = builder
             .build()
-            .map_err(|e| self.error(Some(a.span()), format!("`armature`: {e}")))
+            .map_err(|e| self.error(Some(a.span()), format!("`armature`: {e}")))?;
+        let flex = match flex {
+            // The same modes (and per-mode damping) on the tree with the armature.
+            Some(f) => Some(
+                f.with_rigid(model.clone())
+                    .map_err(|e| self.error(Some(a.span()), format!("`armature`: {e}")))?,
+            ),
+            None => None,
+        };
+        Ok((model, flex))
     }
+}
+
+/// The rigid model of a model file (deserialised from `text`, at `origin`) and, when a body
+/// has `[body.flexible]`, its flexible model (whose rigid tree the model is). A rigid file is
+/// built as `read_model` builds it.
+fn built(
+    file: &ModelFile,
+    text: &str,
+    origin: &Path,
+) -> Result<(Model, Option<FlexModel>), FileError> {
+    if file.body.iter().all(|b| b.get_ref().flexible.is_none()) {
+        let model = file.build().map_err(|e| e.in_file(text, origin))?;
+        return Ok((model, None));
+    }
+    let flex = flex_model_of(file, text, origin)?;
+    Ok((flex.rigid().clone(), Some(flex)))
 }
 
 /// `dir/written`, which must exist: else an error at the scene's line of `key`.

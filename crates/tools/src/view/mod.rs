@@ -22,12 +22,16 @@
 //! the longest, so that thin plates stay visible); a massless body without `shape` is not
 //! drawn. A hinge is drawn on its axis through its point, both fixed in the child body
 //! (`rotationᵀ · axis` and `child_at`). With an orbit the nadir is `−r / |r|` (inertial). The
-//! page interpolates between frames: positions linearly, attitudes by slerp.
+//! page interpolates between frames: positions linearly, attitudes by slerp. A flexible
+//! body's beam ([`ViewBeam`]) is drawn as a polyline along its axis bent by its modes and the
+//! frame's modal coordinates, its deflection multiplied by the page's "bend ×" factor
+//! (default 1; `#bend=20` in the address sets it).
 //!
 //! Numbers are kept to 1e-9 (metres, quaternion components, radians), far below what the
 //! page can show and what the tests check (1e-6 m).
 
 use nalgebra::{Rotation3, SymmetricEigen, UnitQuaternion};
+use satsim_tree::flexible::{self, Beam, FlexData, FlexModel};
 use satsim_tree::spatial::{Mat3, Vec3};
 use satsim_tree::{BaseKind, Data, Model, center_of_mass, forward_kinematics};
 use serde::{Deserialize, Serialize};
@@ -121,6 +125,67 @@ pub struct ViewEvent {
     pub what: String,
 }
 
+/// A flexible body's beam (contract section 14), drawn as a polyline along its axis bent by
+/// its modes: the point at `x` along the axis is
+/// `root + x·axis + exaggeration · Σₖ ηₖ φₖ(x) · bend` in the body's frame, `ηₖ` the frame's
+/// modal coordinates of the body.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ViewBeam {
+    /// The flexible body (index into [`ViewScene::bodies`]).
+    pub body: usize,
+    /// The clamped end, body frame (m).
+    pub root: [f64; 3],
+    /// Unit direction root to tip, body frame.
+    pub axis: [f64; 3],
+    /// Unit direction of the deflection, body frame.
+    pub bend: [f64; 3],
+    /// Distances along the axis of the polyline's points (m), from 0 to the length.
+    pub points: Vec<f64>,
+    /// Per mode (from 1), the mass-normalised shape `φₖ` at each point (m/√kg).
+    pub shapes: Vec<Vec<f64>>,
+}
+
+/// Points of a beam's polyline ([`ViewBeam::points`]).
+pub const BEAM_POINTS: usize = 25;
+
+impl ViewBeam {
+    /// The beam of body `body` with its cantilever modes sampled at [`BEAM_POINTS`] points.
+    pub fn new(body: usize, beam: &Beam) -> Self {
+        let points: Vec<f64> = (0..BEAM_POINTS)
+            .map(|j| beam.length * j as f64 / (BEAM_POINTS - 1) as f64)
+            .collect();
+        let shapes = beam
+            .cantilever_modes()
+            .iter()
+            .map(|m| points.iter().map(|&x| m.shape(x)[0]).collect())
+            .collect();
+        let v = |a: &Vec3| [a.x, a.y, a.z];
+        Self {
+            body,
+            root: v(&beam.root),
+            axis: v(&beam.axis),
+            bend: v(&beam.bend),
+            points,
+            shapes,
+        }
+    }
+
+    /// The polyline in the body's frame (m) for the modal coordinates `eta` (one per mode),
+    /// deflections multiplied by `exaggeration` (what the page draws).
+    pub fn polyline(&self, eta: &[f64], exaggeration: f64) -> Vec<[f64; 3]> {
+        self.points
+            .iter()
+            .enumerate()
+            .map(|(j, &x)| {
+                let w: f64 = self.shapes.iter().zip(eta).map(|(s, e)| s[j] * e).sum();
+                std::array::from_fn(|c| {
+                    self.root[c] + x * self.axis[c] + exaggeration * w * self.bend[c]
+                })
+            })
+            .collect()
+    }
+}
+
 /// The scene shown: everything but the frames (`DIR/view.json`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ViewScene {
@@ -142,11 +207,24 @@ pub struct ViewScene {
     pub nadir: bool,
     /// The run's events.
     pub events: Vec<ViewEvent>,
+    /// The flexible bodies' beams (absent from the file when there is none).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub beams: Vec<ViewBeam>,
+}
+
+impl ViewScene {
+    /// Each beam's body name and number of modes, in the frames' order.
+    fn beam_modes(&self) -> impl Iterator<Item = (&str, usize)> {
+        self.beams
+            .iter()
+            .map(|b| (self.bodies[b.body].name.as_str(), b.shapes.len()))
+    }
 }
 
 /// The recorded frames, one row of [`Frames::width`] numbers each: `t`, the plotted angles
 /// (rad), for each body `x, y, z, q_w, q_x, q_y, q_z`, then (with an orbit) the nadir
-/// `x, y, z` (see the module's conventions).
+/// `x, y, z` (see the module's conventions), then each beam's modal coordinates
+/// `η₁ … ηₘ` (√kg m).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Frames {
     /// Numbers per frame.
@@ -190,6 +268,9 @@ fn pose_columns(scene: &ViewScene) -> Vec<String> {
     }
     if scene.nadir {
         c.extend(["nadir_x", "nadir_y", "nadir_z"].map(str::to_owned));
+    }
+    for (body, m) in scene.beam_modes() {
+        c.extend((1..=m).map(|k| format!("eta_{body}_{k}")));
     }
     c
 }
@@ -425,8 +506,19 @@ impl ViewScene {
             angles,
             nadir,
             events: Vec::new(),
+            beams: Vec::new(),
         }
     }
+}
+
+/// The flexible kinematics of [`PoseRecorder::with_flexible`]: the model, its workspace, the
+/// `eta_<body>_<k>` column of every elastic coordinate, and `q`, `v` with them.
+struct FlexPoses {
+    model: FlexModel,
+    data: FlexData,
+    cols: Vec<usize>,
+    q: Vec<f64>,
+    v: Vec<f64>,
 }
 
 /// Records body poses from output rows (see the module's conventions), keeping at most
@@ -458,6 +550,11 @@ pub struct PoseRecorder {
     /// The plotted angles' columns.
     plotted: Vec<usize>,
     orbit: Option<[usize; 3]>,
+    /// Each beam's `eta_<body>_<k>` columns, in the frames' order.
+    eta_cols: Vec<usize>,
+    /// With flexible bodies, their kinematics (a hinge on a flexible parent rides on its
+    /// deformation).
+    flex: Option<FlexPoses>,
     width: usize,
     max_frames: usize,
     stride: usize,
@@ -516,6 +613,8 @@ impl PoseRecorder {
             angle_cols,
             plotted,
             orbit,
+            eta_cols: Vec::new(),
+            flex: None,
             width,
             max_frames: (NUMBER_BUDGET / width).max(64),
             stride: 1,
@@ -526,6 +625,74 @@ impl PoseRecorder {
             previous: Vec::with_capacity(model.n_bodies()),
             frame: Vec::with_capacity(width),
         })
+    }
+
+    /// Draws the beams of flexible bodies, `(body index, beam)`, bent by the rows'
+    /// `eta_<body>_<k>` columns (`columns` as given to [`PoseRecorder::new`]), which must be
+    /// there. Call before recording.
+    pub fn with_beams(
+        mut self,
+        beams: &[(usize, Beam)],
+        columns: &[String],
+    ) -> Result<Self, ViewError> {
+        for (body, beam) in beams {
+            let b = ViewBeam::new(*body, beam);
+            let name = &self.scene.bodies[*body].name;
+            for k in 1..=b.shapes.len() {
+                let c = format!("eta_{name}_{k}");
+                let i = columns
+                    .iter()
+                    .position(|n| *n == c)
+                    .ok_or_else(|| ViewError::Record(format!("the rows have no `{c}` column")))?;
+                self.eta_cols.push(i);
+            }
+            self.scene.beams.push(b);
+        }
+        self.width = 1
+            + self.scene.angles.len()
+            + 7 * self.model.n_bodies()
+            + if self.scene.nadir { 3 } else { 0 }
+            + self.eta_cols.len();
+        self.max_frames = (NUMBER_BUDGET / self.width).max(64);
+        self.last = Vec::with_capacity(self.width);
+        self.frame = Vec::with_capacity(self.width);
+        Ok(self)
+    }
+
+    /// The poses of a tree with flexible bodies (`model`, whose rigid tree is the recorder's):
+    /// each hinge on a flexible parent carried by the deformation at its point, and each
+    /// beam drawn bent ([`PoseRecorder::with_beams`]). Every `eta_<body>_<k>` column must
+    /// be among `columns`.
+    pub fn with_flexible(self, model: &FlexModel, columns: &[String]) -> Result<Self, ViewError> {
+        let rigid = model.rigid();
+        if rigid.n_bodies() != self.model.n_bodies() {
+            return Err(ViewError::Record(
+                "the flexible model is not the recorder's tree".into(),
+            ));
+        }
+        let beams: Vec<(usize, Beam)> = (0..rigid.n_bodies())
+            .filter_map(|i| model.beam(i).map(|b| (i, b.clone())))
+            .collect();
+        let mut rec = self.with_beams(&beams, columns)?;
+        let mut cols = Vec::with_capacity(model.n_elastic());
+        for i in 0..rigid.n_bodies() {
+            for k in 1..=model.modes(i) {
+                let c = format!("eta_{}_{k}", rigid.bodies()[i].name());
+                cols.push(
+                    columns.iter().position(|n| *n == c).ok_or_else(|| {
+                        ViewError::Record(format!("the rows have no `{c}` column"))
+                    })?,
+                );
+            }
+        }
+        rec.flex = Some(FlexPoses {
+            data: FlexData::new(model),
+            q: model.neutral(),
+            v: vec![0.0; model.nv()],
+            model: model.clone(),
+            cols,
+        });
+        Ok(rec)
     }
 
     /// Sets the most frames kept (at least 2); the recorder halves its frames when full.
@@ -546,8 +713,18 @@ impl PoseRecorder {
         for (k, c) in self.angle_cols.iter().enumerate() {
             self.q[nq0 + k] = c.map_or(0.0, |c| row[c]);
         }
-        forward_kinematics(&self.model, &mut self.data, &self.q, &self.v)
-            .map_err(|e| ViewError::Record(e.to_string()))?;
+        match &mut self.flex {
+            Some(fx) => {
+                let nq = self.q.len();
+                fx.q[..nq].copy_from_slice(&self.q);
+                for (j, &c) in fx.cols.iter().enumerate() {
+                    fx.q[nq + j] = row[c];
+                }
+                flexible::forward_kinematics(&fx.model, &mut fx.data, &mut self.data, &fx.q, &fx.v)
+            }
+            None => forward_kinematics(&self.model, &mut self.data, &self.q, &self.v),
+        }
+        .map_err(|e| ViewError::Record(e.to_string()))?;
         let origin = match self.model.base() {
             BaseKind::Free => center_of_mass(&self.model, &self.data),
             BaseKind::Fixed => Vec3::zeros(),
@@ -581,6 +758,7 @@ impl PoseRecorder {
             let n = -r / r.norm();
             f.extend_from_slice(&[n.x, n.y, n.z]);
         }
+        f.extend(self.eta_cols.iter().map(|&c| row[c]));
         Ok(())
     }
 

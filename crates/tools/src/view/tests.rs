@@ -329,3 +329,98 @@ fn bad_kept_files_are_named_with_their_line() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A 2 m beam along the arm's x axis, bending along y, two modes.
+fn arm_beam() -> Beam {
+    Beam {
+        root: Vec3::new(-1.0, 0.0, 0.0),
+        axis: Vec3::x(),
+        bend: Vec3::y(),
+        length: 2.0,
+        ei: 50.0,
+        rho_a: 0.5,
+        modes: 2,
+    }
+}
+
+#[test]
+fn beams_are_drawn_bent_by_their_modal_coordinates() {
+    let model = arm();
+    let columns = cols(&["t", "angle_h", "eta_arm_1", "eta_arm_2", "tip_arm"]);
+    let rec = PoseRecorder::new(&model, &columns, "arm").unwrap();
+    let mut rec = rec.with_beams(&[(1, arm_beam())], &columns).unwrap();
+    let etas = [[0.0, 0.0], [0.3, 0.0], [0.0, -0.2], [0.1, 0.05]];
+    for (k, e) in etas.iter().enumerate() {
+        rec.record(&[k as f64, 0.1 * k as f64, e[0], e[1], 9.0])
+            .unwrap();
+    }
+    let view = rec.finish(&[]);
+    assert_eq!(view.frames.width, 1 + 1 + 14 + 2);
+    let beam = &view.scene.beams[0];
+    assert_eq!(beam.body, 1);
+    assert_eq!(beam.points.len(), BEAM_POINTS);
+    // A mass-normalised clamped-free mode of a uniform beam has φₙ(L) = 2 (−1)ⁿ⁺¹ / √(ρA L)
+    // at the tip, and nothing at the clamped root.
+    let tip = 2.0 / (0.5f64 * 2.0).sqrt();
+    for (k, e) in etas.iter().enumerate() {
+        let f = view.frames.frame(k);
+        assert_eq!(&f[16..18], e);
+        let line = beam.polyline(&f[16..18], 1.0);
+        let root = line[0];
+        assert!(
+            root[0] == -1.0 && root[1].abs() < 1e-15 && root[2] == 0.0,
+            "{root:?}"
+        );
+        let end = line[BEAM_POINTS - 1];
+        assert!((end[0] - 1.0).abs() < 1e-15 && end[2] == 0.0, "{end:?}");
+        let w = tip * (e[0] - e[1]);
+        assert!((end[1] - w).abs() < 1e-12 * tip, "{} vs {w}", end[1]);
+        // The exaggeration multiplies the deflection only.
+        let big = beam.polyline(&f[16..18], 10.0)[BEAM_POINTS - 1];
+        assert!((big[1] - 10.0 * w).abs() < 1e-11 * tip && big[0] == end[0]);
+    }
+    // The kept poses carry the modal coordinates and read back the same.
+    let dir = temp_dir("beam");
+    view.write(&dir).unwrap();
+    let header = std::fs::read_to_string(dir.join(POSES_CSV)).unwrap();
+    assert!(
+        header
+            .lines()
+            .next()
+            .unwrap()
+            .ends_with(",eta_arm_1,eta_arm_2"),
+        "{header}"
+    );
+    let back = ViewData::read(&dir).unwrap();
+    assert_eq!(back.frames.width, view.frames.width);
+    for (a, b) in back.frames.data.iter().zip(&view.frames.data) {
+        assert!((a - b).abs() <= 5e-10, "{a} {b}");
+    }
+    let (a, b) = (&back.scene.beams[0], &view.scene.beams[0]);
+    assert_eq!(
+        (a.body, a.root, a.axis, a.bend),
+        (b.body, b.root, b.axis, b.bend)
+    );
+    // JSON keeps the shapes to the last bit or so.
+    for (x, y) in a.shapes.iter().flatten().zip(b.shapes.iter().flatten()) {
+        assert!((x - y).abs() <= 1e-15 * tip, "{x} {y}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+    // A scene without beams writes no `beams` key (older pages and files are unchanged).
+    let plain = PoseRecorder::new(&model, &columns, "arm")
+        .unwrap()
+        .finish(&[]);
+    assert!(
+        !serde_json::to_string(&plain.scene)
+            .unwrap()
+            .contains("beams")
+    );
+    // The modal coordinates must be among the columns.
+    let short = cols(&["t", "angle_h", "eta_arm_1"]);
+    let e = PoseRecorder::new(&model, &short, "arm")
+        .unwrap()
+        .with_beams(&[(1, arm_beam())], &short)
+        .err()
+        .unwrap();
+    assert!(e.to_string().contains("`eta_arm_2`"), "{e}");
+}

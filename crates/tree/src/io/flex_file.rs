@@ -12,7 +12,7 @@
 //! node whose `at` equals its own `at` within [`MODES_FILE_NODE_TOLERANCE`].
 
 use super::error::{FileError, SpannedError, line_of};
-use super::model_file::{parse_model_file, schema_message, with_key};
+use super::model_file::{ModelFile, parse_model_file, schema_message, with_key};
 use super::read_text;
 use crate::flexible::model::MAX_BEAM_MODES;
 use crate::flexible::{Beam, FlexError, FlexModel, Flexible, ModalData, Modes, NodeShape};
@@ -419,6 +419,13 @@ fn body_of(e: &FlexError) -> Option<&str> {
 /// `origin` names the file in errors; a `modes_file` is read relative to its folder.
 pub fn parse_flex_model(text: &str, origin: &Path) -> Result<FlexModel, FileError> {
     let file = parse_model_file(text, origin)?;
+    flex_model_of(&file, text, origin)
+}
+
+/// The [`FlexModel`] of a model file already deserialised from `text` (the model file's, or
+/// a scene's whose inline `[model]` table it is: its spans are offsets into `text`).
+/// `origin` names the file in errors; a `modes_file` is read relative to its folder.
+pub fn flex_model_of(file: &ModelFile, text: &str, origin: &Path) -> Result<FlexModel, FileError> {
     let mut builder = file.builder().map_err(|e| e.in_file(text, origin))?;
     let mut flex = Vec::new();
     let mut per_mode_damping: Vec<(String, Vec<f64>)> = Vec::new();

@@ -1,0 +1,168 @@
+//! A scene's flexible bodies (contract section 14): the model's `[body.flexible]` tables read
+//! into a [`FlexModel`] (through [`satsim_tree::io::flex_model_of`], so that a model file or
+//! an inline `[model]` table is read alike), and the initial elastic state
+//!
+//! ```toml
+//! [initial]
+//! flexible = { panel1 = { eta = [0.01, 0.0, 0.0], etadot = [0.0, 0.0, 0.0] } }
+//! ```
+//!
+//! of `[initial]` or of a JSON state file (`"flexible": {"panel1": {"eta": […]}}`): per
+//! flexible body, `eta` (the modal coordinates, √kg m) and `etadot` (their rates, √kg m/s),
+//! one value per mode, each default zeros. The result is in [`FlexModel`]'s coordinate order:
+//! bodies in the model's depth-first order, modes from 1.
+
+use satsim_spacecraft::effects::section::reword;
+use satsim_tree::Model;
+use satsim_tree::flexible::FlexModel;
+use satsim_tree::io::{FileError, StateFile, line_of};
+use serde::Deserialize;
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// One body's initial elastic state as written.
+#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ElasticFile {
+    /// Modal coordinates, one per mode (√kg m), default zeros.
+    #[serde(default)]
+    pub eta: Option<Vec<f64>>,
+    /// Their rates (√kg m/s), default zeros.
+    #[serde(default)]
+    pub etadot: Option<Vec<f64>>,
+}
+
+/// The initial elastic state in [`FlexModel`]'s coordinate order (empty without flexible
+/// bodies).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Elastic {
+    /// `η` (√kg m).
+    pub eta: Vec<f64>,
+    /// `η̇` (√kg m/s).
+    pub etadot: Vec<f64>,
+}
+
+impl Elastic {
+    /// The elastic state at rest of `flex` (zeros; empty without flexible bodies).
+    pub fn rest(flex: Option<&FlexModel>) -> Self {
+        let n = flex.map_or(0, FlexModel::n_elastic);
+        Self {
+            eta: vec![0.0; n],
+            etadot: vec![0.0; n],
+        }
+    }
+}
+
+/// The elastic state of `flex` (whose rigid tree is `rigid`) from the written entries
+/// `(body, entry)`: zeros where not given. The error names the body and what is wrong (an
+/// unknown body, a body that is not flexible, a wrong length, a value that is not finite),
+/// with the index of its entry.
+pub fn elastic_state<'a>(
+    flex: Option<&FlexModel>,
+    rigid: &Model,
+    given: impl IntoIterator<Item = (&'a str, &'a ElasticFile)>,
+) -> Result<Elastic, (usize, String)> {
+    let mut out = Elastic::rest(flex);
+    for (k, (body, e)) in given.into_iter().enumerate() {
+        let flexible: Vec<&str> = flex
+            .map(|f| {
+                (0..rigid.n_bodies())
+                    .filter(|&i| f.modes(i) > 0)
+                    .map(|i| rigid.bodies()[i].name())
+                    .collect()
+            })
+            .unwrap_or_default();
+        let list = if flexible.is_empty() {
+            "the model has none".to_string()
+        } else {
+            format!("flexible bodies: {}", flexible.join(", "))
+        };
+        let Some(i) = rigid.body_index(body) else {
+            return Err((k, format!("flexible.{body}: no body of that name ({list})")));
+        };
+        let (Some(f), true) = (flex, flexible.contains(&body)) else {
+            return Err((
+                k,
+                format!("flexible.{body}: the body is not flexible ({list})"),
+            ));
+        };
+        let (o, m) = (f.elastic_offset(i), f.modes(i));
+        for (key, values, target) in [
+            ("eta", &e.eta, &mut out.eta),
+            ("etadot", &e.etadot, &mut out.etadot),
+        ] {
+            let Some(v) = values else { continue };
+            if v.len() != m {
+                return Err((
+                    k,
+                    format!(
+                        "flexible.{body}.{key}: expected {m} values (one per mode), got {}",
+                        v.len()
+                    ),
+                ));
+            }
+            if let Some(x) = v.iter().find(|x| !x.is_finite()) {
+                return Err((
+                    k,
+                    format!("flexible.{body}.{key}: values must be finite, got {x}"),
+                ));
+            }
+            target[o..o + m].copy_from_slice(v);
+        }
+    }
+    Ok(out)
+}
+
+/// A JSON state file with the optional `flexible` object.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct JsonState {
+    #[serde(default)]
+    base: Option<satsim_tree::io::BaseStateFile>,
+    #[serde(default)]
+    hinges: Option<satsim_tree::io::HingesStateFile>,
+    #[serde(default)]
+    flexible: Option<BTreeMap<String, ElasticFile>>,
+}
+
+/// A JSON state file's text read as the tree's [`StateFile`] and its `flexible` entries (in
+/// the order of their bodies' names). A file without `flexible` is read by
+/// [`satsim_tree::io::parse_state_file`] itself.
+pub fn parse_state_json(
+    text: &str,
+    path: &Path,
+) -> Result<(StateFile, Vec<(String, ElasticFile)>), FileError> {
+    let has_flexible = serde_json::from_str::<serde_json::Value>(text)
+        .ok()
+        .is_some_and(|v| v.get("flexible").is_some());
+    if !has_flexible {
+        return Ok((satsim_tree::io::parse_state_file(text, path)?, Vec::new()));
+    }
+    let s: JsonState = serde_json::from_str(text).map_err(|e| {
+        let full = e.to_string();
+        let message = match full.rfind(" at line ") {
+            Some(k) => full[..k].to_owned(),
+            None => full,
+        };
+        FileError::Schema {
+            path: path.to_path_buf(),
+            line: (e.line() > 0).then_some(e.line()),
+            message: reword(&message),
+        }
+    })?;
+    Ok((
+        StateFile {
+            base: s.base,
+            hinges: s.hinges,
+        },
+        s.flexible.unwrap_or_default().into_iter().collect(),
+    ))
+}
+
+/// The line of a JSON state file where the `flexible` entry of `body` is written (its key
+/// after `"flexible"`), for messages.
+pub fn json_line(text: &str, body: &str) -> Option<usize> {
+    let start = text.find("\"flexible\"")?;
+    let at = text[start..].find(&format!("\"{body}\""))? + start;
+    Some(line_of(text, at))
+}
