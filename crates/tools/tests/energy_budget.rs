@@ -132,6 +132,25 @@ fn every_example_scene_keeps_its_budget() {
     }
 }
 
+#[test]
+fn the_flexible_array_keeps_its_budget() {
+    // The deployment with flexible panels (examples/flexible_array.toml): strain energy in
+    // `V`, modal damping in `D`, the latches' impacts (at about 4.5 and 9.5 s) exciting the
+    // modes; 20 s of it, through both latches.
+    let scene =
+        Scene::read(examples().join("flexible_array.toml")).unwrap_or_else(|e| panic!("{e}"));
+    let mut sim = scene.simulation().expect("the scene builds");
+    assert_eq!(sim.layout().eta.len(), 9, "three panels of three modes");
+    let b = measure(&mut sim, &scene.options, 20.0);
+    assert_eq!(
+        sim.event_records()
+            .filter(|(_, e, _)| *e == "hinge_stops")
+            .count(),
+        2
+    );
+    assert_flat("flexible_array.toml", &b);
+}
+
 // ---- one scene per dissipative or actuated effect ----------------------------------------
 
 /// The preprint's satellite (`examples/satellite.toml`: bus, 3-DOF gimbal h1-h3, panels

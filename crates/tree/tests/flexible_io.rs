@@ -104,10 +104,7 @@ fn the_rigid_reader_refuses_flexible_bodies_at_their_line() {
         ),
         "{err}"
     );
-    assert!(
-        err.contains("`satsim run` do not support them yet"),
-        "{err}"
-    );
+    assert!(err.contains("run the model in a scene"), "{err}");
 }
 
 fn error_of(text: &str) -> String {

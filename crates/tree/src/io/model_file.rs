@@ -362,7 +362,8 @@ impl ModelFile {
                 span: Some(f.get_ref().key_span().unwrap_or_else(|| f.span())),
                 message: format!(
                     "body `{name}`: flexible bodies are read only by the flexible reader \
-                     (`read_flex_model`); the rigid model and `satsim run` do not support them yet"
+                     (`read_flex_model`); the rigid algorithms (`Model`, `satsim dynamics`) do \
+                     not take them: run the model in a scene"
                 ),
             });
         }
