@@ -44,16 +44,28 @@
 //! Equal to [`satsim_tree::aba::aba`] to round-off (tested on the preprint satellite and on
 //! random models of the layout, below; through [`satsim_tree::ForwardDynamics`], bit for bit
 //! the kernel's own result, in `tests/kernel.rs`).
+//!
+//! **Lanes of runs.** The kernel is written once over its scalar ([`Real`]): `UnrolledAba`
+//! is `UnrolledAba<f64>`, one run; [`UnrolledAba::gather`] makes `UnrolledAba<F64x<N>>`, `N`
+//! runs of one layout (a campaign's runs, their masses, inertias and hinge points dispersed)
+//! solved together, lane `k` of every argument being run `k`'s, and each lane's result bit
+//! for bit what that run's own kernel gives (tested below, on the AVX2 instance and on the
+//! baseline one). Where the CPU has AVX2 the lanes run an instance compiled for it, chosen at
+//! run time; a pivot test that not all lanes pass returns [`DynamicsError::LanesPart`] and
+//! the caller solves those runs one by one. Four lanes on AVX2 solve four runs in about half
+//! the time of four calls (`benches/lanes.rs`; the performance page has the figures).
 
-use nalgebra::DVector;
+use nalgebra::{DVector, Matrix3, Vector3};
 use satsim_tree::kernel_parts::{
     self, ChainPart, CoordAxis, SINGULAR_PIVOT_RELATIVE, add_linear_inv_transform, check_len,
     massless_hinges_below, offset_scale,
 };
+use satsim_tree::real::F64x;
+use satsim_tree::real::Real;
 use satsim_tree::spatial::{
-    ArticulatedInertia, Force, Mat3, Motion, RigidInertia, Transform, Vec3,
+    ArticulatedInertia, Force, Mat3, Motion, RigidInertia, Transform, Vec3, rotation_about,
 };
-use satsim_tree::{BaseKind, Data, DynamicsError, Input, Joint, Kernel, Model};
+use satsim_tree::{BaseKind, Data, DynamicsError, Input, Kernel, Model};
 
 /// The longest serial chain below the gimbal's tip that [`UnrolledAba`] takes.
 pub const MAX_SERIAL: usize = 6;
@@ -92,44 +104,62 @@ impl Locks {
 
 /// A balanced rotor on the base (a [`satsim_tree::Gyrostat`]).
 #[derive(Clone, Debug)]
-struct Rotor {
+struct Rotor<T: Real> {
     /// Unit spin axis, base coordinates.
-    axis: Vec3,
+    axis: Vector3<T>,
     /// `J a`: the axis times the axial moment of inertia (kg m²).
-    j_axis: Vec3,
+    j_axis: Vector3<T>,
     /// `1 / J`.
-    inv_j: f64,
+    inv_j: T,
     /// Its coordinate in `v`.
     dof: usize,
-    /// Its body (the index of its wrench in `fext`), its hinge, the hinge's coordinate axis
-    /// and its angle's index in `q`: only a wrench on the rotor needs its transform.
+    /// Its body (the index of its wrench in `fext`), its hinge (axis, fixed rotation where
+    /// not the identity, hinge point, child's origin), the hinge's coordinate axis and its
+    /// angle's index in `q`: only a wrench on the rotor needs its transform.
     body: usize,
-    joint: Joint,
+    hinge_axis: Vector3<T>,
+    rot0: Option<Matrix3<T>>,
+    at: Vector3<T>,
+    child_at: Vector3<T>,
+    /// The hinge's motion subspace `S` (its axial moment of a wrench is `Sᵀ f`).
+    s: Motion<T>,
     coord: Option<CoordAxis>,
     angle: usize,
 }
 
-impl Rotor {
-    /// `Xup` of the rotor's hinge at `q` (as `Model::xup`).
+impl<T: Real> Rotor<T> {
+    /// `Xup` of the rotor's hinge at `q`: `Joint::transform` (through its coordinate-axis
+    /// form where it has one, as `Model::xup`), the same arithmetic.
     #[inline]
-    fn xup(&self, q: &[f64]) -> Transform {
-        kernel_parts::hinge_transform(&self.joint, self.coord.as_ref(), q[self.angle])
+    fn xup(&self, q: &[T]) -> Transform<T> {
+        let phi = q[self.angle];
+        match &self.coord {
+            Some(a) => a.transform(phi, &self.at, &self.child_at),
+            None => {
+                let rot = rotation_about(&self.hinge_axis, phi);
+                let et = match &self.rot0 {
+                    None => rot,
+                    Some(r0) => rot * r0,
+                };
+                Transform::new(et.transpose(), self.at - et * self.child_at)
+            }
+        }
     }
 }
 
 /// A body of the serial chain, in the frame at its hinge point (its own axes).
 #[derive(Clone, Debug)]
-struct Serial {
+struct Serial<T: Real> {
     axis: CoordAxis,
     /// The hinge point in the parent's frame (that frame's origin is the parent's hinge point).
-    at: Vec3,
+    at: Vector3<T>,
     /// Rigid inertia about the hinge point.
-    inertia: RigidInertia,
+    inertia: RigidInertia<T>,
     /// The same as an articulated inertia (where pass 2 starts).
-    start: ArticulatedInertia,
+    start: ArticulatedInertia<T>,
     /// The body's origin from its hinge point (`−child_at`), for the pivot scale of
     /// `aba.rs`, which is taken about the body's origin.
-    origin: Vec3,
+    origin: Vector3<T>,
     /// Its coordinate in `q` and in `v`.
     angle: usize,
     dof: usize,
@@ -175,25 +205,25 @@ struct Serial {
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 #[derive(Clone, Debug)]
-pub struct UnrolledAba {
+pub struct UnrolledAba<T: Real = f64> {
     nq: usize,
     nv: usize,
     /// The base with its rotors locked on (bias), and less `J a aᵀ` per rotor (pass 2 start).
-    base_inertia: RigidInertia,
-    base_start: ArticulatedInertia,
-    rotors: Vec<Rotor>,
+    base_inertia: RigidInertia<T>,
+    base_start: ArticulatedInertia<T>,
+    rotors: Vec<Rotor<T>>,
     /// The gimbal's hinges in elimination order: the tip's, its link's, the outermost.
     gimbal: [CoordAxis; 3],
     gimbal_angle: [usize; 3],
     gimbal_dof: [usize; 3],
     /// The gimbal's point in the base's frame.
-    point: Vec3,
+    point: Vector3<T>,
     /// The tip's rigid inertia about the gimbal's point.
-    tip_inertia: RigidInertia,
-    tip_start: ArticulatedInertia,
+    tip_inertia: RigidInertia<T>,
+    tip_start: ArticulatedInertia<T>,
     /// The tip's origin from the gimbal's point (`−child_at`), for the pivot scale.
-    tip_origin: Vec3,
-    serial: Vec<Serial>,
+    tip_origin: Vector3<T>,
+    serial: Vec<Serial<T>>,
     /// Bodies (indices in `model.bodies`, as in `fext`): the tip, its link, the outermost link.
     chain_bodies: [usize; 3],
     n_bodies: usize,
@@ -202,6 +232,9 @@ pub struct UnrolledAba {
     rotor_hinges: Vec<usize>,
     serial_hinges: Vec<usize>,
     n_hinges: usize,
+    /// Lanes on the baseline target's instructions even where the CPU has wider ones
+    /// ([`UnrolledAba::portable`]).
+    portable: bool,
     /// Per pivot (the gimbal's three in elimination order, then the serial bodies): the
     /// hinge named by a singular-hinge error and the hinges through massless links below it.
     names: Vec<(String, Vec<String>)>,
@@ -302,7 +335,11 @@ impl UnrolledAba {
                 inv_j: 1.0 / g.axial(),
                 dof: joint(g.body()).dof(),
                 body: g.body(),
-                joint: joint(g.body()).clone(),
+                hinge_axis: *joint(g.body()).axis(),
+                rot0: Some(*joint(g.body()).rot0()).filter(|r| *r != Mat3::identity()),
+                at: *joint(g.body()).at(),
+                child_at: *joint(g.body()).child_at(),
+                s: *joint(g.body()).s(),
                 coord: kernel_parts::coord_axis(model, g.body()),
                 angle: base_nq + joint(g.body()).hinge(),
             })
@@ -331,13 +368,9 @@ impl UnrolledAba {
                 .collect(),
             serial_hinges: serial_bodies.iter().map(|&i| joint(i).hinge()).collect(),
             n_hinges: model.n_hinges(),
+            portable: false,
             names,
         })
-    }
-
-    /// Number of serial bodies below the gimbal's tip.
-    pub fn serial_bodies(&self) -> usize {
-        self.serial.len()
     }
 
     /// Forward dynamics without external forces, as [`satsim_tree::aba::aba`] with `fext = None`:
@@ -406,32 +439,6 @@ impl UnrolledAba {
         self.aba_hybrid_with_forces(data, q, v, tau, fext, Locks::NONE)
     }
 
-    /// The kernel's form of a lock mask `locked` (one entry per hinge in the order of
-    /// addition, rotors included, as [`satsim_tree::aba::aba_hybrid`] takes it), or `None`
-    /// where the kernel does not take it: a gimbal hinge locked (the caller keeps
-    /// [`satsim_tree::aba::aba_hybrid`]), a mask of another length, or a locked rotor past
-    /// the 64th.
-    pub fn locks(&self, locked: &[bool]) -> Option<Locks> {
-        if locked.len() != self.n_hinges || self.gimbal_hinges.iter().any(|&h| locked[h]) {
-            return None;
-        }
-        let mut locks = Locks::NONE;
-        for (k, &h) in self.rotor_hinges.iter().enumerate() {
-            if locked[h] {
-                if k >= 64 {
-                    return None;
-                }
-                locks.rotors |= 1 << k;
-            }
-        }
-        for (j, &h) in self.serial_hinges.iter().enumerate() {
-            if locked[h] {
-                locks.serial |= 1 << j;
-            }
-        }
-        Some(locks)
-    }
-
     /// Hybrid dynamics (Featherstone §9.2), as [`satsim_tree::aba::aba_hybrid`]: as
     /// [`UnrolledAba::aba_with_forces`], except that the hinges locked in `locks` (rotors,
     /// serial bodies; see [`UnrolledAba::locks`]) have zero acceleration, their `τ` ignored,
@@ -481,20 +488,60 @@ impl UnrolledAba {
         self.aba_hybrid_with_forces_into(q, v, tau, fext, locks, data.ddq.as_mut_slice())?;
         Ok(&data.ddq)
     }
+}
+
+impl<T: Real> UnrolledAba<T> {
+    /// Number of serial bodies below the gimbal's tip.
+    pub fn serial_bodies(&self) -> usize {
+        self.serial.len()
+    }
+
+    /// The kernel's form of a lock mask `locked` (one entry per hinge in the order of
+    /// addition, rotors included, as [`satsim_tree::aba::aba_hybrid`] takes it), or `None`
+    /// where the kernel does not take it: a gimbal hinge locked (the caller keeps
+    /// [`satsim_tree::aba::aba_hybrid`]), a mask of another length, or a locked rotor past
+    /// the 64th.
+    pub fn locks(&self, locked: &[bool]) -> Option<Locks> {
+        if locked.len() != self.n_hinges || self.gimbal_hinges.iter().any(|&h| locked[h]) {
+            return None;
+        }
+        let mut locks = Locks::NONE;
+        for (k, &h) in self.rotor_hinges.iter().enumerate() {
+            if locked[h] {
+                if k >= 64 {
+                    return None;
+                }
+                locks.rotors |= 1 << k;
+            }
+        }
+        for (j, &h) in self.serial_hinges.iter().enumerate() {
+            if locked[h] {
+                locks.serial |= 1 << j;
+            }
+        }
+        Some(locks)
+    }
 
     /// As [`UnrolledAba::aba_hybrid_with_forces`], with `q̈` written into `ddq` (length
     /// `nv`) instead of `data.ddq`: the kernel needs no [`Data`], and a caller whose state
     /// holds the velocities in `v`'s order gets `q̈` straight into its derivative, with no
     /// copy (a copy right after the writes costs more than its instructions: its wide loads
     /// wait for the narrower stores to retire).
+    ///
+    /// Over lanes (`T` = [`satsim_tree::real::F64x`], a kernel made by
+    /// [`UnrolledAba::gather`]): `N` runs at once, lane `k` of every argument and of `ddq`
+    /// being run `k`'s, each lane's result bit for bit what the `f64` kernel of that run
+    /// gives. Where the lanes part ways at a pivot test (near a singular configuration on
+    /// some lane), it returns [`DynamicsError::LanesPart`] with `ddq` unspecified: solve each
+    /// run with its own `f64` kernel then.
     pub fn aba_hybrid_with_forces_into(
         &self,
-        q: &[f64],
-        v: &[f64],
-        tau: &[f64],
-        fext: Option<&[Force]>,
+        q: &[T],
+        v: &[T],
+        tau: &[T],
+        fext: Option<&[Force<T>]>,
         locks: Locks,
-        ddq: &mut [f64],
+        ddq: &mut [T],
     ) -> Result<(), DynamicsError> {
         check_len("q", q.len(), self.nq)?;
         check_len("v", v.len(), self.nv)?;
@@ -510,14 +557,14 @@ impl UnrolledAba {
     }
 
     /// [`UnrolledAba::run`]'s instance for this model's serial chain.
-    #[inline]
+    #[inline(always)]
     fn serial_len<const LOADED: bool>(
         &self,
-        ddq: &mut [f64],
-        q: &[f64],
-        v: &[f64],
-        tau: &[f64],
-        fext: &[Force],
+        ddq: &mut [T],
+        q: &[T],
+        v: &[T],
+        tau: &[T],
+        fext: &[Force<T>],
         locks: Locks,
     ) -> Result<(), DynamicsError> {
         match self.serial.len() {
@@ -531,27 +578,82 @@ impl UnrolledAba {
         }
     }
 
+    /// [`UnrolledAba::run_in`], compiled for the widest vectors this CPU has: for lanes on
+    /// x86-64 with AVX2, the instance compiled for AVX2 (four `f64` per instruction; the
+    /// baseline target has two), else the baseline's. One run (`f64`) keeps the baseline's:
+    /// its operations are not lane-wise, and wider registers measured no faster for it.
+    #[inline(always)]
+    #[allow(unsafe_code)]
+    fn run<const N: usize, const LOADED: bool>(
+        &self,
+        ddq: &mut [T],
+        q: &[T],
+        v: &[T],
+        tau: &[T],
+        fext: &[Force<T>],
+        locks: Locks,
+    ) -> Result<(), DynamicsError> {
+        #[cfg(target_arch = "x86_64")]
+        if T::LANES > 1 && !self.portable && std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: `run_avx2`'s only requirement is a CPU with AVX2, detected just above.
+            return unsafe { self.run_avx2::<N, LOADED>(ddq, q, v, tau, fext, locks) };
+        }
+        self.run_out::<N, LOADED>(ddq, q, v, tau, fext, locks)
+    }
+
+    /// [`UnrolledAba::run_in`] out of line, for the baseline target.
+    #[inline(never)]
+    fn run_out<const N: usize, const LOADED: bool>(
+        &self,
+        ddq: &mut [T],
+        q: &[T],
+        v: &[T],
+        tau: &[T],
+        fext: &[Force<T>],
+        locks: Locks,
+    ) -> Result<(), DynamicsError> {
+        self.run_in::<N, LOADED>(ddq, q, v, tau, fext, locks)
+    }
+
+    /// [`UnrolledAba::run_in`] compiled for AVX2: over lanes every piece of the kernel is
+    /// inlined into it ([`Real::OUT_OF_LINE`]), so all of it uses four-wide registers. The
+    /// same operations as the baseline's, lane by lane (no fused multiply-add: Rust does not
+    /// contract `a * b + c`), so the same bits.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn run_avx2<const N: usize, const LOADED: bool>(
+        &self,
+        ddq: &mut [T],
+        q: &[T],
+        v: &[T],
+        tau: &[T],
+        fext: &[Force<T>],
+        locks: Locks,
+    ) -> Result<(), DynamicsError> {
+        self.run_in::<N, LOADED>(ddq, q, v, tau, fext, locks)
+    }
+
     /// The three passes for `N` serial bodies (`q`, `v`, `tau`, `ddq` of checked lengths);
     /// `LOADED`: with the external forces `fext` (one per body, checked), else `fext` is
     /// not read; `locks`: the locked hinges (hybrid dynamics).
-    #[inline(never)]
-    fn run<const N: usize, const LOADED: bool>(
+    #[inline(always)]
+    fn run_in<const N: usize, const LOADED: bool>(
         &self,
-        ddq: &mut [f64],
-        q: &[f64],
-        v: &[f64],
-        tau: &[f64],
-        fext: &[Force],
+        ddq: &mut [T],
+        q: &[T],
+        v: &[T],
+        tau: &[T],
+        fext: &[Force<T>],
         locks: Locks,
     ) -> Result<(), DynamicsError> {
-        let serial: &[Serial; N] = self.serial.as_slice().try_into().expect("N bodies");
+        let serial: &[Serial<T>; N] = self.serial.as_slice().try_into().expect("N bodies");
         // Pass 1, outward. The base, with its rotors' gyroscopic couple and axial reactions.
         let v0 = Motion::from_slice(&v[..6]);
         let mut pa0 = v0.cross_force(&self.base_inertia.mul_motion(&v0));
         if LOADED {
             pa0 -= fext[0];
         }
-        let mut spin = Vec3::zeros();
+        let mut spin = Vector3::zeros();
         for (k, r) in self.rotors.iter().enumerate() {
             spin += r.j_axis * v[r.dof];
             if !locks.rotor(k) {
@@ -567,10 +669,11 @@ impl UnrolledAba {
         // The gimbal: its rotation (base axes to the tip's), the axes in the tip's axes.
         let [g0, g1, g2] = &self.gimbal;
         let [i0, i1, i2] = self.gimbal_angle;
-        let e0m = g0.transform(q[i0], &Vec3::zeros(), &Vec3::zeros()).rot;
-        let e1m = g1.transform(q[i1], &Vec3::zeros(), &Vec3::zeros()).rot;
-        let e2m = g2.transform(q[i2], &Vec3::zeros(), &Vec3::zeros()).rot;
-        let e0 = g0.scaled_axis(1.0);
+        let o = Vector3::zeros();
+        let e0m = g0.transform(q[i0], &o, &o).rot;
+        let e1m = g1.transform(q[i1], &o, &o).rot;
+        let e2m = g2.transform(q[i2], &o, &o).rot;
+        let e0 = g0.scaled_axis(T::one());
         let e1 = g1.times_axis(&e0m);
         let r01 = g1.post_rotate(&e0m, &e1m);
         let e2 = g2.times_axis(&r01);
@@ -593,7 +696,7 @@ impl UnrolledAba {
         let (mut g1, mut g2) = (Force::zero(), Force::zero());
         if LOADED {
             pa_tip -= at_hinge(&fext[tip], &self.tip_origin);
-            let rotate = |m: &Mat3, f: &Force| Force::new(m * f.ang, m * f.lin);
+            let rotate = |m: &Matrix3<T>, f: &Force<T>| Force::new(m * f.ang, m * f.lin);
             g1 = rotate(&e0m, &fext[link_in]);
             g2 = g1 + rotate(&r01, &fext[link_out]);
         }
@@ -603,7 +706,7 @@ impl UnrolledAba {
         let mut pas = [Force::zero(); N];
         let mut vp = v_tip;
         for (j, s) in serial.iter().enumerate() {
-            xs[j] = s.axis.transform(q[s.angle], &s.at, &Vec3::zeros());
+            xs[j] = s.axis.transform(q[s.angle], &s.at, &o);
             let vx = s.axis.apply_motion(&xs[j], &vp);
             let sq = s.axis.scaled_axis(v[s.dof]);
             cs[j] = Motion::new(vx.ang.cross(&sq), vx.lin.cross(&sq));
@@ -616,14 +719,14 @@ impl UnrolledAba {
         }
         // Pass 2, inward: the serial bodies, last first, each projected into its parent.
         let mut us = [Force::zero(); N];
-        let mut uu = [0.0; N];
-        let mut inv_ds = [0.0; N];
+        let mut uu = [T::zero(); N];
+        let mut inv_ds = [T::zero(); N];
         // Each parent's inertia is written into one of two buffers, in turn, and read from
         // there (no 216-byte copies of whole inertias).
         let mut buffers = [ArticulatedInertia::default(); 2];
         let [b0, b1] = &mut buffers;
         let (mut parent, mut written) = (b0, b1);
-        let mut ia: &ArticulatedInertia = if N > 0 {
+        let mut ia: &ArticulatedInertia<T> = if N > 0 {
             &serial[N - 1].start
         } else {
             &self.tip_start
@@ -646,7 +749,7 @@ impl UnrolledAba {
                 let u_col = Force::new(a.times_axis(&ia.a), a.tr_times_axis(&ia.b));
                 let d = a.dot_axis(&u_col.ang);
                 self.check(d, ia, &s.origin, 3 + j)?;
-                let inv_d = 1.0 / d;
+                let inv_d = T::one() / d;
                 let u = tau[s.dof] - a.dot_axis(&pa.ang);
                 // The parent's inertia: its start plus Xᵀ (IA − U Uᵀ / D) X.
                 let iac = a.project_at_point(ia, inv_d, &cs[j], &xs[j], parent, parent_start);
@@ -664,8 +767,8 @@ impl UnrolledAba {
         let u0 = tau[d0] - g0.dot_axis(&pa.ang);
         let p0 = g0.dot_axis(&w0.ang);
         self.check(p0, ia, &self.tip_origin, 0)?;
-        let inv0 = 1.0 / p0;
-        let tr_a = ah.trace() - w0.ang.norm_squared() * inv0;
+        let inv0 = T::one() / p0;
+        let tr_a = ah.trace() - w0.ang.dot(&w0.ang) * inv0;
         let l10 = e1.dot(&w0.ang) * inv0;
         let w1 = Force::new(ah * e1, bh.tr_mul(&e1)) - w0 * l10;
         // The links' wrenches load the hinges between them and the base (`links_bias` of
@@ -678,17 +781,17 @@ impl UnrolledAba {
         let u1 = t1 - e1.dot(&pa.ang) - l10 * u0;
         let p1 = e1.dot(&w1.ang);
         self.check_plain(p1, tr_a, 1)?;
-        let inv1 = 1.0 / p1;
-        let tr_a = tr_a - w1.ang.norm_squared() * inv1;
+        let inv1 = T::one() / p1;
+        let tr_a = tr_a - w1.ang.dot(&w1.ang) * inv1;
         let l20 = e2.dot(&w0.ang) * inv0;
         let l21 = e2.dot(&w1.ang) * inv1;
         let w2 = Force::new(ah * e2, bh.tr_mul(&e2)) - w0 * l20 - w1 * l21;
         let u2 = t2 - e2.dot(&pa.ang) - l20 * u0 - l21 * u1;
         let p2 = e2.dot(&w2.ang);
         self.check_plain(p2, tr_a, 2)?;
-        let inv2 = 1.0 / p2;
+        let inv2 = T::one() / p2;
         // What the spherical joint passes on: [0 0; 0 C − Bᵀ A⁻¹ B], and the bias.
-        let cc: Mat3 = ia.c
+        let cc: Matrix3<T> = ia.c
             - (w0.lin * inv0) * w0.lin.transpose()
             - (w1.lin * inv1) * w1.lin.transpose()
             - (w2.lin * inv2) * w2.lin.transpose();
@@ -717,11 +820,15 @@ impl UnrolledAba {
         // Pass 3, outward: a₀ = IA₀⁻¹ (τ₀ − pA₀), the rotors, the gimbal, the serial bodies.
         let a0 = ia0
             .solve(&(Force::from_slice(&tau[..6]) - pa0))
-            .ok_or(DynamicsError::SingularBase)?;
+            .ok_or(if T::LANES == 1 {
+                DynamicsError::SingularBase
+            } else {
+                DynamicsError::LanesPart
+            })?;
         ddq[..6].copy_from_slice(&a0.to_array());
         for (k, r) in self.rotors.iter().enumerate() {
             ddq[r.dof] = if locks.rotor(k) {
-                0.0
+                T::zero()
             } else {
                 self.rotor_torque::<LOADED>(r, tau, fext) * r.inv_j - r.axis.dot(&a0.ang)
             };
@@ -737,7 +844,7 @@ impl UnrolledAba {
         for (j, s) in serial.iter().enumerate() {
             let aj = s.axis.apply_motion(&xs[j], &ap) + cs[j];
             let qdd = if locks.serial(j) {
-                0.0
+                T::zero()
             } else {
                 (uu[j] - aj.dot(&us[j])) * inv_ds[j]
             };
@@ -750,9 +857,9 @@ impl UnrolledAba {
     /// Rotor `r`'s axial torque: its `τ`, plus the axial moment `Sᵀ f` of its external
     /// wrench when `LOADED` (not `+ 0` otherwise: that cannot be folded away).
     #[inline(always)]
-    fn rotor_torque<const LOADED: bool>(&self, r: &Rotor, tau: &[f64], fext: &[Force]) -> f64 {
+    fn rotor_torque<const LOADED: bool>(&self, r: &Rotor<T>, tau: &[T], fext: &[Force<T>]) -> T {
         if LOADED {
-            tau[r.dof] + r.joint.s().dot(&fext[r.body])
+            tau[r.dof] + r.s.dot(&fext[r.body])
         } else {
             tau[r.dof]
         }
@@ -762,33 +869,45 @@ impl UnrolledAba {
     /// hinge point while `aba.rs` takes the scale about the body's origin, at `origin` from
     /// the point: `tr A_o + |o|² tr C`. Cheap first: for a positive semidefinite `ia`,
     /// `tr A_o ≤ 2 tr A + 2 |o|² tr C` (`(x + y)ᵀ M (x + y) ≤ 2 xᵀ M x + 2 yᵀ M y`), so a
-    /// pivot above that bound's threshold is regular; the exact scale only below it.
+    /// pivot above that bound's threshold is regular; the exact scale only below it (one
+    /// run; a batch of lanes where any lane is below it parts: [`DynamicsError::LanesPart`]).
     #[inline]
     fn check(
         &self,
-        d: f64,
-        ia: &ArticulatedInertia,
-        origin: &Vec3,
+        d: T,
+        ia: &ArticulatedInertia<T>,
+        origin: &Vector3<T>,
         pivot: usize,
     ) -> Result<(), DynamicsError> {
         let (tr_a, tr_c) = (ia.a.trace(), ia.c.trace());
-        let o2 = origin.norm_squared();
-        let bound = 2.0 * tr_a + 3.0 * o2 * tr_c;
-        if d > SINGULAR_PIVOT_RELATIVE * bound && d < f64::INFINITY {
+        let o2 = origin.dot(origin);
+        let bound = T::splat(2.0) * tr_a + T::splat(3.0) * o2 * tr_c;
+        if d.all_with(bound, |d, bound| {
+            d > SINGULAR_PIVOT_RELATIVE * bound && d < f64::INFINITY
+        }) {
             return Ok(());
         }
-        let scale = offset_scale(origin, &ia.b, &ia.c, &[], &[], tr_a, tr_c);
-        self.check_plain(d, scale, pivot)
+        if T::LANES > 1 {
+            return Err(DynamicsError::LanesPart);
+        }
+        let lane = |m: &Matrix3<T>| m.map(|x| x.lane(0));
+        let (origin, tr_a, tr_c) = (origin.map(|x| x.lane(0)), tr_a.lane(0), tr_c.lane(0));
+        let scale = offset_scale(&origin, &lane(&ia.b), &lane(&ia.c), &[], &[], tr_a, tr_c);
+        self.check_plain(d, T::splat(scale), pivot)
     }
 
     /// `aba.rs`'s pivot test against `scale`; the error names pivot `pivot`'s hinge.
     #[inline]
-    fn check_plain(&self, d: f64, scale: f64, pivot: usize) -> Result<(), DynamicsError> {
+    fn check_plain(&self, d: T, scale: T, pivot: usize) -> Result<(), DynamicsError> {
         // Written so that a NaN pivot counts as singular too.
-        if d.is_finite() && d > SINGULAR_PIVOT_RELATIVE * scale {
+        if d.all_with(scale, |d, scale| {
+            d.is_finite() && d > SINGULAR_PIVOT_RELATIVE * scale
+        }) {
             Ok(())
+        } else if T::LANES > 1 {
+            Err(DynamicsError::LanesPart)
         } else {
-            Err(self.singular(d, scale, pivot))
+            Err(self.singular(d.lane(0), scale.lane(0), pivot))
         }
     }
 
@@ -802,6 +921,162 @@ impl UnrolledAba {
             pivot: d,
             relative: if scale > 0.0 { d / scale } else { 0.0 },
         }
+    }
+}
+
+impl<const N: usize> UnrolledAba<F64x<N>> {
+    /// The kernel of `N` runs in lanes (lane `k`: `runs[k]`'s constants), or `None` where
+    /// they differ in anything the kernel branches on: the layout (coordinates, bodies,
+    /// hinge axes and their signs, which rotors have a fixed rotation or a coordinate axis)
+    /// and which serial hinge points coincide with the parent's (the pure-rotation case of
+    /// the inertia transform). Masses, inertias and hinge points may differ: the runs of a
+    /// campaign that disperses them share one kernel.
+    ///
+    /// ```
+    /// use satsim_satellite::kernel::{Locks, UnrolledAba};
+    /// use satsim_tree::real::{F64x, Real};
+    /// use satsim_tree::read_model;
+    /// let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/satellite.toml");
+    /// let heavy = {
+    ///     let mut b = read_model(&path)?.to_builder();
+    ///     b.bodies_mut()[4].mass *= 1.5; // panel 2
+    ///     b.build()?
+    /// };
+    /// let (nominal, heavy) = (read_model(&path)?, heavy);
+    /// let (k0, k1) = (UnrolledAba::new(&nominal).unwrap(), UnrolledAba::new(&heavy).unwrap());
+    /// let lanes = UnrolledAba::<F64x<2>>::gather([&k0, &k1]).expect("one layout");
+    /// // Run k's state in lane k.
+    /// let mut q0 = nominal.neutral();
+    /// q0[7..12].copy_from_slice(&[0.1, 0.2, 0.3, 1.2, -1.0]);
+    /// let mut q1 = q0.clone();
+    /// q1[10] = 0.9;
+    /// let (v, tau) = (vec![0.01; nominal.nv()], vec![0.5; nominal.nv()]);
+    /// let pack = |a: &[f64], b: &[f64]| -> Vec<F64x<2>> {
+    ///     a.iter().zip(b).map(|(&x, &y)| F64x([x, y])).collect()
+    /// };
+    /// let mut ddq = vec![F64x::splat(0.0); nominal.nv()];
+    /// let (q, v2, tau2) = (pack(&q0, &q1), pack(&v, &v), pack(&tau, &tau));
+    /// lanes.aba_hybrid_with_forces_into(&q, &v2, &tau2, None, Locks::NONE, &mut ddq)?;
+    /// let mut one = vec![0.0; nominal.nv()];
+    /// k1.aba_hybrid_with_forces_into(&q1, &v, &tau, None, Locks::NONE, &mut one)?;
+    /// assert!(ddq.iter().zip(&one).all(|(l, x)| l.lane(1).to_bits() == x.to_bits()));
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn gather(runs: [&UnrolledAba; N]) -> Option<Self> {
+        let first = runs.first()?;
+        let same_shape = runs.iter().all(|r| {
+            r.nq == first.nq
+                && r.nv == first.nv
+                && r.gimbal == first.gimbal
+                && r.gimbal_angle == first.gimbal_angle
+                && r.gimbal_dof == first.gimbal_dof
+                && r.chain_bodies == first.chain_bodies
+                && r.n_bodies == first.n_bodies
+                && r.gimbal_hinges == first.gimbal_hinges
+                && r.rotor_hinges == first.rotor_hinges
+                && r.serial_hinges == first.serial_hinges
+                && r.n_hinges == first.n_hinges
+                && r.rotors.len() == first.rotors.len()
+                && r.rotors.iter().zip(&first.rotors).all(|(a, b)| {
+                    (a.dof, a.body, a.coord, a.angle, a.rot0.is_some())
+                        == (b.dof, b.body, b.coord, b.angle, b.rot0.is_some())
+                })
+                && r.serial.len() == first.serial.len()
+                && r.serial.iter().zip(&first.serial).all(|(a, b)| {
+                    (a.axis, a.angle, a.dof, a.body, a.at == Vec3::zeros())
+                        == (b.axis, b.angle, b.dof, b.body, b.at == Vec3::zeros())
+                })
+        });
+        if !same_shape {
+            return None;
+        }
+        let scalar = |f: &dyn Fn(&UnrolledAba) -> f64| F64x(std::array::from_fn(|k| f(runs[k])));
+        let vector = |f: &dyn Fn(&UnrolledAba) -> &Vec3| {
+            Vector3::from_fn(|i, _| F64x(std::array::from_fn(|k| f(runs[k])[i])))
+        };
+        let matrix = |f: &dyn Fn(&UnrolledAba) -> &Mat3| {
+            Matrix3::from_fn(|i, j| F64x(std::array::from_fn(|k| f(runs[k])[(i, j)])))
+        };
+        let rigid = |f: &dyn Fn(&UnrolledAba) -> &RigidInertia| RigidInertia {
+            mass: scalar(&|r| f(r).mass),
+            h: vector(&|r| &f(r).h),
+            inertia: matrix(&|r| &f(r).inertia),
+        };
+        let articulated = |f: &dyn Fn(&UnrolledAba) -> &ArticulatedInertia| ArticulatedInertia {
+            a: matrix(&|r| &f(r).a),
+            b: matrix(&|r| &f(r).b),
+            c: matrix(&|r| &f(r).c),
+        };
+        let rotors = (0..first.rotors.len())
+            .map(|i| {
+                let r0 = &first.rotors[i];
+                Rotor {
+                    axis: vector(&|r| &r.rotors[i].axis),
+                    j_axis: vector(&|r| &r.rotors[i].j_axis),
+                    inv_j: scalar(&|r| r.rotors[i].inv_j),
+                    dof: r0.dof,
+                    body: r0.body,
+                    hinge_axis: vector(&|r| &r.rotors[i].hinge_axis),
+                    rot0: r0
+                        .rot0
+                        .map(|_| matrix(&|r| r.rotors[i].rot0.as_ref().expect("same shape"))),
+                    at: vector(&|r| &r.rotors[i].at),
+                    child_at: vector(&|r| &r.rotors[i].child_at),
+                    s: Motion::new(
+                        vector(&|r| &r.rotors[i].s.ang),
+                        vector(&|r| &r.rotors[i].s.lin),
+                    ),
+                    coord: r0.coord,
+                    angle: r0.angle,
+                }
+            })
+            .collect();
+        let serial = (0..first.serial.len())
+            .map(|j| {
+                let s0 = &first.serial[j];
+                Serial {
+                    axis: s0.axis,
+                    at: vector(&|r| &r.serial[j].at),
+                    inertia: rigid(&|r| &r.serial[j].inertia),
+                    start: articulated(&|r| &r.serial[j].start),
+                    origin: vector(&|r| &r.serial[j].origin),
+                    angle: s0.angle,
+                    dof: s0.dof,
+                    body: s0.body,
+                }
+            })
+            .collect();
+        Some(Self {
+            nq: first.nq,
+            nv: first.nv,
+            base_inertia: rigid(&|r| &r.base_inertia),
+            base_start: articulated(&|r| &r.base_start),
+            rotors,
+            gimbal: first.gimbal,
+            gimbal_angle: first.gimbal_angle,
+            gimbal_dof: first.gimbal_dof,
+            point: vector(&|r| &r.point),
+            tip_inertia: rigid(&|r| &r.tip_inertia),
+            tip_start: articulated(&|r| &r.tip_start),
+            tip_origin: vector(&|r| &r.tip_origin),
+            serial,
+            chain_bodies: first.chain_bodies,
+            n_bodies: first.n_bodies,
+            gimbal_hinges: first.gimbal_hinges,
+            rotor_hinges: first.rotor_hinges.clone(),
+            serial_hinges: first.serial_hinges.clone(),
+            n_hinges: first.n_hinges,
+            portable: false,
+            names: first.names.clone(),
+        })
+    }
+
+    /// The same kernel on the baseline target's instructions only (two-wide SSE2 on
+    /// x86-64), where [`UnrolledAba::gather`]'s would use AVX2: to measure what the wider
+    /// instructions give, and to test that both give the same bits.
+    pub fn portable(mut self) -> Self {
+        self.portable = true;
+        self
     }
 }
 
@@ -857,7 +1132,7 @@ impl Kernel for UnrolledAba {
 /// A wrench `f` about a body's origin moved to its hinge point, the origin lying at `o` from
 /// the point (same axes): `[n + o × f; f]`.
 #[inline(always)]
-fn at_hinge(f: &Force, o: &Vec3) -> Force {
+fn at_hinge<T: Real>(f: &Force<T>, o: &Vector3<T>) -> Force<T> {
     Force::new(f.ang + o.cross(&f.lin), f.lin)
 }
 
@@ -1046,6 +1321,216 @@ mod tests {
             (DynamicsError::SingularBase, DynamicsError::SingularBase) => {}
             (x, y) => panic!("kernel {x:?}, generic {y:?}"),
         }
+    }
+
+    /// `model` with its masses and inertias scaled by `mass` and every nonzero hinge point
+    /// by `reach`: the same layout, other constants (a campaign's dispersed run).
+    fn dispersed(model: &Model, mass: f64, reach: f64) -> Model {
+        let mut b = model.to_builder();
+        for body in b.bodies_mut() {
+            body.mass *= mass;
+            body.inertia *= mass;
+            body.com *= reach;
+        }
+        for h in b.hinges_mut() {
+            h.at *= reach;
+            h.child_at *= reach;
+        }
+        b.build().expect("a valid model")
+    }
+
+    /// Lane `k` of `xs`.
+    fn lane<const N: usize>(xs: &[F64x<N>], k: usize) -> Vec<f64> {
+        xs.iter().map(|x| x.0[k]).collect()
+    }
+
+    /// Four runs in lanes (each its own model of the layout, its own state, its own
+    /// wrenches and the same locks) against each run's own `f64` kernel: the same bits, or
+    /// the batch parts (then a lane's own kernel refuses its state).
+    fn lanes_agree(models: &[Model; 4], rng: &mut SplitMix, loaded: bool, locked: &[bool]) -> bool {
+        let kernels: Vec<UnrolledAba> = models
+            .iter()
+            .map(|m| UnrolledAba::new(m).unwrap())
+            .collect();
+        let lanes = UnrolledAba::<F64x<4>>::gather(std::array::from_fn(|k| &kernels[k]))
+            .expect("one layout");
+        let portable = lanes.clone().portable();
+        let locks = kernels[0].locks(locked).expect("the kernel's locks");
+        let runs: Vec<_> = models
+            .iter()
+            .map(|m| {
+                let (q, v, tau) = random_state(m, rng);
+                (q, v, tau, random_wrenches(m, rng))
+            })
+            .collect();
+        fn pack(xs: [&[f64]; 4]) -> Vec<F64x<4>> {
+            (0..xs[0].len())
+                .map(|i| F64x(std::array::from_fn(|k| xs[k][i])))
+                .collect()
+        }
+        let q = pack(std::array::from_fn(|k| runs[k].0.as_slice()));
+        let v = pack(std::array::from_fn(|k| runs[k].1.as_slice()));
+        let tau = pack(std::array::from_fn(|k| runs[k].2.as_slice()));
+        let fext: Vec<Force<F64x<4>>> = (0..runs[0].3.len())
+            .map(|b| {
+                let f = |k: usize| runs[k].3[b].to_array();
+                let part = |i: usize| F64x(std::array::from_fn(|k| f(k)[i]));
+                Force::new(
+                    Vector3::new(part(0), part(1), part(2)),
+                    Vector3::new(part(3), part(4), part(5)),
+                )
+            })
+            .collect();
+        let nv = models[0].nv();
+        let mut ddq = vec![F64x::splat(f64::NAN); nv];
+        let got = lanes.aba_hybrid_with_forces_into(
+            &q,
+            &v,
+            &tau,
+            loaded.then_some(fext.as_slice()),
+            locks,
+            &mut ddq,
+        );
+        // The baseline target's instructions: the same outcome, the same bits.
+        let mut ddq_portable = vec![F64x::splat(f64::NAN); nv];
+        let got_portable = portable.aba_hybrid_with_forces_into(
+            &q,
+            &v,
+            &tau,
+            loaded.then_some(fext.as_slice()),
+            locks,
+            &mut ddq_portable,
+        );
+        assert_eq!(got.is_ok(), got_portable.is_ok());
+        if got.is_ok() {
+            let bits = |x: &[F64x<4>]| {
+                x.iter()
+                    .flat_map(|x| x.0.map(f64::to_bits))
+                    .collect::<Vec<_>>()
+            };
+            assert_eq!(bits(&ddq), bits(&ddq_portable));
+        }
+        let mut alone = vec![0.0; nv];
+        let each: Vec<_> = (0..4)
+            .map(|k| {
+                let (q, v, tau, f) = &runs[k];
+                kernels[k]
+                    .aba_hybrid_with_forces_into(
+                        q,
+                        v,
+                        tau,
+                        loaded.then_some(f.as_slice()),
+                        locks,
+                        &mut alone,
+                    )
+                    .map(|()| alone.clone())
+            })
+            .collect();
+        match got {
+            Ok(()) => {
+                for (k, one) in each.iter().enumerate() {
+                    let one = one.as_ref().expect("a lane solved, so its run solves");
+                    let bits = |x: &[f64]| x.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                    assert_eq!(bits(&lane(&ddq, k)), bits(one), "lane {k}");
+                }
+                true
+            }
+            // Some lane fell below the cheap pivot bound (near a singular configuration).
+            Err(DynamicsError::LanesPart) => false,
+            Err(e) => panic!("a batch fails only by parting: {e}"),
+        }
+    }
+
+    #[test]
+    fn lanes_equal_runs_bit_for_bit() {
+        let mut batches = 0;
+        for seed in 0..60u64 {
+            let (serial, rotors) = ((seed % 5) as usize, ((seed / 5) % 4) as usize);
+            let base = random_layout(serial, rotors, seed);
+            let models = [
+                base.clone(),
+                dispersed(&base, 1.3, 1.0),
+                dispersed(&base, 0.6, 1.2),
+                dispersed(&base, 2.0, 0.8),
+            ];
+            let mut rng = SplitMix(seed ^ 0x1a4e);
+            let n = base.n_hinges();
+            // Nothing locked; every rotor and serial hinge the kernel takes locked in turn.
+            let mut masks = vec![vec![false; n]];
+            let kernel = UnrolledAba::new(&base).unwrap();
+            masks.extend((0..n).filter_map(|h| {
+                let mut m = vec![false; n];
+                m[h] = true;
+                kernel.locks(&m).map(|_| m)
+            }));
+            for mask in &masks {
+                for loaded in [false, true] {
+                    batches += usize::from(lanes_agree(&models, &mut rng, loaded, mask));
+                }
+            }
+        }
+        assert!(batches > 400, "only {batches} batches solved");
+    }
+
+    /// A gimbal lock on one lane parts the batch; the other lanes then solve on their own.
+    #[test]
+    fn a_singular_lane_parts_the_batch() {
+        let (_, model) = satellite_with_wheels();
+        let kernel = UnrolledAba::new(&model).unwrap();
+        let lanes = UnrolledAba::<F64x<2>>::gather([&kernel, &kernel]).unwrap();
+        let mut q = model.neutral();
+        q[7..12].copy_from_slice(&[0.1, 0.2, 0.3, 1.2, -1.0]);
+        let mut locked = q.clone();
+        let axes = kernel.gimbal; // the middle hinge at a right angle locks the outer two
+        let middle = kernel.gimbal_angle[1];
+        let _ = axes;
+        locked[middle] = std::f64::consts::FRAC_PI_2;
+        let (v, tau) = (vec![0.01; model.nv()], vec![0.5; model.nv()]);
+        let mut one = vec![0.0; model.nv()];
+        let alone =
+            kernel.aba_hybrid_with_forces_into(&locked, &v, &tau, None, Locks::NONE, &mut one);
+        assert!(
+            matches!(alone, Err(DynamicsError::SingularHinge { .. })),
+            "{alone:?}"
+        );
+        let pack = |a: &[f64], b: &[f64]| -> Vec<F64x<2>> {
+            a.iter().zip(b).map(|(&x, &y)| F64x([x, y])).collect()
+        };
+        let mut ddq = vec![F64x::splat(0.0); model.nv()];
+        let got = lanes.aba_hybrid_with_forces_into(
+            &pack(&q, &locked),
+            &pack(&v, &v),
+            &pack(&tau, &tau),
+            None,
+            Locks::NONE,
+            &mut ddq,
+        );
+        assert!(matches!(got, Err(DynamicsError::LanesPart)), "{got:?}");
+        kernel
+            .aba_hybrid_with_forces_into(&q, &v, &tau, None, Locks::NONE, &mut one)
+            .expect("the regular lane solves on its own");
+    }
+
+    /// Runs that differ in the layout, or in which serial hinge points coincide with the
+    /// parent's, are not gathered.
+    #[test]
+    fn other_shapes_are_not_gathered() {
+        let base = random_layout(2, 2, 7);
+        let k0 = UnrolledAba::new(&base).unwrap();
+        let k1 = UnrolledAba::new(&dispersed(&base, 1.5, 1.1)).unwrap();
+        assert!(UnrolledAba::<F64x<2>>::gather([&k0, &k1]).is_some());
+        let other = UnrolledAba::new(&random_layout(2, 2, 8)).unwrap();
+        assert!(UnrolledAba::<F64x<2>>::gather([&k0, &other]).is_none());
+        let mut b = base.to_builder();
+        // Body s1's hinge point on s0's: s1's frame then has its origin on its parent's.
+        let find = |b: &mut ModelBuilder, name: &str| {
+            b.hinges_mut().iter().position(|h| h.name == name).unwrap()
+        };
+        let (h0, h1) = (find(&mut b, "h0"), find(&mut b, "h1"));
+        b.hinges_mut()[h1].at = b.hinges_mut()[h0].child_at;
+        let k2 = UnrolledAba::new(&b.build().unwrap()).unwrap();
+        assert!(UnrolledAba::<F64x<2>>::gather([&k0, &k2]).is_none());
+        assert!(UnrolledAba::<F64x<2>>::gather([&k2, &k2]).is_some());
     }
 
     #[test]

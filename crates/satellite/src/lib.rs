@@ -20,7 +20,9 @@
 //!   equations (5)-(10));
 //! - [`compare`]: what `satsim preprint` prints.
 
-#![forbid(unsafe_code)]
+// One `unsafe` block: the lane kernel's call of its AVX2 instance, where the CPU has AVX2
+// (`kernel.rs`, with its safety comment).
+#![deny(unsafe_code)]
 #![warn(missing_docs)]
 
 pub mod checks;

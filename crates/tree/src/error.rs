@@ -222,6 +222,12 @@ pub enum DynamicsError {
     /// A non-finite number in the input.
     #[error("{0} contains a non-finite number")]
     NonFinite(&'static str),
+    /// A batch of runs in lanes ([`crate::real::F64x`]) reached a data-dependent branch that
+    /// not all its lanes take (a pivot test near a singular configuration, a singular base
+    /// on some lane): nothing was computed for the batch; solve each lane on its own, which
+    /// gives each its own result or error.
+    #[error("the lanes of a batch part ways at a pivot test: solve each lane on its own")]
+    LanesPart,
 }
 
 fn gimbal_note(through: &[String]) -> String {

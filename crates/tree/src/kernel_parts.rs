@@ -21,9 +21,11 @@
 
 use crate::error::DynamicsError;
 use crate::model::{Joint, Model};
+use crate::real::Real;
 use crate::spatial::{
     ArticulatedInertia, Force, Mat3, RigidInertia, Transform, Vec3, add_blocks, cross_columns, skew,
 };
+use nalgebra::Matrix3;
 
 pub use crate::aba::SINGULAR_PIVOT_RELATIVE;
 pub use crate::axis::CoordAxis;
@@ -82,12 +84,37 @@ pub fn hinge_transform(joint: &Joint, axis: Option<&CoordAxis>, phi: f64) -> Tra
 
 /// `out += Xᵀ [0 0; 0 C] X` (or `out = start + ...`): a purely linear inertia (what a
 /// spherical joint passes on) moved by `X`, `Eᵀ C E` then the translation's two lever terms.
+/// Out of line for one run, inlined for lanes ([`Real::OUT_OF_LINE`]).
+#[inline(always)]
+pub fn add_linear_inv_transform<T: Real>(
+    c: &Matrix3<T>,
+    x: &Transform<T>,
+    out: &mut ArticulatedInertia<T>,
+    start: Option<&ArticulatedInertia<T>>,
+) {
+    if T::OUT_OF_LINE {
+        linear_inv_transform_out(c, x, out, start)
+    } else {
+        linear_inv_transform_in(c, x, out, start)
+    }
+}
+
 #[inline(never)]
-pub fn add_linear_inv_transform(
-    c: &Mat3,
-    x: &Transform,
-    out: &mut ArticulatedInertia,
-    start: Option<&ArticulatedInertia>,
+fn linear_inv_transform_out<T: Real>(
+    c: &Matrix3<T>,
+    x: &Transform<T>,
+    out: &mut ArticulatedInertia<T>,
+    start: Option<&ArticulatedInertia<T>>,
+) {
+    linear_inv_transform_in(c, x, out, start)
+}
+
+#[inline(always)]
+fn linear_inv_transform_in<T: Real>(
+    c: &Matrix3<T>,
+    x: &Transform<T>,
+    out: &mut ArticulatedInertia<T>,
+    start: Option<&ArticulatedInertia<T>>,
 ) {
     let c = x.rot.tr_mul(&(c * x.rot));
     // [1 [r]×; 0 1] [0 0; 0 C] [1 0; −[r]× 1] = [−[r]×C[r]× [r]×C; −C[r]× C].

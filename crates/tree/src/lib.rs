@@ -66,6 +66,7 @@ pub mod kernel_parts;
 pub mod kinematics;
 pub mod llt;
 pub mod model;
+pub mod real;
 pub mod rnea;
 pub mod samples;
 pub mod spatial;

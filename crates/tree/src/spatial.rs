@@ -8,7 +8,12 @@
 //! - inertias act on motions and give forces: `f = I v`.
 //!
 //! Every operation works on 3-D blocks, so no 6x6 product is ever formed in the per-call paths.
+//!
+//! The types are generic over their scalar ([`Real`]): `f64` by default (`Motion` is
+//! `Motion<f64>`), or lanes of independent runs ([`crate::real::F64x`]) for the kernels that
+//! evaluate several runs at once; every operation is the same code for both.
 
+use crate::real::Real;
 use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
 use std::ops::{Add, AddAssign, Mul, Neg, Sub, SubAssign};
 
@@ -25,14 +30,15 @@ pub type Mat3 = Matrix3<f64>;
 /// assert!((skew(&a) * b - a.cross(&b)).norm() < 1e-15);
 /// ```
 #[inline]
-pub fn skew(a: &Vec3) -> Mat3 {
-    Mat3::new(0.0, -a.z, a.y, a.z, 0.0, -a.x, -a.y, a.x, 0.0)
+pub fn skew<T: Real>(a: &Vector3<T>) -> Matrix3<T> {
+    let o = T::zero();
+    Matrix3::new(o, -a.z, a.y, a.z, o, -a.x, -a.y, a.x, o)
 }
 
 /// `[a]× M`, column by column: `a × mⱼ` (cheaper than the product with the matrix `[a]×`).
 #[inline]
-pub(crate) fn cross_columns(a: &Vec3, m: &Mat3) -> Mat3 {
-    Mat3::from_columns(&[
+pub(crate) fn cross_columns<T: Real>(a: &Vector3<T>, m: &Matrix3<T>) -> Matrix3<T> {
+    Matrix3::from_columns(&[
         a.cross(&m.column(0)),
         a.cross(&m.column(1)),
         a.cross(&m.column(2)),
@@ -45,7 +51,7 @@ pub(crate) fn cross_columns(a: &Vec3, m: &Mat3) -> Mat3 {
 /// backward stable as a Cholesky factorisation (the pivots are Cholesky's squared), as
 /// accurate as nalgebra's Cholesky inverse (tested) at a fraction of its latency.
 #[inline]
-pub(crate) fn spd_inverse(m: &Mat3) -> Option<Mat3> {
+pub(crate) fn spd_inverse<T: Real>(m: &Matrix3<T>) -> Option<Matrix3<T>> {
     let [a, b, c, d, e, f] = [
         m[(0, 0)],
         m[(0, 1)],
@@ -56,18 +62,23 @@ pub(crate) fn spd_inverse(m: &Mat3) -> Option<Mat3> {
     ];
     // L = [1 0 0; l1 1 0; l2 l21 1], D = diag(d0, d1, d2).
     let d0 = a;
-    let r0 = 1.0 / d0;
+    let r0 = T::one() / d0;
     let (l1, l2) = (b * r0, c * r0);
     let d1 = d - l1 * b;
-    let r1 = 1.0 / d1;
+    let r1 = T::one() / d1;
     let e1 = e - l2 * b;
     let l21 = e1 * r1;
     let d2 = f - l2 * c - l21 * e1;
-    // Written so that a NaN or infinite pivot fails too.
-    if !(d0 > 0.0 && d1 > 0.0 && d2 > 0.0 && (d0 + d1 + d2).is_finite()) {
+    // Written so that a NaN or infinite pivot fails too (on any lane).
+    let positive = |x: f64| x > 0.0;
+    if !(d0.all(positive)
+        && d1.all(positive)
+        && d2.all(positive)
+        && (d0 + d1 + d2).all(f64::is_finite))
+    {
         return None;
     }
-    let r2 = 1.0 / d2;
+    let r2 = T::one() / d2;
     // Rows of L⁻¹: (1, 0, 0), (−l1, 1, 0), (w, −l21, 1) with w = l1 l21 − l2.
     let w = l1 * l21 - l2;
     let (wr2, mr2) = (w * r2, l21 * r2);
@@ -76,7 +87,7 @@ pub(crate) fn spd_inverse(m: &Mat3) -> Option<Mat3> {
     let x02 = wr2;
     let x11 = r1 + l21 * mr2;
     let x12 = -mr2;
-    Some(Mat3::new(x00, x01, x02, x01, x11, x12, x02, x12, r2))
+    Some(Matrix3::new(x00, x01, x02, x01, x11, x12, x02, x12, r2))
 }
 
 /// A spatial motion vector (velocity, acceleration, motion subspace column): `[ω; v]`.
@@ -87,11 +98,11 @@ pub(crate) fn spd_inverse(m: &Mat3) -> Option<Mat3> {
 /// assert_eq!(v.cross_motion(&v), Motion::zero()); // v ×m v = 0
 /// ```
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
-pub struct Motion {
+pub struct Motion<T: Real = f64> {
     /// Angular part ω (rad/s, rad/s²).
-    pub ang: Vec3,
+    pub ang: Vector3<T>,
     /// Linear part v of the frame origin (m/s, m/s²).
-    pub lin: Vec3,
+    pub lin: Vector3<T>,
 }
 
 /// A spatial force vector: `[n; f]`, the moment `n` about the frame origin and the force `f`.
@@ -103,17 +114,17 @@ pub struct Motion {
 /// assert_eq!(v.dot(&f), 2.0); // power
 /// ```
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
-pub struct Force {
+pub struct Force<T: Real = f64> {
     /// Moment about the frame origin (N m).
-    pub ang: Vec3,
+    pub ang: Vector3<T>,
     /// Force (N).
-    pub lin: Vec3,
+    pub lin: Vector3<T>,
 }
 
-impl Motion {
+impl<T: Real> Motion<T> {
     /// A motion from its angular and linear parts.
     #[inline]
-    pub fn new(ang: Vec3, lin: Vec3) -> Self {
+    pub fn new(ang: Vector3<T>, lin: Vector3<T>) -> Self {
         Self { ang, lin }
     }
     /// The zero motion.
@@ -123,7 +134,7 @@ impl Motion {
     }
     /// `self ×m m` (Featherstone's `crm(v) m`).
     #[inline]
-    pub fn cross_motion(&self, m: &Motion) -> Motion {
+    pub fn cross_motion(&self, m: &Motion<T>) -> Motion<T> {
         Motion {
             ang: self.ang.cross(&m.ang),
             lin: self.ang.cross(&m.lin) + self.lin.cross(&m.ang),
@@ -131,7 +142,7 @@ impl Motion {
     }
     /// `self ×* f` (Featherstone's `crf(v) f`).
     #[inline]
-    pub fn cross_force(&self, f: &Force) -> Force {
+    pub fn cross_force(&self, f: &Force<T>) -> Force<T> {
         Force {
             ang: self.ang.cross(&f.ang) + self.lin.cross(&f.lin),
             lin: self.ang.cross(&f.lin),
@@ -139,11 +150,11 @@ impl Motion {
     }
     /// The scalar product with a force (power).
     #[inline]
-    pub fn dot(&self, f: &Force) -> f64 {
+    pub fn dot(&self, f: &Force<T>) -> T {
         self.ang.dot(&f.ang) + self.lin.dot(&f.lin)
     }
     /// As a 6-vector `[ω; v]`.
-    pub fn to_vector(&self) -> Vector6<f64> {
+    pub fn to_vector(&self) -> Vector6<T> {
         Vector6::new(
             self.ang.x, self.ang.y, self.ang.z, self.lin.x, self.lin.y, self.lin.z,
         )
@@ -152,21 +163,24 @@ impl Motion {
     ///
     /// # Panics
     /// If the slice has fewer than six entries (a programming error, not user data).
-    pub fn from_slice(s: &[f64]) -> Self {
-        Self::new(Vec3::new(s[0], s[1], s[2]), Vec3::new(s[3], s[4], s[5]))
+    pub fn from_slice(s: &[T]) -> Self {
+        Self::new(
+            Vector3::new(s[0], s[1], s[2]),
+            Vector3::new(s[3], s[4], s[5]),
+        )
     }
     /// As an array `[ω; v]`.
     #[inline]
-    pub fn to_array(&self) -> [f64; 6] {
+    pub fn to_array(&self) -> [T; 6] {
         let (a, l) = (&self.ang, &self.lin);
         [a.x, a.y, a.z, l.x, l.y, l.z]
     }
 }
 
-impl Force {
+impl<T: Real> Force<T> {
     /// A force from its moment and force parts.
     #[inline]
-    pub fn new(ang: Vec3, lin: Vec3) -> Self {
+    pub fn new(ang: Vector3<T>, lin: Vector3<T>) -> Self {
         Self { ang, lin }
     }
     /// The zero force.
@@ -175,14 +189,14 @@ impl Force {
         Self::default()
     }
     /// As a 6-vector `[n; f]`.
-    pub fn to_vector(&self) -> Vector6<f64> {
+    pub fn to_vector(&self) -> Vector6<T> {
         Vector6::new(
             self.ang.x, self.ang.y, self.ang.z, self.lin.x, self.lin.y, self.lin.z,
         )
     }
     /// As an array `[n; f]`.
     #[inline]
-    pub fn to_array(&self) -> [f64; 6] {
+    pub fn to_array(&self) -> [T; 6] {
         let (a, l) = (&self.ang, &self.lin);
         [a.x, a.y, a.z, l.x, l.y, l.z]
     }
@@ -190,61 +204,64 @@ impl Force {
     ///
     /// # Panics
     /// If the slice has fewer than six entries (a programming error, not user data).
-    pub fn from_slice(s: &[f64]) -> Self {
-        Self::new(Vec3::new(s[0], s[1], s[2]), Vec3::new(s[3], s[4], s[5]))
+    pub fn from_slice(s: &[T]) -> Self {
+        Self::new(
+            Vector3::new(s[0], s[1], s[2]),
+            Vector3::new(s[3], s[4], s[5]),
+        )
     }
 }
 
 macro_rules! linear_ops {
-    ($t:ty) => {
-        impl Add for $t {
-            type Output = $t;
+    ($t:ident) => {
+        impl<T: Real> Add for $t<T> {
+            type Output = $t<T>;
             #[inline]
-            fn add(self, o: $t) -> $t {
+            fn add(self, o: $t<T>) -> $t<T> {
                 Self {
                     ang: self.ang + o.ang,
                     lin: self.lin + o.lin,
                 }
             }
         }
-        impl Sub for $t {
-            type Output = $t;
+        impl<T: Real> Sub for $t<T> {
+            type Output = $t<T>;
             #[inline]
-            fn sub(self, o: $t) -> $t {
+            fn sub(self, o: $t<T>) -> $t<T> {
                 Self {
                     ang: self.ang - o.ang,
                     lin: self.lin - o.lin,
                 }
             }
         }
-        impl AddAssign for $t {
+        impl<T: Real> AddAssign for $t<T> {
             #[inline]
-            fn add_assign(&mut self, o: $t) {
+            fn add_assign(&mut self, o: $t<T>) {
                 self.ang += o.ang;
                 self.lin += o.lin;
             }
         }
-        impl SubAssign for $t {
+        impl<T: Real> SubAssign for $t<T> {
             #[inline]
-            fn sub_assign(&mut self, o: $t) {
+            fn sub_assign(&mut self, o: $t<T>) {
                 self.ang -= o.ang;
                 self.lin -= o.lin;
             }
         }
-        impl Neg for $t {
-            type Output = $t;
+        impl<T: Real> Neg for $t<T> {
+            type Output = $t<T>;
             #[inline]
-            fn neg(self) -> $t {
+            fn neg(self) -> $t<T> {
                 Self {
                     ang: -self.ang,
                     lin: -self.lin,
                 }
             }
         }
-        impl Mul<f64> for $t {
-            type Output = $t;
+        impl<T: Real> Mul<T> for $t<T> {
+            type Output = $t<T>;
             #[inline]
-            fn mul(self, s: f64) -> $t {
+            fn mul(self, s: T) -> $t<T> {
                 Self {
                     ang: self.ang * s,
                     lin: self.lin * s,
@@ -268,32 +285,32 @@ linear_ops!(Force);
 /// assert_eq!(x.inv_apply_motion(&v), Motion::new(Vec3::z(), Vec3::zeros()));
 /// ```
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Transform {
+pub struct Transform<T: Real = f64> {
     /// `E`: rotates A-coordinates into B-coordinates.
-    pub rot: Mat3,
+    pub rot: Matrix3<T>,
     /// `r`: B's origin in A-coordinates (m).
-    pub trans: Vec3,
+    pub trans: Vector3<T>,
 }
 
-impl Default for Transform {
+impl<T: Real> Default for Transform<T> {
     fn default() -> Self {
         Self::identity()
     }
 }
 
-impl Transform {
+impl<T: Real> Transform<T> {
     /// A transform from `E` (A to B coordinates) and `r` (B's origin in A).
     #[inline]
-    pub fn new(rot: Mat3, trans: Vec3) -> Self {
+    pub fn new(rot: Matrix3<T>, trans: Vector3<T>) -> Self {
         Self { rot, trans }
     }
     /// The identity transform.
     pub fn identity() -> Self {
-        Self::new(Mat3::identity(), Vec3::zeros())
+        Self::new(Matrix3::identity(), Vector3::zeros())
     }
     /// `X m`: a motion in A-coordinates expressed in B-coordinates.
     #[inline]
-    pub fn apply_motion(&self, m: &Motion) -> Motion {
+    pub fn apply_motion(&self, m: &Motion<T>) -> Motion<T> {
         Motion {
             ang: self.rot * m.ang,
             lin: self.rot * (m.lin - self.trans.cross(&m.ang)),
@@ -301,7 +318,7 @@ impl Transform {
     }
     /// `X⁻¹ m`: a motion in B-coordinates expressed in A-coordinates.
     #[inline]
-    pub fn inv_apply_motion(&self, m: &Motion) -> Motion {
+    pub fn inv_apply_motion(&self, m: &Motion<T>) -> Motion<T> {
         let ang = self.rot.tr_mul(&m.ang);
         Motion {
             ang,
@@ -310,7 +327,7 @@ impl Transform {
     }
     /// `X* f`: a force in A-coordinates expressed in B-coordinates.
     #[inline]
-    pub fn apply_force(&self, f: &Force) -> Force {
+    pub fn apply_force(&self, f: &Force<T>) -> Force<T> {
         Force {
             ang: self.rot * (f.ang - self.trans.cross(&f.lin)),
             lin: self.rot * f.lin,
@@ -318,7 +335,7 @@ impl Transform {
     }
     /// `Xᵀ f`: a force in B-coordinates expressed in A-coordinates.
     #[inline]
-    pub fn inv_apply_force(&self, f: &Force) -> Force {
+    pub fn inv_apply_force(&self, f: &Force<T>) -> Force<T> {
         let lin = self.rot.tr_mul(&f.lin);
         Force {
             ang: self.rot.tr_mul(&f.ang) + self.trans.cross(&lin),
@@ -327,12 +344,15 @@ impl Transform {
     }
     /// `self * other`: first `other` (A to B), then `self` (B to C); gives A to C.
     #[inline]
-    pub fn compose(&self, other: &Transform) -> Transform {
+    pub fn compose(&self, other: &Transform<T>) -> Transform<T> {
         Transform {
             rot: self.rot * other.rot,
             trans: other.trans + other.rot.tr_mul(&self.trans),
         }
     }
+}
+
+impl Transform {
     /// The 6x6 motion-transform matrix.
     pub fn to_matrix(&self) -> Matrix6<f64> {
         let mut x = Matrix6::zeros();
@@ -355,18 +375,18 @@ impl Transform {
 /// assert!((f.lin - Vec3::new(0.0, 1.0, 0.0)).norm() < 1e-15);
 /// ```
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
-pub struct RigidInertia {
+pub struct RigidInertia<T: Real = f64> {
     /// Mass (kg).
-    pub mass: f64,
+    pub mass: T,
     /// First moment of mass about the origin, `m c` (kg m).
-    pub h: Vec3,
+    pub h: Vector3<T>,
     /// Rotational inertia about the origin (kg m²).
-    pub inertia: Mat3,
+    pub inertia: Matrix3<T>,
 }
 
-impl RigidInertia {
+impl<T: Real> RigidInertia<T> {
     /// From mass, centre of mass `c` and rotational inertia `ic` about the centre of mass.
-    pub fn from_com(mass: f64, com: Vec3, ic: Mat3) -> Self {
+    pub fn from_com(mass: T, com: Vector3<T>, ic: Matrix3<T>) -> Self {
         let cx = skew(&com);
         Self {
             mass,
@@ -376,7 +396,7 @@ impl RigidInertia {
     }
     /// `I v`: the momentum of a body moving with `v`.
     #[inline]
-    pub fn mul_motion(&self, v: &Motion) -> Force {
+    pub fn mul_motion(&self, v: &Motion<T>) -> Force<T> {
         Force {
             ang: self.inertia * v.ang + self.h.cross(&v.lin),
             lin: v.lin * self.mass - self.h.cross(&v.ang),
@@ -389,7 +409,7 @@ impl RigidInertia {
     /// grew the crate, LLVM stopped inlining it there (+10 % instructions per mass matrix,
     /// the result returned through memory).
     #[inline(always)]
-    pub fn inv_transform(&self, x: &Transform) -> RigidInertia {
+    pub fn inv_transform(&self, x: &Transform<T>) -> RigidInertia<T> {
         let e = &x.rot;
         let rotated = RigidInertia {
             mass: self.mass,
@@ -403,29 +423,32 @@ impl RigidInertia {
     /// of a frame in which this origin lies at `r`: the translation part of
     /// [`RigidInertia::inv_transform`]. Always inlined, as that is (CRBA's inward pass).
     #[inline(always)]
-    pub(crate) fn translated(&self, r: &Vec3) -> RigidInertia {
+    pub(crate) fn translated(&self, r: &Vector3<T>) -> RigidInertia<T> {
         let h = self.h;
         let hp = h + r * self.mass;
         // I − [r]×[h]× − [h']×[r]×, the skew products by [a]×[b]× = b aᵀ − (a·b) 1.
         let i = self.inertia - h * r.transpose() - r * hp.transpose()
-            + Mat3::from_diagonal_element(r.dot(&h) + r.dot(&hp));
+            + Matrix3::from_diagonal_element(r.dot(&h) + r.dot(&hp));
         RigidInertia {
             mass: self.mass,
             h: hp,
             // Symmetric in exact arithmetic; averaging keeps it symmetric to the last bit.
-            inertia: (i + i.transpose()) * 0.5,
+            inertia: (i + i.transpose()) * T::splat(0.5),
         }
     }
+}
+
+impl RigidInertia {
     /// The 6x6 matrix `[I [h]×; [h]×ᵀ m1]`.
     pub fn to_matrix(&self) -> Matrix6<f64> {
         ArticulatedInertia::from(*self).to_matrix()
     }
 }
 
-impl Add for RigidInertia {
-    type Output = RigidInertia;
+impl<T: Real> Add for RigidInertia<T> {
+    type Output = RigidInertia<T>;
     #[inline]
-    fn add(self, o: RigidInertia) -> RigidInertia {
+    fn add(self, o: RigidInertia<T>) -> RigidInertia<T> {
         RigidInertia {
             mass: self.mass + o.mass,
             h: self.h + o.h,
@@ -433,9 +456,9 @@ impl Add for RigidInertia {
         }
     }
 }
-impl AddAssign for RigidInertia {
+impl<T: Real> AddAssign for RigidInertia<T> {
     #[inline]
-    fn add_assign(&mut self, o: RigidInertia) {
+    fn add_assign(&mut self, o: RigidInertia<T>) {
         self.mass += o.mass;
         self.h += o.h;
         self.inertia += o.inertia;
@@ -451,30 +474,30 @@ impl AddAssign for RigidInertia {
 /// assert!((ia.to_matrix() - rigid.to_matrix()).norm() < 1e-15);
 /// ```
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
-pub struct ArticulatedInertia {
+pub struct ArticulatedInertia<T: Real = f64> {
     /// Angular-angular block `A`.
-    pub a: Mat3,
+    pub a: Matrix3<T>,
     /// Angular-linear block `B`.
-    pub b: Mat3,
+    pub b: Matrix3<T>,
     /// Linear-linear block `C`.
-    pub c: Mat3,
+    pub c: Matrix3<T>,
 }
 
-impl From<RigidInertia> for ArticulatedInertia {
+impl<T: Real> From<RigidInertia<T>> for ArticulatedInertia<T> {
     #[inline]
-    fn from(i: RigidInertia) -> Self {
+    fn from(i: RigidInertia<T>) -> Self {
         Self {
             a: i.inertia,
             b: skew(&i.h),
-            c: Mat3::from_diagonal_element(i.mass),
+            c: Matrix3::from_diagonal_element(i.mass),
         }
     }
 }
 
-impl ArticulatedInertia {
+impl<T: Real> ArticulatedInertia<T> {
     /// `IA v`.
     #[inline]
-    pub fn mul_motion(&self, v: &Motion) -> Force {
+    pub fn mul_motion(&self, v: &Motion<T>) -> Force<T> {
         Force {
             ang: self.a * v.ang + self.b * v.lin,
             lin: self.b.tr_mul(&v.ang) + self.c * v.lin,
@@ -482,7 +505,7 @@ impl ArticulatedInertia {
     }
     /// `IA - u uᵀ / d` for a force-like column `u` (the hinge's projection out of `IA`).
     #[inline]
-    pub fn sub_outer(&mut self, u: &Force, inv_d: f64) {
+    pub fn sub_outer(&mut self, u: &Force<T>, inv_d: T) {
         let un = u.ang * inv_d;
         let uf = u.lin * inv_d;
         self.a -= un * u.ang.transpose();
@@ -491,7 +514,7 @@ impl ArticulatedInertia {
     }
     /// `self = from − u uᵀ / d`: [`Self::sub_outer`] of `from`, written here.
     #[inline]
-    pub(crate) fn set_sub_outer(&mut self, from: &ArticulatedInertia, u: &Force, inv_d: f64) {
+    pub(crate) fn set_sub_outer(&mut self, from: &ArticulatedInertia<T>, u: &Force<T>, inv_d: T) {
         let un = u.ang * inv_d;
         let uf = u.lin * inv_d;
         self.a = from.a - un * u.ang.transpose();
@@ -500,7 +523,7 @@ impl ArticulatedInertia {
     }
     /// `Xᵀ IA X`: this inertia, given in B-coordinates, expressed in A-coordinates.
     #[inline]
-    pub fn inv_transform(&self, x: &Transform) -> ArticulatedInertia {
+    pub fn inv_transform(&self, x: &Transform<T>) -> ArticulatedInertia<T> {
         let mut out = ArticulatedInertia::default();
         self.add_inv_transform_to(x, &mut out, None);
         out
@@ -510,9 +533,9 @@ impl ArticulatedInertia {
     #[inline]
     pub(crate) fn add_inv_transform_to(
         &self,
-        x: &Transform,
-        out: &mut ArticulatedInertia,
-        start: Option<&ArticulatedInertia>,
+        x: &Transform<T>,
+        out: &mut ArticulatedInertia<T>,
+        start: Option<&ArticulatedInertia<T>>,
     ) {
         let e = &x.rot;
         let a = e.tr_mul(&(self.a * e));
@@ -527,15 +550,17 @@ impl ArticulatedInertia {
 /// `[A B; Bᵀ C]` about the origin of a frame with the same axes in which its origin lies at
 /// `r`, added to `out`.
 #[inline]
-pub(crate) fn add_translated(
-    a: &Mat3,
-    b: &Mat3,
-    c: &Mat3,
-    r: &Vec3,
-    out: &mut ArticulatedInertia,
-    start: Option<&ArticulatedInertia>,
+pub(crate) fn add_translated<T: Real>(
+    a: &Matrix3<T>,
+    b: &Matrix3<T>,
+    c: &Matrix3<T>,
+    r: &Vector3<T>,
+    out: &mut ArticulatedInertia<T>,
+    start: Option<&ArticulatedInertia<T>>,
 ) {
-    let (na, nb) = if *r == Vec3::zeros() {
+    // (Over lanes: taken when every lane's origins coincide. A batch whose lanes differ
+    // there is not formed: `satsim-satellite`'s kernel checks it when it gathers lanes.)
+    let (na, nb) = if *r == Vector3::zeros() {
         // Coincident origins (a zero-length gimbal link): a pure rotation.
         (*a, *b)
     } else {
@@ -553,12 +578,12 @@ pub(crate) fn add_translated(
 /// heuristics it stopped being inlined into [`add_translated`] once the flexible algorithms
 /// joined the crate, +1.0 % instructions on the orbit benchmark (callgrind, 600 s).
 #[inline(always)]
-pub(crate) fn add_blocks(
-    a: &Mat3,
-    b: &Mat3,
-    c: &Mat3,
-    out: &mut ArticulatedInertia,
-    start: Option<&ArticulatedInertia>,
+pub(crate) fn add_blocks<T: Real>(
+    a: &Matrix3<T>,
+    b: &Matrix3<T>,
+    c: &Matrix3<T>,
+    out: &mut ArticulatedInertia<T>,
+    start: Option<&ArticulatedInertia<T>>,
 ) {
     match start {
         Some(s) => {
@@ -574,7 +599,7 @@ pub(crate) fn add_blocks(
     }
 }
 
-impl ArticulatedInertia {
+impl<T: Real> ArticulatedInertia<T> {
     /// `IA⁻¹ f`: the motion `[α; a]` with `IA [α; a] = f`, by the Schur complement
     /// `S = A − B C⁻¹ Bᵀ` (no 6x6 matrix): `α = S⁻¹ (f_ang − B C⁻¹ f_lin)`,
     /// `a = C⁻¹ (f_lin − Bᵀ α)`. `None` unless `IA` is positive definite (then `C` and `S`
@@ -585,13 +610,16 @@ impl ArticulatedInertia {
     /// ends every right-hand side with this solve, and a perf profile of the peer orbit put
     /// that form at 12 % of the run.
     #[inline]
-    pub fn solve(&self, f: &Force) -> Option<Motion> {
+    pub fn solve(&self, f: &Force<T>) -> Option<Motion<T>> {
         let c_inv = spd_inverse(&self.c)?;
         let bc = self.b * c_inv; // B C⁻¹
         let schur = self.a - bc * self.b.transpose();
         let ang = spd_inverse(&schur)? * (f.ang - bc * f.lin);
         Some(Motion::new(ang, c_inv * (f.lin - self.b.transpose() * ang)))
     }
+}
+
+impl ArticulatedInertia {
     /// The full 6x6 matrix.
     pub fn to_matrix(&self) -> Matrix6<f64> {
         let mut m = Matrix6::zeros();
@@ -604,9 +632,9 @@ impl ArticulatedInertia {
     }
 }
 
-impl AddAssign for ArticulatedInertia {
+impl<T: Real> AddAssign for ArticulatedInertia<T> {
     #[inline]
-    fn add_assign(&mut self, o: ArticulatedInertia) {
+    fn add_assign(&mut self, o: ArticulatedInertia<T>) {
         self.a += o.a;
         self.b += o.b;
         self.c += o.c;
@@ -621,12 +649,12 @@ impl AddAssign for ArticulatedInertia {
 /// assert!((r * Vec3::x() - Vec3::y()).norm() < 1e-15);
 /// ```
 #[inline]
-pub fn rotation_about(axis: &Vec3, angle: f64) -> Mat3 {
+pub fn rotation_about<T: Real>(axis: &Vector3<T>, angle: T) -> Matrix3<T> {
     // 1 + s [a]× + (1 − c) [a]×², with [a]×² = a aᵀ − 1 for a unit axis.
-    let (s, c) = libm::sincos(angle); // as the coordinate-axis transforms (`axis.rs`)
-    let (a, t) = (axis * s, axis * (1.0 - c));
+    let (s, c) = angle.sin_cos(); // libm's, as the coordinate-axis transforms (`axis.rs`)
+    let (a, t) = (axis * s, axis * (T::one() - c));
     let [x, y, z] = [axis.x, axis.y, axis.z];
-    Mat3::new(
+    Matrix3::new(
         c + t.x * x,
         t.x * y - a.z,
         t.x * z + a.y,

@@ -1,0 +1,181 @@
+//! The unrolled kernel over lanes of runs against one run at a time: the preprint satellite
+//! with its three wheels, four (eight) runs with their own panel masses and states, each
+//! batch solved once by the `f64` kernel per run and once by the kernel over `F64x<4>`
+//! (`F64x<8>`) lanes, on the widest instructions the CPU has (`lanes`: AVX2 where it has
+//! them) and on the baseline target's (`lanes_portable`: SSE2). Throughput per run is what a campaign gains (its runs are independent);
+//! `cargo bench -p satsim-satellite --bench lanes [-- ROUNDS]`. The results are equal bit for
+//! bit (checked here before timing, and by the kernel's tests). Not criterion: on a shared
+//! machine whose speed drifts, the three ways alternate in short rounds and the per-round
+//! ratios are what is reported.
+
+use satsim_satellite::kernel::{Locks, UnrolledAba};
+use satsim_tree::real::{F64x, Real};
+use satsim_tree::samples::{SplitMix, push_wheels, random_q};
+use satsim_tree::{Model, read_model};
+use std::hint::black_box;
+use std::time::Instant;
+
+/// `n` models of the satellite with wheels, panel 2 and 3 masses dispersed by ±10 %.
+fn models(n: usize) -> Vec<Model> {
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/satellite.toml");
+    let nominal = read_model(&path).expect("the example model");
+    let mut rng = SplitMix(3);
+    (0..n)
+        .map(|_| {
+            let mut b = nominal.to_builder();
+            for body in [4, 5] {
+                let scale = rng.range(0.9, 1.1);
+                b.bodies_mut()[body].mass *= scale;
+                b.bodies_mut()[body].inertia *= scale;
+            }
+            push_wheels(&mut b, "bus");
+            b.build().expect("a valid model")
+        })
+        .collect()
+}
+
+type Run = (Vec<f64>, Vec<f64>, Vec<f64>);
+
+fn states(models: &[Model]) -> Vec<Run> {
+    let mut rng = SplitMix(17);
+    models
+        .iter()
+        .map(|m| {
+            let q = random_q(m, &mut rng, 1.0);
+            let v = (0..m.nv()).map(|_| rng.range(-0.5, 0.5)).collect();
+            let tau = (0..m.nv()).map(|_| rng.range(-1.0, 1.0)).collect();
+            (q, v, tau)
+        })
+        .collect()
+}
+
+fn pack<const N: usize>(runs: &[Run], part: fn(&Run) -> &Vec<f64>) -> Vec<F64x<N>> {
+    (0..part(&runs[0]).len())
+        .map(|i| F64x(std::array::from_fn(|k| part(&runs[k])[i])))
+        .collect()
+}
+
+/// Nanoseconds per run of `f` (which solves `runs` runs), over `iters` calls.
+fn per_run(iters: u32, runs: usize, mut f: impl FnMut()) -> f64 {
+    let t = Instant::now();
+    for _ in 0..iters {
+        f();
+    }
+    t.elapsed().as_nanos() as f64 / f64::from(iters) / runs as f64
+}
+
+fn median(mut xs: Vec<f64>) -> f64 {
+    xs.sort_by(f64::total_cmp);
+    xs[xs.len() / 2]
+}
+
+/// `N` runs: one at a time, in lanes on the widest instructions, in lanes on the baseline
+/// target's. The three alternate in short rounds (this machine's speed drifts by tens of
+/// per cent from one second to the next); the medians of the per-round figures and ratios.
+fn lanes<const N: usize>(rounds: usize) {
+    let models = models(N);
+    let kernels: Vec<UnrolledAba> = models
+        .iter()
+        .map(|m| UnrolledAba::new(m).unwrap())
+        .collect();
+    let batch = UnrolledAba::<F64x<N>>::gather(std::array::from_fn(|k| &kernels[k])).unwrap();
+    let portable = batch.clone().portable();
+    let runs = states(&models);
+    let nv = models[0].nv();
+    let (q, v, tau) = (
+        pack::<N>(&runs, |r| &r.0),
+        pack::<N>(&runs, |r| &r.1),
+        pack::<N>(&runs, |r| &r.2),
+    );
+    let mut ddq = vec![F64x::<N>::splat(0.0); nv];
+    let mut one = vec![0.0; nv];
+    for lanes in [&batch, &portable] {
+        lanes
+            .aba_hybrid_with_forces_into(&q, &v, &tau, None, Locks::NONE, &mut ddq)
+            .unwrap();
+        for (k, (kernel, (q, v, tau))) in kernels.iter().zip(&runs).enumerate() {
+            kernel
+                .aba_hybrid_with_forces_into(q, v, tau, None, Locks::NONE, &mut one)
+                .unwrap();
+            assert!(
+                ddq.iter()
+                    .zip(&one)
+                    .all(|(l, x)| l.lane(k).to_bits() == x.to_bits())
+            );
+        }
+    }
+    let iters = (200_000 / N) as u32;
+    let mut figures = [vec![], vec![], vec![]];
+    for _ in 0..rounds {
+        figures[0].push(per_run(iters, N, || {
+            for (kernel, (q, v, tau)) in kernels.iter().zip(&runs) {
+                kernel
+                    .aba_hybrid_with_forces_into(black_box(q), v, tau, None, Locks::NONE, &mut one)
+                    .unwrap();
+                black_box(&one);
+            }
+        }));
+        for (f, lanes) in figures[1..].iter_mut().zip([&batch, &portable]) {
+            f.push(per_run(iters, N, || {
+                lanes
+                    .aba_hybrid_with_forces_into(
+                        black_box(&q),
+                        &v,
+                        &tau,
+                        None,
+                        Locks::NONE,
+                        &mut ddq,
+                    )
+                    .unwrap();
+                black_box(&ddq);
+            }));
+        }
+    }
+    let ratio = |i: usize| {
+        median(
+            figures[0]
+                .iter()
+                .zip(&figures[i])
+                .map(|(a, b)| a / b)
+                .collect(),
+        )
+    };
+    println!(
+        "{N} runs | {:.0} | {:.0} ({:.2}x) | {:.0} ({:.2}x)",
+        median(figures[0].clone()),
+        median(figures[1].clone()),
+        ratio(1),
+        median(figures[2].clone()),
+        ratio(2),
+    );
+}
+
+fn main() {
+    // `cargo bench` passes `--bench`; any other argument is the number of rounds.
+    let rounds = std::env::args()
+        .skip(1)
+        .find_map(|a| a.parse().ok())
+        .unwrap_or(15);
+    let avx2 = if cfg!(target_arch = "x86_64") && is_avx2() {
+        "AVX2"
+    } else {
+        "none"
+    };
+    println!(
+        "ns per run of the kernel (medians of {rounds} alternating rounds; wider instructions: {avx2})"
+    );
+    println!("runs | one at a time | lanes (speed-up) | lanes, baseline target (speed-up)");
+    lanes::<2>(rounds);
+    lanes::<4>(rounds);
+    lanes::<8>(rounds);
+}
+
+#[cfg(target_arch = "x86_64")]
+fn is_avx2() -> bool {
+    std::arch::is_x86_feature_detected!("avx2")
+}
+#[cfg(not(target_arch = "x86_64"))]
+fn is_avx2() -> bool {
+    false
+}
