@@ -52,7 +52,8 @@ impl CoordAxis {
     }
 
     /// `Xup` at hinge angle `phi`: `E = Rot(sign e_k, φ)ᵀ`, `r = at − Eᵀ child_at`.
-    #[inline]
+    #[cfg_attr(not(debug_assertions), inline(always))]
+    #[cfg_attr(debug_assertions, inline)]
     pub fn transform<T: Real>(
         &self,
         phi: T,
@@ -72,7 +73,8 @@ impl CoordAxis {
     }
 
     /// `E v` (parent to child coordinates).
-    #[inline]
+    #[cfg_attr(not(debug_assertions), inline(always))]
+    #[cfg_attr(debug_assertions, inline)]
     fn rotate<T: Real>(&self, e: &Matrix3<T>, v: &Vector3<T>) -> Vector3<T> {
         match self.k {
             0 => rotate::<_, 1, 2, false>(e, v),
@@ -82,7 +84,8 @@ impl CoordAxis {
     }
 
     /// `Eᵀ v` (child to parent coordinates).
-    #[inline]
+    #[cfg_attr(not(debug_assertions), inline(always))]
+    #[cfg_attr(debug_assertions, inline)]
     fn rotate_back<T: Real>(&self, e: &Matrix3<T>, v: &Vector3<T>) -> Vector3<T> {
         match self.k {
             0 => rotate::<_, 1, 2, true>(e, v),
@@ -93,7 +96,8 @@ impl CoordAxis {
 
     /// `Eᵀ M E` for `M = A, B, C` of `ia`: rows then columns `i`, `j` mixed by the 2x2 block
     /// of `E`, with the axes as constants (no index checks, straight-line code).
-    #[inline]
+    #[cfg_attr(not(debug_assertions), inline(always))]
+    #[cfg_attr(debug_assertions, inline)]
     fn similarities<T: Real>(
         &self,
         e: &Matrix3<T>,
@@ -286,7 +290,8 @@ impl CoordAxis {
 
     /// `M E` for this hinge's `E` (`x.rot`): only columns `i` and `j` of `M` mix (a
     /// composite rotation through a chain of massless links, see `aba.rs`).
-    #[inline]
+    #[cfg_attr(not(debug_assertions), inline(always))]
+    #[cfg_attr(debug_assertions, inline)]
     pub fn post_rotate<T: Real>(&self, m: &Matrix3<T>, e: &Matrix3<T>) -> Matrix3<T> {
         let (i, j) = (self.i, self.j);
         let (eii, eij, eji, ejj) = (e[(i, i)], e[(i, j)], e[(j, i)], e[(j, j)]);
@@ -298,31 +303,36 @@ impl CoordAxis {
     }
 
     /// `M a` for this hinge's axis `a = sign e_k`: a signed column of `M`.
-    #[inline]
+    #[cfg_attr(not(debug_assertions), inline(always))]
+    #[cfg_attr(debug_assertions, inline)]
     pub fn times_axis<T: Real>(&self, m: &Matrix3<T>) -> Vector3<T> {
         m.column(self.k) * T::splat(self.sign)
     }
 
     /// `Mᵀ a` for this hinge's axis `a = sign e_k`: a signed row of `M`.
-    #[inline]
+    #[cfg_attr(not(debug_assertions), inline(always))]
+    #[cfg_attr(debug_assertions, inline)]
     pub fn tr_times_axis<T: Real>(&self, m: &Matrix3<T>) -> Vector3<T> {
         m.row(self.k).transpose() * T::splat(self.sign)
     }
 
     /// `a · v` for this hinge's axis `a = sign e_k`: a signed entry of `v`.
-    #[inline]
+    #[cfg_attr(not(debug_assertions), inline(always))]
+    #[cfg_attr(debug_assertions, inline)]
     pub fn dot_axis<T: Real>(&self, v: &Vector3<T>) -> T {
         T::splat(self.sign) * v[self.k]
     }
 
     /// The axis `sign e_k` times `x`.
-    #[inline]
+    #[cfg_attr(not(debug_assertions), inline(always))]
+    #[cfg_attr(debug_assertions, inline)]
     pub fn scaled_axis<T: Real>(&self, x: T) -> Vector3<T> {
         Vector3::ith(self.k, T::splat(self.sign) * x)
     }
 
     /// `Sᵀ f` for `S = [sign e_k; l]`.
-    #[inline]
+    #[cfg_attr(not(debug_assertions), inline(always))]
+    #[cfg_attr(debug_assertions, inline)]
     pub fn dot_subspace<T: Real>(&self, l: &Vector3<T>, f: &Force<T>) -> T {
         T::splat(self.sign) * f.ang[self.k] + l.dot(&f.lin)
     }
