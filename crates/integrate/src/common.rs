@@ -1,7 +1,11 @@
 //! Pieces shared by the steppers: the evaluation context, error norm,
 //! initial step selection and the explicit methods' step-size controller.
 
-use crate::{error::IntegrateError, options::Options, system::System};
+use crate::{
+    error::IntegrateError,
+    options::Options,
+    system::{System, SystemError},
+};
 
 /// Counters and settings shared by the driver and a stepper.
 #[derive(Debug)]
@@ -60,9 +64,22 @@ impl Ctx {
         x: &[f64],
         dx: &mut [f64],
     ) -> Result<(), IntegrateError> {
+        let result = sys.rhs(t, x, dx);
+        self.evaluated(t, x, dx, result)
+    }
+
+    /// Counts an evaluation of `dx = f(t, x)` made elsewhere (a batch's, `lanes.rs`) and
+    /// checks it as [`Ctx::eval`] does.
+    #[inline]
+    pub fn evaluated(
+        &mut self,
+        t: f64,
+        x: &[f64],
+        dx: &[f64],
+        result: Result<(), SystemError>,
+    ) -> Result<(), IntegrateError> {
         self.rhs_evals += 1;
-        sys.rhs(t, x, dx)
-            .map_err(|source| IntegrateError::System { t, source })?;
+        result.map_err(|source| IntegrateError::System { t, source })?;
         if !all_finite(dx) && all_finite(x) {
             return Err(IntegrateError::NonFinite { t });
         }

@@ -1,6 +1,7 @@
 //! The integration driver: steps a method, emits outputs at the requested
 //! times, locates and handles events.
 
+use std::borrow::Cow;
 use std::ops::ControlFlow;
 
 use crate::{
@@ -106,6 +107,50 @@ where
     S: System + ?Sized,
     F: FnMut(f64, &[f64]) -> ControlFlow<()>,
 {
+    let (outputs, ctx) = checked(&*system, options, t0, x0, t_end, Cow::Borrowed(output))?;
+    run_method(system, options, ctx, outputs, observer, t0, x0, t_end).0
+}
+
+/// A checked run by `options.method`, from start to end; the system and the observer back.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn run_method<S: System, F: FnMut(f64, &[f64]) -> ControlFlow<()>>(
+    system: S,
+    options: &Options,
+    ctx: Ctx,
+    outputs: OutputTimes<'_>,
+    observer: F,
+    t0: f64,
+    x0: &[f64],
+    t_end: f64,
+) -> (Result<Stats, IntegrateError>, S, F) {
+    let n = system.dim();
+    match options.method {
+        Method::Rk4 => {
+            Run::new(system, Rk4::new(n), ctx, options, outputs, observer).go(t0, x0, t_end)
+        }
+        Method::Dp54 => {
+            Run::new(system, Dp54::new(n), ctx, options, outputs, observer).go(t0, x0, t_end)
+        }
+        Method::Dop853 => {
+            Run::new(system, Dop853::new(n), ctx, options, outputs, observer).go(t0, x0, t_end)
+        }
+        Method::Radau5 => {
+            let st = Radau5::new(n, options.rtol, options.atol);
+            Run::new(system, st, ctx, options, outputs, observer).go(t0, x0, t_end)
+        }
+    }
+}
+
+/// The checks every run starts with: the options, `x0`'s length and finiteness, the time
+/// span, the output times; then the run's counters.
+pub(crate) fn checked<'o, S: System + ?Sized>(
+    system: &S,
+    options: &Options,
+    t0: f64,
+    x0: &[f64],
+    t_end: f64,
+    output: Cow<'o, Output>,
+) -> Result<(OutputTimes<'o>, Ctx), IntegrateError> {
     options.validate()?;
     let n = system.dim();
     let invalid = |m: String| Err(IntegrateError::InvalidOptions(m));
@@ -126,26 +171,12 @@ where
     }
     let outputs = OutputTimes::new(output, t0, t_end)?;
     let ctx = Ctx::new(system, options)?;
-    match options.method {
-        Method::Rk4 => {
-            Run::new(system, Rk4::new(n), ctx, options, outputs, observer).go(t0, x0, t_end)
-        }
-        Method::Dp54 => {
-            Run::new(system, Dp54::new(n), ctx, options, outputs, observer).go(t0, x0, t_end)
-        }
-        Method::Dop853 => {
-            Run::new(system, Dop853::new(n), ctx, options, outputs, observer).go(t0, x0, t_end)
-        }
-        Method::Radau5 => {
-            let st = Radau5::new(n, options.rtol, options.atol);
-            Run::new(system, st, ctx, options, outputs, observer).go(t0, x0, t_end)
-        }
-    }
+    Ok((outputs, ctx))
 }
 
 /// One integration run: the stepper plus the driver's own workspace.
-struct Run<'a, S: ?Sized, St, F> {
-    sys: &'a mut S,
+pub(crate) struct Run<'a, S, St, F> {
+    sys: S,
     st: St,
     ctx: Ctx,
     outs: OutputTimes<'a>,
@@ -153,6 +184,8 @@ struct Run<'a, S: ?Sized, St, F> {
     event_tol: f64,
     /// The fixed-step grid's origin (`None`: the run's start).
     grid_origin: Option<f64>,
+    /// The fixed-step grid, `(origin, step)`, set by [`Run::begin`].
+    grid: Option<(f64, f64)>,
     events: Vec<(f64, usize)>,
     /// Event function values at the left end of the unprocessed interval,
     /// at the step end, and at a trial point.
@@ -171,6 +204,14 @@ struct Run<'a, S: ?Sized, St, F> {
     x_ev: Vec<f64>,
 }
 
+/// What comes next in a run, before a step.
+pub(crate) enum Plan {
+    /// A step ending at this time at the latest.
+    Step(f64),
+    /// The run is over.
+    Done(Stats),
+}
+
 /// What the run does after handling events in a step.
 enum Next {
     Proceed,
@@ -186,12 +227,12 @@ const RETURN_PROBES: [f64; 5] = [1e-3, 0.125, 0.25, 0.5, 0.75];
 
 impl<'a, S, St, F> Run<'a, S, St, F>
 where
-    S: System + ?Sized,
+    S: System,
     St: Stepper,
     F: FnMut(f64, &[f64]) -> ControlFlow<()>,
 {
-    fn new(
-        sys: &'a mut S,
+    pub(crate) fn new(
+        sys: S,
         st: St,
         ctx: Ctx,
         opts: &Options,
@@ -207,6 +248,7 @@ where
             observer,
             event_tol: opts.event_tol,
             grid_origin: opts.grid_origin,
+            grid: None,
             events: Vec::new(),
             g_left: vec![0.0; ne],
             g_right: vec![0.0; ne],
@@ -234,23 +276,51 @@ where
         }
     }
 
-    fn go(mut self, t0: f64, x0: &[f64], t_end: f64) -> Result<Stats, IntegrateError> {
-        let fixed = self.ctx.fixed.is_some();
-        let grid = self.ctx.fixed.map(|h| (self.grid_origin.unwrap_or(t0), h));
-        let has_events = !self.g_left.is_empty();
-        self.st.restart(self.sys, &mut self.ctx, t0, x0)?;
+    fn go(mut self, t0: f64, x0: &[f64], t_end: f64) -> (Result<Stats, IntegrateError>, S, F) {
+        let result = self.go_on(t0, x0, t_end);
+        (result, self.sys, self.observer)
+    }
+
+    fn go_on(&mut self, t0: f64, x0: &[f64], t_end: f64) -> Result<Stats, IntegrateError> {
+        if let Some(stats) = self.begin(t0, x0)? {
+            return Ok(stats);
+        }
+        loop {
+            match self.plan(t_end)? {
+                Plan::Done(stats) => return Ok(stats),
+                Plan::Step(limit) => self.st.step(&mut self.sys, &mut self.ctx, limit)?,
+            }
+            if let Some(stats) = self.after_step()? {
+                return Ok(stats);
+            }
+        }
+    }
+
+    /// The start: the stepper at `(t0, x0)`, the outputs due there, the event functions'
+    /// first values. `Some` when the observer stopped the run already.
+    pub(crate) fn begin(&mut self, t0: f64, x0: &[f64]) -> Result<Option<Stats>, IntegrateError> {
+        self.grid = self.ctx.fixed.map(|h| (self.grid_origin.unwrap_or(t0), h));
+        self.st.restart(&mut self.sys, &mut self.ctx, t0, x0)?;
         while let Some(to) = self.outs.peek().filter(|to| *to <= t0) {
             if (self.observer)(to, x0).is_break() {
-                return Ok(self.finish(to, x0, StopReason::Observer));
+                return Ok(Some(self.finish(to, x0, StopReason::Observer)));
             }
             self.outs.advance();
         }
         if self.outs.every_step() && (self.observer)(t0, x0).is_break() {
-            return Ok(self.finish(t0, x0, StopReason::Observer));
+            return Ok(Some(self.finish(t0, x0, StopReason::Observer)));
         }
-        if has_events {
-            Self::eval_events(self.sys, t0, x0, &mut self.g_left)?;
+        if !self.g_left.is_empty() {
+            Self::eval_events(&mut self.sys, t0, x0, &mut self.g_left)?;
         }
+        Ok(None)
+    }
+
+    /// Before a step: handles the time stops due now, then says where the next step may
+    /// end at the latest (the next output time of a fixed-step run, time stop or grid
+    /// point, and `t_end`), or that the run is over.
+    pub(crate) fn plan(&mut self, t_end: f64) -> Result<Plan, IntegrateError> {
+        let has_events = !self.g_left.is_empty();
         loop {
             let stop = self.sys.next_stop();
             if stop_due(self.st.t(), stop) {
@@ -258,46 +328,60 @@ where
                 continue;
             }
             if self.st.t() >= t_end {
-                break;
+                let (t, x) = (self.st.t(), self.st.x().to_vec());
+                return Ok(Plan::Done(self.finish(t, &x, StopReason::Finished)));
             }
             let mut limit = match self.outs.peek() {
-                Some(to) if fixed => to.min(t_end),
+                Some(to) if self.ctx.fixed.is_some() => to.min(t_end),
                 _ => t_end,
             };
             limit = limit.min(stop);
-            if let Some((origin, h)) = grid {
+            if let Some((origin, h)) = self.grid {
                 limit = limit.min(next_grid_point(origin, h, self.st.t()));
             }
-            self.st.step(self.sys, &mut self.ctx, limit)?;
+            return Ok(Plan::Step(limit));
+        }
+    }
 
-            // Projection; the copy tells whether cached derivatives went stale.
-            self.buf.copy_from_slice(self.st.x());
-            self.sys.project(self.st.x_mut());
-            if self.buf != self.st.x() {
-                self.st.state_modified();
-            }
-
-            if has_events {
-                match self.handle_events()? {
-                    Next::Proceed => {}
-                    Next::Restarted => continue,
-                    Next::Done(stats) => return Ok(stats),
-                }
-            }
-            let t = self.st.t();
-            if let Some(stats) = self.emit_until(t)? {
-                return Ok(stats);
-            }
-            if self.outs.every_step() && (self.observer)(t, self.st.x()).is_break() {
-                let x = self.st.x().to_vec();
-                return Ok(self.finish(t, &x, StopReason::Observer));
-            }
-            if has_events {
-                std::mem::swap(&mut self.g_left, &mut self.g_right);
+    /// After a step: the projection, the events in the step, the outputs up to its end.
+    /// `Some` when the run ended in it (an event's stop, the observer).
+    pub(crate) fn after_step(&mut self) -> Result<Option<Stats>, IntegrateError> {
+        let has_events = !self.g_left.is_empty();
+        // Projection; the copy tells whether cached derivatives went stale.
+        self.buf.copy_from_slice(self.st.x());
+        self.sys.project(self.st.x_mut());
+        if self.buf != self.st.x() {
+            self.st.state_modified();
+        }
+        if has_events {
+            match self.handle_events()? {
+                Next::Proceed => {}
+                Next::Restarted => return Ok(None),
+                Next::Done(stats) => return Ok(Some(stats)),
             }
         }
-        let (t, x) = (self.st.t(), self.st.x().to_vec());
-        Ok(self.finish(t, &x, StopReason::Finished))
+        let t = self.st.t();
+        if let Some(stats) = self.emit_until(t)? {
+            return Ok(Some(stats));
+        }
+        if self.outs.every_step() && (self.observer)(t, self.st.x()).is_break() {
+            let x = self.st.x().to_vec();
+            return Ok(Some(self.finish(t, &x, StopReason::Observer)));
+        }
+        if has_events {
+            std::mem::swap(&mut self.g_left, &mut self.g_right);
+        }
+        Ok(None)
+    }
+
+    /// The stepper, its context and the system, for a step taken from outside (`lanes.rs`).
+    pub(crate) fn parts(&mut self) -> (&mut St, &mut Ctx, &mut S) {
+        (&mut self.st, &mut self.ctx, &mut self.sys)
+    }
+
+    /// The system and the observer, once the run is over.
+    pub(crate) fn into_parts(self) -> (S, F) {
+        (self.sys, self.observer)
     }
 
     /// Handles the time stop due at the stepper's time (see [`System::on_stop`]): restarts
@@ -322,9 +406,10 @@ where
             if !all_finite(&self.x_ev) {
                 return Err(IntegrateError::NonFinite { t });
             }
-            self.st.restart(self.sys, &mut self.ctx, t, &self.x_ev)?;
+            self.st
+                .restart(&mut self.sys, &mut self.ctx, t, &self.x_ev)?;
             if has_events {
-                Self::eval_events(self.sys, t, &self.x_ev, &mut self.g_left)?;
+                Self::eval_events(&mut self.sys, t, &self.x_ev, &mut self.g_left)?;
             }
         }
         Ok(())
@@ -335,7 +420,7 @@ where
         if t == self.st.t() {
             self.buf.copy_from_slice(self.st.x());
         } else {
-            self.st.prepare_dense(self.sys, &mut self.ctx)?;
+            self.st.prepare_dense(&mut self.sys, &mut self.ctx)?;
             self.st.dense(t, &mut self.buf);
         }
         Ok(())
@@ -370,7 +455,7 @@ where
     /// Handled events restart from `g = 0`, so they do not fire twice for one crossing.
     fn handle_events(&mut self) -> Result<Next, IntegrateError> {
         let (mut t_left, t_right) = (self.st.t_old(), self.st.t());
-        Self::eval_events(self.sys, t_right, self.st.x(), &mut self.g_right)?;
+        Self::eval_events(&mut self.sys, t_right, self.st.x(), &mut self.g_right)?;
         let ne = self.g_left.len();
         loop {
             // Locate every candidate; t_loc[k] is NaN where event k does not cross.
@@ -388,10 +473,10 @@ where
                     continue;
                 }
                 if !prepared {
-                    self.st.prepare_dense(self.sys, &mut self.ctx)?;
+                    self.st.prepare_dense(&mut self.sys, &mut self.ctx)?;
                     prepared = true;
                 }
-                let (sys, st, buf, g) = (&mut *self.sys, &self.st, &mut self.buf, &mut self.g_mid);
+                let (sys, st, buf, g) = (&mut self.sys, &self.st, &mut self.buf, &mut self.g_mid);
                 let mut g_at = |t: f64| {
                     if t == st.t() {
                         buf.copy_from_slice(st.x());
@@ -437,7 +522,7 @@ where
             }
             self.interpolate(t_ev)?;
             self.x_ev.copy_from_slice(&self.buf);
-            Self::eval_events(self.sys, t_ev, &self.x_ev, &mut self.g_mid)?;
+            Self::eval_events(&mut self.sys, t_ev, &self.x_ev, &mut self.g_mid)?;
             if let Some(stats) = self.emit_until(t_ev)? {
                 return Ok(Next::Done(stats));
             }
@@ -486,7 +571,7 @@ where
                             return Err(IntegrateError::NonFinite { t: t_ev });
                         }
                         reset = true;
-                        Self::eval_events(self.sys, t_ev, &self.x_ev, &mut self.g_post)?;
+                        Self::eval_events(&mut self.sys, t_ev, &self.x_ev, &mut self.g_post)?;
                         self.next_group.clear();
                         for k in 0..ne {
                             let dir = self.sys.event_direction(k);
@@ -508,7 +593,8 @@ where
                 }
             }
             if reset {
-                self.st.restart(self.sys, &mut self.ctx, t_ev, &self.x_ev)?;
+                self.st
+                    .restart(&mut self.sys, &mut self.ctx, t_ev, &self.x_ev)?;
                 if self.outs.every_step() && (self.observer)(t_ev, &self.x_ev).is_break() {
                     let x = self.x_ev.clone();
                     return Ok(Next::Done(self.finish(t_ev, &x, StopReason::Observer)));

@@ -39,6 +39,7 @@ mod dp54;
 mod driver;
 mod error;
 mod events;
+pub mod lanes;
 mod options;
 mod radau5;
 mod rk4;

@@ -1,6 +1,6 @@
 //! Method selection, tolerances and output requests.
 
-use std::{fmt, str::FromStr};
+use std::{borrow::Cow, fmt, str::FromStr};
 
 use crate::error::IntegrateError;
 
@@ -223,7 +223,8 @@ pub enum Output {
 /// Iterates the requested output times without allocating.
 #[derive(Debug)]
 pub(crate) struct OutputTimes<'a> {
-    kind: &'a Output,
+    /// Borrowed by one run, owned by a run of a batch (`lanes.rs`).
+    kind: Cow<'a, Output>,
     t0: f64,
     t_end: f64,
     i: usize,
@@ -231,9 +232,9 @@ pub(crate) struct OutputTimes<'a> {
 }
 
 impl<'a> OutputTimes<'a> {
-    pub(crate) fn new(kind: &'a Output, t0: f64, t_end: f64) -> Result<Self, IntegrateError> {
+    pub(crate) fn new(kind: Cow<'a, Output>, t0: f64, t_end: f64) -> Result<Self, IntegrateError> {
         let bad = |m: String| Err(IntegrateError::InvalidOptions(m));
-        match kind {
+        match &*kind {
             Output::Interval(dt) if !(*dt > 0.0 && dt.is_finite()) => {
                 return bad(format!("output interval must be finite and > 0, got {dt}"));
             }
@@ -261,7 +262,7 @@ impl<'a> OutputTimes<'a> {
         if self.done {
             return None;
         }
-        match self.kind {
+        match &*self.kind {
             Output::Steps => None,
             Output::Times(ts) => ts.get(self.i).copied(),
             Output::Interval(dt) => {
@@ -281,14 +282,14 @@ impl<'a> OutputTimes<'a> {
     }
 
     pub(crate) fn advance(&mut self) {
-        if matches!(self.kind, Output::Interval(_)) && self.peek() == Some(self.t_end) {
+        if matches!(*self.kind, Output::Interval(_)) && self.peek() == Some(self.t_end) {
             self.done = true;
         }
         self.i += 1;
     }
 
     pub(crate) fn every_step(&self) -> bool {
-        matches!(self.kind, Output::Steps)
+        matches!(*self.kind, Output::Steps)
     }
 }
 
@@ -298,7 +299,7 @@ mod tests {
 
     fn times(dt: f64, t0: f64, t_end: f64) -> Vec<f64> {
         let kind = Output::Interval(dt);
-        let mut it = OutputTimes::new(&kind, t0, t_end).unwrap();
+        let mut it = OutputTimes::new(Cow::Borrowed(&kind), t0, t_end).unwrap();
         let mut out = Vec::new();
         while let Some(t) = it.peek() {
             out.push(t);

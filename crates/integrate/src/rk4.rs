@@ -26,6 +26,10 @@ pub(crate) struct Rk4 {
     k3: Vec<f64>,
     k4: Vec<f64>,
     tmp: Vec<f64>,
+    /// The step under way: its size, whether it lands on `limit`.
+    h: f64,
+    land: bool,
+    limit: f64,
 }
 
 impl Rk4 {
@@ -43,7 +47,66 @@ impl Rk4 {
             k3: z(),
             k4: z(),
             tmp: z(),
+            h: 0.0,
+            land: false,
+            limit: 0.0,
         }
+    }
+}
+
+/// A step in pieces, so that a batch of runs (`lanes.rs`) evaluates each stage of all its
+/// runs together: [`Rk4::begin_step`], then the right-hand side of each [`Rk4::stage`], then
+/// [`Rk4::end_step`]. [`Stepper::step`] is exactly that sequence.
+impl Rk4 {
+    /// The step toward `limit` (landing on it when within reach).
+    pub(crate) fn begin_step(&mut self, ctx: &Ctx, limit: f64) -> Result<(), IntegrateError> {
+        ctx.check_budget(self.t)?;
+        let h_fixed = ctx.fixed.expect("validated: rk4 has a fixed step");
+        (self.h, self.land) = clamp_to_limit(self.t, h_fixed, limit);
+        self.limit = limit;
+        Ok(())
+    }
+
+    /// Stage `s` (0 to 3): where the slope is wanted, `(t, x)`, and where it goes; `None`
+    /// for the first stage when the slope at the step's start is known already.
+    pub(crate) fn stage(&mut self, s: usize) -> Option<(f64, &[f64], &mut [f64])> {
+        let (t, h) = (self.t, self.h);
+        match s {
+            0 => (!self.f_valid).then_some((t, &self.x[..], &mut self.f[..])),
+            1 => {
+                axpy(&mut self.tmp, &self.x, 0.5 * h, &self.f);
+                Some((t + 0.5 * h, &self.tmp, &mut self.k2))
+            }
+            2 => {
+                axpy(&mut self.tmp, &self.x, 0.5 * h, &self.k2);
+                Some((t + 0.5 * h, &self.tmp, &mut self.k3))
+            }
+            _ => {
+                axpy(&mut self.tmp, &self.x, h, &self.k3);
+                Some((t + h, &self.tmp, &mut self.k4))
+            }
+        }
+    }
+
+    /// The step's end from its four slopes.
+    pub(crate) fn end_step(&mut self, ctx: &mut Ctx) -> Result<(), IntegrateError> {
+        let (t, h) = (self.t, self.h);
+        std::mem::swap(&mut self.x, &mut self.x_old);
+        std::mem::swap(&mut self.f, &mut self.f_old);
+        let slopes = self.f_old.iter().zip(&self.k2).zip(&self.k3).zip(&self.k4);
+        for ((x, x_old), (((f, k2), k3), k4)) in self.x.iter_mut().zip(&self.x_old).zip(slopes) {
+            *x = x_old + h / 6.0 * (f + 2.0 * (k2 + k3) + k4);
+        }
+        if !all_finite(&self.x) {
+            return Err(IntegrateError::NonFinite { t: t + h });
+        }
+        self.t_old = t;
+        self.t = if self.land { self.limit } else { t + h };
+        ctx.steps_accepted += 1;
+        // The end slope is evaluated lazily: by the next step (at the projected state) or by
+        // `prepare_dense`, never twice.
+        self.f_valid = false;
+        Ok(())
     }
 }
 
@@ -69,36 +132,13 @@ impl Stepper for Rk4 {
         ctx: &mut Ctx,
         limit: f64,
     ) -> Result<(), IntegrateError> {
-        ctx.check_budget(self.t)?;
-        let h_fixed = ctx.fixed.expect("validated: rk4 has a fixed step");
-        let (h, land) = clamp_to_limit(self.t, h_fixed, limit);
-        let t = self.t;
-        if !self.f_valid {
-            ctx.eval(sys, t, &self.x, &mut self.f)?;
+        self.begin_step(ctx, limit)?;
+        for stage in 0..4 {
+            if let Some((t, x, dx)) = self.stage(stage) {
+                ctx.eval(sys, t, x, dx)?;
+            }
         }
-        axpy(&mut self.tmp, &self.x, 0.5 * h, &self.f);
-        ctx.eval(sys, t + 0.5 * h, &self.tmp, &mut self.k2)?;
-        axpy(&mut self.tmp, &self.x, 0.5 * h, &self.k2);
-        ctx.eval(sys, t + 0.5 * h, &self.tmp, &mut self.k3)?;
-        axpy(&mut self.tmp, &self.x, h, &self.k3);
-        ctx.eval(sys, t + h, &self.tmp, &mut self.k4)?;
-
-        std::mem::swap(&mut self.x, &mut self.x_old);
-        std::mem::swap(&mut self.f, &mut self.f_old);
-        let slopes = self.f_old.iter().zip(&self.k2).zip(&self.k3).zip(&self.k4);
-        for ((x, x_old), (((f, k2), k3), k4)) in self.x.iter_mut().zip(&self.x_old).zip(slopes) {
-            *x = x_old + h / 6.0 * (f + 2.0 * (k2 + k3) + k4);
-        }
-        if !all_finite(&self.x) {
-            return Err(IntegrateError::NonFinite { t: t + h });
-        }
-        self.t_old = t;
-        self.t = if land { limit } else { t + h };
-        ctx.steps_accepted += 1;
-        // The end slope is evaluated lazily: by the next step (at the projected state) or by
-        // `prepare_dense`, never twice.
-        self.f_valid = false;
-        Ok(())
+        self.end_step(ctx)
     }
 
     fn prepare_dense<S: System + ?Sized>(

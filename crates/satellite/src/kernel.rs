@@ -1127,6 +1127,10 @@ impl Kernel for UnrolledAba {
         } = *input;
         Some(self.aba_hybrid_with_forces_into(q, v, tau, fext, locks, ddq))
     }
+
+    fn as_any(&self) -> Option<&dyn std::any::Any> {
+        Some(self)
+    }
 }
 
 /// A wrench `f` about a body's origin moved to its hinge point, the origin lying at `o` from

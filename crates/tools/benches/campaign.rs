@@ -59,6 +59,7 @@ fn main() {
             threads: Some(t),
             shard: Shard::ALL,
             resume: false,
+            lanes: true,
         };
         let started = Instant::now();
         let report = run_campaign(&c, &dir, &opts, &Quiet).unwrap();

@@ -153,6 +153,13 @@ pub trait Kernel: fmt::Debug + Send + Sync {
     /// `input.locked` (then `ddq` is untouched and the generic algorithm runs).
     /// `input.xup_current` may be ignored (a kernel computes its transforms).
     fn try_solve(&self, input: &Input<'_>, ddq: &mut [f64]) -> Option<Result<(), DynamicsError>>;
+
+    /// The kernel as its own type, for a caller that knows more of it than this trait says
+    /// (several runs' kernels gathered into SIMD lanes, in `satsim-spacecraft`); `None` by
+    /// default.
+    fn as_any(&self) -> Option<&dyn std::any::Any> {
+        None
+    }
 }
 
 /// The forward dynamics of one model: the generic algorithm ([`Method`]), its instance for

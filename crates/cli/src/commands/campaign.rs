@@ -1,5 +1,5 @@
 //! `satsim campaign SCENE.toml [--out DIR] [--threads T] [--shard I/N] [--shards N]
-//! [--resume]` and `satsim campaign merge DIR... --out DIR` (contract section 8): a thin
+//! [--resume] [--no-lanes]` and `satsim campaign merge DIR... --out DIR` (contract section 8): a thin
 //! wrapper over [`satsim_tools::campaign`].
 //!
 //! Without `--shard`, the shard comes from the scheduler's environment when present (Slurm
@@ -47,6 +47,11 @@ pub struct Args {
     /// Keep the runs already in DIR/runs.csv and run only the missing ones
     #[arg(long)]
     pub resume: bool,
+    /// One run at a time per thread: no SIMD lanes of runs (fixed-step RK4 scenes of the
+    /// preprint's layout otherwise run 4 per core with AVX2, 2 without; the results are
+    /// the same, byte for byte)
+    #[arg(long)]
+    pub no_lanes: bool,
     /// Override a scene value by its dotted path before the runs are drawn, e.g.
     /// `--set campaign.runs=20` (repeatable)
     #[arg(long = "set", value_name = "KEY=VALUE", value_parser = super::run::parse_override)]
@@ -129,6 +134,7 @@ pub fn run(args: &Args) -> Result<Output, CliError> {
             threads: args.threads,
             shard: choice.shard,
             resume: args.resume,
+            lanes: !args.no_lanes,
         },
         &bar,
     );

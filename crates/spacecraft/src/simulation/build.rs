@@ -301,6 +301,7 @@ impl Simulation {
                 needs_hold,
                 work,
                 fd,
+                serial: NEXT_SERIAL.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
             },
             log: RunLog {
                 calls: vec![0; effects.len()],
@@ -366,6 +367,9 @@ fn velocity_in_state(layout: &StateLayout, rotors: Option<Range<usize>>) -> Opti
         _ => Some(start),
     }
 }
+
+/// The serial number of the next [`SimModel`] made.
+static NEXT_SERIAL: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
 
 #[cfg(test)]
 mod tests {

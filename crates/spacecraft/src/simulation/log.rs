@@ -6,6 +6,9 @@
 pub struct RunLog {
     /// Right-hand-side evaluations.
     pub(super) rhs_evals: u64,
+    /// Of those, the ones whose dynamics were solved in the lanes of a batch of runs
+    /// (`lanes.rs`).
+    pub(super) lane_rhs: u64,
     /// How many times each effect was applied by the right-hand side (the effects' order).
     pub(super) calls: Vec<u64>,
     /// Each handled event: `(t, description)`, and the effect whose event it was.
@@ -17,6 +20,11 @@ impl RunLog {
     /// Right-hand-side evaluations so far.
     pub fn rhs_evals(&self) -> u64 {
         self.rhs_evals
+    }
+    /// Of [`RunLog::rhs_evals`], the right-hand sides whose dynamics were solved together
+    /// with other runs' in SIMD lanes ([`Simulation::run_lanes`](super::Simulation::run_lanes)).
+    pub fn lane_rhs(&self) -> u64 {
+        self.lane_rhs
     }
     /// What happened at each handled event: `(t, description)`.
     pub fn events(&self) -> &[(f64, String)] {

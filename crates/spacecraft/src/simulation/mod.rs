@@ -73,6 +73,7 @@ mod context;
 mod data;
 mod events;
 mod hold;
+mod lanes;
 mod layout;
 mod loads;
 mod log;
@@ -85,6 +86,7 @@ mod system;
 
 pub use build::SimulationBuilder;
 pub use data::SimData;
+pub use lanes::{LaneJob, LaneJobs, RowSink};
 pub use layout::StateLayout;
 pub use loads::{EffectLoads, moment_about};
 pub use log::RunLog;

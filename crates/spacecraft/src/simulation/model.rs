@@ -45,6 +45,10 @@ pub struct SimModel {
     /// ([`satsim_satellite::kernel::UnrolledAba`]) where the tree has that layout (it takes
     /// every lock mask it accepts).
     pub(super) fd: ForwardDynamics,
+    /// This model's serial number in the process: the lanes' cache of gathered kernels
+    /// (`lanes.rs`) knows by it that a run is the one it gathered (an address could be
+    /// reused by the next run's model).
+    pub(super) serial: u64,
 }
 
 impl SimModel {

@@ -25,48 +25,75 @@ use satsim_tree::spatial::{Force, Vec3};
 use satsim_tree::{Data, DynamicsError, Input, forward_kinematics, momentum, rnea};
 
 impl Simulation {
-    /// `dx = f(t, x)`; slices of the wrong length are an error, not a panic.
+    /// `dx = f(t, x)`; slices of the wrong length are an error, not a panic. The three
+    /// pieces are also called apart, by the lanes of a batch of runs (`lanes.rs`), which
+    /// solve the dynamics of several runs at once between [`Self::rhs_forces`] and
+    /// [`Self::rhs_power`].
     pub(super) fn right_hand_side(
         &mut self,
         t: f64,
         x: &[f64],
         dx: &mut [f64],
     ) -> Result<(), SystemError> {
+        let kin = self.rhs_forces(t, x, dx)?;
+        self.dynamics(kin, dx)?;
+        self.rhs_power(x, dx)
+    }
+
+    /// Stages 1-3 and the positions' part of stage 5: unpack, kinematics, the effects (their
+    /// own derivatives straight into `dx`, and the power they add), `q̇`, and the generalised
+    /// forces of the dynamics into `data.tau`. Returns whether the poses are current.
+    pub(super) fn rhs_forces(
+        &mut self,
+        t: f64,
+        x: &[f64],
+        dx: &mut [f64],
+    ) -> Result<bool, SystemError> {
         self.check_len(x.len(), "rhs")?;
         self.check_len(dx.len(), "rhs (derivative)")?;
         self.log.rhs_evals += 1;
-        // 1-2.
-        self.unpack(x);
-        let kin = self.kinematics(false)?;
-        // 3. The effects write their own derivatives straight into `dx`.
         let track = !self.model.work.is_empty();
-        let power = self.apply_effects(t, x, kin, Some(&mut *dx), true)?;
-        if track && !kin && self.data.forces.has_wrench {
-            // A wrench's power needs the bodies' velocities: an effect wrote one without
-            // asking for kinematics, so they are computed from now on (this evaluation again).
-            self.data.needs_kinematics = true;
-            self.log.rhs_evals -= 1;
-            return self.right_hand_side(t, x, dx);
-        }
+        let (kin, power) = loop {
+            // 1-2.
+            self.unpack(x);
+            let kin = self.kinematics(false)?;
+            // 3. The effects write their own derivatives straight into `dx`.
+            let power = self.apply_effects(t, x, kin, Some(&mut *dx), true)?;
+            if track && !kin && self.data.forces.has_wrench {
+                // A wrench's power needs the bodies' velocities: an effect wrote one without
+                // asking for kinematics, so they are computed from now on (this evaluation
+                // again).
+                self.data.needs_kinematics = true;
+                continue;
+            }
+            break (kin, power);
+        };
         if track {
             dx[self.model.work.start] = power.actuator;
             dx[self.model.work.start + 1] = power.dissipated;
         }
-        // 4-5.
         self.pack_positions(x, dx);
-        self.dynamics(kin, dx)?;
-        if track {
-            dx[self.model.work.start] += self.locked_hinges_power(dx)?;
-            if let Some(f) = &self.model.flex {
-                // Modal damping dissipates `Σ 2 ζ ωₖ η̇ₖ²`.
-                let etadot = &x[self.model.layout.etadot.clone()];
-                dx[self.model.work.start + 1] += f
-                    .damping()
-                    .iter()
-                    .zip(etadot)
-                    .map(|(c, e)| c * e * e)
-                    .sum::<f64>();
-            }
+        let (nb, d) = (self.model.tree.base_nv(), &mut self.data);
+        d.tau[nb..].copy_from_slice(&d.forces.hinge_torque);
+        Ok(kin)
+    }
+
+    /// After the dynamics: the energy budget's power of the locked hinges and of the modal
+    /// damping.
+    pub(super) fn rhs_power(&mut self, x: &[f64], dx: &mut [f64]) -> Result<(), SystemError> {
+        if self.model.work.is_empty() {
+            return Ok(());
+        }
+        dx[self.model.work.start] += self.locked_hinges_power(dx)?;
+        if let Some(f) = &self.model.flex {
+            // Modal damping dissipates `Σ 2 ζ ωₖ η̇ₖ²`.
+            let etadot = &x[self.model.layout.etadot.clone()];
+            dx[self.model.work.start + 1] += f
+                .damping()
+                .iter()
+                .zip(etadot)
+                .map(|(c, e)| c * e * e)
+                .sum::<f64>();
         }
         Ok(())
     }
@@ -315,14 +342,12 @@ impl Simulation {
         }
     }
 
-    /// Stages 4 and 5, the velocities' part: the effects' hinge torques and wrenches, `q̈` by forward
+    /// Stages 4 and 5, the velocities' part: from the effects' hinge torques (in `data.tau`) and wrenches, `q̈` by forward
     /// dynamics with the hinges locked now, packed into `dx` (written straight into it where
     /// the tree's velocity vector is one run of the state). `kin`: the poses are current,
     /// so the generic ABA reuses their transforms (bit for bit the same result).
-    fn dynamics(&mut self, kin: bool, dx: &mut [f64]) -> Result<(), SystemError> {
+    pub(super) fn dynamics(&mut self, kin: bool, dx: &mut [f64]) -> Result<(), SystemError> {
         let (m, d) = (&self.model, &mut self.data);
-        let nb = m.tree.base_nv();
-        d.tau[nb..].copy_from_slice(&d.forces.hinge_torque);
         let fext = d.forces.has_wrench;
         let solve = Input::new(&d.q, &d.v, &d.tau)
             .fext(fext.then_some(d.forces.body_wrench.as_slice()))
@@ -344,6 +369,15 @@ impl Simulation {
             }
             _ => forward_dynamics(m, &mut d.tree, solve, &mut d.ddq).map_err(err)?,
         }
+        self.pack_accelerations(dx);
+        Ok(())
+    }
+
+    /// Stage 5, the accelerations in `data.ddq` into `dx` (where the tree's velocity vector
+    /// is not one run of the state).
+    pub(super) fn pack_accelerations(&self, dx: &mut [f64]) {
+        let (m, d) = (&self.model, &self.data);
+        let nb = m.tree.base_nv();
         let (l, n, ddq) = (&m.layout, m.n_user, &d.ddq);
         if l.free {
             dx[l.omega.start..l.omega.start + 6 + n].copy_from_slice(&ddq[..6 + n]);
@@ -354,7 +388,6 @@ impl Simulation {
             let r = m.own[i].clone();
             dx[r].copy_from_slice(&ddq[nb + n..nb + n + m.n_rotors]);
         }
-        Ok(())
     }
 }
 

@@ -4,7 +4,7 @@ use super::Simulation;
 use satsim_integrate::{
     EventAction, EventDirection, IntegrateError, Options, Output, Stats, System, SystemError,
 };
-use std::cell::RefCell;
+use std::cell::{Ref, RefCell, RefMut};
 use std::ops::ControlFlow;
 use thiserror::Error;
 
@@ -30,36 +30,15 @@ impl Simulation {
         let result =
             satsim_integrate::integrate(&mut shared, options, t0, &x0, t_end, output, |t, x| {
                 let mut sim = cell.borrow_mut();
-                if let Err(e) = sim.row(t, x, &mut row) {
-                    failure = Some(RunError::Integrate(IntegrateError::System { t, source: e }));
-                    return ControlFlow::Break(());
+                match deliver(&mut sim, &columns, &mut row, t, x, &mut sink) {
+                    Ok(()) => ControlFlow::Continue(()),
+                    Err(f) => {
+                        failure = Some(f);
+                        ControlFlow::Break(())
+                    }
                 }
-                // A non-finite quantity is never presented as a result.
-                if let Some(c) = row.iter().position(|v| !v.is_finite()) {
-                    let why = format!("`{}` is not finite: the computation overflowed", columns[c]);
-                    failure = Some(RunError::Integrate(IntegrateError::System {
-                        t,
-                        source: SystemError::new(why),
-                    }));
-                    return ControlFlow::Break(());
-                }
-                if let Err(e) = sink(t, &row) {
-                    failure = Some(RunError::Sink { t, error: e });
-                    return ControlFlow::Break(());
-                }
-                ControlFlow::Continue(())
             });
-        match (result, failure) {
-            (_, Some(f)) => Err(f),
-            (Ok(stats), None) => Ok(stats),
-            (Err(IntegrateError::MaxSteps { t, .. }), None) => {
-                Err(RunError::Integrate(IntegrateError::MaxSteps {
-                    t,
-                    stepping: cell.borrow().stepping_through(),
-                }))
-            }
-            (Err(e), None) => Err(RunError::Integrate(e)),
-        }
+        outcome(result, failure, &cell.borrow())
     }
 
     /// What a run that ran out of steps was stepping through, for its message: the effects
@@ -102,6 +81,45 @@ impl Simulation {
     }
 }
 
+/// An output row at `(t, x)` to `sink`: the row (see [`Simulation::columns`]), refused when
+/// an entry is not finite (an error naming the column), then the sink's.
+pub(super) fn deliver<E>(
+    sim: &mut Simulation,
+    columns: &[String],
+    row: &mut Vec<f64>,
+    t: f64,
+    x: &[f64],
+    sink: &mut impl FnMut(f64, &[f64]) -> Result<(), E>,
+) -> Result<(), RunError<E>> {
+    let system = |source| RunError::Integrate(IntegrateError::System { t, source });
+    sim.row(t, x, row).map_err(system)?;
+    // A non-finite quantity is never presented as a result.
+    if let Some(c) = row.iter().position(|v| !v.is_finite()) {
+        let why = format!("`{}` is not finite: the computation overflowed", columns[c]);
+        return Err(system(SystemError::new(why)));
+    }
+    sink(t, row).map_err(|error| RunError::Sink { t, error })
+}
+
+/// A run's outcome from the integrator's result and the failure its observer kept.
+pub(super) fn outcome<E>(
+    result: Result<Stats, IntegrateError>,
+    failure: Option<RunError<E>>,
+    sim: &Simulation,
+) -> Result<Stats, RunError<E>> {
+    match (result, failure) {
+        (_, Some(f)) => Err(f),
+        (Ok(stats), None) => Ok(stats),
+        (Err(IntegrateError::MaxSteps { t, .. }), None) => {
+            Err(RunError::Integrate(IntegrateError::MaxSteps {
+                t,
+                stepping: sim.stepping_through(),
+            }))
+        }
+        (Err(e), None) => Err(RunError::Integrate(e)),
+    }
+}
+
 /// How many of the last handled events a run out of steps reports on.
 pub const STALL_EVENTS: usize = 1000;
 
@@ -121,32 +139,49 @@ pub enum RunError<E> {
     },
 }
 
-pub(super) struct Shared<'a, 'b>(pub(super) &'a RefCell<&'b mut Simulation>);
+/// A simulation seen as the integrators' [`System`] while an observer also reads it: through
+/// a [`RefCell`], borrowed for each call.
+pub(super) struct Shared<C>(pub(super) C);
 
-impl System for Shared<'_, '_> {
+/// Where a [`Shared`] finds its simulation.
+pub(super) trait SimCell {
+    fn sim(&self) -> Ref<'_, Simulation>;
+    fn sim_mut(&self) -> RefMut<'_, Simulation>;
+}
+
+impl SimCell for &RefCell<&mut Simulation> {
+    fn sim(&self) -> Ref<'_, Simulation> {
+        Ref::map(self.borrow(), |s| &**s)
+    }
+    fn sim_mut(&self) -> RefMut<'_, Simulation> {
+        RefMut::map(self.borrow_mut(), |s| &mut **s)
+    }
+}
+
+impl<C: SimCell> System for Shared<C> {
     fn dim(&self) -> usize {
-        self.0.borrow().model.layout.len
+        self.0.sim().model.layout.len
     }
     fn rhs(&mut self, t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), SystemError> {
-        self.0.borrow_mut().rhs(t, x, dx)
+        self.0.sim_mut().rhs(t, x, dx)
     }
     fn project(&mut self, x: &mut [f64]) {
-        self.0.borrow_mut().project(x)
+        self.0.sim_mut().project(x)
     }
     fn error_weights(&self, w: &mut [f64]) {
-        self.0.borrow().error_weights(w)
+        self.0.sim().error_weights(w)
     }
     fn n_events(&self) -> usize {
-        self.0.borrow().model.n_events
+        self.0.sim().model.n_events
     }
     fn events(&mut self, t: f64, x: &[f64], g: &mut [f64]) -> Result<(), SystemError> {
-        self.0.borrow_mut().events(t, x, g)
+        self.0.sim_mut().events(t, x, g)
     }
     fn event_direction(&self, k: usize) -> EventDirection {
-        self.0.borrow().event_direction(k)
+        self.0.sim().event_direction(k)
     }
     fn on_event(&mut self, k: usize, t: f64, x: &mut [f64]) -> EventAction {
-        self.0.borrow_mut().on_event(k, t, x)
+        self.0.sim_mut().on_event(k, t, x)
     }
     fn on_events(
         &mut self,
@@ -154,12 +189,12 @@ impl System for Shared<'_, '_> {
         t: f64,
         x: &mut [f64],
     ) -> Result<EventAction, SystemError> {
-        self.0.borrow_mut().on_events(ks, t, x)
+        self.0.sim_mut().on_events(ks, t, x)
     }
     fn next_stop(&self) -> f64 {
-        self.0.borrow().next_stop()
+        self.0.sim().next_stop()
     }
     fn on_stop(&mut self, t: f64, x: &mut [f64]) -> Result<bool, SystemError> {
-        self.0.borrow_mut().on_stop(t, x)
+        self.0.sim_mut().on_stop(t, x)
     }
 }

@@ -25,6 +25,7 @@
 //! it); the integration itself does not allocate in its inner loop.
 
 pub mod files;
+pub mod lanes;
 pub mod plots;
 pub mod shard;
 pub mod spec;
@@ -38,6 +39,7 @@ use crate::scene::{DEFAULT_MAX_ROWS, Scene};
 use crate::scene_keys::{KeyError, Override, inline_sources};
 use rayon::prelude::*;
 use satsim_integrate::Output as Times;
+use satsim_spacecraft::simulation::{RowSink, RunError, Simulation};
 use satsim_tree::io::{FileError, line_of, with_key};
 use serde::Deserialize;
 use spec::CampaignFile;
@@ -407,43 +409,30 @@ impl Campaign {
     /// at the next row on Ctrl-C).
     pub fn run_one_until(&self, k: u64, stop: &(dyn Fn() -> bool + Sync)) -> Option<RunRecord> {
         let values = self.draw(k);
-        let mut stopped = false;
-        // Sized for the nominal output times, so the sink does not reallocate as rows come.
-        let rows = (self.nominal.duration / self.nominal.every).floor() as usize + 1;
-        let mut trace = vec![Vec::with_capacity(rows / self.stride + 1); self.trace_columns.len()];
-        let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-            self.integrate(k, &values, &mut trace, stop, &mut stopped)
-        }))
-        .unwrap_or_else(|p| {
-            let what = p
-                .downcast_ref::<&str>()
-                .map(|s| s.to_string())
-                .or_else(|| p.downcast_ref::<String>().cloned())
-                .unwrap_or_else(|| "unknown panic".into());
-            Err(format!("internal error (a bug in satsim): {what}"))
+        let mut collect = None;
+        let outcome = catch_panic(|| {
+            let (scene, sim) = self.prepare(k, &values)?;
+            let c = collect.insert(Collect::new(self, k, stop));
+            let mut sim = sim;
+            let result = sim.run(
+                &scene.options,
+                sim.t0() + scene.duration,
+                &Times::Interval(scene.every),
+                |t, row| c.row(t, row),
+            );
+            Ok(result)
         });
-        if stopped {
-            return None;
+        match (outcome, collect) {
+            (Ok(result), Some(c)) => c.record(values, result),
+            (Err(_), Some(c)) if c.stopped => None,
+            (Err(why), _) => Some(RunRecord::failed(k, values, why)),
+            (Ok(_), None) => unreachable!("a run collects its rows"),
         }
-        if outcome.is_err() {
-            trace.iter_mut().for_each(Vec::clear);
-        }
-        Some(RunRecord {
-            k,
-            values,
-            outcome,
-            trace,
-        })
     }
 
-    fn integrate(
-        &self,
-        k: u64,
-        values: &[f64],
-        trace: &mut [Vec<f64>],
-        stop: &(dyn Fn() -> bool + Sync),
-        stopped: &mut bool,
-    ) -> Result<RunStats, String> {
+    /// Run `k`'s scene with the drawn `values`, parsed, checked and built as `satsim run`
+    /// builds it; the message of a failed run where it cannot be.
+    fn prepare(&self, k: u64, values: &[f64]) -> Result<(Scene, Simulation), String> {
         let text = self.run_text(k, values);
         // The drawn text is rewritten: its errors are placed where the value is written.
         let scene = Scene::parse(&text, &self.path).map_err(|e| {
@@ -454,55 +443,13 @@ impl Campaign {
             FileError::Schema { message, .. } => format!("the drawn scene is refused: {message}"),
             other => other.to_string(),
         })?;
-        let mut sim = scene.simulation().map_err(|e| e.to_string())?;
+        let sim = scene.simulation().map_err(|e| e.to_string())?;
         if sim.columns() != self.columns {
             return Err(
                 "the drawn scene's trajectory columns differ from the nominal scene's".into(),
             );
         }
-        let n = self.columns.len() - 1;
-        let mut stats = RunStats {
-            last: vec![f64::NAN; n],
-            min: vec![f64::INFINITY; n],
-            max: vec![f64::NEG_INFINITY; n],
-        };
-        let mut rows = 0usize;
-        let t_end = sim.t0() + scene.duration;
-        let columns = &self.columns;
-        let result = sim.run(
-            &scene.options,
-            t_end,
-            &Times::Interval(scene.every),
-            |t, row| -> Result<(), String> {
-                if stop() {
-                    *stopped = true;
-                    return Err("stopped".into());
-                }
-                for (c, &v) in row[1..].iter().enumerate() {
-                    if !v.is_finite() {
-                        return Err(format!("`{}` is {v} at t = {t} s", columns[c + 1]));
-                    }
-                    stats.last[c] = v;
-                    stats.min[c] = stats.min[c].min(v);
-                    stats.max[c] = stats.max[c].max(v);
-                }
-                if rows.is_multiple_of(self.stride) {
-                    for (s, &c) in trace.iter_mut().zip(&self.trace_columns) {
-                        s.push(row[c]);
-                    }
-                }
-                rows += 1;
-                Ok(())
-            },
-        );
-        match result {
-            Ok(_) if rows == 0 => Err("the run wrote no output row".into()),
-            Ok(_) => Ok(stats),
-            Err(satsim_spacecraft::simulation::RunError::Integrate(e)) => Err(e.to_string()),
-            Err(satsim_spacecraft::simulation::RunError::Sink { error, .. }) => {
-                Err(format!("non-finite result: {error}"))
-            }
-        }
+        Ok((scene, sim))
     }
 
     /// The `runs.csv` row of a record (with its newline).
@@ -548,6 +495,117 @@ impl Campaign {
     }
 }
 
+/// A run's rows reduced as they come: the final, minimum and maximum of every column, the
+/// trace samples; and whether it was stopped.
+pub(crate) struct Collect<'c> {
+    campaign: &'c Campaign,
+    k: u64,
+    stats: RunStats,
+    rows: usize,
+    trace: Vec<Vec<f64>>,
+    stop: &'c (dyn Fn() -> bool + Sync),
+    stopped: bool,
+}
+
+impl<'c> Collect<'c> {
+    pub(crate) fn new(campaign: &'c Campaign, k: u64, stop: &'c (dyn Fn() -> bool + Sync)) -> Self {
+        let n = campaign.columns.len() - 1;
+        // Sized for the nominal output times, so that rows do not reallocate as they come.
+        let rows = (campaign.nominal.duration / campaign.nominal.every).floor() as usize + 1;
+        let trace =
+            vec![Vec::with_capacity(rows / campaign.stride + 1); campaign.trace_columns.len()];
+        Self {
+            campaign,
+            k,
+            stats: RunStats {
+                last: vec![f64::NAN; n],
+                min: vec![f64::INFINITY; n],
+                max: vec![f64::NEG_INFINITY; n],
+            },
+            rows: 0,
+            trace,
+            stop,
+            stopped: false,
+        }
+    }
+
+    /// The run's record from its outcome; `None` when it was stopped.
+    pub(crate) fn record(
+        self,
+        values: Vec<f64>,
+        result: Result<satsim_integrate::Stats, RunError<String>>,
+    ) -> Option<RunRecord> {
+        if self.stopped {
+            return None;
+        }
+        let outcome = match result {
+            Ok(_) if self.rows == 0 => Err("the run wrote no output row".into()),
+            Ok(_) => Ok(self.stats),
+            Err(RunError::Integrate(e)) => Err(e.to_string()),
+            Err(RunError::Sink { error, .. }) => Err(format!("non-finite result: {error}")),
+        };
+        Some(match outcome {
+            Ok(stats) => RunRecord {
+                k: self.k,
+                values,
+                outcome: Ok(stats),
+                trace: self.trace,
+            },
+            Err(why) => RunRecord::failed(self.k, values, why),
+        })
+    }
+}
+
+impl RowSink for Collect<'_> {
+    type Error = String;
+    fn row(&mut self, t: f64, row: &[f64]) -> Result<(), String> {
+        if (self.stop)() {
+            self.stopped = true;
+            return Err("stopped".into());
+        }
+        let (columns, stats) = (&self.campaign.columns, &mut self.stats);
+        for (c, &v) in row[1..].iter().enumerate() {
+            if !v.is_finite() {
+                return Err(format!("`{}` is {v} at t = {t} s", columns[c + 1]));
+            }
+            stats.last[c] = v;
+            stats.min[c] = stats.min[c].min(v);
+            stats.max[c] = stats.max[c].max(v);
+        }
+        if self.rows.is_multiple_of(self.campaign.stride) {
+            for (s, &c) in self.trace.iter_mut().zip(&self.campaign.trace_columns) {
+                s.push(row[c]);
+            }
+        }
+        self.rows += 1;
+        Ok(())
+    }
+}
+
+impl RunRecord {
+    /// A failed run's record.
+    pub(crate) fn failed(k: u64, values: Vec<f64>, why: String) -> Self {
+        RunRecord {
+            k,
+            values,
+            outcome: Err(why),
+            trace: Vec::new(),
+        }
+    }
+}
+
+/// `f()`, or the message of its panic as a failed run's (a bug, never the campaign's end).
+pub(crate) fn catch_panic<T>(f: impl FnOnce() -> Result<T, String>) -> Result<T, String> {
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(f)).unwrap_or_else(|p| {
+        let what = p
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| p.downcast_ref::<String>().cloned())
+            .unwrap_or_else(|| "unknown panic".into());
+        Err(format!("internal error (a bug in satsim): {what}"))
+    })
+}
+
 /// `final_c, min_c, max_c` for every column but the first (`t`).
 pub fn stat_columns(columns: &[String]) -> Vec<String> {
     columns[1..]
@@ -570,6 +628,9 @@ pub struct RunOptions {
     pub shard: Shard,
     /// Continue the campaign in the output folder, skipping the runs its `runs.csv` holds.
     pub resume: bool,
+    /// Several runs per core in SIMD lanes where the scene allows it ([`lanes`]): the same
+    /// records, sooner. `false`: one run at a time per thread.
+    pub lanes: bool,
 }
 
 /// Told about a campaign's progress (the command line draws a progress bar).
@@ -688,28 +749,58 @@ pub fn run_campaign(
         .map_err(|e| CampaignError::Other(format!("cannot start the thread pool: {e}")))?;
     let sinks = Mutex::new((runs, traces));
     let ran = AtomicU64::new(0);
-    pool.install(|| {
-        todo.par_iter()
-            .with_max_len(1)
-            .try_for_each(|&k| -> Result<(), CampaignError> {
-                if progress.cancelled() {
-                    return Ok(());
-                }
-                let Some(r) = campaign.run_one_until(k, &|| progress.cancelled()) else {
-                    return Ok(());
-                };
-                let row = campaign.csv_row(&r);
-                let lines = campaign.trace_lines(&r);
-                let mut s = sinks.lock().unwrap_or_else(|p| p.into_inner());
-                // Traces first: a row in runs.csv always has its traces.
-                s.1.append(&lines)?;
-                s.0.append(&row)?;
-                drop(s);
-                progress.finished(r.outcome.is_ok());
-                ran.fetch_add(1, Ordering::Relaxed);
-                Ok(())
-            })
-    })?;
+    // A record to the files: traces first, so that a row in runs.csv always has its traces.
+    let emit = |r: RunRecord| -> Result<(), CampaignError> {
+        let row = campaign.csv_row(&r);
+        let lines = campaign.trace_lines(&r);
+        let mut s = sinks.lock().unwrap_or_else(|p| p.into_inner());
+        s.1.append(&lines)?;
+        s.0.append(&row)?;
+        drop(s);
+        progress.finished(r.outcome.is_ok());
+        ran.fetch_add(1, Ordering::Relaxed);
+        Ok(())
+    };
+    if opts.lanes && lanes::applies(campaign) {
+        // Each thread takes runs from the queue, several at a time in lanes.
+        let next = std::sync::atomic::AtomicUsize::new(0);
+        let failure = Mutex::new(None);
+        pool.broadcast(|_| {
+            lanes::work(
+                campaign,
+                &todo,
+                &next,
+                &|| progress.cancelled(),
+                &mut |r| match emit(r) {
+                    Ok(()) => true,
+                    Err(e) => {
+                        failure
+                            .lock()
+                            .unwrap_or_else(|p| p.into_inner())
+                            .get_or_insert(e);
+                        false
+                    }
+                },
+            )
+        });
+        if let Some(e) = failure.into_inner().unwrap_or_else(|p| p.into_inner()) {
+            return Err(e);
+        }
+    } else {
+        pool.install(|| {
+            todo.par_iter()
+                .with_max_len(1)
+                .try_for_each(|&k| -> Result<(), CampaignError> {
+                    if progress.cancelled() {
+                        return Ok(());
+                    }
+                    match campaign.run_one_until(k, &|| progress.cancelled()) {
+                        Some(r) => emit(r),
+                        None => Ok(()),
+                    }
+                })
+        })?;
+    }
     drop(sinks);
     let ran = ran.into_inner();
     if ran < todo.len() as u64 {

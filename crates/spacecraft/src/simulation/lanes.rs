@@ -1,0 +1,347 @@
+//! [`Simulation::run_lanes`]: several runs of one scene on one core, their dynamics solved
+//! together in the SIMD lanes of the preprint layout's unrolled kernel.
+//!
+//! The runs advance in lockstep ([`satsim_integrate::lanes`]: fixed-step RK4, each stage's
+//! right-hand sides of all the runs of a batch at once). Each right-hand side is split where
+//! the dynamics are solved (`rhs.rs`): every run's effects run on their own
+//! ([`Simulation::rhs_forces`]), then one call of the kernel over lanes
+//! ([`UnrolledAba::gather`]) solves all of them, then each run books its power
+//! ([`Simulation::rhs_power`]). Lane `k` of the kernel computes exactly what run `k`'s own
+//! kernel computes (`satsim-satellite`'s bit-for-bit test), so a run gives the same rows,
+//! bit for bit, in a batch or alone.
+//!
+//! The lanes' kernel is taken only where every run of the stage takes it with the same
+//! branches: the same lock mask (that the kernel accepts), wrenches on all or none, kernels
+//! that gather (one layout). Otherwise, and where the lanes part ways at a pivot
+//! ([`DynamicsError::LanesPart`](satsim_tree::DynamicsError::LanesPart)), each run solves
+//! its own dynamics, as alone. A run whose step holds an event locates it alone (the
+//! integrator's driver), and a finished run's place goes to the next run at once.
+
+use super::Simulation;
+use super::run::{RunError, Shared, SimCell, deliver, outcome};
+use satsim_integrate::lanes::{Batch, Lane, LaneRun, Runs, integrate_lanes};
+use satsim_integrate::{IntegrateError, Options, Output, Stats};
+use satsim_satellite::kernel::{Locks, UnrolledAba};
+use satsim_tree::real::F64x;
+use satsim_tree::spatial::Force;
+use std::cell::{Ref, RefCell, RefMut};
+use std::ops::ControlFlow;
+use std::rc::Rc;
+
+/// Where a run of [`Simulation::run_lanes`] writes its rows.
+pub trait RowSink {
+    /// What a refused row is.
+    type Error;
+    /// An output row (see [`Simulation::columns`]), as [`Simulation::run`]'s sink gets it.
+    fn row(&mut self, t: f64, row: &[f64]) -> Result<(), Self::Error>;
+}
+
+/// A run for [`Simulation::run_lanes`]: the simulation from its initial state to `t_end`,
+/// rows at `output` into `sink`.
+pub struct LaneJob<K> {
+    /// The run's simulation.
+    pub sim: Simulation,
+    /// End time.
+    pub t_end: f64,
+    /// Output times.
+    pub output: Output,
+    /// Where its rows go.
+    pub sink: K,
+}
+
+/// The runs of [`Simulation::run_lanes`]: where they come from and where they end.
+pub trait LaneJobs {
+    /// Where a run writes its rows.
+    type Sink: RowSink;
+    /// The next run, `None` when there is none left.
+    fn next(&mut self) -> Option<LaneJob<Self::Sink>>;
+    /// A run is over, with what [`Simulation::run`] would have returned for it. Runs end in
+    /// any order.
+    #[allow(clippy::type_complexity)]
+    fn done(
+        &mut self,
+        sim: Simulation,
+        sink: Self::Sink,
+        result: Result<Stats, RunError<<Self::Sink as RowSink>::Error>>,
+    );
+}
+
+impl Simulation {
+    /// How many runs [`Simulation::run_lanes`] puts in one batch on this CPU: 4 on x86-64
+    /// with AVX2 (four `f64` per instruction), else 2 (the baseline target's two; four lanes
+    /// measured slower there, `benches/lanes.rs`).
+    pub fn lane_width() -> usize {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            return 4;
+        }
+        2
+    }
+
+    /// Whether this simulation's dynamics, now, go to a kernel that gathers into lanes
+    /// (the preprint layout's unrolled kernel, rigid, with a lock mask it takes): what
+    /// [`Simulation::run_lanes`] speeds up.
+    pub fn takes_lanes(&self) -> bool {
+        kernel_call(self).is_some()
+    }
+
+    /// Runs every job of `jobs`, [`Simulation::lane_width`] at a time with their dynamics in
+    /// lanes (see the module documentation), each with `options`, and hands each outcome to
+    /// [`LaneJobs::done`]: bit for bit what [`Simulation::run`] gives that run alone, its rows
+    /// included. With an adaptive method the runs go one after the other.
+    pub fn run_lanes<J: LaneJobs>(options: &Options, jobs: &mut J) {
+        Self::run_lanes_with(options, Self::lane_width(), jobs)
+    }
+
+    /// [`Simulation::run_lanes`] with `width` runs per batch (2, 4 or 8; 1 runs them one
+    /// after the other).
+    pub fn run_lanes_with<J: LaneJobs>(options: &Options, width: usize, jobs: &mut J) {
+        let mut runs = Adapter { jobs };
+        match width {
+            0 | 1 => integrate_lanes(options, 1, &mut Lanes::<2>::default(), &mut runs),
+            2 | 3 => integrate_lanes(options, 2, &mut Lanes::<2>::default(), &mut runs),
+            4..=7 => integrate_lanes(options, 4, &mut Lanes::<4>::default(), &mut runs),
+            _ => integrate_lanes(options, 8, &mut Lanes::<8>::default(), &mut runs),
+        }
+    }
+}
+
+/// A run of a batch: its simulation, shared by its system and its observer.
+struct Running<K: RowSink> {
+    sim: Simulation,
+    sink: K,
+    columns: Vec<String>,
+    row: Vec<f64>,
+    failure: Option<RunError<K::Error>>,
+}
+
+type Cell<K> = Rc<RefCell<Running<K>>>;
+type Observer<'k> = Box<dyn FnMut(f64, &[f64]) -> ControlFlow<()> + 'k>;
+
+impl<K: RowSink> SimCell for Cell<K> {
+    fn sim(&self) -> Ref<'_, Simulation> {
+        Ref::map(self.borrow(), |r| &r.sim)
+    }
+    fn sim_mut(&self) -> RefMut<'_, Simulation> {
+        RefMut::map(self.borrow_mut(), |r| &mut r.sim)
+    }
+}
+
+/// [`LaneJobs`] as the integrator's [`Runs`].
+struct Adapter<'j, J> {
+    jobs: &'j mut J,
+}
+
+impl<'j, J: LaneJobs> Runs<Shared<Cell<J::Sink>>, Observer<'j>> for Adapter<'j, J>
+where
+    J::Sink: 'j,
+{
+    fn next(&mut self) -> Option<LaneRun<Shared<Cell<J::Sink>>, Observer<'j>>> {
+        let job = self.jobs.next()?;
+        let (t0, x0, columns) = (job.sim.t0, job.sim.x0.clone(), job.sim.columns());
+        let cell = Rc::new(RefCell::new(Running {
+            sim: job.sim,
+            sink: job.sink,
+            columns,
+            row: Vec::new(),
+            failure: None,
+        }));
+        let seen = Rc::clone(&cell);
+        let observer: Observer<'j> = Box::new(move |t, x| {
+            let mut r = seen.borrow_mut();
+            let r = &mut *r;
+            match deliver(&mut r.sim, &r.columns, &mut r.row, t, x, &mut |t, row| {
+                r.sink.row(t, row)
+            }) {
+                Ok(()) => ControlFlow::Continue(()),
+                Err(f) => {
+                    r.failure = Some(f);
+                    ControlFlow::Break(())
+                }
+            }
+        });
+        Some(LaneRun {
+            system: Shared(cell),
+            t0,
+            x0,
+            t_end: job.t_end,
+            output: job.output,
+            observer,
+        })
+    }
+
+    fn done(
+        &mut self,
+        system: Shared<Cell<J::Sink>>,
+        observer: Observer<'j>,
+        result: Result<Stats, IntegrateError>,
+    ) {
+        drop(observer);
+        let Ok(run) = Rc::try_unwrap(system.0) else {
+            unreachable!("the observer, the cell's only other owner, is dropped")
+        };
+        let run = run.into_inner();
+        let result = outcome(result, run.failure, &run.sim);
+        self.jobs.done(run.sim, run.sink, result);
+    }
+}
+
+/// The batch's right-hand sides, the dynamics in `N` lanes: the gathered kernel of the runs
+/// it last saw (by their models' serial numbers) and the lanes' inputs and outputs.
+#[derive(Default)]
+struct Lanes<const N: usize> {
+    kernel: Option<(UnrolledAba<F64x<N>>, [u64; N])>,
+    q: Vec<F64x<N>>,
+    v: Vec<F64x<N>>,
+    tau: Vec<F64x<N>>,
+    fext: Vec<Force<F64x<N>>>,
+    ddq: Vec<F64x<N>>,
+}
+
+impl<const N: usize, K: RowSink> Batch<Shared<Cell<K>>> for Lanes<N> {
+    fn rhs(&mut self, lanes: &mut [Lane<'_, Shared<Cell<K>>>]) {
+        let mut kin = [false; N];
+        let mut ready = true;
+        for (l, kin) in lanes.iter_mut().zip(&mut kin) {
+            match l.system.0.sim_mut().rhs_forces(l.t, l.x, l.dx) {
+                Ok(k) => *kin = k,
+                Err(e) => {
+                    l.result = Err(e);
+                    ready = false;
+                }
+            }
+        }
+        let solved = ready && self.solve(lanes);
+        for (l, &kin) in lanes.iter_mut().zip(&kin) {
+            if l.result.is_err() {
+                continue;
+            }
+            let mut sim = l.system.0.sim_mut();
+            let dynamics = if solved {
+                Ok(())
+            } else {
+                sim.dynamics(kin, l.dx)
+            };
+            l.result = dynamics.and_then(|()| sim.rhs_power(l.x, l.dx));
+        }
+    }
+}
+
+impl<const N: usize> Lanes<N> {
+    /// The dynamics of every lane by one call of the lanes' kernel, after their effects:
+    /// `false` (nothing written) where the runs do not all take it alike, or where the lanes
+    /// part ways; then each run solves its own.
+    fn solve<K: RowSink>(&mut self, lanes: &mut [Lane<'_, Shared<Cell<K>>>]) -> bool {
+        if lanes.len() < 2 || lanes.len() > N {
+            return false;
+        }
+        // The runs' simulations (no allocation: a stage is a few microseconds).
+        let sims: [Option<Ref<'_, Running<K>>>; N] =
+            std::array::from_fn(|k| lanes.get(k).map(|l| l.system.0.borrow()));
+        let lane = |k: usize| {
+            sims[k]
+                .as_ref()
+                .unwrap_or_else(|| sims[0].as_ref().expect("2 lanes or more"))
+        };
+        let Some((first, locks, loaded)) = kernel_call(&lane(0).sim) else {
+            return false;
+        };
+        let mut serials = [lane(0).sim.model.serial; N];
+        for (k, r) in sims
+            .iter()
+            .enumerate()
+            .skip(1)
+            .filter_map(|(k, r)| Some((k, r.as_ref()?)))
+        {
+            match kernel_call(&r.sim) {
+                Some((_, l, w)) if (l, w) == (locks, loaded) => serials[k] = r.sim.model.serial,
+                _ => return false,
+            }
+        }
+        if self.kernel.as_ref().is_none_or(|(_, s)| *s != serials) {
+            let kernels: [&UnrolledAba; N] = std::array::from_fn(|k| {
+                sims[k]
+                    .as_ref()
+                    .and_then(|r| kernel_call(&r.sim))
+                    .map_or(first, |c| c.0)
+            });
+            self.kernel = UnrolledAba::gather(kernels).map(|g| (g, serials));
+        }
+        let Some((kernel, _)) = &self.kernel else {
+            return false;
+        };
+        // The inputs, lane `k` run `k`'s (the lanes past the runs repeat the first run).
+        let d0 = &lane(0).sim.data;
+        let (nq, nv, nb) = (d0.q.len(), d0.v.len(), d0.forces.body_wrench.len());
+        let zero = F64x([0.0; N]);
+        self.q.resize(nq, zero);
+        self.v.resize(nv, zero);
+        self.tau.resize(nv, zero);
+        self.ddq.resize(nv, zero);
+        let zero_force = Force::new(
+            nalgebra::Vector3::repeat(zero),
+            nalgebra::Vector3::repeat(zero),
+        );
+        self.fext.resize(if loaded { nb } else { 0 }, zero_force);
+        for k in 0..N {
+            let d = &lane(k).sim.data;
+            for (a, &x) in self.q.iter_mut().zip(&d.q) {
+                a.0[k] = x;
+            }
+            for (a, &x) in self.v.iter_mut().zip(&d.v) {
+                a.0[k] = x;
+            }
+            for (a, &x) in self.tau.iter_mut().zip(&d.tau) {
+                a.0[k] = x;
+            }
+            for (a, w) in self.fext.iter_mut().zip(&d.forces.body_wrench) {
+                for i in 0..3 {
+                    a.ang[i].0[k] = w.ang[i];
+                    a.lin[i].0[k] = w.lin[i];
+                }
+            }
+        }
+        let fext = loaded.then_some(self.fext.as_slice());
+        if kernel
+            .aba_hybrid_with_forces_into(&self.q, &self.v, &self.tau, fext, locks, &mut self.ddq)
+            .is_err()
+        {
+            return false;
+        }
+        drop(sims);
+        for (k, l) in lanes.iter_mut().enumerate() {
+            let mut sim = l.system.0.sim_mut();
+            sim.log.lane_rhs += 1;
+            match sim.model.velocity_at {
+                Some(s) => {
+                    for (d, a) in l.dx[s..s + nv].iter_mut().zip(&self.ddq) {
+                        *d = a.0[k];
+                    }
+                }
+                None => {
+                    for (d, a) in sim.data.ddq.iter_mut().zip(&self.ddq) {
+                        *d = a.0[k];
+                    }
+                    sim.pack_accelerations(l.dx);
+                }
+            }
+        }
+        true
+    }
+}
+
+/// How `sim`'s dynamics call, now, goes to its unrolled kernel: the kernel, the lock mask
+/// in its form, whether wrenches are applied; `None` where it does not (a flexible tree, no
+/// kernel, a lock mask the kernel leaves to the generic algorithm).
+fn kernel_call(sim: &Simulation) -> Option<(&UnrolledAba, Locks, bool)> {
+    let (m, d) = (&sim.model, &sim.data);
+    if m.flex.is_some() {
+        return None;
+    }
+    let kernel = m.fd.kernel()?.as_any()?.downcast_ref::<UnrolledAba>()?;
+    let locks = match d.n_locked {
+        0 => Locks::NONE,
+        _ => kernel.locks(&d.locked)?,
+    };
+    Some((kernel, locks, d.forces.has_wrench))
+}
