@@ -701,3 +701,64 @@ fn bad_campaign_input_exits_2_naming_the_key() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Several runs per core in SIMD lanes give every file of the campaign byte for byte as one
+/// run at a time does: the deployment campaign (latches: lock masks that differ between the
+/// runs of a batch, events located by one run alone, runs that end apart) and the peer
+/// benchmark's campaign, on one and two threads, with a run count that leaves a batch's
+/// places empty at the end.
+#[test]
+fn lanes_do_not_change_a_byte_of_the_campaign() {
+    let dir = temp_dir("lanes");
+    for (scene, set) in [
+        ("examples/scenes/deploy_campaign.toml", "duration=20.0"),
+        (
+            "benches/campaign_vs_mujoco/deploy_vs_mujoco.toml",
+            "duration=60.0",
+        ),
+    ] {
+        let scene = root().join(scene);
+        let scene = scene.to_str().unwrap();
+        let run = |out: &str, extra: &[&str]| {
+            let mut args = vec![
+                "campaign",
+                scene,
+                "--out",
+                out,
+                "--set",
+                "campaign.runs=9",
+                "--set",
+                set,
+            ];
+            args.extend_from_slice(extra);
+            ok(&satsim(&dir, &args))
+        };
+        let alone = run("alone", &["--no-lanes", "--threads", "1"]);
+        assert!(!alone.contains("lanes "), "{alone}");
+        for threads in ["1", "2"] {
+            let lanes = run("lanes", &["--threads", threads]);
+            // The lanes were used: most right-hand sides solved in them.
+            let line = lanes
+                .lines()
+                .find(|l| l.starts_with("lanes "))
+                .unwrap_or_else(|| panic!("no lanes line in {lanes}"));
+            let share: f64 = line
+                .split("; ")
+                .nth(1)
+                .unwrap()
+                .split(' ')
+                .next()
+                .unwrap()
+                .parse()
+                .unwrap();
+            assert!(share > 50.0, "{line}");
+            for file in ["runs.csv", "traces.csv", "summary.json"] {
+                assert_eq!(
+                    read(&dir.join("alone").join(file)),
+                    read(&dir.join("lanes").join(file)),
+                    "{scene}: {file} on {threads} threads"
+                );
+            }
+        }
+    }
+}

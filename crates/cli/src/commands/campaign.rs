@@ -164,6 +164,14 @@ pub fn run(args: &Args) -> Result<Output, CliError> {
             String::new()
         }
     );
+    if let Some(l) = report.lanes {
+        let _ = writeln!(
+            s,
+            "lanes      {} runs per core in SIMD lanes; {:.1} % of their right-hand sides solved in lanes (--no-lanes: one at a time, the same results)",
+            l.width,
+            100.0 * l.in_lanes as f64 / (l.rhs.max(1) as f64)
+        );
+    }
     summary_lines(&mut s, &dir, &report.finished);
     Ok(s)
 }

@@ -283,22 +283,15 @@ impl<const N: usize> Lanes<N> {
             nalgebra::Vector3::repeat(zero),
         );
         self.fext.resize(if loaded { nb } else { 0 }, zero_force);
-        for k in 0..N {
-            let d = &lane(k).sim.data;
-            for (a, &x) in self.q.iter_mut().zip(&d.q) {
-                a.0[k] = x;
-            }
-            for (a, &x) in self.v.iter_mut().zip(&d.v) {
-                a.0[k] = x;
-            }
-            for (a, &x) in self.tau.iter_mut().zip(&d.tau) {
-                a.0[k] = x;
-            }
-            for (a, w) in self.fext.iter_mut().zip(&d.forces.body_wrench) {
-                for i in 0..3 {
-                    a.ang[i].0[k] = w.ang[i];
-                    a.lin[i].0[k] = w.lin[i];
-                }
+        let data = |k: usize| &lane(k).sim.data;
+        pack(&mut self.q, std::array::from_fn(|k| &data(k).q[..]));
+        pack(&mut self.v, std::array::from_fn(|k| &data(k).v[..]));
+        pack(&mut self.tau, std::array::from_fn(|k| &data(k).tau[..]));
+        for (b, a) in self.fext.iter_mut().enumerate() {
+            let w: [&Force; N] = std::array::from_fn(|k| &data(k).forces.body_wrench[b]);
+            for i in 0..3 {
+                a.ang[i] = F64x(w.map(|w| w.ang[i]));
+                a.lin[i] = F64x(w.map(|w| w.lin[i]));
             }
         }
         let fext = loaded.then_some(self.fext.as_slice());
@@ -327,6 +320,18 @@ impl<const N: usize> Lanes<N> {
             }
         }
         true
+    }
+}
+
+/// `dst[i]`'s lane `k` = `src[k][i]`: one value of the lanes built whole (stored at once,
+/// so that the kernel's wide loads find it; lane by lane, four narrow stores would each be
+/// waited for).
+#[inline(always)]
+fn pack<const N: usize>(dst: &mut [F64x<N>], src: [&[f64]; N]) {
+    let n = dst.len();
+    let src = src.map(|s| &s[..n]);
+    for (i, d) in dst.iter_mut().enumerate() {
+        *d = F64x(std::array::from_fn(|k| src[k][i]));
     }
 }
 

@@ -7,7 +7,7 @@
 use super::{Campaign, Collect, RunRecord, catch_panic};
 use satsim_integrate::{Method, Options, Output as Times, Stats};
 use satsim_spacecraft::simulation::{LaneJob, LaneJobs, RunError, Simulation};
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 
 /// Whether the campaign's runs go in lanes: fixed-step RK4, and the nominal scene's dynamics
 /// are the kernel's that gathers into lanes.
@@ -24,16 +24,14 @@ pub(crate) fn applies(campaign: &Campaign) -> bool {
 /// says stop.
 pub(crate) fn work(
     campaign: &Campaign,
-    todo: &[u64],
-    next: &AtomicUsize,
+    queue: &Queue<'_>,
     stop: &(dyn Fn() -> bool + Sync),
     emit: &mut dyn FnMut(RunRecord) -> bool,
 ) {
     let mut jobs = Jobs {
         campaign,
         options: campaign.nominal.options.clone(),
-        todo,
-        next,
+        queue,
         stop,
         emit,
         going: true,
@@ -55,12 +53,21 @@ pub(crate) fn work(
     }
 }
 
+/// The runs to make, shared by the workers, and what they count.
+pub(crate) struct Queue<'q> {
+    /// The runs.
+    pub todo: &'q [u64],
+    /// The next to hand out.
+    pub next: &'q AtomicUsize,
+    /// Right-hand sides of the runs made in batches, and of those the ones solved in lanes.
+    pub counts: &'q [AtomicU64; 2],
+}
+
 /// The queue as [`LaneJobs`].
 struct Jobs<'c, 'e> {
     campaign: &'c Campaign,
     options: Options,
-    todo: &'c [u64],
-    next: &'c AtomicUsize,
+    queue: &'c Queue<'c>,
     stop: &'c (dyn Fn() -> bool + Sync),
     emit: &'e mut dyn FnMut(RunRecord) -> bool,
     going: bool,
@@ -86,7 +93,8 @@ impl<'c> LaneJobs for Jobs<'c, '_> {
 
     fn next(&mut self) -> Option<LaneJob<Sink<'c>>> {
         while self.going && !(self.stop)() {
-            let &k = self.todo.get(self.next.fetch_add(1, Ordering::Relaxed))?;
+            let q = self.queue;
+            let &k = q.todo.get(q.next.fetch_add(1, Ordering::Relaxed))?;
             let values = self.campaign.draw(k);
             let prepared = catch_panic(|| self.campaign.prepare(k, &values));
             match prepared {
@@ -114,7 +122,11 @@ impl<'c> LaneJobs for Jobs<'c, '_> {
         None
     }
 
-    fn done(&mut self, _sim: Simulation, sink: Sink<'c>, result: Result<Stats, RunError<String>>) {
+    fn done(&mut self, sim: Simulation, sink: Sink<'c>, result: Result<Stats, RunError<String>>) {
+        let log = sim.run_log();
+        let [rhs, in_lanes] = &self.queue.counts;
+        rhs.fetch_add(log.rhs_evals(), Ordering::Relaxed);
+        in_lanes.fetch_add(log.lane_rhs(), Ordering::Relaxed);
         let k = sink.collect.k;
         self.in_flight.retain(|&f| f != k);
         if let Some(r) = sink.collect.record(sink.values, result) {

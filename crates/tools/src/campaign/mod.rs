@@ -660,6 +660,20 @@ pub struct Report {
     pub skipped: u64,
     /// The finished folder.
     pub finished: Finished,
+    /// How the runs used lanes ([`RunOptions::lanes`]), `None` where they ran one at a time.
+    pub lanes: Option<LaneUse>,
+}
+
+/// How a campaign's runs used SIMD lanes.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct LaneUse {
+    /// Runs per batch ([`Simulation::lane_width`]).
+    pub width: usize,
+    /// Right-hand sides of the runs made in batches.
+    pub rhs: u64,
+    /// Of those, the ones whose dynamics were solved in lanes (the others: a stage where the
+    /// runs' lock masks differed, an event located by one run alone, a batch's tail).
+    pub in_lanes: u64,
 }
 
 /// The files of a campaign folder.
@@ -761,15 +775,21 @@ pub fn run_campaign(
         ran.fetch_add(1, Ordering::Relaxed);
         Ok(())
     };
+    let mut lane_use = None;
     if opts.lanes && lanes::applies(campaign) {
         // Each thread takes runs from the queue, several at a time in lanes.
         let next = std::sync::atomic::AtomicUsize::new(0);
         let failure = Mutex::new(None);
+        let counts = [AtomicU64::new(0), AtomicU64::new(0)];
+        let queue = lanes::Queue {
+            todo: &todo,
+            next: &next,
+            counts: &counts,
+        };
         pool.broadcast(|_| {
             lanes::work(
                 campaign,
-                &todo,
-                &next,
+                &queue,
                 &|| progress.cancelled(),
                 &mut |r| match emit(r) {
                     Ok(()) => true,
@@ -786,6 +806,12 @@ pub fn run_campaign(
         if let Some(e) = failure.into_inner().unwrap_or_else(|p| p.into_inner()) {
             return Err(e);
         }
+        let [rhs, in_lanes] = counts.map(AtomicU64::into_inner);
+        lane_use = Some(LaneUse {
+            width: Simulation::lane_width(),
+            rhs,
+            in_lanes,
+        });
     } else {
         pool.install(|| {
             todo.par_iter()
@@ -814,6 +840,7 @@ pub fn run_campaign(
     }
     let finished = finish(dir, &meta)?;
     Ok(Report {
+        lanes: lane_use,
         ran,
         skipped: done.len() as u64,
         finished,
