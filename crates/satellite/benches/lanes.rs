@@ -2,8 +2,9 @@
 //! with its three wheels, four (eight) runs with their own panel masses and states, each
 //! batch solved once by the `f64` kernel per run and once by the kernel over `F64x<4>`
 //! (`F64x<8>`) lanes, on the widest instructions the CPU has (`lanes`: AVX2 where it has
-//! them) and on the baseline target's (`lanes_portable`: SSE2). Throughput per run is what a campaign gains (its runs are independent);
-//! `cargo bench -p satsim-satellite --bench lanes [-- ROUNDS]`. The results are equal bit for
+//! them) and on the baseline target's (`lanes_portable`: SSE2), with hinge angles anywhere
+//! (±3 rad) and small (±0.7 rad). Throughput per run is what a campaign gains (its runs are
+//! independent); `cargo bench -p satsim-satellite --bench lanes [-- ROUNDS]`. The results are equal bit for
 //! bit (checked here before timing, and by the kernel's tests). Not criterion: on a shared
 //! machine whose speed drifts, the three ways alternate in short rounds and the per-round
 //! ratios are what is reported.
@@ -37,12 +38,17 @@ fn models(n: usize) -> Vec<Model> {
 
 type Run = (Vec<f64>, Vec<f64>, Vec<f64>);
 
-fn states(models: &[Model]) -> Vec<Run> {
+/// A random state per model: hinge angles in `[-3, 3)` rad scaled by `hinges / 3` (so
+/// `hinges = 3.0` leaves `random_q`'s), rates and torques as they come.
+fn states(models: &[Model], hinges: f64) -> Vec<Run> {
     let mut rng = SplitMix(17);
     models
         .iter()
         .map(|m| {
-            let q = random_q(m, &mut rng, 1.0);
+            let mut q = random_q(m, &mut rng, 1.0);
+            for x in &mut q[m.base_nq()..] {
+                *x *= hinges / 3.0;
+            }
             let v = (0..m.nv()).map(|_| rng.range(-0.5, 0.5)).collect();
             let tau = (0..m.nv()).map(|_| rng.range(-1.0, 1.0)).collect();
             (q, v, tau)
@@ -70,10 +76,11 @@ fn median(mut xs: Vec<f64>) -> f64 {
     xs[xs.len() / 2]
 }
 
-/// `N` runs: one at a time, in lanes on the widest instructions, in lanes on the baseline
-/// target's. The three alternate in short rounds (this machine's speed drifts by tens of
-/// per cent from one second to the next); the medians of the per-round figures and ratios.
-fn lanes<const N: usize>(rounds: usize) {
+/// `N` runs with hinge angles within `±hinges` rad: one at a time, in lanes on the widest
+/// instructions, in lanes on the baseline target's. The three alternate in short rounds
+/// (this machine's speed drifts by tens of per cent from one second to the next); the
+/// medians of the per-round figures and ratios.
+fn lanes<const N: usize>(rounds: usize, hinges: f64) {
     let models = models(N);
     let kernels: Vec<UnrolledAba> = models
         .iter()
@@ -81,7 +88,7 @@ fn lanes<const N: usize>(rounds: usize) {
         .collect();
     let batch = UnrolledAba::<F64x<N>>::gather(std::array::from_fn(|k| &kernels[k])).unwrap();
     let portable = batch.clone().portable();
-    let runs = states(&models);
+    let runs = states(&models, hinges);
     let nv = models[0].nv();
     let (q, v, tau) = (
         pack::<N>(&runs, |r| &r.0),
@@ -142,7 +149,7 @@ fn lanes<const N: usize>(rounds: usize) {
         )
     };
     println!(
-        "{N} runs | {:.0} | {:.0} ({:.2}x) | {:.0} ({:.2}x)",
+        "{N} runs, ±{hinges} rad | {:.0} | {:.0} ({:.2}x) | {:.0} ({:.2}x)",
         median(figures[0].clone()),
         median(figures[1].clone()),
         ratio(1),
@@ -165,10 +172,16 @@ fn main() {
     println!(
         "ns per run of the kernel (medians of {rounds} alternating rounds; wider instructions: {avx2})"
     );
-    println!("runs | one at a time | lanes (speed-up) | lanes, baseline target (speed-up)");
-    lanes::<2>(rounds);
-    lanes::<4>(rounds);
-    lanes::<8>(rounds);
+    println!(
+        "runs, hinge angles | one at a time | lanes (speed-up) | lanes, baseline target (speed-up)"
+    );
+    // Hinge angles anywhere (±3 rad: most beyond π/4, where `sin_cos` reduces its argument)
+    // and small (±0.7 rad, all within π/4, as typical of a campaign).
+    for hinges in [3.0, 0.7] {
+        lanes::<2>(rounds, hinges);
+        lanes::<4>(rounds, hinges);
+        lanes::<8>(rounds, hinges);
+    }
 }
 
 #[cfg(target_arch = "x86_64")]

@@ -4,8 +4,11 @@
 //! An algorithm written once over `T: Real` computes, in lane `k` of `F64x<N>`, exactly what
 //! it computes for `f64` on lane `k`'s inputs: every operation of [`F64x`] is the same IEEE
 //! operation on each lane (`+ − × ÷` and negation; no fused multiply-add, which Rust never
-//! forms by itself), and the one transcendental function, [`Real::sin_cos`], is libm's
-//! `sincos` on each lane. The results are bit for bit the scalar ones; only the branches
+//! forms by itself), and the one transcendental function, [`Real::sin_cos`], gives libm's
+//! `sincos` on each lane: where every lane is within `|x| ≲ π/4` it evaluates libm's own
+//! polynomials (`k_sin`, `k_cos`) lane by lane, the same operations in the same order, which
+//! the compiler vectorises; otherwise it calls `sincos` on each lane. The results are bit
+//! for bit the scalar ones; only the branches
 //! differ, and those that depend on data ([`Real::all`]) are taken by a batch only when all
 //! its lanes take them, so a batch where the lanes disagree is reported to its caller
 //! (see the unrolled kernel of `satsim-satellite`) instead of computed otherwise.
@@ -53,8 +56,14 @@ pub trait Real:
     fn lane(self, k: usize) -> f64;
     /// The value whose lane `k` is `f(k)`.
     fn from_fn(f: impl FnMut(usize) -> f64) -> Self;
-    /// `(sin x, cos x)` on each lane, by libm's `sincos` (< 1 ulp, the same on every lane
-    /// as for one `f64`).
+    /// `(sin x, cos x)` on each lane, libm's `sincos` (< 1 ulp) bit for bit, the same on every
+    /// lane as for one `f64`. `f64` calls it; [`F64x`], where every lane is within
+    /// `|x| ≲ π/4` (libm reduces no argument there), evaluates libm's polynomials for that
+    /// range (`k_sin(x, 0, 0)`, `k_cos(x, 0)`, and `(x, 1)` below `2⁻²⁷ √2`) lane by lane
+    /// with the same constants and the same operations in the same order, which the compiler
+    /// vectorises (four lanes in one AVX2 instruction) where one call per lane would keep it
+    /// scalar; any other batch (an argument to reduce, or not finite) calls `sincos` on each
+    /// lane.
     fn sin_cos(self) -> (Self, Self);
     /// Whether `test` holds on every lane: the form of every data-dependent branch.
     fn all(self, test: impl Fn(f64) -> bool) -> bool;
@@ -180,6 +189,16 @@ impl<const N: usize> Real for F64x<N> {
     }
     #[inline(always)]
     fn sin_cos(self) -> (Self, Self) {
+        // Every lane within π/4, on the bits and without branches per lane: `PIO4_BITS −
+        // abs_bits(x)` is negative on the others (both are below 2⁶³), one lane-wise
+        // subtraction, or-ed together.
+        let outside = self.0.iter().fold(0, |acc, &x| {
+            acc | (PIO4_BITS as i64).wrapping_sub(abs_bits(x) as i64)
+        });
+        if outside >= 0 {
+            return self.sin_cos_pio4();
+        }
+        // Some lane needs its argument reduced (or is not finite): libm on each lane.
         let (mut s, mut c) = ([0.0; N], [0.0; N]);
         for k in 0..N {
             (s[k], c[k]) = libm::sincos(self.0[k]);
@@ -194,6 +213,75 @@ impl<const N: usize> Real for F64x<N> {
     #[inline(always)]
     fn all_with(self, other: Self, test: impl Fn(f64, f64) -> bool) -> bool {
         (0..N).fold(true, |ok, k| ok & test(self.0[k], other.0[k]))
+    }
+}
+
+/// The bits of `|x|`.
+#[inline(always)]
+fn abs_bits(x: f64) -> u64 {
+    x.to_bits() & !(1 << 63)
+}
+
+/// The largest `abs_bits` that libm's `sincos` computes without reducing its argument: a high
+/// word `<= 0x3fe921fb` (`|x| ≲ π/4`).
+const PIO4_BITS: u64 = 0x3fe9_21fb_ffff_ffff;
+/// `abs_bits` below which libm's `sincos` returns `(x, 1)`: a high word `< 0x3e46a09e`
+/// (`|x| < 2⁻²⁷ √2`).
+const TINY_BITS: u64 = 0x3e46_a09e_0000_0000;
+
+/// libm's polynomial coefficients, its literals digit for digit (more digits than an `f64`
+/// holds: the bits are in the comments, checked by the tests).
+#[allow(clippy::excessive_precision)]
+mod coefficients {
+    // libm's `k_sin` (FreeBSD's `__kernel_sin`): sin x ≈ x + S1 x³ + … + S6 x¹³ on [-π/4, π/4].
+    pub const S1: f64 = -1.66666666666666324348e-01; // 0xBFC55555_55555549
+    pub const S2: f64 = 8.33333333332248946124e-03; // 0x3F811111_1110F8A6
+    pub const S3: f64 = -1.98412698298579493134e-04; // 0xBF2A01A0_19C161D5
+    pub const S4: f64 = 2.75573137070700676789e-06; // 0x3EC71DE3_57B1FE7D
+    pub const S5: f64 = -2.50507602534068634195e-08; // 0xBE5AE5E6_8A2B9CEB
+    pub const S6: f64 = 1.58969099521155010221e-10; // 0x3DE5D93A_5ACFD57C
+    // libm's `k_cos` (FreeBSD's `__kernel_cos`): cos x ≈ 1 − x²/2 + C1 x⁴ + … + C6 x¹⁴.
+    pub const C1: f64 = 4.16666666666666019037e-02; // 0x3FA55555_5555554C
+    pub const C2: f64 = -1.38888888888741095749e-03; // 0xBF56C16C_16C15177
+    pub const C3: f64 = 2.48015872894767294178e-05; // 0x3EFA01A0_19CB1590
+    pub const C4: f64 = -2.75573143513906633035e-07; // 0xBE927E4F_809C52AD
+    pub const C5: f64 = 2.08757232129817482790e-09; // 0x3E21EE9E_BDB4B1C4
+    pub const C6: f64 = -1.13596475577881948265e-11; // 0xBDA8FAE9_BE8838D4
+}
+use coefficients::*;
+
+impl<const N: usize> F64x<N> {
+    /// libm's `sincos` where every lane is within `|x| ≲ π/4` (`abs_bits(x) <= PIO4_BITS`),
+    /// lane-wise and without branches: `k_sin(x, 0.0, 0)` and `k_cos(x, 0.0)`, the same
+    /// operations in the same order, and `(x, 1.0)` selected on the lanes below `TINY_BITS`
+    /// as libm returns them. The same bits as libm's on every lane.
+    #[inline(always)]
+    fn sin_cos_pio4(self) -> (Self, Self) {
+        let k = Self::splat;
+        let x = self;
+        // k_sin(x, 0.0, 0).
+        let z = x * x;
+        let w = z * z;
+        let r = k(S2) + z * (k(S3) + z * k(S4)) + z * w * (k(S5) + z * k(S6));
+        let v = z * x;
+        let mut s = x + v * (k(S1) + z * r);
+        // k_cos(x, y) with y = 0.0, literally (`x * y` is ±0, and `z * r − (±0)` is `z * r`).
+        let y = k(0.0);
+        let z = x * x;
+        let w = z * z;
+        let r = z * (k(C1) + z * (k(C2) + z * k(C3))) + w * w * (k(C4) + z * (k(C5) + z * k(C6)));
+        let hz = k(0.5) * z;
+        let w = k(1.0) - hz;
+        let mut c = w + (((k(1.0) - w) - hz) + (z * r - x * y));
+        // |x| < 2⁻²⁷ √2: libm's (x, 1.0) (the polynomial would turn −0 into +0), selected on
+        // the bits with a mask (all ones on those lanes), without branches.
+        for i in 0..N {
+            let tiny = ((abs_bits(x.0[i]) as i64).wrapping_sub(TINY_BITS as i64) >> 63) as u64;
+            let select = |a: f64, b: f64| f64::from_bits(a.to_bits() & tiny | b.to_bits() & !tiny);
+            s.0[i] = select(x.0[i], s.0[i]);
+            c.0[i] = select(1.0, c.0[i]);
+        }
+        (s, c)
     }
 }
 
@@ -218,6 +306,152 @@ mod tests {
                 assert_eq!(out[r].lane(k).to_bits(), want[r].to_bits());
             }
         }
+    }
+
+    /// A deterministic xorshift64* generator for the `sin_cos` tests.
+    struct XorShift(u64);
+
+    impl XorShift {
+        fn next(&mut self) -> u64 {
+            self.0 ^= self.0 >> 12;
+            self.0 ^= self.0 << 25;
+            self.0 ^= self.0 >> 27;
+            self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
+        }
+        /// Uniform in `[0, n)` (`n` small).
+        fn below(&mut self, n: u64) -> u64 {
+            self.next() % n
+        }
+        /// Uniform in `[-a, a)`.
+        fn symmetric(&mut self, a: f64) -> f64 {
+            a * ((self.next() >> 11) as f64 / (1u64 << 52) as f64 - 1.0)
+        }
+        /// `x` or `-x`, at random.
+        fn signed(&mut self, x: f64) -> f64 {
+            if self.next() >> 63 == 1 { -x } else { x }
+        }
+    }
+
+    /// The edges of libm's branches: `|x| ≲ π/4` (the high word `0x3fe921fb`, and π/4 itself),
+    /// `|x| < 2⁻²⁷ √2` (the high word `0x3e46a09e`), zero, subnormals, the least normal, and
+    /// what is not finite; each with its neighbours (`from_bits ± 1, 2`).
+    fn edges() -> Vec<f64> {
+        let pio4 = std::f64::consts::FRAC_PI_4.to_bits();
+        let mut centres = vec![
+            pio4,
+            PIO4_BITS,
+            PIO4_BITS + 1,
+            0x3fe9_21fb_0000_0000,
+            TINY_BITS,
+            0x3e46_a09d_ffff_ffff,
+            0x3e40_0000_0000_0000, // 2⁻²⁷
+            0x0010_0000_0000_0000, // the least normal
+            0x000f_ffff_ffff_ffff, // the largest subnormal
+            2,
+            0x3ff0_0000_0000_0000,
+            std::f64::consts::FRAC_PI_2.to_bits(),
+        ];
+        centres.extend([0.75f64, 0.78, 0.785, 0.79, 0.5, 1e-300, 1e300].map(f64::to_bits));
+        let mut xs: Vec<f64> = centres
+            .iter()
+            .flat_map(|&b| (b.saturating_sub(2)..=b + 2).map(f64::from_bits))
+            .collect();
+        xs.extend([0.0, f64::INFINITY, f64::NAN, f64::MAX, f64::MIN_POSITIVE]);
+        let negated: Vec<f64> = xs.iter().map(|x| -x).collect();
+        xs.extend(negated);
+        xs
+    }
+
+    /// One random argument: in `|x| ≲ π/4` when `inside`, else anywhere, edges often.
+    fn argument(rng: &mut XorShift, edges: &[f64], inside: bool) -> f64 {
+        let x = match rng.below(if inside { 4 } else { 7 }) {
+            0 => edges[rng.below(edges.len() as u64) as usize],
+            // Every magnitude from the subnormals to about 1: random exponent and mantissa.
+            // (Half of them from 2⁻³¹ up, the polynomials' range.)
+            1 => {
+                let e = if rng.below(2) == 0 {
+                    0x3e0 + rng.below(0x1f)
+                } else {
+                    rng.below(0x3ff)
+                };
+                f64::from_bits((e << 52) | (rng.next() >> 12))
+            }
+            2 => rng.symmetric(std::f64::consts::FRAC_PI_4),
+            3 => rng.symmetric(0.7),
+            4 => rng.symmetric(0.8),
+            5 => rng.symmetric(10.0),
+            _ => f64::from_bits(rng.next()),
+        };
+        let x = rng.signed(x);
+        if inside && abs_bits(x) > PIO4_BITS {
+            rng.symmetric(std::f64::consts::FRAC_PI_4)
+        } else {
+            x
+        }
+    }
+
+    /// `F64x::<N>::sin_cos` equals libm's `sincos` on each lane, bit for bit, over `batches`
+    /// random batches (half with every lane within π/4, the rest mixed). (With AVX2: the
+    /// unrolled kernel's tests in `satsim-satellite`.)
+    fn sin_cos_is_libm<const N: usize>(batches: usize) {
+        let edges = edges();
+        let mut rng = XorShift(0x9e37_79b9_7f4a_7c15 ^ N as u64);
+        let (mut inside, mut tiny) = (0, 0);
+        for b in 0..batches {
+            let x = F64x::<N>::from_fn(|_| argument(&mut rng, &edges, b % 2 == 0));
+            let (s, c) = x.sin_cos();
+            for k in 0..N {
+                let (ws, wc) = libm::sincos(x.0[k]);
+                assert_eq!(
+                    (s.0[k].to_bits(), c.0[k].to_bits()),
+                    (ws.to_bits(), wc.to_bits()),
+                    "lane {k} of {x:?}"
+                );
+            }
+            if x.all(|v| abs_bits(v) <= PIO4_BITS) {
+                inside += 1;
+                tiny += usize::from(!x.all(|v| abs_bits(v) >= TINY_BITS));
+            }
+        }
+        // The lane-wise path taken by at least the batches drawn within π/4, with tiny lanes.
+        assert!(
+            inside >= batches / 2 && tiny > batches / 20,
+            "{inside} {tiny}"
+        );
+    }
+
+    #[test]
+    fn sin_cos_is_libm_on_4_lanes() {
+        sin_cos_is_libm::<4>(200_000);
+    }
+
+    #[test]
+    fn sin_cos_is_libm_on_2_and_8_lanes() {
+        sin_cos_is_libm::<2>(200_000);
+        sin_cos_is_libm::<8>(100_000);
+    }
+
+    /// The polynomials' coefficients are libm's (the bits in `k_sin.rs` and `k_cos.rs`).
+    #[test]
+    fn coefficients_are_libm() {
+        let bits = [S1, S2, S3, S4, S5, S6, C1, C2, C3, C4, C5, C6].map(f64::to_bits);
+        assert_eq!(
+            bits,
+            [
+                0xbfc5_5555_5555_5549,
+                0x3f81_1111_1110_f8a6,
+                0xbf2a_01a0_19c1_61d5,
+                0x3ec7_1de3_57b1_fe7d,
+                0xbe5a_e5e6_8a2b_9ceb,
+                0x3de5_d93a_5acf_d57c,
+                0x3fa5_5555_5555_554c,
+                0xbf56_c16c_16c1_5177,
+                0x3efa_01a0_19cb_1590,
+                0xbe92_7e4f_809c_52ad,
+                0x3e21_ee9e_bdb4_b1c4,
+                0xbda8_fae9_be88_38d4,
+            ]
+        );
     }
 
     #[test]
