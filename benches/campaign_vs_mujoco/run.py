@@ -5,7 +5,8 @@ the same cores (kept out of CI).
 springs (satellite.xml = deploy_vs_mujoco.toml), the two fold angles dispersed. MuJoCo's
 rollout records the state at every step; satsim writes a row (energies and momentum
 included) at every step and reduces them to final/min/max. Both run 1 thread, then every
-core. First, a check that the two simulate the same system: the hinge angles of the nominal
+core; satsim with its runs in SIMD lanes (`satsim`, the default) and one at a time
+(`satsim1`, `--no-lanes`). First, a check that the two simulate the same system: the hinge angles of the nominal
 run at t = 10 s and 600 s from `satsim run` and from MuJoCo.
 
     python3 -m venv /tmp/mj && /tmp/mj/bin/pip install mujoco numpy
@@ -86,10 +87,12 @@ for threads in sorted({1, CORES}):
             r.rollout([model] * RUNS, datas, init, nstep=NSTEP)
     wall, cpu = time.perf_counter() - w0, cpu_self() - c0
     print(f"mujoco   {threads:7d}  {wall:8.2f}  {cpu:7.2f}  {RUNS / wall:13.1f}  {RUNS / cpu:16.1f}")
-    with tempfile.TemporaryDirectory() as tmp:
-        c0, w0 = cpu_children(), time.perf_counter()
-        subprocess.run([SATSIM, "campaign", os.path.join(HERE, "deploy_vs_mujoco.toml"),
-                        "--out", tmp, "--threads", str(threads)],
-                       check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-        wall, cpu = time.perf_counter() - w0, cpu_children() - c0
-    print(f"satsim   {threads:7d}  {wall:8.2f}  {cpu:7.2f}  {RUNS / wall:13.1f}  {RUNS / cpu:16.1f}")
+    # satsim with its runs in SIMD lanes (the default), then one run at a time per thread.
+    for name, extra in (("satsim", []), ("satsim1", ["--no-lanes"])):
+        with tempfile.TemporaryDirectory() as tmp:
+            c0, w0 = cpu_children(), time.perf_counter()
+            subprocess.run([SATSIM, "campaign", os.path.join(HERE, "deploy_vs_mujoco.toml"),
+                            "--out", tmp, "--threads", str(threads)] + extra,
+                           check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+            wall, cpu = time.perf_counter() - w0, cpu_children() - c0
+        print(f"{name:8s} {threads:7d}  {wall:8.2f}  {cpu:7.2f}  {RUNS / wall:13.1f}  {RUNS / cpu:16.1f}")

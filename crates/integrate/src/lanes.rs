@@ -9,7 +9,7 @@
 //!
 //! So each run's result is bit for bit what [`integrate`](crate::integrate) gives it,
 //! provided the batch's right-hand sides are each run's own (the [`Batch`] contract): the
-//! stages are [`Rk4`]'s own pieces, the checks of each evaluation those of one run.
+//! stages are RK4's own pieces, the checks of each evaluation those of one run.
 //! Adaptive methods choose each run's steps from its own errors, so runs part ways at once:
 //! with them the runs are integrated one after the other, as [`integrate`](crate::integrate)
 //! does.
@@ -356,7 +356,7 @@ mod tests {
             if k == 1 {
                 return EventAction::Stop;
             }
-            x[1] = -self.restitution * x[1];
+            x[1] *= -self.restitution;
             EventAction::Reset
         }
         fn next_stop(&self) -> f64 {

@@ -4,7 +4,9 @@
 //!
 //! The state is a flat `&[f64]`; a problem implements [`System`] and is run
 //! by [`integrate`]. All work buffers are allocated once per run; the step
-//! loop does not allocate (except to record located events).
+//! loop does not allocate (except to record located events). Several runs of
+//! one fixed-step scene can advance in lockstep, each stage's right-hand sides
+//! evaluated together ([`lanes::integrate_lanes`]).
 //!
 //! ```
 //! use std::ops::ControlFlow;

@@ -64,7 +64,8 @@
 //! - `context.rs` (what the effects' hooks see and write), `hold.rs` (hold torques),
 //!   `events.rs` (the event functions' pass, requests, impulses, energy jumps), `system.rs`
 //!   (the [`System`](satsim_integrate::System) the integrators see), `rows.rs` (output rows,
-//!   [`Diagnostics`]), `run.rs` ([`Simulation::run`]), `stepping.rs` ([`Stepping`]: the
+//!   [`Diagnostics`]), `run.rs` ([`Simulation::run`]), `lanes.rs` ([`Simulation::run_lanes`]:
+//!   runs of a batch with their dynamics solved together in SIMD lanes), `stepping.rs` ([`Stepping`]: the
 //!   simulation advanced a piece at a time from outside, with inputs held between pieces;
 //!   and the time stops of the effects' discrete-time laws).
 
