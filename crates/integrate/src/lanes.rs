@@ -227,14 +227,8 @@ where
     F: FnMut(f64, &[f64]) -> ControlFlow<()>,
     R: Runs<S, F>,
 {
-    let (outputs, ctx) = match checked(
-        &r.system,
-        options,
-        r.t0,
-        &r.x0,
-        r.t_end,
-        Cow::Owned(r.output),
-    ) {
+    let mut r = r;
+    let (outputs, ctx) = match check(options, &mut r) {
         Ok(c) => c,
         Err(e) => {
             runs.done(r.system, r.observer, Err(e));
@@ -281,14 +275,8 @@ where
     F: FnMut(f64, &[f64]) -> ControlFlow<()>,
     R: Runs<S, F>,
 {
-    match checked(
-        &r.system,
-        options,
-        r.t0,
-        &r.x0,
-        r.t_end,
-        Cow::Owned(r.output),
-    ) {
+    let mut r = r;
+    match check(options, &mut r) {
         Ok((outputs, ctx)) => {
             let (result, system, observer) = run_method(
                 r.system, options, ctx, outputs, r.observer, r.t0, &r.x0, r.t_end,
@@ -297,6 +285,16 @@ where
         }
         Err(e) => runs.done(r.system, r.observer, Err(e)),
     }
+}
+
+/// A run's checks as [`integrate`](crate::integrate) makes them (its output times taken
+/// into the result).
+fn check<S: System, F>(
+    options: &Options,
+    r: &mut LaneRun<S, F>,
+) -> Result<(crate::options::OutputTimes<'static>, Ctx), IntegrateError> {
+    let output = std::mem::replace(&mut r.output, Output::Steps);
+    checked(&r.system, options, r.t0, &r.x0, r.t_end, Cow::Owned(output))
 }
 
 /// An empty vector's allocation under another lifetime: the lanes' buffer is made once,
