@@ -187,10 +187,11 @@ where
 }
 
 /// The batch's right-hand sides, the dynamics in `N` lanes: the gathered kernel of the runs
-/// it last saw (by their models' serial numbers) and the lanes' inputs and outputs.
+/// it last saw (by their models' serial numbers; `None` where they do not gather, so that
+/// they are not tried again at every stage) and the lanes' inputs and outputs.
 #[derive(Default)]
 struct Lanes<const N: usize> {
-    kernel: Option<(UnrolledAba<F64x<N>>, [u64; N])>,
+    kernel: Option<(Option<UnrolledAba<F64x<N>>>, [u64; N])>,
     q: Vec<F64x<N>>,
     v: Vec<F64x<N>>,
     tau: Vec<F64x<N>>,
@@ -265,9 +266,9 @@ impl<const N: usize> Lanes<N> {
                     .and_then(|r| kernel_call(&r.sim))
                     .map_or(first, |c| c.0)
             });
-            self.kernel = UnrolledAba::gather(kernels).map(|g| (g, serials));
+            self.kernel = Some((UnrolledAba::gather(kernels), serials));
         }
-        let Some((kernel, _)) = &self.kernel else {
+        let Some((Some(kernel), _)) = &self.kernel else {
             return false;
         };
         // The inputs, lane `k` run `k`'s (the lanes past the runs repeat the first run).

@@ -563,14 +563,19 @@ impl RowSink for Collect<'_> {
             self.stopped = true;
             return Err("stopped".into());
         }
-        let (columns, stats) = (&self.campaign.columns, &mut self.stats);
-        for (c, &v) in row[1..].iter().enumerate() {
-            if !v.is_finite() {
-                return Err(format!("`{}` is {v} at t = {t} s", columns[c + 1]));
-            }
-            stats.last[c] = v;
-            stats.min[c] = stats.min[c].min(v);
-            stats.max[c] = stats.max[c].max(v);
+        let values = &row[1..];
+        if let Some(c) = values.iter().position(|v| !v.is_finite()) {
+            let column = &self.campaign.columns[c + 1];
+            return Err(format!("`{column}` is {} at t = {t} s", values[c]));
+        }
+        // Apart from the check, so that the loops have no exit and vectorise.
+        let s = &mut self.stats;
+        s.last.copy_from_slice(values);
+        for (m, &v) in s.min.iter_mut().zip(values) {
+            *m = m.min(v);
+        }
+        for (m, &v) in s.max.iter_mut().zip(values) {
+            *m = m.max(v);
         }
         if self.rows.is_multiple_of(self.campaign.stride) {
             for (s, &c) in self.trace.iter_mut().zip(&self.campaign.trace_columns) {
