@@ -54,6 +54,9 @@ pub struct Data {
     /// first child writes its parent's inertia as the rigid start plus its own part, so
     /// that no body's start is copied in first.
     pub(crate) ia_started: Vec<bool>,
+    /// [`crate::rnea::rnea_for`]'s bodies: 0 not visited, 1 an ancestor of a hinge asked
+    /// for, 2 below one.
+    pub(crate) rnea_reach: Vec<u8>,
     /// Articulated bias forces. Filled by [`crate::aba::aba`].
     pub pa: Vec<Force>,
     /// Per chain tip ([`crate::Chain`]): what ABA's pass 3 reads of the chain's pass 2.
@@ -102,6 +105,7 @@ impl Data {
             f: vec![Force::zero(); n],
             ia: vec![ArticulatedInertia::default(); n],
             ia_started: vec![false; n],
+            rnea_reach: vec![0; n],
             pa: vec![Force::zero(); n],
             chain: vec![ChainWork::default(); n],
             u_col: vec![Force::zero(); n],

@@ -86,4 +86,4 @@ pub use kinematics::{base_pose, forward_kinematics, forward_kinematics_acc, upda
 pub use model::{
     BaseKind, Body, BodyInfo, BoxShape, Chain, Gyrostat, Hinge, Joint, Model, ModelBuilder,
 };
-pub use rnea::{bias, rnea};
+pub use rnea::{bias, rnea, rnea_for};

@@ -83,6 +83,114 @@ pub fn rnea<'d>(
     Ok(&data.tau)
 }
 
+/// [`rnea`]'s torques of the hinges `which` only (`which[k]`: hinge `k`, the entry
+/// `τ[base_nv + k]`), for a caller that reads a few of them (the hold torques of locked
+/// reaction wheels). Only the bodies those torques depend on are visited: the subtree below
+/// each hinge asked for (every entry of which is written) and its ancestors (velocities and
+/// accelerations only). Each visited body's arithmetic is `rnea`'s, in the same order, so
+/// the torques written are `rnea`'s bit for bit; the other entries of `data.tau` (a free
+/// base's wrench among them) keep whatever they held.
+///
+/// ```
+/// use satsim_tree::{BaseKind, Body, Data, Hinge, ModelBuilder, rnea, rnea_for, spatial::{Mat3, Vec3}};
+/// let model = ModelBuilder::new(BaseKind::Free)
+///     .body(Body::new("bus", 10.0, Mat3::identity()))
+///     .body(Body::new("arm", 1.0, Mat3::identity()))
+///     .body(Body::new("wheel", 0.5, Mat3::from_diagonal(&Vec3::new(0.1, 0.1, 0.2))))
+///     .hinge(Hinge::revolute("shoulder", "bus", "arm", Vec3::y()).child_at(Vec3::new(-1.0, 0.0, 0.0)))
+///     .hinge(Hinge::revolute("spin", "bus", "wheel", Vec3::z()))
+///     .build()?;
+/// let (q, v, a) = (model.neutral(), [0.1, 0.2, 0.3, 0.0, 0.0, 0.0, 0.5, 2.0], [0.3; 8]);
+/// let mut data = Data::new(&model);
+/// let all = rnea(&model, &mut data, &q, &v, &a, None)?.clone();
+/// let some = rnea_for(&model, &mut data, &q, &v, &a, None, &[false, true])?;
+/// assert_eq!(some[7].to_bits(), all[7].to_bits());
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn rnea_for<'d>(
+    model: &Model,
+    data: &'d mut Data,
+    q: &[f64],
+    v: &[f64],
+    a: &[f64],
+    fext: Option<&[Force]>,
+    which: &[bool],
+) -> Result<&'d DVector<f64>, DynamicsError> {
+    if let Some(f) = fext {
+        check_len("fext", f.len(), model.n_bodies())?;
+    }
+    check_len("a", a.len(), model.nv())?;
+    check_len("v", v.len(), model.nv())?;
+    check_len("q", q.len(), model.nq())?;
+    let nb = model.base_nv();
+    check_len("which", which.len(), model.nv() - nb)?;
+    let n = model.n_bodies();
+    // Which bodies: below a hinge asked for (parents come first), then their ancestors.
+    const ABOVE: u8 = 1;
+    const BELOW: u8 = 2;
+    let reach = &mut data.rnea_reach;
+    reach[0] = 0;
+    for i in 1..n {
+        let joint = model.joints[i].as_ref().expect("joint");
+        let p = model.parent[i].expect("parent");
+        reach[i] = if which[joint.dof - nb] || reach[p] == BELOW {
+            BELOW
+        } else {
+            0
+        };
+    }
+    for i in (1..n).rev() {
+        let p = model.parent[i].expect("parent");
+        if reach[i] != 0 && reach[p] == 0 {
+            reach[p] = ABOVE;
+        }
+    }
+    if reach.iter().all(|&r| r == 0) {
+        return Ok(&data.tau);
+    }
+    // Pass 1, outward, as `rnea`'s.
+    data.v[0] = base_motion(model, v);
+    data.a[0] = base_motion(model, a);
+    for i in 0..n {
+        if data.rnea_reach[i] == 0 {
+            continue;
+        }
+        if let Some(joint) = &model.joints[i] {
+            let p = model.parent[i].expect("parent");
+            data.xup[i] = model.xup(i, q);
+            let x = &data.xup[i];
+            let vj = joint.s * v[joint.dof];
+            data.v[i] = x.apply_motion(&data.v[p]) + vj;
+            data.a[i] =
+                x.apply_motion(&data.a[p]) + joint.s * a[joint.dof] + data.v[i].cross_motion(&vj);
+        }
+        if data.rnea_reach[i] != BELOW {
+            continue;
+        }
+        let inertia = &model.bodies[i].inertia;
+        let vi = data.v[i];
+        data.f[i] = inertia.mul_motion(&data.a[i]) + vi.cross_force(&inertia.mul_motion(&vi));
+        if let Some(f) = fext {
+            data.f[i] -= f[i];
+        }
+    }
+    // Pass 2, inward, within the subtrees (a body below a hinge asked for has all its
+    // children below it too, so its force sums them in `rnea`'s order).
+    for i in (1..n).rev() {
+        if data.rnea_reach[i] != BELOW {
+            continue;
+        }
+        let joint = model.joints[i].as_ref().expect("joint");
+        data.tau[joint.dof] = joint.s.dot(&data.f[i]) + joint.armature * a[joint.dof];
+        let p = model.parent[i].expect("parent");
+        if data.rnea_reach[p] == BELOW {
+            let fp = data.xup[i].inv_apply_force(&data.f[i]);
+            data.f[p] += fp;
+        }
+    }
+    Ok(&data.tau)
+}
+
 /// The bias forces `C(q, v) − Jᵀ fext` (RNEA with zero acceleration), into `data.bias`.
 ///
 /// ```
@@ -111,4 +219,56 @@ pub fn bias<'d>(
     result?;
     data.bias.copy_from(&data.tau);
     Ok(&data.bias)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::samples::{SplitMix, random_q, random_tree};
+
+    /// Every torque `rnea_for` writes is `rnea`'s bit for bit, and it writes the hinges
+    /// asked for and only entries below them: random trees (free and fixed, with massless
+    /// links), states, external forces and masks.
+    #[test]
+    fn rnea_for_is_rnea_on_the_hinges_asked_for() {
+        let mut rng = SplitMix(29);
+        let mut checked = 0;
+        for seed in 0..40 {
+            let base = if seed % 2 == 0 {
+                BaseKind::Free
+            } else {
+                BaseKind::Fixed
+            };
+            let model = random_tree(2 + seed as usize % 7, base, seed % 3 == 0, seed);
+            let (nv, nb, n) = (model.nv(), model.base_nv(), model.n_bodies());
+            let q = random_q(&model, &mut rng, 2.0);
+            let v: Vec<f64> = (0..nv).map(|_| rng.range(-2.0, 2.0)).collect();
+            let a: Vec<f64> = (0..nv).map(|_| rng.range(-2.0, 2.0)).collect();
+            let fext: Vec<Force> = (0..n)
+                .map(|_| Force::new(rng.vec3(1.0), rng.vec3(1.0)))
+                .collect();
+            for with_fext in [false, true] {
+                let fext = with_fext.then_some(fext.as_slice());
+                let mut data = Data::new(&model);
+                let all = rnea(&model, &mut data, &q, &v, &a, fext).unwrap().clone();
+                for _ in 0..4 {
+                    let which: Vec<bool> = (0..nv - nb).map(|_| rng.next_f64() < 0.3).collect();
+                    let mut data = Data::new(&model);
+                    data.tau.fill(f64::NAN);
+                    let some = rnea_for(&model, &mut data, &q, &v, &a, fext, &which).unwrap();
+                    for (k, &asked) in which.iter().enumerate() {
+                        let t = some[nb + k];
+                        if asked {
+                            assert_eq!(t.to_bits(), all[nb + k].to_bits(), "seed {seed} hinge {k}");
+                            checked += 1;
+                        } else {
+                            assert!(t.is_nan() || t.to_bits() == all[nb + k].to_bits());
+                        }
+                    }
+                    assert!(some.as_slice()[..nb].iter().all(|t| t.is_nan()));
+                }
+            }
+        }
+        assert!(checked > 100, "{checked}");
+    }
 }

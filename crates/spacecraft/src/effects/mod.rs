@@ -450,6 +450,15 @@ impl EventReads {
     }
 }
 
+/// Whose hold torques an effect's event functions read ([`Effect::hold_reads`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum HoldReads {
+    /// Every locked hinge's.
+    Locked,
+    /// The locked rotors' only.
+    Rotors,
+}
+
 /// What an effect asks the simulation to do at one of its events.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Request {
@@ -629,6 +638,13 @@ pub trait Effect: Send {
             kinematics: self.needs().kinematics,
             ..EventReads::ALL
         }
+    }
+    /// Whose [`Context::hold_torque`] [`Effect::events`] reads when [`Effect::event_reads`]
+    /// asks for hold torques: every locked hinge's (the default, always right), or only the
+    /// locked rotors' ([`HoldReads::Rotors`]: the others are then NaN in `events`), which
+    /// spares the event pass the inverse dynamics of the rest of the tree.
+    fn hold_reads(&self) -> HoldReads {
+        HoldReads::Locked
     }
     /// Which sign changes of event `k` count.
     fn event_direction(&self, _k: usize) -> EventDirection {

@@ -54,7 +54,8 @@
 //! A wheel with `max_speed` 0 keeps the plain rule (no torque that speeds it up).
 
 use super::{
-    Context, Effect, EventReads, Forces, Links, Needs, Power, Request, Rotor, SceneEffect, Section,
+    Context, Effect, EventReads, Forces, HoldReads, Links, Needs, Power, Request, Rotor,
+    SceneEffect, Section,
 };
 use satsim_integrate::{EventAction, EventDirection, SystemError};
 use satsim_tree::io::FileError;
@@ -482,6 +483,10 @@ impl Effect for ReactionWheels {
             hold_torques: stuck,
             kinematics: false,
         }
+    }
+    /// A wheel reads its own rotor's hold torque only.
+    fn hold_reads(&self) -> HoldReads {
+        HoldReads::Rotors
     }
     fn on_event(
         &mut self,

@@ -1,5 +1,6 @@
 //! [`SimData`]: the scratch of every evaluation, and the discrete state.
 
+use super::ahead::Ahead;
 use crate::effects::{Forces, Request};
 use satsim_tree::flexible::{FlexData, FlexModel};
 use satsim_tree::{Data, Model};
@@ -64,6 +65,9 @@ pub struct SimData {
     /// The constant hinge torques every pass starts from (N m, tree hinge order: the
     /// initial state's `torque`, zero on the rotors).
     pub(super) base_tau: Vec<f64>,
+    /// The right-hand side the event functions evaluated at the end of a step, for the next
+    /// step's first stage (`ahead.rs`).
+    pub(super) ahead: Ahead,
 }
 
 impl SimData {
@@ -87,6 +91,7 @@ impl SimData {
             locked: vec![false; nh],
             n_locked: 0,
             base_tau: vec![0.0; nh],
+            ahead: Ahead::new(n_states),
         }
     }
     /// The loads the effects applied in the last pass.

@@ -19,6 +19,12 @@ impl Simulation {
             .fold(EventReads::STATE, |r, e| r.union(e.event_reads()));
         let hold = reads.hold_torques && self.model.needs_hold && self.data.n_locked > 0;
         let wrap = |e: SystemError| SystemError::new(format!("event functions: {e}"));
+        if hold && self.can_evaluate_ahead(reads.kinematics) {
+            // The hold torques' solve is the right-hand side's: evaluate that, and keep it
+            // for the next step (`ahead.rs`).
+            self.evaluate_ahead(t, x).map_err(wrap)?;
+            return Ok(reads.kinematics);
+        }
         if reads.forces || hold {
             let h = if hold { Hold::Locked } else { Hold::None };
             self.prepare_with(t, x, reads.kinematics, h).map_err(wrap)?;
@@ -41,6 +47,7 @@ impl Simulation {
         reqs: &[Request],
         x: &mut [f64],
     ) -> Result<(), SimError> {
+        self.forget_ahead();
         let mut targets: Vec<(usize, f64)> = Vec::new();
         let mut locks: Vec<usize> = Vec::new();
         for r in reqs {

@@ -202,9 +202,16 @@ struct Lanes<const N: usize> {
 impl<const N: usize, K: RowSink> Batch<Shared<Cell<K>>> for Lanes<N> {
     fn rhs(&mut self, lanes: &mut [Lane<'_, Shared<Cell<K>>>]) {
         let mut kin = [false; N];
+        // The lanes whose slope their event functions evaluated already (`ahead.rs`).
+        let mut ahead = [false; N];
         let mut ready = true;
-        for (l, kin) in lanes.iter_mut().zip(&mut kin) {
-            match l.system.0.sim_mut().rhs_forces(l.t, l.x, l.dx) {
+        for ((l, kin), ahead) in lanes.iter_mut().zip(&mut kin).zip(&mut ahead) {
+            let mut sim = l.system.0.sim_mut();
+            if sim.reuse_ahead(l.t, l.x, l.dx) {
+                *ahead = true;
+                continue;
+            }
+            match sim.rhs_forces(l.t, l.x, l.dx) {
                 Ok(k) => *kin = k,
                 Err(e) => {
                     l.result = Err(e);
@@ -212,9 +219,12 @@ impl<const N: usize, K: RowSink> Batch<Shared<Cell<K>>> for Lanes<N> {
                 }
             }
         }
-        let solved = ready && self.solve(lanes);
-        for (l, &kin) in lanes.iter_mut().zip(&kin) {
-            if l.result.is_err() {
+        if ahead[..lanes.len().min(N)].iter().all(|&a| a) {
+            return;
+        }
+        let solved = ready && self.solve(lanes, &ahead);
+        for ((l, &kin), &ahead) in lanes.iter_mut().zip(&kin).zip(&ahead) {
+            if l.result.is_err() || ahead {
                 continue;
             }
             let mut sim = l.system.0.sim_mut();
@@ -232,7 +242,13 @@ impl<const N: usize> Lanes<N> {
     /// The dynamics of every lane by one call of the lanes' kernel, after their effects:
     /// `false` (nothing written) where the runs do not all take it alike, or where the lanes
     /// part ways; then each run solves its own.
-    fn solve<K: RowSink>(&mut self, lanes: &mut [Lane<'_, Shared<Cell<K>>>]) -> bool {
+    /// The lanes `ahead` have their slope already: their inputs (whatever their runs' last
+    /// pass left) only fill their places, and their results are not written.
+    fn solve<K: RowSink>(
+        &mut self,
+        lanes: &mut [Lane<'_, Shared<Cell<K>>>],
+        ahead: &[bool; N],
+    ) -> bool {
         if lanes.len() < 2 || lanes.len() > N {
             return false;
         }
@@ -304,6 +320,9 @@ impl<const N: usize> Lanes<N> {
         }
         drop(sims);
         for (k, l) in lanes.iter_mut().enumerate() {
+            if ahead[k] {
+                continue;
+            }
             let mut sim = l.system.0.sim_mut();
             sim.log.lane_rhs += 1;
             match sim.model.velocity_at {

@@ -9,6 +9,9 @@ pub struct RunLog {
     /// Of those, the ones whose dynamics were solved in the lanes of a batch of runs
     /// (`lanes.rs`).
     pub(super) lane_rhs: u64,
+    /// Right-hand sides answered by the slope the event functions had just evaluated at the
+    /// same state (`ahead.rs`): not evaluated again, so not in `rhs_evals`.
+    pub(super) reused_rhs: u64,
     /// How many times each effect was applied by the right-hand side (the effects' order).
     pub(super) calls: Vec<u64>,
     /// Each handled event: `(t, description)`, and the effect whose event it was.
@@ -25,6 +28,12 @@ impl RunLog {
     /// with other runs' in SIMD lanes ([`Simulation::run_lanes`](super::Simulation::run_lanes)).
     pub fn lane_rhs(&self) -> u64 {
         self.lane_rhs
+    }
+    /// Right-hand sides answered by the slope the event functions had just evaluated at the
+    /// same state, instead of being evaluated again (not counted in
+    /// [`RunLog::rhs_evals`]; see [`Simulation::reuse_event_slopes`](super::Simulation::reuse_event_slopes)).
+    pub fn reused_rhs(&self) -> u64 {
+        self.reused_rhs
     }
     /// What happened at each handled event: `(t, description)`.
     pub fn events(&self) -> &[(f64, String)] {

@@ -69,6 +69,7 @@
 //!   simulation advanced a piece at a time from outside, with inputs held between pieces;
 //!   and the time stops of the effects' discrete-time laws).
 
+mod ahead;
 mod build;
 mod context;
 mod data;
@@ -209,11 +210,13 @@ impl Simulation {
     /// theirs (N m, tree hinge order: the model's hinges, then the rotors): the initial
     /// state's `torque`, zero on the rotors. The linearisation (`satsim_tools::linearize`) perturbs them to form `B`.
     pub fn constant_torques_mut(&mut self) -> &mut [f64] {
+        self.forget_ahead();
         &mut self.data.base_tau
     }
     /// Unlocks hinge `h` (tree order) as if its effect had released it (a no-op when it is
     /// not locked). The linearisation frees wheels held by static friction this way.
     pub fn release(&mut self, h: usize) {
+        self.forget_ahead();
         if self.data.locked.get(h).copied().unwrap_or(false) {
             self.data.locked[h] = false;
             self.data.n_locked -= 1;
@@ -246,6 +249,7 @@ impl Simulation {
     /// Drops the layout's kernel: every solve from now on takes the generic ABA (to compare
     /// the two, or to time the kernel's gain).
     pub fn use_generic_dynamics(&mut self) {
+        self.forget_ahead();
         self.model.fd = ForwardDynamics::new(&self.model.tree);
     }
     /// Whether every evaluation runs the forward kinematics (an effect needs the poses).

@@ -336,6 +336,7 @@ impl Stepping {
                 self.sim.effects[i].hold_thrust_input(j, v, self.t);
             }
         }
+        self.sim.forget_ahead();
         let (t, mut x) = (self.t, std::mem::take(&mut self.x));
         let r = self.sim.settle_events(t, &mut x, &before);
         self.x = x;
@@ -499,6 +500,7 @@ impl Simulation {
     /// the events the change moved across zero are handled. Returns whether the dynamics
     /// changed (an effect that does not only observe was sampled: the integrator restarts).
     pub(super) fn sample_effects(&mut self, t: f64, x: &mut [f64]) -> Result<bool, SystemError> {
+        self.forget_ahead();
         let due = |e: &dyn crate::effects::Effect| stop_due(t, e.next_sample());
         if !self.effects.iter().any(|e| due(e.as_ref())) {
             return Ok(false);

@@ -71,6 +71,7 @@ impl System for Simulation {
 
     /// The effects whose sample is due latch their laws' outputs (`stepping.rs`).
     fn on_stop(&mut self, t: f64, x: &mut [f64]) -> Result<bool, SystemError> {
+        self.forget_ahead();
         self.sample_effects(t, x)
     }
 
@@ -96,6 +97,7 @@ impl System for Simulation {
         t: f64,
         x: &mut [f64],
     ) -> Result<EventAction, SystemError> {
+        self.forget_ahead();
         self.check_len(x.len(), "on_events")?;
         let before = self.mechanical_energy(t, x)?;
         if let Err(e) = self.prepare_with(t, x, false, Hold::All) {

@@ -1,0 +1,152 @@
+//! The right-hand side evaluated ahead, by the event functions.
+//!
+//! A stuck reaction wheel's event function reads the hold torques of the locked hinges
+//! (`hold.rs`): forward dynamics with exactly the hinges locked now, then RNEA. That solve is
+//! the right-hand side's own at the same state, and the integrator evaluates the event
+//! functions at the end of every step, where the next step's first stage (RK4's `k1`, or
+//! the Hermite slope of the dense output) then asks for `f(t, x)` again. So the event
+//! functions evaluate the whole right-hand side there, keep it, and take the hold torques
+//! from its accelerations; the next `rhs` at the same `(t, x)` (bit for bit) returns the
+//! kept slope instead of computing it again: one evaluation of the kinematics, the effects
+//! and the dynamics where there were two. The slope and the hold torques are bit for bit
+//! what the two passes gave apart: the same solve (`forward_dynamics` with the same inputs
+//! and lock mask) feeds both.
+//!
+//! The kept slope is used once, and only while nothing but the continuous state could
+//! change `f`: every change of the discrete state (locks, an effect's event or sample, the
+//! inputs, the constant torques, the dynamics chosen) forgets it
+//! ([`Simulation::forget_ahead`]).
+
+use super::Simulation;
+use crate::effects::HoldReads;
+use satsim_integrate::SystemError;
+use satsim_tree::rnea_for;
+
+/// The slope kept by [`Simulation::evaluate_ahead`]: `dx = f(t, x)`, while `valid`.
+pub(super) struct Ahead {
+    /// Whether the slope is reused at all ([`Simulation::reuse_event_slopes`]).
+    enabled: bool,
+    valid: bool,
+    t: f64,
+    x: Vec<f64>,
+    dx: Vec<f64>,
+}
+
+impl Ahead {
+    /// Room for a state of `n` values (allocated once, by the builder).
+    pub(super) fn new(n: usize) -> Self {
+        Self {
+            enabled: true,
+            valid: false,
+            t: f64::NAN,
+            x: vec![0.0; n],
+            dx: vec![0.0; n],
+        }
+    }
+}
+
+impl Simulation {
+    /// Whether the event functions' hold torques can come from the right-hand side itself:
+    /// the rigid tree (the flexible one solves its hold torques apart) and the hold torques
+    /// asked for those of the hinges locked now. `kinematics`: the event functions read the
+    /// poses, which the right-hand side computes only when an effect needs them.
+    pub(super) fn can_evaluate_ahead(&self, kinematics: bool) -> bool {
+        self.model.flex.is_none()
+            && self.model.needs_hold
+            && self.data.n_locked > 0
+            && (!kinematics || self.data.needs_kinematics)
+    }
+
+    /// The right-hand side at `(t, x)`, kept for the next [`Self::reuse_ahead`], and the
+    /// locked hinges' hold torques from its accelerations, as
+    /// [`Self::hold_torques_after_effects`] gives them with `Hold::Locked`: by RNEA over the
+    /// bodies they depend on, and only the rotors' where the event functions read no other
+    /// ([`Effect::hold_reads`](crate::effects::Effect::hold_reads); the others NaN).
+    pub(super) fn evaluate_ahead(&mut self, t: f64, x: &[f64]) -> Result<(), SystemError> {
+        self.forget_ahead();
+        let mut dx = std::mem::take(&mut self.data.ahead.dx);
+        let result = self.right_hand_side(t, x, &mut dx);
+        let a = &mut self.data.ahead;
+        a.dx = dx;
+        a.valid = result.is_ok();
+        result?;
+        a.t = t;
+        a.x.copy_from_slice(x);
+        let (m, d) = (&self.model, &mut self.data);
+        match m.velocity_at {
+            Some(s) => {
+                let nv = d.v.len();
+                d.hold_ddq.copy_from_slice(&d.ahead.dx[s..s + nv]);
+            }
+            None => d.hold_ddq.copy_from_slice(&d.ddq),
+        }
+        // Only the hold torques read: the rotors' when every reader reads only theirs.
+        let rotors_only = self
+            .effects
+            .iter()
+            .filter(|e| e.n_events() > 0 && e.event_reads().hold_torques)
+            .all(|e| e.hold_reads() == HoldReads::Rotors);
+        for (k, (w, &locked)) in d.hold_mask.iter_mut().zip(&d.locked).enumerate() {
+            *w = locked && (!rotors_only || k >= m.n_user);
+        }
+        let fext = d
+            .forces
+            .has_wrench
+            .then_some(d.forces.body_wrench.as_slice());
+        let need = rnea_for(
+            &m.tree,
+            &mut d.tree,
+            &d.q,
+            &d.v,
+            &d.hold_ddq,
+            fext,
+            &d.hold_mask,
+        )
+        .map_err(SystemError::from_error)?;
+        let nb = m.tree.base_nv();
+        for ((h, &w), n) in d
+            .hold
+            .iter_mut()
+            .zip(&d.hold_mask)
+            .zip(&need.as_slice()[nb..])
+        {
+            *h = if w { *n } else { f64::NAN };
+        }
+        Ok(())
+    }
+
+    /// `dx = f(t, x)` from the slope kept by [`Self::evaluate_ahead`] when it was taken at
+    /// this very `(t, x)` (bit for bit) and nothing changed since; the slope is used once.
+    /// Not counted as an evaluation: [`Self::evaluate_ahead`] counted it.
+    #[inline]
+    pub(super) fn reuse_ahead(&mut self, t: f64, x: &[f64], dx: &mut [f64]) -> bool {
+        let a = &mut self.data.ahead;
+        if !a.valid || !a.enabled {
+            return false;
+        }
+        a.valid = false;
+        let same = t.to_bits() == a.t.to_bits()
+            && x.len() == a.x.len()
+            && dx.len() == a.dx.len()
+            && x.iter().zip(&a.x).all(|(p, q)| p.to_bits() == q.to_bits());
+        if same {
+            dx.copy_from_slice(&a.dx);
+            self.log.reused_rhs += 1;
+        }
+        same
+    }
+
+    /// Whether a right-hand side at the state where the event functions just evaluated it
+    /// reuses it (the default), or computes it again: the results are the same bit for bit
+    /// either way (tested), so this serves only to check that or to time the gain.
+    pub fn reuse_event_slopes(&mut self, on: bool) {
+        self.data.ahead.enabled = on;
+        self.forget_ahead();
+    }
+
+    /// Forgets the kept slope: the discrete state changed, so `f` may have.
+    #[inline]
+    pub(super) fn forget_ahead(&mut self) {
+        self.data.ahead.valid = false;
+    }
+}

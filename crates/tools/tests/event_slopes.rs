@@ -1,0 +1,101 @@
+//! The slope the event functions evaluate at the end of a step, reused by the next step
+//! (`crates/spacecraft/src/simulation/ahead.rs`): runs of the deployment campaign (stuck
+//! wheels read hold torques at every step; panels latch; wheels break free) give the same
+//! rows, outcome and events bit for bit with the reuse on and off, and reuse it at most steps.
+
+use satsim_integrate::{Output, Stats};
+use satsim_spacecraft::simulation::{RunError, Simulation};
+use satsim_tools::campaign::Campaign;
+use satsim_tools::scene::Scene;
+use std::path::Path;
+
+/// A run's outcome (as text), rows (as bits) and events.
+type Outcome = (String, Vec<u64>, Vec<(u64, String)>);
+
+fn run(scene: &Scene, reuse: bool) -> (Outcome, Simulation) {
+    let mut sim = scene.simulation().unwrap();
+    sim.reuse_event_slopes(reuse);
+    let mut rows = Vec::new();
+    let result: Result<Stats, RunError<String>> = sim.run(
+        &scene.options,
+        sim.t0() + scene.duration,
+        &Output::Interval(scene.every),
+        |t, row| {
+            rows.push(t.to_bits());
+            rows.extend(row.iter().map(|v| v.to_bits()));
+            Ok(())
+        },
+    );
+    let result = format!("{:?}", result.map(|s| (s.t_final, s.x_final, s.events)));
+    let events = sim
+        .event_log()
+        .iter()
+        .map(|(t, what)| (t.to_bits(), what.clone()))
+        .collect();
+    ((result, rows, events), sim)
+}
+
+#[test]
+fn reusing_the_event_functions_slope_changes_no_bit() {
+    let path =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/scenes/deploy_campaign.toml");
+    let campaign = Campaign::read(&path).unwrap();
+    for k in 0..3 {
+        let text = campaign.run_text(k, &campaign.draw(k));
+        let mut scene = Scene::parse(&text, &path).unwrap();
+        scene.duration = 25.0;
+        let (on, sim_on) = run(&scene, true);
+        let (off, sim_off) = run(&scene, false);
+        assert_eq!(on.0, off.0, "run {k}: outcome");
+        assert!(on.1 == off.1, "run {k}: rows differ");
+        assert_eq!(on.2, off.2, "run {k}: events");
+        assert!(on.2.len() >= 2, "run {k}: the panels latch");
+        // Every reused slope is one evaluation fewer, and most steps reuse one.
+        let (log_on, log_off) = (sim_on.run_log(), sim_off.run_log());
+        assert_eq!(log_off.reused_rhs(), 0);
+        assert_eq!(
+            log_on.rhs_evals() + log_on.reused_rhs(),
+            log_off.rhs_evals(),
+            "run {k}"
+        );
+        let steps = (scene.duration / 0.01) as u64;
+        assert!(
+            log_on.reused_rhs() * 2 > steps,
+            "run {k}: {} of {steps} steps reused the slope",
+            log_on.reused_rhs()
+        );
+    }
+}
+
+/// The kept slope answers only a right-hand side at the very `(t, x)` where the event
+/// functions evaluated it, once.
+#[test]
+fn the_slope_is_reused_only_at_the_same_state() {
+    use satsim_integrate::System;
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/scenes/deploy.toml");
+    let scene = Scene::read(&path).unwrap();
+    let mut sim = scene.simulation().unwrap();
+    let mut fresh = scene.simulation().unwrap();
+    assert!(sim.locked().iter().any(|&l| l), "the wheels start stuck");
+    let (t, x) = (sim.t0(), sim.x0().to_vec());
+    let n = x.len();
+    let mut g = vec![0.0; sim.n_events()];
+    let (mut dx, mut want) = (vec![0.0; n], vec![0.0; n]);
+    let bits = |v: &[f64]| v.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+    let mut other = x.clone();
+    other[n - 1] += 1e-3;
+    for (tk, xk) in [(t, &other), (t + 1e-3, &x)] {
+        sim.events(t, &x, &mut g).unwrap();
+        sim.rhs(tk, xk, &mut dx).unwrap();
+        fresh.rhs(tk, xk, &mut want).unwrap();
+        assert_eq!(bits(&dx), bits(&want));
+        assert_eq!(sim.run_log().reused_rhs(), 0);
+    }
+    sim.events(t, &x, &mut g).unwrap();
+    sim.rhs(t, &x, &mut dx).unwrap();
+    assert_eq!(sim.run_log().reused_rhs(), 1);
+    sim.rhs(t, &x, &mut dx).unwrap();
+    assert_eq!(sim.run_log().reused_rhs(), 1, "used once");
+    fresh.rhs(t, &x, &mut want).unwrap();
+    assert_eq!(bits(&dx), bits(&want));
+}
