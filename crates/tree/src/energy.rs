@@ -62,6 +62,12 @@ pub fn center_of_mass(model: &Model, data: &Data) -> Vec3 {
     let mut m = 0.0;
     let mut mc = Vec3::zeros();
     for (i, b) in model.bodies.iter().enumerate() {
+        // A massless body (a gimbal link, a wheel whose mass is the bus's) adds ±0 to sums
+        // that start at +0 and so can never be −0: skipping it changes no bit (for finite
+        // poses), and spares most of the loop where such bodies are common.
+        if b.mass == 0.0 {
+            continue;
+        }
         m += b.mass;
         mc += (data.position[i] + data.rotation[i] * b.com) * b.mass;
     }

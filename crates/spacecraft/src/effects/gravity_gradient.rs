@@ -34,7 +34,7 @@
 //! `k̇ = −3 k (E·v)/r`), which the energy budget counts as actuator work (see
 //! [`Effect::power`]).
 
-use super::{Context, Effect, Forces, Needs, Power, SceneEffect, Section};
+use super::{Context, Effect, Forces, Links, Needs, OrbitState, Power, SceneEffect, Section};
 use satsim_integrate::SystemError;
 use satsim_tree::io::FileError;
 use satsim_tree::spatial::{Force, Mat3, Vec3};
@@ -56,8 +56,25 @@ pub enum GravityModel {
 pub struct GravityGradient {
     /// The model.
     pub model: GravityModel,
-    /// `∂V/∂t` at the last `apply` (W), computed there from the same per-body terms.
+    /// `∂V/∂t` at the last `apply` (W), computed there from the same per-body terms when the
+    /// simulation asks for it ([`Context::power`]); NaN after an `apply` that did not.
     field_power: f64,
+    /// The bodies the field loads, in body order (from [`Effect::connect`]): a body with
+    /// neither mass nor inertia (a gimbal link) feels nothing and is left out.
+    loaded: Vec<Loaded>,
+    /// The number of bodies of the tree `loaded` was made for.
+    n_bodies: usize,
+}
+
+/// A body the field loads: its per-body constants, worked out once.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Loaded {
+    /// Its index in the tree's bodies.
+    body: usize,
+    /// Whether it has mass (it feels a tidal force in the full model).
+    massive: bool,
+    /// The trace of its inertia about its centre of mass (for `∂V/∂t`).
+    trace: f64,
 }
 
 /// The couple `3 k E × I E` on a body of inertia `inertia` (about its centre of mass) with
@@ -78,7 +95,62 @@ impl GravityGradient {
         Self {
             model,
             field_power: 0.0,
+            loaded: Vec::new(),
+            n_bodies: 0,
         }
+    }
+
+    /// Adds every loaded body's couple (and, for `full`, tidal force) to `forces`; with
+    /// `POWER`, returns `∂V/∂t` from the same terms (else 0: nothing reads it this pass, and
+    /// its terms cost about as much as the couples). `k = μ/r³`, `e` the local vertical.
+    #[allow(clippy::too_many_arguments)]
+    fn load<const POWER: bool>(
+        &self,
+        ctx: &Context,
+        forces: &mut Forces,
+        orbit: &OrbitState,
+        r: f64,
+        k: f64,
+        e: Vec3,
+        com: Vec3,
+    ) -> f64 {
+        // For the energy budget, ∂V/∂t (see `power`): Ė = (v − (E·v) E)/r, k̇ = −3 k (E·v)/r.
+        let (e_dot, k_dot) = if POWER {
+            let ev = e.dot(&orbit.v);
+            ((orbit.v - ev * e) / r, -3.0 * k * ev / r)
+        } else {
+            (Vec3::zeros(), 0.0)
+        };
+        let full = self.model == GravityModel::Full;
+        let bodies = ctx.model.bodies();
+        let mut field_power = 0.0;
+        for l in &self.loaded {
+            let (i, body) = (l.body, &bodies[l.body]);
+            let rot = &ctx.data.rotation[i];
+            let eb = rot.tr_mul(&e);
+            let ie = body.inertia_com() * eb;
+            let mut ang = couple(k, &eb, body.inertia_com());
+            if POWER {
+                field_power += 0.5 * k_dot * (3.0 * eb.dot(&ie) - l.trace)
+                    + 3.0 * k * rot.tr_mul(&e_dot).dot(&ie);
+            }
+            let mut lin = Vec3::zeros();
+            if full && l.massive {
+                let rho = ctx.data.position[i] + rot * body.com() - com;
+                let f = tidal(k, &e, body.mass(), &rho);
+                lin = rot.tr_mul(&f);
+                ang += body.com().cross(&lin);
+                if POWER {
+                    let er = e.dot(&rho);
+                    field_power -= 0.5
+                        * body.mass()
+                        * (k_dot * (3.0 * er * er - rho.norm_squared())
+                            + 6.0 * k * er * e_dot.dot(&rho));
+                }
+            }
+            forces.add_wrench(i, Force::new(ang, lin));
+        }
+        field_power
     }
 }
 
@@ -95,6 +167,22 @@ impl Effect for GravityGradient {
             ..Needs::default()
         }
     }
+    /// The per-body constants of the tree, once (the same test and trace `apply` made at
+    /// every evaluation).
+    fn connect(&mut self, links: &Links) {
+        let bodies = links.model.bodies();
+        self.loaded = bodies
+            .iter()
+            .enumerate()
+            .filter(|(_, b)| !(b.mass() == 0.0 && b.inertia_com().norm() == 0.0))
+            .map(|(i, b)| Loaded {
+                body: i,
+                massive: b.mass() > 0.0,
+                trace: b.inertia_com().trace(),
+            })
+            .collect();
+        self.n_bodies = bodies.len();
+    }
     fn apply(
         &mut self,
         ctx: &Context,
@@ -103,47 +191,29 @@ impl Effect for GravityGradient {
         _own_dot: &mut [f64],
     ) -> Result<(), SystemError> {
         let orbit = ctx.orbit_or_err("gravity_gradient")?;
+        if self.n_bodies != ctx.model.bodies().len() {
+            return Err(SystemError::new(
+                "gravity_gradient: not connected to this tree (`Effect::connect`)",
+            ));
+        }
         let r = orbit.r.norm();
         let k = orbit.mu / (r * r * r);
         let e = orbit.r / r;
-        // For the energy budget, ∂V/∂t (see `power`): Ė = (v − (E·v) E)/r, k̇ = −3 k (E·v)/r.
-        let ev = e.dot(&orbit.v);
-        let e_dot = (orbit.v - ev * e) / r;
-        let k_dot = -3.0 * k * ev / r;
         let com = match self.model {
             GravityModel::Full => ctx.com_or_err("gravity_gradient")?,
             GravityModel::Preprint => Vec3::zeros(), // not read
         };
-        let mut field_power = 0.0;
-        for (i, body) in ctx.model.bodies().iter().enumerate() {
-            if body.mass() == 0.0 && body.inertia_com().norm() == 0.0 {
-                continue;
-            }
-            let rot = &ctx.data.rotation[i];
-            let eb = rot.tr_mul(&e);
-            let ie = body.inertia_com() * eb;
-            let mut ang = couple(k, &eb, body.inertia_com());
-            field_power += 0.5 * k_dot * (3.0 * eb.dot(&ie) - body.inertia_com().trace())
-                + 3.0 * k * rot.tr_mul(&e_dot).dot(&ie);
-            let mut lin = Vec3::zeros();
-            if self.model == GravityModel::Full && body.mass() > 0.0 {
-                let rho = ctx.data.position[i] + rot * body.com() - com;
-                let er = e.dot(&rho);
-                let f = tidal(k, &e, body.mass(), &rho);
-                lin = rot.tr_mul(&f);
-                ang += body.com().cross(&lin);
-                field_power -= 0.5
-                    * body.mass()
-                    * (k_dot * (3.0 * er * er - rho.norm_squared())
-                        + 6.0 * k * er * e_dot.dot(&rho));
-            }
-            forces.add_wrench(i, Force::new(ang, lin));
-        }
-        self.field_power = field_power;
+        self.field_power = if ctx.power {
+            self.load::<true>(ctx, forces, &orbit, r, k, e, com)
+        } else {
+            self.load::<false>(ctx, forces, &orbit, r, k, e, com);
+            f64::NAN
+        };
         Ok(())
     }
     /// `∂V/∂t`: the work rate of the field turning with the orbit (the rest of the forces'
-    /// power is `−dV/dt` at fixed time, counted in the potential), computed by `apply`.
+    /// power is `−dV/dt` at fixed time, counted in the potential), computed by `apply` (the
+    /// simulation asks for it only after an `apply` with [`Context::power`]).
     fn power(&self, _ctx: &Context, _own: &[f64], _applied: f64) -> Power {
         Power::actuator(self.field_power)
     }

@@ -217,6 +217,11 @@ pub struct Context<'a> {
     /// every hinge in `on_event` and `start`, and only when an effect sets
     /// [`Needs::hold_torques`]; NaN where not computed.
     pub hold_torque: &'a [f64],
+    /// Whether the simulation asks the effects for [`Effect::power`] after this
+    /// evaluation's `apply` (the right-hand side, with the energy budget on). An effect that
+    /// works out its power in `apply` may skip that work when it is false: the other passes
+    /// (event functions, output rows) and a run without the budget never read it.
+    pub power: bool,
 }
 
 impl Needs {
@@ -408,6 +413,9 @@ pub struct Links<'a> {
     pub torquers: &'a [Torquer],
     /// Whether an enabled effect writes [`Forces::dipole_command`] ([`Effect::commands_dipoles`]).
     pub dipoles_commanded: bool,
+    /// The tree every [`Context::model`] will be (the scene's model plus the rotors), for
+    /// per-body constants an effect works out once rather than at every evaluation.
+    pub model: &'a Model,
 }
 
 /// What an effect's event functions ([`Effect::events`]) read beyond the state, so that the

@@ -200,21 +200,22 @@ impl Simulation {
                 "more than one effect owns magnetic torquers: give them all to one".into(),
             ));
         }
-        let links = Links {
-            rotors: &rotors,
-            rotors_commanded: effects.iter().any(|e| e.commands_rotors()),
-            torquers: &torquers,
-            dipoles_commanded: effects.iter().any(|e| e.commands_dipoles()),
-        };
-        for e in &mut effects {
-            e.connect(&links);
-        }
-        let orbit_effect = effects.iter().position(|e| e.name() == "orbit");
         let model = if rotors.is_empty() {
             user.clone()
         } else {
             with_rotors(&user, &rotors)?
         };
+        let links = Links {
+            rotors: &rotors,
+            rotors_commanded: effects.iter().any(|e| e.commands_rotors()),
+            torquers: &torquers,
+            dipoles_commanded: effects.iter().any(|e| e.commands_dipoles()),
+            model: &model,
+        };
+        for e in &mut effects {
+            e.connect(&links);
+        }
+        let orbit_effect = effects.iter().position(|e| e.name() == "orbit");
         let flex = match flex {
             Some(f) if rotors.is_empty() => Some(f),
             Some(f) => Some(f.with_rigid(model.clone())?),

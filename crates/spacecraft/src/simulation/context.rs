@@ -44,6 +44,19 @@ impl Simulation {
         kin: bool,
         f: impl FnOnce(&Context, Hooks) -> R,
     ) -> R {
+        self.with_context_power(t, x, kin, false, f)
+    }
+
+    /// [`Self::with_context`], with [`Context::power`] set to `power` (the right-hand side's
+    /// effects pass with the energy budget on).
+    pub(super) fn with_context_power<R>(
+        &mut self,
+        t: f64,
+        x: &[f64],
+        kin: bool,
+        power: bool,
+        f: impl FnOnce(&Context, Hooks) -> R,
+    ) -> R {
         let Self {
             model,
             effects,
@@ -99,6 +112,7 @@ impl Simulation {
             omega,
             rotor_rates: &v[nb + *n_user..],
             hold_torque: hold,
+            power,
         };
         f(
             &ctx,

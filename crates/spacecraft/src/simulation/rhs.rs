@@ -280,7 +280,7 @@ impl Simulation {
     ) -> Result<Power, SystemError> {
         let track = rhs && !self.model.work.is_empty();
         let nb = self.model.tree.base_nv();
-        self.with_context(t, x, kin, |ctx, h| {
+        self.with_context_power(t, x, kin, track, |ctx, h| {
             let own_dot = match own_dot {
                 Some(dx) => dx,
                 None => h.scratch,
