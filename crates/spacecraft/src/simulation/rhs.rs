@@ -43,7 +43,6 @@ impl Simulation {
     /// Stages 1-3 and the positions' part of stage 5: unpack, kinematics, the effects (their
     /// own derivatives straight into `dx`, and the power they add), `q̇`, and the generalised
     /// forces of the dynamics into `data.tau`. Returns whether the poses are current.
-    #[inline]
     pub(super) fn rhs_forces(
         &mut self,
         t: f64,
@@ -81,7 +80,6 @@ impl Simulation {
 
     /// After the dynamics: the energy budget's power of the locked hinges and of the modal
     /// damping.
-    #[inline]
     pub(super) fn rhs_power(&mut self, x: &[f64], dx: &mut [f64]) -> Result<(), SystemError> {
         if self.model.work.is_empty() {
             return Ok(());
