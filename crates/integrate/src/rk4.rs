@@ -59,6 +59,7 @@ impl Rk4 {
 /// [`Rk4::end_step`]. [`Stepper::step`] is exactly that sequence.
 impl Rk4 {
     /// The step toward `limit` (landing on it when within reach).
+    #[inline]
     pub(crate) fn begin_step(&mut self, ctx: &Ctx, limit: f64) -> Result<(), IntegrateError> {
         ctx.check_budget(self.t)?;
         let h_fixed = ctx.fixed.expect("validated: rk4 has a fixed step");
@@ -69,6 +70,7 @@ impl Rk4 {
 
     /// Stage `s` (0 to 3): where the slope is wanted, `(t, x)`, and where it goes; `None`
     /// for the first stage when the slope at the step's start is known already.
+    #[inline]
     pub(crate) fn stage(&mut self, s: usize) -> Option<(f64, &[f64], &mut [f64])> {
         let (t, h) = (self.t, self.h);
         match s {
@@ -89,6 +91,7 @@ impl Rk4 {
     }
 
     /// The step's end from its four slopes.
+    #[inline]
     pub(crate) fn end_step(&mut self, ctx: &mut Ctx) -> Result<(), IntegrateError> {
         let (t, h) = (self.t, self.h);
         std::mem::swap(&mut self.x, &mut self.x_old);

@@ -47,13 +47,56 @@ pub fn kinetic_energy_after_kinematics(model: &Model, data: &Data, v: &[f64]) ->
     let bodies: f64 = (0..model.n_bodies())
         .map(|i| 0.5 * data.v[i].dot(&model.bodies[i].inertia.mul_motion(&data.v[i])))
         .sum();
-    let armatures: f64 = model
+    bodies + armature_energy(model, v)
+}
+
+/// `½ Σₖ aₖ q̇ₖ²`, the hinges' armatures.
+fn armature_energy(model: &Model, v: &[f64]) -> f64 {
+    model
         .joints
         .iter()
         .flatten()
         .map(|j| 0.5 * j.armature * v[j.dof] * v[j.dof])
-        .sum();
-    bodies + armatures
+        .sum()
+}
+
+/// [`kinetic_energy_after_kinematics`] and [`momentum`] in one pass over the bodies, for an
+/// output row that wants both: each body's momentum `Iᵢ vᵢ` and rotation are read once, and
+/// every sum takes the same terms in the same order as in those functions (a float `sum`
+/// starts from −0), so the results are theirs bit for bit. Returns `(kinetic, p, h)`.
+///
+/// ```
+/// use satsim_tree::{energy_and_momentum, forward_kinematics, kinetic_energy_after_kinematics, momentum};
+/// use satsim_tree::{samples::chain, BaseKind, Data};
+/// let model = chain(3, BaseKind::Free);
+/// let mut data = Data::new(&model);
+/// let (q, v) = (model.neutral(), vec![0.3; model.nv()]);
+/// forward_kinematics(&model, &mut data, &q, &v)?;
+/// let (t, p, h) = energy_and_momentum(&model, &data, &v);
+/// assert_eq!(t, kinetic_energy_after_kinematics(&model, &data, &v));
+/// assert_eq!((p, h), momentum(&model, &data));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn energy_and_momentum(model: &Model, data: &Data, v: &[f64]) -> (f64, Vec3, Vec3) {
+    let mut bodies = -0.0;
+    let (mut p, mut h_origin) = (Vec3::zeros(), Vec3::zeros());
+    let (mut m, mut mc) = (0.0, Vec3::zeros());
+    for (i, b) in model.bodies.iter().enumerate() {
+        let f = b.inertia.mul_motion(&data.v[i]);
+        bodies += 0.5 * data.v[i].dot(&f);
+        let r = &data.rotation[i];
+        let lin = r * f.lin;
+        p += lin;
+        h_origin += r * f.ang + data.position[i].cross(&lin);
+        m += b.mass;
+        mc += (data.position[i] + r * b.com) * b.mass;
+    }
+    let c = if m > 0.0 { mc / m } else { data.position[0] };
+    (
+        bodies + armature_energy(model, v),
+        p,
+        h_origin - c.cross(&p),
+    )
 }
 
 /// The system's centre of mass in inertial coordinates (m), from the poses of the last

@@ -73,7 +73,9 @@ pub mod spatial;
 
 pub use crba::crba;
 pub use data::Data;
-pub use energy::{center_of_mass, kinetic_energy, kinetic_energy_after_kinematics, momentum};
+pub use energy::{
+    center_of_mass, energy_and_momentum, kinetic_energy, kinetic_energy_after_kinematics, momentum,
+};
 pub use error::{DynamicsError, ModelError};
 pub use facet::{Facet, facets_of_box};
 pub use forward_dynamics::{ForwardDynamics, Input, Kernel, Method};

@@ -62,19 +62,29 @@ impl Effect for HingeSprings {
     /// The springs are conservative (their work is the potential's change); the dampers
     /// dissipate `Σ δ_i ψ_i²`.
     fn power(&self, ctx: &Context, _own: &[f64], _applied: f64) -> Power {
+        // Zipped, as in `apply` (the same terms in the same order).
         Power::dissipated(
-            (0..self.damping.len())
-                .map(|k| self.damping[k] * ctx.rates[k] * ctx.rates[k])
+            self.damping
+                .iter()
+                .zip(ctx.rates)
+                .map(|(delta, psi)| delta * psi * psi)
                 .sum(),
         )
     }
     fn potential_energy(&self, ctx: &Context, _own: &[f64]) -> f64 {
-        (0..self.stiffness.len())
-            .map(|k| {
-                let d = ctx.angles[k] - self.reference[k];
-                0.5 * self.stiffness[k] * d * d
+        self.stiffness
+            .iter()
+            .zip(&self.reference)
+            .zip(ctx.angles)
+            .map(|((lambda, phi_ref), phi)| {
+                let d = phi - phi_ref;
+                0.5 * lambda * d * d
             })
             .sum()
+    }
+    /// Its potential reads the angles only, and it has no output columns.
+    fn row_reads_apply(&self) -> bool {
+        false
     }
 }
 

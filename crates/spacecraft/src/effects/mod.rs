@@ -611,6 +611,13 @@ pub trait Effect: Send {
     fn power(&self, _ctx: &Context, _own: &[f64], applied: f64) -> Power {
         Power::actuator(applied)
     }
+    /// Whether its [`Effect::output`] or [`Effect::potential_energy`] reads what its last
+    /// `apply` kept (a command, a mode), so that an output row runs `apply` first: the
+    /// default. `false` lets a row whose effects all say so skip the effects' pass; right
+    /// for an effect whose `apply` only adds forces, which rows do not read.
+    fn row_reads_apply(&self) -> bool {
+        true
+    }
     /// Extra output columns.
     fn output_columns(&self) -> Vec<String> {
         Vec::new()

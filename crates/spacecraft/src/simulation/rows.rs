@@ -1,9 +1,10 @@
 //! Output rows: the column names, one row of values, the energies and momenta.
 
 use super::Simulation;
+use super::hold::Hold;
 use satsim_integrate::SystemError;
+use satsim_tree::energy_and_momentum;
 use satsim_tree::flexible;
-use satsim_tree::kinetic_energy_after_kinematics;
 use satsim_tree::spatial::Vec3;
 
 impl Simulation {
@@ -68,7 +69,7 @@ impl Simulation {
     pub fn row(&mut self, t: f64, x: &[f64], row: &mut Vec<f64>) -> Result<(), SystemError> {
         self.check_len(x.len(), "row")?;
         row.clear();
-        self.prepare(t, x, true)?;
+        self.prepare_row(t, x)?;
         row.push(t);
         let l = &self.model.layout;
         if l.free {
@@ -103,8 +104,21 @@ impl Simulation {
     /// Energies and momenta at `(t, x)`.
     pub fn diagnostics(&mut self, t: f64, x: &[f64]) -> Result<Diagnostics, SystemError> {
         self.check_len(x.len(), "diagnostics")?;
-        self.prepare(t, x, true)?;
+        self.prepare_row(t, x)?;
         self.diagnostics_prepared(t, x, None)
+    }
+
+    /// What a row reads prepared: [`Self::prepare`] with kinematics, less the effects'
+    /// `apply` where none of them reads in its output or potential what `apply` kept
+    /// ([`crate::effects::Effect::row_reads_apply`]): a row takes no forces, and that pass
+    /// was a fifth of the springs' every-step rows.
+    fn prepare_row(&mut self, t: f64, x: &[f64]) -> Result<(), SystemError> {
+        if self.effects.iter().any(|e| e.row_reads_apply()) {
+            return self.prepare(t, x, true);
+        }
+        self.unpack(x);
+        self.kinematics(true)?;
+        self.hold_torques_after_effects(true, Hold::None)
     }
 
     pub(super) fn diagnostics_prepared(
@@ -114,16 +128,20 @@ impl Simulation {
         row: Option<&mut Vec<f64>>,
     ) -> Result<Diagnostics, SystemError> {
         // `prepare` ran kinematics on this state.
-        let (kinetic, strain) = match (&self.model.flex, &mut self.data.flex) {
+        let d = &mut self.data;
+        let (kinetic, strain, p, h) = match (&self.model.flex, &mut d.flex) {
             (Some(f), Some(w)) => {
-                flexible::energy(f, &mut w.data, &w.q, &w.v).map_err(SystemError::from_error)?
+                let (kinetic, strain) = flexible::energy(f, &mut w.data, &w.q, &w.v)
+                    .map_err(SystemError::from_error)?;
+                let (p, h) = flexible::momentum(f, &d.tree, &w.q, &w.v);
+                (kinetic, strain, p, h)
             }
-            _ => (
-                kinetic_energy_after_kinematics(&self.model.tree, &self.data.tree, &self.data.v),
-                0.0,
-            ),
+            _ => {
+                // The energy and momenta in one pass (bit for bit the separate functions').
+                let (kinetic, p, h) = energy_and_momentum(&self.model.tree, &d.tree, &d.v);
+                (kinetic, 0.0, p, h)
+            }
         };
-        let (p, h) = self.momentum();
         let rotor_effect = self.model.rotor_effect;
         let potential = self.with_context(t, x, true, |ctx, hooks| {
             let mut potential = 0.0;
