@@ -61,7 +61,7 @@ use satsim_tree::kernel_parts::{
     massless_hinges_below, offset_scale,
 };
 use satsim_tree::real::F64x;
-use satsim_tree::real::Real;
+use satsim_tree::real::{Real, mat3};
 use satsim_tree::spatial::{
     ArticulatedInertia, Force, Mat3, Motion, RigidInertia, Transform, Vec3, rotation_about,
 };
@@ -665,7 +665,7 @@ impl<T: Real> UnrolledAba<T> {
                 pa0 -= r.xup(q).inv_apply_force(&fext[r.body]);
             }
         }
-        pa0.ang += v0.ang.cross(&spin);
+        pa0.ang += mat3::cross(&v0.ang, &spin);
         // The gimbal: its rotation (base axes to the tip's), the axes in the tip's axes.
         let [g0, g1, g2] = &self.gimbal;
         let [i0, i1, i2] = self.gimbal_angle;
@@ -685,8 +685,8 @@ impl<T: Real> UnrolledAba<T> {
         // the chain's velocity-product term is Σ vₜ × Sₜ q̇ₜ with vₜ the links' velocities.
         let vp = x.apply_motion(&v0);
         let c_tip = Motion::new(
-            vp.ang.cross(&w_rel) + w2.cross(&w1) + (w2 + w1).cross(&w0),
-            vp.lin.cross(&w_rel),
+            mat3::cross(&vp.ang, &w_rel) + mat3::cross(&w2, &w1) + mat3::cross(&(w2 + w1), &w0),
+            mat3::cross(&vp.lin, &w_rel),
         );
         let v_tip = Motion::new(vp.ang + w_rel, vp.lin);
         let mut pa_tip = v_tip.cross_force(&self.tip_inertia.mul_motion(&v_tip));
@@ -696,7 +696,9 @@ impl<T: Real> UnrolledAba<T> {
         let (mut g1, mut g2) = (Force::zero(), Force::zero());
         if LOADED {
             pa_tip -= at_hinge(&fext[tip], &self.tip_origin);
-            let rotate = |m: &Matrix3<T>, f: &Force<T>| Force::new(m * f.ang, m * f.lin);
+            let rotate = |m: &Matrix3<T>, f: &Force<T>| {
+                Force::new(mat3::mul(m, &f.ang), mat3::mul(m, &f.lin))
+            };
             g1 = rotate(&e0m, &fext[link_in]);
             g2 = g1 + rotate(&r01, &fext[link_out]);
         }
@@ -709,7 +711,7 @@ impl<T: Real> UnrolledAba<T> {
             xs[j] = s.axis.transform(q[s.angle], &s.at, &o);
             let vx = s.axis.apply_motion(&xs[j], &vp);
             let sq = s.axis.scaled_axis(v[s.dof]);
-            cs[j] = Motion::new(vx.ang.cross(&sq), vx.lin.cross(&sq));
+            cs[j] = Motion::new(mat3::cross(&vx.ang, &sq), mat3::cross(&vx.lin, &sq));
             let vj = Motion::new(vx.ang + sq, vx.lin);
             pas[j] = vj.cross_force(&s.inertia.mul_motion(&vj));
             if LOADED {
@@ -770,7 +772,7 @@ impl<T: Real> UnrolledAba<T> {
         let inv0 = T::one() / p0;
         let tr_a = ah.trace() - w0.ang.dot(&w0.ang) * inv0;
         let l10 = e1.dot(&w0.ang) * inv0;
-        let w1 = Force::new(ah * e1, bh.tr_mul(&e1)) - w0 * l10;
+        let w1 = Force::new(mat3::mul(ah, &e1), mat3::tr_mul(bh, &e1)) - w0 * l10;
         // The links' wrenches load the hinges between them and the base (`links_bias` of
         // `aba.rs`): the tip's link's on e₁, both on e₂.
         let (t1, t2) = if LOADED {
@@ -785,18 +787,18 @@ impl<T: Real> UnrolledAba<T> {
         let tr_a = tr_a - w1.ang.dot(&w1.ang) * inv1;
         let l20 = e2.dot(&w0.ang) * inv0;
         let l21 = e2.dot(&w1.ang) * inv1;
-        let w2 = Force::new(ah * e2, bh.tr_mul(&e2)) - w0 * l20 - w1 * l21;
+        let w2 = Force::new(mat3::mul(ah, &e2), mat3::tr_mul(bh, &e2)) - w0 * l20 - w1 * l21;
         let u2 = t2 - e2.dot(&pa.ang) - l20 * u0 - l21 * u1;
         let p2 = e2.dot(&w2.ang);
         self.check_plain(p2, tr_a, 2)?;
         let inv2 = T::one() / p2;
         // What the spherical joint passes on: [0 0; 0 C − Bᵀ A⁻¹ B], and the bias.
         let cc: Matrix3<T> = ia.c
-            - (w0.lin * inv0) * w0.lin.transpose()
-            - (w1.lin * inv1) * w1.lin.transpose()
-            - (w2.lin * inv2) * w2.lin.transpose();
+            - mat3::outer(&(w0.lin * inv0), &w0.lin)
+            - mat3::outer(&(w1.lin * inv1), &w1.lin)
+            - mat3::outer(&(w2.lin * inv2), &w2.lin);
         let mut pa_h = pa + w0 * (u0 * inv0) + w1 * (u1 * inv1) + w2 * (u2 * inv2);
-        pa_h.lin += cc * c_tip.lin;
+        pa_h.lin += mat3::mul(&cc, &c_tip.lin);
         if LOADED {
             pa_h -= g2; // and reach the base rigidly
         }
@@ -808,7 +810,7 @@ impl<T: Real> UnrolledAba<T> {
             let mut start = self.base_start;
             for (k, r) in self.rotors.iter().enumerate() {
                 if locks.rotor(k) {
-                    start.a += r.j_axis * r.axis.transpose();
+                    start.a += mat3::outer(&r.j_axis, &r.axis);
                 }
             }
             with_locked = start;
@@ -1137,7 +1139,7 @@ impl Kernel for UnrolledAba {
 /// the point (same axes): `[n + o × f; f]`.
 #[inline(always)]
 fn at_hinge<T: Real>(f: &Force<T>, o: &Vector3<T>) -> Force<T> {
-    Force::new(f.ang + o.cross(&f.lin), f.lin)
+    Force::new(f.ang + mat3::cross(o, &f.lin), f.lin)
 }
 
 #[cfg(test)]

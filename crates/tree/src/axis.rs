@@ -14,7 +14,7 @@
 //! Every kernel is generic over its scalar ([`Real`]): the same code for one run (`f64`) and
 //! for lanes of runs; the axis and its sign are the batch's, common to its lanes.
 
-use crate::real::Real;
+use crate::real::{Real, mat3};
 use crate::spatial::{
     ArticulatedInertia, Force, Mat3, Motion, RigidInertia, Transform, Vec3, add_translated,
 };
@@ -129,7 +129,7 @@ impl CoordAxis {
     fn apply_motion_in<T: Real>(&self, x: &Transform<T>, m: &Motion<T>) -> Motion<T> {
         Motion {
             ang: self.rotate(&x.rot, &m.ang),
-            lin: self.rotate(&x.rot, &(m.lin - x.trans.cross(&m.ang))),
+            lin: self.rotate(&x.rot, &(m.lin - mat3::cross(&x.trans, &m.ang))),
         }
     }
 
@@ -158,7 +158,7 @@ impl CoordAxis {
     ) -> Force<T> {
         let lin = self.rotate_back(&x.rot, &f.lin);
         Force {
-            ang: self.rotate_back(&x.rot, &f.ang) + x.trans.cross(&lin),
+            ang: self.rotate_back(&x.rot, &f.ang) + mat3::cross(&x.trans, &lin),
             lin,
         }
     }
@@ -397,13 +397,13 @@ fn project_at_point<T: Real, const K: usize, const I: usize, const J: usize>(
     );
     let bi = b.row(I).transpose() - bk * ri;
     let bj = b.row(J).transpose() - bk * rj;
-    let cp = ia.c - (bk * r) * bk.transpose();
+    let cp = ia.c - mat3::outer(&(bk * r), &bk);
     // IAᵃ c.
     let (ci, cj) = (c.ang[I], c.ang[J]);
     let mut f_ang = Vector3::zeros();
     f_ang[I] = aii * ci + aij * cj + bi.dot(&c.lin);
     f_ang[J] = aij * ci + ajj * cj + bj.dot(&c.lin);
-    let f = Force::new(f_ang, bi * ci + bj * cj + cp * c.lin);
+    let f = Force::new(f_ang, bi * ci + bj * cj + mat3::mul(&cp, &c.lin));
     // Eᵀ M E: the I-J block of A, rows I and J of B (then its columns), all of C.
     let e = &x.rot;
     let (eii, eij, eji, ejj) = (e[(I, I)], e[(I, J)], e[(J, I)], e[(J, J)]);

@@ -21,7 +21,7 @@
 
 use crate::error::DynamicsError;
 use crate::model::{Joint, Model};
-use crate::real::Real;
+use crate::real::{Real, mat3};
 use crate::spatial::{
     ArticulatedInertia, Force, Mat3, RigidInertia, Transform, Vec3, add_blocks, cross_columns, skew,
 };
@@ -116,7 +116,7 @@ fn linear_inv_transform_in<T: Real>(
     out: &mut ArticulatedInertia<T>,
     start: Option<&ArticulatedInertia<T>>,
 ) {
-    let c = x.rot.tr_mul(&(c * x.rot));
+    let c = mat3::tr_mul_mat(&x.rot, &mat3::mul_mat(c, &x.rot));
     // [1 [r]×; 0 1] [0 0; 0 C] [1 0; −[r]× 1] = [−[r]×C[r]× [r]×C; −C[r]× C].
     let nb = cross_columns(&x.trans, &c);
     let na = cross_columns(&x.trans, &nb.transpose()).transpose();

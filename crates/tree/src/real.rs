@@ -285,8 +285,141 @@ impl<const N: usize> F64x<N> {
     }
 }
 
+/// nalgebra's 3×3 products, the same arithmetic in the same order, always inlined for the
+/// lanes. nalgebra's generic products are ordinary functions that the optimiser may keep
+/// out of line; out of line, a kernel compiled for wider vectors (`#[target_feature]`) calls
+/// them as the baseline target compiled them, with its operands through memory, and which
+/// calls it keeps moves from one build to the next. For `f64` (`Real::OUT_OF_LINE`) these
+/// are nalgebra's operators themselves, as tuned. Bit for bit the same: tested below.
+pub mod mat3 {
+    use super::Real;
+    use nalgebra::{Matrix3, Vector3};
+
+    /// `m v`. nalgebra's `gemv`, column by column: `((m₀ x₀ + m₁ x₁) + m₂ x₂)` per row (its
+    /// factors `1` are exact).
+    #[inline(always)]
+    pub fn mul<T: Real>(m: &Matrix3<T>, v: &Vector3<T>) -> Vector3<T> {
+        if T::OUT_OF_LINE {
+            return m * v;
+        }
+        Vector3::new(
+            m[(0, 0)] * v[0] + m[(0, 1)] * v[1] + m[(0, 2)] * v[2],
+            m[(1, 0)] * v[0] + m[(1, 1)] * v[1] + m[(1, 2)] * v[2],
+            m[(2, 0)] * v[0] + m[(2, 1)] * v[1] + m[(2, 2)] * v[2],
+        )
+    }
+
+    /// `mᵀ v`. nalgebra's `tr_mul`: a dot product per column, `(a₀ b₀ + a₁ b₁) + a₂ b₂`.
+    #[inline(always)]
+    pub fn tr_mul<T: Real>(m: &Matrix3<T>, v: &Vector3<T>) -> Vector3<T> {
+        if T::OUT_OF_LINE {
+            return m.tr_mul(v);
+        }
+        Vector3::new(
+            m[(0, 0)] * v[0] + m[(1, 0)] * v[1] + m[(2, 0)] * v[2],
+            m[(0, 1)] * v[0] + m[(1, 1)] * v[1] + m[(2, 1)] * v[2],
+            m[(0, 2)] * v[0] + m[(1, 2)] * v[1] + m[(2, 2)] * v[2],
+        )
+    }
+
+    /// `a b`: nalgebra's `gemm`, [`mul`] column by column.
+    #[inline(always)]
+    pub fn mul_mat<T: Real>(a: &Matrix3<T>, b: &Matrix3<T>) -> Matrix3<T> {
+        if T::OUT_OF_LINE {
+            return a * b;
+        }
+        Matrix3::from_columns(&[
+            mul(a, &Vector3::new(b[(0, 0)], b[(1, 0)], b[(2, 0)])),
+            mul(a, &Vector3::new(b[(0, 1)], b[(1, 1)], b[(2, 1)])),
+            mul(a, &Vector3::new(b[(0, 2)], b[(1, 2)], b[(2, 2)])),
+        ])
+    }
+
+    /// `aᵀ b`: nalgebra's `tr_mul`, [`tr_mul`] column by column.
+    #[inline(always)]
+    pub fn tr_mul_mat<T: Real>(a: &Matrix3<T>, b: &Matrix3<T>) -> Matrix3<T> {
+        if T::OUT_OF_LINE {
+            return a.tr_mul(b);
+        }
+        Matrix3::from_columns(&[
+            tr_mul(a, &Vector3::new(b[(0, 0)], b[(1, 0)], b[(2, 0)])),
+            tr_mul(a, &Vector3::new(b[(0, 1)], b[(1, 1)], b[(2, 1)])),
+            tr_mul(a, &Vector3::new(b[(0, 2)], b[(1, 2)], b[(2, 2)])),
+        ])
+    }
+
+    /// `a × b`, as nalgebra's `cross`.
+    #[inline(always)]
+    pub fn cross<T: Real>(a: &Vector3<T>, b: &Vector3<T>) -> Vector3<T> {
+        if T::OUT_OF_LINE {
+            return a.cross(b);
+        }
+        Vector3::new(
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        )
+    }
+
+    /// `u vᵀ`. nalgebra's `gemm` of a column by a row: `uᵢ vⱼ`.
+    #[inline(always)]
+    pub fn outer<T: Real>(u: &Vector3<T>, v: &Vector3<T>) -> Matrix3<T> {
+        if T::OUT_OF_LINE {
+            return u * v.transpose();
+        }
+        Matrix3::from_fn(|i, j| u[i] * v[j])
+    }
+}
+
 #[cfg(test)]
 mod tests {
+    /// `mat3`'s inlined products are nalgebra's bit for bit, on lanes of random values.
+    #[test]
+    fn mat3_products_are_nalgebras() {
+        use super::mat3;
+        use nalgebra::{Matrix3, Vector3};
+        let mut rng = crate::samples::SplitMix(7);
+        let mut r = || {
+            let x = rng.range(-2.0, 2.0);
+            x * 10f64.powi((x * 40.0) as i32)
+        };
+        let bits3 = |v: &Vector3<F64x<4>>, w: &[Vector3<f64>; 4]| {
+            (0..4).all(|k| (0..3).all(|i| v[i].0[k].to_bits() == w[k][i].to_bits()))
+        };
+        for _ in 0..2000 {
+            let m: [Matrix3<f64>; 4] = std::array::from_fn(|_| Matrix3::from_fn(|_, _| r()));
+            let a: [Vector3<f64>; 4] = std::array::from_fn(|_| Vector3::from_fn(|_, _| r()));
+            let b: [Vector3<f64>; 4] = std::array::from_fn(|_| Vector3::from_fn(|_, _| r()));
+            let ml = Matrix3::from_fn(|i, j| F64x(std::array::from_fn(|k| m[k][(i, j)])));
+            let al = Vector3::from_fn(|i, _| F64x(std::array::from_fn(|k| a[k][i])));
+            let bl = Vector3::from_fn(|i, _| F64x(std::array::from_fn(|k| b[k][i])));
+            assert!(bits3(
+                &mat3::mul(&ml, &al),
+                &std::array::from_fn(|k| m[k] * a[k])
+            ));
+            assert!(bits3(
+                &mat3::tr_mul(&ml, &al),
+                &std::array::from_fn(|k| m[k].tr_mul(&a[k]))
+            ));
+            assert!(bits3(
+                &mat3::cross(&al, &bl),
+                &std::array::from_fn(|k| a[k].cross(&b[k]))
+            ));
+            let m2: [Matrix3<f64>; 4] = std::array::from_fn(|_| Matrix3::from_fn(|_, _| r()));
+            let ml2 = Matrix3::from_fn(|i, j| F64x(std::array::from_fn(|k| m2[k][(i, j)])));
+            let (p, tp) = (mat3::mul_mat(&ml, &ml2), mat3::tr_mul_mat(&ml, &ml2));
+            for k in 0..4 {
+                let (want, want_t) = (m[k] * m2[k], m[k].tr_mul(&m2[k]));
+                assert!((0..9).all(|e| p[e].0[k].to_bits() == want[e].to_bits()));
+                assert!((0..9).all(|e| tp[e].0[k].to_bits() == want_t[e].to_bits()));
+            }
+            let o = mat3::outer(&al, &bl);
+            for k in 0..4 {
+                let want = a[k] * b[k].transpose();
+                assert!((0..9).all(|e| o[e].0[k].to_bits() == want[e].to_bits()));
+            }
+        }
+    }
     use super::*;
     use nalgebra::{Matrix3, Vector3};
 

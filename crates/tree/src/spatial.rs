@@ -19,7 +19,7 @@
 //! (the tests) leave it to the compiler, which keeps the lane kernels' test builds minutes
 //! shorter; inlining changes no result.
 
-use crate::real::Real;
+use crate::real::{Real, mat3};
 use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
 use std::ops::{Add, AddAssign, Mul, Neg, Sub, SubAssign};
 
@@ -46,10 +46,11 @@ pub fn skew<T: Real>(a: &Vector3<T>) -> Matrix3<T> {
 #[cfg_attr(not(debug_assertions), inline(always))]
 #[cfg_attr(debug_assertions, inline)]
 pub(crate) fn cross_columns<T: Real>(a: &Vector3<T>, m: &Matrix3<T>) -> Matrix3<T> {
+    let col = |j: usize| Vector3::new(m[(0, j)], m[(1, j)], m[(2, j)]);
     Matrix3::from_columns(&[
-        a.cross(&m.column(0)),
-        a.cross(&m.column(1)),
-        a.cross(&m.column(2)),
+        mat3::cross(a, &col(0)),
+        mat3::cross(a, &col(1)),
+        mat3::cross(a, &col(2)),
     ])
 }
 
@@ -148,8 +149,8 @@ impl<T: Real> Motion<T> {
     #[cfg_attr(debug_assertions, inline)]
     pub fn cross_motion(&self, m: &Motion<T>) -> Motion<T> {
         Motion {
-            ang: self.ang.cross(&m.ang),
-            lin: self.ang.cross(&m.lin) + self.lin.cross(&m.ang),
+            ang: mat3::cross(&self.ang, &m.ang),
+            lin: mat3::cross(&self.ang, &m.lin) + mat3::cross(&self.lin, &m.ang),
         }
     }
     /// `self ×* f` (Featherstone's `crf(v) f`).
@@ -157,8 +158,8 @@ impl<T: Real> Motion<T> {
     #[cfg_attr(debug_assertions, inline)]
     pub fn cross_force(&self, f: &Force<T>) -> Force<T> {
         Force {
-            ang: self.ang.cross(&f.ang) + self.lin.cross(&f.lin),
-            lin: self.ang.cross(&f.lin),
+            ang: mat3::cross(&self.ang, &f.ang) + mat3::cross(&self.lin, &f.lin),
+            lin: mat3::cross(&self.ang, &f.lin),
         }
     }
     /// The scalar product with a force (power).
@@ -332,18 +333,18 @@ impl<T: Real> Transform<T> {
     #[cfg_attr(debug_assertions, inline)]
     pub fn apply_motion(&self, m: &Motion<T>) -> Motion<T> {
         Motion {
-            ang: self.rot * m.ang,
-            lin: self.rot * (m.lin - self.trans.cross(&m.ang)),
+            ang: mat3::mul(&self.rot, &m.ang),
+            lin: mat3::mul(&self.rot, &(m.lin - mat3::cross(&self.trans, &m.ang))),
         }
     }
     /// `X⁻¹ m`: a motion in B-coordinates expressed in A-coordinates.
     #[cfg_attr(not(debug_assertions), inline(always))]
     #[cfg_attr(debug_assertions, inline)]
     pub fn inv_apply_motion(&self, m: &Motion<T>) -> Motion<T> {
-        let ang = self.rot.tr_mul(&m.ang);
+        let ang = mat3::tr_mul(&self.rot, &m.ang);
         Motion {
             ang,
-            lin: self.rot.tr_mul(&m.lin) + self.trans.cross(&ang),
+            lin: mat3::tr_mul(&self.rot, &m.lin) + mat3::cross(&self.trans, &ang),
         }
     }
     /// `X* f`: a force in A-coordinates expressed in B-coordinates.
@@ -351,17 +352,17 @@ impl<T: Real> Transform<T> {
     #[cfg_attr(debug_assertions, inline)]
     pub fn apply_force(&self, f: &Force<T>) -> Force<T> {
         Force {
-            ang: self.rot * (f.ang - self.trans.cross(&f.lin)),
-            lin: self.rot * f.lin,
+            ang: mat3::mul(&self.rot, &(f.ang - mat3::cross(&self.trans, &f.lin))),
+            lin: mat3::mul(&self.rot, &f.lin),
         }
     }
     /// `Xᵀ f`: a force in B-coordinates expressed in A-coordinates.
     #[cfg_attr(not(debug_assertions), inline(always))]
     #[cfg_attr(debug_assertions, inline)]
     pub fn inv_apply_force(&self, f: &Force<T>) -> Force<T> {
-        let lin = self.rot.tr_mul(&f.lin);
+        let lin = mat3::tr_mul(&self.rot, &f.lin);
         Force {
-            ang: self.rot.tr_mul(&f.ang) + self.trans.cross(&lin),
+            ang: mat3::tr_mul(&self.rot, &f.ang) + mat3::cross(&self.trans, &lin),
             lin,
         }
     }
@@ -370,8 +371,8 @@ impl<T: Real> Transform<T> {
     #[cfg_attr(debug_assertions, inline)]
     pub fn compose(&self, other: &Transform<T>) -> Transform<T> {
         Transform {
-            rot: self.rot * other.rot,
-            trans: other.trans + other.rot.tr_mul(&self.trans),
+            rot: mat3::mul_mat(&self.rot, &other.rot),
+            trans: other.trans + mat3::tr_mul(&other.rot, &self.trans),
         }
     }
 }
@@ -423,8 +424,8 @@ impl<T: Real> RigidInertia<T> {
     #[cfg_attr(debug_assertions, inline)]
     pub fn mul_motion(&self, v: &Motion<T>) -> Force<T> {
         Force {
-            ang: self.inertia * v.ang + self.h.cross(&v.lin),
-            lin: v.lin * self.mass - self.h.cross(&v.ang),
+            ang: mat3::mul(&self.inertia, &v.ang) + mat3::cross(&self.h, &v.lin),
+            lin: v.lin * self.mass - mat3::cross(&self.h, &v.ang),
         }
     }
     /// `Xᵀ I X`: this inertia, given in B-coordinates, expressed in A-coordinates
@@ -438,8 +439,8 @@ impl<T: Real> RigidInertia<T> {
         let e = &x.rot;
         let rotated = RigidInertia {
             mass: self.mass,
-            h: e.tr_mul(&self.h),
-            inertia: e.tr_mul(&(self.inertia * e)),
+            h: mat3::tr_mul(e, &self.h),
+            inertia: mat3::tr_mul_mat(e, &mat3::mul_mat(&self.inertia, e)),
         };
         rotated.translated(&x.trans)
     }
@@ -528,8 +529,8 @@ impl<T: Real> ArticulatedInertia<T> {
     #[cfg_attr(debug_assertions, inline)]
     pub fn mul_motion(&self, v: &Motion<T>) -> Force<T> {
         Force {
-            ang: self.a * v.ang + self.b * v.lin,
-            lin: self.b.tr_mul(&v.ang) + self.c * v.lin,
+            ang: mat3::mul(&self.a, &v.ang) + mat3::mul(&self.b, &v.lin),
+            lin: mat3::tr_mul(&self.b, &v.ang) + mat3::mul(&self.c, &v.lin),
         }
     }
     /// `IA - u uᵀ / d` for a force-like column `u` (the hinge's projection out of `IA`).
@@ -538,9 +539,9 @@ impl<T: Real> ArticulatedInertia<T> {
     pub fn sub_outer(&mut self, u: &Force<T>, inv_d: T) {
         let un = u.ang * inv_d;
         let uf = u.lin * inv_d;
-        self.a -= un * u.ang.transpose();
-        self.b -= un * u.lin.transpose();
-        self.c -= uf * u.lin.transpose();
+        self.a -= mat3::outer(&un, &u.ang);
+        self.b -= mat3::outer(&un, &u.lin);
+        self.c -= mat3::outer(&uf, &u.lin);
     }
     /// `self = from − u uᵀ / d`: [`Self::sub_outer`] of `from`, written here.
     #[cfg_attr(not(debug_assertions), inline(always))]
@@ -548,9 +549,9 @@ impl<T: Real> ArticulatedInertia<T> {
     pub(crate) fn set_sub_outer(&mut self, from: &ArticulatedInertia<T>, u: &Force<T>, inv_d: T) {
         let un = u.ang * inv_d;
         let uf = u.lin * inv_d;
-        self.a = from.a - un * u.ang.transpose();
-        self.b = from.b - un * u.lin.transpose();
-        self.c = from.c - uf * u.lin.transpose();
+        self.a = from.a - mat3::outer(&un, &u.ang);
+        self.b = from.b - mat3::outer(&un, &u.lin);
+        self.c = from.c - mat3::outer(&uf, &u.lin);
     }
     /// `Xᵀ IA X`: this inertia, given in B-coordinates, expressed in A-coordinates.
     #[cfg_attr(not(debug_assertions), inline(always))]
@@ -571,9 +572,9 @@ impl<T: Real> ArticulatedInertia<T> {
         start: Option<&ArticulatedInertia<T>>,
     ) {
         let e = &x.rot;
-        let a = e.tr_mul(&(self.a * e));
-        let b = e.tr_mul(&(self.b * e));
-        let c = e.tr_mul(&(self.c * e));
+        let a = mat3::tr_mul_mat(e, &mat3::mul_mat(&self.a, e));
+        let b = mat3::tr_mul_mat(e, &mat3::mul_mat(&self.b, e));
+        let c = mat3::tr_mul_mat(e, &mat3::mul_mat(&self.c, e));
         add_translated(&a, &b, &c, &x.trans, out, start);
     }
 }
