@@ -48,26 +48,12 @@ pub fn rnea<'d>(
     data.v[0] = base_motion(model, v);
     data.a[0] = base_motion(model, a);
     for i in 0..n {
-        if let Some(joint) = &model.joints[i] {
-            let p = model.parent[i].expect("parent");
-            let x = &data.xup[i];
-            let vj = joint.s * v[joint.dof];
-            data.v[i] = x.apply_motion(&data.v[p]) + vj;
-            data.a[i] =
-                x.apply_motion(&data.a[p]) + joint.s * a[joint.dof] + data.v[i].cross_motion(&vj);
-        }
-        let inertia = &model.bodies[i].inertia;
-        let vi = data.v[i];
-        data.f[i] = inertia.mul_motion(&data.a[i]) + vi.cross_force(&inertia.mul_motion(&vi));
-        if let Some(f) = fext {
-            data.f[i] -= f[i];
-        }
+        motion_at(model, data, i, v, a);
+        force_at(model, data, i, fext);
     }
     // Pass 2, inward: hinge forces and torques.
     for i in (1..n).rev() {
-        let joint = model.joints[i].as_ref().expect("joint");
-        data.tau[joint.dof] = joint.s.dot(&data.f[i]) + joint.armature * a[joint.dof];
-        let p = model.parent[i].expect("parent");
+        let p = torque_at(model, data, i, a);
         let fp = data.xup[i].inv_apply_force(&data.f[i]);
         data.f[p] += fp;
     }
@@ -87,7 +73,7 @@ pub fn rnea<'d>(
 /// `τ[base_nv + k]`), for a caller that reads a few of them (the hold torques of locked
 /// reaction wheels). Only the bodies those torques depend on are visited: the subtree below
 /// each hinge asked for (every entry of which is written) and its ancestors (velocities and
-/// accelerations only). Each visited body's arithmetic is `rnea`'s, in the same order, so
+/// accelerations only). Each visited body takes `rnea`'s own steps, in the same order, so
 /// the torques written are `rnea`'s bit for bit; the other entries of `data.tau` (a free
 /// base's wrench among them) keep whatever they held.
 ///
@@ -155,23 +141,12 @@ pub fn rnea_for<'d>(
         if data.rnea_reach[i] == 0 {
             continue;
         }
-        if let Some(joint) = &model.joints[i] {
-            let p = model.parent[i].expect("parent");
+        if i > 0 {
             data.xup[i] = model.xup(i, q);
-            let x = &data.xup[i];
-            let vj = joint.s * v[joint.dof];
-            data.v[i] = x.apply_motion(&data.v[p]) + vj;
-            data.a[i] =
-                x.apply_motion(&data.a[p]) + joint.s * a[joint.dof] + data.v[i].cross_motion(&vj);
         }
-        if data.rnea_reach[i] != BELOW {
-            continue;
-        }
-        let inertia = &model.bodies[i].inertia;
-        let vi = data.v[i];
-        data.f[i] = inertia.mul_motion(&data.a[i]) + vi.cross_force(&inertia.mul_motion(&vi));
-        if let Some(f) = fext {
-            data.f[i] -= f[i];
+        motion_at(model, data, i, v, a);
+        if data.rnea_reach[i] == BELOW {
+            force_at(model, data, i, fext);
         }
     }
     // Pass 2, inward, within the subtrees (a body below a hinge asked for has all its
@@ -180,15 +155,47 @@ pub fn rnea_for<'d>(
         if data.rnea_reach[i] != BELOW {
             continue;
         }
-        let joint = model.joints[i].as_ref().expect("joint");
-        data.tau[joint.dof] = joint.s.dot(&data.f[i]) + joint.armature * a[joint.dof];
-        let p = model.parent[i].expect("parent");
+        let p = torque_at(model, data, i, a);
         if data.rnea_reach[p] == BELOW {
             let fp = data.xup[i].inv_apply_force(&data.f[i]);
             data.f[p] += fp;
         }
     }
     Ok(&data.tau)
+}
+
+/// Pass 1 at body `i` (its transform current): its velocity and acceleration from its
+/// parent's. One body's step, shared by [`rnea`] and [`rnea_for`], so that they agree bit
+/// for bit by construction.
+#[inline(always)]
+fn motion_at(model: &Model, data: &mut Data, i: usize, v: &[f64], a: &[f64]) {
+    if let Some(joint) = &model.joints[i] {
+        let p = model.parent[i].expect("parent");
+        let x = &data.xup[i];
+        let vj = joint.s * v[joint.dof];
+        data.v[i] = x.apply_motion(&data.v[p]) + vj;
+        data.a[i] =
+            x.apply_motion(&data.a[p]) + joint.s * a[joint.dof] + data.v[i].cross_motion(&vj);
+    }
+}
+
+/// Pass 1 at body `i`: the force that produces its motion, less the external one.
+#[inline(always)]
+fn force_at(model: &Model, data: &mut Data, i: usize, fext: Option<&[Force]>) {
+    let inertia = &model.bodies[i].inertia;
+    let vi = data.v[i];
+    data.f[i] = inertia.mul_motion(&data.a[i]) + vi.cross_force(&inertia.mul_motion(&vi));
+    if let Some(f) = fext {
+        data.f[i] -= f[i];
+    }
+}
+
+/// Pass 2 at body `i` (`i > 0`, its force complete): its hinge's torque. Returns its parent.
+#[inline(always)]
+fn torque_at(model: &Model, data: &mut Data, i: usize, a: &[f64]) -> usize {
+    let joint = model.joints[i].as_ref().expect("joint");
+    data.tau[joint.dof] = joint.s.dot(&data.f[i]) + joint.armature * a[joint.dof];
+    model.parent[i].expect("parent")
 }
 
 /// The bias forces `C(q, v) − Jᵀ fext` (RNEA with zero acceleration), into `data.bias`.
