@@ -346,13 +346,30 @@ where
     /// After a step: the projection, the events in the step, the outputs up to its end.
     /// `Some` when the run ended in it (an event's stop, the observer).
     pub(crate) fn after_step(&mut self) -> Result<Option<Stats>, IntegrateError> {
-        let has_events = !self.g_left.is_empty();
-        // Projection; the copy tells whether cached derivatives went stale.
+        self.project_step();
+        self.after_projection()
+    }
+
+    /// The first part of [`Self::after_step`]: the projection of the step's end state.
+    pub(crate) fn project_step(&mut self) {
+        // The copy tells whether cached derivatives went stale.
         self.buf.copy_from_slice(self.st.x());
         self.sys.project(self.st.x_mut());
         if self.buf != self.st.x() {
             self.st.state_modified();
         }
+    }
+
+    /// The projected step's end, as the rest of [`Self::after_step`] reads it: the system,
+    /// the time and state, and whether the event functions evaluate the system there.
+    pub(crate) fn step_end(&mut self) -> (&mut S, f64, &[f64], bool) {
+        let events = !self.g_left.is_empty();
+        (&mut self.sys, self.st.t(), self.st.x(), events)
+    }
+
+    /// The rest of [`Self::after_step`], after [`Self::project_step`]: events, output.
+    pub(crate) fn after_projection(&mut self) -> Result<Option<Stats>, IntegrateError> {
+        let has_events = !self.g_left.is_empty();
         if has_events {
             match self.handle_events()? {
                 Next::Proceed => {}

@@ -49,6 +49,26 @@ pub struct Lane<'a, S> {
 pub trait Batch<S> {
     /// Evaluates every lane (at most the batch's width of them, each a different run).
     fn rhs(&mut self, lanes: &mut [Lane<'_, S>]);
+
+    /// The runs whose steps just ended (projected), before each goes on alone (its event
+    /// functions, its output): what the batch may evaluate for them together. The contract
+    /// is [`Batch::rhs`]'s: what each run then computes is, bit for bit, what it would have
+    /// computed without this call. The default evaluates nothing.
+    fn step_ends(&mut self, ends: &mut [StepEnd<'_, S>]) {
+        let _ = ends;
+    }
+}
+
+/// A run at the end of its step, for [`Batch::step_ends`].
+pub struct StepEnd<'a, S> {
+    /// Its system.
+    pub system: &'a mut S,
+    /// The step's end time.
+    pub t: f64,
+    /// The (projected) state there.
+    pub x: &'a [f64],
+    /// Whether its event functions evaluate the system at `(t, x)` next.
+    pub events: bool,
 }
 
 /// A run handed to [`integrate_lanes`]: its system, start, end, output times and observer,
@@ -140,6 +160,7 @@ where
     let mut slots: Vec<Option<Slot<S, F>>> = (0..width).map(|_| None).collect();
     let mut failed: Vec<Option<IntegrateError>> = (0..width).map(|_| None).collect();
     let mut lanes: Vec<Lane<'_, S>> = Vec::with_capacity(width);
+    let mut ends: Vec<StepEnd<'_, S>> = Vec::with_capacity(width);
     let mut more = true;
     loop {
         // Every place holds a run about to step, or is empty for good.
@@ -195,18 +216,42 @@ where
             }
             lanes = recycle(batch_lanes);
         }
+        // Every step ends and is projected, then the batch sees them all (`step_ends`), then
+        // each run goes on alone: each run's own sequence is `after_step`'s.
         for (slot, failure) in slots.iter_mut().zip(&mut failed) {
             let Some(s) = slot else { continue };
-            let outcome = match failure.take() {
+            let ended = match failure.take() {
                 Some(e) => Err(e),
                 None => {
                     let (st, ctx, _) = s.run.parts();
-                    match st.end_step(ctx).and_then(|()| s.run.after_step()) {
-                        Ok(None) => continue,
-                        Ok(Some(stats)) => Ok(stats),
-                        Err(e) => Err(e),
-                    }
+                    st.end_step(ctx)
                 }
+            };
+            match ended {
+                Ok(()) => s.run.project_step(),
+                Err(e) => end(slot, Err(e), runs),
+            }
+        }
+        let mut step_ends = recycle_ends(std::mem::take(&mut ends));
+        step_ends.extend(slots.iter_mut().flatten().map(|s| {
+            let (system, t, x, events) = s.run.step_end();
+            StepEnd {
+                system,
+                t,
+                x,
+                events,
+            }
+        }));
+        if step_ends.len() > 1 {
+            batch.step_ends(&mut step_ends);
+        }
+        ends = recycle_ends(step_ends);
+        for slot in &mut slots {
+            let Some(s) = slot else { continue };
+            let outcome = match s.run.after_projection() {
+                Ok(None) => continue,
+                Ok(Some(stats)) => Ok(stats),
+                Err(e) => Err(e),
             };
             end(slot, outcome, runs);
         }
@@ -301,6 +346,12 @@ fn check<S: System, F>(
 /// not at every stage (an in-place `collect` of an empty vector of the same layout keeps
 /// its allocation).
 fn recycle<'a, 'b, S>(mut v: Vec<Lane<'a, S>>) -> Vec<Lane<'b, S>> {
+    v.clear();
+    v.into_iter().map(|_| unreachable!("empty")).collect()
+}
+
+/// [`recycle`] for the step ends.
+fn recycle_ends<'a, 'b, S>(mut v: Vec<StepEnd<'a, S>>) -> Vec<StepEnd<'b, S>> {
     v.clear();
     v.into_iter().map(|_| unreachable!("empty")).collect()
 }

@@ -1,6 +1,7 @@
 //! [`Simulation::run_lanes_with`]: runs of the deployment campaign in batches of 2, 3 and 8
 //! give each run's rows, outcome and counters bit for bit as [`Simulation::run`] alone does,
-//! and most of their dynamics are solved in lanes.
+//! and most of their dynamics are solved in lanes, the event functions' right-hand sides at
+//! the steps' ends included.
 
 use satsim_integrate::{Output, Stats};
 use satsim_spacecraft::simulation::{LaneJob, LaneJobs, RowSink, RunError, Simulation};
@@ -32,7 +33,7 @@ fn outcome(sim: &Simulation, rows: Rows, result: Result<Stats, RunError<String>>
 struct Jobs {
     scenes: Vec<Scene>,
     next: usize,
-    done: Vec<Option<(Outcome, u64)>>,
+    done: Vec<Option<(Outcome, u64, u64)>>,
 }
 
 impl LaneJobs for Jobs {
@@ -55,8 +56,8 @@ impl LaneJobs for Jobs {
                 self.done[k].is_none() && self.scenes[k].simulation().unwrap().x0() == sim.x0()
             })
             .expect("a run handed out");
-        let lanes = sim.run_log().lane_rhs();
-        self.done[k] = Some((outcome(&sim, rows, result), lanes));
+        let (lanes, ahead) = (sim.run_log().lane_rhs(), sim.run_log().lane_ahead());
+        self.done[k] = Some((outcome(&sim, rows, result), lanes, ahead));
     }
 }
 
@@ -101,9 +102,10 @@ fn runs_in_lanes_are_the_runs_alone() {
             done: vec![None; scenes.len()],
         };
         Simulation::run_lanes_with(&options, width, &mut jobs);
-        let mut in_lanes = 0;
+        let (mut in_lanes, mut ahead) = (0, 0);
         for (k, (a, b)) in alone.iter().zip(&jobs.done).enumerate() {
-            let (b, lanes) = b.as_ref().expect("every run ends");
+            let (b, lanes, lane_ahead) = b.as_ref().expect("every run ends");
+            ahead += lane_ahead;
             assert_eq!(a.0, b.0, "run {k}, width {width}: outcome");
             assert!(a.1 == b.1, "run {k}, width {width}: rows differ");
             assert_eq!((a.2, a.3), (b.2, b.3), "run {k}, width {width}: counters");
@@ -113,6 +115,13 @@ fn runs_in_lanes_are_the_runs_alone() {
         assert!(
             in_lanes * 2 > rhs,
             "width {width}: {in_lanes} of {rhs} in lanes"
+        );
+        // The wheels stick from the start, so the event functions evaluate the right-hand
+        // side at (nearly) every step's end, a quarter of the evaluations: most of those in
+        // lanes too (not where a lone run is left in its batch, as at the end).
+        assert!(
+            ahead * 8 > rhs,
+            "width {width}: {ahead} of {rhs} evaluated ahead in lanes"
         );
     }
 }

@@ -30,6 +30,10 @@ pub(super) struct Ahead {
     t: f64,
     x: Vec<f64>,
     dx: Vec<f64>,
+    /// The right-hand side at `(t, x)` was evaluated before the event functions asked for
+    /// it, with this result, by the lanes of a batch ([`Simulation::keep_ahead`]); until
+    /// the event functions take it.
+    given: Option<Result<(), SystemError>>,
 }
 
 impl Ahead {
@@ -41,6 +45,7 @@ impl Ahead {
             t: f64::NAN,
             x: vec![0.0; n],
             dx: vec![0.0; n],
+            given: None,
         }
     }
 }
@@ -62,16 +67,27 @@ impl Simulation {
     /// [`Self::hold_torques_after_effects`] gives them with `Hold::Locked`: by RNEA over the
     /// bodies they depend on, and only the rotors' where the event functions read no other
     /// ([`Effect::hold_reads`](crate::effects::Effect::hold_reads); the others NaN).
+    /// The right-hand side itself may have been evaluated already, at this very `(t, x)`, by
+    /// the lanes of a batch ([`Self::keep_ahead`]): then its result is taken, as it stands.
     pub(super) fn evaluate_ahead(&mut self, t: f64, x: &[f64]) -> Result<(), SystemError> {
-        self.forget_ahead();
-        let mut dx = std::mem::take(&mut self.data.ahead.dx);
-        let result = self.right_hand_side(t, x, &mut dx);
         let a = &mut self.data.ahead;
-        a.dx = dx;
-        a.valid = result.is_ok();
-        result?;
-        a.t = t;
-        a.x.copy_from_slice(x);
+        match a.given.take() {
+            Some(result) if a.same_state(t, x) => {
+                self.log.lane_ahead += 1;
+                result?
+            }
+            _ => {
+                self.forget_ahead();
+                let mut dx = std::mem::take(&mut self.data.ahead.dx);
+                let result = self.right_hand_side(t, x, &mut dx);
+                let a = &mut self.data.ahead;
+                a.dx = dx;
+                a.valid = result.is_ok();
+                result?;
+                a.t = t;
+                a.x.copy_from_slice(x);
+            }
+        }
         let (m, d) = (&self.model, &mut self.data);
         match m.velocity_at {
             Some(s) => {
@@ -125,10 +141,7 @@ impl Simulation {
             return false;
         }
         a.valid = false;
-        let same = t.to_bits() == a.t.to_bits()
-            && x.len() == a.x.len()
-            && dx.len() == a.dx.len()
-            && x.iter().zip(&a.x).all(|(p, q)| p.to_bits() == q.to_bits());
+        let same = dx.len() == a.dx.len() && a.same_state(t, x);
         if same {
             dx.copy_from_slice(&a.dx);
             self.log.reused_rhs += 1;
@@ -148,5 +161,58 @@ impl Simulation {
     #[inline]
     pub(super) fn forget_ahead(&mut self) {
         self.data.ahead.valid = false;
+        self.data.ahead.given = None;
+    }
+
+    /// Whether the event functions at `(t, x)` evaluate the right-hand side there
+    /// ([`Self::evaluate_ahead`], as [`Self::prepare_events`] decides), so that the lanes of
+    /// a batch may evaluate it for them ([`Self::keep_ahead`]).
+    pub(super) fn evaluates_ahead(&self, x: &[f64]) -> bool {
+        self.model.n_events > 0
+            && x.len() == self.data.ahead.x.len()
+            && self.event_reads_ahead().is_some()
+    }
+
+    /// The slope's buffer, for the lanes to evaluate the right-hand side into; the kept
+    /// slope is forgotten. Back with [`Self::keep_ahead`] or [`Self::return_ahead_slope`].
+    pub(super) fn take_ahead_slope(&mut self) -> Vec<f64> {
+        self.forget_ahead();
+        std::mem::take(&mut self.data.ahead.dx)
+    }
+
+    /// The buffer of [`Self::take_ahead_slope`], unused.
+    pub(super) fn return_ahead_slope(&mut self, dx: Vec<f64>) {
+        self.data.ahead.dx = dx;
+    }
+
+    /// The right-hand side at `(t, x)`, `dx` (in the buffer of [`Self::take_ahead_slope`]),
+    /// evaluated by the lanes of a batch with `result`, as the event functions' own
+    /// [`Self::evaluate_ahead`] would have: kept for them, and, once they have taken it,
+    /// for the next step's first stage.
+    pub(super) fn keep_ahead(
+        &mut self,
+        t: f64,
+        x: &[f64],
+        dx: Vec<f64>,
+        result: Result<(), SystemError>,
+    ) {
+        let a = &mut self.data.ahead;
+        a.dx = dx;
+        a.valid = result.is_ok();
+        a.t = t;
+        a.x.copy_from_slice(x);
+        a.given = Some(result);
+    }
+}
+
+impl Ahead {
+    /// Whether `(t, x)` is the kept state, bit for bit.
+    #[inline]
+    fn same_state(&self, t: f64, x: &[f64]) -> bool {
+        t.to_bits() == self.t.to_bits()
+            && x.len() == self.x.len()
+            && x.iter()
+                .zip(&self.x)
+                .all(|(p, q)| p.to_bits() == q.to_bits())
     }
 }

@@ -12,19 +12,15 @@ impl Simulation {
     /// effects' [`Effect::event_reads`]). Returns whether they read the poses (which are
     /// then current).
     pub(super) fn prepare_events(&mut self, t: f64, x: &[f64]) -> Result<bool, SystemError> {
-        let reads = self
-            .effects
-            .iter()
-            .filter(|e| e.n_events() > 0)
-            .fold(EventReads::STATE, |r, e| r.union(e.event_reads()));
-        let hold = reads.hold_torques && self.model.needs_hold && self.data.n_locked > 0;
         let wrap = |e: SystemError| SystemError::new(format!("event functions: {e}"));
-        if hold && self.can_evaluate_ahead(reads.kinematics) {
+        if let Some(reads) = self.event_reads_ahead() {
             // The hold torques' solve is the right-hand side's: evaluate that, and keep it
             // for the next step (`ahead.rs`).
             self.evaluate_ahead(t, x).map_err(wrap)?;
             return Ok(reads.kinematics);
         }
+        let reads = self.event_reads();
+        let hold = reads.hold_torques && self.model.needs_hold && self.data.n_locked > 0;
         if reads.forces || hold {
             let h = if hold { Hold::Locked } else { Hold::None };
             self.prepare_with(t, x, reads.kinematics, h).map_err(wrap)?;
@@ -36,6 +32,24 @@ impl Simulation {
             self.kinematics(true).map_err(wrap)?;
         }
         Ok(reads.kinematics)
+    }
+
+    /// What the event functions read (the union of the effects' [`Effect::event_reads`]).
+    ///
+    /// [`Effect::event_reads`]: crate::effects::Effect::event_reads
+    fn event_reads(&self) -> EventReads {
+        self.effects
+            .iter()
+            .filter(|e| e.n_events() > 0)
+            .fold(EventReads::STATE, |r, e| r.union(e.event_reads()))
+    }
+
+    /// What the event functions read, where they take the hold torques from the
+    /// right-hand side evaluated ahead (`ahead.rs`); `None` where they do not.
+    pub(super) fn event_reads_ahead(&self) -> Option<EventReads> {
+        let reads = self.event_reads();
+        let hold = reads.hold_torques && self.model.needs_hold && self.data.n_locked > 0;
+        (hold && self.can_evaluate_ahead(reads.kinematics)).then_some(reads)
     }
 
     /// Carries out requests made together (at one event instant, or at the start) on the

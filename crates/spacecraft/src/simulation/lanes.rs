@@ -19,8 +19,8 @@
 
 use super::Simulation;
 use super::run::{RunError, Shared, SimCell, deliver, outcome};
-use satsim_integrate::lanes::{Batch, Lane, LaneRun, Runs, integrate_lanes};
-use satsim_integrate::{IntegrateError, Options, Output, Stats};
+use satsim_integrate::lanes::{Batch, Lane, LaneRun, Runs, StepEnd, integrate_lanes};
+use satsim_integrate::{IntegrateError, Options, Output, Stats, SystemError};
 use satsim_satellite::kernel::{Locks, UnrolledAba};
 use satsim_tree::real::F64x;
 use satsim_tree::spatial::Force;
@@ -199,75 +199,195 @@ struct Lanes<const N: usize> {
     ddq: Vec<F64x<N>>,
 }
 
+/// A right-hand side for [`Lanes::evaluate`]: a stage's lane, or a step's end
+/// ([`Batch::step_ends`]).
+trait Place<K: RowSink> {
+    /// The run, `(t, x)`, where `dx` goes and the result; `None` for a place left empty.
+    #[allow(clippy::type_complexity)]
+    fn parts(
+        &mut self,
+    ) -> Option<(
+        &Cell<K>,
+        f64,
+        &[f64],
+        &mut [f64],
+        &mut Result<(), SystemError>,
+    )>;
+}
+
+impl<K: RowSink> Place<K> for Lane<'_, Shared<Cell<K>>> {
+    #[inline(always)]
+    fn parts(
+        &mut self,
+    ) -> Option<(
+        &Cell<K>,
+        f64,
+        &[f64],
+        &mut [f64],
+        &mut Result<(), SystemError>,
+    )> {
+        Some((
+            &self.system.0,
+            self.t,
+            self.x,
+            &mut *self.dx,
+            &mut self.result,
+        ))
+    }
+}
+
+/// A step's end whose event functions will evaluate the right-hand side there
+/// ([`Simulation::evaluates_ahead`]): evaluated in lanes, into the run's kept slope.
+struct Ending<'a, K: RowSink> {
+    cell: Option<&'a Cell<K>>,
+    t: f64,
+    x: &'a [f64],
+    dx: Vec<f64>,
+    result: Result<(), SystemError>,
+}
+
+impl<K: RowSink> Place<K> for Ending<'_, K> {
+    #[inline(always)]
+    fn parts(
+        &mut self,
+    ) -> Option<(
+        &Cell<K>,
+        f64,
+        &[f64],
+        &mut [f64],
+        &mut Result<(), SystemError>,
+    )> {
+        Some((self.cell?, self.t, self.x, &mut self.dx, &mut self.result))
+    }
+}
+
 impl<const N: usize, K: RowSink> Batch<Shared<Cell<K>>> for Lanes<N> {
     fn rhs(&mut self, lanes: &mut [Lane<'_, Shared<Cell<K>>>]) {
-        let mut kin = [false; N];
-        // The lanes whose slope their event functions evaluated already (`ahead.rs`).
-        let mut ahead = [false; N];
-        let mut ready = true;
-        for ((l, kin), ahead) in lanes.iter_mut().zip(&mut kin).zip(&mut ahead) {
-            let mut sim = l.system.0.sim_mut();
-            if sim.reuse_ahead(l.t, l.x, l.dx) {
-                *ahead = true;
-                continue;
-            }
-            match sim.rhs_forces(l.t, l.x, l.dx) {
-                Ok(k) => *kin = k,
-                Err(e) => {
-                    l.result = Err(e);
-                    ready = false;
-                }
-            }
-        }
-        if ahead[..lanes.len().min(N)].iter().all(|&a| a) {
+        self.evaluate(lanes);
+    }
+
+    /// The right-hand sides that the runs' event functions are about to evaluate at their
+    /// steps' ends (`ahead.rs`), evaluated here together: the dynamics in lanes where the
+    /// event functions would have solved them one run at a time.
+    fn step_ends(&mut self, ends: &mut [StepEnd<'_, Shared<Cell<K>>>]) {
+        if ends.len() > N || ends.iter().filter(|e| e.events).count() < 2 {
             return;
         }
-        let solved = ready && self.solve(lanes, &ahead);
-        for ((l, &kin), &ahead) in lanes.iter_mut().zip(&kin).zip(&ahead) {
-            if l.result.is_err() || ahead {
-                continue;
+        let mut places: [Ending<'_, K>; N] = std::array::from_fn(|_| Ending {
+            cell: None,
+            t: 0.0,
+            x: &[],
+            dx: Vec::new(),
+            result: Ok(()),
+        });
+        let mut count = 0;
+        for (e, p) in ends.iter_mut().zip(&mut places) {
+            let mut sim = e.system.0.sim_mut();
+            if e.events && sim.evaluates_ahead(e.x) {
+                p.dx = sim.take_ahead_slope();
+                (p.cell, p.t, p.x) = (Some(&e.system.0), e.t, e.x);
+                count += 1;
             }
-            let mut sim = l.system.0.sim_mut();
-            let dynamics = if solved {
-                Ok(())
-            } else {
-                sim.dynamics(kin, l.dx)
-            };
-            l.result = dynamics.and_then(|()| sim.rhs_power(l.x, l.dx));
+        }
+        if count < 2 {
+            // One run alone: its event functions evaluate it, as without lanes.
+            for p in places.iter_mut().filter(|p| p.cell.is_some()) {
+                let dx = std::mem::take(&mut p.dx);
+                p.cell.expect("a run").sim_mut().return_ahead_slope(dx);
+            }
+            return;
+        }
+        self.evaluate(&mut places);
+        for p in places.iter_mut() {
+            if let Some(cell) = p.cell {
+                let result = std::mem::replace(&mut p.result, Ok(()));
+                let dx = std::mem::take(&mut p.dx);
+                cell.sim_mut().keep_ahead(p.t, p.x, dx, result);
+            }
         }
     }
 }
 
 impl<const N: usize> Lanes<N> {
-    /// The dynamics of every lane by one call of the lanes' kernel, after their effects:
+    /// Every place's right-hand side: each run's effects on their own, the dynamics of all
+    /// of them by one call of the lanes' kernel where they take it alike ([`Self::solve`]),
+    /// else each run's own; then each run's power.
+    fn evaluate<K: RowSink, P: Place<K>>(&mut self, places: &mut [P]) {
+        let mut kin = [false; N];
+        // The places whose slope their event functions evaluated already (`ahead.rs`), and
+        // the empty ones: not evaluated.
+        let mut ahead = [false; N];
+        let mut ready = true;
+        for ((p, kin), ahead) in places.iter_mut().zip(&mut kin).zip(&mut ahead) {
+            let Some((cell, t, x, dx, result)) = p.parts() else {
+                *ahead = true;
+                continue;
+            };
+            let mut sim = cell.sim_mut();
+            if sim.reuse_ahead(t, x, dx) {
+                *ahead = true;
+                continue;
+            }
+            match sim.rhs_forces(t, x, dx) {
+                Ok(k) => *kin = k,
+                Err(e) => {
+                    *result = Err(e);
+                    ready = false;
+                }
+            }
+        }
+        if ahead[..places.len().min(N)].iter().all(|&a| a) {
+            return;
+        }
+        let solved = ready && self.solve(places, &ahead);
+        for ((p, &kin), &ahead) in places.iter_mut().zip(&kin).zip(&ahead) {
+            let Some((cell, _, x, dx, result)) = p.parts() else {
+                continue;
+            };
+            if result.is_err() || ahead {
+                continue;
+            }
+            let mut sim = cell.sim_mut();
+            let dynamics = if solved {
+                Ok(())
+            } else {
+                sim.dynamics(kin, dx)
+            };
+            *result = dynamics.and_then(|()| sim.rhs_power(x, dx));
+        }
+    }
+
+    /// The dynamics of every place by one call of the lanes' kernel, after their effects:
     /// `false` (nothing written) where the runs do not all take it alike, or where the lanes
     /// part ways; then each run solves its own.
-    /// The lanes `ahead` have their slope already: their inputs (whatever their runs' last
-    /// pass left) only fill their places, and their results are not written.
-    fn solve<K: RowSink>(
-        &mut self,
-        lanes: &mut [Lane<'_, Shared<Cell<K>>>],
-        ahead: &[bool; N],
-    ) -> bool {
-        if lanes.len() < 2 || lanes.len() > N {
+    /// The places `ahead` (their slope kept already, or empty) are not solved: the inputs of
+    /// a run there (whatever its last pass left) or of the first run only fill their lanes,
+    /// and their results are not written.
+    fn solve<K: RowSink, P: Place<K>>(&mut self, places: &mut [P], ahead: &[bool; N]) -> bool {
+        if places.len() < 2 || places.len() > N {
             return false;
         }
         // The runs' simulations (no allocation: a stage is a few microseconds).
-        let sims: [Option<Ref<'_, Running<K>>>; N] =
-            std::array::from_fn(|k| lanes.get(k).map(|l| l.system.0.borrow()));
+        let mut sims: [Option<Ref<'_, Running<K>>>; N] = std::array::from_fn(|_| None);
+        for (s, p) in sims.iter_mut().zip(places.iter_mut()) {
+            *s = p.parts().map(|(cell, ..)| cell.borrow());
+        }
+        let Some(first) = sims.iter().position(Option::is_some) else {
+            return false;
+        };
         let lane = |k: usize| {
             sims[k]
                 .as_ref()
-                .unwrap_or_else(|| sims[0].as_ref().expect("2 lanes or more"))
+                .unwrap_or_else(|| sims[first].as_ref().expect("a run"))
         };
-        let Some((first, locks, loaded)) = kernel_call(&lane(0).sim) else {
+        let Some((first_kernel, locks, loaded)) = kernel_call(&lane(first).sim) else {
             return false;
         };
-        let mut serials = [lane(0).sim.model.serial; N];
+        let mut serials = [lane(first).sim.model.serial; N];
         for (k, r) in sims
             .iter()
             .enumerate()
-            .skip(1)
+            .skip(first + 1)
             .filter_map(|(k, r)| Some((k, r.as_ref()?)))
         {
             match kernel_call(&r.sim) {
@@ -280,7 +400,7 @@ impl<const N: usize> Lanes<N> {
                 sims[k]
                     .as_ref()
                     .and_then(|r| kernel_call(&r.sim))
-                    .map_or(first, |c| c.0)
+                    .map_or(first_kernel, |c| c.0)
             });
             self.kernel = Some((UnrolledAba::gather(kernels), serials));
         }
@@ -288,7 +408,7 @@ impl<const N: usize> Lanes<N> {
             return false;
         };
         // The inputs, lane `k` run `k`'s (the lanes past the runs repeat the first run).
-        let d0 = &lane(0).sim.data;
+        let d0 = &lane(first).sim.data;
         let (nq, nv, nb) = (d0.q.len(), d0.v.len(), d0.forces.body_wrench.len());
         let zero = F64x([0.0; N]);
         self.q.resize(nq, zero);
@@ -319,15 +439,18 @@ impl<const N: usize> Lanes<N> {
             return false;
         }
         drop(sims);
-        for (k, l) in lanes.iter_mut().enumerate() {
+        for (k, p) in places.iter_mut().enumerate() {
             if ahead[k] {
                 continue;
             }
-            let mut sim = l.system.0.sim_mut();
+            let Some((cell, _, _, dx, _)) = p.parts() else {
+                continue;
+            };
+            let mut sim = cell.sim_mut();
             sim.log.lane_rhs += 1;
             match sim.model.velocity_at {
                 Some(s) => {
-                    for (d, a) in l.dx[s..s + nv].iter_mut().zip(&self.ddq) {
+                    for (d, a) in dx[s..s + nv].iter_mut().zip(&self.ddq) {
                         *d = a.0[k];
                     }
                 }
@@ -335,7 +458,7 @@ impl<const N: usize> Lanes<N> {
                     for (d, a) in sim.data.ddq.iter_mut().zip(&self.ddq) {
                         *d = a.0[k];
                     }
-                    sim.pack_accelerations(l.dx);
+                    sim.pack_accelerations(dx);
                 }
             }
         }

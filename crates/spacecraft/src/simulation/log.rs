@@ -12,6 +12,9 @@ pub struct RunLog {
     /// Right-hand sides answered by the slope the event functions had just evaluated at the
     /// same state (`ahead.rs`): not evaluated again, so not in `rhs_evals`.
     pub(super) reused_rhs: u64,
+    /// Of `rhs_evals`, the right-hand sides that the event functions took from the lanes of
+    /// a batch, which had evaluated them at the step's end (`ahead.rs`).
+    pub(super) lane_ahead: u64,
     /// How many times each effect was applied by the right-hand side (the effects' order).
     pub(super) calls: Vec<u64>,
     /// Each handled event: `(t, description)`, and the effect whose event it was.
@@ -34,6 +37,11 @@ impl RunLog {
     /// [`RunLog::rhs_evals`]; see [`Simulation::reuse_event_slopes`](super::Simulation::reuse_event_slopes)).
     pub fn reused_rhs(&self) -> u64 {
         self.reused_rhs
+    }
+    /// Of [`RunLog::rhs_evals`], the right-hand sides that the event functions took from
+    /// the lanes of a batch of runs, which had evaluated them together at the steps' ends.
+    pub fn lane_ahead(&self) -> u64 {
+        self.lane_ahead
     }
     /// What happened at each handled event: `(t, description)`.
     pub fn events(&self) -> &[(f64, String)] {
