@@ -647,11 +647,16 @@ impl<T: Real> ArticulatedInertia<T> {
     #[cfg_attr(not(debug_assertions), inline(always))]
     #[cfg_attr(debug_assertions, inline)]
     pub fn solve(&self, f: &Force<T>) -> Option<Motion<T>> {
+        // nalgebra's products, through `mat3` so that they stay inline over lanes.
         let c_inv = spd_inverse(&self.c)?;
-        let bc = self.b * c_inv; // B C⁻¹
-        let schur = self.a - bc * self.b.transpose();
-        let ang = spd_inverse(&schur)? * (f.ang - bc * f.lin);
-        Some(Motion::new(ang, c_inv * (f.lin - self.b.transpose() * ang)))
+        let bt = self.b.transpose();
+        let bc = mat3::mul_mat(&self.b, &c_inv); // B C⁻¹
+        let schur = self.a - mat3::mul_mat(&bc, &bt);
+        let ang = mat3::mul(&spd_inverse(&schur)?, &(f.ang - mat3::mul(&bc, &f.lin)));
+        Some(Motion::new(
+            ang,
+            mat3::mul(&c_inv, &(f.lin - mat3::mul(&bt, &ang))),
+        ))
     }
 }
 
