@@ -142,3 +142,59 @@ pub fn momentum(model: &Model, data: &Data) -> (Vec3, Vec3) {
     let c = center_of_mass(model, data);
     (p, h_origin - c.cross(&p))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::BaseKind;
+    use crate::samples::{SplitMix, random_tree_with_rotors};
+    use crate::spatial::Mat3;
+
+    /// `energy_and_momentum` equals the separate functions bit for bit (and
+    /// `center_of_mass`, which skips the bodies without mass or inertia, the sums that do
+    /// not): random trees with massless links and rotors, at random states, at rest (every
+    /// term ±0) and with only some rates zero or −0.
+    #[test]
+    fn one_pass_equals_the_separate_functions() {
+        let bits = |x: &[f64]| x.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        let mut massless = 0;
+        for seed in 0..60u64 {
+            let mut rng = SplitMix(seed ^ 0xe4e7);
+            let base = if seed % 3 == 0 {
+                BaseKind::Fixed
+            } else {
+                BaseKind::Free
+            };
+            let model = random_tree_with_rotors(2 + (seed % 9) as usize, base, true, 2, seed);
+            massless += model
+                .bodies
+                .iter()
+                .filter(|b| b.mass == 0.0 && b.inertia_com == Mat3::zeros())
+                .count();
+            let mut data = Data::new(&model);
+            let mut q = model.neutral();
+            for x in &mut q[model.base_nq()..] {
+                *x = rng.range(-3.0, 3.0);
+            }
+            for case in 0..4 {
+                let v: Vec<f64> = (0..model.nv())
+                    .map(|k| match case {
+                        0 => 0.0,
+                        1 => -0.0,
+                        2 if k % 2 == 0 => -0.0,
+                        _ => rng.range(-2.0, 2.0),
+                    })
+                    .collect();
+                forward_kinematics(&model, &mut data, &q, &v).unwrap();
+                let (t, p, h) = energy_and_momentum(&model, &data, &v);
+                let (p1, h1) = momentum(&model, &data);
+                let t1 = kinetic_energy_after_kinematics(&model, &data, &v);
+                let what = format!("seed {seed} case {case}");
+                assert_eq!(t.to_bits(), t1.to_bits(), "{what}: {t} {t1}");
+                assert_eq!(bits(p.as_slice()), bits(p1.as_slice()), "{what}");
+                assert_eq!(bits(h.as_slice()), bits(h1.as_slice()), "{what}");
+            }
+        }
+        assert!(massless > 30, "{massless} massless bodies");
+    }
+}
