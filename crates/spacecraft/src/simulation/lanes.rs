@@ -199,33 +199,25 @@ struct Lanes<const N: usize> {
     ddq: Vec<F64x<N>>,
 }
 
+/// A place's run, `(t, x)`, `dx` and result ([`Place::parts`]).
+type Parts<'p, K> = (
+    &'p Cell<K>,
+    f64,
+    &'p [f64],
+    &'p mut [f64],
+    &'p mut Result<(), SystemError>,
+);
+
 /// A right-hand side for [`Lanes::evaluate`]: a stage's lane, or a step's end
 /// ([`Batch::step_ends`]).
 trait Place<K: RowSink> {
     /// The run, `(t, x)`, where `dx` goes and the result; `None` for a place left empty.
-    #[allow(clippy::type_complexity)]
-    fn parts(
-        &mut self,
-    ) -> Option<(
-        &Cell<K>,
-        f64,
-        &[f64],
-        &mut [f64],
-        &mut Result<(), SystemError>,
-    )>;
+    fn parts(&mut self) -> Option<Parts<'_, K>>;
 }
 
 impl<K: RowSink> Place<K> for Lane<'_, Shared<Cell<K>>> {
     #[inline(always)]
-    fn parts(
-        &mut self,
-    ) -> Option<(
-        &Cell<K>,
-        f64,
-        &[f64],
-        &mut [f64],
-        &mut Result<(), SystemError>,
-    )> {
+    fn parts(&mut self) -> Option<Parts<'_, K>> {
         Some((
             &self.system.0,
             self.t,
@@ -248,15 +240,7 @@ struct Ending<'a, K: RowSink> {
 
 impl<K: RowSink> Place<K> for Ending<'_, K> {
     #[inline(always)]
-    fn parts(
-        &mut self,
-    ) -> Option<(
-        &Cell<K>,
-        f64,
-        &[f64],
-        &mut [f64],
-        &mut Result<(), SystemError>,
-    )> {
+    fn parts(&mut self) -> Option<Parts<'_, K>> {
         Some((self.cell?, self.t, self.x, &mut self.dx, &mut self.result))
     }
 }
