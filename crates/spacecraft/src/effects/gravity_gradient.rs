@@ -36,8 +36,10 @@
 
 use super::{Context, Effect, Forces, Links, Needs, OrbitState, Power, SceneEffect, Section};
 use satsim_integrate::SystemError;
+use satsim_tree::Model;
 use satsim_tree::io::FileError;
-use satsim_tree::spatial::{Force, Mat3, Vec3};
+use satsim_tree::kernel_parts;
+use satsim_tree::spatial::{Force, Mat3, Vec3, skew};
 use serde::Deserialize;
 use toml::Spanned;
 
@@ -60,21 +62,68 @@ pub struct GravityGradient {
     /// simulation asks for it ([`Context::power`]); NaN after an `apply` that did not.
     field_power: f64,
     /// The bodies the field loads, in body order (from [`Effect::connect`]): a body with
-    /// neither mass nor inertia (a gimbal link) feels nothing and is left out.
+    /// neither mass nor inertia (a gimbal link) feels nothing and is left out, and a gyrostat
+    /// rotor is loaded through its carrier ([`Loaded`]).
     loaded: Vec<Loaded>,
     /// The number of bodies of the tree `loaded` was made for.
     n_bodies: usize,
 }
 
 /// A body the field loads: its per-body constants, worked out once.
+///
+/// A balanced rotor that the tree folds into its carrier as a gyrostat
+/// ([`satsim_tree::Gyrostat`], e.g. a reaction wheel) is loaded as part of its carrier: its
+/// inertia does not change as it spins, and the field's couple and tidal force are linear in
+/// the mass distribution (second moments), so the carrier with its rotors locked on
+/// ([`kernel_parts::carrier_inertia`]) feels the sum of what each would feel alone. Their
+/// share about the spin axis is zero (`a · (E × J a (a·E)) = 0`), so the rotors' spin is
+/// untouched; the carrier takes the rest, as the tree would pass it on. One body's terms
+/// instead of one per wheel (the same to round-off; test
+/// `rotors_load_through_their_carrier`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Loaded {
     /// Its index in the tree's bodies.
     body: usize,
-    /// Whether it has mass (it feels a tidal force in the full model).
-    massive: bool,
-    /// The trace of its inertia about its centre of mass (for `∂V/∂t`).
+    /// Its mass with its rotors (kg).
+    mass: f64,
+    /// Its centre of mass with its rotors, body axes (m).
+    com: Vec3,
+    /// Its inertia with its rotors about that centre of mass, body axes (kg m²).
+    inertia: Mat3,
+    /// The trace of `inertia` (for `∂V/∂t`).
     trace: f64,
+}
+
+impl Loaded {
+    /// Body `i` with the rotors the tree folds into it; `None` for a gyrostat rotor (loaded
+    /// through its carrier) and for a body with neither mass nor inertia (a gimbal link).
+    fn of(model: &Model, i: usize) -> Option<Self> {
+        if kernel_parts::is_gyrostat(model, i) {
+            return None;
+        }
+        let body = &model.bodies()[i];
+        let (mass, com, inertia) = if model.gyrostats().iter().any(|g| g.parent() == i) {
+            // The locked-on inertia about the body origin, back to its centre of mass:
+            // `I_O = I_c − m [c]×[c]×` (`RigidInertia::from_com`).
+            let ri = kernel_parts::carrier_inertia(model, i);
+            let com = if ri.mass > 0.0 {
+                ri.h / ri.mass
+            } else {
+                *body.com()
+            };
+            let cx = skew(&com);
+            (ri.mass, com, ri.inertia + cx * cx * ri.mass)
+        } else {
+            (body.mass(), *body.com(), *body.inertia_com())
+        };
+        (mass != 0.0 || inertia.norm() != 0.0).then(|| Loaded {
+            body: i,
+            mass,
+            com,
+            inertia,
+            trace: inertia.trace(),
+        })
+    }
 }
 
 /// The couple `3 k E × I E` on a body of inertia `inertia` (about its centre of mass) with
@@ -122,28 +171,27 @@ impl GravityGradient {
             (Vec3::zeros(), 0.0)
         };
         let full = self.model == GravityModel::Full;
-        let bodies = ctx.model.bodies();
         let mut field_power = 0.0;
         for l in &self.loaded {
-            let (i, body) = (l.body, &bodies[l.body]);
+            let i = l.body;
             let rot = &ctx.data.rotation[i];
             let eb = rot.tr_mul(&e);
-            let ie = body.inertia_com() * eb;
-            let mut ang = couple(k, &eb, body.inertia_com());
+            let ie = l.inertia * eb;
+            let mut ang = couple(k, &eb, &l.inertia);
             if POWER {
                 field_power += 0.5 * k_dot * (3.0 * eb.dot(&ie) - l.trace)
                     + 3.0 * k * rot.tr_mul(&e_dot).dot(&ie);
             }
             let mut lin = Vec3::zeros();
-            if full && l.massive {
-                let rho = ctx.data.position[i] + rot * body.com() - com;
-                let f = tidal(k, &e, body.mass(), &rho);
+            if full && l.mass > 0.0 {
+                let rho = ctx.data.position[i] + rot * l.com - com;
+                let f = tidal(k, &e, l.mass, &rho);
                 lin = rot.tr_mul(&f);
-                ang += body.com().cross(&lin);
+                ang += l.com.cross(&lin);
                 if POWER {
                     let er = e.dot(&rho);
                     field_power -= 0.5
-                        * body.mass()
+                        * l.mass
                         * (k_dot * (3.0 * er * er - rho.norm_squared())
                             + 6.0 * k * er * e_dot.dot(&rho));
                 }
@@ -167,21 +215,14 @@ impl Effect for GravityGradient {
             ..Needs::default()
         }
     }
-    /// The per-body constants of the tree, once (the same test and trace `apply` made at
-    /// every evaluation).
+    /// The per-body constants of the tree, once: the loaded bodies, each with the rotors
+    /// folded into it ([`Loaded`]).
     fn connect(&mut self, links: &Links) {
-        let bodies = links.model.bodies();
-        self.loaded = bodies
-            .iter()
-            .enumerate()
-            .filter(|(_, b)| !(b.mass() == 0.0 && b.inertia_com().norm() == 0.0))
-            .map(|(i, b)| Loaded {
-                body: i,
-                massive: b.mass() > 0.0,
-                trace: b.inertia_com().trace(),
-            })
+        let model = links.model;
+        self.loaded = (0..model.n_bodies())
+            .filter_map(|i| Loaded::of(model, i))
             .collect();
-        self.n_bodies = bodies.len();
+        self.n_bodies = model.n_bodies();
     }
     fn apply(
         &mut self,
