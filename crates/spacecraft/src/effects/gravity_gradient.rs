@@ -215,8 +215,8 @@ impl Effect for GravityGradient {
             ..Needs::default()
         }
     }
-    /// The per-body constants of the tree, once: the loaded bodies, each with the rotors
-    /// folded into it ([`Loaded`]).
+    /// The per-body constants of the tree, once: the loaded bodies, each with the gyrostat
+    /// rotors the tree folds into it.
     fn connect(&mut self, links: &Links) {
         let model = links.model;
         self.loaded = (0..model.n_bodies())
