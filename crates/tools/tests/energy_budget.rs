@@ -690,6 +690,20 @@ fn solar_pressure_does_work_on_the_turning_panels() {
     assert!(b.work != 0.0 && b.dissipated == 0.0, "{b:?}");
 }
 
+/// The gravity gradient reads only the poses and works out its own power, so the right-hand
+/// side leaves out the bodies' velocities; the magnetic torquer declares no kinematics but
+/// adds wrenches whose power the budget must measure, so with both the right-hand side
+/// computes the velocities again (`rhs_forces`) and the budget still closes.
+#[test]
+fn the_gravity_gradient_beside_a_torquer_keeps_the_budget() {
+    let b = environment_budget(
+        500e3,
+        "[effects.gravity_gradient]\nmodel = \"full\"\n[effects.magnetic]\nresidual_dipole = [2.0, -1.0, 3.0]\n[[effects.magnetic.torquer]]\nname = \"x\"\naxis = [1.0, 0.0, 0.0]\nmax_dipole = 10.0\ndipole = 8.0\n",
+        "magnetic",
+    );
+    assert!(b.work != 0.0 && b.dissipated == 0.0, "{b:?}");
+}
+
 #[test]
 fn drag_does_work_by_the_flow_and_dissipates_by_the_motion() {
     let b = environment_budget(300e3, "[effects.drag]\n", "drag");

@@ -84,7 +84,9 @@ pub use io::{
     FileError, ModelFile, State, StateFile, parse_flex_model, parse_model, parse_state,
     read_flex_model, read_model, read_state,
 };
-pub use kinematics::{base_pose, forward_kinematics, forward_kinematics_acc, update_transforms};
+pub use kinematics::{
+    base_pose, forward_kinematics, forward_kinematics_acc, forward_poses, update_transforms,
+};
 pub use model::{
     BaseKind, Body, BodyInfo, BoxShape, Chain, Gyrostat, Hinge, Joint, Model, ModelBuilder,
 };

@@ -210,7 +210,7 @@ impl Effect for GravityGradient {
         Needs {
             orbit: true,
             free_base: true,
-            kinematics: true,
+            poses: true,
             com: self.model == GravityModel::Full,
             ..Needs::default()
         }
@@ -257,6 +257,10 @@ impl Effect for GravityGradient {
     /// simulation asks for it only after an `apply` with [`Context::power`]).
     fn power(&self, _ctx: &Context, _own: &[f64], _applied: f64) -> Power {
         Power::actuator(self.field_power)
+    }
+    /// Its power is `∂V/∂t`, from its own terms.
+    fn power_reads_applied(&self) -> bool {
+        false
     }
     /// `gg_torque_x/y/z`: the moment of the couples and tidal forces about the centre of
     /// mass, bus axes (N m), beside the other disturbances' columns.

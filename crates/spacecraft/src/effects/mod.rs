@@ -75,11 +75,18 @@ pub struct Needs {
     pub rotors: bool,
     /// A free-floating root (`[base] kind = "free"`).
     pub free_base: bool,
-    /// Body poses in [`Context::data`] (forward kinematics is skipped when no enabled effect
-    /// needs it; without it `data.rotation`, `data.position` and `data.v` are stale).
+    /// Body poses and velocities in [`Context::data`] (forward kinematics is skipped when no
+    /// enabled effect needs it; without it `data.rotation`, `data.position` and `data.v` are
+    /// stale).
     pub kinematics: bool,
-    /// The system's centre of mass, [`Context::com`] (implies `kinematics`). It is computed
-    /// only when an enabled effect declares it; otherwise `Context::com` is `None`.
+    /// Body poses only, `data.rotation` and `data.position` (and `com` without velocities):
+    /// where every effect that reads the bodies says this, the right-hand side leaves
+    /// `data.v` stale, a third of the kinematics' work. An effect that says it reads no
+    /// `data.v` in any of its functions.
+    pub poses: bool,
+    /// The system's centre of mass, [`Context::com`] (implies `kinematics`, or only the
+    /// poses with `poses`). It is computed only when an enabled effect declares it;
+    /// otherwise `Context::com` is `None`.
     pub com: bool,
     /// [`Context::hold_torque`] in `events`, `on_event` and `start` (stick/slip decisions).
     /// It costs a hybrid-dynamics solve and an RNEA per evaluation, never in the rhs.
@@ -232,6 +239,7 @@ impl Needs {
         orbit: true,
         free_base: true,
         kinematics: true,
+        poses: false,
         com: true,
         hold_torques: false,
         rotors: false,
@@ -579,9 +587,10 @@ pub trait Effect: Send {
     }
     /// Whether [`Effect::sample`] reads the body poses and velocities in [`Context::data`]:
     /// the simulation then runs forward kinematics at its sample instants (not in every
-    /// right-hand side). The default: [`Needs::kinematics`].
+    /// right-hand side). The default: [`Needs::kinematics`] or [`Needs::poses`].
     fn sample_reads_kinematics(&self) -> bool {
-        self.needs().kinematics
+        let n = self.needs();
+        n.kinematics || n.poses
     }
     /// The readings of the sensors it models, appended to `out` as `(name, values)`: each
     /// the reading last taken or, where a sample is due at `ctx.t`, the one taken there
@@ -610,6 +619,12 @@ pub trait Effect: Send {
     /// losses (a motor, a controller).
     fn power(&self, _ctx: &Context, _own: &[f64], applied: f64) -> Power {
         Power::actuator(applied)
+    }
+    /// Whether [`Effect::power`] reads `applied` (the default). An effect that works out its
+    /// power itself says `false`: the simulation then need not measure the power of its
+    /// wrenches, which takes the bodies' velocities (see [`Needs::poses`]).
+    fn power_reads_applied(&self) -> bool {
+        true
     }
     /// Whether its [`Effect::output`] or [`Effect::potential_energy`] reads what its last
     /// `apply` kept (a command, a mode), so that an output row runs `apply` first: the
@@ -645,12 +660,13 @@ pub trait Effect: Send {
     /// What [`Effect::events`] reads beyond the state, asked before every evaluation of the
     /// event functions (so it may depend on the effect's mode: a wheel reads hold torques only
     /// while it is stuck). The default, everything ([`EventReads::ALL`], the poses only when
-    /// the effect declares [`Needs::kinematics`]), is always right; a narrower answer spares
+    /// the effect declares [`Needs::kinematics`] or [`Needs::poses`]), is always right; a
+    /// narrower answer spares
     /// the event pass, at every step, the effects' `apply`, kinematics or a hybrid-dynamics
     /// solve. It must be exact: what is not declared is stale in `events`.
     fn event_reads(&self) -> EventReads {
         EventReads {
-            kinematics: self.needs().kinematics,
+            kinematics: self.needs().kinematics || self.needs().poses,
             ..EventReads::ALL
         }
     }

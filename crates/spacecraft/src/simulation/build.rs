@@ -250,8 +250,17 @@ impl Simulation {
         let needs_com = effects.iter().any(|e| e.needs().com);
         let net_force_to =
             orbit_effect.filter(|_| free && effects.iter().any(|e| e.needs().net_force));
-        let needs_kinematics =
-            needs_com || net_force_to.is_some() || effects.iter().any(|e| e.needs().kinematics);
+        let needs_kinematics = needs_com
+            || net_force_to.is_some()
+            || effects
+                .iter()
+                .any(|e| e.needs().kinematics || e.needs().poses);
+        // The bodies' velocities too, unless every effect that reads the bodies reads only
+        // their poses (the energy budget may still ask for them: `rhs_forces`).
+        let needs_velocities = effects.iter().any(|e| {
+            let n = e.needs();
+            n.kinematics || ((n.com || n.net_force) && !n.poses)
+        });
         let needs_hold = effects.iter().any(|e| e.needs().hold_torques);
         let nh = model.n_hinges();
         let mut base_tau = vec![0.0; nh];
@@ -282,6 +291,7 @@ impl Simulation {
         data.forces =
             std::mem::replace(&mut data.forces, Forces::new(0, 0, 0)).with_torquers(torquers.len());
         data.needs_kinematics = needs_kinematics;
+        data.needs_velocities = needs_velocities;
         data.base_tau = base_tau;
         data.flex = flex.as_ref().map(FlexWork::new);
         let mut sim = Self {

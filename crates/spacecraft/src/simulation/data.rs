@@ -59,6 +59,11 @@ pub struct SimData {
     /// Whether every pass runs kinematics: an effect asked for it, or wrote a wrench whose
     /// power the energy budget needs (found at the first such pass).
     pub(super) needs_kinematics: bool,
+    /// Whether that kinematics computes the bodies' velocities in the right-hand side (every
+    /// other pass that asks for kinematics gets them): an effect reads them, or the energy
+    /// budget measures the power of a wrench (found at the first such pass); otherwise only
+    /// the poses ([`Needs::poses`](crate::effects::Needs::poses)).
+    pub(super) needs_velocities: bool,
     /// Which hinges (the scene's, then the rotors) are locked now, and how many.
     pub(super) locked: Vec<bool>,
     pub(super) n_locked: usize,
@@ -88,6 +93,7 @@ impl SimData {
             hold_ddq: vec![0.0; nv],
             ddq: vec![0.0; nv],
             needs_kinematics: false,
+            needs_velocities: true,
             locked: vec![false; nh],
             n_locked: 0,
             base_tau: vec![0.0; nh],

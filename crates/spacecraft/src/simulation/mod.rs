@@ -22,8 +22,8 @@
 //!
 //! # Right-hand side
 //!
-//! unpack `x` → forward kinematics (only when an effect needs it; the centre of mass only
-//! when an effect reads it) → each enabled effect adds hinge torques, body wrenches and its
+//! unpack `x` → forward kinematics (only when an effect needs it, the poses alone where no
+//! effect reads the bodies' velocities; the centre of mass only when an effect reads it) → each enabled effect adds hinge torques, body wrenches and its
 //! own derivatives → ABA (hybrid ABA when hinges are locked; reusing the kinematics' hinge
 //! transforms when they ran; the unrolled kernel, hybrid too, where the model has the
 //! preprint's layout and no gimbal hinge is locked) → pack `dx`.

@@ -1,7 +1,8 @@
 //! The right-hand side, `dx = f(t, x)`, as one pipeline read top to bottom:
 //!
 //! 1. **unpack** `x` into the tree's `q` and `v`;
-//! 2. **kinematics**: the poses and velocities of every body, when an effect reads them;
+//! 2. **kinematics**: the poses and velocities of every body, when an effect reads them (the
+//!    poses alone where no effect reads the velocities, `Needs::poses`);
 //! 3. **effects**: each enabled effect adds hinge torques and body wrenches and writes its
 //!    own states' derivatives (and, for the energy budget, the power of what it added);
 //! 4. **dynamics**: forward dynamics (ABA, hybrid when hinges are locked; the layout's
@@ -22,7 +23,7 @@ use crate::effects::{Context, Forces, Power};
 use satsim_integrate::SystemError;
 use satsim_tree::flexible::{self, FlexModel};
 use satsim_tree::spatial::{Force, Vec3};
-use satsim_tree::{Data, DynamicsError, Input, forward_kinematics, momentum, rnea};
+use satsim_tree::{Data, DynamicsError, Input, forward_kinematics, forward_poses, momentum, rnea};
 
 impl Simulation {
     /// `dx = f(t, x)`; slices of the wrong length are an error, not a panic. The three
@@ -61,12 +62,15 @@ impl Simulation {
             self.unpack(x);
             let kin = self.kinematics(false)?;
             // 3. The effects write their own derivatives straight into `dx`.
-            let power = self.apply_effects(t, x, kin, Some(&mut *dx), true)?;
-            if track && !kin && self.data.forces.has_wrench {
+            let velocities = kin && self.data.needs_velocities;
+            let (power, unmeasured) =
+                self.apply_effects(t, x, kin, velocities, Some(&mut *dx), true)?;
+            if track && (unmeasured || (!kin && self.data.forces.has_wrench)) {
                 // A wrench's power needs the bodies' velocities: an effect wrote one without
-                // asking for kinematics, so they are computed from now on (this evaluation
-                // again).
+                // asking for kinematics (or for the poses only) and reads its power, so they
+                // are computed from now on (this evaluation again).
                 self.data.needs_kinematics = true;
+                self.data.needs_velocities = true;
                 continue;
             }
             break (kin, power);
@@ -164,7 +168,7 @@ impl Simulation {
     ) -> Result<(), SystemError> {
         self.unpack(x);
         let kin = self.kinematics(kinematics)?;
-        self.apply_effects(t, x, kin, None, false)?;
+        self.apply_effects(t, x, kin, kin, None, false)?;
         self.hold_torques_after_effects(kinematics, hold)
     }
 
@@ -228,7 +232,8 @@ impl Simulation {
     }
 
     /// Stage 2: forward kinematics when this pass asks for it or an effect needs it; returns
-    /// whether the poses are now current.
+    /// whether the poses are now current. The velocities too, unless the right-hand side's
+    /// effects read only the poses (`data.needs_velocities`; a pass that asks gets them).
     #[inline]
     pub(super) fn kinematics(&mut self, asked: bool) -> Result<bool, SystemError> {
         let kin = asked || self.data.needs_kinematics;
@@ -237,8 +242,12 @@ impl Simulation {
                 self.flexible_kinematics()?;
             } else {
                 let d = &mut self.data;
-                forward_kinematics(&self.model.tree, &mut d.tree, &d.q, &d.v)
-                    .map_err(SystemError::from_error)?;
+                if asked || d.needs_velocities {
+                    forward_kinematics(&self.model.tree, &mut d.tree, &d.q, &d.v)
+                } else {
+                    forward_poses(&self.model.tree, &mut d.tree, &d.q)
+                }
+                .map_err(SystemError::from_error)?;
             }
         }
         Ok(kin)
@@ -269,15 +278,20 @@ impl Simulation {
     /// `own_dot` (the right-hand side's `dx`) or, when `None`, into the scratch buffer.
     /// `rhs`: the right-hand side's pass, which counts the calls and, with the energy budget,
     /// measures each effect's power (`Σ Δτ_k q̇_k + Σ Δf_i · v_i` over what it added) and
-    /// lets the effect split it.
+    /// lets the effect split it. `velocities`: the bodies' velocities are current; without
+    /// them a wrench's power is not measured, and the second value says whether an effect
+    /// that reads it ([`Effect::power_reads_applied`]) added one.
+    ///
+    /// [`Effect::power_reads_applied`]: crate::effects::Effect::power_reads_applied
     pub(super) fn apply_effects(
         &mut self,
         t: f64,
         x: &[f64],
         kin: bool,
+        velocities: bool,
         own_dot: Option<&mut [f64]>,
         rhs: bool,
-    ) -> Result<Power, SystemError> {
+    ) -> Result<(Power, bool), SystemError> {
         let track = rhs && !self.model.work.is_empty();
         let nb = self.model.tree.base_nv();
         self.with_context_power(t, x, kin, track, |ctx, h| {
@@ -293,7 +307,7 @@ impl Simulation {
             } else {
                 0.0
             };
-            let (mut wrenches, mut added) = (0.0, 0);
+            let (mut wrenches, mut added, mut unmeasured) = (0.0, 0, false);
             let mut power = Power::actuator(hinges);
             for ((e, r), c) in h.effects.iter_mut().zip(h.own).zip(h.calls.iter_mut()) {
                 if rhs {
@@ -306,9 +320,13 @@ impl Simulation {
                     hinges = now;
                     if h.forces.wrenches_added() != added {
                         added = h.forces.wrenches_added();
-                        let now = h.forces.wrench_power(&ctx.data.v);
-                        applied += now - wrenches;
-                        wrenches = now;
+                        if velocities {
+                            let now = h.forces.wrench_power(&ctx.data.v);
+                            applied += now - wrenches;
+                            wrenches = now;
+                        } else {
+                            unmeasured |= e.power_reads_applied();
+                        }
                     }
                     let p = e.power(ctx, &x[r.clone()], applied);
                     power.actuator += p.actuator;
@@ -324,7 +342,7 @@ impl Simulation {
                     &mut own_dot[h.own[o].start + 3..h.own[o].end],
                 );
             }
-            Ok(power)
+            Ok((power, unmeasured))
         })
     }
 
