@@ -660,8 +660,10 @@ impl<T: Real> UnrolledAba<T> {
                 // (Locked, the axial torque goes through the lock: the hold torque.)
                 pa0.ang += r.axis * self.rotor_torque::<LOADED>(r, tau, fext);
             }
-            if LOADED {
-                // The rest of the rotor's wrench acts on the base through the bearing.
+            if LOADED && !is_zero(&fext[r.body]) {
+                // The rest of the rotor's wrench acts on the base through the bearing. None
+                // where no effect loads the rotor (the gravity gradient loads the wheels
+                // through the bus): then its transform, a `sin_cos` per lane, is not needed.
                 pa0 -= r.xup(q).inv_apply_force(&fext[r.body]);
             }
         }
@@ -1133,6 +1135,17 @@ impl Kernel for UnrolledAba {
     fn as_any(&self) -> Option<&dyn std::any::Any> {
         Some(self)
     }
+}
+
+/// Whether every component of `f` is zero in every lane (±0). Subtracting a zero wrench
+/// moved to another frame (±0 in each component) changes no bit of a nonzero sum, and at
+/// most the sign of a zero one (`−0 − −0 = +0`).
+#[inline]
+fn is_zero<T: Real>(f: &Force<T>) -> bool {
+    f.ang
+        .iter()
+        .chain(f.lin.iter())
+        .all(|x| x.all(|x| x == 0.0))
 }
 
 /// A wrench `f` about a body's origin moved to its hinge point, the origin lying at `o` from
