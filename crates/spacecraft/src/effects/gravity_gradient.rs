@@ -79,7 +79,10 @@ pub struct GravityGradient {
 /// share about the spin axis is zero (`a · (E × J a (a·E)) = 0`), so the rotors' spin is
 /// untouched; the carrier takes the rest, as the tree would pass it on. One body's terms
 /// instead of one per wheel (the same to round-off; test
-/// `rotors_load_through_their_carrier`).
+/// `rotors_load_through_their_carrier`). The preprint's model keeps only each body's couple
+/// about its own centre of mass, which is not linear in that way for a rotor with mass off
+/// the carrier's centre (the offset's share is the tidal term it drops): there a carrier
+/// takes its rotors only when none of them has mass.
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Loaded {
     /// Its index in the tree's bodies.
@@ -94,15 +97,26 @@ struct Loaded {
     trace: f64,
 }
 
+/// Whether body `carrier` takes its gyrostat rotors under `gm` ([`Loaded`]).
+fn takes_rotors(model: &Model, gm: GravityModel, carrier: usize) -> bool {
+    let mut rotors = model.gyrostats().iter().filter(|g| g.parent() == carrier);
+    match gm {
+        GravityModel::Full => true,
+        GravityModel::Preprint => rotors.all(|g| model.bodies()[g.body()].mass() == 0.0),
+    }
+}
+
 impl Loaded {
-    /// Body `i` with the rotors the tree folds into it; `None` for a gyrostat rotor (loaded
-    /// through its carrier) and for a body with neither mass nor inertia (a gimbal link).
-    fn of(model: &Model, i: usize) -> Option<Self> {
-        if kernel_parts::is_gyrostat(model, i) {
+    /// Body `i` with the rotors the tree folds into it, where it takes them; `None` for a
+    /// rotor its carrier takes and for a body with neither mass nor inertia (a gimbal link).
+    fn of(model: &Model, gm: GravityModel, i: usize) -> Option<Self> {
+        let taken = |g: &satsim_tree::Gyrostat| takes_rotors(model, gm, g.parent());
+        if model.gyrostats().iter().any(|g| g.body() == i && taken(g)) {
             return None;
         }
         let body = &model.bodies()[i];
-        let (mass, com, inertia) = if model.gyrostats().iter().any(|g| g.parent() == i) {
+        let carries = model.gyrostats().iter().any(|g| g.parent() == i);
+        let (mass, com, inertia) = if carries && takes_rotors(model, gm, i) {
             // The locked-on inertia about the body origin, back to its centre of mass:
             // `I_O = I_c − m [c]×[c]×` (`RigidInertia::from_com`).
             let ri = kernel_parts::carrier_inertia(model, i);
@@ -220,7 +234,7 @@ impl Effect for GravityGradient {
     fn connect(&mut self, links: &Links) {
         let model = links.model;
         self.loaded = (0..model.n_bodies())
-            .filter_map(|i| Loaded::of(model, i))
+            .filter_map(|i| Loaded::of(model, self.model, i))
             .collect();
         self.n_bodies = model.n_bodies();
     }
