@@ -115,6 +115,51 @@ fn generalised_forces(sim: &mut Simulation, x: &[f64]) -> Vec<f64> {
     (m * nalgebra::DVector::from_vec(qdd)).as_slice().to_vec()
 }
 
+/// The moment of the Earth's point-mass gravity on point masses at `rho` from the centre of
+/// mass, the centre of mass at `r` (inertial axes).
+fn point_mass_moment(r: &Vec3, pts: impl IntoIterator<Item = (f64, Vec3)>) -> Vec3 {
+    pts.into_iter().fold(Vec3::zeros(), |t, (m, rho)| {
+        t + rho.cross(&(-MU_EARTH * m * (r + rho) / (r + rho).norm().powi(3)))
+    })
+}
+
+/// A 300 kg bus (principal axes) with three large wheels of mass `mass`, tilted, at rest at
+/// `r` under the gravity gradient `gm`: the simulation and its attitude.
+fn wheels_on_a_tilted_bus(
+    gm: GravityModel,
+    mass: f64,
+    r: Vec3,
+) -> (Simulation, UnitQuaternion<f64>) {
+    let model = ModelBuilder::new(BaseKind::Free)
+        .body(Body::new("bus", 300.0, Mat3::from_diagonal(&BUS_INERTIA)))
+        .build()
+        .unwrap();
+    // Large against the bus, so that a wheel left out (or put at the wrong centre) shows.
+    let wheels = (0..3)
+        .map(|j| {
+            let mut w = Wheel::new(format!("w{j}"), Vec3::ith(j, 1.0), 20.0 + 5.0 * j as f64);
+            w.transverse = 12.0 + 3.0 * j as f64;
+            w.mass = mass;
+            w.at = Vec3::new(0.4, -0.3 + 0.2 * j as f64, 0.25);
+            w
+        })
+        .collect();
+    let att = UnitQuaternion::from_euler_angles(0.3, -0.5, 1.1);
+    let mut state = State::rest(&model);
+    state.q[..4].copy_from_slice(&[att.w, att.i, att.j, att.k]);
+    let sim = Simulation::builder(model)
+        .initial(state)
+        .effect(orbit_at(r))
+        .effect(GravityGradient::new(gm))
+        .effect(ReactionWheels::new(wheels))
+        .build()
+        .unwrap();
+    (sim, att)
+}
+
+/// The bus of [`wheels_on_a_tilted_bus`], principal moments (kg m²).
+const BUS_INERTIA: Vec3 = Vec3::new(120.0, 90.0, 60.0);
+
 fn orbit_at(r: Vec3) -> Orbit {
     let v = r.cross(&Vec3::z()).normalize() * (MU_EARTH / r.norm()).sqrt();
     Orbit::new(OrbitModel::Kepler, r, v)
@@ -145,12 +190,12 @@ fn gravity_gradient_sign() {
 
     // Brute force: the points in principal axes rotated back to the body frame.
     let rot = att.to_rotation_matrix();
-    let mut torque = Vec3::zeros();
-    for (m, p) in point_masses(300.0, Vec3::zeros(), &Mat3::from_diagonal(&eig.eigenvalues)) {
-        let rho = rot * (eig.eigenvectors * p);
-        let f = -MU_EARTH * m * (r + rho) / (r + rho).norm().powi(3);
-        torque += rho.cross(&f);
-    }
+    let torque = point_mass_moment(
+        &r,
+        point_masses(300.0, Vec3::zeros(), &Mat3::from_diagonal(&eig.eigenvalues))
+            .into_iter()
+            .map(|(m, p)| (m, rot * (eig.eigenvectors * p))),
+    );
     let torque_bus = rot.inverse() * torque;
     let err = (torque_model - torque_bus).norm() / torque_bus.norm();
     eprintln!(
@@ -171,33 +216,8 @@ fn gravity_gradient_sign() {
 /// wheel, and no torque about any spin axis.
 #[test]
 fn rotors_load_through_their_carrier() {
-    // Principal axes, as `cloud`'s point masses take them.
-    let inertia = Mat3::from_diagonal(&Vec3::new(120.0, 90.0, 60.0));
-    let model = ModelBuilder::new(BaseKind::Free)
-        .body(Body::new("bus", 300.0, inertia))
-        .build()
-        .unwrap();
-    // Large against the bus, so that a wheel left out (or put at the wrong centre) shows.
-    let wheels = (0..3)
-        .map(|j| {
-            let mut w = Wheel::new(format!("w{j}"), Vec3::ith(j, 1.0), 20.0 + 5.0 * j as f64);
-            w.transverse = 12.0 + 3.0 * j as f64;
-            w.mass = 15.0;
-            w.at = Vec3::new(0.4, -0.3 + 0.2 * j as f64, 0.25);
-            w
-        })
-        .collect();
-    let att = UnitQuaternion::from_euler_angles(0.3, -0.5, 1.1);
-    let mut state = State::rest(&model);
-    state.q[..4].copy_from_slice(&[att.w, att.i, att.j, att.k]);
     let r = Vec3::new(5.0e6, 4.0e6, 2.5e6);
-    let mut sim = Simulation::builder(model)
-        .initial(state)
-        .effect(orbit_at(r))
-        .effect(GravityGradient::new(GravityModel::Full))
-        .effect(ReactionWheels::new(wheels))
-        .build()
-        .unwrap();
+    let (mut sim, att) = wheels_on_a_tilted_bus(GravityModel::Full, 15.0, r);
     let tree = sim.model().clone();
     assert_eq!(tree.gyrostats().len(), 3, "the wheels are gyrostat rotors");
     let x0 = sim.x0().to_vec();
@@ -205,13 +225,9 @@ fn rotors_load_through_their_carrier() {
     let torque_model = Vec3::new(q[0], q[1], q[2]); // bus axes, about its origin
 
     // The model's forces sum to zero, so their moment is the same about any point.
-    let mut torque = Vec3::zeros();
     let mut q0 = tree.neutral();
     q0[..4].copy_from_slice(&x0[..4]);
-    for (m, rho) in cloud(&tree, &q0) {
-        torque += rho.cross(&(-MU_EARTH * m * (r + rho) / (r + rho).norm().powi(3)));
-    }
-    let torque_bus = att.inverse() * torque;
+    let torque_bus = att.inverse() * point_mass_moment(&r, cloud(&tree, &q0));
     let err = (torque_model - torque_bus).norm() / torque_bus.norm();
     eprintln!(
         "gravity gradient with wheels: model {torque_model:?}, point masses {torque_bus:?}, relative error {err:.2e}"
@@ -223,11 +239,12 @@ fn rotors_load_through_their_carrier() {
         "model {torque_model} vs point masses {torque_bus}: {err}"
     );
     // Without the wheels the moment is far off: the test sees them.
-    let mut bus_only = Vec3::zeros();
-    for (m, p) in point_masses(300.0, Vec3::zeros(), &inertia) {
-        let rho = att * p;
-        bus_only += rho.cross(&(-MU_EARTH * m * (r + rho) / (r + rho).norm().powi(3)));
-    }
+    let bus_only = point_mass_moment(
+        &r,
+        point_masses(300.0, Vec3::zeros(), &Mat3::from_diagonal(&BUS_INERTIA))
+            .into_iter()
+            .map(|(m, p)| (m, att * p)),
+    );
     assert!((att.inverse() * bus_only - torque_bus).norm() > 0.05 * torque_bus.norm());
     // The field turns no wheel about its spin axis.
     for (j, qj) in q[6..].iter().enumerate() {
@@ -245,32 +262,9 @@ fn rotors_load_through_their_carrier() {
 /// share the model drops.)
 #[test]
 fn preprint_gravity_gradient_sums_each_bodys_couple_with_wheels() {
-    let inertia = Mat3::from_diagonal(&Vec3::new(120.0, 90.0, 60.0));
-    let att = UnitQuaternion::from_euler_angles(0.3, -0.5, 1.1);
     let r = Vec3::new(5.0e6, 4.0e6, 2.5e6);
     for mass in [0.0, 15.0] {
-        let model = ModelBuilder::new(BaseKind::Free)
-            .body(Body::new("bus", 300.0, inertia))
-            .build()
-            .unwrap();
-        let wheels = (0..3)
-            .map(|j| {
-                let mut w = Wheel::new(format!("w{j}"), Vec3::ith(j, 1.0), 20.0 + 5.0 * j as f64);
-                w.transverse = 12.0 + 3.0 * j as f64;
-                w.mass = mass;
-                w.at = Vec3::new(0.4, -0.3 + 0.2 * j as f64, 0.25);
-                w
-            })
-            .collect();
-        let mut state = State::rest(&model);
-        state.q[..4].copy_from_slice(&[att.w, att.i, att.j, att.k]);
-        let mut sim = Simulation::builder(model)
-            .initial(state)
-            .effect(orbit_at(r))
-            .effect(GravityGradient::new(GravityModel::Preprint))
-            .effect(ReactionWheels::new(wheels))
-            .build()
-            .unwrap();
+        let (mut sim, att) = wheels_on_a_tilted_bus(GravityModel::Preprint, mass, r);
         let tree = sim.model().clone();
         let x0 = sim.x0().to_vec();
         let q = generalised_forces(&mut sim, &x0);

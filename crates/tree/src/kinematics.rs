@@ -103,7 +103,9 @@ pub fn forward_poses(model: &Model, data: &mut Data, q: &[f64]) -> Result<(), Dy
     data.position[0] = pos;
     for i in 1..model.n_bodies() {
         let p = model.parent[i].expect("non-root body has a parent");
-        // `forward_kinematics`' products, in its order (tested bit for bit).
+        // `forward_kinematics`' products, in its order (tested bit for bit). Written out rather
+        // than shared: a shared helper moved the code layout of the kernel crates and cost one
+        // orbit 24 % (docs/src/results/performance.md).
         let x = &data.xup[i];
         data.rotation[i] = data.rotation[p] * x.rot.transpose();
         data.position[i] = data.position[p] + data.rotation[p] * x.trans;
