@@ -97,11 +97,38 @@ pub fn forward_kinematics(
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 pub fn forward_poses(model: &Model, data: &mut Data, q: &[f64]) -> Result<(), DynamicsError> {
-    update_transforms(model, data, q)?;
+    forward_poses_of(model, data, q, model.n_bodies())
+}
+
+/// [`forward_poses`] of the first `n` bodies only (`n ≤ n_bodies`; a parent comes before
+/// its children, so these are closed under parents): their hinge transforms and poses, bit
+/// for bit [`forward_poses`]'; every other body's entries keep whatever they held. For a
+/// caller that reads none of the rest (a simulation whose effects read no pose of the
+/// rotors it adds last).
+///
+/// ```
+/// use satsim_tree::{Data, forward_poses, forward_poses_of, samples::chain, BaseKind};
+/// let model = chain(3, BaseKind::Free);
+/// let (mut all, mut two) = (Data::new(&model), Data::new(&model));
+/// let q = model.neutral();
+/// forward_poses(&model, &mut all, &q)?;
+/// forward_poses_of(&model, &mut two, &q, 2)?;
+/// assert_eq!(all.rotation[..2], two.rotation[..2]);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn forward_poses_of(
+    model: &Model,
+    data: &mut Data,
+    q: &[f64],
+    n: usize,
+) -> Result<(), DynamicsError> {
+    check_len("q", q.len(), model.nq())?;
+    let n = n.min(model.n_bodies());
     let (att, pos) = base_pose(model, q);
     data.rotation[0] = att.to_rotation_matrix().into_inner();
     data.position[0] = pos;
-    for i in 1..model.n_bodies() {
+    for i in 1..n {
+        data.xup[i] = model.xup(i, q);
         let p = model.parent[i].expect("non-root body has a parent");
         // `forward_kinematics`' products, in its order (tested bit for bit). Written out rather
         // than shared: a shared helper moved the code layout of the kernel crates and cost one
@@ -234,6 +261,19 @@ mod tests {
                 (&data.rotation, &data.position, &data.xup),
                 "seed {seed}: the poses alone"
             );
+            // The first bodies' alone: theirs bit for bit, the rest untouched.
+            let n = 1 + seed as usize % model.n_bodies();
+            let mut first = Data::new(&model);
+            forward_poses_of(&model, &mut first, &q, n).unwrap();
+            let fresh = Data::new(&model);
+            for i in 0..model.n_bodies() {
+                let want = if i < n { &data } else { &fresh };
+                assert_eq!(
+                    (first.rotation[i], first.position[i], &first.xup[i]),
+                    (want.rotation[i], want.position[i], &want.xup[i]),
+                    "seed {seed}: the first {n} poses, body {i}"
+                );
+            }
             for (i, aba_vi) in aba_v.iter().enumerate().skip(1) {
                 assert_eq!(data.xup[i], model.xup(i, &q), "seed {seed} body {i}");
                 if !model.is_gyrostat[i] {

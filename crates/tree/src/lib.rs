@@ -85,9 +85,10 @@ pub use io::{
     read_flex_model, read_model, read_state,
 };
 pub use kinematics::{
-    base_pose, forward_kinematics, forward_kinematics_acc, forward_poses, update_transforms,
+    base_pose, forward_kinematics, forward_kinematics_acc, forward_poses, forward_poses_of,
+    update_transforms,
 };
 pub use model::{
     BaseKind, Body, BodyInfo, BoxShape, Chain, Gyrostat, Hinge, Joint, Model, ModelBuilder,
 };
-pub use rnea::{bias, rnea, rnea_for};
+pub use rnea::{bias, gyrostat_torques, rnea, rnea_for};

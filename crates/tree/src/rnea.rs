@@ -164,6 +164,94 @@ pub fn rnea_for<'d>(
     Ok(&data.tau)
 }
 
+/// [`rnea_for`] where every hinge asked for is a [`Gyrostat`](crate::Gyrostat) rotor's
+/// (a balanced axisymmetric leaf on a hinge without armature): its torque by the rotor's
+/// closed form instead of the rotor's own pass, to round-off the same (tested).
+///
+/// The axial part of the rotor's Euler equation about its centre of mass (which lies on
+/// the axis, so the hinge's reaction force has no moment about it) is
+/// `τ + aᵀ n_ext = aᵀ (I ω̇ + ω × I ω)` with `ω = ω_c + a q̇` its angular velocity. For
+/// `I = J a aᵀ + Iₜ (1 − a aᵀ)`, `aᵀ (ω × I ω) = 0`, and `aᵀ ω̇ = aᵀ ω̇_c + q̈` (the axis
+/// turns with the carrier, `ȧ = ω_c × a ⟂ a`), so
+///
+/// `τ = J (aᵀ ω̇_c + q̈) − Sᵀ f_ext`,
+///
+/// `ω̇_c` the carrier's angular acceleration (its axes: the angular part of its spatial
+/// acceleration) and `Sᵀ f_ext` the rotor's external moment about the axis. Only the
+/// carriers and their ancestors are visited (velocities and accelerations); no rotor
+/// transform (a `sin_cos`) or inertia. Returns `None`, with nothing written, where a hinge
+/// asked for is not a gyrostat rotor's (then use [`rnea_for`]); the entries not asked for
+/// keep whatever they held.
+///
+/// ```
+/// use satsim_tree::{BaseKind, Body, Data, Hinge, ModelBuilder, gyrostat_torques, rnea, spatial::{Mat3, Vec3}};
+/// let model = ModelBuilder::new(BaseKind::Free)
+///     .body(Body::new("bus", 10.0, Mat3::identity()))
+///     .body(Body::new("wheel", 0.5, Mat3::from_diagonal(&Vec3::new(0.1, 0.1, 0.2))))
+///     .hinge(Hinge::revolute("spin", "bus", "wheel", Vec3::z()))
+///     .build()?;
+/// let (q, v, a) = (model.neutral(), [0.1, 0.2, 0.3, 0.0, 0.0, 0.0, 50.0], [0.3; 7]);
+/// let mut data = Data::new(&model);
+/// let all = rnea(&model, &mut data, &q, &v, &a, None)?[6];
+/// let closed = gyrostat_torques(&model, &mut data, &q, &v, &a, None, &[true])?.expect("a gyrostat");
+/// assert!((closed[6] - all).abs() < 1e-14);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn gyrostat_torques<'d>(
+    model: &Model,
+    data: &'d mut Data,
+    q: &[f64],
+    v: &[f64],
+    a: &[f64],
+    fext: Option<&[Force]>,
+    which: &[bool],
+) -> Result<Option<&'d DVector<f64>>, DynamicsError> {
+    if let Some(f) = fext {
+        check_len("fext", f.len(), model.n_bodies())?;
+    }
+    check_len("a", a.len(), model.nv())?;
+    check_len("v", v.len(), model.nv())?;
+    check_len("q", q.len(), model.nq())?;
+    let nb = model.base_nv();
+    check_len("which", which.len(), model.nv() - nb)?;
+    let n = model.n_bodies();
+    // The bodies to visit: each asked rotor's carrier and its ancestors.
+    const ABOVE: u8 = 1;
+    let reach = &mut data.rnea_reach;
+    reach.fill(0);
+    for i in 1..n {
+        let joint = model.joints[i].as_ref().expect("joint");
+        if which[joint.dof - nb] {
+            if !model.is_gyrostat[i] {
+                return Ok(None);
+            }
+            let mut c = model.parent[i];
+            while let Some(p) = c {
+                reach[p] = ABOVE;
+                c = model.parent[p];
+            }
+        }
+    }
+    // Pass 1, outward, as `rnea`'s, over those bodies.
+    data.v[0] = base_motion(model, v);
+    data.a[0] = base_motion(model, a);
+    for i in 1..n {
+        if data.rnea_reach[i] == ABOVE {
+            data.xup[i] = model.xup(i, q);
+            motion_at(model, data, i, v, a);
+        }
+    }
+    for g in &model.gyrostats {
+        let joint = model.joints[g.body].as_ref().expect("joint");
+        if which[joint.dof - nb] {
+            let n_ext = fext.map_or(0.0, |f| joint.s.dot(&f[g.body]));
+            data.tau[joint.dof] =
+                g.axial * (g.axis.dot(&data.a[g.parent].ang) + a[joint.dof]) - n_ext;
+        }
+    }
+    Ok(Some(&data.tau))
+}
+
 /// Pass 1 at body `i` (its transform current): its velocity and acceleration from its
 /// parent's. One body's step, shared by [`rnea`] and [`rnea_for`], so that they agree bit
 /// for bit by construction.
@@ -273,6 +361,69 @@ mod tests {
                         }
                     }
                     assert!(some.as_slice()[..nb].iter().all(|t| t.is_nan()));
+                }
+            }
+        }
+        assert!(checked > 100, "{checked}");
+    }
+
+    /// The gyrostat rotors' closed form gives `rnea`'s torques to round-off (random trees with
+    /// rotors of random mass, axis and hinge point, free and fixed bases, with and without
+    /// external wrenches on every body), writes only the hinges asked for, and declines a
+    /// hinge that is not a gyrostat rotor's.
+    #[test]
+    fn gyrostat_torques_are_rneas() {
+        use crate::samples::random_tree_with_rotors;
+        let mut rng = SplitMix(31);
+        let mut checked = 0;
+        for seed in 0..40 {
+            let base = if seed % 2 == 0 {
+                BaseKind::Free
+            } else {
+                BaseKind::Fixed
+            };
+            let model =
+                random_tree_with_rotors(2 + seed as usize % 6, base, seed % 3 == 0, 3, seed);
+            assert!(!model.gyrostats().is_empty(), "seed {seed}");
+            let (nv, nb, n) = (model.nv(), model.base_nv(), model.n_bodies());
+            let q = random_q(&model, &mut rng, 2.0);
+            let v: Vec<f64> = (0..nv).map(|_| rng.range(-20.0, 20.0)).collect();
+            let a: Vec<f64> = (0..nv).map(|_| rng.range(-2.0, 2.0)).collect();
+            let fext: Vec<Force> = (0..n)
+                .map(|_| Force::new(rng.vec3(1.0), rng.vec3(1.0)))
+                .collect();
+            let rotor_hinge = |i: usize| model.joints[i].as_ref().unwrap().dof - nb;
+            for with_fext in [false, true] {
+                let fext = with_fext.then_some(fext.as_slice());
+                let mut data = Data::new(&model);
+                let all = rnea(&model, &mut data, &q, &v, &a, fext).unwrap().clone();
+                let scale = all.amax().max(1.0);
+                let mut which = vec![false; nv - nb];
+                for g in model.gyrostats() {
+                    which[rotor_hinge(g.body())] = true;
+                }
+                let mut data = Data::new(&model);
+                data.tau.fill(f64::NAN);
+                let closed = gyrostat_torques(&model, &mut data, &q, &v, &a, fext, &which)
+                    .unwrap()
+                    .expect("every hinge asked is a rotor's");
+                for (k, &asked) in which.iter().enumerate() {
+                    if asked {
+                        let err = (closed[nb + k] - all[nb + k]).abs();
+                        assert!(err < 1e-12 * scale, "seed {seed} hinge {k}: {err:e}");
+                        checked += 1;
+                    } else {
+                        assert!(closed[nb + k].is_nan(), "seed {seed} hinge {k} written");
+                    }
+                }
+                // A hinge that is no rotor's: declined, nothing written.
+                if let Some(k) = (0..nv - nb).find(|&k| !which[k]) {
+                    which[k] = true;
+                    let mut data = Data::new(&model);
+                    data.tau.fill(f64::NAN);
+                    let none = gyrostat_torques(&model, &mut data, &q, &v, &a, fext, &which);
+                    assert!(none.unwrap().is_none(), "seed {seed}");
+                    assert!(data.tau.iter().all(|t| t.is_nan()));
                 }
             }
         }

@@ -8,9 +8,11 @@
 //! functions evaluate the whole right-hand side there, keep it, and take the hold torques
 //! from its accelerations; the next `rhs` at the same `(t, x)` (bit for bit) returns the
 //! kept slope instead of computing it again: one evaluation of the kinematics, the effects
-//! and the dynamics where there were two. The slope and the hold torques are bit for bit
-//! what the two passes gave apart: the same solve (`forward_dynamics` with the same inputs
-//! and lock mask) feeds both.
+//! and the dynamics where there were two. The slope is bit for bit what the two passes gave
+//! apart: the same solve (`forward_dynamics` with the same inputs and lock mask) feeds both.
+//! The hold torques are RNEA's on those accelerations, bit for bit; a stuck wheel's alone
+//! (every reader reads only the rotors') comes from the gyrostat rotor's closed form
+//! ([`satsim_tree::gyrostat_torques`]), RNEA's to round-off, without the rotor's pass.
 //!
 //! The kept slope is used once, and only while nothing but the continuous state could
 //! change `f`: every change of the discrete state (locks, an effect's event or sample, the
@@ -20,7 +22,7 @@
 use super::Simulation;
 use crate::effects::HoldReads;
 use satsim_integrate::SystemError;
-use satsim_tree::rnea_for;
+use satsim_tree::{gyrostat_torques, rnea_for};
 
 /// The slope kept by [`Simulation::evaluate_ahead`]: `dx = f(t, x)`, while `valid`.
 pub(super) struct Ahead {
@@ -66,7 +68,8 @@ impl Simulation {
     /// locked hinges' hold torques from its accelerations, as
     /// [`Self::hold_torques_after_effects`] gives them with `Hold::Locked`: by RNEA over the
     /// bodies they depend on, and only the rotors' where the event functions read no other
-    /// ([`Effect::hold_reads`](crate::effects::Effect::hold_reads); the others NaN).
+    /// ([`Effect::hold_reads`](crate::effects::Effect::hold_reads); the others NaN), those of
+    /// gyrostat rotors in closed form (the same to round-off).
     /// The right-hand side itself may have been evaluated already, at this very `(t, x)`, by
     /// the lanes of a batch ([`Self::keep_ahead`]): then its result is taken, as it stands.
     pub(super) fn evaluate_ahead(&mut self, t: f64, x: &[f64]) -> Result<(), SystemError> {
@@ -109,15 +112,15 @@ impl Simulation {
             .forces
             .has_wrench
             .then_some(d.forces.body_wrench.as_slice());
-        let need = rnea_for(
-            &m.tree,
-            &mut d.tree,
-            &d.q,
-            &d.v,
-            &d.hold_ddq,
-            fext,
-            &d.hold_mask,
-        )
+        // A gyrostat rotor's (a reaction wheel's) in closed form; RNEA where any other is
+        // asked for.
+        let (tree, data, q, v, ddq, mask) =
+            (&m.tree, &mut d.tree, &d.q, &d.v, &d.hold_ddq, &d.hold_mask);
+        let need = match gyrostat_torques(tree, data, q, v, ddq, fext, mask) {
+            Ok(Some(_)) => Ok(&data.tau),
+            Ok(None) => rnea_for(tree, data, q, v, ddq, fext, mask),
+            Err(e) => Err(e),
+        }
         .map_err(SystemError::from_error)?;
         let nb = m.tree.base_nv();
         for ((h, &w), n) in d
