@@ -312,3 +312,79 @@ fn unrolled_aba_in_the_right_hand_side() {
         assert_round_off(&a, &b, "orbit");
     }
 }
+
+/// An effect that reads the reaction wheels' poses with the poses alone ([`Needs::poses`]
+/// and the default `reads_rotor_poses`) and adds nothing: each `apply` checks that the
+/// first wheel (a rotor hinged to the bus about a coordinate axis, its angle 0) is turned
+/// exactly as its carrier, an error otherwise.
+struct ReadsRotorPoses;
+
+impl Effect for ReadsRotorPoses {
+    fn name(&self) -> &str {
+        "reads_rotor_poses"
+    }
+    fn needs(&self) -> Needs {
+        Needs {
+            poses: true,
+            ..Needs::default()
+        }
+    }
+    fn apply(
+        &mut self,
+        ctx: &Context,
+        _forces: &mut Forces,
+        _own: &[f64],
+        _own_dot: &mut [f64],
+    ) -> Result<(), SystemError> {
+        let g = &ctx.model.gyrostats()[0];
+        let (rotor, carrier) = (ctx.data.rotation[g.body()], ctx.data.rotation[g.parent()]);
+        if (rotor - carrier).norm() > 1e-15 {
+            return Err(SystemError::new("reads_rotor_poses: a stale rotor pose"));
+        }
+        Ok(())
+    }
+}
+
+/// The deployment scene (the gravity gradient reads the poses only and loads the wheels
+/// through the bus, so the right-hand side leaves the wheels' poses out), with the extra
+/// effect or without.
+fn deploy_with(reads_rotors: bool) -> Simulation {
+    let scene = Scene::read(examples().join("scenes/deploy.toml")).unwrap();
+    let mut b = Simulation::builder(scene.model.clone())
+        .initial(scene.initial.clone())
+        .energy_budget(scene.energy_budget);
+    for e in scene.effects.to_boxed() {
+        b = b.boxed(e);
+    }
+    if reads_rotors {
+        b = b.effect(ReadsRotorPoses);
+    }
+    b.build().unwrap()
+}
+
+/// An effect that reads a rotor's pose with the poses alone gets it current at every
+/// right-hand side (the bus turned at random states); and leaving the rotors' poses out, as
+/// the right-hand side does without such an effect, changes no bit of its result, with the
+/// unrolled kernel and with the generic ABA (which reads the rotors' transforms, kept from
+/// the start).
+#[test]
+fn rotor_poses_are_skipped_only_where_no_effect_reads_them() {
+    for generic in [false, true] {
+        let mut rng = SplitMix(47);
+        let (mut skip, mut read) = (deploy_with(false), deploy_with(true));
+        if generic {
+            skip.use_generic_dynamics();
+            read.use_generic_dynamics();
+        }
+        assert!(skip.x0().len() == read.x0().len());
+        for trial in 0..40 {
+            let x = random_state(&skip, &mut rng);
+            let (mut a, mut b) = (vec![0.0; x.len()], vec![0.0; x.len()]);
+            skip.rhs(0.0, &x, &mut a).unwrap();
+            read.rhs(0.0, &x, &mut b)
+                .unwrap_or_else(|e| panic!("generic {generic}, trial {trial}: {e}"));
+            let bits = |v: &[f64]| v.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&a), bits(&b), "generic {generic}, trial {trial}");
+        }
+    }
+}

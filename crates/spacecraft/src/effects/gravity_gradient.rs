@@ -36,10 +36,10 @@
 
 use super::{Context, Effect, Forces, Links, Needs, OrbitState, Power, SceneEffect, Section};
 use satsim_integrate::SystemError;
-use satsim_tree::Model;
 use satsim_tree::io::FileError;
 use satsim_tree::kernel_parts;
 use satsim_tree::spatial::{Force, Mat3, Vec3, skew};
+use satsim_tree::{Model, center_of_mass};
 use serde::Deserialize;
 use toml::Spanned;
 
@@ -67,6 +67,9 @@ pub struct GravityGradient {
     loaded: Vec<Loaded>,
     /// The number of bodies of the tree `loaded` was made for.
     n_bodies: usize,
+    /// For `full`, each loaded body's centre of mass in inertial axes from the system's
+    /// origin, by `apply` (room made once, by `connect`).
+    at: Vec<Vec3>,
 }
 
 /// A body the field loads: its per-body constants, worked out once.
@@ -95,6 +98,8 @@ struct Loaded {
     inertia: Mat3,
     /// The trace of `inertia` (for `∂V/∂t`).
     trace: f64,
+    /// Whether it is a gyrostat rotor, loaded alone.
+    rotor: bool,
 }
 
 /// Whether body `carrier` takes its gyrostat rotors under `gm` ([`Loaded`]).
@@ -136,6 +141,7 @@ impl Loaded {
             com,
             inertia,
             trace: inertia.trace(),
+            rotor: model.gyrostats().iter().any(|g| g.body() == i),
         })
     }
 }
@@ -153,6 +159,29 @@ fn tidal(k: f64, e: &Vec3, m: f64, rho: &Vec3) -> Vec3 {
 }
 
 impl GravityGradient {
+    /// Each loaded body's centre of mass (`at`, inertial axes) from the poses; for `full`.
+    fn place(&mut self, ctx: &Context) {
+        for (p, l) in self.at.iter_mut().zip(&self.loaded) {
+            let i = l.body;
+            *p = ctx.data.position[i] + ctx.data.rotation[i] * l.com;
+        }
+    }
+
+    /// The system's centre of mass from `at`: the loaded bodies hold all the mass (a rotor's
+    /// in its carrier's, a body left out has none), so this is
+    /// [`satsim_tree::center_of_mass`] to round-off, without a second pass over the bodies.
+    fn com(&self) -> Vec3 {
+        let mut m = 0.0;
+        let mut mc = Vec3::zeros();
+        for (p, l) in self.at.iter().zip(&self.loaded) {
+            if l.mass > 0.0 {
+                m += l.mass;
+                mc += p * l.mass;
+            }
+        }
+        if m > 0.0 { mc / m } else { Vec3::zeros() }
+    }
+
     /// The effect with the given model.
     pub fn new(model: GravityModel) -> Self {
         Self {
@@ -160,13 +189,13 @@ impl GravityGradient {
             field_power: 0.0,
             loaded: Vec::new(),
             n_bodies: 0,
+            at: Vec::new(),
         }
     }
 
     /// Adds every loaded body's couple (and, for `full`, tidal force) to `forces`; with
     /// `POWER`, returns `∂V/∂t` from the same terms (else 0: nothing reads it this pass, and
     /// its terms cost about as much as the couples). `k = μ/r³`, `e` the local vertical.
-    #[allow(clippy::too_many_arguments)]
     fn load<const POWER: bool>(
         &self,
         ctx: &Context,
@@ -175,7 +204,6 @@ impl GravityGradient {
         r: f64,
         k: f64,
         e: Vec3,
-        com: Vec3,
     ) -> f64 {
         // For the energy budget, ∂V/∂t (see `power`): Ė = (v − (E·v) E)/r, k̇ = −3 k (E·v)/r.
         let (e_dot, k_dot) = if POWER {
@@ -185,8 +213,9 @@ impl GravityGradient {
             (Vec3::zeros(), 0.0)
         };
         let full = self.model == GravityModel::Full;
+        let com = if full { self.com() } else { Vec3::zeros() };
         let mut field_power = 0.0;
-        for l in &self.loaded {
+        for (n, l) in self.loaded.iter().enumerate() {
             let i = l.body;
             let rot = &ctx.data.rotation[i];
             let eb = rot.tr_mul(&e);
@@ -198,7 +227,7 @@ impl GravityGradient {
             }
             let mut lin = Vec3::zeros();
             if full && l.mass > 0.0 {
-                let rho = ctx.data.position[i] + rot * l.com - com;
+                let rho = self.at[n] - com;
                 let f = tidal(k, &e, l.mass, &rho);
                 lin = rot.tr_mul(&f);
                 ang += l.com.cross(&lin);
@@ -225,7 +254,6 @@ impl Effect for GravityGradient {
             orbit: true,
             free_base: true,
             poses: true,
-            com: self.model == GravityModel::Full,
             ..Needs::default()
         }
     }
@@ -237,6 +265,7 @@ impl Effect for GravityGradient {
             .filter_map(|i| Loaded::of(model, self.model, i))
             .collect();
         self.n_bodies = model.n_bodies();
+        self.at = vec![Vec3::zeros(); self.loaded.len()];
     }
     fn apply(
         &mut self,
@@ -254,14 +283,13 @@ impl Effect for GravityGradient {
         let r = orbit.r.norm();
         let k = orbit.mu / (r * r * r);
         let e = orbit.r / r;
-        let com = match self.model {
-            GravityModel::Full => ctx.com_or_err("gravity_gradient")?,
-            GravityModel::Preprint => Vec3::zeros(), // not read
-        };
+        if self.model == GravityModel::Full {
+            self.place(ctx);
+        }
         self.field_power = if ctx.power {
-            self.load::<true>(ctx, forces, &orbit, r, k, e, com)
+            self.load::<true>(ctx, forces, &orbit, r, k, e)
         } else {
-            self.load::<false>(ctx, forces, &orbit, r, k, e, com);
+            self.load::<false>(ctx, forces, &orbit, r, k, e);
             f64::NAN
         };
         Ok(())
@@ -275,6 +303,12 @@ impl Effect for GravityGradient {
     /// Its power is `∂V/∂t`, from its own terms.
     fn power_reads_applied(&self) -> bool {
         false
+    }
+    /// Only where it loads a rotor alone (the preprint's model, a rotor with mass): a rotor
+    /// its carrier takes is no loaded body. `output` and `potential_energy` read every body,
+    /// but their passes compute every pose.
+    fn reads_rotor_poses(&self) -> bool {
+        self.loaded.iter().any(|l| l.rotor)
     }
     /// `gg_torque_x/y/z`: the moment of the couples and tidal forces about the centre of
     /// mass, bus axes (N m), beside the other disturbances' columns.
@@ -290,8 +324,7 @@ impl Effect for GravityGradient {
             row.extend_from_slice(&[f64::NAN; 3]);
             return;
         };
-        // Declared in `needs` for the full model; NaN (never a silent zero) if it were not.
-        let com = ctx.com.unwrap_or(Vec3::repeat(f64::NAN));
+        let com = center_of_mass(ctx.model, ctx.data);
         let r = orbit.r.norm();
         let (k, e) = (orbit.mu / (r * r * r), orbit.r / r);
         let mut moment = Vec3::zeros();
@@ -310,8 +343,7 @@ impl Effect for GravityGradient {
         let r = orbit.r.norm();
         let k = orbit.mu / (r * r * r);
         let e = orbit.r / r;
-        // Declared in `needs` for the full model; NaN (never a silent zero) if it were not.
-        let com = ctx.com.unwrap_or(Vec3::repeat(f64::NAN));
+        let com = center_of_mass(ctx.model, ctx.data);
         let mut v = 0.0;
         for (i, body) in ctx.model.bodies().iter().enumerate() {
             let rot = &ctx.data.rotation[i];

@@ -626,6 +626,16 @@ pub trait Effect: Send {
     fn power_reads_applied(&self) -> bool {
         true
     }
+    /// Whether, declaring [`Needs::poses`], it reads the poses of the rotor bodies the
+    /// effects add (the reaction wheels': [`Rotor`]) in [`Effect::apply`] (the default, always
+    /// right). A rotor's angle is no state: its pose is its carrier's, turned about its axis
+    /// by a fixed angle, and an effect that loads a balanced rotor through its carrier (the
+    /// gravity gradient) reads none. Where no effect reads them (and none needs the
+    /// velocities or the centre of mass), the right-hand side's poses pass leaves the rotors'
+    /// stale; every other pass computes them.
+    fn reads_rotor_poses(&self) -> bool {
+        true
+    }
     /// Whether its [`Effect::output`] or [`Effect::potential_energy`] reads what its last
     /// `apply` kept (a command, a mode), so that an output row runs `apply` first: the
     /// default. `false` lets a row whose effects all say so skip the effects' pass; right

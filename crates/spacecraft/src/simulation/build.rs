@@ -7,7 +7,9 @@ use super::{RunLog, SimData, SimError, SimModel, Simulation, StateLayout};
 use crate::effects::{Effect, Forces, Links, Rotor, Torquer, order};
 use satsim_satellite::kernel::UnrolledAba;
 use satsim_tree::flexible::FlexModel;
-use satsim_tree::{BaseKind, Body, ForwardDynamics, Hinge, Kernel, Model, ModelError, State};
+use satsim_tree::{
+    BaseKind, Body, ForwardDynamics, Hinge, Kernel, Model, ModelError, State, forward_poses,
+};
 use std::ops::Range;
 
 /// Builds a [`Simulation`] from a model, an initial state and effects.
@@ -261,6 +263,14 @@ impl Simulation {
             let n = e.needs();
             n.kinematics || ((n.com || n.net_force) && !n.poses)
         });
+        // The rotors' poses too, unless the only effects that read the bodies read their
+        // poses but no rotor's (the centre of mass reads every massive body).
+        let rotor_poses = needs_com
+            || net_force_to.is_some()
+            || effects.iter().any(|e| {
+                let n = e.needs();
+                (n.kinematics || n.poses) && e.reads_rotor_poses()
+            });
         let needs_hold = effects.iter().any(|e| e.needs().hold_torques);
         let nh = model.n_hinges();
         let mut base_tau = vec![0.0; nh];
@@ -292,6 +302,11 @@ impl Simulation {
             std::mem::replace(&mut data.forces, Forces::new(0, 0, 0)).with_torquers(torquers.len());
         data.needs_kinematics = needs_kinematics;
         data.needs_velocities = needs_velocities;
+        if !rotor_poses {
+            data.pose_bodies = model.n_bodies() - n_rotors;
+            // The rotors' transforms, once: their angles stay 0 (`SimData::pose_bodies`).
+            forward_poses(&model, &mut data.tree, &data.q)?;
+        }
         data.base_tau = base_tau;
         data.flex = flex.as_ref().map(FlexWork::new);
         let mut sim = Self {

@@ -64,6 +64,13 @@ pub struct SimData {
     /// budget measures the power of a wrench (found at the first such pass); otherwise only
     /// the poses ([`Needs::poses`](crate::effects::Needs::poses)).
     pub(super) needs_velocities: bool,
+    /// How many of the tree's first bodies that poses-only kinematics places: all of them, or
+    /// all but the rotors the effects add (the tree's last bodies) where no effect reads a
+    /// rotor's pose there ([`Effect::reads_rotor_poses`](crate::effects::Effect::reads_rotor_poses)).
+    /// A rotor's hinge angle is no state and stays 0, so its transform in `tree.xup`, set
+    /// when the simulation is built, stays current (every solve that recomputes it gets the
+    /// same).
+    pub(super) pose_bodies: usize,
     /// Which hinges (the scene's, then the rotors) are locked now, and how many.
     pub(super) locked: Vec<bool>,
     pub(super) n_locked: usize,
@@ -94,6 +101,7 @@ impl SimData {
             ddq: vec![0.0; nv],
             needs_kinematics: false,
             needs_velocities: true,
+            pose_bodies: tree.n_bodies(),
             locked: vec![false; nh],
             n_locked: 0,
             base_tau: vec![0.0; nh],

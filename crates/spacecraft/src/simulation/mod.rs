@@ -23,7 +23,8 @@
 //! # Right-hand side
 //!
 //! unpack `x` → forward kinematics (only when an effect needs it, the poses alone where no
-//! effect reads the bodies' velocities; the centre of mass only when an effect reads it) → each enabled effect adds hinge torques, body wrenches and its
+//! effect reads the bodies' velocities, and then not the rotors' where no effect reads a
+//! rotor's pose; the centre of mass only when an effect reads it) → each enabled effect adds hinge torques, body wrenches and its
 //! own derivatives → ABA (hybrid ABA when hinges are locked; reusing the kinematics' hinge
 //! transforms when they ran; the unrolled kernel, hybrid too, where the model has the
 //! preprint's layout and no gimbal hinge is locked) → pack `dx`.

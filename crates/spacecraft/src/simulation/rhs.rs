@@ -23,7 +23,9 @@ use crate::effects::{Context, Forces, Power};
 use satsim_integrate::SystemError;
 use satsim_tree::flexible::{self, FlexModel};
 use satsim_tree::spatial::{Force, Vec3};
-use satsim_tree::{Data, DynamicsError, Input, forward_kinematics, forward_poses, momentum, rnea};
+use satsim_tree::{
+    Data, DynamicsError, Input, forward_kinematics, forward_poses_of, momentum, rnea,
+};
 
 impl Simulation {
     /// `dx = f(t, x)`; slices of the wrong length are an error, not a panic. The three
@@ -245,7 +247,7 @@ impl Simulation {
                 if asked || d.needs_velocities {
                     forward_kinematics(&self.model.tree, &mut d.tree, &d.q, &d.v)
                 } else {
-                    forward_poses(&self.model.tree, &mut d.tree, &d.q)
+                    forward_poses_of(&self.model.tree, &mut d.tree, &d.q, d.pose_bodies)
                 }
                 .map_err(SystemError::from_error)?;
             }
