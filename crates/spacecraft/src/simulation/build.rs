@@ -244,10 +244,12 @@ impl Simulation {
         layout.len = work.end;
         let own: Vec<Range<usize>> = layout.effects.iter().map(|(_, r)| r.clone()).collect();
         let mut event_start = Vec::with_capacity(effects.len());
+        let mut event_owner = Vec::new();
         let mut n_events = 0;
-        for e in &effects {
+        for (i, e) in effects.iter().enumerate() {
             event_start.push(n_events);
             n_events += e.n_events();
+            event_owner.resize(n_events, i);
         }
         let needs_com = effects.iter().any(|e| e.needs().com);
         let net_force_to =
@@ -316,6 +318,7 @@ impl Simulation {
                 layout,
                 own,
                 event_start,
+                event_owner,
                 n_events,
                 n_user,
                 n_rotors,

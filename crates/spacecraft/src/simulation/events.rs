@@ -229,10 +229,8 @@ impl Simulation {
         Ok(())
     }
 
+    /// The effect that owns event function `k` (from the table made when it was built).
     pub(super) fn event_owner(&self, k: usize) -> usize {
-        (0..self.effects.len())
-            .rev()
-            .find(|&i| self.model.event_start[i] <= k && self.effects[i].n_events() > 0)
-            .unwrap_or(0)
+        self.model.event_owner.get(k).copied().unwrap_or(0)
     }
 }

@@ -22,6 +22,8 @@ pub struct SimModel {
     /// Each effect's first event function; `n_events` in all.
     pub(super) event_start: Vec<usize>,
     pub(super) n_events: usize,
+    /// The effect that owns each event function (asked at every step, per function).
+    pub(super) event_owner: Vec<usize>,
     /// The scene's hinges (the tree's first hinges) and the rotors after them.
     pub(super) n_user: usize,
     pub(super) n_rotors: usize,
