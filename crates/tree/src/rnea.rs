@@ -102,14 +102,8 @@ pub fn rnea_for<'d>(
     fext: Option<&[Force]>,
     which: &[bool],
 ) -> Result<&'d DVector<f64>, DynamicsError> {
-    if let Some(f) = fext {
-        check_len("fext", f.len(), model.n_bodies())?;
-    }
-    check_len("a", a.len(), model.nv())?;
-    check_len("v", v.len(), model.nv())?;
-    check_len("q", q.len(), model.nq())?;
+    check_some(model, q, v, a, fext, which)?;
     let nb = model.base_nv();
-    check_len("which", which.len(), model.nv() - nb)?;
     let n = model.n_bodies();
     // Which bodies: below a hinge asked for (parents come first), then their ancestors.
     const ABOVE: u8 = 1;
@@ -206,14 +200,8 @@ pub fn gyrostat_torques<'d>(
     fext: Option<&[Force]>,
     which: &[bool],
 ) -> Result<Option<&'d DVector<f64>>, DynamicsError> {
-    if let Some(f) = fext {
-        check_len("fext", f.len(), model.n_bodies())?;
-    }
-    check_len("a", a.len(), model.nv())?;
-    check_len("v", v.len(), model.nv())?;
-    check_len("q", q.len(), model.nq())?;
+    check_some(model, q, v, a, fext, which)?;
     let nb = model.base_nv();
-    check_len("which", which.len(), model.nv() - nb)?;
     let n = model.n_bodies();
     // The bodies to visit: each asked rotor's carrier and its ancestors.
     const ABOVE: u8 = 1;
@@ -250,6 +238,24 @@ pub fn gyrostat_torques<'d>(
         }
     }
     Ok(Some(&data.tau))
+}
+
+/// The lengths [`rnea_for`] and [`gyrostat_torques`] check.
+fn check_some(
+    model: &Model,
+    q: &[f64],
+    v: &[f64],
+    a: &[f64],
+    fext: Option<&[Force]>,
+    which: &[bool],
+) -> Result<(), DynamicsError> {
+    if let Some(f) = fext {
+        check_len("fext", f.len(), model.n_bodies())?;
+    }
+    check_len("a", a.len(), model.nv())?;
+    check_len("v", v.len(), model.nv())?;
+    check_len("q", q.len(), model.nq())?;
+    check_len("which", which.len(), model.nv() - model.base_nv())
 }
 
 /// Pass 1 at body `i` (its transform current): its velocity and acceleration from its
