@@ -327,6 +327,32 @@ mod tests {
     use super::*;
     use crate::samples::{SplitMix, random_q, random_tree};
 
+    /// A free base for even seeds, fixed for odd ones.
+    fn base_of(seed: u64) -> BaseKind {
+        if seed.is_multiple_of(2) {
+            BaseKind::Free
+        } else {
+            BaseKind::Fixed
+        }
+    }
+
+    /// A random state of `model`: `q`, rates within `±rate`, accelerations within ±2 and a
+    /// wrench on every body.
+    fn random_motion(
+        model: &Model,
+        rng: &mut SplitMix,
+        rate: f64,
+    ) -> (Vec<f64>, Vec<f64>, Vec<f64>, Vec<Force>) {
+        let nv = model.nv();
+        let q = random_q(model, rng, 2.0);
+        let v = (0..nv).map(|_| rng.range(-rate, rate)).collect();
+        let a = (0..nv).map(|_| rng.range(-2.0, 2.0)).collect();
+        let fext = (0..model.n_bodies())
+            .map(|_| Force::new(rng.vec3(1.0), rng.vec3(1.0)))
+            .collect();
+        (q, v, a, fext)
+    }
+
     /// Every torque `rnea_for` writes is `rnea`'s bit for bit, and it writes the hinges
     /// asked for and only entries below them: random trees (free and fixed, with massless
     /// links), states, external forces and masks.
@@ -335,19 +361,9 @@ mod tests {
         let mut rng = SplitMix(29);
         let mut checked = 0;
         for seed in 0..40 {
-            let base = if seed % 2 == 0 {
-                BaseKind::Free
-            } else {
-                BaseKind::Fixed
-            };
-            let model = random_tree(2 + seed as usize % 7, base, seed % 3 == 0, seed);
-            let (nv, nb, n) = (model.nv(), model.base_nv(), model.n_bodies());
-            let q = random_q(&model, &mut rng, 2.0);
-            let v: Vec<f64> = (0..nv).map(|_| rng.range(-2.0, 2.0)).collect();
-            let a: Vec<f64> = (0..nv).map(|_| rng.range(-2.0, 2.0)).collect();
-            let fext: Vec<Force> = (0..n)
-                .map(|_| Force::new(rng.vec3(1.0), rng.vec3(1.0)))
-                .collect();
+            let model = random_tree(2 + seed as usize % 7, base_of(seed), seed % 3 == 0, seed);
+            let (nv, nb) = (model.nv(), model.base_nv());
+            let (q, v, a, fext) = random_motion(&model, &mut rng, 2.0);
             for with_fext in [false, true] {
                 let fext = with_fext.then_some(fext.as_slice());
                 let mut data = Data::new(&model);
@@ -383,21 +399,16 @@ mod tests {
         let mut rng = SplitMix(31);
         let mut checked = 0;
         for seed in 0..40 {
-            let base = if seed % 2 == 0 {
-                BaseKind::Free
-            } else {
-                BaseKind::Fixed
-            };
-            let model =
-                random_tree_with_rotors(2 + seed as usize % 6, base, seed % 3 == 0, 3, seed);
+            let model = random_tree_with_rotors(
+                2 + seed as usize % 6,
+                base_of(seed),
+                seed % 3 == 0,
+                3,
+                seed,
+            );
             assert!(!model.gyrostats().is_empty(), "seed {seed}");
-            let (nv, nb, n) = (model.nv(), model.base_nv(), model.n_bodies());
-            let q = random_q(&model, &mut rng, 2.0);
-            let v: Vec<f64> = (0..nv).map(|_| rng.range(-20.0, 20.0)).collect();
-            let a: Vec<f64> = (0..nv).map(|_| rng.range(-2.0, 2.0)).collect();
-            let fext: Vec<Force> = (0..n)
-                .map(|_| Force::new(rng.vec3(1.0), rng.vec3(1.0)))
-                .collect();
+            let (nv, nb) = (model.nv(), model.base_nv());
+            let (q, v, a, fext) = random_motion(&model, &mut rng, 20.0);
             let rotor_hinge = |i: usize| model.joints[i].as_ref().unwrap().dof - nb;
             for with_fext in [false, true] {
                 let fext = with_fext.then_some(fext.as_slice());
