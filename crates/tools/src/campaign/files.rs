@@ -320,37 +320,63 @@ pub fn finish(dir: &Path, meta: &Meta) -> Result<Finished, CampaignError> {
         }
     }
 
-    // Traces: keep the finished ok runs', sorted by k then column.
+    // Traces: keep the finished ok runs', sorted by k then column. A line whose every value
+    // parses is copied as written: a value written as `{:.7e}` reads back as the nearest
+    // double, which `{:.7e}` writes as the same text, so formatting it again (most of this
+    // pass's time) would change nothing.
     let traces_path = dir.join(TRACES_CSV);
     let mut traces: BTreeMap<u64, Vec<(String, Vec<f64>)>> = BTreeMap::new();
-    if traces_path.exists() {
-        let text = std::fs::read_to_string(&traces_path)
-            .map_err(|e| CampaignError::io(&traces_path, e))?;
-        let (lines, _) = complete_lines(&text);
-        let ok: HashMap<u64, ()> = ok_rows.iter().map(|(k, _)| (*k, ())).collect();
-        for line in lines {
-            let mut it = line.split(',');
-            let (Some(k), Some(col)) = (it.next().and_then(|k| k.parse::<u64>().ok()), it.next())
-            else {
-                continue;
-            };
-            if !ok.contains_key(&k) {
-                continue;
+    let mut written: BTreeMap<u64, Vec<Option<&str>>> = BTreeMap::new();
+    let text = if traces_path.exists() {
+        std::fs::read_to_string(&traces_path).map_err(|e| CampaignError::io(&traces_path, e))?
+    } else {
+        String::new()
+    };
+    let (lines, _) = complete_lines(&text);
+    let ok: HashMap<u64, ()> = ok_rows.iter().map(|(k, _)| (*k, ())).collect();
+    for line in lines {
+        let mut it = line.split(',');
+        let (Some(k_text), Some(col)) = (it.next(), it.next()) else {
+            continue;
+        };
+        let Ok(k) = k_text.parse::<u64>() else {
+            continue;
+        };
+        if !ok.contains_key(&k) {
+            continue;
+        }
+        // The values as written, from the comma after the column.
+        let values_text = &line[(k_text.len() + 1 + col.len()).min(line.len())..];
+        let mut fields = 0;
+        let vals: Vec<f64> = it
+            .inspect(|_| fields += 1)
+            .filter_map(|v| v.parse().ok())
+            .collect();
+        let as_written = (vals.len() == fields).then_some(values_text);
+        let entry = traces.entry(k).or_default();
+        let texts = written.entry(k).or_default();
+        match entry.iter().position(|(c, _)| c == col) {
+            Some(i) => {
+                entry[i].1 = vals;
+                texts[i] = as_written;
             }
-            let vals: Vec<f64> = it.filter_map(|v| v.parse().ok()).collect();
-            let entry = traces.entry(k).or_default();
-            match entry.iter_mut().find(|(c, _)| c == col) {
-                Some(e) => e.1 = vals,
-                None => entry.push((col.to_owned(), vals)),
+            None => {
+                entry.push((col.to_owned(), vals));
+                texts.push(as_written);
             }
         }
     }
     let mut t = String::new();
-    for (k, cols) in &traces {
-        for (c, vals) in cols {
+    for ((k, cols), texts) in traces.iter().zip(written.values()) {
+        for ((c, vals), as_written) in cols.iter().zip(texts) {
             let _ = write!(t, "{k},{c}");
-            for v in vals {
-                let _ = write!(t, ",{v:.7e}");
+            match as_written {
+                Some(values) => t.push_str(values),
+                None => {
+                    for v in vals {
+                        let _ = write!(t, ",{v:.7e}");
+                    }
+                }
             }
             t.push('\n');
         }
@@ -552,5 +578,49 @@ mod tests {
         }
         assert_eq!(quote("a,b"), "\"a,b\"");
         assert_eq!(quote("q\""), "\"q\"\"\"");
+    }
+
+    /// `finish` rewrites `traces.csv` sorted by run, for the runs that finished, the last
+    /// line of a run and column winning: a line whose values all parse is copied as
+    /// written, one with a value that does not is written again without it, as `{:.7e}`.
+    #[test]
+    fn finish_sorts_the_traces_and_keeps_their_text() {
+        let dir = std::env::temp_dir().join(format!("satsim-finish-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(
+            dir.join(RUNS_CSV),
+            "run,status,message,final_a\n1,ok,,2.0\n0,ok,,1.0\n2,failed,boom,\n",
+        )
+        .unwrap();
+        std::fs::write(
+            dir.join(TRACES_CSV),
+            "1,t,0.0000000e0,1.0000000e-1\n\
+             0,a,1.2345679e0,NaN\n\
+             0,t,0.0000000e0,1.0000000e-1\n\
+             2,t,0.0000000e0\n\
+             1,a,5.0000000e-1,x,2.5000000e0\n\
+             0,a,9.8765432e-3,1.0000000e300\n\
+             1,t,0.0000000e0,1.0000000e-1,2.0",
+        )
+        .unwrap();
+        let meta = Meta {
+            scene: "scene.toml".into(),
+            runs: 3,
+            seed: 1,
+            shard: Shard::new(0, 1).unwrap(),
+            histograms: Vec::new(),
+            scene_digest: None,
+        };
+        let done = finish(&dir, &meta).unwrap();
+        assert_eq!((done.ok, done.failed), (2, 1));
+        let traces = std::fs::read_to_string(dir.join(TRACES_CSV)).unwrap();
+        std::fs::remove_dir_all(&dir).unwrap();
+        assert_eq!(
+            traces,
+            "0,a,9.8765432e-3,1.0000000e300\n\
+             0,t,0.0000000e0,1.0000000e-1\n\
+             1,t,0.0000000e0,1.0000000e-1\n\
+             1,a,5.0000000e-1,2.5000000e0\n"
+        );
     }
 }
