@@ -1,15 +1,15 @@
 //! The unrolled kernel over lanes of runs against one run at a time: the preprint satellite
 //! with its three wheels, four (eight) runs with their own panel masses and states, each
-//! batch solved once by the `f64` kernel per run and once by the kernel over `F64x<4>`
-//! (`F64x<8>`) lanes, on the widest instructions the CPU has (`lanes`: AVX2 where it has
-//! them) and on the baseline target's (`lanes_portable`: SSE2), with hinge angles anywhere
+//! batch solved once by the `f64` kernel per run and by the kernel over `F64x<2>`, `F64x<4>`
+//! and `F64x<8>` lanes on each instruction set the CPU has (the baseline target's SSE2,
+//! AVX2, AVX-512: [`Instructions`]), with hinge angles anywhere
 //! (±3 rad) and small (±0.7 rad). Throughput per run is what a campaign gains (its runs are
 //! independent); `cargo bench -p satsim-satellite --bench lanes [-- ROUNDS]`. The results are equal bit for
 //! bit (checked here before timing, and by the kernel's tests). Not criterion: on a shared
-//! machine whose speed drifts, the three ways alternate in short rounds and the per-round
+//! machine whose speed drifts, the ways alternate in short rounds and the per-round
 //! ratios are what is reported.
 
-use satsim_satellite::kernel::{Locks, UnrolledAba};
+use satsim_satellite::kernel::{Instructions, Locks, UnrolledAba};
 use satsim_tree::real::{F64x, Real};
 use satsim_tree::samples::{SplitMix, push_wheels, random_q};
 use satsim_tree::{Model, read_model};
@@ -76,18 +76,21 @@ fn median(mut xs: Vec<f64>) -> f64 {
     xs[xs.len() / 2]
 }
 
-/// `N` runs with hinge angles within `±hinges` rad: one at a time, in lanes on the widest
-/// instructions, in lanes on the baseline target's. The three alternate in short rounds
-/// (this machine's speed drifts by tens of per cent from one second to the next); the
-/// medians of the per-round figures and ratios.
-fn lanes<const N: usize>(rounds: usize, hinges: f64) {
+/// `N` runs with hinge angles within `±hinges` rad: one at a time, then in lanes on each of
+/// `sets` (instruction sets). The ways alternate in short rounds (this machine's speed drifts
+/// by tens of per cent from one second to the next); the medians of the per-round figures
+/// and ratios.
+fn lanes<const N: usize>(rounds: usize, hinges: f64, sets: &[Instructions]) {
     let models = models(N);
     let kernels: Vec<UnrolledAba> = models
         .iter()
         .map(|m| UnrolledAba::new(m).unwrap())
         .collect();
     let batch = UnrolledAba::<F64x<N>>::gather(std::array::from_fn(|k| &kernels[k])).unwrap();
-    let portable = batch.clone().portable();
+    let batches: Vec<UnrolledAba<F64x<N>>> = sets
+        .iter()
+        .map(|&i| batch.clone().instructions(i))
+        .collect();
     let runs = states(&models, hinges);
     let nv = models[0].nv();
     let (q, v, tau) = (
@@ -97,7 +100,7 @@ fn lanes<const N: usize>(rounds: usize, hinges: f64) {
     );
     let mut ddq = vec![F64x::<N>::splat(0.0); nv];
     let mut one = vec![0.0; nv];
-    for lanes in [&batch, &portable] {
+    for lanes in &batches {
         lanes
             .aba_hybrid_with_forces_into(&q, &v, &tau, None, Locks::NONE, &mut ddq)
             .unwrap();
@@ -113,7 +116,7 @@ fn lanes<const N: usize>(rounds: usize, hinges: f64) {
         }
     }
     let iters = (200_000 / N) as u32;
-    let mut figures = [vec![], vec![], vec![]];
+    let mut figures = vec![vec![]; 1 + sets.len()];
     for _ in 0..rounds {
         figures[0].push(per_run(iters, N, || {
             for (kernel, (q, v, tau)) in kernels.iter().zip(&runs) {
@@ -123,7 +126,7 @@ fn lanes<const N: usize>(rounds: usize, hinges: f64) {
                 black_box(&one);
             }
         }));
-        for (f, lanes) in figures[1..].iter_mut().zip([&batch, &portable]) {
+        for (f, lanes) in figures[1..].iter_mut().zip(&batches) {
             f.push(per_run(iters, N, || {
                 lanes
                     .aba_hybrid_with_forces_into(
@@ -148,14 +151,14 @@ fn lanes<const N: usize>(rounds: usize, hinges: f64) {
                 .collect(),
         )
     };
-    println!(
-        "{N} runs, ±{hinges} rad | {:.0} | {:.0} ({:.2}x) | {:.0} ({:.2}x)",
-        median(figures[0].clone()),
-        median(figures[1].clone()),
-        ratio(1),
-        median(figures[2].clone()),
-        ratio(2),
+    let mut line = format!(
+        "{N} runs, ±{hinges} rad | {:.0}",
+        median(figures[0].clone())
     );
+    for (i, f) in figures.iter().enumerate().skip(1) {
+        line += &format!(" | {:.0} ({:.2}x)", median(f.clone()), ratio(i));
+    }
+    println!("{line}");
 }
 
 fn main() {
@@ -164,31 +167,29 @@ fn main() {
         .skip(1)
         .find_map(|a| a.parse().ok())
         .unwrap_or(15);
-    let avx2 = if cfg!(target_arch = "x86_64") && is_avx2() {
-        "AVX2"
-    } else {
-        "none"
-    };
+    let widest = Instructions::detected();
+    let sets: Vec<Instructions> = [
+        Instructions::Baseline,
+        Instructions::Avx2,
+        Instructions::Avx512,
+    ]
+    .into_iter()
+    .filter(|&i| i <= widest)
+    .collect();
     println!(
-        "ns per run of the kernel (medians of {rounds} alternating rounds; wider instructions: {avx2})"
+        "ns per run of the kernel (medians of {rounds} alternating rounds; this CPU's widest \
+         instructions: {widest:?})"
     );
-    println!(
-        "runs, hinge angles | one at a time | lanes (speed-up) | lanes, baseline target (speed-up)"
-    );
+    let head: String = sets
+        .iter()
+        .map(|i| format!(" | lanes, {i:?} (speed-up)"))
+        .collect();
+    println!("runs, hinge angles | one at a time{head}");
     // Hinge angles anywhere (±3 rad: most beyond π/4, where `sin_cos` reduces its argument)
     // and small (±0.7 rad, all within π/4, as typical of a campaign).
     for hinges in [3.0, 0.7] {
-        lanes::<2>(rounds, hinges);
-        lanes::<4>(rounds, hinges);
-        lanes::<8>(rounds, hinges);
+        lanes::<2>(rounds, hinges, &sets);
+        lanes::<4>(rounds, hinges, &sets);
+        lanes::<8>(rounds, hinges, &sets);
     }
-}
-
-#[cfg(target_arch = "x86_64")]
-fn is_avx2() -> bool {
-    std::arch::is_x86_feature_detected!("avx2")
-}
-#[cfg(not(target_arch = "x86_64"))]
-fn is_avx2() -> bool {
-    false
 }

@@ -49,11 +49,13 @@
 //! is `UnrolledAba<f64>`, one run; [`UnrolledAba::gather`] makes `UnrolledAba<F64x<N>>`, `N`
 //! runs of one layout (a campaign's runs, their masses, inertias and hinge points dispersed)
 //! solved together, lane `k` of every argument being run `k`'s, and each lane's result bit
-//! for bit what that run's own kernel gives (tested below, on the AVX2 instance and on the
-//! baseline one). Where the CPU has AVX2 the lanes run an instance compiled for it, chosen at
-//! run time; a pivot test that not all lanes pass returns [`DynamicsError::LanesPart`] and
-//! the caller solves those runs one by one. Four lanes on AVX2 solve four runs in about half
-//! the time of four calls (`benches/lanes.rs`; the performance page has the figures).
+//! for bit what that run's own kernel gives (tested below, on every instance the CPU runs).
+//! The lanes run an instance compiled for the widest instructions the CPU has
+//! ([`Instructions`]: AVX-512, AVX2 or the baseline's), chosen at run time; a pivot test
+//! that not all lanes pass returns [`DynamicsError::LanesPart`] and the caller solves those
+//! runs one by one. Four lanes on AVX2 solve four runs in about a third of the time of four
+//! calls, eight lanes on AVX-512 eight runs in about a quarter (`benches/lanes.rs`; the
+//! performance page has the figures).
 
 use nalgebra::{DVector, Matrix3, Vector3};
 use satsim_tree::kernel_parts::{
@@ -69,6 +71,52 @@ use satsim_tree::{BaseKind, Data, DynamicsError, Input, Kernel, Model};
 
 /// The longest serial chain below the gimbal's tip that [`UnrolledAba`] takes.
 pub const MAX_SERIAL: usize = 6;
+
+/// The instructions a kernel over lanes runs on, narrowest first: chosen at run time, the
+/// widest the CPU has ([`Instructions::detected`]) unless [`UnrolledAba::instructions`] caps
+/// it. Every instance executes the same operations lane by lane (Rust does not contract
+/// `a * b + c` into a fused multiply-add), so all give the same bits.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum Instructions {
+    /// The baseline target's (two `f64` per SSE2 instruction on x86-64; every other
+    /// architecture).
+    Baseline,
+    /// x86-64 with AVX2: four `f64` per instruction, 16 vector registers.
+    Avx2,
+    /// x86-64 with AVX-512 (F and VL): eight `f64` per instruction, 32 vector registers.
+    Avx512,
+}
+
+impl Instructions {
+    /// The widest instructions of this CPU (the standard library caches the detection, so a
+    /// call is a load and a test).
+    pub fn detected() -> Self {
+        #[cfg(target_arch = "x86_64")]
+        {
+            if std::arch::is_x86_feature_detected!("avx512f")
+                && std::arch::is_x86_feature_detected!("avx512vl")
+                && std::arch::is_x86_feature_detected!("avx2")
+            {
+                return Self::Avx512;
+            }
+            if std::arch::is_x86_feature_detected!("avx2") {
+                return Self::Avx2;
+            }
+        }
+        Self::Baseline
+    }
+
+    /// How many runs a batch of lanes holds on these instructions: one register per value
+    /// (eight on AVX-512, four on AVX2; two on the baseline target, where four lanes measured
+    /// slower: `benches/lanes.rs`).
+    pub fn lanes(self) -> usize {
+        match self {
+            Self::Baseline => 2,
+            Self::Avx2 => 4,
+            Self::Avx512 => 8,
+        }
+    }
+}
 
 /// Which of the kernel's hinges are locked (hybrid dynamics, as
 /// [`satsim_tree::aba::aba_hybrid`]): the rotors' and the serial bodies', one bit each (rotor `k` of the model's gyrostats, serial
@@ -232,9 +280,8 @@ pub struct UnrolledAba<T: Real = f64> {
     rotor_hinges: Vec<usize>,
     serial_hinges: Vec<usize>,
     n_hinges: usize,
-    /// Lanes on the baseline target's instructions even where the CPU has wider ones
-    /// ([`UnrolledAba::portable`]).
-    portable: bool,
+    /// The widest instructions lanes may run on ([`UnrolledAba::instructions`]).
+    at_most: Instructions,
     /// Per pivot (the gimbal's three in elimination order, then the serial bodies): the
     /// hinge named by a singular-hinge error and the hinges through massless links below it.
     names: Vec<(String, Vec<String>)>,
@@ -368,7 +415,7 @@ impl UnrolledAba {
                 .collect(),
             serial_hinges: serial_bodies.iter().map(|&i| joint(i).hinge()).collect(),
             n_hinges: model.n_hinges(),
-            portable: false,
+            at_most: Instructions::Avx512,
             names,
         })
     }
@@ -578,10 +625,12 @@ impl<T: Real> UnrolledAba<T> {
         }
     }
 
-    /// [`UnrolledAba::run_in`], compiled for the widest vectors this CPU has: for lanes on
-    /// x86-64 with AVX2, the instance compiled for AVX2 (four `f64` per instruction; the
-    /// baseline target has two), else the baseline's. One run (`f64`) keeps the baseline's:
-    /// its operations are not lane-wise, and wider registers measured no faster for it.
+    /// [`UnrolledAba::run_in`], compiled for the widest vectors this CPU has (at most
+    /// [`UnrolledAba::instructions`]): for lanes on x86-64, the instance compiled for
+    /// AVX-512 (32 vector registers, eight `f64` per instruction), else for AVX2 (four `f64`
+    /// per instruction; the baseline target has two), else the baseline's. One run (`f64`)
+    /// keeps the baseline's: its operations are not lane-wise, and wider registers measured
+    /// no faster for it.
     #[inline(always)]
     #[allow(unsafe_code)]
     fn run<const N: usize, const LOADED: bool>(
@@ -594,9 +643,20 @@ impl<T: Real> UnrolledAba<T> {
         locks: Locks,
     ) -> Result<(), DynamicsError> {
         #[cfg(target_arch = "x86_64")]
-        if T::LANES > 1 && !self.portable && std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: `run_avx2`'s only requirement is a CPU with AVX2, detected just above.
-            return unsafe { self.run_avx2::<N, LOADED>(ddq, q, v, tau, fext, locks) };
+        if T::LANES > 1 {
+            match self.at_most.min(Instructions::detected()) {
+                // SAFETY: `run_avx512`'s only requirement is a CPU with AVX-512 F and VL
+                // (and AVX2), which `Instructions::detected` found.
+                Instructions::Avx512 => {
+                    return unsafe { self.run_avx512::<N, LOADED>(ddq, q, v, tau, fext, locks) };
+                }
+                // SAFETY: `run_avx2`'s only requirement is a CPU with AVX2, which
+                // `Instructions::detected` found.
+                Instructions::Avx2 => {
+                    return unsafe { self.run_avx2::<N, LOADED>(ddq, q, v, tau, fext, locks) };
+                }
+                Instructions::Baseline => {}
+            }
         }
         self.run_out::<N, LOADED>(ddq, q, v, tau, fext, locks)
     }
@@ -622,6 +682,23 @@ impl<T: Real> UnrolledAba<T> {
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     fn run_avx2<const N: usize, const LOADED: bool>(
+        &self,
+        ddq: &mut [T],
+        q: &[T],
+        v: &[T],
+        tau: &[T],
+        fext: &[Force<T>],
+        locks: Locks,
+    ) -> Result<(), DynamicsError> {
+        self.run_in::<N, LOADED>(ddq, q, v, tau, fext, locks)
+    }
+
+    /// [`UnrolledAba::run_in`] compiled for AVX-512 (F and VL): the same operations again,
+    /// so the same bits, in 32 vector registers where AVX2 has 16. Eight lanes fill one
+    /// 512-bit register per value; four lanes in 256-bit registers spill less.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,avx512f,avx512vl")]
+    fn run_avx512<const N: usize, const LOADED: bool>(
         &self,
         ddq: &mut [T],
         q: &[T],
@@ -1070,16 +1147,22 @@ impl<const N: usize> UnrolledAba<F64x<N>> {
             rotor_hinges: first.rotor_hinges.clone(),
             serial_hinges: first.serial_hinges.clone(),
             n_hinges: first.n_hinges,
-            portable: false,
+            at_most: Instructions::Avx512,
             names: first.names.clone(),
         })
     }
 
     /// The same kernel on the baseline target's instructions only (two-wide SSE2 on
-    /// x86-64), where [`UnrolledAba::gather`]'s would use AVX2: to measure what the wider
-    /// instructions give, and to test that both give the same bits.
-    pub fn portable(mut self) -> Self {
-        self.portable = true;
+    /// x86-64): `self.instructions(Instructions::Baseline)`.
+    pub fn portable(self) -> Self {
+        self.instructions(Instructions::Baseline)
+    }
+
+    /// The same kernel on instructions no wider than `at_most`, where the CPU has wider
+    /// ones (by default lanes run on the widest it has): to measure what the wider
+    /// instructions give, and to test that every instance gives the same bits.
+    pub fn instructions(mut self, at_most: Instructions) -> Self {
+        self.at_most = at_most;
         self
     }
 }
@@ -1363,11 +1446,12 @@ mod tests {
         xs.iter().map(|x| x.0[k]).collect()
     }
 
-    /// Four runs in lanes (each its own model of the layout, its own state with hinge angles
+    /// `N` runs in lanes (each its own model of the layout, its own state with hinge angles
     /// in `±3 · scale` rad, its own wrenches and the same locks) against each run's own `f64`
     /// kernel: the same bits, or the batch parts (then a lane's own kernel refuses its state).
-    fn lanes_agree(
-        models: &[Model; 4],
+    /// Every instance of the kernel this CPU runs (baseline, AVX2, AVX-512) gives the same.
+    fn lanes_agree<const N: usize>(
+        models: &[Model; N],
         rng: &mut SplitMix,
         loaded: bool,
         locked: &[bool],
@@ -1377,9 +1461,8 @@ mod tests {
             .iter()
             .map(|m| UnrolledAba::new(m).unwrap())
             .collect();
-        let lanes = UnrolledAba::<F64x<4>>::gather(std::array::from_fn(|k| &kernels[k]))
+        let lanes = UnrolledAba::<F64x<N>>::gather(std::array::from_fn(|k| &kernels[k]))
             .expect("one layout");
-        let portable = lanes.clone().portable();
         let locks = kernels[0].locks(locked).expect("the kernel's locks");
         let runs: Vec<_> = models
             .iter()
@@ -1391,7 +1474,7 @@ mod tests {
                 (q, v, tau, random_wrenches(m, rng))
             })
             .collect();
-        fn pack(xs: [&[f64]; 4]) -> Vec<F64x<4>> {
+        fn pack<const N: usize>(xs: [&[f64]; N]) -> Vec<F64x<N>> {
             (0..xs[0].len())
                 .map(|i| F64x(std::array::from_fn(|k| xs[k][i])))
                 .collect()
@@ -1399,7 +1482,7 @@ mod tests {
         let q = pack(std::array::from_fn(|k| runs[k].0.as_slice()));
         let v = pack(std::array::from_fn(|k| runs[k].1.as_slice()));
         let tau = pack(std::array::from_fn(|k| runs[k].2.as_slice()));
-        let fext: Vec<Force<F64x<4>>> = (0..runs[0].3.len())
+        let fext: Vec<Force<F64x<N>>> = (0..runs[0].3.len())
             .map(|b| {
                 let f = |k: usize| runs[k].3[b].to_array();
                 let part = |i: usize| F64x(std::array::from_fn(|k| f(k)[i]));
@@ -1419,27 +1502,33 @@ mod tests {
             locks,
             &mut ddq,
         );
-        // The baseline target's instructions: the same outcome, the same bits.
-        let mut ddq_portable = vec![F64x::splat(f64::NAN); nv];
-        let got_portable = portable.aba_hybrid_with_forces_into(
-            &q,
-            &v,
-            &tau,
-            loaded.then_some(fext.as_slice()),
-            locks,
-            &mut ddq_portable,
-        );
-        assert_eq!(got.is_ok(), got_portable.is_ok());
-        if got.is_ok() {
-            let bits = |x: &[F64x<4>]| {
-                x.iter()
-                    .flat_map(|x| x.0.map(f64::to_bits))
-                    .collect::<Vec<_>>()
-            };
-            assert_eq!(bits(&ddq), bits(&ddq_portable));
+        // The narrower instructions this CPU has: the same outcome, the same bits.
+        let widest = Instructions::detected();
+        for narrower in [Instructions::Baseline, Instructions::Avx2].map(|i| i.min(widest)) {
+            let mut ddq_narrow = vec![F64x::splat(f64::NAN); nv];
+            let got_narrow = lanes
+                .clone()
+                .instructions(narrower)
+                .aba_hybrid_with_forces_into(
+                    &q,
+                    &v,
+                    &tau,
+                    loaded.then_some(fext.as_slice()),
+                    locks,
+                    &mut ddq_narrow,
+                );
+            assert_eq!(got.is_ok(), got_narrow.is_ok(), "{narrower:?}");
+            if got.is_ok() {
+                let bits = |x: &[F64x<N>]| {
+                    x.iter()
+                        .flat_map(|x| x.0.map(f64::to_bits))
+                        .collect::<Vec<_>>()
+                };
+                assert_eq!(bits(&ddq), bits(&ddq_narrow), "{narrower:?}");
+            }
         }
         let mut alone = vec![0.0; nv];
-        let each: Vec<_> = (0..4)
+        let each: Vec<_> = (0..N)
             .map(|k| {
                 let (q, v, tau, f) = &runs[k];
                 kernels[k]
@@ -1471,7 +1560,7 @@ mod tests {
 
     #[test]
     fn lanes_equal_runs_bit_for_bit() {
-        let mut batches = 0;
+        let (mut batches, mut batches8) = (0, 0);
         for seed in 0..60u64 {
             let (serial, rotors) = ((seed % 5) as usize, ((seed / 5) % 4) as usize);
             let base = random_layout(serial, rotors, seed);
@@ -1481,6 +1570,15 @@ mod tests {
                 dispersed(&base, 0.6, 1.2),
                 dispersed(&base, 2.0, 0.8),
             ];
+            // Eight lanes (one AVX-512 register per value): four more runs.
+            let eight: [Model; 8] = std::array::from_fn(|k| match k {
+                0..4 => models[k].clone(),
+                _ => dispersed(
+                    &base,
+                    0.5 + 0.4 * k as f64 / 7.0,
+                    1.3 - 0.1 * k as f64 / 7.0,
+                ),
+            });
             let mut rng = SplitMix(seed ^ 0x1a4e);
             let n = base.n_hinges();
             // Nothing locked; every rotor and serial hinge the kernel takes locked in turn.
@@ -1497,10 +1595,12 @@ mod tests {
                 for (loaded, small) in [(false, small), (true, !small)] {
                     let scale = if small { 0.25 } else { 1.0 };
                     batches += usize::from(lanes_agree(&models, &mut rng, loaded, mask, scale));
+                    batches8 += usize::from(lanes_agree(&eight, &mut rng, loaded, mask, scale));
                 }
             }
         }
-        assert!(batches > 400, "only {batches} batches solved");
+        assert!(batches > 400, "only {batches} batches of four solved");
+        assert!(batches8 > 400, "only {batches8} batches of eight solved");
     }
 
     /// A gimbal lock on one lane parts the batch; the other lanes then solve on their own.

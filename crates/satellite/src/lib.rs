@@ -20,8 +20,8 @@
 //!   equations (5)-(10));
 //! - [`compare`]: what `satsim preprint` prints.
 
-// One `unsafe` block: the lane kernel's call of its AVX2 instance, where the CPU has AVX2
-// (`kernel.rs`, with its safety comment).
+// Two `unsafe` blocks: the lane kernel's calls of its AVX-512 and AVX2 instances, where the
+// CPU has those instructions (`kernel.rs`, each with its safety comment).
 #![deny(unsafe_code)]
 #![warn(missing_docs)]
 

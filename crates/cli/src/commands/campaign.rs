@@ -48,8 +48,8 @@ pub struct Args {
     #[arg(long)]
     pub resume: bool,
     /// One run at a time per thread: no SIMD lanes of runs (fixed-step RK4 scenes of the
-    /// preprint's layout otherwise run 4 per core with AVX2, 2 without; the results are
-    /// the same, byte for byte)
+    /// preprint's layout otherwise run 8 per core with AVX-512, 4 with AVX2, 2 without; the
+    /// results are the same, byte for byte)
     #[arg(long)]
     pub no_lanes: bool,
     /// Override a scene value by its dotted path before the runs are drawn, e.g.

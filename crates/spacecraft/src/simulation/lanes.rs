@@ -21,7 +21,7 @@ use super::Simulation;
 use super::run::{RunError, Shared, SimCell, deliver, outcome};
 use satsim_integrate::lanes::{Batch, Lane, LaneRun, Runs, StepEnd, integrate_lanes};
 use satsim_integrate::{IntegrateError, Options, Output, Stats, SystemError};
-use satsim_satellite::kernel::{Locks, UnrolledAba};
+use satsim_satellite::kernel::{Instructions, Locks, UnrolledAba};
 use satsim_tree::real::F64x;
 use satsim_tree::spatial::Force;
 use std::cell::{Ref, RefCell, RefMut};
@@ -67,15 +67,12 @@ pub trait LaneJobs {
 }
 
 impl Simulation {
-    /// How many runs [`Simulation::run_lanes`] puts in one batch on this CPU: 4 on x86-64
-    /// with AVX2 (four `f64` per instruction), else 2 (the baseline target's two; four lanes
-    /// measured slower there, `benches/lanes.rs`).
+    /// How many runs [`Simulation::run_lanes`] puts in one batch on this CPU: one vector
+    /// register per value of the kernel, [`Instructions::lanes`] of the widest it has (8 on
+    /// x86-64 with AVX-512, 4 with AVX2, else 2; `benches/lanes.rs` in `satsim-satellite`
+    /// measures each).
     pub fn lane_width() -> usize {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            return 4;
-        }
-        2
+        Instructions::detected().lanes()
     }
 
     /// Whether this simulation's dynamics, now, go to a kernel that gathers into lanes
