@@ -72,6 +72,25 @@ use satsim_tree::{BaseKind, Data, DynamicsError, Input, Kernel, Model};
 /// The longest serial chain below the gimbal's tip that [`UnrolledAba`] takes.
 pub const MAX_SERIAL: usize = 6;
 
+/// An instance of [`UnrolledAba::run_in`] (the same body, so the same operations) under
+/// its own attributes: the baseline's out of line, and one per instruction set.
+macro_rules! run_instance {
+    ($(#[$attr:meta])* $name:ident) => {
+        $(#[$attr])*
+        fn $name<const N: usize, const LOADED: bool>(
+            &self,
+            ddq: &mut [T],
+            q: &[T],
+            v: &[T],
+            tau: &[T],
+            fext: &[Force<T>],
+            locks: Locks,
+        ) -> Result<(), DynamicsError> {
+            self.run_in::<N, LOADED>(ddq, q, v, tau, fext, locks)
+        }
+    };
+}
+
 /// The instructions a kernel over lanes runs on, narrowest first: chosen at run time, the
 /// widest the CPU has ([`Instructions::detected`]) unless [`UnrolledAba::instructions`] caps
 /// it. Every instance executes the same operations lane by lane (Rust does not contract
@@ -661,53 +680,29 @@ impl<T: Real> UnrolledAba<T> {
         self.run_out::<N, LOADED>(ddq, q, v, tau, fext, locks)
     }
 
-    /// [`UnrolledAba::run_in`] out of line, for the baseline target.
-    #[inline(never)]
-    fn run_out<const N: usize, const LOADED: bool>(
-        &self,
-        ddq: &mut [T],
-        q: &[T],
-        v: &[T],
-        tau: &[T],
-        fext: &[Force<T>],
-        locks: Locks,
-    ) -> Result<(), DynamicsError> {
-        self.run_in::<N, LOADED>(ddq, q, v, tau, fext, locks)
+    run_instance! {
+        /// [`UnrolledAba::run_in`] out of line, for the baseline target.
+        #[inline(never)]
+        run_out
     }
 
-    /// [`UnrolledAba::run_in`] compiled for AVX2: over lanes every piece of the kernel is
-    /// inlined into it ([`Real::OUT_OF_LINE`]), so all of it uses four-wide registers. The
-    /// same operations as the baseline's, lane by lane (no fused multiply-add: Rust does not
-    /// contract `a * b + c`), so the same bits.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    fn run_avx2<const N: usize, const LOADED: bool>(
-        &self,
-        ddq: &mut [T],
-        q: &[T],
-        v: &[T],
-        tau: &[T],
-        fext: &[Force<T>],
-        locks: Locks,
-    ) -> Result<(), DynamicsError> {
-        self.run_in::<N, LOADED>(ddq, q, v, tau, fext, locks)
+    run_instance! {
+        /// [`UnrolledAba::run_in`] compiled for AVX2: over lanes every piece of the kernel is
+        /// inlined into it ([`Real::OUT_OF_LINE`]), so all of it uses four-wide registers. The
+        /// same operations as the baseline's, lane by lane (no fused multiply-add: Rust does
+        /// not contract `a * b + c`), so the same bits.
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = "avx2")]
+        run_avx2
     }
 
-    /// [`UnrolledAba::run_in`] compiled for AVX-512 (F and VL): the same operations again,
-    /// so the same bits, in 32 vector registers where AVX2 has 16. Eight lanes fill one
-    /// 512-bit register per value; four lanes in 256-bit registers spill less.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2,avx512f,avx512vl")]
-    fn run_avx512<const N: usize, const LOADED: bool>(
-        &self,
-        ddq: &mut [T],
-        q: &[T],
-        v: &[T],
-        tau: &[T],
-        fext: &[Force<T>],
-        locks: Locks,
-    ) -> Result<(), DynamicsError> {
-        self.run_in::<N, LOADED>(ddq, q, v, tau, fext, locks)
+    run_instance! {
+        /// [`UnrolledAba::run_in`] compiled for AVX-512 (F and VL): the same operations again,
+        /// so the same bits, in 32 vector registers where AVX2 has 16. Eight lanes fill one
+        /// 512-bit register per value; four lanes in 256-bit registers spill less.
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = "avx2,avx512f,avx512vl")]
+        run_avx512
     }
 
     /// The three passes for `N` serial bodies (`q`, `v`, `tau`, `ddq` of checked lengths);
