@@ -449,8 +449,9 @@ impl<const N: usize> Lanes<N> {
 
 /// `dst[i]`'s lane `k` = `src[k][i]`: one value of the lanes built whole (stored at once,
 /// so that the kernel's wide loads find it; lane by lane, four narrow stores would each be
-/// waited for).
-#[inline(always)]
+/// waited for). Out of line: alone, the compiler transposes two values of each run at a
+/// time in registers; inlined into `solve`, it loaded and stored each value on its own.
+#[inline(never)]
 fn pack<const N: usize>(dst: &mut [F64x<N>], src: [&[f64]; N]) {
     let n = dst.len();
     let src = src.map(|s| &s[..n]);
