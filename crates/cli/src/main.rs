@@ -34,6 +34,11 @@ fn main() -> ExitCode {
             return ExitCode::from(if e.use_stderr() { EXIT_BAD_INPUT } else { 0 });
         }
     };
+    // A cap on the kernels' instructions that names none of them is bad input, not ignored.
+    if let Err(e) = satsim_satellite::kernel::Instructions::from_env() {
+        eprintln!("error: {e}");
+        return ExitCode::from(EXIT_BAD_INPUT);
+    }
     // `satsim` alone runs the default scene; `satsim run` has its own exit statuses (1 for a
     // run that fails part-way, 130 for Ctrl-C, 2 for bad input).
     let is_run = matches!(cli.command, None | Some(Command::Run(_)));

@@ -702,6 +702,21 @@ fn bad_campaign_input_exits_2_naming_the_key() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// `campaign SCENE --out OUT --set S...` and then `extra`.
+fn campaign_args<'a>(
+    scene: &'a str,
+    out: &'a str,
+    sets: &[&'a str],
+    extra: &[&'a str],
+) -> Vec<&'a str> {
+    let mut args = vec!["campaign", scene, "--out", out];
+    for set in sets {
+        args.extend(["--set", set]);
+    }
+    args.extend_from_slice(extra);
+    args
+}
+
 /// Several runs per core in SIMD lanes give every file of the campaign byte for byte as one
 /// run at a time does: the deployment campaign (latches: lock masks that differ between the
 /// runs of a batch, events located by one run alone, runs that end apart) and the peer
@@ -720,18 +735,12 @@ fn lanes_do_not_change_a_byte_of_the_campaign() {
         let scene = root().join(scene);
         let scene = scene.to_str().unwrap();
         let run = |out: &str, extra: &[&str]| {
-            let mut args = vec![
-                "campaign",
-                scene,
-                "--out",
-                out,
-                "--set",
-                "campaign.runs=9",
-                "--set",
-                set,
-            ];
-            args.extend_from_slice(extra);
-            ok(&satsim(&dir, &args))
+            let sets = ["campaign.runs=9", set];
+            ok(&satsim_env(
+                &dir,
+                &campaign_args(scene, out, &sets, extra),
+                &[],
+            ))
         };
         let alone = run("alone", &["--no-lanes", "--threads", "1"]);
         assert!(!alone.contains("lanes "), "{alone}");
@@ -761,4 +770,54 @@ fn lanes_do_not_change_a_byte_of_the_campaign() {
             }
         }
     }
+}
+
+/// `SATSIM_INSTRUCTIONS` caps the instructions of every kernel (one run's and the lanes'),
+/// and so the runs per batch: every cap gives every file of the campaign byte for byte as
+/// the CPU's widest does, one run at a time and in lanes; the baseline's batches hold two
+/// runs. A value that names no instruction set is refused before anything runs.
+#[test]
+fn every_instruction_cap_gives_the_same_bytes() {
+    let dir = temp_dir("instructions");
+    let scene = root().join("examples/scenes/deploy_campaign.toml");
+    let scene = scene.to_str().unwrap();
+    let sets = ["campaign.runs=5", "duration=20.0"];
+    let run = |out: &str, extra: &[&str], env: &[(&str, &str)]| {
+        ok(&satsim_env(
+            &dir,
+            &campaign_args(scene, out, &sets, extra),
+            env,
+        ))
+    };
+    run("widest", &["--no-lanes", "--threads", "1"], &[]);
+    for cap in ["baseline", "avx2", "avx512"] {
+        let env = [("SATSIM_INSTRUCTIONS", cap)];
+        run("alone", &["--no-lanes", "--threads", "1"], &env);
+        let lanes = run("lanes", &["--threads", "1"], &env);
+        if cap == "baseline" {
+            assert!(lanes.contains("lanes      2 runs per core"), "{lanes}");
+        }
+        for out in ["alone", "lanes"] {
+            for file in ["runs.csv", "traces.csv", "summary.json"] {
+                assert_eq!(
+                    read(&dir.join("widest").join(file)),
+                    read(&dir.join(out).join(file)),
+                    "{cap}, {out}: {file}"
+                );
+            }
+        }
+    }
+    let o = satsim_env(
+        &dir,
+        &["campaign", scene, "--out", "bad"],
+        &[("SATSIM_INSTRUCTIONS", "sse9")],
+    );
+    assert_eq!(o.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        stderr.contains("SATSIM_INSTRUCTIONS") && stderr.contains("`sse9`"),
+        "{stderr}"
+    );
+    assert!(!dir.join("bad").exists());
+    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -68,6 +68,7 @@ use satsim_tree::spatial::{
     ArticulatedInertia, Force, Mat3, Motion, RigidInertia, Transform, Vec3, rotation_about,
 };
 use satsim_tree::{BaseKind, Data, DynamicsError, Input, Kernel, Model};
+use std::sync::atomic::{AtomicU8, Ordering};
 
 /// The longest serial chain below the gimbal's tip that [`UnrolledAba`] takes.
 pub const MAX_SERIAL: usize = 6;
@@ -107,9 +108,34 @@ pub enum Instructions {
 }
 
 impl Instructions {
-    /// The widest instructions of this CPU (the standard library caches the detection, so a
-    /// call is a load and a test).
+    /// The environment variable that caps the instructions every kernel runs on (and so the
+    /// width of a campaign's batches): `baseline`, `avx2` or `avx512`. To measure what the
+    /// wider instructions give on one machine, or to run the narrower code paths; the
+    /// results are the same bits on all of them.
+    pub const ENV: &'static str = "SATSIM_INSTRUCTIONS";
+
+    /// The instructions the kernels run on: the widest of this CPU ([`Instructions::cpu`]),
+    /// capped by [`Instructions::ENV`] where that is set to a valid value
+    /// ([`Instructions::from_env`]; the command line refuses an invalid one, the library
+    /// ignores it). Decided once per process; later calls are one load.
     pub fn detected() -> Self {
+        const UNDECIDED: u8 = u8::MAX;
+        static CHOSEN: AtomicU8 = AtomicU8::new(UNDECIDED);
+        let chosen = CHOSEN.load(Ordering::Relaxed);
+        if chosen != UNDECIDED {
+            return Self::ALL[usize::from(chosen)];
+        }
+        let cpu = Self::cpu();
+        let chosen = match Self::from_env() {
+            Ok(Some(cap)) => cap.min(cpu),
+            _ => cpu,
+        };
+        CHOSEN.store(chosen as u8, Ordering::Relaxed);
+        chosen
+    }
+
+    /// The widest instructions of this CPU (the standard library caches the detection).
+    pub fn cpu() -> Self {
         #[cfg(target_arch = "x86_64")]
         {
             if std::arch::is_x86_feature_detected!("avx512f")
@@ -125,6 +151,27 @@ impl Instructions {
         Self::Baseline
     }
 
+    /// The cap set by [`Instructions::ENV`]: `None` where it is unset or empty, an error
+    /// naming the variable and the accepted values where it is something else.
+    pub fn from_env() -> Result<Option<Self>, String> {
+        match std::env::var(Self::ENV) {
+            Err(std::env::VarError::NotPresent) => Ok(None),
+            Ok(s) if s.trim().is_empty() => Ok(None),
+            Ok(s) => s
+                .trim()
+                .parse()
+                .map(Some)
+                .map_err(|e| format!("{}: {e}", Self::ENV)),
+            Err(std::env::VarError::NotUnicode(_)) => Err(format!(
+                "{}: not valid UTF-8 (expected baseline, avx2 or avx512)",
+                Self::ENV
+            )),
+        }
+    }
+
+    /// Narrowest first (the discriminants index it).
+    const ALL: [Self; 3] = [Self::Baseline, Self::Avx2, Self::Avx512];
+
     /// How many runs a batch of lanes holds on these instructions: one register per value
     /// (eight on AVX-512, four on AVX2; two on the baseline target, where four lanes measured
     /// slower: `benches/lanes.rs`).
@@ -134,6 +181,28 @@ impl Instructions {
             Self::Avx2 => 4,
             Self::Avx512 => 8,
         }
+    }
+}
+
+impl std::str::FromStr for Instructions {
+    type Err = String;
+
+    /// `baseline`, `avx2` or `avx512` (any case), as [`Instructions`]' `Display` writes them.
+    fn from_str(s: &str) -> Result<Self, String> {
+        Self::ALL
+            .into_iter()
+            .find(|i| i.to_string().eq_ignore_ascii_case(s))
+            .ok_or_else(|| format!("`{s}` is not one of baseline, avx2, avx512"))
+    }
+}
+
+impl std::fmt::Display for Instructions {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Self::Baseline => "baseline",
+            Self::Avx2 => "avx2",
+            Self::Avx512 => "avx512",
+        })
     }
 }
 
@@ -557,6 +626,20 @@ impl UnrolledAba {
 }
 
 impl<T: Real> UnrolledAba<T> {
+    /// The same kernel on the baseline target's instructions only (two-wide SSE2 on
+    /// x86-64): `self.instructions(Instructions::Baseline)`.
+    pub fn portable(self) -> Self {
+        self.instructions(Instructions::Baseline)
+    }
+
+    /// The same kernel on instructions no wider than `at_most`, where the CPU has wider
+    /// ones (by default lanes run on the widest it has): to measure what the wider
+    /// instructions give, and to test that every instance gives the same bits.
+    pub fn instructions(mut self, at_most: Instructions) -> Self {
+        self.at_most = at_most;
+        self
+    }
+
     /// Number of serial bodies below the gimbal's tip.
     pub fn serial_bodies(&self) -> usize {
         self.serial.len()
@@ -645,11 +728,13 @@ impl<T: Real> UnrolledAba<T> {
     }
 
     /// [`UnrolledAba::run_in`], compiled for the widest vectors this CPU has (at most
-    /// [`UnrolledAba::instructions`]): for lanes on x86-64, the instance compiled for
-    /// AVX-512 (32 vector registers, eight `f64` per instruction), else for AVX2 (four `f64`
-    /// per instruction; the baseline target has two), else the baseline's. One run (`f64`)
-    /// keeps the baseline's: its operations are not lane-wise, and wider registers measured
-    /// no faster for it.
+    /// [`UnrolledAba::instructions`]) on x86-64: the instance compiled for AVX-512 (32
+    /// vector registers, eight `f64` per instruction), else for AVX2 (four `f64` per
+    /// instruction, 16 registers; the baseline target has two), else the baseline's. One run
+    /// (`f64`) takes them too: its operations are not lane-wise, but the 3-vectors and 3×3
+    /// blocks fill wider registers, and VEX/EVEX's three-operand forms and AVX-512's extra
+    /// registers save moves and spills (one orbit of the peer scene: 0.83 of the baseline
+    /// instance's time on AVX2 or AVX-512).
     #[inline(always)]
     #[allow(unsafe_code)]
     fn run<const N: usize, const LOADED: bool>(
@@ -662,7 +747,7 @@ impl<T: Real> UnrolledAba<T> {
         locks: Locks,
     ) -> Result<(), DynamicsError> {
         #[cfg(target_arch = "x86_64")]
-        if T::LANES > 1 {
+        {
             match self.at_most.min(Instructions::detected()) {
                 // SAFETY: `run_avx512`'s only requirement is a CPU with AVX-512 F and VL
                 // (and AVX2), which `Instructions::detected` found.
@@ -687,8 +772,8 @@ impl<T: Real> UnrolledAba<T> {
     }
 
     run_instance! {
-        /// [`UnrolledAba::run_in`] compiled for AVX2: over lanes every piece of the kernel is
-        /// inlined into it ([`Real::OUT_OF_LINE`]), so all of it uses four-wide registers. The
+        /// [`UnrolledAba::run_in`] compiled for AVX2: every piece of the kernel is inlined
+        /// into it, so all of it uses four-wide registers. The
         /// same operations as the baseline's, lane by lane (no fused multiply-add: Rust does
         /// not contract `a * b + c`), so the same bits.
         #[cfg(target_arch = "x86_64")]
@@ -1146,20 +1231,6 @@ impl<const N: usize> UnrolledAba<F64x<N>> {
             names: first.names.clone(),
         })
     }
-
-    /// The same kernel on the baseline target's instructions only (two-wide SSE2 on
-    /// x86-64): `self.instructions(Instructions::Baseline)`.
-    pub fn portable(self) -> Self {
-        self.instructions(Instructions::Baseline)
-    }
-
-    /// The same kernel on instructions no wider than `at_most`, where the CPU has wider
-    /// ones (by default lanes run on the widest it has): to measure what the wider
-    /// instructions give, and to test that every instance gives the same bits.
-    pub fn instructions(mut self, at_most: Instructions) -> Self {
-        self.at_most = at_most;
-        self
-    }
 }
 
 /// The engine's interface: a [`satsim_tree::ForwardDynamics`] with this kernel attached
@@ -1526,16 +1597,32 @@ mod tests {
         let each: Vec<_> = (0..N)
             .map(|k| {
                 let (q, v, tau, f) = &runs[k];
-                kernels[k]
-                    .aba_hybrid_with_forces_into(
-                        q,
-                        v,
-                        tau,
-                        loaded.then_some(f.as_slice()),
-                        locks,
-                        &mut alone,
-                    )
-                    .map(|()| alone.clone())
+                let solve = |kernel: &UnrolledAba, ddq: &mut Vec<f64>| {
+                    kernel
+                        .aba_hybrid_with_forces_into(
+                            q,
+                            v,
+                            tau,
+                            loaded.then_some(f.as_slice()),
+                            locks,
+                            ddq,
+                        )
+                        .map(|()| ddq.clone())
+                };
+                let one = solve(&kernels[k], &mut alone);
+                // One run on the narrower instructions too: the same outcome, the same bits.
+                for narrower in [Instructions::Baseline, Instructions::Avx2].map(|i| i.min(widest))
+                {
+                    let mut ddq_narrow = vec![f64::NAN; nv];
+                    let narrow = solve(&kernels[k].clone().instructions(narrower), &mut ddq_narrow);
+                    let bits = |x: &Result<Vec<f64>, _>| {
+                        x.as_ref()
+                            .ok()
+                            .map(|x| x.iter().map(|x| x.to_bits()).collect::<Vec<_>>())
+                    };
+                    assert_eq!(bits(&one), bits(&narrow), "run {k}, {narrower:?}");
+                }
+                one
             })
             .collect();
         match got {
@@ -1551,6 +1638,26 @@ mod tests {
             Err(DynamicsError::LanesPart) => false,
             Err(e) => panic!("a batch fails only by parting: {e}"),
         }
+    }
+
+    #[test]
+    fn instructions_read_write_and_size_batches() {
+        for i in Instructions::ALL {
+            assert_eq!(i.to_string().parse::<Instructions>(), Ok(i));
+            assert_eq!(i.to_string().to_uppercase().parse::<Instructions>(), Ok(i));
+        }
+        assert!(
+            "sse2"
+                .parse::<Instructions>()
+                .unwrap_err()
+                .contains("`sse2`")
+        );
+        assert!(Instructions::Baseline < Instructions::Avx2);
+        assert!(Instructions::Avx2 < Instructions::Avx512);
+        let lanes = Instructions::ALL.map(Instructions::lanes);
+        assert_eq!(lanes, [2, 4, 8]);
+        // The instructions used are never wider than the CPU's.
+        assert!(Instructions::detected() <= Instructions::cpu());
     }
 
     #[test]

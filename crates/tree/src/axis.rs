@@ -8,8 +8,11 @@
 //! costs three planar similarities instead of three 3x3 similarities, `U = IA S` is a column
 //! of `IA` (plus a lever term when the hinge point is off the child's origin), `D` an entry.
 //! The results equal the general path's to round-off (tested in `aba.rs`). The kernels are
-//! kept out of line: inlined into ABA's three passes (three axes each) they multiplied its
-//! instruction-cache misses and made it slower in wall time despite fewer instructions.
+//! inlined where they are called: the unrolled kernel's instances compiled for wider
+//! vectors (`#[target_feature]`) compile them for those vectors too, where an out-of-line
+//! piece keeps the baseline target's code (kept out of line until 2026-11-28, for the
+//! instruction cache; inlined, one orbit of the peer scene takes 0.83 of the time and
+//! `satsim bench`'s generic ABA 0.89: `docs/src/results/performance.md`).
 //!
 //! Every kernel is generic over its scalar ([`Real`]): the same code for one run (`f64`) and
 //! for lanes of runs; the axis and its sign are the batch's, common to its lanes.
@@ -113,20 +116,6 @@ impl CoordAxis {
     /// `X m` for this hinge's `Xup` (as [`Transform::apply_motion`]).
     #[inline(always)]
     pub fn apply_motion<T: Real>(&self, x: &Transform<T>, m: &Motion<T>) -> Motion<T> {
-        if T::OUT_OF_LINE {
-            self.apply_motion_out(x, m)
-        } else {
-            self.apply_motion_in(x, m)
-        }
-    }
-
-    #[inline(never)]
-    fn apply_motion_out<T: Real>(&self, x: &Transform<T>, m: &Motion<T>) -> Motion<T> {
-        self.apply_motion_in(x, m)
-    }
-
-    #[inline(always)]
-    fn apply_motion_in<T: Real>(&self, x: &Transform<T>, m: &Motion<T>) -> Motion<T> {
         Motion {
             ang: self.rotate(&x.rot, &m.ang),
             lin: self.rotate(&x.rot, &(m.lin - mat3::cross(&x.trans, &m.ang))),
@@ -136,15 +125,6 @@ impl CoordAxis {
     /// `Xᵀ f` for this hinge's `Xup` (as [`Transform::inv_apply_force`]).
     #[inline(always)]
     pub fn inv_apply_force<T: Real>(&self, x: &Transform<T>, f: &Force<T>) -> Force<T> {
-        if T::OUT_OF_LINE {
-            self.inv_apply_force_out(x, f)
-        } else {
-            self.inv_apply_force_inline(x, f)
-        }
-    }
-
-    #[inline(never)]
-    fn inv_apply_force_out<T: Real>(&self, x: &Transform<T>, f: &Force<T>) -> Force<T> {
         self.inv_apply_force_inline(x, f)
     }
 
@@ -195,32 +175,6 @@ impl CoordAxis {
         out: &mut ArticulatedInertia<T>,
         start: Option<&ArticulatedInertia<T>>,
     ) {
-        if T::OUT_OF_LINE {
-            self.add_inv_transform_out(ia, x, out, start)
-        } else {
-            self.add_inv_transform_in(ia, x, out, start)
-        }
-    }
-
-    #[inline(never)]
-    fn add_inv_transform_out<T: Real>(
-        &self,
-        ia: &ArticulatedInertia<T>,
-        x: &Transform<T>,
-        out: &mut ArticulatedInertia<T>,
-        start: Option<&ArticulatedInertia<T>>,
-    ) {
-        self.add_inv_transform_in(ia, x, out, start)
-    }
-
-    #[inline(always)]
-    fn add_inv_transform_in<T: Real>(
-        &self,
-        ia: &ArticulatedInertia<T>,
-        x: &Transform<T>,
-        out: &mut ArticulatedInertia<T>,
-        start: Option<&ArticulatedInertia<T>>,
-    ) {
         let s = self.similarities(&x.rot, ia);
         add_translated(&s.a, &s.b, &s.c, &x.trans, out, start);
     }
@@ -232,36 +186,6 @@ impl CoordAxis {
     /// zero: they are neither formed nor rotated (the unrolled ABA's serial bodies).
     #[inline(always)]
     pub fn project_at_point<T: Real>(
-        &self,
-        ia: &ArticulatedInertia<T>,
-        inv_d: T,
-        c: &Motion<T>,
-        x: &Transform<T>,
-        out: &mut ArticulatedInertia<T>,
-        start: &ArticulatedInertia<T>,
-    ) -> Force<T> {
-        if T::OUT_OF_LINE {
-            self.project_at_point_out(ia, inv_d, c, x, out, start)
-        } else {
-            self.project_at_point_in(ia, inv_d, c, x, out, start)
-        }
-    }
-
-    #[inline(never)]
-    fn project_at_point_out<T: Real>(
-        &self,
-        ia: &ArticulatedInertia<T>,
-        inv_d: T,
-        c: &Motion<T>,
-        x: &Transform<T>,
-        out: &mut ArticulatedInertia<T>,
-        start: &ArticulatedInertia<T>,
-    ) -> Force<T> {
-        self.project_at_point_in(ia, inv_d, c, x, out, start)
-    }
-
-    #[inline(always)]
-    fn project_at_point_in<T: Real>(
         &self,
         ia: &ArticulatedInertia<T>,
         inv_d: T,

@@ -84,33 +84,8 @@ pub fn hinge_transform(joint: &Joint, axis: Option<&CoordAxis>, phi: f64) -> Tra
 
 /// `out += Xᵀ [0 0; 0 C] X` (or `out = start + ...`): a purely linear inertia (what a
 /// spherical joint passes on) moved by `X`, `Eᵀ C E` then the translation's two lever terms.
-/// Out of line for one run, inlined for lanes ([`Real::OUT_OF_LINE`]).
 #[inline(always)]
 pub fn add_linear_inv_transform<T: Real>(
-    c: &Matrix3<T>,
-    x: &Transform<T>,
-    out: &mut ArticulatedInertia<T>,
-    start: Option<&ArticulatedInertia<T>>,
-) {
-    if T::OUT_OF_LINE {
-        linear_inv_transform_out(c, x, out, start)
-    } else {
-        linear_inv_transform_in(c, x, out, start)
-    }
-}
-
-#[inline(never)]
-fn linear_inv_transform_out<T: Real>(
-    c: &Matrix3<T>,
-    x: &Transform<T>,
-    out: &mut ArticulatedInertia<T>,
-    start: Option<&ArticulatedInertia<T>>,
-) {
-    linear_inv_transform_in(c, x, out, start)
-}
-
-#[inline(always)]
-fn linear_inv_transform_in<T: Real>(
     c: &Matrix3<T>,
     x: &Transform<T>,
     out: &mut ArticulatedInertia<T>,

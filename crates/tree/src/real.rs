@@ -45,11 +45,6 @@ pub trait Real:
 {
     /// How many independent values one holds.
     const LANES: usize;
-    /// Whether the algorithms keep their larger pieces out of line (`f64`: inlined into the
-    /// passes they multiplied the instruction-cache misses, see `axis.rs`) or inline them
-    /// (lanes: so that a caller compiled for wider vectors, `#[target_feature]`, compiles
-    /// the whole kernel for them; an out-of-line piece would keep the baseline target's).
-    const OUT_OF_LINE: bool;
     /// Every lane `x`.
     fn splat(x: f64) -> Self;
     /// Lane `k` (`k < LANES`).
@@ -73,7 +68,6 @@ pub trait Real:
 
 impl Real for f64 {
     const LANES: usize = 1;
-    const OUT_OF_LINE: bool = true;
     #[inline(always)]
     fn splat(x: f64) -> Self {
         x
@@ -174,7 +168,6 @@ impl<const N: usize> One for F64x<N> {
 
 impl<const N: usize> Real for F64x<N> {
     const LANES: usize = N;
-    const OUT_OF_LINE: bool = false;
     #[inline(always)]
     fn splat(x: f64) -> Self {
         Self([x; N])
@@ -285,12 +278,11 @@ impl<const N: usize> F64x<N> {
     }
 }
 
-/// nalgebra's 3×3 products, the same arithmetic in the same order, always inlined for the
-/// lanes. nalgebra's generic products are ordinary functions that the optimiser may keep
-/// out of line; out of line, a kernel compiled for wider vectors (`#[target_feature]`) calls
-/// them as the baseline target compiled them, with its operands through memory, and which
-/// calls it keeps moves from one build to the next. For `f64` (`Real::OUT_OF_LINE`) these
-/// are nalgebra's operators themselves, as tuned. Bit for bit the same: tested below.
+/// nalgebra's 3×3 products, the same arithmetic in the same order, always inlined.
+/// nalgebra's generic products are ordinary functions that the optimiser may keep out of
+/// line; out of line, a kernel compiled for wider vectors (`#[target_feature]`) calls them as
+/// the baseline target compiled them, with its operands through memory, and which calls it
+/// keeps moves from one build to the next. Bit for bit the same: tested below.
 pub mod mat3 {
     use super::Real;
     use nalgebra::{Matrix3, Vector3};
@@ -299,9 +291,6 @@ pub mod mat3 {
     /// factors `1` are exact).
     #[inline(always)]
     pub fn mul<T: Real>(m: &Matrix3<T>, v: &Vector3<T>) -> Vector3<T> {
-        if T::OUT_OF_LINE {
-            return m * v;
-        }
         Vector3::new(
             m[(0, 0)] * v[0] + m[(0, 1)] * v[1] + m[(0, 2)] * v[2],
             m[(1, 0)] * v[0] + m[(1, 1)] * v[1] + m[(1, 2)] * v[2],
@@ -312,9 +301,6 @@ pub mod mat3 {
     /// `mᵀ v`. nalgebra's `tr_mul`: a dot product per column, `(a₀ b₀ + a₁ b₁) + a₂ b₂`.
     #[inline(always)]
     pub fn tr_mul<T: Real>(m: &Matrix3<T>, v: &Vector3<T>) -> Vector3<T> {
-        if T::OUT_OF_LINE {
-            return m.tr_mul(v);
-        }
         Vector3::new(
             m[(0, 0)] * v[0] + m[(1, 0)] * v[1] + m[(2, 0)] * v[2],
             m[(0, 1)] * v[0] + m[(1, 1)] * v[1] + m[(2, 1)] * v[2],
@@ -325,9 +311,6 @@ pub mod mat3 {
     /// `a b`: nalgebra's `gemm`, [`mul`] column by column.
     #[inline(always)]
     pub fn mul_mat<T: Real>(a: &Matrix3<T>, b: &Matrix3<T>) -> Matrix3<T> {
-        if T::OUT_OF_LINE {
-            return a * b;
-        }
         Matrix3::from_columns(&[
             mul(a, &Vector3::new(b[(0, 0)], b[(1, 0)], b[(2, 0)])),
             mul(a, &Vector3::new(b[(0, 1)], b[(1, 1)], b[(2, 1)])),
@@ -338,9 +321,6 @@ pub mod mat3 {
     /// `aᵀ b`: nalgebra's `tr_mul`, [`tr_mul`] column by column.
     #[inline(always)]
     pub fn tr_mul_mat<T: Real>(a: &Matrix3<T>, b: &Matrix3<T>) -> Matrix3<T> {
-        if T::OUT_OF_LINE {
-            return a.tr_mul(b);
-        }
         Matrix3::from_columns(&[
             tr_mul(a, &Vector3::new(b[(0, 0)], b[(1, 0)], b[(2, 0)])),
             tr_mul(a, &Vector3::new(b[(0, 1)], b[(1, 1)], b[(2, 1)])),
@@ -351,9 +331,6 @@ pub mod mat3 {
     /// `a × b`, as nalgebra's `cross`.
     #[inline(always)]
     pub fn cross<T: Real>(a: &Vector3<T>, b: &Vector3<T>) -> Vector3<T> {
-        if T::OUT_OF_LINE {
-            return a.cross(b);
-        }
         Vector3::new(
             a[1] * b[2] - a[2] * b[1],
             a[2] * b[0] - a[0] * b[2],
@@ -364,9 +341,6 @@ pub mod mat3 {
     /// `u vᵀ`. nalgebra's `gemm` of a column by a row: `uᵢ vⱼ`.
     #[inline(always)]
     pub fn outer<T: Real>(u: &Vector3<T>, v: &Vector3<T>) -> Matrix3<T> {
-        if T::OUT_OF_LINE {
-            return u * v.transpose();
-        }
         Matrix3::from_fn(|i, j| u[i] * v[j])
     }
 }
