@@ -196,3 +196,29 @@ def test_read_trajectory_bad_input(tmp_path):
     (tmp_path / "text.csv").write_text("t,a\n0,x\n")
     with pytest.raises(satsim.SatsimError, match=r"text\.csv:2: `x` in column `a`"):
         satsim.read_trajectory(tmp_path / "text.csv")
+
+
+def test_a_bad_instructions_cap_is_warned_about_and_ignored():
+    # The library cannot refuse SATSIM_INSTRUCTIONS as the command line does: it says so
+    # once on standard error and gives the same bits as without it.
+    import os
+    import sys
+
+    scene = SCENES / "deploy.toml"
+    text = scene.read_text().replace("duration = 300.0", "duration = 5.0", 1)
+    code = (
+        "import sys, satsim, numpy as np\n"
+        f"r = satsim.run({text!r}, base_dir={str(SCENES)!r})\n"
+        "assert r.data.shape[0] > 1\n"
+        "sys.stdout.write(np.ascontiguousarray(r.data).tobytes().hex())\n"
+    )
+    env = {k: v for k, v in os.environ.items() if k != "SATSIM_INSTRUCTIONS"}
+    plain = subprocess.run([sys.executable, "-c", code], env=env, check=True,
+                           capture_output=True, text=True)
+    bad = subprocess.run([sys.executable, "-c", code],
+                         env={**env, "SATSIM_INSTRUCTIONS": "sse9"}, check=True,
+                         capture_output=True, text=True)
+    assert bad.stdout == plain.stdout
+    assert "SATSIM_INSTRUCTIONS" in bad.stderr and "`sse9`" in bad.stderr
+    assert bad.stderr.count("warning") == 1
+    assert "warning" not in plain.stderr

@@ -1,7 +1,7 @@
 //! The unrolled kernel over lanes of runs against one run at a time: the preprint satellite
 //! with its three wheels, four (eight) runs with their own panel masses and states, each
-//! batch solved once by the `f64` kernel per run and by the kernel over `F64x<2>`, `F64x<4>`
-//! and `F64x<8>` lanes on each instruction set the CPU has (the baseline target's SSE2,
+//! batch solved by the `f64` kernel per run and by the kernel over `F64x<2>`, `F64x<4>`
+//! and `F64x<8>` lanes, both on each instruction set the CPU has (the baseline target's SSE2,
 //! AVX2, AVX-512: [`Instructions`]), with hinge angles anywhere
 //! (±3 rad) and small (±0.7 rad). Throughput per run is what a campaign gains (its runs are
 //! independent); `cargo bench -p satsim-satellite --bench lanes [-- ROUNDS]`. The results are equal bit for
@@ -115,18 +115,32 @@ fn lanes<const N: usize>(rounds: usize, hinges: f64, sets: &[Instructions]) {
             );
         }
     }
+    // One at a time on each instruction set (the first, the baseline's, is the reference).
+    let singles: Vec<Vec<UnrolledAba>> = sets
+        .iter()
+        .map(|&i| kernels.iter().map(|k| k.clone().instructions(i)).collect())
+        .collect();
     let iters = (200_000 / N) as u32;
-    let mut figures = vec![vec![]; 1 + sets.len()];
+    let mut figures = vec![vec![]; 2 * sets.len()];
     for _ in 0..rounds {
-        figures[0].push(per_run(iters, N, || {
-            for (kernel, (q, v, tau)) in kernels.iter().zip(&runs) {
-                kernel
-                    .aba_hybrid_with_forces_into(black_box(q), v, tau, None, Locks::NONE, &mut one)
-                    .unwrap();
-                black_box(&one);
-            }
-        }));
-        for (f, lanes) in figures[1..].iter_mut().zip(&batches) {
+        for (f, kernels) in figures.iter_mut().zip(&singles) {
+            f.push(per_run(iters, N, || {
+                for (kernel, (q, v, tau)) in kernels.iter().zip(&runs) {
+                    kernel
+                        .aba_hybrid_with_forces_into(
+                            black_box(q),
+                            v,
+                            tau,
+                            None,
+                            Locks::NONE,
+                            &mut one,
+                        )
+                        .unwrap();
+                    black_box(&one);
+                }
+            }));
+        }
+        for (f, lanes) in figures[sets.len()..].iter_mut().zip(&batches) {
             f.push(per_run(iters, N, || {
                 lanes
                     .aba_hybrid_with_forces_into(
@@ -182,9 +196,11 @@ fn main() {
     );
     let head: String = sets
         .iter()
-        .map(|i| format!(" | lanes, {i:?} (speed-up)"))
+        .skip(1)
+        .map(|i| format!(" | one at a time, {i:?} (speed-up)"))
+        .chain(sets.iter().map(|i| format!(" | lanes, {i:?} (speed-up)")))
         .collect();
-    println!("runs, hinge angles | one at a time{head}");
+    println!("runs, hinge angles | one at a time, Baseline{head}");
     // Hinge angles anywhere (±3 rad: most beyond π/4, where `sin_cos` reduces its argument)
     // and small (±0.7 rad, all within π/4, as typical of a campaign).
     for hinges in [3.0, 0.7] {

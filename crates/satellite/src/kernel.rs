@@ -50,8 +50,9 @@
 //! runs of one layout (a campaign's runs, their masses, inertias and hinge points dispersed)
 //! solved together, lane `k` of every argument being run `k`'s, and each lane's result bit
 //! for bit what that run's own kernel gives (tested below, on every instance the CPU runs).
-//! The lanes run an instance compiled for the widest instructions the CPU has
-//! ([`Instructions`]: AVX-512, AVX2 or the baseline's), chosen at run time; a pivot test
+//! One run and lanes run an instance compiled for the widest instructions the CPU has
+//! ([`Instructions`]: AVX-512, AVX2 or the baseline's; `SATSIM_INSTRUCTIONS` caps it),
+//! chosen at run time, the same bits on each; a pivot test
 //! that not all lanes pass returns [`DynamicsError::LanesPart`] and the caller solves those
 //! runs one by one. Four lanes on AVX2 solve four runs in about a third of the time of four
 //! calls, eight lanes on AVX-512 eight runs in about a quarter (`benches/lanes.rs`; the
@@ -68,7 +69,7 @@ use satsim_tree::spatial::{
     ArticulatedInertia, Force, Mat3, Motion, RigidInertia, Transform, Vec3, rotation_about,
 };
 use satsim_tree::{BaseKind, Data, DynamicsError, Input, Kernel, Model};
-use std::sync::atomic::{AtomicU8, Ordering};
+use std::sync::OnceLock;
 
 /// The longest serial chain below the gimbal's tip that [`UnrolledAba`] takes.
 pub const MAX_SERIAL: usize = 6;
@@ -92,9 +93,9 @@ macro_rules! run_instance {
     };
 }
 
-/// The instructions a kernel over lanes runs on, narrowest first: chosen at run time, the
-/// widest the CPU has ([`Instructions::detected`]) unless [`UnrolledAba::instructions`] caps
-/// it. Every instance executes the same operations lane by lane (Rust does not contract
+/// The instructions a kernel (one run or lanes) runs on, narrowest first: chosen at run
+/// time, the widest the CPU has ([`Instructions::detected`], capped by
+/// [`Instructions::ENV`]) unless [`UnrolledAba::instructions`] caps it further. Every instance executes the same operations lane by lane (Rust does not contract
 /// `a * b + c` into a fused multiply-add), so all give the same bits.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub enum Instructions {
@@ -117,21 +118,22 @@ impl Instructions {
     /// The instructions the kernels run on: the widest of this CPU ([`Instructions::cpu`]),
     /// capped by [`Instructions::ENV`] where that is set to a valid value
     /// ([`Instructions::from_env`]; the command line refuses an invalid one, the library
-    /// ignores it). Decided once per process; later calls are one load.
+    /// warns once on standard error and ignores it). Decided once per process; later calls
+    /// are one load.
     pub fn detected() -> Self {
-        const UNDECIDED: u8 = u8::MAX;
-        static CHOSEN: AtomicU8 = AtomicU8::new(UNDECIDED);
-        let chosen = CHOSEN.load(Ordering::Relaxed);
-        if chosen != UNDECIDED {
-            return Self::ALL[usize::from(chosen)];
-        }
-        let cpu = Self::cpu();
-        let chosen = match Self::from_env() {
-            Ok(Some(cap)) => cap.min(cpu),
-            _ => cpu,
-        };
-        CHOSEN.store(chosen as u8, Ordering::Relaxed);
-        chosen
+        static CHOSEN: OnceLock<Instructions> = OnceLock::new();
+        *CHOSEN.get_or_init(|| {
+            let cpu = Self::cpu();
+            match Self::from_env() {
+                Ok(Some(cap)) => cap.min(cpu),
+                Ok(None) => cpu,
+                Err(e) => {
+                    // Where no caller refused it first (the library, Python).
+                    eprintln!("warning: {e}; ignored, the kernels use {cpu}");
+                    cpu
+                }
+            }
+        })
     }
 
     /// The widest instructions of this CPU (the standard library caches the detection).
@@ -169,7 +171,7 @@ impl Instructions {
         }
     }
 
-    /// Narrowest first (the discriminants index it).
+    /// Narrowest first.
     const ALL: [Self; 3] = [Self::Baseline, Self::Avx2, Self::Avx512];
 
     /// How many runs a batch of lanes holds on these instructions: one register per value
@@ -368,7 +370,7 @@ pub struct UnrolledAba<T: Real = f64> {
     rotor_hinges: Vec<usize>,
     serial_hinges: Vec<usize>,
     n_hinges: usize,
-    /// The widest instructions lanes may run on ([`UnrolledAba::instructions`]).
+    /// The widest instructions this kernel may run on ([`UnrolledAba::instructions`]).
     at_most: Instructions,
     /// Per pivot (the gimbal's three in elimination order, then the serial bodies): the
     /// hinge named by a singular-hinge error and the hinges through massless links below it.
@@ -633,7 +635,7 @@ impl<T: Real> UnrolledAba<T> {
     }
 
     /// The same kernel on instructions no wider than `at_most`, where the CPU has wider
-    /// ones (by default lanes run on the widest it has): to measure what the wider
+    /// ones (by default a kernel runs on the widest it has): to measure what the wider
     /// instructions give, and to test that every instance gives the same bits.
     pub fn instructions(mut self, at_most: Instructions) -> Self {
         self.at_most = at_most;

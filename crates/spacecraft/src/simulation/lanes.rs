@@ -70,7 +70,7 @@ impl Simulation {
     /// How many runs [`Simulation::run_lanes`] puts in one batch on this CPU: one vector
     /// register per value of the kernel, [`Instructions::lanes`] of the widest it has (8 on
     /// x86-64 with AVX-512, 4 with AVX2, else 2; `benches/lanes.rs` in `satsim-satellite`
-    /// measures each).
+    /// measures each), capped by `SATSIM_INSTRUCTIONS` ([`Instructions::ENV`]).
     pub fn lane_width() -> usize {
         Instructions::detected().lanes()
     }
