@@ -35,7 +35,7 @@ fn main() -> ExitCode {
         }
     };
     // A cap on the kernels' instructions that names none of them is bad input, not ignored.
-    if let Err(e) = satsim_satellite::kernel::Instructions::from_env() {
+    if let Err(e) = satsim_satellite::instructions::Instructions::from_env() {
         eprintln!("error: {e}");
         return ExitCode::from(EXIT_BAD_INPUT);
     }

@@ -28,6 +28,7 @@
 pub mod checks;
 pub mod closed_form;
 pub mod engine;
+pub mod instructions;
 pub mod kernel;
 pub mod layout;
 pub mod params;

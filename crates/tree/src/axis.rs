@@ -122,20 +122,11 @@ impl CoordAxis {
         }
     }
 
-    /// `Xᵀ f` for this hinge's `Xup` (as [`Transform::inv_apply_force`]).
+    /// `Xᵀ f` for this hinge's `Xup` (as [`Transform::inv_apply_force`]). Always inlined:
+    /// CRBA's columns chain them on the walk to the root, and a result returned through
+    /// memory would make the next call wait for its stores.
     #[inline(always)]
     pub fn inv_apply_force<T: Real>(&self, x: &Transform<T>, f: &Force<T>) -> Force<T> {
-        self.inv_apply_force_inline(x, f)
-    }
-
-    /// [`CoordAxis::inv_apply_force`] inlined: for a chain of them (CRBA's columns), where
-    /// a call's result returned through memory would make the next call wait for it.
-    #[inline(always)]
-    pub(crate) fn inv_apply_force_inline<T: Real>(
-        &self,
-        x: &Transform<T>,
-        f: &Force<T>,
-    ) -> Force<T> {
         let lin = self.rotate_back(&x.rot, &f.lin);
         Force {
             ang: self.rotate_back(&x.rot, &f.ang) + mat3::cross(&x.trans, &lin),

@@ -54,7 +54,7 @@ pub(crate) fn mass_matrix(model: &Model, data: &mut Data) {
         let mut j = i;
         while let Some(p) = model.parent[j] {
             f = match &model.coord_axis[j] {
-                Some(a) => a.inv_apply_force_inline(&data.xup[j], &f),
+                Some(a) => a.inv_apply_force(&data.xup[j], &f),
                 None => data.xup[j].inv_apply_force(&f),
             };
             j = p;
