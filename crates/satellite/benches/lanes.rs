@@ -1,8 +1,9 @@
 //! The unrolled kernel over lanes of runs against one run at a time: the preprint satellite
 //! with its three wheels, four (eight) runs with their own panel masses and states, each
 //! batch solved by the `f64` kernel per run and by the kernel over `F64x<2>`, `F64x<4>`
-//! and `F64x<8>` lanes, both on each instruction set the CPU has (the baseline target's SSE2,
-//! AVX2, AVX-512: [`Instructions`]), with hinge angles anywhere
+//! and `F64x<8>` lanes, both capped to each instruction set the CPU has (the baseline
+//! target's SSE2, AVX2, AVX-512: [`Instructions`]; lanes have the instances of their own
+//! register size only, so a cap without one is marked with the instance that ran), with hinge angles anywhere
 //! (±3 rad) and small (±0.7 rad). Throughput per run is what a campaign gains (its runs are
 //! independent); `cargo bench -p satsim-satellite --bench lanes [-- ROUNDS]`. The results are equal bit for
 //! bit (checked here before timing, and by the kernel's tests). Not criterion: on a shared
@@ -170,7 +171,13 @@ fn lanes<const N: usize>(rounds: usize, hinges: f64, sets: &[Instructions]) {
         median(figures[0].clone())
     );
     for (i, f) in figures.iter().enumerate().skip(1) {
-        line += &format!(" | {:.0} ({:.2}x)", median(f.clone()), ratio(i));
+        // A width has the instances of its own register size only (`UnrolledAba::instance`):
+        // under a cap it has no instance for, the lanes run on a narrower one, named.
+        let on = match i.checked_sub(sets.len()) {
+            Some(j) if batches[j].instance() != sets[j] => format!(", {}", batches[j].instance()),
+            _ => String::new(),
+        };
+        line += &format!(" | {:.0} ({:.2}x{on})", median(f.clone()), ratio(i));
     }
     println!("{line}");
 }

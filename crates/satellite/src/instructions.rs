@@ -1,7 +1,9 @@
 //! The instructions the kernels run on ([`Instructions`]): chosen once per process, the
 //! widest the CPU has, capped by `SATSIM_INSTRUCTIONS`. [`crate::kernel::UnrolledAba`]
-//! compiles one instance of its passes per choice (one run and lanes of runs alike); every
-//! instance gives the same bits.
+//! compiles one instance of its passes per choice for one run, and for lanes of runs the
+//! baseline's and the one of their register size
+//! ([`UnrolledAba::instance`](crate::kernel::UnrolledAba::instance)); every instance gives
+//! the same bits.
 
 use std::sync::OnceLock;
 

@@ -52,7 +52,8 @@
 //! for bit what that run's own kernel gives (tested below, on every instance the CPU runs).
 //! One run and lanes run an instance compiled for the widest instructions the CPU has
 //! ([`Instructions`]: AVX-512, AVX2 or the baseline's; `SATSIM_INSTRUCTIONS` caps it),
-//! chosen at run time, the same bits on each; a pivot test
+//! chosen at run time, the same bits on each (lanes have the instances of their own
+//! register size only: [`UnrolledAba::instance`]); a pivot test
 //! that not all lanes pass returns [`DynamicsError::LanesPart`] and the caller solves those
 //! runs one by one. Four lanes on AVX2 solve four runs in about a third of the time of four
 //! calls, eight lanes on AVX-512 eight runs in about a quarter (`benches/lanes.rs`; the
@@ -635,21 +636,48 @@ impl<T: Real> UnrolledAba<T> {
     ) -> Result<(), DynamicsError> {
         #[cfg(target_arch = "x86_64")]
         {
+            // The guards are constants of `T`: the compiler does not even instantiate the
+            // instances a `T` has not (see `UnrolledAba::instance`).
             match self.at_most.min(Instructions::detected()) {
                 // SAFETY: `run_avx512`'s only requirement is a CPU with AVX-512 F and VL
                 // (and AVX2), which `Instructions::detected` found.
-                Instructions::Avx512 => {
+                Instructions::Avx512 if const { Self::HAS_AVX512 } => {
                     return unsafe { self.run_avx512::<N, LOADED>(ddq, q, v, tau, fext, locks) };
                 }
                 // SAFETY: `run_avx2`'s only requirement is a CPU with AVX2, which
-                // `Instructions::detected` found.
-                Instructions::Avx2 => {
+                // `Instructions::detected` found (AVX-512 machines have it too).
+                Instructions::Avx2 | Instructions::Avx512 if const { Self::HAS_AVX2 } => {
                     return unsafe { self.run_avx2::<N, LOADED>(ddq, q, v, tau, fext, locks) };
                 }
-                Instructions::Baseline => {}
+                _ => {}
             }
         }
         self.run_out::<N, LOADED>(ddq, q, v, tau, fext, locks)
+    }
+
+    /// Whether `T` has an AVX2 instance: one run, and four lanes (one 256-bit register per
+    /// value).
+    const HAS_AVX2: bool = T::LANES == 1 || T::LANES == 4;
+    /// Whether `T` has an AVX-512 instance: one run, and eight lanes (one 512-bit register
+    /// per value).
+    const HAS_AVX512: bool = T::LANES == 1 || T::LANES == 8;
+
+    /// The instance this kernel runs on this CPU: the widest instruction set, no wider than
+    /// [`UnrolledAba::instructions`] and the CPU's, that `T` has an instance for.
+    ///
+    /// One run (`f64`) has all three. Lanes have the baseline's and the one whose registers
+    /// hold one value of theirs: four lanes AVX2's, eight lanes AVX-512's, two lanes only the
+    /// baseline's (SSE2's 128-bit registers). These are the widths
+    /// [`Instructions::lanes`] gives each CPU; another width on a CPU runs on the baseline's
+    /// instance (four lanes on AVX-512: AVX2's). Each instance is the whole kernel inlined,
+    /// for each serial length and with and without loads, and the wider lanes' are the largest:
+    /// the instances that no CPU's own width takes were a third of the kernel's machine code.
+    pub fn instance(&self) -> Instructions {
+        match self.at_most.min(Instructions::detected()) {
+            Instructions::Avx512 if Self::HAS_AVX512 => Instructions::Avx512,
+            Instructions::Avx2 | Instructions::Avx512 if Self::HAS_AVX2 => Instructions::Avx2,
+            _ => Instructions::Baseline,
+        }
     }
 
     run_instance! {
@@ -1570,6 +1598,26 @@ mod tests {
         }
         assert!(batches > 400, "only {batches} batches of four solved");
         assert!(batches8 > 400, "only {batches8} batches of eight solved");
+    }
+
+    /// Each width runs on the instance of its own register size, else the baseline's; one
+    /// run on each instruction set.
+    #[test]
+    fn each_width_takes_its_own_instances() {
+        use Instructions::{Avx2, Avx512, Baseline};
+        let (_, model) = satellite_with_wheels();
+        let one = UnrolledAba::new(&model).unwrap();
+        let two = UnrolledAba::<F64x<2>>::gather([&one, &one]).unwrap();
+        let four = UnrolledAba::<F64x<4>>::gather([&one; 4]).unwrap();
+        let eight = UnrolledAba::<F64x<8>>::gather([&one; 8]).unwrap();
+        for cap in [Baseline, Avx2, Avx512] {
+            let level = cap.min(Instructions::detected());
+            assert_eq!(one.clone().instructions(cap).instance(), level);
+            assert_eq!(two.clone().instructions(cap).instance(), Baseline);
+            assert_eq!(four.clone().instructions(cap).instance(), level.min(Avx2));
+            let wide = if level == Avx512 { Avx512 } else { Baseline };
+            assert_eq!(eight.clone().instructions(cap).instance(), wide);
+        }
     }
 
     /// A gimbal lock on one lane parts the batch; the other lanes then solve on their own.
