@@ -636,17 +636,19 @@ impl<T: Real> UnrolledAba<T> {
     ) -> Result<(), DynamicsError> {
         #[cfg(target_arch = "x86_64")]
         {
-            // The guards are constants of `T`: the compiler does not even instantiate the
-            // instances a `T` has not (see `UnrolledAba::instance`).
-            match self.at_most.min(Instructions::detected()) {
+            // `instance` says which instance runs; the guards repeat what it already
+            // ensures, as constants of `T`, so the compiler does not even instantiate the
+            // instances a `T` has not.
+            match self.instance() {
                 // SAFETY: `run_avx512`'s only requirement is a CPU with AVX-512 F and VL
-                // (and AVX2), which `Instructions::detected` found.
+                // (and AVX2): `instance` gives `Avx512` only where `Instructions::detected`
+                // found them.
                 Instructions::Avx512 if const { Self::HAS_AVX512 } => {
                     return unsafe { self.run_avx512::<N, LOADED>(ddq, q, v, tau, fext, locks) };
                 }
-                // SAFETY: `run_avx2`'s only requirement is a CPU with AVX2, which
-                // `Instructions::detected` found (AVX-512 machines have it too).
-                Instructions::Avx2 | Instructions::Avx512 if const { Self::HAS_AVX2 } => {
+                // SAFETY: `run_avx2`'s only requirement is a CPU with AVX2: `instance` gives
+                // `Avx2` only where `Instructions::detected` found it.
+                Instructions::Avx2 if const { Self::HAS_AVX2 } => {
                     return unsafe { self.run_avx2::<N, LOADED>(ddq, q, v, tau, fext, locks) };
                 }
                 _ => {}
@@ -1601,7 +1603,7 @@ mod tests {
     }
 
     /// Each width runs on the instance of its own register size, else the baseline's; one
-    /// run on each instruction set.
+    /// run on each instruction set (`run` dispatches on `instance`).
     #[test]
     fn each_width_takes_its_own_instances() {
         use Instructions::{Avx2, Avx512, Baseline};
@@ -1629,9 +1631,8 @@ mod tests {
         let mut q = model.neutral();
         q[7..12].copy_from_slice(&[0.1, 0.2, 0.3, 1.2, -1.0]);
         let mut locked = q.clone();
-        let axes = kernel.gimbal; // the middle hinge at a right angle locks the outer two
+        // the middle hinge at a right angle locks the outer two
         let middle = kernel.gimbal_angle[1];
-        let _ = axes;
         locked[middle] = std::f64::consts::FRAC_PI_2;
         let (v, tau) = (vec![0.01; model.nv()], vec![0.5; model.nv()]);
         let mut one = vec![0.0; model.nv()];

@@ -143,6 +143,11 @@ impl Wheel {
             t
         }
     }
+    /// Whether the wheel, uncommanded, adds no torque at all: no constant motor torque and
+    /// no friction.
+    fn idle(&self) -> bool {
+        self.torque == 0.0 && self.coulomb == 0.0 && self.stribeck == 0.0 && self.viscous == 0.0
+    }
     /// Whether the speed limit is handled with events (`0 < max_speed < ∞`).
     fn limit_events(&self) -> bool {
         self.max_speed > 0.0 && self.max_speed.is_finite()
@@ -159,6 +164,10 @@ pub struct ReactionWheels {
     /// Either way [`Forces::rotor_input`] (the stepping API's held inputs) is added to the
     /// command before the limits.
     pub commanded: bool,
+    /// Set when the simulation is built ([`Effect::connect`]): no controller commands the
+    /// wheels and every wheel is [`Wheel::idle`] (free wheels that only carry momentum, as
+    /// in the peer benchmark), so `apply` adds nothing while no stepping input is held.
+    pub(crate) idle: bool,
     stuck: Vec<bool>,
     /// Slip direction of each slipping wheel (±1).
     dir: Vec<f64>,
@@ -178,6 +187,7 @@ impl ReactionWheels {
         Self {
             wheels,
             commanded: false,
+            idle: false,
             stuck: vec![false; n],
             dir: vec![1.0; n],
             motor: vec![0.0; n],
@@ -325,8 +335,22 @@ impl Effect for ReactionWheels {
         own: &[f64],
         _own_dot: &mut [f64],
     ) -> Result<(), SystemError> {
-        // Zipped rather than indexed: no bounds checks per wheel.
         let n = ctx.rotor_hinge(0);
+        // Inputs of `+0.0` (the bits: a `-0.0` could make a motor torque of `-0.0`).
+        if self.idle && forces.rotor_input.iter().all(|u| u.to_bits() == 0) {
+            // What the loop below computes for such wheels, without its branches: a motor
+            // torque of +0 and a friction of ±0, so each free rotor's torque gets `+ 0.0`
+            // (kept: it turns a `-0.0` into `+0.0`, as the loop does).
+            self.motor.fill(0.0);
+            let rotors = forces.hinge_torque[n..].iter_mut().zip(&ctx.locked[n..]);
+            for (torque, &locked) in rotors {
+                if !locked {
+                    *torque += 0.0;
+                }
+            }
+            return Ok(());
+        }
+        // Zipped rather than indexed: no bounds checks per wheel.
         let rotors = forces.hinge_torque[n..].iter_mut().zip(&ctx.locked[n..]);
         let commands = &forces.rotor_command;
         let inputs = &forces.rotor_input;
@@ -379,6 +403,7 @@ impl Effect for ReactionWheels {
 
     fn connect(&mut self, links: &Links) {
         self.commanded = links.rotors_commanded;
+        self.idle = !self.commanded && self.wheels.iter().all(Wheel::idle);
     }
     fn output_columns(&self) -> Vec<String> {
         self.wheels
@@ -717,5 +742,48 @@ impl SceneEffect for ReactionWheels {
             ));
         }
         Ok(ReactionWheels::new(wheels))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{Effect, Links, ReactionWheels, Wheel};
+    use satsim_tree::spatial::Vec3;
+    use satsim_tree::{BaseKind, samples};
+
+    /// Only wheels that add no torque at all, uncommanded, take `apply`'s idle path.
+    #[test]
+    fn only_torque_free_uncommanded_wheels_are_idle() {
+        let model = samples::chain(1, BaseKind::Free);
+        let links = |commanded| Links {
+            rotors: &[],
+            rotors_commanded: commanded,
+            torquers: &[],
+            dipoles_commanded: false,
+            model: &model,
+        };
+        let free = Wheel::new("w", Vec3::z(), 0.1);
+        let idle = |w: &Wheel, commanded| {
+            let mut e = ReactionWheels::new(vec![free.clone(), w.clone()]);
+            e.connect(&links(commanded));
+            e.idle
+        };
+        assert!(idle(&free, false));
+        assert!(!idle(&free, true));
+        let mut limited = free.clone();
+        (limited.max_speed, limited.max_torque) = (10.0, 0.1);
+        assert!(idle(&limited, false));
+        for set in [
+            |w: &mut Wheel| w.torque = 0.01,
+            |w: &mut Wheel| w.coulomb = 0.01,
+            |w: &mut Wheel| w.stribeck = 0.01,
+            |w: &mut Wheel| w.viscous = 0.01,
+        ] {
+            let mut w = free.clone();
+            set(&mut w);
+            assert!(!idle(&w, false), "{w:?}");
+        }
+        // Not connected (an effect applied by hand): the full loop.
+        assert!(!ReactionWheels::new(vec![free]).idle);
     }
 }

@@ -472,3 +472,67 @@ pub(super) fn forward_dynamics(
 ) -> Result<(), DynamicsError> {
     m.fd.solve(&m.tree, data, input, ddq)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::Simulation;
+    use crate::effects::{Effect, HingeSprings, Links, ReactionWheels, Wheel};
+    use satsim_tree::spatial::Vec3;
+    use satsim_tree::{BaseKind, samples};
+
+    /// Free wheels (no torque, no friction) skip `ReactionWheels::apply`'s loop: the
+    /// right-hand side is bit for bit what the loop gives.
+    #[test]
+    fn idle_wheels_give_the_loops_bits() {
+        let wheels: Vec<Wheel> = [(Vec3::x(), 100.0), (Vec3::y(), -50.0), (Vec3::z(), 30.0)]
+            .into_iter()
+            .enumerate()
+            .map(|(k, (axis, speed))| {
+                let mut w = Wheel::new(format!("w{k}"), axis, 0.1);
+                (w.mass, w.at, w.speed) = (2.0, 0.3 * axis, speed);
+                w
+            })
+            .collect();
+        let mut sim = Simulation::builder(samples::chain(3, BaseKind::Free))
+            .effect(HingeSprings {
+                damping: vec![0.4, 0.1],
+                ..HingeSprings::new(vec![5.0, 2.0])
+            })
+            .effect(ReactionWheels::new(wheels.clone()))
+            .build()
+            .unwrap();
+        let mut x = sim.x0().to_vec();
+        for (k, v) in x.iter_mut().enumerate().skip(4) {
+            *v += 0.01 * (k as f64).sin();
+        }
+        let rhs = |sim: &mut Simulation| {
+            let mut dx = vec![0.0; x.len()];
+            sim.forget_ahead();
+            sim.right_hand_side(0.0, &x, &mut dx).unwrap();
+            dx
+        };
+        let idle = rhs(&mut sim);
+        let k = sim
+            .effect_names()
+            .iter()
+            .position(|&n| n == "reaction_wheels")
+            .unwrap();
+        let mut full = ReactionWheels::new(wheels);
+        assert!(!full.idle);
+        full.commanded = false;
+        sim.effects[k] = Box::new(full);
+        let looped = rhs(&mut sim);
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&idle), bits(&looped));
+        // The wheels did take the idle path: the same effect, connected as the build does.
+        let mut connected = ReactionWheels::new(vec![Wheel::new("w", Vec3::z(), 0.1)]);
+        connected.connect(&Links {
+            rotors: &[],
+            rotors_commanded: false,
+            torquers: &[],
+            dipoles_commanded: false,
+            model: sim.model(),
+        });
+        assert!(connected.idle);
+    }
+}
