@@ -517,15 +517,15 @@ mod tests {
             .iter()
             .position(|&n| n == "reaction_wheels")
             .unwrap();
-        let mut full = ReactionWheels::new(wheels);
+        // The same wheels, never connected: `idle` stays false and `apply` takes the loop.
+        let full = ReactionWheels::new(wheels.clone());
         assert!(!full.idle);
-        full.commanded = false;
         sim.effects[k] = Box::new(full);
         let looped = rhs(&mut sim);
         let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
         assert_eq!(bits(&idle), bits(&looped));
-        // The wheels did take the idle path: the same effect, connected as the build does.
-        let mut connected = ReactionWheels::new(vec![Wheel::new("w", Vec3::z(), 0.1)]);
+        // The build's wheels took the idle path: these wheels, connected as the build does.
+        let mut connected = ReactionWheels::new(wheels);
         connected.connect(&Links {
             rotors: &[],
             rotors_commanded: false,
