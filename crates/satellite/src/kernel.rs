@@ -38,8 +38,10 @@
 //!   serial body passes its inertia and bias to its parent unprojected; a locked rotor's axial
 //!   inertia is the base's again and its axial torque leaves the base's bias. A locked
 //!   gimbal hinge is not taken ([`UnrolledAba::locks`] says so).
-//! - The serial chain's length is a const parameter: its loops run over arrays of known
-//!   size (no per-body dispatch, no `Option`s, no index checks).
+//! - The serial chain's length is a const parameter for the preprint's length
+//!   ([`PREPRINT_SERIAL`]): its loops unroll over arrays of known size (no per-body
+//!   dispatch, no `Option`s, no index checks). Other lengths share one instance whose loops
+//!   run to the model's length over arrays of [`MAX_SERIAL`].
 //!
 //! Equal to [`satsim_tree::aba::aba`] to round-off (tested on the preprint satellite and on
 //! random models of the layout, below; through [`satsim_tree::ForwardDynamics`], bit for bit
@@ -75,12 +77,16 @@ use satsim_tree::{BaseKind, Data, DynamicsError, Input, Kernel, Model};
 /// The longest serial chain below the gimbal's tip that [`UnrolledAba`] takes.
 pub const MAX_SERIAL: usize = 6;
 
+/// The preprint satellite's serial chain: panels 2 and 3 below the gimbal's tip (panel 1).
+/// The kernel has an instance unrolled at this length; others share one that loops.
+pub const PREPRINT_SERIAL: usize = 2;
+
 /// An instance of [`UnrolledAba::run_in`] (the same body, so the same operations) under
 /// its own attributes: the baseline's out of line, and one per instruction set.
 macro_rules! run_instance {
     ($(#[$attr:meta])* $name:ident) => {
         $(#[$attr])*
-        fn $name<const N: usize, const LOADED: bool>(
+        fn $name<const N: usize, const EXACT: bool, const LOADED: bool>(
             &self,
             ddq: &mut [T],
             q: &[T],
@@ -89,7 +95,7 @@ macro_rules! run_instance {
             fext: &[Force<T>],
             locks: Locks,
         ) -> Result<(), DynamicsError> {
-            self.run_in::<N, LOADED>(ddq, q, v, tau, fext, locks)
+            self.run_in::<N, EXACT, LOADED>(ddq, q, v, tau, fext, locks)
         }
     };
 }
@@ -593,7 +599,12 @@ impl<T: Real> UnrolledAba<T> {
         }
     }
 
-    /// [`UnrolledAba::run`]'s instance for this model's serial chain.
+    /// [`UnrolledAba::run`]'s instance for this model's serial chain: the preprint's
+    /// length ([`PREPRINT_SERIAL`]) has its own, unrolled at that length; every other length
+    /// (0 to [`MAX_SERIAL`]) shares one that loops to the model's length. Both execute the
+    /// same operations in the same order, so the same bits. An instance for each of the
+    /// seven lengths made three times the machine code (each is the whole kernel inlined,
+    /// per scalar, instruction set and `LOADED`) to save about 2 % on the other lengths.
     #[inline(always)]
     fn serial_len<const LOADED: bool>(
         &self,
@@ -604,14 +615,10 @@ impl<T: Real> UnrolledAba<T> {
         fext: &[Force<T>],
         locks: Locks,
     ) -> Result<(), DynamicsError> {
-        match self.serial.len() {
-            0 => self.run::<0, LOADED>(ddq, q, v, tau, fext, locks),
-            1 => self.run::<1, LOADED>(ddq, q, v, tau, fext, locks),
-            2 => self.run::<2, LOADED>(ddq, q, v, tau, fext, locks),
-            3 => self.run::<3, LOADED>(ddq, q, v, tau, fext, locks),
-            4 => self.run::<4, LOADED>(ddq, q, v, tau, fext, locks),
-            5 => self.run::<5, LOADED>(ddq, q, v, tau, fext, locks),
-            _ => self.run::<MAX_SERIAL, LOADED>(ddq, q, v, tau, fext, locks),
+        if self.serial.len() == PREPRINT_SERIAL {
+            self.run::<PREPRINT_SERIAL, true, LOADED>(ddq, q, v, tau, fext, locks)
+        } else {
+            self.run::<MAX_SERIAL, false, LOADED>(ddq, q, v, tau, fext, locks)
         }
     }
 
@@ -625,7 +632,7 @@ impl<T: Real> UnrolledAba<T> {
     /// instance's time on AVX2 or AVX-512).
     #[inline(always)]
     #[allow(unsafe_code)]
-    fn run<const N: usize, const LOADED: bool>(
+    fn run<const N: usize, const EXACT: bool, const LOADED: bool>(
         &self,
         ddq: &mut [T],
         q: &[T],
@@ -644,17 +651,21 @@ impl<T: Real> UnrolledAba<T> {
                 // (and AVX2): `instance` gives `Avx512` only where `Instructions::detected`
                 // found them.
                 Instructions::Avx512 if const { Self::HAS_AVX512 } => {
-                    return unsafe { self.run_avx512::<N, LOADED>(ddq, q, v, tau, fext, locks) };
+                    return unsafe {
+                        self.run_avx512::<N, EXACT, LOADED>(ddq, q, v, tau, fext, locks)
+                    };
                 }
                 // SAFETY: `run_avx2`'s only requirement is a CPU with AVX2: `instance` gives
                 // `Avx2` only where `Instructions::detected` found it.
                 Instructions::Avx2 if const { Self::HAS_AVX2 } => {
-                    return unsafe { self.run_avx2::<N, LOADED>(ddq, q, v, tau, fext, locks) };
+                    return unsafe {
+                        self.run_avx2::<N, EXACT, LOADED>(ddq, q, v, tau, fext, locks)
+                    };
                 }
                 _ => {}
             }
         }
-        self.run_out::<N, LOADED>(ddq, q, v, tau, fext, locks)
+        self.run_out::<N, EXACT, LOADED>(ddq, q, v, tau, fext, locks)
     }
 
     /// Whether `T` has an AVX2 instance: one run, and four lanes (one 256-bit register per
@@ -672,7 +683,8 @@ impl<T: Real> UnrolledAba<T> {
     /// baseline's (SSE2's 128-bit registers). These are the widths
     /// [`Instructions::lanes`] gives each CPU; another width on a CPU runs on the baseline's
     /// instance (four lanes on AVX-512: AVX2's). Each instance is the whole kernel inlined,
-    /// for each serial length and with and without loads, and the wider lanes' are the largest:
+    /// for the preprint's serial length and for any other, with and without loads, and the
+    /// wider lanes' are the largest:
     /// the instances that no CPU's own width takes were a third of the kernel's machine code.
     pub fn instance(&self) -> Instructions {
         match self.at_most.min(Instructions::detected()) {
@@ -707,11 +719,12 @@ impl<T: Real> UnrolledAba<T> {
         run_avx512
     }
 
-    /// The three passes for `N` serial bodies (`q`, `v`, `tau`, `ddq` of checked lengths);
+    /// The three passes for the serial bodies (`q`, `v`, `tau`, `ddq` of checked lengths):
+    /// exactly `N` of them when `EXACT` (the loops unroll), else the model's, at most `N`;
     /// `LOADED`: with the external forces `fext` (one per body, checked), else `fext` is
     /// not read; `locks`: the locked hinges (hybrid dynamics).
     #[inline(always)]
-    fn run_in<const N: usize, const LOADED: bool>(
+    fn run_in<const N: usize, const EXACT: bool, const LOADED: bool>(
         &self,
         ddq: &mut [T],
         q: &[T],
@@ -720,7 +733,14 @@ impl<T: Real> UnrolledAba<T> {
         fext: &[Force<T>],
         locks: Locks,
     ) -> Result<(), DynamicsError> {
-        let serial: &[Serial<T>; N] = self.serial.as_slice().try_into().expect("N bodies");
+        // A constant length where `EXACT`; else the model's, which `min` tells the compiler
+        // is within the arrays below (no index checks).
+        let serial: &[Serial<T>] = if EXACT {
+            <&[Serial<T>; N]>::try_from(self.serial.as_slice()).expect("N bodies")
+        } else {
+            &self.serial[..self.serial.len().min(N)]
+        };
+        let len = serial.len();
         // Pass 1, outward. The base, with its rotors' gyroscopic couple and axial reactions.
         let v0 = Motion::from_slice(&v[..6]);
         let mut pa0 = v0.cross_force(&self.base_inertia.mul_motion(&v0));
@@ -804,13 +824,13 @@ impl<T: Real> UnrolledAba<T> {
         let mut buffers = [ArticulatedInertia::default(); 2];
         let [b0, b1] = &mut buffers;
         let (mut parent, mut written) = (b0, b1);
-        let mut ia: &ArticulatedInertia<T> = if N > 0 {
-            &serial[N - 1].start
+        let mut ia: &ArticulatedInertia<T> = if len > 0 {
+            &serial[len - 1].start
         } else {
             &self.tip_start
         };
-        let mut pa = if N > 0 { pas[N - 1] } else { pa_tip };
-        for j in (0..N).rev() {
+        let mut pa = if len > 0 { pas[len - 1] } else { pa_tip };
+        for j in (0..len).rev() {
             let s = &serial[j];
             let a = &s.axis;
             let (parent_start, parent_bias) = if j > 0 {
@@ -1701,6 +1721,85 @@ mod tests {
                 .count();
             assert!(solved > 290, "{solved}");
         }
+    }
+
+    /// The preprint's length has its own unrolled instance; the instance that every other
+    /// length shares, run on the preprint's layout, gives the same bits: one run on every
+    /// instruction set this CPU has, and four lanes; with and without wrenches; free, a
+    /// panel's hinge locked, a wheel locked.
+    #[test]
+    fn the_instance_of_any_length_gives_the_unrolled_ones_bits() {
+        /// `q`, `v`, `tau` and the wrenches, if any.
+        type Args<'a, T> = (&'a [T], &'a [T], &'a [T], Option<&'a [Force<T>]>);
+        /// One run's `q`, `v`, `tau` and wrenches.
+        type Run = (Vec<f64>, Vec<f64>, Vec<f64>, Vec<Force>);
+        fn both<T: Real>(
+            kernel: &UnrolledAba<T>,
+            (q, v, tau, fext): Args<'_, T>,
+            locks: Locks,
+        ) -> Option<(Vec<T>, Vec<T>)> {
+            let (mut exact, mut any) = (vec![T::zero(); v.len()], vec![T::zero(); v.len()]);
+            let unrolled = kernel.aba_hybrid_with_forces_into(q, v, tau, fext, locks, &mut exact);
+            let shared = match fext {
+                None => kernel.run::<MAX_SERIAL, false, false>(&mut any, q, v, tau, &[], locks),
+                Some(f) => kernel.run::<MAX_SERIAL, false, true>(&mut any, q, v, tau, f, locks),
+            };
+            assert_eq!(unrolled.is_ok(), shared.is_ok());
+            unrolled.ok().map(|()| (exact, any))
+        }
+        let bits = |x: &[f64]| x.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+        let (_, model) = satellite_with_wheels();
+        let one = UnrolledAba::new(&model).unwrap();
+        assert_eq!(one.serial_bodies(), PREPRINT_SERIAL);
+        let mut masks = vec![vec![false; one.n_hinges]; 3];
+        masks[1][one.serial_hinges[1]] = true;
+        masks[2][one.rotor_hinges[0]] = true;
+        let mut rng = SplitMix(29);
+        let mut solved = 0;
+        for case in 0..240 {
+            let locks = one.locks(&masks[case % 3]).unwrap();
+            let loaded = case % 2 == 1;
+            let runs: [_; 4] = std::array::from_fn(|_| {
+                let (q, v, tau) = random_state(&model, &mut rng);
+                (q, v, tau, random_wrenches(&model, &mut rng))
+            });
+            let (q, v, tau, f) = &runs[0];
+            for cap in [
+                Instructions::Baseline,
+                Instructions::Avx2,
+                Instructions::Avx512,
+            ] {
+                let kernel = one.clone().instructions(cap);
+                let fext = loaded.then_some(f.as_slice());
+                if let Some((exact, any)) = both(&kernel, (q, v, tau, fext), locks) {
+                    assert_eq!(bits(&exact), bits(&any), "case {case}, {cap:?}");
+                    solved += 1;
+                }
+            }
+            let lanes = UnrolledAba::<F64x<4>>::gather([&one; 4]).unwrap();
+            let pack = |x: fn(&Run) -> &[f64]| {
+                (0..x(&runs[0]).len())
+                    .map(|i| F64x(std::array::from_fn(|k| x(&runs[k])[i])))
+                    .collect::<Vec<F64x<4>>>()
+            };
+            let (q4, v4, tau4) = (pack(|r| &r.0), pack(|r| &r.1), pack(|r| &r.2));
+            let f4: Vec<Force<F64x<4>>> = (0..model.n_bodies())
+                .map(|b| {
+                    Force::new(
+                        Vector3::from_fn(|i, _| F64x(std::array::from_fn(|k| runs[k].3[b].ang[i]))),
+                        Vector3::from_fn(|i, _| F64x(std::array::from_fn(|k| runs[k].3[b].lin[i]))),
+                    )
+                })
+                .collect();
+            let fext = loaded.then_some(f4.as_slice());
+            if let Some((exact, any)) = both(&lanes, (&q4, &v4, &tau4, fext), locks) {
+                for k in 0..4 {
+                    assert_eq!(bits(&lane(&exact, k)), bits(&lane(&any, k)), "case {case}");
+                }
+                solved += 1;
+            }
+        }
+        assert!(solved > 800, "{solved}");
     }
 
     #[test]
