@@ -1449,6 +1449,27 @@ mod tests {
         xs.iter().map(|x| x.0[k]).collect()
     }
 
+    /// `N` runs' vectors as one of lanes: lane `k` is `xs[k]`.
+    fn pack<const N: usize>(xs: [&[f64]; N]) -> Vec<F64x<N>> {
+        (0..xs[0].len())
+            .map(|i| F64x(std::array::from_fn(|k| xs[k][i])))
+            .collect()
+    }
+
+    /// `N` runs' wrenches as wrenches of lanes: lane `k` is `fs[k]`.
+    fn pack_wrenches<const N: usize>(fs: [&[Force]; N]) -> Vec<Force<F64x<N>>> {
+        (0..fs[0].len())
+            .map(|b| {
+                let f = |k: usize| fs[k][b].to_array();
+                let part = |i: usize| F64x(std::array::from_fn(|k| f(k)[i]));
+                Force::new(
+                    Vector3::new(part(0), part(1), part(2)),
+                    Vector3::new(part(3), part(4), part(5)),
+                )
+            })
+            .collect()
+    }
+
     /// `N` runs in lanes (each its own model of the layout, its own state with hinge angles
     /// in `±3 · scale` rad, its own wrenches and the same locks) against each run's own `f64`
     /// kernel: the same bits, or the batch parts (then a lane's own kernel refuses its state).
@@ -1477,24 +1498,10 @@ mod tests {
                 (q, v, tau, random_wrenches(m, rng))
             })
             .collect();
-        fn pack<const N: usize>(xs: [&[f64]; N]) -> Vec<F64x<N>> {
-            (0..xs[0].len())
-                .map(|i| F64x(std::array::from_fn(|k| xs[k][i])))
-                .collect()
-        }
         let q = pack(std::array::from_fn(|k| runs[k].0.as_slice()));
         let v = pack(std::array::from_fn(|k| runs[k].1.as_slice()));
         let tau = pack(std::array::from_fn(|k| runs[k].2.as_slice()));
-        let fext: Vec<Force<F64x<N>>> = (0..runs[0].3.len())
-            .map(|b| {
-                let f = |k: usize| runs[k].3[b].to_array();
-                let part = |i: usize| F64x(std::array::from_fn(|k| f(k)[i]));
-                Force::new(
-                    Vector3::new(part(0), part(1), part(2)),
-                    Vector3::new(part(3), part(4), part(5)),
-                )
-            })
-            .collect();
+        let fext = pack_wrenches(std::array::from_fn(|k| runs[k].3.as_slice()));
         let nv = models[0].nv();
         let mut ddq = vec![F64x::splat(f64::NAN); nv];
         let got = lanes.aba_hybrid_with_forces_into(
@@ -1731,8 +1738,6 @@ mod tests {
     fn the_instance_of_any_length_gives_the_unrolled_ones_bits() {
         /// `q`, `v`, `tau` and the wrenches, if any.
         type Args<'a, T> = (&'a [T], &'a [T], &'a [T], Option<&'a [Force<T>]>);
-        /// One run's `q`, `v`, `tau` and wrenches.
-        type Run = (Vec<f64>, Vec<f64>, Vec<f64>, Vec<Force>);
         fn both<T: Real>(
             kernel: &UnrolledAba<T>,
             (q, v, tau, fext): Args<'_, T>,
@@ -1754,6 +1759,7 @@ mod tests {
         let mut masks = vec![vec![false; one.n_hinges]; 3];
         masks[1][one.serial_hinges[1]] = true;
         masks[2][one.rotor_hinges[0]] = true;
+        let lanes = UnrolledAba::<F64x<4>>::gather([&one; 4]).unwrap();
         let mut rng = SplitMix(29);
         let mut solved = 0;
         for case in 0..240 {
@@ -1776,21 +1782,12 @@ mod tests {
                     solved += 1;
                 }
             }
-            let lanes = UnrolledAba::<F64x<4>>::gather([&one; 4]).unwrap();
-            let pack = |x: fn(&Run) -> &[f64]| {
-                (0..x(&runs[0]).len())
-                    .map(|i| F64x(std::array::from_fn(|k| x(&runs[k])[i])))
-                    .collect::<Vec<F64x<4>>>()
-            };
-            let (q4, v4, tau4) = (pack(|r| &r.0), pack(|r| &r.1), pack(|r| &r.2));
-            let f4: Vec<Force<F64x<4>>> = (0..model.n_bodies())
-                .map(|b| {
-                    Force::new(
-                        Vector3::from_fn(|i, _| F64x(std::array::from_fn(|k| runs[k].3[b].ang[i]))),
-                        Vector3::from_fn(|i, _| F64x(std::array::from_fn(|k| runs[k].3[b].lin[i]))),
-                    )
-                })
-                .collect();
+            let (q4, v4, tau4) = (
+                pack(std::array::from_fn(|k| runs[k].0.as_slice())),
+                pack(std::array::from_fn(|k| runs[k].1.as_slice())),
+                pack(std::array::from_fn(|k| runs[k].2.as_slice())),
+            );
+            let f4 = pack_wrenches(std::array::from_fn(|k| runs[k].3.as_slice()));
             let fext = loaded.then_some(f4.as_slice());
             if let Some((exact, any)) = both(&lanes, (&q4, &v4, &tau4, fext), locks) {
                 for k in 0..4 {
