@@ -7,20 +7,21 @@ Dependencies through registers (xmm/ymm/zmm as one register, a general register'
 same way (a stack slot, a field at the same base register). An approximation: llvm-mca's
 own simulation (run.sh) ignores memory dependencies.
 """
+
 import re
 import sys
 
-lines = open(sys.argv[1]).read().splitlines()
+with open(sys.argv[1]) as f:
+    lines = f.read().splitlines()
 head = next(i for i, l in enumerate(lines) if l.startswith("[1]    [2]"))
 table = []
-for l in lines[head + 1:]:
+for l in lines[head + 1 :]:
     if not l.strip():
         break
     cols, text = l.split("\t", 1) if "\t" in l else (l, "")  # (`vzeroupper` has no operands)
     table.append((int(cols.split()[1]), cols.split()[-1], text.strip()))
 
-GPR = {"a": "ax", "b": "bx", "c": "cx", "d": "dx", "si": "si", "di": "di", "bp": "bp",
-       "sp": "sp"}
+GPR = {"a": "ax", "b": "bx", "c": "cx", "d": "dx", "si": "si", "di": "di", "bp": "bp", "sp": "sp"}
 
 
 def reg(r):

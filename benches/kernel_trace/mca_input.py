@@ -2,13 +2,15 @@
 AT&T syntax), without jumps, calls and returns (taken as predicted), with its source line
 beside it in a second file. Usage: mca_input.py BINARY TRACE LOAD_BASE OUT.s OUT.src
 """
+
 import re
 import subprocess
 import sys
 
 binary, trace, base, out_s, out_src = sys.argv[1:6]
 base = int(base, 16)
-pcs = [int(line, 16) - base for line in open(trace)]
+with open(trace) as f:
+    pcs = [int(line, 16) - base for line in f]
 # Disassemble the address ranges the trace touched (the kernel, libm's sincos).
 addrs = sorted(set(pcs))
 ranges, start, prev = [], addrs[0], addrs[0]
@@ -21,9 +23,21 @@ ranges.append((start, prev))
 insn = {}
 for lo, hi in ranges:
     dump = subprocess.run(
-        ["objdump", "-d", "-l", "--no-show-raw-insn", "-M", "att",
-         f"--start-address={lo}", f"--stop-address={hi + 16}", binary],
-        capture_output=True, text=True, check=True).stdout
+        [
+            "objdump",
+            "-d",
+            "-l",
+            "--no-show-raw-insn",
+            "-M",
+            "att",
+            f"--start-address={lo}",
+            f"--stop-address={hi + 16}",
+            binary,
+        ],
+        capture_output=True,
+        text=True,
+        check=True,
+    ).stdout
     line = None
     for row in dump.splitlines():
         m = re.match(r"^(/\S+):(\d+)", row)

@@ -5,6 +5,7 @@ It stops at every one-run instance of `UnrolledAba::run_avx2`, lets the scene's 
 calls go (SKIP, default 20) and the next, then single-steps one call from its first
 instruction, libm's `sincos` calls included, until it returns to the caller.
 """
+
 import os
 
 import gdb
