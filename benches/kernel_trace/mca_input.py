@@ -3,6 +3,7 @@ AT&T syntax), without jumps, calls and returns (taken as predicted), with its so
 beside it in a second file. Usage: mca_input.py BINARY TRACE LOAD_BASE OUT.s OUT.src
 """
 
+import os
 import re
 import subprocess
 import sys
@@ -10,8 +11,11 @@ import sys
 binary, trace, base, out_s, out_src = sys.argv[1:6]
 base = int(base, 16)
 with open(trace) as f:
-    pcs = [int(line, 16) - base for line in f]
-# Disassemble the address ranges the trace touched (the kernel, libm's sincos).
+    traced = [int(line, 16) - base for line in f]
+# The binary's own instructions (the kernel, libm's sincos); a shared library's (libc's
+# `memcpy`, say) lie outside its address range and cannot be disassembled from it.
+size = os.path.getsize(binary)
+pcs = [pc for pc in traced if 0 <= pc < size]
 addrs = sorted(set(pcs))
 ranges, start, prev = [], addrs[0], addrs[0]
 for a in addrs[1:]:
@@ -58,4 +62,8 @@ with open(out_s, "w") as f:
     f.write("\n".join(t for t, _ in kept) + "\n")
 with open(out_src, "w") as f:
     f.write("\n".join(l for _, l in kept) + "\n")
-print(f"{len(pcs)} instructions traced, {len(kept)} to llvm-mca")
+outside = len(traced) - len(pcs)
+print(
+    f"{len(traced)} instructions traced, {len(kept)} to llvm-mca"
+    + (f" ({outside} in shared libraries left out)" if outside else "")
+)
