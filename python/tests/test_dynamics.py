@@ -65,6 +65,39 @@ def test_dynamics_equals_the_command_line_to_the_last_bit(cli, case):
         np.testing.assert_array_equal(bits(d[key]), bits(want[key]), err_msg=key)
 
 
+@pytest.mark.parametrize("middle", [1.5706963267984133, -1.5707000000070335])
+def test_near_a_gimbal_lock_dynamics_gives_the_command_lines_bits(cli, tmp_path, middle):
+    # The 3-DOF hinge's middle angle 1e-4 rad from +-90 degrees, where the accelerations
+    # magnify the last bit of an angle. Both angles are numbers a JSON reader without exact
+    # float parsing reads 1 ulp off (`satsim` built alone once did, unlike the module).
+    model = EXAMPLES / "satellite.toml"
+
+    def state(mid):
+        return {
+            "base": {"attitude": [1.0, 0.0, 0.0, 0.0], "angular_velocity": [0.001, -0.002, 0.0015]},
+            "hinges": {
+                "angle": [0.3, mid, 0.1, 1.2, -1.0],
+                "rate": [0.01, 0.02, -0.01, 0.05, -0.04],
+                "torque": [0.0, 0.0, 0.0, -0.5, 0.4],
+            },
+        }
+
+    path = tmp_path / "lock.json"
+    path.write_text(json.dumps(state(middle)))
+    out = subprocess.run(
+        [cli, "dynamics", "--model", model, "--state", path],
+        check=True, capture_output=True, text=True,
+    ).stdout
+    want = json.loads(out)
+    m = satsim.Model.from_file(model)
+    for d in (m.dynamics(path), m.dynamics(state(middle))):
+        for key in ("mass_matrix", "bias", "acceleration", "kinetic_energy"):
+            np.testing.assert_array_equal(bits(d[key]), bits(want[key]), err_msg=key)
+    # The check can tell: an angle 1 ulp away gives other accelerations.
+    nudged = m.dynamics(state(float(np.nextafter(middle, 0.0))))
+    assert not np.array_equal(bits(nudged["acceleration"]), bits(want["acceleration"]))
+
+
 def test_state_as_path_text_dict_and_numpy_give_the_same_bits():
     m = satsim.Model.from_file(PINOCCHIO / "satellite_rotated.model.toml")
     path = PINOCCHIO / "satellite_rotated.state.json"
