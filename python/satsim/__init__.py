@@ -506,14 +506,20 @@ class Simulation:
     by whole periods commands each period from its start). Inputs are held until changed and
     added to what the enabled effects apply.
 
-    Rows are recorded as in a run, on the scene's ``output.every`` grid (continued past the
-    scene's ``duration`` when you step beyond it). With ``out=DIR`` they are streamed to
-    ``DIR/trajectory.csv`` as ``satsim run`` writes it; :meth:`close` then writes
-    ``events.csv``, the plots the scene asks for and ``view.html`` (when the scene's view is
-    on) beside it.
+    Rows are recorded as in a run, on the scene's ``output.every`` grid. :meth:`advance` may go
+    on past the scene's end (:attr:`t_end`: a closed loop often runs longer than the nominal
+    ``duration``): the rows continue on the same grid, and nothing else changes. The rows are
+    kept in memory for :meth:`trajectory`, at most ``max_rows`` of them (default 1 000 000,
+    ``satsim run --max-rows``' default), the first included: an ``advance`` that would record
+    more raises :class:`SatsimError` before it integrates and changes nothing (so memory never
+    grows with ``dt``); raise ``output.every`` in the scene or ``max_rows`` to go on. With
+    ``out=DIR`` they are also streamed to ``DIR/trajectory.csv`` as ``satsim run`` writes it;
+    :meth:`close` then writes ``events.csv``, the plots the scene asks for and ``view.html``
+    (when the scene's view is on) beside it.
 
     Bad input raises :class:`SatsimError` and changes nothing: an unknown input name, a
-    non-finite input value, a thruster's duty outside [0, 1], a ``dt`` that is not a finite number > 0. A failed integration
+    non-finite input value, a thruster's duty outside [0, 1], a ``dt`` that is not a finite
+    number > 0 or that would keep more than ``max_rows`` rows. A failed integration
     raises :class:`SatsimError`; the simulation cannot go on after it.
 
     ``measure()`` returns every sensor's latest reading (the scene's ``[sensors]``: gyros,
@@ -524,6 +530,9 @@ class Simulation:
 
     __slots__ = ("_native", "_columns")
 
+    #: The default of ``max_rows``: ``satsim run --max-rows``' default.
+    MAX_ROWS = 1_000_000
+
     def __init__(
         self,
         scene: PathLike,
@@ -531,6 +540,7 @@ class Simulation:
         *,
         base_dir: Optional[PathLike] = None,
         seed: Optional[int] = None,
+        max_rows: int = MAX_ROWS,
     ) -> None:
         origin, text = _scene_args(scene, base_dir)
         out_path = None if out is None else os.fspath(out)
@@ -539,7 +549,11 @@ class Simulation:
                 raise SatsimError(f"seed must be an integer, got {seed!r}")
             if not 0 <= seed < 2**64:
                 raise SatsimError(f"seed must be an integer in [0, 2**64), got {seed}")
-        self._native = _satsim.NativeSimulation(origin, text, out_path, seed)
+        if isinstance(max_rows, bool) or not isinstance(max_rows, int):
+            raise SatsimError(f"max_rows must be an integer, got {max_rows!r}")
+        if not 1 <= max_rows < 2**64:
+            raise SatsimError(f"max_rows must be an integer in [1, 2**64), got {max_rows}")
+        self._native = _satsim.NativeSimulation(origin, text, out_path, seed, max_rows)
         self._columns: List[str] = list(self._native.columns)
 
     @property
@@ -557,6 +571,17 @@ class Simulation:
         """The scene's end, its start plus ``duration`` (s): where ``satsim.run`` stops.
         :meth:`advance` may go on past it (the rows continue on the same grid)."""
         return float(self._native.t_end)
+
+    @property
+    def sensor_kinds(self) -> Dict[str, str]:
+        """Each sensor's kind by its name, in the scene's order: ``"gyro"``,
+        ``"star_tracker"``, ``"sun_sensor"`` or ``"magnetometer"``."""
+        return dict(self._native.sensors)
+
+    @property
+    def max_rows(self) -> int:
+        """The most rows kept for :meth:`trajectory` (the first included)."""
+        return int(self._native.max_rows)
 
     @property
     def inputs(self) -> List[str]:
@@ -588,7 +613,8 @@ class Simulation:
 
     def advance(self, dt: float) -> List[Tuple[float, str, str]]:
         """Integrates from :attr:`t` to ``t + dt``; returns the events that fired, as
-        ``(t, effect, text)``. ``dt`` must be a finite number > 0."""
+        ``(t, effect, text)``. ``dt`` must be a finite number > 0 whose rows fit in what is
+        left of ``max_rows``; ``t + dt`` may lie past :attr:`t_end`."""
         try:
             dt = float(dt)
         except (TypeError, ValueError):
@@ -621,7 +647,7 @@ class Simulation:
         return out
 
     def trajectory(self) -> Trajectory:
-        """The rows so far, as :func:`run` returns them."""
+        """The rows so far, as :func:`run` returns them (at most ``max_rows``)."""
         columns, data = self._native.trajectory()
         return Trajectory(columns, data)
 

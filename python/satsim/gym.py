@@ -18,14 +18,22 @@ order hold, see :class:`satsim.Simulation`), then the simulation advances ``peri
 
 - **Actions**: a ``Box`` over the named inputs (``sim.inputs``: ``torque_<hinge>``,
   ``wheel_<name>``, ``dipole_<torquer>``, ``thrust_<thruster>``), in the order given, with the
-  bounds given. An action outside its bounds is clipped to them (a saturating actuator).
+  bounds given (finite, ``low < high``; within [0, 1] for a thruster's duty cycle). An action
+  outside its bounds is clipped to them (a saturating actuator); one of another length, or
+  not numbers, raises :class:`satsim.SatsimError`.
 - **Observations**: ``"sensors"`` the sensors' readings (``sim.measure()``'s columns, in the
   order of the trajectory's columns: what flight software sees), ``"row"`` every column of
-  the row except ``t`` (the truth), or a list of column names. ``float64``.
+  the row except ``t`` (the truth), or a list of column names. ``float64``. The space's
+  bounds are those each column has: [-1, 1] for a quaternion's components (a star tracker's
+  ``w`` in [0, 1]) and a Sun sensor's unit vector, [0, 1] for ``shadow``, [0, 180] for
+  ``pointing_error_deg``, >= 0 for thrusts, energies of motion, norms and densities;
+  unbounded for the rest.
 - **Reward and termination** are the caller's: ``reward(row, reading, action)`` with the row
   and the readings as dicts and the action as a dict of input values (default: 0), and
   ``terminated(row, reading)`` (default: never). The episode is truncated at the scene's
-  ``duration`` (``max_time`` to change it).
+  end, ``t0 + duration`` (``max_time``, a finite time after ``t0``, to change it); ``period``
+  (a finite number of seconds > 0) may not exceed the episode.
+- **Order**: ``step`` before the first ``reset`` raises :class:`satsim.SatsimError`.
 - **Seeding**: ``reset(seed=...)`` seeds the environment's generator, and each episode's
   sensor noise is drawn from a seed it takes from there (``satsim.Simulation(seed=...)``), so
   the same seed gives the same episode and episodes differ.
@@ -55,6 +63,35 @@ Reward = Callable[[Dict[str, float], Dict[str, Any], Dict[str, float]], float]
 Terminated = Callable[[Dict[str, float], Dict[str, Any]], bool]
 
 
+def _is_number(x: Any) -> bool:
+    return isinstance(x, (int, float, np.integer, np.floating)) and not isinstance(x, bool)
+
+
+#: Bounds of the row's columns that have them, by name (the rest are unbounded).
+_BOUNDS: Dict[str, Tuple[float, float]] = {
+    **{f"q_{a}": (-1.0, 1.0) for a in "wxyz"},
+    "shadow": (0.0, 1.0),
+    "pointing_error_deg": (0.0, 180.0),
+    **{c: (0.0, np.inf) for c in ("kinetic_energy", "h_norm", "orbit_radius", "density")},
+}
+
+
+def _column_bounds(column: str, sensor_kinds: Mapping[str, str]) -> Tuple[float, float]:
+    """The range a column's values lie in: see the module documentation."""
+    if column in _BOUNDS:
+        return _BOUNDS[column]
+    for name, kind in sensor_kinds.items():
+        if kind == "star_tracker" and column == f"{name}_q_w":
+            return (0.0, 1.0)
+        if kind == "star_tracker" and column in (f"{name}_q_x", f"{name}_q_y", f"{name}_q_z"):
+            return (-1.0, 1.0)
+        if kind == "sun_sensor" and column in (f"{name}_x", f"{name}_y", f"{name}_z"):
+            return (-1.0, 1.0)
+    if column.startswith("thrust_"):
+        return (0.0, np.inf)
+    return (-np.inf, np.inf)
+
+
 class Env(gymnasium.Env):
     """A satsim scene as a Gymnasium ``Env``; see the module documentation."""
 
@@ -74,14 +111,15 @@ class Env(gymnasium.Env):
     ) -> None:
         super().__init__()
         self._scene, self._base_dir = scene, base_dir
-        if not (isinstance(period, (int, float)) and np.isfinite(period) and period > 0):
+        if not (_is_number(period) and np.isfinite(period) and period > 0):
             raise SatsimError(f"period must be a finite number > 0, got {period!r}")
         self._period = float(period)
         self._reward = reward
         self._terminated = terminated
-        # A first simulation, to check the names against the scene and size the spaces.
-        self._sim: Optional[Simulation] = self._new_simulation(None)
-        sim = self._sim
+        # A first simulation, to check the names against the scene and size the spaces; the
+        # episodes' start at reset().
+        sim = self._new_simulation(None)
+        self._sim: Optional[Simulation] = None
         if not actions:
             raise SatsimError(f"no actions given; the scene's inputs are {sim.inputs}")
         self._actions: List[str] = list(actions)
@@ -95,13 +133,34 @@ class Env(gymnasium.Env):
                 raise SatsimError(f"bounds of `{name}` must be (low, high), got {bounds!r}") from None
             if not (np.isfinite(lo) and np.isfinite(hi) and lo < hi):
                 raise SatsimError(f"bounds of `{name}` must be finite with low < high, got {bounds!r}")
+            if name.startswith("thrust_") and not (0.0 <= lo and hi <= 1.0):
+                raise SatsimError(
+                    f"bounds of `{name}` must lie within [0, 1] (a thruster's duty cycle), got {bounds!r}"
+                )
             low.append(lo)
             high.append(hi)
         self.action_space = spaces.Box(np.array(low), np.array(high), dtype=np.float64)
         self._observe: List[str] = self._observation_columns(observation, sim)
-        n = len(self._observe)
-        self.observation_space = spaces.Box(-np.inf, np.inf, shape=(n,), dtype=np.float64)
-        self._max_time = sim.t_end if max_time is None else float(max_time)
+        kinds = sim.sensor_kinds
+        bounds = [_column_bounds(c, kinds) for c in self._observe]
+        self.observation_space = spaces.Box(
+            np.array([b[0] for b in bounds]), np.array([b[1] for b in bounds]), dtype=np.float64
+        )
+        t0 = sim.t
+        if max_time is None:
+            self._max_time = sim.t_end
+        elif _is_number(max_time) and np.isfinite(max_time) and max_time > t0:
+            self._max_time = float(max_time)
+        else:
+            raise SatsimError(
+                f"max_time must be a finite time (s) after the scene's start t0 = {t0}, got {max_time!r}"
+            )
+        if self._period > self._max_time - t0:
+            raise SatsimError(
+                f"period = {self._period} s is longer than an episode (max_time - t0 = "
+                f"{self._max_time - t0} s): shorten period or raise max_time"
+            )
+        sim.close()
 
     def _new_simulation(self, seed: Optional[int]) -> Simulation:
         return Simulation(self._scene, base_dir=self._base_dir, seed=seed)
@@ -147,10 +206,17 @@ class Env(gymnasium.Env):
 
     def step(self, action: Any) -> Tuple[np.ndarray, float, bool, bool, Dict[str, Any]]:
         if self._sim is None or self._sim.closed:
-            raise SatsimError("step() before reset()")
-        a = np.clip(np.asarray(action, dtype=np.float64).reshape(-1), self.action_space.low, self.action_space.high)
-        if a.shape != (len(self._actions),):
-            raise SatsimError(f"an action has {len(self._actions)} values, got {np.shape(action)}")
+            raise SatsimError("step() before reset(): call reset() to start an episode")
+        n = len(self._actions)
+        try:
+            a = np.asarray(action, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise SatsimError(f"action must be {n} numbers ({', '.join(self._actions)}), got {action!r}") from None
+        if a.size != n:
+            raise SatsimError(
+                f"action must have {n} values ({', '.join(self._actions)}), got shape {a.shape}"
+            )
+        a = np.clip(a.reshape(-1), self.action_space.low, self.action_space.high)
         values = dict(zip(self._actions, (float(x) for x in a)))
         self._sim.set_inputs(values)
         events = self._sim.advance(self._period)

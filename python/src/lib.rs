@@ -514,16 +514,21 @@ impl NativeSimulation {
 impl NativeSimulation {
     /// Reads the scene file at `origin` (or parses `text`, named `origin`); with `out`,
     /// streams `out/trajectory.csv`; with `seed`, the sensors' noise is drawn from it
-    /// instead of the scene's `[sensors] seed`.
+    /// instead of the scene's `[sensors] seed`; `max_rows` bounds the rows kept (default
+    /// `satsim run`'s limit).
     #[new]
-    #[pyo3(signature = (origin, text=None, out=None, seed=None))]
+    #[pyo3(signature = (origin, text=None, out=None, seed=None, max_rows=None))]
     fn new(
         py: Python<'_>,
         origin: PathBuf,
         text: Option<String>,
         out: Option<PathBuf>,
         seed: Option<u64>,
+        max_rows: Option<u64>,
     ) -> PyResult<Self> {
+        if max_rows == Some(0) {
+            return Err(err("max_rows must be at least 1"));
+        }
         let inner = py
             .detach(|| {
                 let scene = read_scene(&origin, text.as_deref())?;
@@ -531,8 +536,12 @@ impl NativeSimulation {
                     || origin.display().to_string(),
                     |n| n.to_string_lossy().into(),
                 );
-                SceneStepper::with_seed(&scene, out.as_deref(), &title, seed)
-                    .map_err(|e| format!("{}: {e}", origin.display()))
+                let mut s = SceneStepper::with_seed(&scene, out.as_deref(), &title, seed)
+                    .map_err(|e| format!("{}: {e}", origin.display()))?;
+                if let Some(m) = max_rows {
+                    s.set_max_rows(m);
+                }
+                Ok::<_, String>(s)
             })
             .map_err(err)?;
         Ok(Self {
@@ -554,6 +563,21 @@ impl NativeSimulation {
     #[getter]
     fn t_end(&self) -> PyResult<f64> {
         Ok(self.lock()?.stepping().output_grid().t_end)
+    }
+    /// Each sensor's `(name, kind)`: `gyro`, `star_tracker`, `sun_sensor`, `magnetometer`.
+    #[getter]
+    fn sensors(&self) -> PyResult<Vec<(String, String)>> {
+        Ok(self
+            .lock()?
+            .sensors()
+            .iter()
+            .map(|(n, k)| (n.clone(), (*k).to_owned()))
+            .collect())
+    }
+    /// The most rows kept for `trajectory`.
+    #[getter]
+    fn max_rows(&self) -> PyResult<u64> {
+        Ok(self.lock()?.max_rows())
     }
     /// The input names.
     #[getter]

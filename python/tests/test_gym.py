@@ -124,3 +124,82 @@ def test_bad_arguments_name_what_is_wrong():
         satsim.gym.Env(deploy_text(2.0), WHEELS, observation=["nope"], base_dir=SCENES)
     with pytest.raises(satsim.SatsimError, match="period"):
         satsim.gym.Env(deploy_text(2.0), WHEELS, observation="row", period=0.0, base_dir=SCENES)
+
+
+def test_bad_max_time_thrust_bounds_and_period_are_refused_at_construction():
+    for bad in (float("nan"), float("inf"), -1.0, 0.0, "3", True):
+        with pytest.raises(satsim.SatsimError, match="max_time must be a finite time"):
+            env(max_time=bad)
+    with pytest.raises(satsim.SatsimError, match=r"period = 1000000000(\.0)? s is longer than an episode"):
+        env(period=1e9)
+    with pytest.raises(satsim.SatsimError, match=r"period = 0.5 s is longer than an episode \(max_time - t0 = 0.25 s\)"):
+        env(period=0.5, max_time=0.25)
+    text = THRUSTERS
+    for bounds in ((-0.5, 1.0), (0.0, 2.0)):
+        with pytest.raises(satsim.SatsimError, match=r"bounds of `thrust_roll` must lie within \[0, 1\]"):
+            satsim.gym.Env(text, {"thrust_roll": bounds}, observation="row")
+    e = satsim.gym.Env(text, {"thrust_roll": (0.0, 1.0)}, observation="row", max_time=0.35)
+    e.reset(seed=0)
+    truncated = [e.step(np.array([1.0]))[3] for _ in range(4)]
+    assert truncated == [False, False, False, True]
+
+
+def test_step_before_reset_and_a_wrong_action_raise_naming_them():
+    e = env()
+    with pytest.raises(satsim.SatsimError, match=r"step\(\) before reset\(\)"):
+        e.step(np.zeros(3))
+    e.reset(seed=0)
+    with pytest.raises(satsim.SatsimError, match=r"action must have 3 values \(wheel_x, wheel_y, wheel_z\), got shape \(2,\)"):
+        e.step(np.zeros(2))
+    with pytest.raises(satsim.SatsimError, match="action must be 3 numbers"):
+        e.step(["a", "b", "c"])
+    e.step([0.0, 0.0, 0.0])
+
+
+def test_the_observation_space_has_each_columns_bounds():
+    e = env("row")
+    space = e.observation_space
+    names = e._observe
+    for c in ("q_w", "q_x", "q_y", "q_z"):
+        i = names.index(c)
+        assert (space.low[i], space.high[i]) == (-1.0, 1.0)
+    i = names.index("omega_x")
+    assert (space.low[i], space.high[i]) == (-np.inf, np.inf)
+    i = names.index("kinetic_energy")
+    assert (space.low[i], space.high[i]) == (0.0, np.inf)
+    s = env("sensors")
+    names, space = s._observe, s.observation_space
+    assert (space.low[names.index("st_q_w")], space.high[names.index("st_q_w")]) == (0.0, 1.0)
+    assert (space.low[names.index("st_q_z")], space.high[names.index("st_q_z")]) == (-1.0, 1.0)
+    assert (space.low[names.index("gyro_x")], space.high[names.index("gyro_x")]) == (-np.inf, np.inf)
+    obs = s.reset(seed=1)[0]
+    for _ in range(5):
+        assert space.contains(obs)
+        obs = s.step(np.zeros(3))[0]
+    t = satsim.gym.Env(THRUSTERS, {"thrust_roll": (0.0, 1.0)}, observation=["thrust_roll", "h_x"])
+    assert list(t.observation_space.low) == [0.0, -np.inf]
+
+
+THRUSTERS = """
+duration = 1.0
+[model]
+[[model.body]]
+name = "bus"
+mass = 50.0
+inertia = [[4.0, 0.0, 0.0], [0.0, 5.0, 0.0], [0.0, 0.0, 6.0]]
+[integrator]
+method = "rk4"
+step = 0.01
+[output]
+every = 0.1
+plots = false
+view = false
+[effects.thrusters]
+period = 0.1
+[[effects.thrusters.thruster]]
+name = "roll"
+body = "bus"
+at = [0.0, 0.5, 0.0]
+direction = [0.0, 0.0, 1.0]
+thrust = 2.0
+"""

@@ -178,3 +178,36 @@ def test_a_thruster_duty_set_from_python_acts_as_the_same_constant_duty():
         assert abs(sim.row()["h_x"] - 10 * 0.3 * 0.1) < 1e-14
         with pytest.raises(satsim.SatsimError, match="thrust_roll"):
             sim.set_inputs({"thrust_roll": 1.5})
+
+
+def test_rows_kept_are_bounded_by_max_rows_and_a_long_dt_is_refused_at_once():
+    # advance(1e9) used to list 1e10 output times (gigabytes) before integrating.
+    text = THRUSTER_SCENE.replace("DUTY", "0.0")
+    with satsim.Simulation(text) as sim:
+        assert sim.max_rows == satsim.Simulation.MAX_ROWS == 1_000_000
+        with pytest.raises(satsim.SatsimError, match=r"dt = 1000000000(\.0)? s would record about 10000000000 rows .*`max_rows`"):
+            sim.advance(1e9)
+        assert sim.t == 0.0 and len(sim.trajectory().data) == 1
+        sim.advance(0.5)
+        assert len(sim.trajectory().data) == 6
+    with satsim.Simulation(text, max_rows=3) as sim:
+        sim.advance(0.2)
+        assert len(sim.trajectory().data) == 3
+        with pytest.raises(satsim.SatsimError, match="more than the 0 left of the limit of 3 rows kept"):
+            sim.advance(0.1)
+        assert sim.t == pytest.approx(0.2, abs=1e-15)
+        sim.advance(0.05)  # no output time in (0.2, 0.25]: nothing to keep
+        assert len(sim.trajectory().data) == 3
+    for bad in (0, -1, 1.5, True, "3"):
+        with pytest.raises(satsim.SatsimError, match="max_rows"):
+            satsim.Simulation(text, max_rows=bad)
+
+
+def test_advance_goes_on_past_the_scenes_end_on_the_same_grid():
+    text = THRUSTER_SCENE.replace("DUTY", "0.0")
+    with satsim.Simulation(text) as sim:
+        assert sim.t_end == 1.0
+        sim.advance(1.5)
+        assert sim.t == pytest.approx(1.5, abs=1e-15)
+        t = sim.trajectory()["t"]
+        assert len(t) == 16 and t[10] == 1.0 and t[-1] == pytest.approx(1.5, abs=1e-15)

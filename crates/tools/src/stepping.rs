@@ -6,13 +6,16 @@
 //! Rows are recorded as `satsim run` records them ([`api::run_scene`](crate::api::run_scene)):
 //! at `t0 + i · output.every` (the row at `t0 + duration` included, snapped to it as a run
 //! does, and the grid continued past it), kept in memory and, with an output folder,
-//! streamed to `DIR/trajectory.csv` by the same writer. [`SceneStepper::close`] then writes
+//! streamed to `DIR/trajectory.csv` by the same writer. The rows kept in memory are bounded
+//! as a run's are ([`SceneStepper::max_rows`], default [`DEFAULT_MAX_ROWS`]): an `advance`
+//! that would keep more is refused before it integrates, so memory never grows with `dt`
+//! or with the time stepped past the scene's end. [`SceneStepper::close`] then writes
 //! the rest of what `satsim run` writes there: `events.csv`, the plots the scene asks for
 //! and `view.html` when the scene has the view on.
 
 use crate::api::Trajectory;
 use crate::output::{CsvWriter, PlotRecorder, write_events};
-use crate::scene::Scene;
+use crate::scene::{DEFAULT_MAX_ROWS, Scene};
 use crate::view::PoseRecorder;
 use satsim_integrate::Options;
 use satsim_spacecraft::sensors::Sensors;
@@ -64,6 +67,9 @@ pub struct SceneStepper {
     trajectory: Trajectory,
     out: Option<OutDir>,
     closed: bool,
+    max_rows: u64,
+    /// Each sensor's name and kind (`gyro`, `star_tracker`, ...), in the scene's order.
+    sensors: Vec<(String, &'static str)>,
 }
 
 impl SceneStepper {
@@ -86,6 +92,12 @@ impl SceneStepper {
         if let (Some(seed), Some(s)) = (seed, effects.get_mut::<Sensors>()) {
             s.set_seed(seed);
         }
+        let sensors = effects.get::<Sensors>().map_or_else(Vec::new, |s| {
+            s.sensors()
+                .iter()
+                .map(|x| (x.name().to_owned(), x.kind().name()))
+                .collect()
+        });
         let scene = &Scene {
             effects,
             ..scene.clone()
@@ -140,9 +152,20 @@ impl SceneStepper {
             },
             out,
             closed: false,
+            max_rows: DEFAULT_MAX_ROWS,
+            sensors,
         };
         stepper.record_start()?;
         Ok(stepper)
+    }
+
+    /// The most rows kept ([`SceneStepper::trajectory`]), the first included.
+    pub fn max_rows(&self) -> u64 {
+        self.max_rows
+    }
+    /// Sets [`SceneStepper::max_rows`] (at least 1: the row at the start is kept already).
+    pub fn set_max_rows(&mut self, max_rows: u64) {
+        self.max_rows = max_rows.max(1);
     }
 
     /// Records the row at the start (the first output time), as a run's first row.
@@ -208,6 +231,11 @@ impl SceneStepper {
             .measure()
             .map_err(|e| StepFailure::Failed(e.to_string()))
     }
+    /// Each sensor's name and kind (`gyro`, `star_tracker`, `sun_sensor`, `magnetometer`),
+    /// in the scene's order (the order of [`SceneStepper::measure`]).
+    pub fn sensors(&self) -> &[(String, &'static str)] {
+        &self.sensors
+    }
     /// The input names ([`Stepping::inputs`]).
     pub fn inputs(&self) -> &[String] {
         self.stepping.inputs()
@@ -221,10 +249,25 @@ impl SceneStepper {
             .map_err(StepFailure::from)
     }
     /// Integrates from `t` to `t + dt` with the scene's integrator, recording the rows on the
-    /// way; returns the events that fired. A `dt` that is not finite and > 0 is a
-    /// [`StepFailure::Input`] and changes nothing.
+    /// way; returns the events that fired. A `dt` that is not finite and > 0, or one whose
+    /// rows would take the rows kept past [`SceneStepper::max_rows`], is a
+    /// [`StepFailure::Input`] and changes nothing. Past the scene's end the rows go on, on
+    /// the same grid.
     pub fn advance(&mut self, dt: f64) -> Result<Vec<EventRecord>, StepFailure> {
         self.check_open()?;
+        let kept = self.trajectory.n_rows() as u64;
+        let room = self.max_rows.saturating_sub(kept);
+        let cap = usize::try_from(room).unwrap_or(usize::MAX - 1);
+        if self.stepping.rows_in(&self.options, dt, cap) as u64 > room {
+            let every = self.stepping.output_grid().every;
+            return Err(StepFailure::Input(format!(
+                "advancing by dt = {dt} s would record about {:.0} rows (`output.every` = {every} s), \
+                 more than the {room} left of the limit of {} rows kept: advance by less, or \
+                 raise `output.every` or the limit (`max_rows`)",
+                (dt / every).floor().max(1.0),
+                self.max_rows
+            )));
+        }
         let Self {
             stepping,
             options,

@@ -421,3 +421,38 @@ fn the_built_in_discrete_hinge_controller_equals_the_same_law_in_a_stepping_loop
         assert!(last < 0.0, "{integrator}the hinge ended at {last}");
     }
 }
+
+#[test]
+fn an_advance_that_would_keep_more_than_max_rows_is_refused_before_it_integrates() {
+    let scene = deploy(|t| replace(t, "duration = 300.0", "duration = 2.0"));
+    let every = scene.every;
+    let mut s = stepper(&scene);
+    assert_eq!(s.max_rows(), satsim_tools::scene::DEFAULT_MAX_ROWS);
+    // 1e9 s: about 1e9 / every rows, refused at once (no output time listed, no row kept).
+    let Err(StepFailure::Input(m)) = s.advance(1e9) else {
+        panic!("advance(1e9) was not refused")
+    };
+    let rows = format!("would record about {:.0} rows", (1e9 / every).floor());
+    assert!(m.contains(&rows) && m.contains("`max_rows`"), "{m}");
+    assert_eq!((s.t(), s.trajectory().n_rows()), (0.0, 1));
+    // A limit of 3 rows: two more intervals fit, a third does not; a piece with no output
+    // time in it still goes.
+    s.set_max_rows(3);
+    s.advance(2.0 * every).unwrap();
+    assert_eq!(s.trajectory().n_rows(), 3);
+    let Err(StepFailure::Input(m)) = s.advance(every) else {
+        panic!("the fourth row was kept")
+    };
+    assert!(
+        m.contains("more than the 0 left of the limit of 3 rows kept"),
+        "{m}"
+    );
+    s.advance(0.25 * every).unwrap();
+    assert_eq!(s.trajectory().n_rows(), 3);
+    // Past the scene's end, the rows go on on the same grid.
+    let mut s = stepper(&scene);
+    s.advance(2.0 + 2.0 * every).unwrap();
+    let t = s.trajectory();
+    let last = t.rows().last().unwrap()[0];
+    assert!((last - (2.0 + 2.0 * every)).abs() < 1e-12, "{last}");
+}

@@ -472,6 +472,23 @@ impl Stepping {
         Ok(events)
     }
 
+    /// How many rows [`Stepping::advance`]`(options, dt, ..)` would give (the output times
+    /// after [`Stepping::t`] up to `t + dt`), counted no further than `cap + 1`: a caller
+    /// that keeps rows checks a long `dt` against its room before integrating (the rows of
+    /// one piece are listed in memory). 0 for a `dt` that `advance` refuses.
+    pub fn rows_in(&self, options: &Options, dt: f64, cap: usize) -> usize {
+        if !(dt > 0.0 && dt.is_finite() && (self.t + dt).is_finite()) {
+            return 0;
+        }
+        let t_end = self.snap(options, self.t + dt);
+        let (mut c, mut n) = (self.cursor, 0);
+        while n <= cap && self.grid.time(c) <= t_end {
+            n += 1;
+            c = self.grid.after(c);
+        }
+        n
+    }
+
     /// The end of a piece: an output time or (fixed step) a grid point within round-off of
     /// `t_end`, else `t_end`.
     fn snap(&self, options: &Options, t_end: f64) -> f64 {
