@@ -68,6 +68,8 @@ pub struct Drag {
 /// assert!((f.x + 0.5 * 1e-12 * 7600.0f64.powi(2) * 2.2).abs() < 1e-18);
 /// ```
 pub fn plate_force(v: &Vec3, n: &Vec3, area: f64, cd: f64, rho: f64) -> Vec3 {
+    #[cfg(test)]
+    tests::PLATES.with(|k| k.set(k.get() + 1));
     let speed = v.norm();
     if speed == 0.0 {
         return Vec3::zeros();
@@ -140,7 +142,10 @@ impl Effect for Drag {
             let flow = orbit.v - earth.cross(&(orbit.r + c));
             let (n, area, cd) = (self.facets.normal(k), facet.area, facet.drag);
             let f = plate_force(&(flow + own), n, area, cd, self.density);
-            flow_power += plate_force(&flow, n, area, cd, self.density).dot(&own);
+            // The steady flow's force only for the energy budget: nothing else reads it.
+            if ctx.power {
+                flow_power += plate_force(&flow, n, area, cd, self.density).dot(&own);
+            }
             if f == Vec3::zeros() {
                 continue;
             }
@@ -208,5 +213,62 @@ impl SceneEffect for Drag {
             false => None,
         };
         Ok(Drag::new(atmosphere, co_rotating, facets))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::effects::orbit::{Elements, Orbit, OrbitModel};
+    use crate::simulation::Simulation;
+    use satsim_integrate::System;
+    use satsim_tree::spatial::Mat3;
+    use satsim_tree::{BaseKind, Body, BoxShape, ModelBuilder, facets_of_box};
+    use std::cell::Cell;
+
+    thread_local! {
+        /// Calls of [`plate_force`] on this thread.
+        pub(super) static PLATES: Cell<usize> = const { Cell::new(0) };
+    }
+
+    #[test]
+    fn each_facet_is_evaluated_once_per_rhs_unless_the_energy_budget_asks_for_the_flows() {
+        let shape = BoxShape::new(Vec3::new(1.0, 2.0, 3.0));
+        let model = ModelBuilder::new(BaseKind::Free)
+            .body(
+                Body::new("bus", 100.0, 10.0 * Mat3::identity())
+                    .with_facets(facets_of_box(&shape, &Vec3::zeros())),
+            )
+            .build()
+            .unwrap();
+        let rhs = |budget: bool| {
+            let mut sim = Simulation::builder(model.clone())
+                .effect(Orbit::from_elements(
+                    OrbitModel::Kepler,
+                    &Elements::circular(6.778e6, 0.9),
+                ))
+                .effect(Drag::new(
+                    Atmosphere::Exponential,
+                    None,
+                    Facets::of_model(&model),
+                ))
+                .energy_budget(budget)
+                .build()
+                .unwrap();
+            let mut x = sim.x0().to_vec();
+            // The bus turning: its facets' own velocities add to the flow's.
+            x[sim.layout().omega.clone()].copy_from_slice(&[0.01, -0.02, 0.03]);
+            let mut dx = vec![0.0; x.len()];
+            PLATES.with(|k| k.set(0));
+            sim.rhs(0.0, &x, &mut dx).unwrap();
+            (PLATES.with(Cell::get), sim.layout().clone(), dx)
+        };
+        let (plain, layout, dx) = rhs(false);
+        let (budget, with_layout, dx_budget) = rhs(true);
+        assert_eq!(plain, 6, "one plate per facet");
+        assert_eq!(budget, 12, "and the steady flow's for the budget");
+        // The same motion, bit for bit (the budget's states come after it).
+        assert_eq!(dx[..layout.len], dx_budget[..layout.len]);
+        assert!(with_layout.len >= layout.len);
     }
 }
