@@ -374,6 +374,60 @@ fn a_campaigns_runs_draw_their_own_noise_and_each_is_its_drawn_scene() {
     assert_eq!(&last[1..], &s1.last[..]);
 }
 
+/// Every order of the four sensor kinds in the file gives the same columns, and a campaign's
+/// drawn runs (whose scene text is rewritten, tables in another order) the nominal scene's:
+/// the columns and noise streams follow the kinds, not the text.
+#[test]
+fn every_order_of_the_sensor_kinds_gives_one_campaign() {
+    let blocks = [
+        "[[sensors.gyro]]\nname = \"gyro\"\nbody = \"bus\"\nperiod = 0.1\nnoise_density = 1e-4\n",
+        "[[sensors.star_tracker]]\nname = \"st\"\nbody = \"bus\"\nperiod = 0.1\nnoise_arcsec = [5.0, 5.0, 40.0]\n",
+        "[[sensors.sun_sensor]]\nname = \"sun\"\nbody = \"bus\"\nperiod = 0.1\nnoise = 1e-3\n",
+        "[[sensors.magnetometer]]\nname = \"mag\"\nbody = \"bus\"\nperiod = 0.1\nnoise = 1e-8\n",
+    ];
+    let campaign = "\n[campaign]\nruns = 2\nseed = 4\n[[campaign.disperse]]\nkey = \"model.body.0.mass\"\nnormal = { sigma = 1.0 }\n";
+    let mut first: Option<(Vec<String>, Vec<u64>)> = None;
+    let mut orders = 0;
+    for a in 0..4 {
+        for b in 0..4 {
+            for c in 0..4 {
+                if a == b || a == c || b == c {
+                    continue;
+                }
+                let d = (0..4).find(|x| ![a, b, c].contains(x)).unwrap();
+                orders += 1;
+                let sensors = format!(
+                    "[sensors]\nseed = 1\n{}{}{}{}{campaign}",
+                    blocks[a], blocks[b], blocks[c], blocks[d]
+                );
+                let text = orbit_scene_text(0.3, 0.1, &sensors);
+                let cp = Campaign::parse(&text, Path::new("campaign.toml"))
+                    .unwrap_or_else(|e| panic!("order {a}{b}{c}{d}: {e}"));
+                let mut bits = Vec::new();
+                for k in 0..2 {
+                    let st = cp
+                        .run_one(k)
+                        .outcome
+                        .unwrap_or_else(|e| panic!("order {a}{b}{c}{d}, run {k}: {e}"));
+                    bits.extend(st.last.iter().map(|v| v.to_bits()));
+                }
+                let cols = cp.columns.clone();
+                match &first {
+                    None => first = Some((cols, bits)),
+                    Some((c0, b0)) => {
+                        assert_eq!(&cols, c0, "order {a}{b}{c}{d}: the columns");
+                        assert_eq!(&bits, b0, "order {a}{b}{c}{d}: the runs' last rows");
+                    }
+                }
+            }
+        }
+    }
+    assert_eq!(orders, 24);
+    let (cols, _) = first.unwrap();
+    let at = |n: &str| cols.iter().position(|c| c == n).unwrap();
+    assert!(at("gyro_x") < at("st_q_w") && at("st_q_w") < at("sun_x") && at("sun_x") < at("mag_x"));
+}
+
 fn error_of(text: &str) -> String {
     match Scene::parse(text, Path::new("bad.toml")) {
         Ok(_) => panic!("accepted:\n{text}"),

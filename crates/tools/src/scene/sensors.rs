@@ -137,7 +137,11 @@ pub(crate) fn read(
     let non_negative = |x: &Option<Spanned<f64>>, what: &str| -> Result<f64, FileError> {
         x.as_ref().map_or(Ok(0.0), |x| text.non_negative(x, what))
     };
-    // Every sensor with its kind, in file order (its index is its noise stream).
+    // Every sensor with its kind, kind by kind (gyros, star trackers, Sun sensors,
+    // magnetometers), each kind in file order: its index is its noise stream and places its
+    // columns. Not the order of the tables in the text, which a rewritten scene (a campaign's
+    // drawn run, `--set`) does not keep: the same sensors give the same columns and streams
+    // however the file interleaves their kinds.
     let mut all: Vec<(Common, Kind)> = Vec::new();
     for g in &f.gyro {
         let r = g.get_ref();
@@ -223,7 +227,6 @@ pub(crate) fn read(
             }),
         ));
     }
-    all.sort_by_key(|(c, _)| c.span.start);
     let mut set = Sensors::new(seed);
     for (c, kind) in all {
         let name = c.name.get_ref();
