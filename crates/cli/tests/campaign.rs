@@ -702,6 +702,106 @@ fn bad_campaign_input_exits_2_naming_the_key() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// Dispersions that every run would ignore or refuse, refused when the campaign starts (not
+/// a campaign of failed runs that exits 0): the sensors' seed, a whole-number key, a law that
+/// draws infinities, a number of runs past the bound; and a merge of one folder twice.
+#[test]
+fn dispersions_the_runs_cannot_take_are_refused_up_front() {
+    let dir = temp_dir("refused");
+    let gyro = "\n[sensors]\nseed = 5\n[[sensors.gyro]]\nname = \"g\"\nbody = \"bus\"\nperiod = 0.5\nnoise_density = 1e-4\n";
+    let disperse =
+        |body: &str| format!("{gyro}\n[campaign]\nruns = 3\n\n[[campaign.disperse]]\n{body}\n");
+    for (extra, needles) in [
+        (
+            disperse("key = \"sensors.seed\"\nnormal = { sigma = 2.0 }"),
+            vec![
+                "sensors.seed",
+                "cannot be dispersed",
+                "each run writes its own",
+            ],
+        ),
+        (
+            disperse("key = \"integrator.max_steps\"\nnormal = { sigma = 10.0 }"),
+            vec!["integrator.max_steps", "whole numbers"],
+        ),
+        (
+            disperse("key = \"model.body.3.mass\"\nnormal = { sigma = 1e308 }"),
+            vec!["model.body.3.mass", "normal.sigma", "infinity"],
+        ),
+        (
+            disperse("key = \"model.body.3.mass\"\nscale = { sigma = 1e307 }"),
+            vec!["model.body.3.mass", "scale.sigma", "infinity"],
+        ),
+        (
+            disperse("key = \"model.body.3.mass\"\nuniform = { low = -1e308, high = 1e308 }"),
+            vec!["model.body.3.mass", "uniform.low", "infinity"],
+        ),
+        (
+            format!("\n[campaign]\nruns = {}\n", i64::MAX),
+            vec!["campaign.runs", "1000000000"],
+        ),
+    ] {
+        let scene = write_campaign(&dir, "");
+        let text =
+            read(&scene).replace("step = 0.01\n", "step = 0.01\nmax_steps = 100000\n") + &extra;
+        std::fs::write(&scene, text).unwrap();
+        let o = satsim(&dir, &["campaign", "scene.toml", "--out", "c"]);
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{extra}: {stderr}");
+        assert!(stderr.contains("scene.toml:"), "{stderr}");
+        for n in needles {
+            assert!(stderr.contains(n), "{extra}: `{n}` not in {stderr}");
+        }
+        assert!(!dir.join("c/runs.csv").exists(), "{extra}: no run is made");
+    }
+    // One folder merged with itself, or two copies of one shard, would count traces twice.
+    let scene = write_campaign(&dir, CAMPAIGN);
+    let scene = scene.to_str().unwrap();
+    ok(&satsim(
+        &dir,
+        &["campaign", scene, "--shard", "0/2", "--out", "s0"],
+    ));
+    ok(&satsim(
+        &dir,
+        &["campaign", scene, "--shard", "1/2", "--out", "s1"],
+    ));
+    copy_dir(&dir.join("s0"), &dir.join("s0copy"));
+    for (args, needle) in [
+        (
+            vec!["campaign", "merge", "s0", "s1", "s0", "--out", "m"],
+            "given twice",
+        ),
+        (
+            vec!["campaign", "merge", "s0", "./s0", "--out", "m"],
+            "given twice",
+        ),
+        (
+            vec!["campaign", "merge", "s0", "s1", "s0copy", "--out", "m"],
+            "both hold shard 0/2",
+        ),
+    ] {
+        let o = satsim(&dir, &args);
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {stderr}");
+        assert!(stderr.contains(needle), "{args:?}: {stderr}");
+    }
+    ok(&satsim(
+        &dir,
+        &["campaign", "merge", "s0", "s1", "--out", "m"],
+    ));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+fn copy_dir(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for e in std::fs::read_dir(from).unwrap() {
+        let e = e.unwrap();
+        if e.file_type().unwrap().is_file() {
+            std::fs::copy(e.path(), to.join(e.file_name())).unwrap();
+        }
+    }
+}
+
 /// `campaign SCENE --out OUT --set S...` and then `extra`.
 fn campaign_args<'a>(
     scene: &'a str,

@@ -493,8 +493,30 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<Finished, CampaignError> {
     let mut meta: Option<Meta> = None;
     let mut rows = Vec::new();
     let mut traces = String::new();
+    // A folder given twice, or two folders of one shard, would count its traces twice.
+    let mut seen: Vec<(PathBuf, Shard, &PathBuf)> = Vec::new();
     for d in dirs {
         let m = Meta::read(d)?;
+        let same = std::fs::canonicalize(d).unwrap_or_else(|_| d.clone());
+        for (other, shard, given) in &seen {
+            if *other == same {
+                return Err(CampaignError::Other(format!(
+                    "{} is given twice (as {} and {}): name each shard's folder once",
+                    same.display(),
+                    given.display(),
+                    d.display()
+                )));
+            }
+            if shard.count > 1 && *shard == m.shard {
+                return Err(CampaignError::Other(format!(
+                    "{} and {} both hold shard {}: name each shard's folder once",
+                    given.display(),
+                    d.display(),
+                    m.shard
+                )));
+            }
+        }
+        seen.push((same, m.shard, d));
         // Shards are merged only when their digests say they ran the same scene.
         if m.scene_digest.is_none() {
             return Err(CampaignError::Other(format!(

@@ -126,6 +126,15 @@ pub struct Campaign {
 /// The largest number of samples of a run's trace for the envelope plots.
 const TRACE_POINTS: usize = 200;
 
+/// The most runs one campaign may have: a billion runs of the smallest scene are days of a
+/// large cluster's time; a number beyond it is a slip, not a study.
+pub const MAX_RUNS: i64 = 1_000_000_000;
+
+/// Whether a dispersed number is the sensors' seed (`sensors.seed`), which each run sets.
+fn is_sensor_seed(path: &[Segment]) -> bool {
+    matches!(path, [Segment::Key(a), Segment::Key(b), ..] if a == "sensors" && b == "seed")
+}
+
 /// One run's statistics over its output rows (every trajectory column but `t`, in order).
 #[derive(Clone, Debug, PartialEq)]
 pub struct RunStats {
@@ -235,10 +244,12 @@ impl Campaign {
         };
         let file = file.into_inner();
         let runs = *file.runs.get_ref();
-        if runs < 1 {
+        if !(1..=MAX_RUNS).contains(&runs) {
             return Err(schema(
                 Some(file.runs.span()),
-                format!("`campaign.runs` must be a whole number >= 1, got {runs}"),
+                format!(
+                    "`campaign.runs` must be a whole number from 1 to {MAX_RUNS}, got {runs} (split a larger study into campaigns with their own seeds)"
+                ),
             ));
         }
         let seed = match &file.seed {
@@ -279,12 +290,36 @@ impl Campaign {
             let law = spec::law_of(d).map_err(named)?;
             let index = d.index.as_ref().map(|x| *x.get_ref());
             let found = spec::resolve(&base, key, index, law).map_err(|KeyError(m)| named(m))?;
-            for f in found {
+            if found.iter().any(|f| is_sensor_seed(&f.path)) {
+                return Err(named(
+                    "`sensors.seed` cannot be dispersed: each run writes its own (drawn from `campaign.seed` and the run's number), so a dispersed one would be ignored".into(),
+                ));
+            }
+            spec::check_reach(&found, law).map_err(named)?;
+            for f in &found {
                 if dispersed.iter().any(|o| o.path == f.path) {
                     return Err(named(format!("`{}` is dispersed twice", f.column)));
                 }
-                dispersed.push(f);
             }
+            // A key the scene reads as a whole number (a count: `beam.modes`, `resolution`)
+            // refuses the drawn values, which are real: found now, not as every run failing.
+            let mut t = base.clone();
+            for f in &found {
+                spec::set(&mut t, &f.path, f.nominal);
+            }
+            let floated = toml::to_string(&t).expect("a TOML table serialises");
+            if let Err(e) = Scene::parse(&floated, path) {
+                let why = match e {
+                    FileError::Schema { message, .. } | FileError::Syntax { message, .. } => {
+                        message
+                    }
+                    other => other.to_string(),
+                };
+                return Err(named(format!(
+                    "the scene takes only whole numbers there, and dispersed values are real numbers ({why})"
+                )));
+            }
+            dispersed.extend(found);
         }
 
         let sim = nominal

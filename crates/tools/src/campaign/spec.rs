@@ -214,6 +214,33 @@ pub(crate) fn set(root: &mut Table, path: &[Segment], value: f64) {
     scene_keys::set(root, path, Value::Float(value));
 }
 
+/// The largest |z| a standard normal variate is taken to reach when checking that draws stay
+/// finite: beyond 40 the normal's probability is below 1e-300.
+const Z_REACH: f64 = 40.0;
+
+/// Checks that `law` keeps every draw from the numbers `found` finite (a `sigma` of 1e308
+/// would draw infinities and record them as values).
+pub(crate) fn check_reach(found: &[Dispersed], law: Law) -> Result<(), String> {
+    for f in found {
+        let x = f.nominal.abs();
+        let (reach, what) = match law {
+            Law::Normal { sigma } => (x + Z_REACH * sigma, "normal.sigma"),
+            Law::Scale { sigma } => (x * (1.0 + Z_REACH * sigma), "scale.sigma"),
+            Law::Uniform { low, high } => (
+                (x + low.abs().max(high.abs())) + (high - low),
+                "uniform.low` and `uniform.high",
+            ),
+        };
+        if !reach.is_finite() {
+            return Err(format!(
+                "`{what}` is too large for `{}` = {}: its draws would overflow to infinity",
+                f.column, f.nominal
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// The law of a `[[campaign.disperse]]` entry, checked.
 pub(crate) fn law_of(d: &DisperseFile) -> Result<Law, String> {
     let given = [d.normal.is_some(), d.uniform.is_some(), d.scale.is_some()]
