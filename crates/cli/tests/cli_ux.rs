@@ -638,3 +638,45 @@ fn plot_refuses_bad_input_naming_it() {
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(String::from_utf8_lossy(&o.stdout).contains("2 rows"));
 }
+
+#[test]
+fn environment_at_0_shows_a_thruster_firing_from_the_start() {
+    // Duty 1 from t = 0: the thruster is on over the first period; `--at 0` used to report
+    // the state before the start's sample, with no thrust at all.
+    let dir = setup("env-thrust0");
+    std::fs::write(
+        dir.join("thrust.toml"),
+        r#"duration = 1.0
+[model]
+[[model.body]]
+name = "bus"
+mass = 100.0
+inertia = [[10.0, 0.0, 0.0], [0.0, 10.0, 0.0], [0.0, 0.0, 10.0]]
+[effects.thrusters]
+period = 0.1
+[[effects.thrusters.thruster]]
+name = "roll"
+at = [0.0, 1.0, 0.0]
+direction = [0.0, 0.0, 1.0]
+thrust = 2.0
+duty = 1.0
+"#,
+    )
+    .unwrap();
+    for at in ["0", "0.05"] {
+        let o = satsim_in(&dir, &["environment", "thrust.toml", "--at", at]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        let bus = &v["effects"]["thrusters"]["bodies"]["bus"];
+        assert_eq!(
+            bus["force"],
+            serde_json::json!([0.0, 0.0, 2.0]),
+            "--at {at}: {v}"
+        );
+        assert_eq!(
+            bus["torque"],
+            serde_json::json!([2.0, 0.0, 0.0]),
+            "--at {at}: {v}"
+        );
+    }
+}

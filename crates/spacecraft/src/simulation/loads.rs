@@ -3,7 +3,7 @@
 
 use super::Simulation;
 use super::run::{RunError, Shared};
-use satsim_integrate::{Options, Output, SystemError};
+use satsim_integrate::{IntegrateError, Options, Output, System, SystemError, stop_due};
 use satsim_tree::spatial::{Force, Vec3};
 use satsim_tree::{Data, rnea};
 use std::cell::RefCell;
@@ -91,15 +91,29 @@ impl Simulation {
     }
 
     /// The state a run of this simulation reaches at `t_end` (from its initial state, events
-    /// handled as in [`Simulation::run`]), with the time it reached.
+    /// handled as in [`Simulation::run`]), with the time it reached. The effects' samples due
+    /// at the time reached are taken (at `t0` too: a thruster that fires from the start is
+    /// on), so that [`Simulation::loads`] there shows what the run applies from then on.
     pub fn state_at(
         &mut self,
         options: &Options,
         t_end: f64,
     ) -> Result<(f64, Vec<f64>), RunError<Infallible>> {
-        let x0 = self.x0.clone();
+        let mut x0 = self.x0.clone();
         let t0 = self.t0;
         if t_end <= t0 {
+            // The samples due at the start, as a run takes them before its first step (a
+            // thruster firing from t0 is on there).
+            if stop_due(t0, self.next_stop()) {
+                let system = |source| RunError::Integrate(IntegrateError::System { t: t0, source });
+                self.on_stop(t0, &mut x0).map_err(system)?;
+                if stop_due(t0, self.next_stop()) {
+                    return Err(system(SystemError::new(format!(
+                        "the time stop at {} was handled at t = {t0} but did not move past it",
+                        self.next_stop()
+                    ))));
+                }
+            }
             return Ok((t0, x0));
         }
         let cell = RefCell::new(self);
