@@ -680,3 +680,78 @@ duty = 1.0
         );
     }
 }
+
+#[test]
+fn the_views_header_counts_wheel_rotors_apart() {
+    // A bus, one panel on one hinge and three wheels: the tree has 5 bodies and 4 hinges,
+    // the view's header must say "2 bodies, 1 hinges, 3 wheel rotors" as the summary does.
+    let dir = setup("view-rotors");
+    std::fs::write(
+        dir.join("wheels.toml"),
+        r#"duration = 0.5
+[model]
+[[model.body]]
+name = "bus"
+mass = 100.0
+inertia = [[10.0, 0.0, 0.0], [0.0, 10.0, 0.0], [0.0, 0.0, 10.0]]
+[[model.body]]
+name = "panel"
+mass = 5.0
+inertia = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+com = [0.0, 1.0, 0.0]
+[[model.hinge]]
+name = "root"
+parent = "bus"
+child = "panel"
+axis = [1.0, 0.0, 0.0]
+at = [0.0, 0.5, 0.0]
+[integrator]
+method = "rk4"
+step = 0.1
+[output]
+every = 0.1
+plots = false
+[effects.reaction_wheels]
+[[effects.reaction_wheels.wheel]]
+name = "x"
+axis = [1.0, 0.0, 0.0]
+inertia = 0.01
+[[effects.reaction_wheels.wheel]]
+name = "y"
+axis = [0.0, 1.0, 0.0]
+inertia = 0.01
+[[effects.reaction_wheels.wheel]]
+name = "z"
+axis = [0.0, 0.0, 1.0]
+inertia = 0.01
+speed = 10.0
+"#,
+    )
+    .unwrap();
+    let o = satsim_in(&dir, &["run", "wheels.toml", "--out", "w"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        out.contains("model      2 bodies, 1 hinges, 3 wheel rotors"),
+        "{out}"
+    );
+    let scene: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("w/view.json")).unwrap()).unwrap();
+    // Every body is drawn (the rotors too); the header subtracts the rotors.
+    assert_eq!(scene["bodies"].as_array().unwrap().len(), 5, "{scene}");
+    assert_eq!(scene["hinges"].as_array().unwrap().len(), 4, "{scene}");
+    assert_eq!(scene["rotors"], 3, "{scene}");
+    let page = std::fs::read_to_string(dir.join("w/view.html")).unwrap();
+    assert!(
+        page.contains("${NB - NR} bodies, ${SCENE.hinges.length - NR} hinges"),
+        "the page's header does not subtract the rotors"
+    );
+    // `satsim view` re-creates the page from view.json, rotors included.
+    let o = satsim_in(&dir, &["view", "w", "--out", "again.html"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let again = std::fs::read_to_string(dir.join("again.html")).unwrap();
+    assert!(
+        again.contains("\"rotors\":3"),
+        "rotors lost on the way back"
+    );
+}

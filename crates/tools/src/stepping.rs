@@ -131,6 +131,9 @@ impl SceneStepper {
                                 Some(f) => r.with_flexible(f, &columns),
                                 None => Ok(r),
                             })
+                            .and_then(|r| {
+                                r.with_rotors(sim.model().n_hinges() - sim.layout().n_hinges)
+                            })
                             .map_err(|e| StepFailure::Failed(e.to_string()))?,
                     ),
                     false => None,

@@ -175,6 +175,7 @@ pub fn run_limited(
                     Some(f) => r.with_flexible(f, &columns),
                     None => Ok(r),
                 })
+                .and_then(|r| r.with_rotors(sim.model().n_hinges() - sim.layout().n_hinges))
                 .map_err(|e| CliError::Other(e.to_string()))?,
         ),
         false => None,

@@ -200,6 +200,10 @@ pub struct ViewScene {
     pub bodies: Vec<ViewBody>,
     /// Every hinge of the model.
     pub hinges: Vec<ViewHinge>,
+    /// How many of the last bodies (and hinges) are wheel rotors (hinged to the root): the
+    /// header counts them apart, as a run's summary does (absent from the file when none).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub rotors: usize,
     /// The hinges whose angles are plotted (those with an `angle_<name>` column), in the
     /// columns' order.
     pub angles: Vec<String>,
@@ -210,6 +214,10 @@ pub struct ViewScene {
     /// The flexible bodies' beams (absent from the file when there is none).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub beams: Vec<ViewBeam>,
+}
+
+fn is_zero(n: &usize) -> bool {
+    *n == 0
 }
 
 impl ViewScene {
@@ -503,6 +511,7 @@ impl ViewScene {
             },
             bodies,
             hinges,
+            rotors: 0,
             angles,
             nadir,
             events: Vec::new(),
@@ -693,6 +702,21 @@ impl PoseRecorder {
             cols,
         });
         Ok(rec)
+    }
+
+    /// Marks the model's last `n` bodies, on its last `n` hinges, as wheel rotors (as
+    /// [`satsim_spacecraft::simulation::Simulation`] appends them), so that the page's
+    /// header counts them apart from the bodies and hinges.
+    pub fn with_rotors(mut self, n: usize) -> Result<Self, ViewError> {
+        if n >= self.scene.bodies.len() || n > self.scene.hinges.len() {
+            return Err(ViewError::Record(format!(
+                "{n} wheel rotors in a model of {} bodies and {} hinges",
+                self.scene.bodies.len(),
+                self.scene.hinges.len()
+            )));
+        }
+        self.scene.rotors = n;
+        Ok(self)
     }
 
     /// Sets the most frames kept (at least 2); the recorder halves its frames when full.

@@ -424,3 +424,36 @@ fn beams_are_drawn_bent_by_their_modal_coordinates() {
         .unwrap();
     assert!(e.to_string().contains("`eta_arm_2`"), "{e}");
 }
+
+#[test]
+fn wheel_rotors_are_counted_apart_and_kept_in_view_json() {
+    // chain(3): bodies b0, b1, b2 on hinges h1, h2; take the last as a rotor.
+    let model = chain(3, BaseKind::Fixed);
+    let columns = cols(&["t", "angle_h1", "angle_h2"]);
+    let rec = PoseRecorder::new(&model, &columns, "c")
+        .unwrap()
+        .with_rotors(1)
+        .unwrap();
+    let view = rec.finish(&[]);
+    assert_eq!(view.scene.rotors, 1);
+    let json = serde_json::to_string(&view.scene).unwrap();
+    assert!(json.contains("\"rotors\":1"), "{json}");
+    // None: the key is left out, and a file without it reads as none.
+    let plain = PoseRecorder::new(&model, &columns, "c")
+        .unwrap()
+        .finish(&[]);
+    let json = serde_json::to_string(&plain.scene).unwrap();
+    assert!(!json.contains("rotors"), "{json}");
+    let back: ViewScene = serde_json::from_str(&json).unwrap();
+    assert_eq!(back.rotors, 0);
+    // More rotors than the model has bodies besides its root: refused.
+    let e = PoseRecorder::new(&model, &columns, "c")
+        .unwrap()
+        .with_rotors(3)
+        .err()
+        .unwrap();
+    assert_eq!(
+        e.to_string(),
+        "view: 3 wheel rotors in a model of 3 bodies and 2 hinges"
+    );
+}
