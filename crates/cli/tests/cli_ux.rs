@@ -755,3 +755,40 @@ speed = 10.0
         "rotors lost on the way back"
     );
 }
+
+#[test]
+fn modes_at_a_state_that_is_no_equilibrium_warn_with_the_residual() {
+    // tumbling.toml spins about the intermediate axis, slightly off it: Euler's equations
+    // give |ω̇| = 9.49e-5 rad/s² at t = 0, and its "modes" describe that motion.
+    let dir = setup("modes-drift");
+    let tumbling = root().join("examples/scenes/tumbling.toml");
+    let o = satsim_in(&dir, &["modes", tumbling.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        err.contains("warning: the initial state is not an equilibrium")
+            && err.contains("angular velocity (rad/s²) 9.49")
+            && err.contains("zero rates"),
+        "{err}"
+    );
+    let o = satsim_in(&dir, &["linearize", tumbling.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("not an equilibrium"), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let states = v["states"].as_array().unwrap();
+    let residual = v["residual"].as_array().unwrap();
+    assert_eq!(residual.len(), states.len());
+    let at = |name: &str| {
+        let k = states.iter().position(|s| s == name).unwrap();
+        residual[k].as_f64().unwrap()
+    };
+    // ω̇_x = −(ω_y I_z ω_z − ω_z I_y ω_y) / I_x = 0.08 / 900.
+    assert!((at("omega_x") - 0.08 / 900.0).abs() < 1e-12, "{v}");
+    // At rest, at its springs' references: an equilibrium, no warning.
+    let rest = root().join("examples/scenes/deployment_modes.toml");
+    for command in ["modes", "linearize"] {
+        let o = satsim_in(&dir, &[command, rest.to_str().unwrap()]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert!(!stderr(&o).contains("equilibrium"), "{}", stderr(&o));
+    }
+}

@@ -87,6 +87,7 @@ use nalgebra::{DMatrix, Matrix3, Quaternion, UnitQuaternion};
 use satsim_integrate::System;
 use satsim_spacecraft::simulation::{SimError, Simulation};
 use satsim_tree::spatial::Vec3;
+use std::ops::Range;
 use thiserror::Error;
 
 /// Relative step of the finite differences (see the module documentation).
@@ -106,6 +107,13 @@ pub const ACCURACY: f64 = 1e-3;
 /// overflows: with a spring of 10³⁰⁸ the eigenvalues come out as 10²⁹⁸ where they are
 /// 10¹⁵³, with negative damping ratios.
 pub const LARGEST_ENTRY: f64 = 1.3407807929942596e154;
+
+/// The largest rate of a group of states at the linearisation point (its
+/// [`Linearization::residual`]'s norm) that still counts as an equilibrium, relative to the
+/// larger of 1 and the largest entry of `A`: a state that stays put to round-off (10⁻¹⁶ of
+/// its terms) passes, and a drift of 10⁻⁹ rad/s over a unit state is already far below what
+/// a mode of the model would show.
+pub const EQUILIBRIUM: f64 = 1e-9;
 
 /// Why a scene could not be linearised.
 #[derive(Debug, Error)]
@@ -176,12 +184,62 @@ pub struct Linearization {
     /// Wheels (`wheel_<name>`) stuck by static friction at the initial state, released for
     /// the linearisation (see the module documentation).
     pub released: Vec<String>,
+    /// `ż` at the linearisation point (`z = 0`, `u = 0`), by state (0 for a frozen state):
+    /// zero at an equilibrium. `A` and `B` leave it out (see
+    /// [`Linearization::not_an_equilibrium`]).
+    pub residual: Vec<f64>,
+    /// The states in groups, each named with the unit of its rate: `attitude (rad/s)`,
+    /// `angular velocity (rad/s²)`, `velocity (m/s²)`, `hinge angles (rad/s)`,
+    /// `hinge rates (rad/s²)`, the elastic coordinates and rates, then each effect's states
+    /// (by the effect's name, per second), with their ranges in [`Linearization::states`].
+    pub groups: Vec<(String, Range<usize>)>,
 }
 
 impl Linearization {
     /// The index of state `name`.
     pub fn state(&self, name: &str) -> Option<usize> {
         self.states.iter().position(|s| s == name)
+    }
+
+    /// The norm of [`Linearization::residual`] over each group of
+    /// [`Linearization::groups`], in their order.
+    pub fn residuals(&self) -> Vec<(&str, f64)> {
+        self.groups
+            .iter()
+            .map(|(g, r)| {
+                let norm = self.residual[r.clone()].iter().map(|v| v * v).sum::<f64>();
+                (g.as_str(), norm.sqrt())
+            })
+            .collect()
+    }
+
+    /// Why the linearisation point is not an equilibrium, when it is not: the groups whose
+    /// rate [`Linearization::residual`] is more than [`EQUILIBRIUM`] times the larger of 1
+    /// and the largest entry of `A` (the orbit's own states, which move on any orbit, left
+    /// out), with what to set. `A` is then the Jacobian at one instant of a motion, and its
+    /// eigenvalues describe the start of that motion frozen there, not vibrations about a
+    /// pose.
+    pub fn not_an_equilibrium(&self) -> Option<String> {
+        let tolerance = EQUILIBRIUM * self.a.amax().max(1.0);
+        let moving: Vec<String> = self
+            .residuals()
+            .into_iter()
+            .filter(|(g, norm)| !g.starts_with("orbit") && (norm.is_nan() || *norm > tolerance))
+            .map(|(g, norm)| format!("{g} {norm:.3e}"))
+            .collect();
+        if moving.is_empty() {
+            return None;
+        }
+        Some(format!(
+            "the initial state is not an equilibrium: its rate of change there, per group of \
+             states, is {}; the linear model and its modes describe that motion frozen at \
+             t = 0, not vibrations about a pose (frequencies, damping ratios and shapes can be \
+             meaningless). For vibration modes start at rest where the loads balance: zero \
+             rates (`[initial] base.angular_velocity`, `hinges.rate`; or a spin about a \
+             principal axis), hinge angles at their springs' `reference`, or sweep with \
+             `satsim modes --along`, which holds each configuration",
+            moving.join(", ")
+        ))
     }
 }
 
@@ -245,6 +303,15 @@ pub fn linearize_simulation(sim: &mut Simulation) -> Result<Linearization, Linea
     let mut x_index: Vec<Option<usize>> = Vec::new(); // None: attitude error component
     let mut scale: Vec<f64> = Vec::new();
     let mut frozen: Vec<bool> = Vec::new();
+    let mut groups: Vec<(String, Range<usize>)> = Vec::new();
+    let mut group = |name: &str, states: &[String]| {
+        let start = groups
+            .last()
+            .map_or(0, |(_, r): &(String, Range<usize>)| r.end);
+        if states.len() > start {
+            groups.push((name.to_owned(), start..states.len()));
+        }
+    };
     if layout.free {
         for c in ["x", "y", "z"] {
             states.push(format!("att_{c}"));
@@ -252,32 +319,45 @@ pub fn linearize_simulation(sim: &mut Simulation) -> Result<Linearization, Linea
             scale.push(1.0);
             frozen.push(false);
         }
-        for (prefix, range) in [("omega", &layout.omega), ("vel", &layout.velocity)] {
+        group("attitude (rad/s)", &states);
+        for (prefix, range, g) in [
+            ("omega", &layout.omega, "angular velocity (rad/s²)"),
+            ("vel", &layout.velocity, "velocity (m/s²)"),
+        ] {
             for (k, c) in ["x", "y", "z"].iter().enumerate() {
                 states.push(format!("{prefix}_{c}"));
                 x_index.push(Some(range.start + k));
                 scale.push(1.0);
                 frozen.push(false);
             }
+            group(g, &states);
         }
     }
-    for (prefix, range) in [("angle", &layout.angles), ("rate", &layout.rates)] {
+    for (prefix, range, g) in [
+        ("angle", &layout.angles, "hinge angles (rad/s)"),
+        ("rate", &layout.rates, "hinge rates (rad/s²)"),
+    ] {
         for k in 0..n_user {
             states.push(format!("{prefix}_{}", hinge_names[k]));
             x_index.push(Some(range.start + k));
             scale.push(1.0);
             frozen.push(locked[k]);
         }
+        group(g, &states);
     }
     // A flexible body's modal coordinates and rates (√kg m, √kg m/s), after the hinge rates.
     let elastic = sim.elastic_names();
-    for (prefix, range) in [("eta", &layout.eta), ("etadot", &layout.etadot)] {
+    for (prefix, range, g) in [
+        ("eta", &layout.eta, "elastic coordinates (√kg m/s)"),
+        ("etadot", &layout.etadot, "elastic rates (√kg m/s²)"),
+    ] {
         for (name, i) in elastic.iter().zip(range.clone()) {
             states.push(format!("{prefix}_{name}"));
             x_index.push(Some(i));
             scale.push(1.0);
             frozen.push(false);
         }
+        group(g, &states);
     }
     for (name, range) in &layout.effects {
         if range.is_empty() {
@@ -300,6 +380,7 @@ pub fn linearize_simulation(sim: &mut Simulation) -> Result<Linearization, Linea
             scale.push(1.0f64.max(STEP * norm));
             frozen.push(rotors && locked.get(n_user + k).copied().unwrap_or(false));
         }
+        group(&format!("{name} (per second)"), &states);
     }
     let n = states.len();
 
@@ -426,6 +507,14 @@ pub fn linearize_simulation(sim: &mut Simulation) -> Result<Linearization, Linea
             }
         }
     }
+    // Where the linear model starts: zero at an equilibrium.
+    let mut residual = vec![0.0; n];
+    zdot(sim, &vec![0.0; n], &tau0, &mut residual)?;
+    for (r, f) in residual.iter_mut().zip(&frozen) {
+        if *f {
+            *r = 0.0;
+        }
+    }
     check_range(&a, &b, &states, &inputs)?;
     let largest = a.amax().max(b.amax());
     if error_estimate > ACCURACY * largest {
@@ -447,6 +536,8 @@ pub fn linearize_simulation(sim: &mut Simulation) -> Result<Linearization, Linea
         error_estimate,
         locked: locked_names,
         released,
+        residual,
+        groups,
     })
 }
 
@@ -490,6 +581,63 @@ fn right_jacobian_inv(phi: &Vec3) -> Matrix3<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn bus(initial: &str) -> Scene {
+        let text = format!(
+            r#"duration = 1.0
+[model]
+[[model.body]]
+name = "bus"
+mass = 100.0
+inertia = [[10.0, 0.0, 0.0], [0.0, 20.0, 0.0], [0.0, 0.0, 30.0]]
+{initial}"#
+        );
+        Scene::parse(&text, "bus.toml".as_ref()).unwrap()
+    }
+
+    #[test]
+    fn a_tumbling_start_is_not_an_equilibrium_and_says_by_how_much() {
+        // Euler's equations at ω = (0.1, 0.2, 0.3): I ω̇ = −ω × I ω = −(0.6, −0.6, 0.2).
+        let lin = linearize(&bus(
+            "[initial]\nbase = { angular_velocity = [0.1, 0.2, 0.3] }",
+        ))
+        .unwrap();
+        let omega = lin.state("omega_x").unwrap();
+        let expected = [-0.06, 0.03, -0.2 / 30.0];
+        for (k, e) in expected.iter().enumerate() {
+            assert!(
+                (lin.residual[omega + k] - e).abs() < 1e-12,
+                "{:?}",
+                lin.residual
+            );
+        }
+        let groups = lin.residuals();
+        let (name, norm) = groups[1];
+        assert_eq!(name, "angular velocity (rad/s²)");
+        assert!((norm - 0.0674125).abs() < 1e-6, "{groups:?}");
+        // The attitude error is measured from the reference as it moves: no drift there.
+        assert_eq!(groups[0], ("attitude (rad/s)", 0.0));
+        let w = lin.not_an_equilibrium().expect("a warning");
+        assert!(
+            w.starts_with("the initial state is not an equilibrium")
+                && w.contains("angular velocity (rad/s²) 6.741e-2")
+                && !w.contains("attitude (rad/s)")
+                && w.contains("zero rates"),
+            "{w}"
+        );
+    }
+
+    #[test]
+    fn a_bus_at_rest_or_spinning_about_a_principal_axis_is_an_equilibrium() {
+        for initial in [
+            "",
+            "[initial]\nbase = { angular_velocity = [0.0, 0.0, 2.0] }",
+        ] {
+            let lin = linearize(&bus(initial)).unwrap();
+            assert!(lin.residual.iter().all(|r| *r == 0.0), "{:?}", lin.residual);
+            assert_eq!(lin.not_an_equilibrium(), None);
+        }
+    }
 
     #[test]
     fn right_jacobian_inverse_inverts_the_kinematics() {

@@ -90,6 +90,10 @@ pub struct Modes {
     pub locked: Vec<String>,
     /// Wheels stuck at the initial state, released for the analysis.
     pub released: Vec<String>,
+    /// Why the initial state is not an equilibrium, when it is not
+    /// ([`Linearization::not_an_equilibrium`]): the modes then describe a motion frozen at
+    /// one instant, not vibrations.
+    pub not_equilibrium: Option<String>,
 }
 
 /// Linearises `scene` at its initial state and returns its modes.
@@ -201,6 +205,7 @@ pub fn modes_of(lin: &Linearization) -> Result<Modes, ModesError> {
         real_eigenvalues: real,
         locked: lin.locked.clone(),
         released: lin.released.clone(),
+        not_equilibrium: lin.not_an_equilibrium(),
     })
 }
 

@@ -1,6 +1,6 @@
 //! `satsim linearize SCENE.toml` (contract section 9): the linear model `ż = A z + B u` of a
 //! scene at its initial state, every enabled effect included, as one JSON object
-//! (`states`, `inputs`, `A`, `B`, plus `error_estimate`, `locked` and `released`). The work
+//! (`states`, `inputs`, `A`, `B`, plus `error_estimate`, `locked`, `released` and `residual`). The work
 //! is [`satsim_tools::linearize`]'s; this is its command-line face.
 
 use super::{CliError, Output, rows, to_json};
@@ -31,6 +31,7 @@ struct Json<'a> {
     error_estimate: f64,
     locked: &'a [String],
     released: &'a [String],
+    residual: &'a [f64],
 }
 
 /// Runs `satsim linearize`.
@@ -38,6 +39,7 @@ pub fn run(args: &Args) -> Result<Output, CliError> {
     let scene = Scene::read_with(&args.scene, &args.set)?;
     super::print_warnings(&scene.warnings);
     let lin = linearize(&scene).map_err(|e| scene_error(&args.scene, e))?;
+    super::print_warnings(lin.not_an_equilibrium().as_slice());
     to_json(&json(&lin))
 }
 
@@ -55,5 +57,6 @@ fn json(lin: &Linearization) -> Json<'_> {
         error_estimate: lin.error_estimate,
         locked: &lin.locked,
         released: &lin.released,
+        residual: &lin.residual,
     }
 }

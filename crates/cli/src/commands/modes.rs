@@ -15,7 +15,7 @@
 
 use super::linearize::scene_error;
 use super::{CliError, Output, stem, to_json, usage};
-use satsim_tools::modes::{Along, Mode, Modes, modes, sweep, sweep_plot};
+use satsim_tools::modes::{Along, Mode, Modes, SweepPoint, modes, sweep, sweep_plot};
 use satsim_tools::scene::Scene;
 use serde::ser::{Serialize, SerializeMap, Serializer};
 use std::path::{Path, PathBuf};
@@ -86,9 +86,30 @@ pub fn run(args: &Args) -> Result<Output, CliError> {
     super::print_warnings(&scene.warnings);
     let Some((along, steps)) = along else {
         let m = modes(&scene).map_err(|e| scene_error(path, e))?;
+        // A warning, not an error: a linear model about a motion is still what a controller
+        // is checked against (`docs/src/guide/modes.md`).
+        super::print_warnings(m.not_equilibrium.as_slice());
         return to_json(&ModesJson(&m));
     };
     let points = sweep(&scene, &along, steps).map_err(|e| scene_error(path, e))?;
+    let moving: Vec<&SweepPoint> = points
+        .iter()
+        .filter(|p| p.modes.not_equilibrium.is_some())
+        .collect();
+    if let Some(first) = moving.first() {
+        super::print_warnings(&[format!(
+            "{} of the {} configurations are not equilibria; at the first ({}): {}",
+            moving.len(),
+            points.len(),
+            along
+                .iter()
+                .zip(&first.angles)
+                .map(|(a, v)| format!("{} = {v}", a.hinge))
+                .collect::<Vec<_>>()
+                .join(", "),
+            first.modes.not_equilibrium.as_deref().unwrap_or_default()
+        )]);
+    }
     let plot = args
         .plot
         .clone()
