@@ -1,5 +1,5 @@
 /* The core's clock, for turning times into cycles on a machine without hardware counters
- * (docs/src/results/performance.md, "Flop count and the floor"): a chain of dependent
+ * (docs/src/engineering/floor.md, "The earlier analyses"): a chain of dependent
  * integer adds retires one per cycle. Not built by cargo or CI.
  *
  *   gcc -O2 -o /tmp/clock benches/peers/clock.c && /tmp/clock

@@ -7,7 +7,7 @@ a shared machine; instructions are not:
 
 counts only what runs inside `mj_step` (each RK4 step evaluates the dynamics four times).
 Compare with `valgrind --tool=callgrind target/release/satsim run <orbit.toml with
-duration = 600>` (performance.md, "One orbit against MuJoCo and Basilisk").
+duration = 600>` (docs/src/engineering/floor.md, "The earlier analyses").
 """
 
 import os

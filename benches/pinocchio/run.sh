@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Side-by-side benchmark of satsim and Pinocchio 4.1 (C++) on the same models, in ONE run.
-# Not part of the build or of CI (docs/src/results/performance.md has results and details).
+# Not part of the build or of CI (results: docs/src/results/performance.md; details:
+# docs/src/engineering/performance-decisions.md and algorithms.md).
 #
 #   bash benches/pinocchio/run.sh                      # the satellite, 5 interleaved rounds
 #   MODELS="satellite chain10 binary10 chain100 binary100" ROUNDS=7 bash benches/pinocchio/run.sh

@@ -4,7 +4,7 @@
 //! the copy into the caller's `q̈`). The preprint layout's unrolled kernel is
 //! `satsim-satellite`'s (`satsim bench` times it as `aba_unrolled`).
 //! `cargo bench -p satsim-tree --bench algorithms`.
-//! Results and the scaling slopes are in docs/src/results/performance.md.
+//! Results and the scaling slopes are in docs/src/engineering/algorithms.md.
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use satsim_tree::aba::aba;

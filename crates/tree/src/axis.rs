@@ -12,7 +12,7 @@
 //! vectors (`#[target_feature]`) compile them for those vectors too, where an out-of-line
 //! piece keeps the baseline target's code (kept out of line until 2026-11-28, for the
 //! instruction cache; inlined, one orbit of the peer scene takes 0.83 of the time and
-//! `satsim bench`'s generic ABA 0.89: `docs/src/results/performance.md`).
+//! `satsim bench`'s generic ABA 0.89: `docs/src/engineering/kernel.md`).
 //!
 //! Every kernel is generic over its scalar ([`Real`]): the same code for one run (`f64`) and
 //! for lanes of runs; the axis and its sign are the batch's, common to its lanes.

@@ -132,7 +132,7 @@ pub fn forward_poses_of(
         let p = model.parent[i].expect("non-root body has a parent");
         // `forward_kinematics`' products, in its order (tested bit for bit). Written out rather
         // than shared: a shared helper moved the code layout of the kernel crates and cost one
-        // orbit 24 % (docs/src/results/performance.md).
+        // orbit 24 % (docs/src/engineering/campaigns.md, "A lesson in measuring").
         let x = &data.xup[i];
         data.rotation[i] = data.rotation[p] * x.rot.transpose();
         data.position[i] = data.position[p] + data.rotation[p] * x.trans;

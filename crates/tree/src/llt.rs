@@ -17,7 +17,7 @@ use nalgebra::{DMatrix, DVector};
 /// From this many degrees of freedom on, the factorisation uses faer. Measured: with the
 /// in-house factorisation [`crate::cholesky::crba_cholesky`] is faster up to about 45 DOF,
 /// faer is faster from about 55-65 DOF on, and in between they are level within the noise
-/// (chains and binary trees; docs/src/results/performance.md, "Cholesky crossover").
+/// (chains and binary trees; docs/src/engineering/algorithms.md, "Dense Cholesky below 48 DOF").
 pub const FAER_MIN_DOF: usize = 48;
 
 /// faer's buffers, allocated once for large models.
