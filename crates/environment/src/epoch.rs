@@ -30,6 +30,42 @@ pub fn parse_epoch(text: &str) -> Result<Epoch, String> {
     })
 }
 
+/// The first year of the dates a run may cover (1 January 00:00 UTC).
+pub const FIRST_YEAR: f64 = 1900.0;
+/// The year at whose start the dates a run may cover end.
+pub const END_YEAR: f64 = 2100.0;
+
+/// Refuses a run from `epoch` lasting `duration` seconds that leaves [`FIRST_YEAR`] to
+/// [`END_YEAR`]: the span over which the Sun's series is checked against ERFA's epv00
+/// ephemeris (`tests/sun.rs`, 0.5 arcsecond; epv00 itself covers 1900-2100). Outside it the
+/// truncated series and the IAU-1976 precession drift without bound (year 100000 puts the
+/// Sun at 2.4 AU), so a date there is almost always a typing error.
+///
+/// ```
+/// use satsim_environment::{epoch::check_span, parse_epoch};
+/// assert!(check_span(parse_epoch("2026-03-20T12:00:00 UTC").unwrap(), 86_400.0).is_ok());
+/// let far = parse_epoch("9999-01-01T00:00:00 UTC").unwrap();
+/// assert!(check_span(far, 0.0).unwrap_err().contains("1900 to 2100"));
+/// let late = parse_epoch("2099-12-31T00:00:00 UTC").unwrap();
+/// assert!(check_span(late, 2.0 * 86_400.0).unwrap_err().contains("ends"));
+/// ```
+pub fn check_span(epoch: Epoch, duration: f64) -> Result<(), String> {
+    let why = "the years the Sun's position is checked for (against ERFA's epv00 ephemeris)";
+    let start = decimal_year(epoch, 0.0);
+    if !(FIRST_YEAR..END_YEAR).contains(&start) {
+        return Err(format!(
+            "{epoch} (year {start:.3}) is outside {FIRST_YEAR:.0} to {END_YEAR:.0}, {why}"
+        ));
+    }
+    let end = decimal_year(epoch, duration);
+    if !(FIRST_YEAR..END_YEAR).contains(&end) {
+        return Err(format!(
+            "the run from {epoch} ends in year {end:.3}, after {END_YEAR:.0}: dates must stay within {FIRST_YEAR:.0} to {END_YEAR:.0}, {why}"
+        ));
+    }
+    Ok(())
+}
+
 /// `epoch + t` seconds (SI seconds, the run's time), as a TAI epoch.
 pub fn at(epoch: Epoch, t: f64) -> Epoch {
     // Added in TAI: hifitime adds to a UTC epoch in UTC's count, which skips leap seconds.
@@ -137,6 +173,27 @@ mod tests {
         assert!(decimal_year(e, f64::NAN).is_nan());
         assert_eq!(decimal_year(e, f64::INFINITY), f64::INFINITY);
         assert!(decimal_year(e, -1e300) < -1e290);
+    }
+
+    #[test]
+    fn runs_outside_1900_to_2100_are_refused() {
+        let e = |t: &str| parse_epoch(t).unwrap();
+        assert!(check_span(e("1900-01-01T00:00:00 UTC"), 0.0).is_ok());
+        assert!(check_span(e("2099-12-31T23:59:00 UTC"), 59.0).is_ok());
+        for far in [
+            "0001-01-01T00:00:00 UTC",
+            "1899-12-31T23:59:59 UTC",
+            "2100-01-01T00:00:00 UTC",
+            "9999-01-01T00:00:00 UTC",
+            "100000-01-01T00:00:00 UTC",
+        ] {
+            let m = check_span(e(far), 0.0).unwrap_err();
+            assert!(m.contains("is outside 1900 to 2100"), "{far}: {m}");
+        }
+        let m = check_span(e("2099-12-31T23:59:00 UTC"), 61.0).unwrap_err();
+        assert!(m.contains("ends in year 2100.000, after 2100"), "{m}");
+        // Not finite: refused, no panic.
+        assert!(check_span(e("2026-01-01T00:00:00 UTC"), f64::INFINITY).is_err());
     }
 
     #[test]

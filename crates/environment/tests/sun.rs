@@ -1,5 +1,5 @@
 //! The Sun's position against astropy's built-in ephemeris (ERFA epv00) at 300 dates over
-//! 1950-2050: fixtures/sun_reference.csv, made by fixtures/sun_reference.py.
+//! 1900-2100: fixtures/sun_reference.csv, made by fixtures/sun_reference.py.
 
 use satsim_environment::{AU, Vec3, parse_epoch, sun::sun_position};
 
