@@ -792,3 +792,74 @@ fn modes_at_a_state_that_is_no_equilibrium_warn_with_the_residual() {
         assert!(!stderr(&o).contains("equilibrium"), "{}", stderr(&o));
     }
 }
+
+#[test]
+fn self_shadowing_many_facets_warns_with_its_cost() {
+    // 2000 facets scattered in a 4 m cube, each shading many others: self-shadowing costs
+    // tens of milliseconds per right-hand side, which reading the scene says.
+    let dir = setup("shade-cost");
+    let mut state: u64 = 0x9e37_79b9_7f4a_7c15;
+    let mut uniform = move || {
+        state ^= state >> 12;
+        state ^= state << 25;
+        state ^= state >> 27;
+        (state.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let facets = |n: usize, uniform: &mut dyn FnMut() -> f64| {
+        (0..n)
+            .map(|_| {
+                let at = [4.0 * uniform(), 4.0 * uniform(), 4.0 * uniform()];
+                let n = [uniform() - 0.5, uniform() - 0.5, uniform() + 0.1];
+                let norm = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+                let normal = n.map(|c| c / norm);
+                format!(
+                    "  {{ area = {}, normal = {normal:?}, at = {at:?} }},\n",
+                    0.05 + 0.4 * uniform()
+                )
+            })
+            .collect::<String>()
+    };
+    let scene = |facets: &str, shadowing: bool| {
+        format!(
+            r#"epoch = "2026-03-20T12:00:00 UTC"
+duration = 1.0
+[model]
+[[model.body]]
+name = "bus"
+mass = 100.0
+inertia = [[10.0, 0.0, 0.0], [0.0, 10.0, 0.0], [0.0, 0.0, 10.0]]
+facets = [
+{facets}]
+[orbit]
+altitude = 500e3
+[effects.solar_radiation]
+self_shadowing = {shadowing}
+"#
+        )
+    };
+    let many = facets(2000, &mut uniform);
+    std::fs::write(dir.join("many.toml"), scene(&many, true)).unwrap();
+    std::fs::write(dir.join("off.toml"), scene(&many, false)).unwrap();
+    std::fs::write(dir.join("few.toml"), scene(&facets(30, &mut uniform), true)).unwrap();
+    let o = satsim_in(&dir, &["environment", "many.toml"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let err = stderr(&o);
+    let line = 2012; // the [effects.solar_radiation] line: 9 + 2000 facets + 3
+    assert!(
+        err.contains(&format!(
+            "warning: many.toml:{line}: `effects.solar_radiation.self_shadowing` on 2000 facets \
+             at resolution 8 costs about"
+        )) && err.contains("ms per right-hand side")
+            && err.contains("set `self_shadowing = false`"),
+        "{err}"
+    );
+    for quiet in ["off.toml", "few.toml"] {
+        let o = satsim_in(&dir, &["environment", quiet]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert!(
+            !stderr(&o).contains("self_shadowing"),
+            "{quiet}: {}",
+            stderr(&o)
+        );
+    }
+}

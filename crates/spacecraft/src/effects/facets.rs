@@ -38,8 +38,16 @@
 //! straight edge crosses, `A/(2 resolution)` for an edge along a side); a facet in full
 //! light or full shadow is exact.
 //!
-//! Cost: `O(n²)` culling tests for `n` facets and, for each lit facet with `m` candidate
-//! occluders, `resolution · m` row intervals. Measured (test `shade_cost`, release build, on
+//! Cost: the culling tests of every pair of `n` facets, `O(n²)`, and, for each lit facet
+//! with `m` candidate occluders, `resolution · m` row intervals. From 48 facets on, the
+//! facets are first binned by their centroids projected across the light in a grid of
+//! cells about a facet's size, and a facet tests only the facets of the cells within its
+//! reach (its radius plus the largest): the same candidates as every pair, so the same
+//! bits (test `the_grid_finds_the_same_shade_as_every_pair_to_the_bit`), at `O(n)` tests
+//! for facets spread over a surface (3000 tiles of an array: 20 ms every pair, 1.9 ms with
+//! the grid, test `shade_cost_of_many_facets`; facets heaped in a volume keep many
+//! candidates). [`Facets::shade_estimate`] counts the work without sampling, for the scene
+//! reader's warning of a costly self-shadowing. Measured (test `shade_cost`, release build, on
 //! a 2-core machine shared with other builds) for 26 facets (a bus and three folded panels as
 //! boxes, and two more facets), averaged over 64 light directions: 4.5 µs at resolution 1,
 //! 10.4 µs at 8, 16.4 µs at 16; [`Facets::place`] 0.46 µs, [`Facets::shade_none`] 0.02 µs.
@@ -128,6 +136,134 @@ fn mark(row: &mut [u64], first: usize, last: usize) {
     }
 }
 
+/// Below this many facets [`Facets::shade`] tests every pair; from it on, it bins the
+/// facets in a [`Grid`] first (same occluders, fewer tests).
+const GRID_MIN: usize = 48;
+
+/// The facets' centroids projected on the plane normal to the light, binned in square
+/// cells: the candidate occluders of a facet are then read from the cells within its reach
+/// (its radius plus the largest) instead of from every facet. Storage is reserved when the
+/// facets are gathered; building and reading it allocate nothing.
+#[derive(Clone, Debug, Default)]
+struct Grid {
+    /// Per facet: its projected centroid's coordinates along two axes of the plane.
+    at: Vec<[f64; 2]>,
+    /// Per facet: its cell.
+    cell: Vec<usize>,
+    /// Per cell: where its facets start in `items` (one entry more than cells).
+    start: Vec<usize>,
+    /// The facets, cell by cell.
+    items: Vec<usize>,
+    /// The lower corner of the cells (m).
+    origin: [f64; 2],
+    /// A cell's side (m).
+    side: f64,
+    /// Cells along each axis.
+    cells: [usize; 2],
+    /// The largest facet radius (m).
+    r_max: f64,
+}
+
+impl Grid {
+    /// Storage for `n` facets: at most `(⌈2√n⌉ + 1)²` cells.
+    fn new(n: usize) -> Self {
+        let per_side = Self::per_side(n) + 1;
+        Self {
+            at: vec![[0.0; 2]; n],
+            cell: vec![0; n],
+            start: Vec::with_capacity(per_side * per_side + 1),
+            items: vec![0; n],
+            ..Self::default()
+        }
+    }
+
+    fn per_side(n: usize) -> usize {
+        ((4 * n) as f64).sqrt().ceil().max(1.0) as usize
+    }
+
+    /// Bins the facets (`across`: centroids projected on the plane normal to the unit `s`,
+    /// `radius`: their circumscribed radii); `false`, binning nothing, when a coordinate is
+    /// not finite.
+    fn build(&mut self, s: &Vec3, across: &[Vec3], radius: &[f64]) -> bool {
+        let n = across.len();
+        let e = if s.x.abs() < 0.9 {
+            Vec3::x()
+        } else {
+            Vec3::y()
+        };
+        let a = (e - s * s.dot(&e)).normalize();
+        let b = s.cross(&a);
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        let (mut r_max, mut r_sum) = (0.0f64, 0.0);
+        for (k, c) in across.iter().enumerate() {
+            let p = [c.dot(&a), c.dot(&b)];
+            for d in 0..2 {
+                lo[d] = lo[d].min(p[d]);
+                hi[d] = hi[d].max(p[d]);
+            }
+            r_max = r_max.max(radius[k]);
+            r_sum += radius[k];
+            self.at[k] = p;
+        }
+        if !(lo.iter().chain(&hi).all(|v| v.is_finite()) && r_sum.is_finite()) {
+            return false;
+        }
+        // Cells about a facet's diameter, no more than about 4n of them.
+        let per_side = Self::per_side(n) as f64;
+        let side = (2.0 * r_sum / n as f64)
+            .max((hi[0] - lo[0]) / per_side)
+            .max((hi[1] - lo[1]) / per_side);
+        self.side = if side > 0.0 { side } else { 1.0 };
+        self.origin = lo;
+        self.r_max = r_max;
+        for d in 0..2 {
+            self.cells[d] = ((hi[d] - lo[d]) / self.side) as usize + 1;
+        }
+        let count = self.cells[0] * self.cells[1];
+        self.start.clear();
+        self.start.resize(count + 1, 0);
+        for k in 0..n {
+            let c = self.cell_of(self.at[k]);
+            self.cell[k] = c;
+            self.start[c + 1] += 1;
+        }
+        for c in 0..count {
+            self.start[c + 1] += self.start[c];
+        }
+        // Counting sort: `start[c]` runs ahead as cell c fills, then is set back.
+        for k in 0..n {
+            let c = self.cell[k];
+            self.items[self.start[c]] = k;
+            self.start[c] += 1;
+        }
+        for c in (0..count).rev() {
+            self.start[c + 1] = self.start[c];
+        }
+        self.start[0] = 0;
+        true
+    }
+
+    /// The cell index along axis `d` of coordinate `x` (clamped to the grid).
+    fn index(&self, d: usize, x: f64) -> usize {
+        (((x - self.origin[d]) / self.side).max(0.0) as usize).min(self.cells[d] - 1)
+    }
+
+    fn cell_of(&self, p: [f64; 2]) -> usize {
+        self.index(1, p[1]) * self.cells[0] + self.index(0, p[0])
+    }
+
+    /// The cells `(x range, y range)` holding every facet whose projected centroid lies
+    /// within `reach` of facet `k`'s, with a margin for the round-off of the projection.
+    fn around(&self, k: usize, reach: f64) -> ([usize; 2], [usize; 2]) {
+        let p = self.at[k];
+        let r = reach * (1.0 + 1e-9) + 1e-9 * (p[0].abs() + p[1].abs() + self.side);
+        (
+            [self.index(0, p[0] - r), self.index(0, p[0] + r)],
+            [self.index(1, p[1] - r), self.index(1, p[1] + r)],
+        )
+    }
+}
+
 /// Half the range of the affine form `c[0] + α c[1] + β c[2]` over `|α|, |β| <= 1/2`.
 fn half_range(c: &[f64; 3]) -> f64 {
     0.5 * (c[1].abs() + c[2].abs())
@@ -164,6 +300,9 @@ pub struct Facets {
     /// Scratch: the blocked samples of one grid row, a bit each (grown with the largest
     /// resolution used).
     row: Vec<u64>,
+    /// Scratch of [`Facets::shade`]: the facets binned across the light (from
+    /// [`GRID_MIN`] facets on).
+    grid: Grid,
 }
 
 impl Facets {
@@ -204,6 +343,11 @@ impl Facets {
             across: vec![Vec3::zeros(); n],
             occluders: Vec::with_capacity(n),
             row: vec![0; 1],
+            grid: if n >= GRID_MIN {
+                Grid::new(n)
+            } else {
+                Grid::default()
+            },
             facet,
         }
     }
@@ -279,6 +423,12 @@ impl Facets {
     /// (a bit per sample of a grid row, 64 to start with) grows the first time a larger
     /// resolution is used.
     pub fn shade(&mut self, s: &Vec3, resolution: usize) {
+        self.shade_by(s, resolution, self.len() >= GRID_MIN);
+    }
+
+    /// [`Facets::shade`], the candidate occluders read from a [`Grid`] (`grid`) or from
+    /// every pair: the same candidates either way, so the same bits.
+    fn shade_by(&mut self, s: &Vec3, resolution: usize, grid: bool) {
         let r = resolution.max(1);
         let cells = (r * r) as f64;
         let words = r.div_ceil(64);
@@ -292,13 +442,14 @@ impl Facets {
             self.depth[k] = [mid - half, mid + half];
             self.across[k] = c - s * mid;
         }
+        let grid = grid && self.grid.build(s, &self.across, &self.radius);
         for k in 0..self.len() {
             let nk = self.normal[k];
             if nk.dot(s) <= 0.0 {
                 self.lit[k] = 0.0;
                 continue;
             }
-            self.gather_occluders(k, s);
+            self.gather_occluders(k, s, grid);
             if self.occluders.is_empty() {
                 self.lit[k] = 1.0;
                 continue;
@@ -306,6 +457,80 @@ impl Facets {
             let free = self.free_samples(r);
             self.lit[k] = free as f64 / cells;
         }
+    }
+
+    /// The work of [`Facets::shade`] for `s` at `resolution`, at the facets' last places:
+    /// `(pairs, intervals)`, the facet pairs put to the culling tests and the occluder row
+    /// intervals the sampling then solves (`resolution` per candidate occluder of each facet
+    /// facing `s`). Its time is about `pairs · 25 ns + intervals · 35 ns` (see
+    /// [`Facets::shade_seconds`]).
+    pub fn shade_work(&mut self, s: &Vec3, resolution: usize) -> (usize, usize) {
+        let r = resolution.max(1);
+        for k in 0..self.len() {
+            let c = self.centroid[k];
+            let [e0, e1] = self.edges[k];
+            let (mid, half) = (c.dot(s), 0.5 * (e0.dot(s).abs() + e1.dot(s).abs()));
+            self.depth[k] = [mid - half, mid + half];
+            self.across[k] = c - s * mid;
+        }
+        let grid = self.len() >= GRID_MIN && self.grid.build(s, &self.across, &self.radius);
+        let (mut pairs, mut intervals) = (0, 0);
+        for k in 0..self.len() {
+            if self.normal[k].dot(s) <= 0.0 {
+                continue;
+            }
+            pairs += if grid {
+                let ([x0, x1], [y0, y1]) = self.grid.around(k, self.radius[k] + self.grid.r_max);
+                (y0..=y1)
+                    .map(|y| {
+                        let row = y * self.grid.cells[0];
+                        self.grid.start[row + x1 + 1] - self.grid.start[row + x0]
+                    })
+                    .sum()
+            } else {
+                self.len()
+            };
+            self.gather_occluders(k, s, grid);
+            intervals += r * self.occluders.len();
+        }
+        (pairs, intervals)
+    }
+
+    /// The estimated time (s) of one [`Facets::shade`] from its [`Facets::shade_work`]:
+    /// 25 ns a pair and 35 ns an interval, as test `shade_cost_of_many_facets` measured
+    /// them on 3000 facets (a shared two-core machine, the tests' optimisation; a release
+    /// build is faster, so this errs high).
+    pub fn shade_seconds(work: (usize, usize)) -> f64 {
+        work.0 as f64 * 25e-9 + work.1 as f64 * 35e-9
+    }
+
+    /// The estimated time (s) of one [`Facets::shade`] of `model`'s facets at its neutral
+    /// pose: the largest over three light directions of [`Facets::shade_seconds`]. `None`
+    /// when even every pair occluding every other (`n²` pairs, `resolution · n²` intervals)
+    /// would take less than `below` (the facets are then not placed at all).
+    pub fn shade_estimate(model: &Model, resolution: usize, below: f64) -> Option<f64> {
+        let n = model
+            .bodies()
+            .iter()
+            .map(|b| b.facets().len())
+            .sum::<usize>();
+        if Self::shade_seconds((n * n, resolution.max(1) * n * n)) < below {
+            return None;
+        }
+        let mut f = Self::of_model(model);
+        let mut data = Data::new(model);
+        satsim_tree::forward_kinematics(model, &mut data, &model.neutral(), &vec![0.0; model.nv()])
+            .ok()?;
+        f.place(&data);
+        let worst = [
+            Vec3::new(0.3, -0.4, 0.8),
+            Vec3::new(-0.7, 0.5, 0.3),
+            Vec3::new(0.5, 0.6, -0.6),
+        ]
+        .iter()
+        .map(|s| Self::shade_seconds(f.shade_work(&s.normalize(), resolution)))
+        .fold(0.0, f64::max);
+        Some(worst)
     }
 
     /// The number of samples of an `r × r` grid whose rays meet none of `self.occluders`.
@@ -375,33 +600,51 @@ impl Facets {
     }
 
     /// Fills `self.occluders` with the facets that may meet a ray from facet `k` along `s`
-    /// (with `self.depth` and `self.across` already computed for `s`).
-    fn gather_occluders(&mut self, k: usize, s: &Vec3) {
+    /// (with `self.depth` and `self.across` already computed for `s`, and `self.grid` built
+    /// for it when `grid`): every facet tested, or only those in the cells within reach.
+    fn gather_occluders(&mut self, k: usize, s: &Vec3, grid: bool) {
         self.occluders.clear();
-        let depth_k = self.depth[k][0];
-        let across_k = self.across[k];
-        for j in 0..self.len() {
-            // Entirely behind the facet along s: no point of a ray (t > 0) is that deep.
-            if j == k || self.depth[j][1] <= depth_k {
-                continue;
+        if !grid {
+            for j in 0..self.len() {
+                if let Some(o) = self.candidate(k, j, s) {
+                    self.occluders.push(o);
+                }
             }
-            // Bounding circles, projected on the plane normal to s, apart.
-            let reach = self.radius[j] + self.radius[k];
-            if (self.across[j] - across_k).norm_squared() > reach * reach {
-                continue;
-            }
-            let Some(o) = self.occluder(k, j, s) else {
-                continue;
-            };
-            // Over the whole facet the hit is behind the ray's start or off the rectangle.
-            if o.t[0] + half_range(&o.t) <= 0.0
-                || o.u[0].abs() - half_range(&o.u) > 0.5
-                || o.v[0].abs() - half_range(&o.v) > 0.5
-            {
-                continue;
-            }
-            self.occluders.push(o);
+            return;
         }
+        let ([x0, x1], [y0, y1]) = self.grid.around(k, self.radius[k] + self.grid.r_max);
+        for y in y0..=y1 {
+            let row = y * self.grid.cells[0];
+            for i in self.grid.start[row + x0]..self.grid.start[row + x1 + 1] {
+                if let Some(o) = self.candidate(k, self.grid.items[i], s) {
+                    self.occluders.push(o);
+                }
+            }
+        }
+    }
+
+    /// Facet `j` as an occluder of facet `k` along `s`, unless the cheap tests show that no
+    /// ray from `k` can meet it.
+    #[inline]
+    fn candidate(&self, k: usize, j: usize, s: &Vec3) -> Option<Occluder> {
+        // Entirely behind the facet along s: no point of a ray (t > 0) is that deep.
+        if j == k || self.depth[j][1] <= self.depth[k][0] {
+            return None;
+        }
+        // Bounding circles, projected on the plane normal to s, apart.
+        let reach = self.radius[j] + self.radius[k];
+        if (self.across[j] - self.across[k]).norm_squared() > reach * reach {
+            return None;
+        }
+        let o = self.occluder(k, j, s)?;
+        // Over the whole facet the hit is behind the ray's start or off the rectangle.
+        if o.t[0] + half_range(&o.t) <= 0.0
+            || o.u[0].abs() - half_range(&o.u) > 0.5
+            || o.v[0].abs() - half_range(&o.v) > 0.5
+        {
+            return None;
+        }
+        Some(o)
     }
 }
 
@@ -723,6 +966,110 @@ at = [0, 0, 1.5]
         let model = b.build().unwrap();
         let data = Data::new(&model);
         (model, data)
+    }
+
+    /// `n` facets scattered in a 4 m cube: random sizes (0.01 to 0.5 m²), normals and
+    /// in-plane turns, on one body at the neutral pose.
+    fn scattered(n: usize, seed: u64) -> Facets {
+        let mut state = seed;
+        let mut uniform = move || {
+            // xorshift64*: enough for a test's scatter.
+            state ^= state >> 12;
+            state ^= state << 25;
+            state ^= state >> 27;
+            (state.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let facets: Vec<Facet> = (0..n)
+            .map(|_| {
+                let at = Vec3::new(uniform(), uniform(), uniform()) * 4.0;
+                let normal = Vec3::new(uniform() - 0.5, uniform() - 0.5, uniform() - 0.5);
+                let area = 0.01 + 0.49 * uniform();
+                let mut f = Facet::new(area, normal.normalize(), at);
+                // Turned in its plane, and stretched into a rectangle.
+                let turn = UnitQuaternion::from_axis_angle(
+                    &nalgebra::Unit::new_normalize(normal),
+                    6.0 * uniform(),
+                );
+                let stretch = 0.3 + 2.0 * uniform();
+                f.edges = [turn * f.edges[0] * stretch, turn * f.edges[1] / stretch];
+                f
+            })
+            .collect();
+        placed(facets)
+    }
+
+    #[test]
+    fn the_grid_finds_the_same_shade_as_every_pair_to_the_bit() {
+        for (n, seed) in [(GRID_MIN, 7), (300, 11), (1000, 13)] {
+            let mut f = scattered(n, seed);
+            let mut partly = 0;
+            for k in 0..24 {
+                let a = k as f64 * 0.9;
+                let s = Vec3::new(a.cos(), (1.7 * a).sin(), a.sin() - 0.2).normalize();
+                for r in [1, 8] {
+                    f.shade_by(&s, r, false);
+                    let every: Vec<u64> = f.lit.iter().map(|l| l.to_bits()).collect();
+                    f.shade_by(&s, r, true);
+                    let grid: Vec<u64> = f.lit.iter().map(|l| l.to_bits()).collect();
+                    assert_eq!(every, grid, "{n} facets, s = {s:?}, resolution {r}");
+                    partly += f.lit.iter().filter(|l| **l > 0.0 && **l < 1.0).count();
+                }
+            }
+            // The scatter shades: the comparison is not of facets all lit or all dark.
+            assert!(partly > n, "{n} facets: {partly} partly lit");
+            // `shade` takes the grid from GRID_MIN facets on.
+            f.shade(&Vec3::z(), 8);
+            let shaded = f.lit.clone();
+            f.shade_by(&Vec3::z(), 8, false);
+            assert_eq!(shaded, f.lit);
+        }
+    }
+
+    /// What the grid buys (run with `--release -- --ignored --nocapture`): `shade` on 3000
+    /// scattered facets and on an array of 3000 tiles, every pair against the grid.
+    #[test]
+    #[ignore = "timing: run in release"]
+    fn shade_cost_of_many_facets() {
+        // 3000 tiles of 0.1 m on a 5 m × 6 m array (both sides), tilted to the light.
+        let tiles: Vec<Facet> = (0..1500)
+            .flat_map(|k| {
+                let at = Vec3::new((k % 50) as f64 * 0.1, (k / 50) as f64 * 0.2, 0.0);
+                [
+                    Facet::new(0.01, Vec3::z(), at),
+                    Facet::new(0.01, -Vec3::z(), at),
+                ]
+            })
+            .collect();
+        for (what, mut f) in [
+            ("3000 scattered facets", scattered(3000, 5)),
+            ("3000 tiles", placed(tiles)),
+        ] {
+            let s = Vec3::new(0.3, -0.4, 0.8).normalize();
+            for grid in [false, true] {
+                let start = std::time::Instant::now();
+                for _ in 0..5 {
+                    f.shade_by(&s, 8, grid);
+                }
+                println!(
+                    "{what}, resolution 8, {}: {:.2} ms per call",
+                    if grid { "grid" } else { "every pair" },
+                    start.elapsed().as_secs_f64() / 5.0 * 1e3
+                );
+            }
+            for r in [1, 8, 32] {
+                let work = f.shade_work(&s, r);
+                let start = std::time::Instant::now();
+                for _ in 0..5 {
+                    f.shade(&s, r);
+                }
+                println!(
+                    "{what}, resolution {r}: {work:?} (pairs, intervals), {:.2} ms per call, \
+                     estimated {:.2} ms",
+                    start.elapsed().as_secs_f64() / 5.0 * 1e3,
+                    Facets::shade_seconds(work) * 1e3
+                );
+            }
+        }
     }
 
     /// The cost of `shade` for 26 facets (run with `--release -- --ignored --nocapture`).

@@ -34,6 +34,11 @@ use toml::Spanned;
 /// The default number of rays along each side of a facet for self-shadowing.
 pub const DEFAULT_RESOLUTION: usize = 8;
 
+/// The estimated time of one self-shadowing pass (s, per right-hand side) from which reading
+/// the scene warns ([`Facets::shade_estimate`]): 10 ms, 40 ms per RK4 step, an hour's run at
+/// one-second steps taking over two minutes in the shading alone.
+pub const SHADE_WARNING: f64 = 0.01;
+
 /// What one evaluation found: the Sun, the shadow and the loads' moment about the centre
 /// of mass.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -239,10 +244,29 @@ impl SceneEffect for SolarRadiation {
             }
         };
         let facets = Facets::of_section(section)?;
+        let self_shadowing = file.self_shadowing.unwrap_or(false);
+        if self_shadowing
+            && let Some(seconds) =
+                Facets::shade_estimate(section.model(), resolution, SHADE_WARNING)
+            && seconds >= SHADE_WARNING
+        {
+            section.warn(
+                section.span(),
+                format!(
+                    "`effects.solar_radiation.self_shadowing` on {} facets at resolution {resolution} \
+                     costs about {:.0} ms per right-hand side ({:.2} s per RK4 step; estimated at \
+                     the model's neutral pose): lower `resolution`, give fewer, larger facets, or \
+                     set `self_shadowing = false`",
+                    facets.len(),
+                    seconds * 1e3,
+                    4.0 * seconds
+                ),
+            );
+        }
         Ok(SolarRadiation::new(
             section.epoch()?,
             shadow,
-            file.self_shadowing.unwrap_or(false),
+            self_shadowing,
             resolution,
             facets,
         ))
