@@ -81,7 +81,7 @@ impl Ctx {
         self.rhs_evals += 1;
         result.map_err(|source| IntegrateError::System { t, source })?;
         if !all_finite(dx) && all_finite(x) {
-            return Err(IntegrateError::NonFinite { t });
+            return Err(IntegrateError::non_finite_derivative(t, dx));
         }
         Ok(())
     }

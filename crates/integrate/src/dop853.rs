@@ -271,7 +271,7 @@ impl Stepper for Dop853 {
             ctx.eval(sys, t + h, &self.x, &mut k_hi[0])?;
             let accepted = if ctx.fixed.is_some() {
                 if !all_finite(&self.x) {
-                    return Err(IntegrateError::NonFinite { t: t + h });
+                    return Err(IntegrateError::non_finite_state(t + h, &self.x));
                 }
                 true
             } else {

@@ -144,7 +144,7 @@ impl Stepper for Dp54 {
             }
             let accepted = if ctx.fixed.is_some() {
                 if !all_finite(&self.x_new) {
-                    return Err(IntegrateError::NonFinite { t: t + h });
+                    return Err(IntegrateError::non_finite_state(t + h, &self.x_new));
                 }
                 true
             } else {

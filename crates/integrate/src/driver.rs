@@ -167,7 +167,7 @@ pub(crate) fn checked<'o, S: System + ?Sized>(
         return invalid(format!("t_end ({t_end}) must not precede t0 ({t0})"));
     }
     if !all_finite(x0) {
-        return Err(IntegrateError::NonFinite { t: t0 });
+        return Err(IntegrateError::non_finite_state(t0, x0));
     }
     let outputs = OutputTimes::new(output, t0, t_end)?;
     let ctx = Ctx::new(system, options)?;
@@ -421,7 +421,7 @@ where
         }
         if changed {
             if !all_finite(&self.x_ev) {
-                return Err(IntegrateError::NonFinite { t });
+                return Err(IntegrateError::non_finite_state(t, &self.x_ev));
             }
             self.st
                 .restart(&mut self.sys, &mut self.ctx, t, &self.x_ev)?;
@@ -585,7 +585,7 @@ where
                     }
                     EventAction::Reset => {
                         if !all_finite(&self.x_ev) {
-                            return Err(IntegrateError::NonFinite { t: t_ev });
+                            return Err(IntegrateError::non_finite_state(t_ev, &self.x_ev));
                         }
                         reset = true;
                         Self::eval_events(&mut self.sys, t_ev, &self.x_ev, &mut self.g_post)?;

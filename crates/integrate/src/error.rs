@@ -30,10 +30,15 @@ pub enum IntegrateError {
     },
     /// The system returned a non-finite derivative for a finite state, or a
     /// fixed-step run produced a non-finite state.
-    #[error("non-finite value at t = {t}")]
+    #[error("non-finite value at t = {t}{what}")]
     NonFinite {
         /// Time of the offending evaluation.
         t: f64,
+        /// The first entry that is not finite, when one is known.
+        entry: Option<NonFiniteEntry>,
+        /// What is not finite (`": …"`, appended to the message): the integrator names the
+        /// entry by its index; a caller that knows the system may name it instead.
+        what: String,
     },
     /// The Newton iteration of an implicit method did not converge in
     /// fixed-step mode, or its iteration matrix stayed singular.
@@ -52,4 +57,42 @@ pub enum IntegrateError {
         /// The system's error.
         source: SystemError,
     },
+}
+
+/// The entry of a vector that an [`IntegrateError::NonFinite`] found not finite first.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum NonFiniteEntry {
+    /// Entry `i` of the state.
+    State(usize),
+    /// Entry `i` of the derivative, the state being finite.
+    Derivative(usize),
+}
+
+impl IntegrateError {
+    /// The first non-finite entry of the state `x` at `t` (none found: no entry named).
+    pub(crate) fn non_finite_state(t: f64, x: &[f64]) -> Self {
+        Self::non_finite(
+            t,
+            x.iter()
+                .position(|v| !v.is_finite())
+                .map(NonFiniteEntry::State),
+        )
+    }
+    /// The first non-finite entry of the derivative `dx` of a finite state at `t`.
+    pub(crate) fn non_finite_derivative(t: f64, dx: &[f64]) -> Self {
+        Self::non_finite(
+            t,
+            dx.iter()
+                .position(|v| !v.is_finite())
+                .map(NonFiniteEntry::Derivative),
+        )
+    }
+    fn non_finite(t: f64, entry: Option<NonFiniteEntry>) -> Self {
+        let what = match entry {
+            Some(NonFiniteEntry::State(i)) => format!(": state entry {i}"),
+            Some(NonFiniteEntry::Derivative(i)) => format!(": the derivative of state entry {i}"),
+            None => String::new(),
+        };
+        IntegrateError::NonFinite { t, entry, what }
+    }
 }

@@ -51,6 +51,6 @@ mod system;
 mod tests;
 
 pub use driver::{Stats, StopReason, integrate};
-pub use error::IntegrateError;
+pub use error::{IntegrateError, NonFiniteEntry};
 pub use options::{Method, Options, Output, UnknownMethod};
 pub use system::{EventAction, EventDirection, STOP_ROUNDOFF, System, SystemError, stop_due};

@@ -223,7 +223,11 @@ impl Radau5 {
             .map_err(|source| IntegrateError::System { t, source })?;
         if analytic {
             if !all_finite(&self.jac_user) {
-                return Err(IntegrateError::NonFinite { t });
+                return Err(IntegrateError::NonFinite {
+                    t,
+                    entry: None,
+                    what: ": in the system's Jacobian".into(),
+                });
             }
             for i in 0..n {
                 for j in 0..n {
@@ -549,7 +553,7 @@ impl Stepper for Radau5 {
             if fixed {
                 self.accept(h, t_new);
                 if !all_finite(&self.x) {
-                    return Err(IntegrateError::NonFinite { t: t_new });
+                    return Err(IntegrateError::non_finite_state(t_new, &self.x));
                 }
                 ctx.steps_accepted += 1;
                 return Ok(());

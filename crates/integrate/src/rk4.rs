@@ -101,7 +101,7 @@ impl Rk4 {
             *x = x_old + h / 6.0 * (f + 2.0 * (k2 + k3) + k4);
         }
         if !all_finite(&self.x) {
-            return Err(IntegrateError::NonFinite { t: t + h });
+            return Err(IntegrateError::non_finite_state(t + h, &self.x));
         }
         self.t_old = t;
         self.t = if self.land { self.limit } else { t + h };

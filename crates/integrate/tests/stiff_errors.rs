@@ -3,7 +3,9 @@
 mod common;
 
 use common::{Smooth, run};
-use satsim_integrate::{IntegrateError, Method, Options, Output, System, SystemError, integrate};
+use satsim_integrate::{
+    IntegrateError, Method, NonFiniteEntry, Options, Output, System, SystemError, integrate,
+};
 
 /// y' = -1e6 (y - cos t): solution hugs cos t after a 1 µs transient.
 struct StiffScalar;
@@ -216,8 +218,14 @@ fn non_finite_rhs_is_reported() {
             0.0,
             1.0,
         ) {
-            Err(IntegrateError::NonFinite { t }) => {
-                assert!(t > 0.5 && t <= 1.0, "{method}: t = {t}")
+            Err(e @ IntegrateError::NonFinite { t, entry, .. }) => {
+                assert!(t > 0.5 && t <= 1.0, "{method}: t = {t}");
+                // The entry is named: the derivative's, the state being finite.
+                assert_eq!(entry, Some(NonFiniteEntry::Derivative(0)), "{method}");
+                assert!(
+                    e.to_string().ends_with(": the derivative of state entry 0"),
+                    "{method}: {e}"
+                );
             }
             other => panic!("{method}: expected NonFinite, got {other:?}"),
         }

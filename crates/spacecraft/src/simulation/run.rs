@@ -2,7 +2,8 @@
 
 use super::Simulation;
 use satsim_integrate::{
-    EventAction, EventDirection, IntegrateError, Options, Output, Stats, System, SystemError,
+    EventAction, EventDirection, IntegrateError, NonFiniteEntry, Options, Output, Stats, System,
+    SystemError,
 };
 use std::cell::{Ref, RefCell, RefMut};
 use std::ops::ControlFlow;
@@ -116,7 +117,80 @@ pub(super) fn outcome<E>(
                 stepping: sim.stepping_through(),
             }))
         }
-        (Err(e), None) => Err(RunError::Integrate(e)),
+        (Err(e), None) => Err(RunError::Integrate(sim.named(e))),
+    }
+}
+
+impl Simulation {
+    /// `e` with the state it found not finite named as a column is (`rate_h4`, not "state
+    /// entry 11"), and where that comes from: the first entry to overflow points at the
+    /// value that drove it.
+    pub(super) fn named(&self, e: IntegrateError) -> IntegrateError {
+        let IntegrateError::NonFinite {
+            t,
+            entry: Some(entry),
+            ..
+        } = e
+        else {
+            return e;
+        };
+        let what = match entry {
+            NonFiniteEntry::State(i) => format!(": `{}` is not finite", self.state_name(i)),
+            NonFiniteEntry::Derivative(i) => format!(
+                ": the rate of change of `{}` is not finite",
+                self.state_name(i)
+            ),
+        };
+        let what = format!(
+            "{what} (the forces or the motion overflowed: look for a huge value in the scene)"
+        );
+        IntegrateError::NonFinite {
+            t,
+            entry: Some(entry),
+            what,
+        }
+    }
+
+    /// The name of state entry `i` (see [`StateLayout`](super::StateLayout)): its output
+    /// column's where it has one.
+    fn state_name(&self, i: usize) -> String {
+        let l = &self.model.layout;
+        let hinges = self.model.tree.hinge_names();
+        let elastic = self.elastic_names();
+        let at = |r: &std::ops::Range<usize>| r.contains(&i).then(|| i - r.start);
+        if let Some(k) = at(&l.attitude) {
+            return format!("q_{}", ["w", "x", "y", "z"][k]);
+        }
+        if let Some(k) = at(&l.omega) {
+            return format!("omega_{}", ["x", "y", "z"][k]);
+        }
+        if let Some(k) = at(&l.velocity) {
+            return format!("v_{}", ["x", "y", "z"][k]);
+        }
+        if let Some(k) = at(&l.angles) {
+            return format!("angle_{}", hinges[k]);
+        }
+        if let Some(k) = at(&l.rates) {
+            return format!("rate_{}", hinges[k]);
+        }
+        if let Some(k) = at(&l.eta) {
+            return format!("eta_{}", elastic[k]);
+        }
+        if let Some(k) = at(&l.etadot) {
+            return format!("etadot_{}", elastic[k]);
+        }
+        for (name, r) in &l.effects {
+            if let Some(k) = at(r) {
+                let names = self.effect(name).map(|e| e.state_names());
+                return names
+                    .and_then(|n| n.get(k).cloned())
+                    .unwrap_or_else(|| format!("{name}_{k}"));
+            }
+        }
+        if let Some(k) = at(&self.model.work) {
+            return ["work_actuators", "energy_dissipated"][k].to_string();
+        }
+        format!("state entry {i}")
     }
 }
 

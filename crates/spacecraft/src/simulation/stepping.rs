@@ -445,7 +445,7 @@ impl Stepping {
         }
         let failure = match (result, failure) {
             (_, Some(f)) => Some(f),
-            (Err(e), None) => Some(StepError::Integrate(e)),
+            (Err(e), None) => Some(StepError::Integrate(self.sim.named(e))),
             (Ok(stats), None) => {
                 self.t = stats.t_final;
                 self.x = stats.x_final;
