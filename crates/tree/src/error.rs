@@ -1,6 +1,37 @@
-//! Errors of model construction and of the per-call algorithms.
+//! Errors of model construction and of the per-call algorithms, and [`Num`], the form every
+//! message prints a number in.
 
+use crate::facet::{MAX_FACET_AREA, MAX_FACET_DISTANCE};
+use std::fmt;
 use thiserror::Error;
+
+/// A number as a message or an output prints it: as `{}` does (`0.5`, `-3`, `2000`), but in
+/// exponent form (`1e300`, `2.5e-12`) from 1e9 up or below 1e-9 in magnitude, where `{}`
+/// writes a run of zeros (301 digits for 1e300). Both forms read back to the same `f64`.
+///
+/// ```
+/// use satsim_tree::error::Num;
+/// assert_eq!(Num(1e300).to_string(), "1e300");
+/// assert_eq!(Num(1e8).to_string(), "100000000");
+/// assert_eq!(Num(-2.5e9).to_string(), "-2.5e9");
+/// assert_eq!(Num(-2.5e-12).to_string(), "-2.5e-12");
+/// assert_eq!(Num(123456.5).to_string(), "123456.5");
+/// assert_eq!(Num(1e-9).to_string(), "0.000000001");
+/// assert_eq!((Num(0.0).to_string(), Num(f64::INFINITY).to_string()), ("0".into(), "inf".into()));
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Num(pub f64);
+
+impl fmt::Display for Num {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let a = self.0.abs();
+        if a.is_finite() && a != 0.0 && !(1e-9..1e9).contains(&a) {
+            write!(f, "{:e}", self.0)
+        } else {
+            write!(f, "{}", self.0)
+        }
+    }
+}
 
 /// Why a model could not be built. Each variant names the body or hinge concerned.
 #[derive(Debug, Error, Clone, PartialEq)]
@@ -59,7 +90,7 @@ pub enum ModelError {
     #[error("{0}: value is not finite")]
     NonFinite(String),
     /// A negative mass.
-    #[error("body `{body}`: mass {mass} is negative")]
+    #[error("body `{body}`: mass {} is negative", Num(*mass))]
     NegativeMass {
         /// The body.
         body: String,
@@ -102,7 +133,7 @@ pub enum ModelError {
         norm: f64,
     },
     /// A negative hinge armature.
-    #[error("hinge `{hinge}`: armature {armature} is negative")]
+    #[error("hinge `{hinge}`: armature {} is negative", Num(*armature))]
     NegativeArmature {
         /// The hinge.
         hinge: String,
@@ -118,7 +149,7 @@ pub enum ModelError {
         size: [f64; 3],
     },
     /// A facet whose area is not positive.
-    #[error("body `{body}`: facet {index}: area {area} must be positive")]
+    #[error("body `{body}`: facet {index}: area {} must be positive", Num(*area))]
     FacetArea {
         /// The body.
         body: String,
@@ -126,6 +157,34 @@ pub enum ModelError {
         index: usize,
         /// The area given.
         area: f64,
+    },
+    /// A facet whose area is larger than [`MAX_FACET_AREA`].
+    #[error(
+        "body `{body}`: facet {index}: area {} m² is more than {:e} m² (a square kilometre): no spacecraft's surface is that large",
+        Num(*area),
+        MAX_FACET_AREA
+    )]
+    FacetTooLarge {
+        /// The body.
+        body: String,
+        /// The facet's index in the body's facets.
+        index: usize,
+        /// The area given.
+        area: f64,
+    },
+    /// A facet whose centroid lies farther than [`MAX_FACET_DISTANCE`] from its body's origin.
+    #[error(
+        "body `{body}`: facet {index}: its centroid `at` is {} m from the body's origin, more than {:e} m: no spacecraft is that large (lengths are in metres)",
+        Num(*distance),
+        MAX_FACET_DISTANCE
+    )]
+    FacetTooFar {
+        /// The body.
+        body: String,
+        /// The facet's index in the body's facets.
+        index: usize,
+        /// The centroid's distance from the body's origin (m).
+        distance: f64,
     },
     /// A facet normal whose norm is not 1 (within 1e-6).
     #[error("body `{body}`: facet {index}: normal norm {norm} is not 1 (within 1e-6)")]
@@ -152,7 +211,7 @@ pub enum ModelError {
         diffuse: f64,
     },
     /// A negative drag coefficient.
-    #[error("body `{body}`: facet {index}: drag coefficient {drag} is negative")]
+    #[error("body `{body}`: facet {index}: drag coefficient {} is negative", Num(*drag))]
     FacetDrag {
         /// The body.
         body: String,

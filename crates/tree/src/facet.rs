@@ -20,6 +20,14 @@ use crate::spatial::Vec3;
 /// free-molecular flow).
 pub const DEFAULT_DRAG: f64 = 2.2;
 
+/// The largest facet area (m²): a square kilometre, a hundred times the largest solar sail
+/// flown or planned. A larger area is a unit slip (mm² for m²) or a typo.
+pub const MAX_FACET_AREA: f64 = 1e6;
+
+/// The farthest a facet's centroid may lie from its body's origin (m): 10 km, beyond any
+/// structure a body's surface could describe.
+pub const MAX_FACET_DISTANCE: f64 = 1e4;
+
 /// A flat, one-sided rectangle of a body's surface, in the body's frame: lit, and met by
 /// the flow, only on its normal's side.
 ///
@@ -152,6 +160,27 @@ impl Facet {
                 area: self.area,
             });
         }
+        if self.area > MAX_FACET_AREA {
+            return Err(ModelError::FacetTooLarge {
+                body: body.to_owned(),
+                index,
+                area: self.area,
+            });
+        }
+        // Scaled, so that a centroid at 1e308 m is said to be there, not at infinity.
+        let scale = self.at.amax();
+        let distance = if scale > 0.0 {
+            scale * (self.at / scale).norm()
+        } else {
+            0.0
+        };
+        if distance > MAX_FACET_DISTANCE {
+            return Err(ModelError::FacetTooFar {
+                body: body.to_owned(),
+                index,
+                distance,
+            });
+        }
         let norm = self.normal.norm();
         if (norm - 1.0).abs() > UNIT_NORM_TOLERANCE {
             return Err(ModelError::FacetNormal {
@@ -246,6 +275,47 @@ mod tests {
         assert!((c - f.normal * f.area).norm() <= 1e-14 * f.area, "{f:?}");
         assert!(f.edges[0].dot(&f.normal).abs() < 1e-15);
         assert!(f.edges[1].dot(&f.normal).abs() < 1e-15);
+    }
+
+    #[test]
+    fn facets_beyond_any_spacecraft_are_refused_naming_the_value() {
+        let too_large = Facet::new(1e30, Vec3::z(), Vec3::zeros()).checked("bus", 2);
+        assert_eq!(
+            too_large,
+            Err(ModelError::FacetTooLarge {
+                body: "bus".into(),
+                index: 2,
+                area: 1e30
+            })
+        );
+        assert!(
+            too_large
+                .unwrap_err()
+                .to_string()
+                .contains("facet 2: area 1e30 m² is more than 1e6 m²")
+        );
+        // 1e308 m away: said as such, not as an infinite distance.
+        let far = Facet::new(1.0, Vec3::z(), Vec3::new(1e308, 1e308, 0.0)).checked("bus", 0);
+        let Err(ModelError::FacetTooFar { distance, .. }) = &far else {
+            panic!("{far:?}")
+        };
+        assert!((distance / 1e308 - 2f64.sqrt()).abs() < 1e-15, "{distance}");
+        let message = far.unwrap_err().to_string();
+        assert!(
+            message.contains("its centroid `at` is 1.41421356"),
+            "{message}"
+        );
+        assert!(
+            message.contains("e308 m from the body's origin, more than 1e4 m"),
+            "{message}"
+        );
+        // At the bounds: accepted.
+        let edge = Facet::new(
+            MAX_FACET_AREA,
+            Vec3::z(),
+            Vec3::new(0.0, MAX_FACET_DISTANCE, 0.0),
+        );
+        assert!(edge.checked("bus", 0).is_ok());
     }
 
     #[test]

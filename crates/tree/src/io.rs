@@ -57,8 +57,8 @@ mod state_file;
 pub use attitude::{Attitude, EULER_SEQUENCES, EulerSequence};
 pub use error::{FileError, SpannedError, line_of};
 pub use flex_file::{
-    BeamFile, FlexibleFile, MODES_FILE_NODE_TOLERANCE, ModesFile, NodeFile, flex_model_of,
-    parse_flex_model, parse_modes_file, read_flex_model, write_modes_file,
+    BeamFile, FlexibleFile, MAX_FILE_MODES, MODES_FILE_NODE_TOLERANCE, ModesFile, NodeFile,
+    flex_model_of, parse_flex_model, parse_modes_file, read_flex_model, write_modes_file,
 };
 pub use model_file::{
     BaseFile, BaseKindFile, BodyFile, CoefficientsFile, FacetFile, HingeFile, ModelFile, ShapeFile,

@@ -376,11 +376,14 @@ fn bad_modes_files_name_their_file_and_line() {
         err.starts_with(&format!("{}:30: hinge `h2`: its point [0.0, 2.0, 0.0] on the flexible body `panel` is none of the nodes", origin.display())),
         "{err}"
     );
-    // A missing modes file.
+    // A missing modes file: the model's fault, at its `modes_file` line (10).
     std::fs::remove_file(&m).unwrap();
     let err = parse_flex_model(&model, &origin).unwrap_err().to_string();
     assert!(
-        err.starts_with(&format!("{path}: cannot read the file")),
+        err.starts_with(&format!(
+            "{}:10: body `panel`: `modes_file` = \"m.toml\" ({path}): cannot read it: ",
+            origin.display()
+        )),
         "{err}"
     );
     std::fs::remove_dir_all(dir).unwrap();

@@ -14,6 +14,7 @@
 use super::error::{FileError, SpannedError, line_of};
 use super::model_file::{ModelFile, parse_model_file, schema_message, with_key};
 use super::read_text;
+use crate::error::Num;
 use crate::flexible::model::MAX_BEAM_MODES;
 use crate::flexible::{Beam, FlexError, FlexModel, Flexible, ModalData, Modes, NodeShape};
 use crate::model::{Body, UNIT_NORM_TOLERANCE};
@@ -26,6 +27,12 @@ use toml::Spanned;
 
 /// Largest distance (m) between a child hinge's `at` and the modes-file node that carries it.
 pub const MODES_FILE_NODE_TOLERANCE: f64 = 1e-6;
+
+/// Most modes a modes file may give a body. A model reduced for dynamics keeps the modes up
+/// to a few times the bandwidth of interest: tens, not hundreds. Each right-hand side
+/// factorises the body's dense block of its modes (cost growing as their cube), and the
+/// highest mode sets the step an explicit method can take.
+pub const MAX_FILE_MODES: usize = 100;
 
 /// `[body.flexible]`: `beam` or `modes_file` (exactly one), `damping`, `stiffening`.
 #[derive(Clone, Debug, Deserialize, PartialEq)]
@@ -167,6 +174,14 @@ impl ModesFile {
         let f = &self.frequencies_hz;
         if m == 0 {
             return Err((f.span(), "`frequencies_hz`: at least one mode".into()));
+        }
+        if m > MAX_FILE_MODES {
+            return Err((
+                f.span(),
+                format!(
+                    "`frequencies_hz`: {m} modes, more than the {MAX_FILE_MODES} a body may have"
+                ),
+            ));
         }
         if !f.get_ref().iter().all(|x| x.is_finite() && *x > 0.0) {
             return Err((f.span(), "`frequencies_hz`: each must be positive".into()));
@@ -368,7 +383,7 @@ fn beam_of(
         } else {
             Err(schema(
                 x.span(),
-                format!("beam.{key} = {v} must be positive"),
+                format!("beam.{key} = {} must be positive", Num(v)),
             ))
         }
     };
@@ -445,7 +460,10 @@ pub fn flex_model_of(file: &ModelFile, text: &str, origin: &Path) -> Result<Flex
             Some(d) => {
                 let z = *d.get_ref();
                 if !(z.is_finite() && z >= 0.0) {
-                    return Err(schema(d.span(), format!("damping = {z} must be >= 0")));
+                    return Err(schema(
+                        d.span(),
+                        format!("damping = {} must be >= 0", Num(z)),
+                    ));
                 }
                 Some(z)
             }
@@ -467,7 +485,25 @@ pub fn flex_model_of(file: &ModelFile, text: &str, origin: &Path) -> Result<Flex
             (Some(beam), None) => Modes::Beam(beam_of(beam.get_ref(), &schema)?),
             (None, Some(m)) => {
                 let path = origin.parent().unwrap_or(Path::new("")).join(m.get_ref());
-                let modes = parse_modes_file(&read_text(&path)?, &path)?;
+                // A file that cannot be read is the model's fault, at its `modes_file` line;
+                // a fault inside the file is placed in the file.
+                let modes_text = read_text(&path).map_err(|e| {
+                    let why = match &e {
+                        FileError::Read { source, .. } => format!("cannot read it: {source}"),
+                        _ => "the file is empty".to_string(),
+                    };
+                    // The path it resolved to, where the model's folder adds to it.
+                    let resolved = if path == Path::new(m.get_ref()) {
+                        String::new()
+                    } else {
+                        format!(" ({})", path.display())
+                    };
+                    schema(
+                        m.span(),
+                        format!("`modes_file` = {:?}{resolved}: {why}", m.get_ref()),
+                    )
+                })?;
+                let modes = parse_modes_file(&modes_text, &path)?;
                 if let (Some(_), Some(d)) = (&modes.damping, &spec.damping) {
                     return Err(schema(
                         d.span(),

@@ -575,11 +575,15 @@ impl ModelFile {
                     .map(|s| s.get_ref().size.span())
                     .unwrap_or_else(|| b.name.span())
             }),
-            ModelError::FacetArea { body, index, .. } => {
+            ModelError::FacetArea { body, index, .. }
+            | ModelError::FacetTooLarge { body, index, .. } => {
                 self.facet_span(body, *index, |f| f.area.as_ref().map(Spanned::span))
             }
             ModelError::FacetNormal { body, index, .. } => {
                 self.facet_span(body, *index, |f| Some(f.normal.span()))
+            }
+            ModelError::FacetTooFar { body, index, .. } => {
+                self.facet_span(body, *index, |f| Some(f.at.span()))
             }
             ModelError::FacetOptical { body, index, .. } => self.facet_span(body, *index, |f| {
                 f.specular
