@@ -296,7 +296,7 @@ fn check_effect(
         let mut b = Simulation::builder(model.clone()).initial(state.clone());
         for e in effects() {
             b = if knocked && e.name() == knock {
-                b.effect(Unbooked(e))
+                b.boxed(Box::new(Unbooked(e)))
             } else {
                 b.boxed(e)
             };

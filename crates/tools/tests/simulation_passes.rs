@@ -133,6 +133,7 @@ fn lean_event_pass_equals_the_full_pass() {
 }
 
 /// An effect that reads the centre of mass, declaring it or not.
+#[derive(Clone)]
 struct ReadsCom(bool);
 
 impl Effect for ReadsCom {
@@ -317,6 +318,7 @@ fn unrolled_aba_in_the_right_hand_side() {
 /// and the default `reads_rotor_poses`) and adds nothing: each `apply` checks that the
 /// first wheel (a rotor hinged to the bus about a coordinate axis, its angle 0) is turned
 /// exactly as its carrier, an error otherwise.
+#[derive(Clone)]
 struct ReadsRotorPoses;
 
 impl Effect for ReadsRotorPoses {

@@ -422,6 +422,126 @@ fn the_built_in_discrete_hinge_controller_equals_the_same_law_in_a_stepping_loop
     }
 }
 
+/// `deploy.toml` for 30 s with every kind of effect state a run changes: the discrete
+/// attitude controller's held output, the sensors' noise streams (their readings are
+/// columns), a thruster's period, and the hinge stops' latches (events).
+fn stateful_deploy() -> Scene {
+    deploy(|t| {
+        let t = replace(t, "duration = 300.0", "duration = 30.0");
+        let t = replace(
+            t,
+            "kd = 150.0               # N m s/rad",
+            "kd = 150.0\nperiod = 0.3",
+        );
+        t + r#"
+[sensors]
+seed = 11
+[[sensors.gyro]]
+name = "gyro"
+body = "bus"
+period = 0.1
+noise_density = 1e-4
+bias_walk = 1e-6
+[[sensors.star_tracker]]
+name = "st"
+body = "bus"
+period = 0.2
+noise_arcsec = [5.0, 5.0, 40.0]
+[effects.thrusters]
+period = 0.5
+[[effects.thrusters.thruster]]
+name = "roll"
+body = "bus"
+at = [0.0, 0.5, 0.0]
+direction = [0.0, 0.0, 1.0]
+thrust = 0.2
+duty = 0.3
+"#
+    })
+}
+
+fn run_rows(
+    sim: &mut satsim_spacecraft::simulation::Simulation,
+    scene: &Scene,
+) -> (Vec<u64>, Vec<(f64, String)>) {
+    let mut bits = Vec::new();
+    sim.run(
+        &scene.options,
+        scene.duration,
+        &satsim_integrate::Output::Interval(0.5),
+        |t, row| {
+            bits.push(t.to_bits());
+            bits.extend(row.iter().map(|v| v.to_bits()));
+            Ok::<(), ()>(())
+        },
+    )
+    .unwrap();
+    (bits, sim.event_log().to_vec())
+}
+
+#[test]
+fn a_second_run_of_one_simulation_gives_the_first_runs_bits() {
+    let scene = stateful_deploy();
+    let mut sim = scene.simulation().unwrap();
+    let (first, events) = run_rows(&mut sim, &scene);
+    // The panels latch (events), and the sensors and the controller sampled on the way.
+    assert!(events.len() >= 2, "{events:?}");
+    let evals = sim.rhs_evals();
+    let (second, events2) = run_rows(&mut sim, &scene);
+    assert_eq!(
+        events2, events,
+        "the second run's events (not appended to the first's)"
+    );
+    assert_eq!(sim.rhs_evals(), evals, "the run log starts again");
+    assert!(first == second, "a second run differs from the first");
+    // A fresh simulation gives the same, and a simulation that ran, stepped, starts again.
+    let (fresh, _) = run_rows(&mut scene.simulation().unwrap(), &scene);
+    assert!(fresh == first);
+    let grid = satsim_spacecraft::simulation::OutputGrid {
+        t0: 0.0,
+        every: 0.5,
+        t_end: 30.0,
+    };
+    let rows = |sim| {
+        let mut st = satsim_spacecraft::simulation::Stepping::new(sim, grid);
+        let mut bits = Vec::new();
+        st.advance(&scene.options, 30.0, |t, row| {
+            bits.push(t.to_bits());
+            bits.extend(row.iter().map(|v: &f64| v.to_bits()));
+            Ok::<(), String>(())
+        })
+        .unwrap();
+        bits
+    };
+    let stepped_fresh = rows(scene.simulation().unwrap());
+    assert!(rows(sim) == stepped_fresh, "stepping a simulation that ran");
+}
+
+#[test]
+fn a_simulation_with_an_effect_given_without_a_copy_refuses_a_second_run() {
+    let scene = stateful_deploy();
+    let mut b = satsim_spacecraft::simulation::Simulation::builder(scene.model.clone())
+        .initial(scene.initial.clone());
+    for e in scene.effects.to_boxed() {
+        b = b.boxed(e);
+    }
+    let mut sim = b.build().unwrap();
+    let opts = &scene.options;
+    let output = satsim_integrate::Output::Interval(1.0);
+    sim.run(opts, 2.0, &output, |_, _| Ok::<(), String>(()))
+        .unwrap();
+    let e = sim
+        .run(opts, 2.0, &output, |_, _| Ok::<(), String>(()))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains(
+            "was added without a copy (`SimulationBuilder::boxed`), so the simulation runs once"
+        ),
+        "{e}"
+    );
+}
+
 #[test]
 fn an_advance_that_would_keep_more_than_max_rows_is_refused_before_it_integrates() {
     let scene = deploy(|t| replace(t, "duration = 300.0", "duration = 2.0"));

@@ -4,7 +4,8 @@
 use super::data::FlexWork;
 use super::hold::Hold;
 use super::{RunLog, SimData, SimError, SimModel, Simulation, StateLayout};
-use crate::effects::{Effect, Forces, Links, Rotor, Torquer, order};
+use crate::effects::{AnyEffect, Effect, EffectSet, Forces, Links, Rotor, Torquer, order};
+use satsim_integrate::SystemError;
 use satsim_satellite::kernel::UnrolledAba;
 use satsim_tree::flexible::FlexModel;
 use satsim_tree::{
@@ -35,8 +36,31 @@ pub struct SimulationBuilder {
     elastic: Option<(Vec<f64>, Vec<f64>)>,
     state: Option<State>,
     effects: Vec<Box<dyn Effect>>,
+    /// A copy of each effect as given, where there is one (see [`Simulation::run`]).
+    copies: Vec<Option<Box<dyn Fresh>>>,
     t0: f64,
     energy_budget: bool,
+}
+
+/// An effect as it was given, from which a simulation makes a fresh one each time it starts
+/// again ([`Simulation::run`] run twice).
+pub(super) trait Fresh: Send {
+    fn fresh(&self) -> Box<dyn Effect>;
+}
+
+impl<E: Effect + Clone + 'static> Fresh for E {
+    fn fresh(&self) -> Box<dyn Effect> {
+        Box::new(self.clone())
+    }
+}
+
+/// A scene's effect (an [`EffectSet`]'s) as a [`Fresh`].
+struct FreshAny(Box<dyn AnyEffect>);
+
+impl Fresh for FreshAny {
+    fn fresh(&self) -> Box<dyn Effect> {
+        self.0.clone_box().into_effect()
+    }
 }
 
 impl SimulationBuilder {
@@ -45,14 +69,26 @@ impl SimulationBuilder {
         self.state = Some(state);
         self
     }
-    /// Adds an effect.
-    pub fn effect(mut self, e: impl Effect + 'static) -> Self {
+    /// Adds an effect (a copy of it is kept, for a simulation that runs more than once).
+    pub fn effect(mut self, e: impl Effect + Clone + 'static) -> Self {
+        self.copies.push(Some(Box::new(e.clone())));
         self.effects.push(Box::new(e));
         self
     }
-    /// Adds a boxed effect.
+    /// Adds a boxed effect. There is no copy of it: a simulation with it runs once
+    /// ([`Simulation::run`]).
     pub fn boxed(mut self, e: Box<dyn Effect>) -> Self {
+        self.copies.push(None);
         self.effects.push(e);
+        self
+    }
+    /// Adds every effect of `set` (copies of them), in its order.
+    pub fn effects(mut self, set: &EffectSet) -> Self {
+        for name in set.names() {
+            let Some(e) = set.find(name) else { continue };
+            self.effects.push(e.clone_box().into_effect());
+            self.copies.push(Some(Box::new(FreshAny(e.clone_box()))));
+        }
         self
     }
     /// Makes the tree flexible: the simulation's model becomes `model.rigid()` (replacing the
@@ -112,6 +148,7 @@ impl Simulation {
             elastic: None,
             state: None,
             effects: Vec::new(),
+            copies: Vec::new(),
             t0: 0.0,
             energy_budget: true,
         }
@@ -124,6 +161,7 @@ impl Simulation {
             elastic,
             state,
             effects,
+            copies,
             t0,
             energy_budget,
         } = b;
@@ -151,6 +189,10 @@ impl Simulation {
         // The order of evaluation: the effects' declared dependencies, else as given.
         let run_order = order::run_order(&effects).map_err(SimError::Needs)?;
         let mut slots: Vec<Option<Box<dyn Effect>>> = effects.into_iter().map(Some).collect();
+        let mut copies: Vec<Option<Option<Box<dyn Fresh>>>> =
+            copies.into_iter().map(Some).collect();
+        let fresh: Vec<Option<Box<dyn Fresh>>> =
+            run_order.iter().filter_map(|&i| copies[i].take()).collect();
         let mut effects: Vec<Box<dyn Effect>> = run_order
             .into_iter()
             .filter_map(|i| slots[i].take())
@@ -207,16 +249,7 @@ impl Simulation {
         } else {
             with_rotors(&user, &rotors)?
         };
-        let links = Links {
-            rotors: &rotors,
-            rotors_commanded: effects.iter().any(|e| e.commands_rotors()),
-            torquers: &torquers,
-            dipoles_commanded: effects.iter().any(|e| e.commands_dipoles()),
-            model: &model,
-        };
-        for e in &mut effects {
-            e.connect(&links);
-        }
+        connect(&mut effects, &rotors, &torquers, &model);
         let orbit_effect = effects.iter().position(|e| e.name() == "orbit");
         let flex = match flex {
             Some(f) if rotors.is_empty() => Some(f),
@@ -328,6 +361,7 @@ impl Simulation {
                 net_force_to,
                 needs_com,
                 needs_hold,
+                needs_at_start: (needs_kinematics, needs_velocities),
                 work,
                 fd,
                 serial: NEXT_SERIAL.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
@@ -337,8 +371,11 @@ impl Simulation {
                 ..RunLog::default()
             },
             effects,
+            fresh,
             data,
             x0: Vec::new(),
+            x_start: Vec::new(),
+            ran: false,
             t0,
         };
         // With an orbit, put the centre of mass at rest in the orbit's frame.
@@ -351,7 +388,60 @@ impl Simulation {
                 x0[sim.model.layout.velocity.start + k] -= du[k];
             }
         }
-        // Effects' start hooks (initial locks).
+        sim.x_start = x0.clone();
+        sim.start(x0)?;
+        Ok(sim)
+    }
+
+    /// Puts a simulation that has run back at its start, as built: fresh copies of the
+    /// effects (connected and started again: their modes, held outputs, sensor noise streams
+    /// and thruster periods as new), the locks the start sets and no other, the run log
+    /// emptied. The constant hinge torques stay as they are. The first call only notes that
+    /// the simulation runs. An effect added without a copy
+    /// ([`SimulationBuilder::boxed`]) makes a second start an error.
+    pub(super) fn restart(&mut self) -> Result<(), SystemError> {
+        if !std::mem::replace(&mut self.ran, true) {
+            return Ok(());
+        }
+        let mut effects = Vec::with_capacity(self.effects.len());
+        for (e, f) in self.effects.iter().zip(&self.fresh) {
+            let Some(f) = f else {
+                return Err(SystemError::new(format!(
+                    "effect `{}` was added without a copy (`SimulationBuilder::boxed`), so the \
+                     simulation runs once: build another to run it again",
+                    e.name()
+                )));
+            };
+            effects.push(f.fresh());
+        }
+        let rotors = self
+            .model
+            .rotor_effect
+            .map(|i| effects[i].rotors())
+            .unwrap_or_default();
+        let torquers: Vec<Torquer> = effects.iter().flat_map(|e| e.torquers()).collect();
+        connect(&mut effects, &rotors, &torquers, &self.model.tree);
+        self.effects = effects;
+        self.log = RunLog {
+            calls: vec![0; self.effects.len()],
+            ..RunLog::default()
+        };
+        let d = &mut self.data;
+        d.locked.fill(false);
+        d.n_locked = 0;
+        d.hold.fill(f64::NAN);
+        d.requests.clear();
+        (d.needs_kinematics, d.needs_velocities) = self.model.needs_at_start;
+        self.forget_ahead();
+        self.start(self.x_start.clone())
+            .map_err(|e| SystemError::new(e.to_string()))
+    }
+
+    /// The effects' start hooks (initial locks) at the initial state `x0` (the orbit's
+    /// correction made), and the check of its row; sets [`Simulation::x0`].
+    fn start(&mut self, mut x0: Vec<f64>) -> Result<(), SimError> {
+        let t0 = self.t0;
+        let sim = self;
         sim.prepare_with(t0, &x0, true, Hold::All)
             .map_err(SimError::Start)?;
         sim.with_context(t0, &x0, true, |ctx, h| {
@@ -378,7 +468,21 @@ impl Simulation {
             )));
         }
         sim.x0 = x0;
-        Ok(sim)
+        Ok(())
+    }
+}
+
+/// Tells every effect what the rest of the simulation provides ([`Effect::connect`]).
+fn connect(effects: &mut [Box<dyn Effect>], rotors: &[Rotor], torquers: &[Torquer], model: &Model) {
+    let links = Links {
+        rotors,
+        rotors_commanded: effects.iter().any(|e| e.commands_rotors()),
+        torquers,
+        dipoles_commanded: effects.iter().any(|e| e.commands_dipoles()),
+        model,
+    };
+    for e in effects {
+        e.connect(&links);
     }
 }
 

@@ -134,7 +134,14 @@ where
     J::Sink: 'j,
 {
     fn next(&mut self) -> Option<LaneRun<Shared<Cell<J::Sink>>, Observer<'j>>> {
-        let job = self.jobs.next()?;
+        let mut job = self.jobs.next()?;
+        // A simulation that has run starts again as `Simulation::run` does, or its job fails.
+        while let Err(source) = job.sim.restart() {
+            let t = job.sim.t0;
+            let e = RunError::Integrate(IntegrateError::System { t, source });
+            self.jobs.done(job.sim, job.sink, Err(e));
+            job = self.jobs.next()?;
+        }
         let (t0, x0, columns) = (job.sim.t0, job.sim.x0.clone(), job.sim.columns());
         let cell = Rc::new(RefCell::new(Running {
             sim: job.sim,

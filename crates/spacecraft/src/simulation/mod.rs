@@ -134,14 +134,23 @@ pub enum SimError {
 /// [`SimModel`] (the tree with the effects' rotors, the state layout, the effects'
 /// places in it, the dynamics' kernel) is never written during a run; the [`SimData`] holds
 /// the scratch of every evaluation and the discrete state that `x` does not hold (locks,
-/// held torques); the [`RunLog`] counts evaluations and records the events. The effects,
-/// made once, change only their modes at events.
+/// held torques); the [`RunLog`] counts evaluations and records the events. The effects
+/// change their modes at events and their held outputs at their samples; every run starts
+/// from fresh copies of them, so that a second run gives the first's bits (see
+/// [`Simulation::run`]).
 pub struct Simulation {
     model: SimModel,
     effects: Vec<Box<dyn Effect>>,
+    /// The effects as given (in `effects`' order), to start from again; `None` for one
+    /// given without a copy.
+    fresh: Vec<Option<Box<dyn build::Fresh>>>,
     data: SimData,
     log: RunLog,
     x0: Vec<f64>,
+    /// The initial state before the effects' start hooks.
+    x_start: Vec<f64>,
+    /// Whether a run (or a [`Stepping`]) has started.
+    ran: bool,
     t0: f64,
 }
 

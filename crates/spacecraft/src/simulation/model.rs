@@ -40,6 +40,9 @@ pub struct SimModel {
     /// only then), or hold torques.
     pub(super) needs_com: bool,
     pub(super) needs_hold: bool,
+    /// [`SimData`](super::SimData)'s `needs_kinematics` and `needs_velocities` as built
+    /// (a run may turn them on), for a run that starts again.
+    pub(super) needs_at_start: (bool, bool),
     /// The energy budget's states in `x`: `[actuator work, dissipated energy]` (J), or
     /// empty when not tracked.
     pub(super) work: Range<usize>,

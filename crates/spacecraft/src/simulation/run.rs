@@ -14,6 +14,13 @@ impl Simulation {
     /// row (see [`Simulation::columns`]) at each output time. A sink error stops the run.
     /// Every row passed to `sink` is finite: a row with a non-finite entry stops the run with
     /// an error naming the column.
+    ///
+    /// Every run starts from the simulation as built: a second run starts from fresh copies
+    /// of the effects (their modes, held outputs, sensor noise streams and thruster periods
+    /// as new), the start's locks and an empty run log, so it gives the first's bits (the
+    /// constant hinge torques stay as set). A simulation with an effect given without a copy
+    /// ([`SimulationBuilder::boxed`](super::SimulationBuilder::boxed)) runs once: a second
+    /// run is an error.
     pub fn run<E>(
         &mut self,
         options: &Options,
@@ -21,6 +28,12 @@ impl Simulation {
         output: &Output,
         mut sink: impl FnMut(f64, &[f64]) -> Result<(), E>,
     ) -> Result<Stats, RunError<E>> {
+        if let Err(source) = self.restart() {
+            return Err(RunError::Integrate(IntegrateError::System {
+                t: self.t0,
+                source,
+            }));
+        }
         let x0 = self.x0.clone();
         let t0 = self.t0;
         let columns = self.columns();

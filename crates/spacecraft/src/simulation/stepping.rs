@@ -177,8 +177,10 @@ pub struct Stepping {
 }
 
 impl Stepping {
-    /// Stepping `sim` from its initial state, rows on `grid`.
+    /// Stepping `sim` from its initial state, rows on `grid`. A simulation that has run
+    /// starts again as [`Simulation::run`] does (when it cannot, every `advance` fails).
     pub fn new(mut sim: Simulation, grid: OutputGrid) -> Self {
+        let failed = sim.restart().err().map(|e| e.to_string());
         let n_user = sim.model.n_user;
         let names = sim.model.tree.hinge_names();
         let mut inputs: Vec<String> = names[..n_user]
@@ -224,7 +226,7 @@ impl Stepping {
                 past_end: false,
             },
             reported,
-            failed: None,
+            failed,
             row: Vec::new(),
             outs: Vec::new(),
         }

@@ -159,13 +159,10 @@ impl Scene {
                 .flexible(f.clone())
                 .elastic(self.elastic.eta.clone(), self.elastic.etadot.clone());
         }
-        let mut b = b
-            .initial(self.initial.clone())
-            .energy_budget(self.energy_budget);
-        for e in self.effects.to_boxed() {
-            b = b.boxed(e);
-        }
-        b.build()
+        b.initial(self.initial.clone())
+            .energy_budget(self.energy_budget)
+            .effects(&self.effects)
+            .build()
     }
 
     /// Reads the scene file at `path`, with the built-in effects.
