@@ -617,3 +617,234 @@ fn angles_beyond_a_turn_warn_as_degrees_written_for_radians() {
     assert!(!err.contains("warning"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `satellite_flexible.toml` beside the scene, its last panel's beam replaced by
+/// `modes_file = <file>`; the scene [`SHORT`] reading it. The model's text and the line of
+/// `modes_file`.
+fn flexible_with_modes_file(dir: &Path, file: &str) -> (String, usize) {
+    let model = std::fs::read_to_string(root().join("examples/satellite_flexible.toml")).unwrap();
+    let panel3 = model.find("name = \"panel3\"").unwrap();
+    let beam = model[panel3..].find("beam = {").unwrap() + panel3;
+    let end = model[beam..].find("modes = 3 }\n").unwrap() + beam + "modes = 3 }\n".len();
+    let text = format!("{}modes_file = {file:?}\n{}", &model[..beam], &model[end..]);
+    std::fs::write(dir.join("flex.toml"), &text).unwrap();
+    scene(dir, &SHORT.replace("satellite.toml", "flex.toml"));
+    let line = line_of(&text, "name = \"panel3\"", "modes_file");
+    (text, line)
+}
+
+#[test]
+fn a_modes_file_that_cannot_be_read_is_an_error_at_its_line_in_the_model() {
+    let dir = temp_dir("modes-file");
+    for (file, why) in [
+        (".", "cannot read it: "),
+        ("missing.toml", "cannot read it: "),
+        ("empty.toml", "the file is empty"),
+    ] {
+        std::fs::write(dir.join("empty.toml"), "  \n").unwrap();
+        let (_, line) = flexible_with_modes_file(&dir, file);
+        let err = refused(&satsim(&dir, &["run", "short.toml", "--out", "o"]));
+        assert!(
+            err.contains(&format!(
+                "flex.toml:{line}: body `panel3`: `modes_file` = {file:?}"
+            )),
+            "{err}"
+        );
+        assert!(err.contains(why), "{err}");
+    }
+    // A file of 500 modes: refused at its `frequencies_hz` line (the cap is 100).
+    let n = 500;
+    let hz: Vec<String> = (1..=n).map(|k| format!("{k}.0")).collect();
+    let rows = "  [0.0, 0.0, 0.0, 0.0, 0.0, 0.1],\n".repeat(n);
+    let modes = format!(
+        "mass = 10.0\ninertia = [[1, 0, 0], [0, 1, 0], [0, 0, 1]]\nfrequencies_hz = [{}]\nmomentum = [\n{rows}]\n",
+        hz.join(", ")
+    );
+    std::fs::write(dir.join("many.toml"), modes).unwrap();
+    flexible_with_modes_file(&dir, "many.toml");
+    let err = refused(&satsim(&dir, &["run", "short.toml", "--out", "o"]));
+    assert!(
+        err.contains("many.toml:3: `frequencies_hz`: 500 modes, more than the 100 a body may have"),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// [`SHORT`] with the date, orbit, magnetic torquer, B-dot, thruster and star tracker of the
+/// bound checks, each at a sane value.
+const EQUIPPED: &str = r#"
+[orbit]
+altitude = 500e3
+inclination_deg = 51.6
+
+[effects.magnetic]
+field = "dipole"
+residual_dipole = [0.1, 0.0, 0.0]
+[[effects.magnetic.torquer]]
+name = "mx"
+axis = [1.0, 0.0, 0.0]
+max_dipole = 100.0
+dipole = 2.0
+
+[effects.bdot]
+gain = 1e5
+field = "dipole"
+
+[effects.thrusters]
+period = 0.5
+[[effects.thrusters.thruster]]
+name = "t1"
+at = [0.0, 0.0, 1.0]
+direction = [1.0, 0.0, 0.0]
+thrust = 1.0
+
+[sensors]
+[[sensors.star_tracker]]
+name = "st"
+body = "bus"
+period = 0.5
+noise_arcsec = [10.0, 10.0, 10.0]
+"#;
+
+#[test]
+fn values_beyond_any_spacecraft_are_refused_at_their_line_naming_the_bound() {
+    let dir = temp_dir("bounds");
+    let text = format!("epoch = \"2026-03-20T12:00:00 UTC\"\n{SHORT}{EQUIPPED}");
+    scene(&dir, &text);
+    ok(&satsim(&dir, &["run", "short.toml", "--out", "o"]));
+    for (from, to, anchor, expected) in [
+        (
+            "thrust = 1.0",
+            "thrust = 1e20",
+            "thrust",
+            "`effects.thrusters.thruster.thrust` is 1e20 N, more than 1e8 N",
+        ),
+        (
+            "max_dipole = 100.0",
+            "max_dipole = 1e20",
+            "max_dipole",
+            "`effects.magnetic.torquer.max_dipole` is 1e20 A m², more than 1e6 A m²",
+        ),
+        (
+            "dipole = 2.0",
+            "dipole = -1e20",
+            "dipole =",
+            "`effects.magnetic.torquer.dipole` is -1e20 A m², below -1e6 A m²",
+        ),
+        (
+            "residual_dipole = [0.1,",
+            "residual_dipole = [1e7,",
+            "residual_dipole",
+            "`effects.magnetic.residual_dipole` is 10000000 A m², more than 1e6 A m²",
+        ),
+        (
+            "gain = 1e5",
+            "gain = 1e308",
+            "gain",
+            "`effects.bdot.gain` is 1e308 A m² s/T, more than 1e12 A m² s/T",
+        ),
+        (
+            "noise_arcsec = [10.0,",
+            "noise_arcsec = [1e12,",
+            "noise_arcsec",
+            "`sensors.star_tracker.noise_arcsec` must be finite numbers >= 0 (arc seconds), at most 648000 (half a turn), got [1e12, 10, 10]",
+        ),
+        (
+            "inclination_deg = 51.6",
+            "inclination_deg = 1e308",
+            "[orbit]",
+            "`orbit.inclination_deg` is 1e308 deg: an inclination lies in [0, 180] deg",
+        ),
+    ] {
+        let bad = text.replace(from, to);
+        assert_ne!(bad, text, "{from}");
+        scene(&dir, &bad);
+        let err = refused(&satsim(&dir, &["run", "short.toml", "--out", "o"]));
+        let line = line_of(&bad, "[orbit]", anchor);
+        assert!(
+            err.contains(&format!("short.toml:{line}: {expected}")),
+            "{err}"
+        );
+    }
+    // In the model: a facet of 1e30 m², or 1e308 m from its body.
+    let model = std::fs::read_to_string(dir.join("satellite.toml")).unwrap();
+    let shape = model.find("facets_from_shape").unwrap();
+    let after = model[shape..].find('\n').unwrap() + shape + 1;
+    for (facet, expected) in [
+        (
+            "{ area = 1e30, normal = [0, 0, 1], at = [0, 0, 0] }",
+            "body `bus`: facet 0: area 1e30 m² is more than 1e6 m²",
+        ),
+        (
+            "{ area = 1.0, normal = [0, 0, 1], at = [1e308, 0, 0] }",
+            "body `bus`: facet 0: its centroid `at` is 1e308 m from the body's origin, more than 1e4 m",
+        ),
+    ] {
+        let bad = format!("{}facets = [{facet}]\n{}", &model[..after], &model[after..]);
+        std::fs::write(dir.join("big.toml"), &bad).unwrap();
+        scene(&dir, &SHORT.replace("satellite.toml", "big.toml"));
+        let err = refused(&satsim(&dir, &["run", "short.toml", "--out", "o"]));
+        let line = bad[..after].lines().count() + 1;
+        assert!(
+            err.contains(&format!("big.toml:{line}: {expected}")),
+            "{err}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_run_that_overflows_names_the_state_that_went_non_finite_first() {
+    let dir = temp_dir("overflow");
+    scene(&dir, SHORT);
+    for method in ["rk4", "dp54"] {
+        let o = satsim(
+            &dir,
+            &[
+                "run",
+                "short.toml",
+                "--out",
+                "o",
+                "--set",
+                "effects.hinge_springs.stiffness=[50.0, 50.0, 50.0, 1e300, 2.0]",
+                "--set",
+                &format!("integrator.method={method}"),
+            ],
+        );
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{err}");
+        assert!(err.contains("non-finite value at t = "), "{err}");
+        // A column's name, not an index into the state.
+        assert!(err.contains(": the rate of change of `"), "{err}");
+        assert!(!err.contains("state entry"), "{err}");
+        assert!(
+            err.contains("is not finite (the forces or the motion overflowed"),
+            "{err}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_hinge_control_profile_beyond_a_turn_warns_as_degrees_written_for_radians() {
+    let dir = temp_dir("control-angles");
+    let text = format!(
+        "{SHORT}\n[effects.hinge_control]\n[[effects.hinge_control.hinge]]\nname = \"h5\"\nstart = 180.0\nend = 0.0\nduration = 10.0\nkp = 1.0\n"
+    );
+    scene(&dir, &text);
+    let err = ok(&satsim(&dir, &["run", "short.toml", "--out", "o"]));
+    let line = line_of(
+        &text,
+        "[[effects.hinge_control.hinge]]",
+        "[[effects.hinge_control.hinge]]",
+    );
+    assert!(
+        err.contains(&format!(
+            "short.toml:{line}: `effects.hinge_control.hinge.start` is 180 rad, beyond ±2π"
+        )),
+        "{err}"
+    );
+    assert!(err.contains("write 3.141593"), "{err}");
+    assert!(!err.contains("hinge.end"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -2,6 +2,7 @@
 //! in-house writer [`Figure`], used by every plot of satsim), in bounded memory whatever the
 //! number of rows.
 
+use satsim_tree::error::Num;
 use std::fmt::Write as _;
 use std::fs::File;
 use std::io::{self, BufWriter, Write};
@@ -36,7 +37,8 @@ impl CsvWriter {
             flushed: Instant::now(),
         })
     }
-    /// Appends one row (shortest round-trip formatting). It reaches the file when its block
+    /// Appends one row (shortest round-trip formatting, in exponent form past 1e9 or below
+    /// 1e-9 in magnitude: [`Num`]). It reaches the file when its block
     /// is full, 0.5 s after the last flush, or at [`CsvWriter::flush`].
     pub fn row(&mut self, values: &[f64]) -> io::Result<()> {
         self.line.clear();
@@ -44,7 +46,7 @@ impl CsvWriter {
             if i > 0 {
                 self.line.push(',');
             }
-            let _ = write!(self.line, "{v}");
+            let _ = write!(self.line, "{}", Num(*v));
         }
         self.line.push('\n');
         // `BufWriter` writes its buffer out before a line that does not fit: blocks end on
@@ -963,6 +965,26 @@ mod tests {
             text,
             "t,effect,event\n0.5,hinge_stops,hinge a latched\n1.25,reaction_wheels,\"wheel 1, saturated \"\"hard\"\"\"\n"
         );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn huge_and_tiny_numbers_are_written_in_exponent_form_and_read_back_exactly() {
+        let dir = std::env::temp_dir().join(format!("satsim-csv-num-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("t.csv");
+        let mut w = CsvWriter::create(&path, &["a".into(), "b".into(), "c".into()]).unwrap();
+        let row = [1e300, -2.5e-300, 0.125, 123456.75, 1e9, f64::MAX, 5e-324];
+        w.row(&row).unwrap();
+        w.flush().unwrap();
+        let text = std::fs::read_to_string(&path).unwrap();
+        let line = text.lines().nth(1).unwrap();
+        assert_eq!(
+            line,
+            "1e300,-2.5e-300,0.125,123456.75,1e9,1.7976931348623157e308,5e-324"
+        );
+        let back: Vec<f64> = line.split(',').map(|v| v.parse().unwrap()).collect();
+        assert_eq!(back, row);
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

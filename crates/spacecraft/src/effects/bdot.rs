@@ -13,13 +13,24 @@
 //! issue.
 
 use super::magnetic::field_model;
-use super::{Context, Effect, EffectSet, Forces, Links, Needs, SceneEffect, Section, needs_met};
+use super::{
+    Bound, Context, Effect, EffectSet, Forces, Links, Needs, SceneEffect, Section, needs_met,
+};
 use satsim_environment::magnetic::GeoField;
 use satsim_integrate::SystemError;
 use satsim_tree::io::FileError;
 use satsim_tree::spatial::Vec3;
 use serde::Deserialize;
 use toml::Spanned;
+
+/// The largest B-dot `gain`: at it a rate of 10⁻⁵ rad/s in a 20 µT field already asks for
+/// 200 A m², more than most torquers give; a larger gain changes nothing but the rates at
+/// which the command saturates.
+pub const MAX_GAIN: Bound = Bound {
+    max: 1e12,
+    unit: "A m² s/T",
+    why: "at that gain any rate above 10⁻⁵ rad/s already saturates the torquers",
+};
 
 /// The B-dot controller.
 #[derive(Clone, Debug)]
@@ -107,7 +118,7 @@ impl SceneEffect for Bdot {
     const SECTION: &'static str = "bdot";
     type File = BdotFile;
     fn from_section(file: BdotFile, section: &Section) -> Result<Self, FileError> {
-        let gain = section.positive(&file.gain, "effects.bdot.gain")?;
+        let gain = section.positive_within(&file.gain, "effects.bdot.gain", MAX_GAIN)?;
         let model = field_model(file.field.as_ref(), "effects.bdot.field", section)?;
         let field = GeoField::new(model, section.epoch()?)
             .map_err(|e| section.error_here(format!("`epoch`: {e}")))?;

@@ -181,6 +181,9 @@ impl SceneEffect for HingeControl {
                     ("kd", hf.kd, true),
                 ],
             )?;
+            for (key, v) in [("start", hf.start), ("end", hf.end)] {
+                section.check_angle(h.span(), &format!("effects.hinge_control.hinge.{key}"), v);
+            }
             if hinges.iter().any(|p: &HingeProfile| p.hinge == hinge) {
                 return Err(section.error(
                     Some(h.span()),

@@ -20,7 +20,7 @@
 //! Energy: the couples do work (an actuator's, in the budget: the field turns with the
 //! Earth and the torquers are driven).
 
-use super::{Context, Effect, Forces, Links, Needs, SceneEffect, Section, Torquer};
+use super::{Bound, Context, Effect, Forces, Links, Needs, SceneEffect, Section, Torquer};
 use satsim_environment::Epoch;
 use satsim_environment::magnetic::{FieldModel, GeoField};
 use satsim_integrate::SystemError;
@@ -28,6 +28,14 @@ use satsim_tree::io::FileError;
 use satsim_tree::spatial::{Force, Vec3};
 use serde::Deserialize;
 use toml::Spanned;
+
+/// The largest dipole a scene gives a torquer or the residual (per axis): a thousand times
+/// the strongest torquer flown (a few hundred A m²).
+pub const MAX_DIPOLE: Bound = Bound {
+    max: 1e6,
+    unit: "A m²",
+    why: "a thousand times the strongest magnetic torquer flown",
+};
 
 /// The magnetic effect.
 #[derive(Clone, Debug)]
@@ -230,6 +238,11 @@ impl SceneEffect for Magnetic {
                         "`effects.magnetic.residual_dipole` must be finite (A m²)",
                     ));
                 }
+                for x in &v {
+                    MAX_DIPOLE
+                        .check(*x, "effects.magnetic.residual_dipole")
+                        .map_err(|m| section.error(Some(r.span()), m))?;
+                }
                 v
             }
         };
@@ -270,11 +283,19 @@ impl SceneEffect for Magnetic {
                     format!("torquer `{name}`: `axis` must be a unit vector, its norm is {norm}"),
                 ));
             }
-            let max_dipole =
-                section.positive(&t.max_dipole, "effects.magnetic.torquer.max_dipole")?;
+            let max_dipole = section.positive_within(
+                &t.max_dipole,
+                "effects.magnetic.torquer.max_dipole",
+                MAX_DIPOLE,
+            )?;
             let c = match &t.dipole {
                 None => 0.0,
-                Some(d) if d.get_ref().is_finite() => *d.get_ref(),
+                Some(d) if d.get_ref().is_finite() => {
+                    MAX_DIPOLE
+                        .check(*d.get_ref(), "effects.magnetic.torquer.dipole")
+                        .map_err(|m| section.error(Some(d.span()), m))?;
+                    *d.get_ref()
+                }
                 Some(d) => {
                     return Err(section.error(
                         Some(d.span()),

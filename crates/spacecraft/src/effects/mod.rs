@@ -55,7 +55,7 @@ pub use orbit::{Elements, Orbit, OrbitModel};
 pub use reaction_wheels::{ReactionWheels, Wheel};
 pub use registry::{AnyEffect, EffectSet, Registry, SceneEffect, needs_met};
 pub use sampling::Sampling;
-pub use section::{SceneText, Section};
+pub use section::{Bound, SceneText, Section};
 pub use solar_radiation::SolarRadiation;
 pub use thrusters::{ThrustMode, Thruster, Thrusters};
 

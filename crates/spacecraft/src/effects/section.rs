@@ -7,6 +7,7 @@
 
 use satsim_environment::Epoch;
 use satsim_tree::Model;
+use satsim_tree::error::Num;
 use satsim_tree::io::{FileError, line_of, with_key};
 use serde::de::{self, DeserializeOwned, DeserializeSeed, IgnoredAny, MapAccess, Visitor};
 use std::cell::RefCell;
@@ -53,9 +54,23 @@ impl<'a> SceneText<'a> {
         if !(v > 0.0 && v.is_finite()) {
             return Err(self.error(
                 Some(x.span()),
-                format!("`{what}` must be a finite number > 0, got {v}"),
+                format!("`{what}` must be a finite number > 0, got {}", Num(v)),
             ));
         }
+        Ok(v)
+    }
+
+    /// `x`, which must be a finite number > 0 within `bound` (`what` names the key).
+    pub fn positive_within(
+        &self,
+        x: &Spanned<f64>,
+        what: &str,
+        bound: Bound,
+    ) -> Result<f64, FileError> {
+        let v = self.positive(x, what)?;
+        bound
+            .check(v, what)
+            .map_err(|m| self.error(Some(x.span()), m))?;
         Ok(v)
     }
 
@@ -65,7 +80,7 @@ impl<'a> SceneText<'a> {
         if !(v >= 0.0 && v.is_finite()) {
             return Err(self.error(
                 Some(x.span()),
-                format!("`{what}` must be a finite number >= 0, got {v}"),
+                format!("`{what}` must be a finite number >= 0, got {}", Num(v)),
             ));
         }
         Ok(v)
@@ -89,7 +104,7 @@ impl<'a> SceneText<'a> {
                 };
                 return Err(self.error(
                     Some(span),
-                    format!("`{table}{key}` must be {what}, got {v}"),
+                    format!("`{table}{key}` must be {what}, got {}", Num(v)),
                 ));
             }
         }
@@ -152,6 +167,40 @@ impl<'de, T: DeserializeOwned> Visitor<'de> for Pick<'_, T> {
             }
         }
         Ok(found)
+    }
+}
+
+/// The largest magnitude a value may have: beyond any real spacecraft's (`why` says so), so
+/// that a larger value is a slip (a unit, an exponent) refused at its line, not a run that
+/// overflows.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Bound {
+    /// The largest magnitude.
+    pub max: f64,
+    /// Its unit, for the message (`N`, `A m²`).
+    pub unit: &'static str,
+    /// Why no real value exceeds it, for the message.
+    pub why: &'static str,
+}
+
+impl Bound {
+    /// `v` within the bound; else the message, naming the key `what`.
+    pub fn check(&self, v: f64, what: &str) -> Result<(), String> {
+        if v.abs() <= self.max {
+            return Ok(());
+        }
+        // The bound is a round power of ten: `1e8`, not `100000000`.
+        let (unit, max) = (self.unit, format!("{:e}", self.max));
+        let limit = if v < 0.0 {
+            format!("below -{max} {unit}")
+        } else {
+            format!("more than {max} {unit}")
+        };
+        Err(format!(
+            "`{what}` is {} {unit}, {limit}: {}",
+            Num(v),
+            self.why
+        ))
     }
 }
 
@@ -229,7 +278,9 @@ impl<'a> Section<'a> {
             self.warn(
                 span,
                 format!(
-                    "`{what}` is {value} rad, beyond ±2π: angles are in radians (for {value} degrees write {:.6})",
+                    "`{what}` is {} rad, beyond ±2π: angles are in radians (for {} degrees write {:.6})",
+                    Num(value),
+                    Num(value),
                     value.to_radians()
                 ),
             );
@@ -305,8 +356,9 @@ impl<'a> Section<'a> {
             return Err(self.text.error(
                 Some(x.span()),
                 format!(
-                    "`{what}`: entry {k} (hinge `{}`) is {bad}: it must be >= 0",
-                    self.model.hinge_names()[k]
+                    "`{what}`: entry {k} (hinge `{}`) is {}: it must be >= 0",
+                    self.model.hinge_names()[k],
+                    Num(*bad)
                 ),
             ));
         }

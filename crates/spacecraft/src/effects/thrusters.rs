@@ -36,7 +36,7 @@
 //! Energy: the thrust's work is an actuator's (the default [`Power`](super::Power)); with an
 //! orbit only its part in the falling frame counts (the work on the orbit is the orbit's).
 
-use super::{Context, Effect, Forces, Needs, Sampling, SceneEffect, Section};
+use super::{Bound, Context, Effect, Forces, Needs, Sampling, SceneEffect, Section};
 use satsim_integrate::{SystemError, stop_due};
 use satsim_tree::io::FileError;
 use satsim_tree::spatial::{Force, Vec3};
@@ -46,6 +46,13 @@ use toml::Spanned;
 /// The fraction of a period within which an on-time counts as zero or as reaching the next
 /// period start (the round-off of `duty · period` and of the stops' times).
 pub const ROUNDOFF: f64 = 1e-9;
+
+/// The largest `thrust` a scene accepts: ten times the strongest rocket motor built.
+pub const MAX_THRUST: Bound = Bound {
+    max: 1e8,
+    unit: "N",
+    why: "ten times the strongest rocket motor ever built",
+};
 
 /// How a duty becomes an on-time (see the module documentation).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -332,7 +339,11 @@ impl SceneEffect for Thrusters {
                     ),
                 ));
             }
-            let thrust = section.positive(&t.thrust, "effects.thrusters.thruster.thrust")?;
+            let thrust = section.positive_within(
+                &t.thrust,
+                "effects.thrusters.thruster.thrust",
+                MAX_THRUST,
+            )?;
             let min_impulse = match &t.min_impulse {
                 None => 0.0,
                 Some(m) => section.non_negative(m, "effects.thrusters.thruster.min_impulse")?,

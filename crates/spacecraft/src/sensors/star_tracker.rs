@@ -19,6 +19,9 @@ pub struct StarTracker {
 }
 
 impl StarTracker {
+    /// The largest noise a scene accepts (arc seconds, 1σ, per axis): half a turn, past
+    /// which the reading says nothing of the attitude.
+    pub const MAX_NOISE_ARCSEC: f64 = 648_000.0;
     /// A star tracker of noise `noise_arcsec` (arc seconds, 1σ, about the body's x, y, z).
     pub fn from_arcsec(noise_arcsec: [f64; 3]) -> Self {
         Self {

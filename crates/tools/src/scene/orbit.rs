@@ -4,6 +4,7 @@
 use super::file::OrbitFile;
 use super::parse::Parser;
 use satsim_spacecraft::effects::{Elements, Orbit, OrbitModel};
+use satsim_tree::error::Num;
 use satsim_tree::io::FileError;
 use satsim_tree::spatial::Vec3;
 use toml::Spanned;
@@ -46,13 +47,24 @@ impl Parser<'_> {
                 ("velocity", vec(f.velocity, 2), false),
             ],
         )?;
+        if let Some(i) = f.inclination_deg
+            && !(0.0..=180.0).contains(&i)
+        {
+            return Err(self.error(
+                Some(o.span()),
+                format!(
+                    "`orbit.inclination_deg` is {} deg: an inclination lies in [0, 180] deg",
+                    Num(i)
+                ),
+            ));
+        }
         for (key, v) in [("mu", f.mu), ("radius", f.radius)] {
             if let Some(v) = v
                 && !(v > 0.0 && v.is_finite())
             {
                 return Err(self.error(
                     Some(o.span()),
-                    format!("`orbit.{key}` must be a finite number > 0, got {v}"),
+                    format!("`orbit.{key}` must be a finite number > 0, got {}", Num(v)),
                 ));
             }
         }

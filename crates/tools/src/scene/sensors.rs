@@ -10,6 +10,7 @@ use satsim_spacecraft::sensors::{
     Gyro, Kind, Magnetometer, Sensor, Sensors, StarTracker, SunSensor,
 };
 use satsim_tree::Model;
+use satsim_tree::error::Num;
 use satsim_tree::io::FileError;
 use satsim_tree::spatial::Vec3;
 use serde::Deserialize;
@@ -169,13 +170,20 @@ pub(crate) fn read(
         let r = s.get_ref();
         let noise = match &r.noise_arcsec {
             None => [0.0; 3],
-            Some(n) if n.get_ref().iter().all(|v| *v >= 0.0 && v.is_finite()) => *n.get_ref(),
+            Some(n)
+                if n.get_ref()
+                    .iter()
+                    .all(|v| (0.0..=StarTracker::MAX_NOISE_ARCSEC).contains(v)) =>
+            {
+                *n.get_ref()
+            }
             Some(n) => {
                 return Err(text.error(
                     Some(n.span()),
                     format!(
-                        "`sensors.star_tracker.noise_arcsec` must be finite numbers >= 0 (arc seconds), got {:?}",
-                        n.get_ref()
+                        "`sensors.star_tracker.noise_arcsec` must be finite numbers >= 0 (arc seconds), at most {} (half a turn), got [{}]",
+                        StarTracker::MAX_NOISE_ARCSEC,
+                        n.get_ref().map(|v| Num(v).to_string()).join(", ")
                     ),
                 ));
             }
