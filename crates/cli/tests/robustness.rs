@@ -58,6 +58,10 @@ damping = [1.0, 1.0, 1.0, 0.5, 0.5]
 
 const WHEEL: &str = "[effects.reaction_wheels]\n[[effects.reaction_wheels.wheel]]\nname = \"x\"\naxis = [1.0, 0.0, 0.0]\ninertia = 0.1\n";
 
+/// A thruster section, its one thruster's `name` left to add (at line 19 of a scene that
+/// appends this to [`SCENE`]).
+const THRUSTER: &str = "[effects.thrusters]\nperiod = 0.1\n[[effects.thrusters.thruster]]\nat = [0.0, 0.0, 0.0]\ndirection = [1.0, 0.0, 0.0]\nthrust = 1.0\n";
+
 /// `(case, scene text, extra files, what the message must contain)`.
 type Case = (
     &'static str,
@@ -545,6 +549,124 @@ fn cases() -> Vec<Case> {
             vec![("state.json", "{\"hinges\": ".into())],
             vec!["state.json:1"],
         ),
+        // Names that become columns: letters, digits and `_` (a comma or a newline would
+        // break the CSV), in the model file and the scene alike.
+        (
+            "hinge name with a comma",
+            String::from(SCENE),
+            vec![(
+                "satellite.toml",
+                model.replace("name = \"h1\"", "name = \"h,1\""),
+            )],
+            vec![
+                "satellite.toml:48",
+                "`hinge.name` must be letters, digits and `_`",
+                "\"h,1\"",
+            ],
+        ),
+        (
+            "body name with a space",
+            String::from(SCENE),
+            vec![(
+                "satellite.toml",
+                model.replace("name = \"panel3\"", "name = \"panel 3\""),
+            )],
+            vec!["satellite.toml:41", "`body.name`", "\"panel 3\""],
+        ),
+        (
+            "thruster name with a comma",
+            add(&format!("{THRUSTER}name = \"a,b\"\n")),
+            no_file(),
+            vec![
+                "bad.toml:19",
+                "`effects.thrusters.thruster.name` must be letters, digits and `_`",
+                "\"a,b\"",
+            ],
+        ),
+        (
+            "wheel name with a newline",
+            add(&WHEEL.replace("name = \"x\"", "name = \"x\\ny\"")),
+            no_file(),
+            vec![
+                "bad.toml:15",
+                "`effects.reaction_wheels.wheel.name`",
+                "\"x\\ny\"",
+            ],
+        ),
+        (
+            "torquer name with a space",
+            format!(
+                "epoch = \"2026-03-20T12:00:00 UTC\"\n{SCENE}[orbit]\naltitude = 5e5\n[effects.magnetic]\n[[effects.magnetic.torquer]]\nname = \"m x\"\naxis = [1.0, 0.0, 0.0]\nmax_dipole = 10.0\n"
+            ),
+            no_file(),
+            vec!["bad.toml:18", "`effects.magnetic.torquer.name`", "\"m x\""],
+        ),
+        // A position and velocity without angular momentum have no orbital plane.
+        (
+            "radial orbit",
+            add("[orbit]\nposition = [7e6, 0.0, 0.0]\nvelocity = [7000.0, 0.0, 0.0]\n"),
+            no_file(),
+            vec![
+                "bad.toml:13",
+                "the orbit is degenerate",
+                "parallel to `orbit.position`",
+                "r × v is zero",
+            ],
+        ),
+        (
+            "orbit at rest",
+            add("[orbit]\nposition = [7e6, 0.0, 0.0]\nvelocity = [0.0, 0.0, 0.0]\n"),
+            no_file(),
+            vec!["bad.toml:13", "the orbit is degenerate", "`orbit.velocity` is zero"],
+        ),
+        // Epochs outside the span the Sun's series is checked over.
+        (
+            "epoch year 100000",
+            format!("epoch = \"100000-01-01T00:00:00 UTC\"\n{SCENE}"),
+            no_file(),
+            vec!["bad.toml:1", "`epoch`", "outside 1900 to 2100"],
+        ),
+        (
+            "epoch year 1",
+            format!("epoch = \"0001-01-01T00:00:00 UTC\"\n{SCENE}"),
+            no_file(),
+            vec!["bad.toml:1", "`epoch`", "outside 1900 to 2100"],
+        ),
+        (
+            "epoch year 9999",
+            format!("epoch = \"9999-06-01T00:00:00 UTC\"\n{SCENE}"),
+            no_file(),
+            vec!["bad.toml:1", "`epoch`", "outside 1900 to 2100"],
+        ),
+        (
+            "run past 2100",
+            format!("epoch = \"2099-12-31T23:59:59 UTC\"\n{SCENE}"),
+            no_file(),
+            vec!["bad.toml:1", "`epoch`", "ends in year 2100"],
+        ),
+        // A sampled law whose period makes more samples than `--max-rows` (each a stop of
+        // the integrator): refused before the run, which would take minutes.
+        (
+            "sensor period too short",
+            add("[sensors]\n[[sensors.gyro]]\nname = \"g\"\nbody = \"bus\"\nperiod = 1e-6\n"),
+            no_file(),
+            vec![
+                "bad.toml:17",
+                "sensor `g`: `period` = 0.000001 s over `duration` = 2 s makes ",
+                "samples, more than the limit of 1000000",
+                "--max-rows",
+            ],
+        ),
+        (
+            "thruster period too short",
+            add(&format!("{}name = \"t\"\n", THRUSTER.replace("period = 0.1", "period = 1e-6"))),
+            no_file(),
+            vec![
+                "bad.toml:14",
+                "`effects.thrusters`: `period` = 0.000001 s",
+                "samples, more than the limit of 1000000",
+            ],
+        ),
     ]
 }
 
@@ -751,4 +873,96 @@ fn two_ctrl_c_in_a_row_still_stop_cleanly() {
             rows.len()
         )
     );
+}
+
+/// Initial rates beyond 2 rad/s (degrees per second written as radians?) run, with a warning
+/// at the `[initial]` table's line naming the entry and the value in radians, as hinge angles
+/// beyond ±2π are warned.
+#[test]
+fn rates_beyond_2_rad_per_s_warn_as_degrees_would() {
+    let dir = setup("rates");
+    let text = SCENE.replace("initial = \"state.json\"\n", "").replace(
+        "[integrator]",
+        "[initial]\nbase = { angular_velocity = [5.0, 5.0, 5.0] }\nhinges = { angle = [0.0, 0.0, 0.0, 0.0, 0.0], rate = [0.0, 0.0, 0.0, -3.0, 0.0] }\n[integrator]",
+    );
+    std::fs::write(dir.join("rates.toml"), text).unwrap();
+    let o = satsim_in(&dir, &["run", "rates.toml"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("rates.toml:3: initial.base.angular_velocity: entry 0 is 5 rad/s, beyond ±2 rad/s: rates are in rad/s (for 5 deg/s write 0.087266)"),
+        "{err}"
+    );
+    assert!(
+        err.contains("rates.toml:3: initial.hinges.rate: entry 3 is -3 rad/s"),
+        "{err}"
+    );
+    // Rates within the bound: no warning.
+    std::fs::write(dir.join("calm.toml"), SCENE).unwrap();
+    let o = satsim_in(&dir, &["run", "calm.toml"]);
+    assert!(o.status.success());
+    assert!(
+        o.stderr.is_empty(),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+}
+
+/// `--set initial.base.attitude` takes either form whatever the scene writes: a quaternion
+/// over Euler angles, and the keys of one table form over a quaternion or the other form.
+#[test]
+fn set_takes_either_attitude_form() {
+    let dir = setup("attitude_forms");
+    let euler = SCENE.replace("initial = \"state.json\"\n", "").replace(
+        "[integrator]",
+        "[initial]\nbase = { attitude = { euler_deg = [90.0, 0.0, 0.0], sequence = \"zyx\" } }\nhinges = { angle = [0.0, 0.0, 0.0, 0.0, 0.0], rate = [0.0, 0.0, 0.0, 0.0, 0.0] }\n[integrator]",
+    );
+    std::fs::write(dir.join("euler.toml"), euler).unwrap();
+    std::fs::write(dir.join("quaternion.toml"), SCENE).unwrap();
+    let h = std::f64::consts::FRAC_1_SQRT_2;
+    for (scene, sets, q) in [
+        (
+            "euler.toml",
+            vec!["initial.base.attitude=[1, 0, 0, 0]"],
+            [1.0, 0.0, 0.0, 0.0],
+        ),
+        (
+            "quaternion.toml",
+            vec![
+                "initial.base.attitude.euler_deg=[90.0, 0.0, 0.0]",
+                "initial.base.attitude.sequence=zyx",
+            ],
+            [h, 0.0, 0.0, h],
+        ),
+        (
+            "euler.toml",
+            vec![
+                "initial.base.attitude.axis=[1.0, 0.0, 0.0]",
+                "initial.base.attitude.angle_deg=90",
+            ],
+            [h, h, 0.0, 0.0],
+        ),
+        (
+            "quaternion.toml",
+            vec!["initial.base.attitude={ axis = [0.0, 1.0, 0.0], angle_deg = 90.0 }"],
+            [h, 0.0, h, 0.0],
+        ),
+    ] {
+        let mut args = vec!["run", scene, "--out", "out"];
+        for s in &sets {
+            args.extend(["--set", s]);
+        }
+        let o = satsim_in(&dir, &args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.success(), "{scene} {sets:?}: {err}");
+        let (header, rows) = csv(&dir.join("out/trajectory.csv"));
+        let col = |name: &str| header.iter().position(|c| c == name).unwrap();
+        let got = ["q_w", "q_x", "q_y", "q_z"].map(|c| rows[0][col(c)]);
+        for (g, w) in got.iter().zip(q) {
+            assert!(
+                (g - w).abs() < 1e-8,
+                "{scene} {sets:?}: q = {got:?}, expected {q:?}"
+            );
+        }
+    }
 }

@@ -10,7 +10,8 @@
 //!
 //! An override replaces a value that the scene (or its model or state file) already gives by
 //! one of the same kind: a number by a number (an integer by an integer), a string by a
-//! string, a boolean by a boolean, an array by an array, a table by an inline table. A value
+//! string, a boolean by a boolean, an array by an array, a table by an inline table; where
+//! the scene accepts either of two forms (`initial.base.attitude`, `armature`), by either. A value
 //! that is not valid TOML replaces a string as that string (so `--set
 //! integrator.method=rk4` needs no quotes). A key the file leaves out (at its default) is
 //! added, with the tables on its way (`--set integrator.step=0.01`, `--set
@@ -181,6 +182,7 @@ impl Override {
     /// key that is not there is added (with the tables on its way), for the scene reader to
     /// check against its schema.
     pub fn apply(&self, root: &mut Table) -> Result<(), KeyError> {
+        self.clear_other_forms(root);
         if walk(root, &self.key).is_err() {
             return self.add(root);
         }
@@ -196,6 +198,11 @@ impl Override {
             | (Value::Array(_), v @ Value::Array(_))
             | (Value::Table(_), v @ Value::Table(_))
             | (Value::Datetime(_), v @ Value::Datetime(_)) => v,
+            // A value the scene may write in either form replaces the form written.
+            (_, Value::Integer(i)) if other_form(&self.key, &Value::Float(0.0)) => {
+                Value::Float(i as f64)
+            }
+            (_, v) if other_form(&self.key, &v) => v,
             (t, v) => {
                 return Err(KeyError(format!(
                     "`--set {}`: wrong type: the scene has {} there, got {}",
@@ -207,6 +214,29 @@ impl Override {
         };
         set(root, &path, value);
         Ok(())
+    }
+
+    /// A key of one of `initial.base.attitude`'s table forms (`euler_deg` and `sequence`, or
+    /// `axis` and `angle_deg`) replaces the attitude written in another form: the quaternion
+    /// array, or the other table form's keys.
+    fn clear_other_forms(&self, root: &mut Table) {
+        let Some(rest) = self.key.strip_prefix("initial.base.attitude.") else {
+            return;
+        };
+        let form: &[&str] = match rest {
+            "euler_deg" | "sequence" => &["euler_deg", "sequence"],
+            "axis" | "angle_deg" => &["axis", "angle_deg"],
+            _ => return,
+        };
+        let Some(Value::Table(base)) = root.get_mut("initial").and_then(|i| i.get_mut("base"))
+        else {
+            return;
+        };
+        match base.get_mut("attitude") {
+            Some(Value::Table(t)) => t.retain(|k, _| form.contains(&k)),
+            Some(a) => *a = Value::Table(Table::new()),
+            None => {}
+        }
     }
 
     /// Adds the key that [`walk`] did not find: every missing segment is a table key (an
@@ -277,6 +307,17 @@ impl Override {
         }
         here.insert(last.to_string(), value);
         Ok(())
+    }
+}
+
+/// Whether the scene accepts `value` at `key` in place of a value of another kind: the keys
+/// a scene may write in either of two forms, `initial.base.attitude` (a quaternion array or
+/// an Euler or axis-angle table) and `armature` (one number or one per hinge).
+fn other_form(key: &str, value: &Value) -> bool {
+    match key {
+        "initial.base.attitude" => matches!(value, Value::Array(_) | Value::Table(_)),
+        "armature" => matches!(value, Value::Array(_) | Value::Float(_)),
+        _ => false,
     }
 }
 
@@ -682,6 +723,45 @@ mod tests {
         set_one(&mut r, "model.body.1.name=\"panel\"").unwrap();
         assert_eq!(r["model"]["body"][1]["name"].as_str(), Some("panel"));
         assert_eq!(r["model"]["body"][1]["mass"].as_float(), Some(2.5));
+    }
+
+    #[test]
+    fn either_form_replaces_the_other() {
+        let mut r: Table = toml::from_str(
+            "armature = 0.001\n[initial.base]\nattitude = { euler_deg = [90.0, 0.0, 0.0], sequence = \"zyx\" }\n",
+        )
+        .unwrap();
+        let attitude = |r: &Table| r["initial"]["base"]["attitude"].clone();
+        set_one(&mut r, "initial.base.attitude=[1, 0, 0, 0]").unwrap();
+        assert_eq!(attitude(&r).as_array().map(Vec::len), Some(4));
+        // A table form's key replaces the quaternion, then the other table form's keys.
+        set_one(&mut r, "initial.base.attitude.euler_deg=[0.0, 0.0, 10.0]").unwrap();
+        set_one(&mut r, "initial.base.attitude.sequence=zyx").unwrap();
+        let t = attitude(&r);
+        let keys = |t: &Value| {
+            let mut k: Vec<String> = t.as_table().unwrap().keys().cloned().collect();
+            k.sort();
+            k
+        };
+        assert_eq!(keys(&t), ["euler_deg", "sequence"]);
+        set_one(&mut r, "initial.base.attitude.axis=[0.0, 0.0, 1.0]").unwrap();
+        set_one(&mut r, "initial.base.attitude.angle_deg=30").unwrap();
+        let t = attitude(&r);
+        assert_eq!(keys(&t), ["angle_deg", "axis"]);
+        set_one(
+            &mut r,
+            "initial.base.attitude={ euler_deg = [1.0, 2.0, 3.0], sequence = \"xyz\" }",
+        )
+        .unwrap();
+        assert_eq!(attitude(&r)["sequence"].as_str(), Some("xyz"));
+        // `armature`: one number or one per hinge.
+        set_one(&mut r, "armature=[0.0, 1e-3]").unwrap();
+        assert_eq!(r["armature"].as_array().map(Vec::len), Some(2));
+        set_one(&mut r, "armature=0").unwrap();
+        assert_eq!(r["armature"].as_float(), Some(0.0));
+        // Elsewhere the kinds still must match.
+        let e = set_one(&mut r, "initial.base.attitude=\"identity\"").unwrap_err();
+        assert!(e.0.contains("wrong type"), "{e}");
     }
 
     #[test]

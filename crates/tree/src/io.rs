@@ -65,11 +65,31 @@ pub use model_file::{
     parse_model, parse_model_file, read_model, with_key,
 };
 pub use state_file::{
-    BaseFrame, BaseStateFile, FieldError, FrameMotion, HingesStateFile, STATE_ATTITUDE_TOLERANCE,
-    State, StateFile, parse_state, parse_state_file, read_state,
+    BaseFrame, BaseStateFile, FieldError, FrameMotion, HingesStateFile, RATE_WARNING,
+    STATE_ATTITUDE_TOLERANCE, State, StateFile, parse_state, parse_state_file, read_state,
 };
 
 use std::path::Path;
+
+/// Checks a name that becomes part of output column names (`angle_<hinge>`,
+/// `thrust_<thruster>`, `<sensor>_x`…): bodies, hinges, wheels, thrusters, torquers, sensors.
+/// It must be ASCII letters, digits and `_`, so that no comma, quote, space or newline breaks
+/// a CSV row or header. The error says what is allowed and shows the name as written.
+///
+/// ```
+/// use satsim_tree::io::column_name;
+/// assert!(column_name("panel_1").is_ok());
+/// assert!(column_name("a,b").unwrap_err().contains("\"a,b\""));
+/// assert!(column_name("").is_err() && column_name("x\ny").is_err());
+/// ```
+pub fn column_name(name: &str) -> Result<(), String> {
+    if !name.is_empty() && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') {
+        return Ok(());
+    }
+    Err(format!(
+        "must be letters, digits and `_` (it names output columns), got {name:?}"
+    ))
+}
 
 /// The text of the file at `path`; an empty file (or only white space) is an error.
 pub(crate) fn read_text(path: &Path) -> Result<String, FileError> {

@@ -249,7 +249,7 @@ impl SceneEffect for Magnetic {
         let mut torquers: Vec<Torquer> = Vec::new();
         let mut command = Vec::new();
         for t in &file.torquer {
-            let name = t.name.get_ref();
+            let name = section.column_name(&t.name, "effects.magnetic.torquer.name")?;
             if torquers.iter().any(|o| &o.name == name) {
                 return Err(section.error(
                     Some(t.name.span()),

@@ -674,7 +674,9 @@ impl SceneEffect for ReactionWheels {
         for wf in &w.wheel {
             let span = Some(wf.span());
             let f = wf.get_ref();
-            let name = f.name.get_ref().clone();
+            let name = section
+                .column_name(&f.name, "effects.reaction_wheels.wheel.name")?
+                .clone();
             let at = |k: usize| f.at.map(|a| a[k]);
             section.check_numbers(
                 wf.span(),

@@ -86,6 +86,18 @@ impl<'a> SceneText<'a> {
         Ok(v)
     }
 
+    /// `name`, which becomes part of output column names: letters, digits and `_` only (see
+    /// [`satsim_tree::io::column_name`]); `what` names the key, e.g. `effects.thrusters.thruster.name`.
+    pub fn column_name<'n>(
+        &self,
+        name: &'n Spanned<String>,
+        what: &str,
+    ) -> Result<&'n String, FileError> {
+        satsim_tree::io::column_name(name.get_ref())
+            .map_err(|m| self.error(Some(name.span()), format!("`{what}` {m}")))?;
+        Ok(name.get_ref())
+    }
+
     /// Every given value is finite (TOML accepts `nan` and `inf`), and those marked
     /// non-negative are `>= 0`; the error names the key and the table's line.
     pub fn check_numbers(

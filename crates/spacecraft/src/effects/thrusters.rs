@@ -296,7 +296,7 @@ impl SceneEffect for Thrusters {
         let mut thrusters: Vec<Thruster> = Vec::new();
         let mut duty = Vec::new();
         for t in &file.thruster {
-            let name = t.name.get_ref();
+            let name = section.column_name(&t.name, "effects.thrusters.thruster.name")?;
             if thrusters.iter().any(|o| &o.name == name) {
                 return Err(section.error(
                     Some(t.name.span()),

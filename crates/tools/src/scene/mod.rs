@@ -89,10 +89,25 @@ pub struct Scene {
     /// The enabled effects (the orbit included): look one up by type,
     /// `scene.effects.get::<HingeSprings>()`.
     pub effects: EffectSet,
+    /// The scene's sampled laws (its sensors, thrusters, controllers with a `period`), whose
+    /// samples [`Scene::check_rows`] bounds.
+    pub clocks: Vec<Clock>,
     /// What the reader accepted but the user should hear about (a nearly unit attitude
     /// quaternion normalised…), each naming the file; the command line prints them on
     /// standard error.
     pub warnings: Vec<String>,
+}
+
+/// A sampled law of a scene, as written: each of its samples is a stop of the integrator (a
+/// step cut to land on it), so a tiny period holds a run for hours however few rows it writes.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Clock {
+    /// What samples, as a message names it (``sensor `gyro1` ``, `` `effects.thrusters` ``).
+    pub what: String,
+    /// The line of its `period` in the scene file.
+    pub line: Option<usize>,
+    /// The period (s, > 0).
+    pub period: f64,
 }
 
 /// The most output rows a run writes unless told otherwise (`satsim run --max-rows`): about
@@ -111,11 +126,13 @@ impl Scene {
     }
 
     /// Refuses a scene whose run would write more than `max_rows` rows, naming
-    /// `output.every`, the row count and the limit.
+    /// `output.every`, the row count and the limit; or in which a sampled law ([`Clock`])
+    /// would take more than `max_rows` samples, naming it, its line, the count and the limit
+    /// (a sample costs at least a step, more than a row's right-hand side).
     pub fn check_rows(&self, max_rows: u64) -> Result<(), FileError> {
         let rows = self.output_rows();
         if rows <= max_rows as f64 {
-            return Ok(());
+            return self.check_samples(max_rows);
         }
         Err(FileError::Schema {
             path: self.path.clone(),
@@ -127,6 +144,28 @@ impl Scene {
                 self.duration / (max_rows.max(2) - 1) as f64
             ),
         })
+    }
+
+    /// [`Scene::check_rows`]'s bound on each clock's samples: `t = 0, period, …` up to the
+    /// duration.
+    fn check_samples(&self, max: u64) -> Result<(), FileError> {
+        for c in &self.clocks {
+            let samples = (self.duration / c.period).floor() + 1.0;
+            if samples > max as f64 {
+                return Err(FileError::Schema {
+                    path: self.path.clone(),
+                    line: c.line,
+                    message: format!(
+                        "{}: `period` = {} s over `duration` = {} s makes {samples:.0} samples, more than the limit of {max}: each sample is a stop of the integrator; raise the period (at least {:.3e} s) or the limit (`--max-rows`)",
+                        c.what,
+                        c.period,
+                        self.duration,
+                        self.duration / (max.max(2) - 1) as f64
+                    ),
+                });
+            }
+        }
+        Ok(())
     }
 
     /// A torque-free scene of `model` from `initial`, integrated by DP54 at the given
@@ -146,6 +185,7 @@ impl Scene {
             view: true,
             energy_budget: true,
             effects: EffectSet::default(),
+            clocks: Vec::new(),
             warnings: Vec::new(),
         }
     }
@@ -209,10 +249,13 @@ impl Scene {
         let mut scene = Scene::parse_with_registry(&rewritten, path, registry)
             .map_err(|e| scene_keys::relocate(e, &text, path, &rewritten, overrides))?;
         // A line of the rewritten text means nothing to the user: name where it was written.
-        if !scene.warnings.is_empty() {
+        if !scene.warnings.is_empty() || !scene.clocks.is_empty() {
             let origins = scene_keys::Origins::new(&text, path, &rewritten);
             for w in &mut scene.warnings {
                 *w = origins.warning(w);
+            }
+            for c in &mut scene.clocks {
+                c.line = c.line.and_then(|l| origins.place(l).1);
             }
         }
         Ok(scene)

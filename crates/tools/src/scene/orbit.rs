@@ -95,6 +95,24 @@ impl Parser<'_> {
                         ),
                     ));
                 }
+                // Without angular momentum there is no orbital plane: the local orbital
+                // frame (and every column or law that uses it) is undefined. Round-off of
+                // the cross product is ~1e-16 of |r||v|, far below this.
+                let momentum = orbit.r0.cross(&orbit.v0).norm();
+                if momentum <= 1e-10 * orbit.r0.norm() * orbit.v0.norm() {
+                    return Err(self.error(
+                        span,
+                        format!(
+                            "the orbit is degenerate: `orbit.velocity` is {}, so the angular momentum r × v is zero and there is no orbital plane; give a velocity with a component across the position (a circular orbit's is sqrt(mu / |r|) = {:.0} m/s, at right angles to it)",
+                            if orbit.v0.norm() == 0.0 {
+                                "zero"
+                            } else {
+                                "parallel to `orbit.position` (a radial orbit)"
+                            },
+                            (orbit.mu / orbit.r0.norm()).sqrt()
+                        ),
+                    ));
+                }
             }
             (true, None, None) => {
                 let a = match (&f.altitude, &f.semi_major_axis) {

@@ -3,9 +3,9 @@
 //! [`SceneText`] carries the scene's text and path so that every check names the file and
 //! line.
 
-use super::Scene;
 use super::file::{ArmatureFile, ModelSource, SceneFile, StateSource};
 use super::flexible::{Elastic, elastic_state, json_line, parse_state_json};
+use super::{Clock, Scene};
 use crate::scene_keys;
 use satsim_integrate::Options;
 use satsim_spacecraft::effects::section::reword;
@@ -14,10 +14,14 @@ use satsim_tree::flexible::FlexModel;
 use satsim_tree::io::{FileError, FrameMotion, ModelFile, flex_model_of, line_of, with_key};
 use satsim_tree::{Model, State};
 
+use serde::Deserialize;
 use std::collections::BTreeMap;
 use std::ops::{Deref, Range};
 use std::path::{Path, PathBuf};
 use toml::Spanned;
+
+/// The built-in effects whose `period` is a sample period: a clock each ([`Clock`]).
+const SAMPLED: [&str; 3] = ["attitude_control", "hinge_control", "thrusters"];
 
 /// Reads a scene's text into a [`Scene`].
 pub(crate) struct Parser<'a> {
@@ -139,10 +143,12 @@ impl<'a> Parser<'a> {
 
         let duration = self.positive(&file.duration, "duration")?;
         let epoch = match &file.epoch {
-            Some(e) => Some(
-                satsim_environment::parse_epoch(e.get_ref())
-                    .map_err(|m| self.error(Some(e.span()), format!("`epoch`: {m}")))?,
-            ),
+            Some(e) => {
+                let at_line = |m: String| self.error(Some(e.span()), format!("`epoch`: {m}"));
+                let epoch = satsim_environment::parse_epoch(e.get_ref()).map_err(at_line)?;
+                satsim_environment::epoch::check_span(epoch, duration).map_err(at_line)?;
+                Some(epoch)
+            }
             None => None,
         };
         let options = self.integrator(file.integrator.as_ref())?;
@@ -169,13 +175,16 @@ impl<'a> Parser<'a> {
         if let Some(o) = orbit {
             effects.insert(o);
         }
+        let mut clocks = Vec::new();
         if let Some(e) = &file.effects {
             self.effects(e, &model, epoch, &mut effects, &mut warnings)?;
+            clocks = self.clocks(&effects)?;
         }
         if let Some(s) = &file.sensors
             && let Some(set) = super::sensors::read(self, s, &model, epoch, &effects)?
         {
             effects.insert(set);
+            clocks.extend(super::sensors::clocks(self, s));
         }
         let scene = Scene {
             path,
@@ -191,6 +200,7 @@ impl<'a> Parser<'a> {
             view,
             energy_budget,
             effects,
+            clocks,
             warnings,
         };
         // Build once to surface any remaining setup error with the scene's name.
@@ -278,6 +288,34 @@ impl<'a> Parser<'a> {
                 .map_err(|m| self.error(Some(span), m))?;
         }
         Ok(())
+    }
+
+    /// The clocks of the enabled effects that sample with a `period` (their sections'
+    /// `period` key, in this order).
+    fn clocks(&self, effects: &EffectSet) -> Result<Vec<Clock>, FileError> {
+        /// A section's `period`, its other keys left to the effect.
+        #[derive(Deserialize)]
+        struct Period {
+            #[serde(default)]
+            period: Option<Spanned<f64>>,
+        }
+        let mut out = Vec::new();
+        for name in SAMPLED {
+            if !effects.contains(name) {
+                continue;
+            }
+            if let Some(p) = self
+                .effect_section::<Period>(name)?
+                .and_then(|s| s.into_inner().period)
+            {
+                out.push(Clock {
+                    what: format!("`effects.{name}`"),
+                    line: Some(line_of(self.text(), p.span().start)),
+                    period: *p.get_ref(),
+                });
+            }
+        }
+        Ok(out)
     }
 
     /// The model (and its flexible bodies) with the scene's `armature` on its hinges.

@@ -11,7 +11,7 @@ use satsim_spacecraft::sensors::{
 };
 use satsim_tree::Model;
 use satsim_tree::error::Num;
-use satsim_tree::io::FileError;
+use satsim_tree::io::{FileError, line_of};
 use satsim_tree::spatial::Vec3;
 use serde::Deserialize;
 use std::ops::Range;
@@ -237,20 +237,7 @@ pub(crate) fn read(
     }
     let mut set = Sensors::new(seed);
     for (c, kind) in all {
-        let name = c.name.get_ref();
-        if name.is_empty()
-            || !name
-                .chars()
-                .all(|ch| ch.is_ascii_alphanumeric() || ch == '_')
-        {
-            return Err(text.error(
-                Some(c.name.span()),
-                format!(
-                    "`sensors.{}.name` must be letters, digits and `_` (it prefixes the columns), got {name:?}",
-                    c.table
-                ),
-            ));
-        }
+        let name = text.column_name(c.name, &format!("sensors.{}.name", c.table))?;
         if set.sensors().iter().any(|s| s.name() == name) {
             return Err(text.error(
                 Some(c.name.span()),
@@ -308,6 +295,38 @@ fn needs_orbit(text: &SceneText, c: &Common, effects: &EffectSet) -> Result<(), 
             c.table
         ),
     ))
+}
+
+/// Each sensor's clock (its name and the line of its `period`), for
+/// [`Scene::check_rows`](super::Scene::check_rows) to bound its samples.
+pub(crate) fn clocks(text: &SceneText, file: &Spanned<SensorsFile>) -> Vec<super::Clock> {
+    let f = file.get_ref();
+    let named = f
+        .gyro
+        .iter()
+        .map(|s| (&s.get_ref().name, &s.get_ref().period))
+        .chain(
+            f.star_tracker
+                .iter()
+                .map(|s| (&s.get_ref().name, &s.get_ref().period)),
+        )
+        .chain(
+            f.sun_sensor
+                .iter()
+                .map(|s| (&s.get_ref().name, &s.get_ref().period)),
+        )
+        .chain(
+            f.magnetometer
+                .iter()
+                .map(|s| (&s.get_ref().name, &s.get_ref().period)),
+        );
+    named
+        .map(|(name, period)| super::Clock {
+            what: format!("sensor `{}`", name.get_ref()),
+            line: Some(line_of(text.text(), period.span().start)),
+            period: *period.get_ref(),
+        })
+        .collect()
 }
 
 /// A sensor column that another column of the run already has (`omega_x` from a sensor

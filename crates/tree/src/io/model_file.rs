@@ -380,6 +380,10 @@ impl ModelFile {
         for b in &self.body {
             let body = b.get_ref();
             let name = body.name.get_ref();
+            super::column_name(name).map_err(|m| SpannedError::Schema {
+                span: span_of(&body.name),
+                message: format!("`body.name` {m}"),
+            })?;
             let mass = *body.mass.get_ref();
             let nonfinite = |field: &str, span: Option<Range<usize>>| SpannedError::Model {
                 span,
@@ -439,6 +443,10 @@ impl ModelFile {
         for h in &self.hinge {
             let hinge = h.get_ref();
             let name = hinge.name.get_ref();
+            super::column_name(name).map_err(|m| SpannedError::Schema {
+                span: span_of(&hinge.name),
+                message: format!("`hinge.name` {m}"),
+            })?;
             let nonfinite = |field: &str, span: Option<Range<usize>>| SpannedError::Model {
                 span,
                 error: ModelError::NonFinite(format!("hinge `{name}`: {field}")),

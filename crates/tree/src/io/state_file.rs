@@ -158,10 +158,15 @@ fn check_array(field: &str, x: &[f64], n: usize, what: &str) -> Result<(), Field
 /// this (a quaternion typed with a few digits), and refused beyond.
 pub const STATE_ATTITUDE_TOLERANCE: f64 = 1e-3;
 
+/// The rate (rad/s) beyond which a state's angular velocity or hinge rate is warned about
+/// ([`StateFile::warnings`]): degrees per second written as radians per second?
+pub const RATE_WARNING: f64 = 2.0;
+
 impl StateFile {
     /// What [`StateFile::resolve`] accepts but a user should hear about: an attitude
     /// quaternion normalised from a norm more than [`UNIT_NORM_TOLERANCE`] away from 1, a
-    /// hinge angle beyond ±2π (degrees written as radians?).
+    /// hinge angle beyond ±2π, a base angular velocity or hinge rate beyond
+    /// ±[`RATE_WARNING`] (degrees written as radians?).
     pub fn warnings(&self) -> Vec<String> {
         let mut out = Vec::new();
         if let Some(Attitude::Quaternion(a)) = self.base.as_ref().and_then(|b| b.attitude.as_ref())
@@ -187,6 +192,29 @@ impl StateFile {
                 "hinges.angle: entry {k} is {a} rad, beyond ±2π: angles are in radians (for {a} degrees write {:.6})",
                 a.to_radians()
             ));
+        }
+        // Likewise a rate beyond 2 rad/s (115 deg/s, far above any bus's or deploying
+        // panel's) is most likely degrees per second.
+        let base_rates = self
+            .base
+            .as_ref()
+            .and_then(|b| b.angular_velocity.as_deref());
+        let hinge_rates = self.hinges.as_ref().map(|h| h.rate.as_slice());
+        for (field, rates) in [
+            ("base.angular_velocity", base_rates),
+            ("hinges.rate", hinge_rates),
+        ] {
+            if let Some((k, w)) = rates
+                .unwrap_or_default()
+                .iter()
+                .enumerate()
+                .find(|(_, w)| w.abs() > RATE_WARNING)
+            {
+                out.push(format!(
+                    "{field}: entry {k} is {w} rad/s, beyond ±{RATE_WARNING} rad/s: rates are in rad/s (for {w} deg/s write {:.6})",
+                    w.to_radians()
+                ));
+            }
         }
         out
     }

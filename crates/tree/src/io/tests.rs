@@ -1182,3 +1182,63 @@ fn the_quaternion_form_keeps_its_checks() {
         "{e}"
     );
 }
+
+#[test]
+fn names_that_become_columns_are_letters_digits_and_underscores() {
+    // A comma, space, quote or newline in a body or hinge name would break the CSV files'
+    // rows: refused at the name's line, the name shown as written.
+    for (from, to, line, key) in [
+        ("name = \"h\"", "name = \"a,b\"", 15, "hinge.name"),
+        ("name = \"h\"", "name = \"a\\nb\"", 15, "hinge.name"),
+        (
+            "name = \"panel\"",
+            "name = \"solar panel\"",
+            10,
+            "body.name",
+        ),
+        ("name = \"bus\"", "name = \"\"", 5, "body.name"),
+    ] {
+        let text = GOOD.replacen(from, to, 1);
+        let e = parse_model(&text, Path::new("m.toml"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with(&format!(
+                "m.toml:{line}: `{key}` must be letters, digits and `_`"
+            )),
+            "{to}: {e}"
+        );
+        assert_eq!(e.lines().count(), 1, "{e}");
+    }
+    // The flexible reader reads the same names.
+    let text = GOOD.replacen("name = \"h\"", "name = \"h;1\"", 1);
+    let e = parse_flex_model(&text, Path::new("m.toml")).unwrap_err();
+    assert!(e.to_string().starts_with("m.toml:15: `hinge.name`"), "{e}");
+}
+
+#[test]
+fn rates_beyond_2_rad_per_s_warn_as_angles_beyond_a_turn_do() {
+    let f = |w: &str, rate: &str| {
+        parse_state_file(
+            &format!(
+                "{{\"base\": {{\"angular_velocity\": {w}}}, \"hinges\": {{\"angle\": [0], \"rate\": [{rate}]}}}}"
+            ),
+            Path::new("s.json"),
+        )
+        .unwrap()
+        .warnings()
+    };
+    assert!(f("[0.1, -2.0, 1.0]", "2.0").is_empty());
+    assert_eq!(
+        f("[5, 5, 5]", "0"),
+        [
+            "base.angular_velocity: entry 0 is 5 rad/s, beyond ±2 rad/s: rates are in rad/s (for 5 deg/s write 0.087266)"
+        ]
+    );
+    let w = f("[0, 0, 0]", "-90");
+    assert_eq!(w.len(), 1);
+    assert!(
+        w[0].starts_with("hinges.rate: entry 0 is -90 rad/s, beyond ±2 rad/s"),
+        "{w:?}"
+    );
+}
