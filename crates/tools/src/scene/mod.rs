@@ -52,6 +52,7 @@ use crate::scene_keys::{self, Override};
 use satsim_integrate::Options;
 use satsim_spacecraft::effects::{EffectSet, Registry};
 use satsim_spacecraft::simulation::{SimError, Simulation};
+use satsim_tree::error::Num;
 use satsim_tree::flexible::FlexModel;
 use satsim_tree::io::FileError;
 use satsim_tree::{Model, State};
@@ -158,8 +159,8 @@ impl Scene {
                     message: format!(
                         "{}: `period` = {} s over `duration` = {} s makes {samples:.0} samples, more than the limit of {max}: each sample is a stop of the integrator; raise the period (at least {:.3e} s) or the limit (`--max-rows`)",
                         c.what,
-                        c.period,
-                        self.duration,
+                        Num(c.period),
+                        Num(self.duration),
                         self.duration / (max.max(2) - 1) as f64
                     ),
                 });

@@ -5,6 +5,7 @@ use super::attitude::Attitude;
 use super::error::FileError;
 use super::model_file::schema_message;
 use super::read_text;
+use crate::error::Num;
 use crate::model::{BaseKind, Model, UNIT_NORM_TOLERANCE};
 use crate::spatial::Vec3;
 use nalgebra::UnitQuaternion;
@@ -189,7 +190,9 @@ impl StateFile {
                 .find(|(_, a)| a.abs() > std::f64::consts::TAU)
         {
             out.push(format!(
-                "hinges.angle: entry {k} is {a} rad, beyond ±2π: angles are in radians (for {a} degrees write {:.6})",
+                "hinges.angle: entry {k} is {} rad, beyond ±2π: angles are in radians (for {} degrees write {:.6})",
+                Num(*a),
+                Num(*a),
                 a.to_radians()
             ));
         }
@@ -211,7 +214,9 @@ impl StateFile {
                 .find(|(_, w)| w.abs() > RATE_WARNING)
             {
                 out.push(format!(
-                    "{field}: entry {k} is {w} rad/s, beyond ±{RATE_WARNING} rad/s: rates are in rad/s (for {w} deg/s write {:.6})",
+                    "{field}: entry {k} is {} rad/s, beyond ±{RATE_WARNING} rad/s: rates are in rad/s (for {} deg/s write {:.6})",
+                    Num(*w),
+                    Num(*w),
                     w.to_radians()
                 ));
             }

@@ -1235,6 +1235,12 @@ fn rates_beyond_2_rad_per_s_warn_as_angles_beyond_a_turn_do() {
             "base.angular_velocity: entry 0 is 5 rad/s, beyond ±2 rad/s: rates are in rad/s (for 5 deg/s write 0.087266)"
         ]
     );
+    // A huge value is written short, not in 301 digits.
+    let w = f("[1e300, 0, 0]", "0");
+    assert!(
+        w[0].starts_with("base.angular_velocity: entry 0 is 1e300 rad/s, beyond ±2 rad/s"),
+        "{w:?}"
+    );
     let w = f("[0, 0, 0]", "-90");
     assert_eq!(w.len(), 1);
     assert!(
