@@ -3,8 +3,14 @@
 //! right-hand side, events and output row and takes a few integration steps, each to a
 //! result or an error.
 //!
-//! Only inline models and states are followed: a scene naming a file (`model = "..."`) could
-//! name `/dev/zero`, which the reader would read forever.
+//! Only inline models and states are followed: a scene naming a file (`model = "..."`, a
+//! flexible body's `modes_file = "..."`) could name `/dev/zero`, which the reader would read
+//! forever. Scenes whose sampled laws (sensors, discrete controllers, thrusters) would take
+//! more samples than a run may are refused by `check_rows`, as `satsim run` refuses them.
+//!
+//! Seed corpora: `corpus_seed/scene_reader` (the examples), and one per section of the
+//! environment and the hardware (`scene_sensors`, `scene_thrusters`, `scene_flexible`,
+//! `scene_environment`), each run for 10^6 executions.
 #![no_main]
 use libfuzzer_sys::fuzz_target;
 use satsim_integrate::{Output, System};
@@ -17,13 +23,17 @@ fuzz_target!(|bytes: &[u8]| {
     };
     if let Ok(table) = text.parse::<toml::Table>()
         && (table.get("model").is_some_and(|m| m.is_str())
-            || table.get("initial").is_some_and(|m| m.is_str()))
+            || table.get("initial").is_some_and(|m| m.is_str())
+            || names_a_file(&toml::Value::Table(table)))
     {
         return;
     }
     let Ok(scene) = Scene::parse(text, Path::new("/nonexistent/fuzz.toml")) else {
         return;
     };
+    if scene.check_rows(100_000).is_err() {
+        return;
+    }
     if scene.model.n_bodies() > 64
         || scene
             .effects
@@ -56,3 +66,14 @@ fuzz_target!(|bytes: &[u8]| {
     let t_end = sim.t0() + scene.duration.min(1.0);
     let _ = sim.run(&options, t_end, &Output::Steps, |_, _| Ok::<(), ()>(()));
 });
+
+/// Whether any table holds a `modes_file` (a path the reader would follow).
+fn names_a_file(v: &toml::Value) -> bool {
+    match v {
+        toml::Value::Table(t) => t
+            .iter()
+            .any(|(k, v)| k == "modes_file" || names_a_file(v)),
+        toml::Value::Array(a) => a.iter().any(names_a_file),
+        _ => false,
+    }
+}
