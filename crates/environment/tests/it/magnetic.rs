@@ -6,8 +6,8 @@ use satsim_environment::earth::gcrf_to_itrf;
 use satsim_environment::magnetic::{FieldModel, GeoField};
 use satsim_environment::{Vec3, parse_epoch};
 
-const REFERENCE: &str = include_str!("../fixtures/igrf_reference.csv");
-const TABLE: &str = include_str!("../data/igrf14coeffs.txt");
+const REFERENCE: &str = include_str!("../../fixtures/igrf_reference.csv");
+const TABLE: &str = include_str!("../../data/igrf14coeffs.txt");
 /// IGRF's reference radius (m).
 const A: f64 = 6_371_200.0;
 

@@ -6,7 +6,7 @@ use nalgebra::{Matrix3, Rotation3};
 use satsim_environment::earth::{earth_rotation_gcrf, gcrf_to_itrf};
 use satsim_environment::{OMEGA_EARTH, Vec3, parse_epoch};
 
-const REFERENCE: &str = include_str!("../fixtures/earth_reference.csv");
+const REFERENCE: &str = include_str!("../../fixtures/earth_reference.csv");
 
 /// What the model leaves out, as an angle (arcsec): nutation moves the pole by at most
 /// sqrt((Δψ sin ε)² + Δε²) with |Δψ| <= 17.2 + 1.32 + 0.23 + 0.21 = 19.0 and |Δε| <= 9.20 +

@@ -3,7 +3,7 @@
 
 use satsim_environment::{AU, Vec3, parse_epoch, sun::sun_position};
 
-const REFERENCE: &str = include_str!("../fixtures/sun_reference.csv");
+const REFERENCE: &str = include_str!("../../fixtures/sun_reference.csv");
 
 #[test]
 fn sun_position_is_within_0_01_degrees_and_1e_4_of_the_ephemeris() {
