@@ -18,7 +18,7 @@
 //! 7.5e-9, RK4 5.3e-4 / 3.2e-5 at 1e5 / 2e5 steps (order 4.0); VDPOL 1.8e-7 / 3.7e-10 at tol
 //! 1e-6 / 1e-9 (0.09 and 0.19 of the tolerance); ROBER at 1e11 relative 5.5e-10 (rtol 1e-10).
 
-mod common;
+use crate::common;
 
 use common::run;
 use satsim_integrate::{Method, Options, System, SystemError};

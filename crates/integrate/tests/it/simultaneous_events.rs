@@ -2,7 +2,7 @@
 //! same instant and together, whatever the others do; a reset that makes another event cross
 //! fires it at the same instant (a chain); a failing event evaluation is an error.
 
-mod common;
+use crate::common;
 
 use common::collect;
 use satsim_integrate::{

@@ -1,6 +1,6 @@
 //! Measured order of convergence at fixed steps equals the theoretical order.
 
-mod common;
+use crate::common;
 
 use common::{Smooth, max_err, run};
 use satsim_integrate::{Method, Options};

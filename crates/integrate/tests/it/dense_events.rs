@@ -1,6 +1,6 @@
 //! Dense output, event location (reset / continue / stop) and observer break.
 
-mod common;
+use crate::common;
 
 use std::ops::ControlFlow;
 

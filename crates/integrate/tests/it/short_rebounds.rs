@@ -4,7 +4,7 @@
 //! it, a ball bouncing with little restitution under fixed steps fell through the floor (the
 //! two_wings scene's boom elbow crept through its rebound stop the same way).
 
-mod common;
+use crate::common;
 
 use common::{Ball, collect};
 use satsim_integrate::{EventAction, Method, Options, Output, StopReason};

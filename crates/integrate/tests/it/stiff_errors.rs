@@ -1,6 +1,6 @@
 //! Stiff problems, every error variant, and the projection hook.
 
-mod common;
+use crate::common;
 
 use common::{Smooth, run};
 use satsim_integrate::{

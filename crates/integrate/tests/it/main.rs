@@ -1,0 +1,11 @@
+//! The integrators' tests: one binary (one link), one module per subject; `common` holds the test problems.
+
+mod common;
+mod convergence;
+mod dense_events;
+mod hairer_reference;
+mod properties;
+mod short_rebounds;
+mod simultaneous_events;
+mod stiff_errors;
+mod time_stops;
