@@ -2,7 +2,7 @@
 //! engine, plus a third, brute-force computation (kinetic-energy polarisation for `S`, ABA
 //! for `N`), and one printed-fails/corrected-passes test per erratum.
 
-mod common;
+use crate::common;
 
 use common::{Rng, couples, random_model, random_state, realistic};
 use nalgebra::{DMatrix, DVector};

@@ -9,40 +9,8 @@ use satsim_tree::aba::{aba, aba_hybrid, aba_hybrid_with_kinematics, aba_with_kin
 use satsim_tree::samples::{SplitMix, push_wheels, random_q};
 use satsim_tree::spatial::Force;
 use satsim_tree::{Data, ForwardDynamics, Input, Kernel, Model, forward_kinematics, read_model};
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
+use satsim_testkit::alloc::allocations;
 use std::path::Path;
-
-struct Counting;
-thread_local! {
-    // Per thread: the test harness's own threads allocate too, and must not count.
-    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
-}
-
-fn count() {
-    let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
-}
-
-fn allocations() -> usize {
-    ALLOCATIONS.with(|c| c.get())
-}
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        count();
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        count();
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
-
-#[global_allocator]
-static GLOBAL: Counting = Counting;
 
 /// The preprint satellite (`examples/satellite.toml`) with the peer orbit's three wheels.
 fn satellite_with_wheels() -> Model {

@@ -23,7 +23,7 @@
 //! Measured: worst 9.2e-11 (relative) over 100 random models; asserted below 1e-9. The
 //! printed `N` (errata E2 and E3) is off by 3.1e-4 or more on every one of them.
 
-mod common;
+use crate::common;
 
 use common::{Rng, random_model, random_state, realistic};
 use nalgebra::{SMatrix, SVector};

@@ -3,7 +3,7 @@
 //! torque, the quaternion equation (20), the gravity force approximation, and the Newton-Euler
 //! equations (5)-(10) with (2), (3) and (16) from which (19) is derived.
 
-mod common;
+use crate::common;
 
 use common::{Rng, random_model, random_state, realistic};
 use nalgebra::{Quaternion, UnitQuaternion, Vector4};
