@@ -1,0 +1,5 @@
+//! The simulation's tests: one binary (one link), one module per subject.
+
+mod flexible;
+mod integrators;
+mod physics;
