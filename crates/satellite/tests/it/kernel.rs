@@ -5,11 +5,11 @@
 //! to round-off, is tested in `kernel.rs` itself.)
 
 use satsim_satellite::kernel::UnrolledAba;
+use satsim_testkit::alloc::allocations;
 use satsim_tree::aba::{aba, aba_hybrid, aba_hybrid_with_kinematics, aba_with_kinematics};
 use satsim_tree::samples::{SplitMix, push_wheels, random_q};
 use satsim_tree::spatial::Force;
 use satsim_tree::{Data, ForwardDynamics, Input, Kernel, Model, forward_kinematics, read_model};
-use satsim_testkit::alloc::allocations;
 use std::path::Path;
 
 /// The preprint satellite (`examples/satellite.toml`) with the peer orbit's three wheels.
