@@ -4,8 +4,8 @@
 //! undetermined. The engine must refuse, name the hinges, still solve close to the lock, and
 //! solve at the lock once a (documented) armature regularises it.
 
+use crate::common;
 use nalgebra::DVector;
-mod common;
 
 use common::satellite;
 use satsim_tree::aba::aba;

@@ -1,43 +1,10 @@
 //! The per-call algorithms allocate nothing once `Data` exists (Pinocchio's Model/Data rule).
 
+use satsim_testkit::alloc::allocations;
 use satsim_tree::aba::aba;
 use satsim_tree::cholesky::crba_cholesky;
 use satsim_tree::samples::{chain, random_tree, random_tree_with_rotors};
 use satsim_tree::*;
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
-
-struct Counting;
-thread_local! {
-    // Per thread: the test harness's own threads (its output capture, its "running for over
-    // 60 seconds" timer on a loaded machine) allocate too, and must not count.
-    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
-}
-
-fn count() {
-    let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
-}
-
-fn allocations() -> usize {
-    ALLOCATIONS.with(|c| c.get())
-}
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        count();
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        count();
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
-
-#[global_allocator]
-static GLOBAL: Counting = Counting;
 
 #[test]
 fn per_call_algorithms_do_not_allocate() {

@@ -4,6 +4,7 @@
 //! allocation per call.
 
 use nalgebra::{DMatrix, DVector, Quaternion, SymmetricEigen};
+use satsim_testkit::alloc::allocations;
 use satsim_tree::flexible::beam::{
     BETA1_L, CantileverMode, PANELS, POINTS, beta_l, gauss_legendre, integrate,
 };
@@ -13,31 +14,6 @@ use satsim_tree::flexible::{
 use satsim_tree::samples::{SplitMix, random_tree};
 use satsim_tree::spatial::{Force, Mat3, Vec3};
 use satsim_tree::{BaseKind, Body, Data, Hinge, ModelBuilder};
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
-
-struct Counting;
-thread_local! {
-    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
-}
-fn allocations() -> usize {
-    ALLOCATIONS.with(|c| c.get())
-}
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
-#[global_allocator]
-static GLOBAL: Counting = Counting;
 
 /// The contract's example beam along `axis`, bending along `bend`, rooted at the origin.
 fn beam(axis: Vec3, bend: Vec3, modes: usize) -> Beam {

@@ -3,9 +3,9 @@
 //! and the chain form agrees with the tree form (every link a body) away from, near and at
 //! the gimbal lock (the same refusal, naming the same hinges).
 
+use crate::common;
 use nalgebra::DVector;
 use satsim_tree::spatial::{Force, Vec3};
-mod common;
 
 use common::satellite;
 use satsim_tree::aba::aba;
