@@ -2,7 +2,7 @@
 //! equal to `satsim run` of the substituted scene, failed runs, resume, scheduler
 //! environments, bad input.
 
-mod common;
+use crate::common;
 use common::root;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
@@ -45,15 +45,7 @@ fn ok(o: &Output) -> String {
 }
 
 fn temp_dir(test: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("satsim-campaign-{}-{test}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    std::fs::copy(
-        root().join("examples/satellite.toml"),
-        dir.join("satellite.toml"),
-    )
-    .unwrap();
-    dir
+    satsim_testkit::temp_dir_with(&format!("campaign-{test}"), &["examples/satellite.toml"])
 }
 
 /// The scene of most tests, with `{placeholders}` for the dispersed numbers; `nominal`

@@ -2,7 +2,7 @@
 //! resumes that mix scenes, errors placed where the value is written, `--set` on every
 //! command, Ctrl-C in a campaign's long runs, a trajectory cut by a kill.
 
-mod common;
+use crate::common;
 
 use common::root;
 use std::path::{Path, PathBuf};
@@ -49,15 +49,7 @@ normal = { sigma = 1.0 }
 "#;
 
 fn temp_dir(test: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("satsim-limits-{test}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    std::fs::copy(
-        root().join("examples/satellite.toml"),
-        dir.join("satellite.toml"),
-    )
-    .unwrap();
-    dir
+    satsim_testkit::temp_dir_with(&format!("limits-{test}"), &["examples/satellite.toml"])
 }
 
 fn scene(dir: &Path, text: &str) -> PathBuf {

@@ -4,7 +4,8 @@
 //! there and vibrates at the analytic frequency), bad elastic states exit 2 naming file and
 //! line, `dynamics` refuses a flexible model, and a campaign dispersing `EI` and `damping`.
 
-mod common;
+use crate::common;
+use common::json;
 use common::satsim_in;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
@@ -53,9 +54,7 @@ beam = { root = [0.0, 0.5, 0.0], axis = [0.0, 1.0, 0.0], bend = [0.0, 0.0, 1.0],
 "#;
 
 fn setup(test: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("satsim-flex-{}-{test}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = satsim_testkit::temp_dir(&format!("flex-{test}"));
     std::fs::write(dir.join("cantilever.toml"), CANTILEVER).unwrap();
     std::fs::write(dir.join("bus.toml"), BUS).unwrap();
     dir
@@ -63,15 +62,6 @@ fn setup(test: &str) -> PathBuf {
 
 fn scene(dir: &Path, name: &str, text: &str) {
     std::fs::write(dir.join(name), text).unwrap();
-}
-
-fn json(o: &Output) -> Value {
-    assert!(
-        o.status.success(),
-        "stderr: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    serde_json::from_slice(&o.stdout).expect("one JSON object")
 }
 
 fn fails(o: &Output, needles: &[&str]) {

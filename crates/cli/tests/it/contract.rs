@@ -1,7 +1,7 @@
 //! The command-line contract (`cli-contract.md` sections 3, 5 and 6), driven through the
 //! built `satsim` binary.
 
-mod common;
+use crate::common;
 use common::root;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
@@ -28,10 +28,7 @@ fn stderr(o: &Output) -> String {
 
 /// A fresh directory under the system's temporary directory.
 fn temp_dir(test: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("satsim-contract-{}-{test}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+    satsim_testkit::temp_dir(&format!("contract-{test}"))
 }
 
 fn numbers(v: &Value) -> Vec<f64> {
@@ -271,7 +268,7 @@ fn usage_errors() {
 
 /// `tests/fixtures/two_body.toml` (shared with the model reader's unit tests).
 /// Line numbers: 4 bus, 9 panel, 14 hinge (name 15, parent 16, child 17, axis 18, at 19).
-const MODEL: &str = include_str!("../../../tests/fixtures/two_body.toml");
+const MODEL: &str = include_str!("../../../../tests/fixtures/two_body.toml");
 
 const STATE: &str = r#"{
   "base": {"attitude": [1, 0, 0, 0], "angular_velocity": [0.1, 0, 0], "velocity": [0, 0, 0]},

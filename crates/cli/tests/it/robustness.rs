@@ -3,20 +3,17 @@
 //! standard output and never panics; a scene driven into gimbal lock exits 1 naming the
 //! hinges and the time and keeps its CSV; Ctrl-C stops a run cleanly with exit status 130.
 
-mod common;
+use crate::common;
 use common::{root, satsim_in};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 fn setup(test: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("satsim-robust-{}-{test}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    for f in ["satellite.toml", "state.json"] {
-        std::fs::copy(root().join("examples").join(f), dir.join(f)).unwrap();
-    }
-    dir
+    satsim_testkit::temp_dir_with(
+        &format!("robust-{test}"),
+        &["examples/satellite.toml", "examples/state.json"],
+    )
 }
 
 /// Every row has every column and parses; returns (header, rows).

@@ -1,21 +1,13 @@
 //! `satsim linearize` and `satsim modes` (contract section 9): the JSON keys, shapes and
 //! normalisation, the `--along` sweep, and exit status 2 on bad input.
 
-mod common;
-use common::{root, satsim_in};
-use serde_json::Value;
+use crate::common;
+use common::{json, satsim_in};
 use std::path::PathBuf;
 use std::process::Output;
 
 fn setup(test: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("satsim-lin-{}-{test}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    std::fs::copy(
-        root().join("examples/satellite.toml"),
-        dir.join("satellite.toml"),
-    )
-    .unwrap();
+    let dir = satsim_testkit::temp_dir_with(&format!("lin-{test}"), &["examples/satellite.toml"]);
     std::fs::write(dir.join("springs.toml"), SCENE).unwrap();
     dir
 }
@@ -35,15 +27,6 @@ axis = [0.0, 1.0, 0.0]
 inertia = 0.1
 speed = 100.0
 "#;
-
-fn json(o: &Output) -> Value {
-    assert!(
-        o.status.success(),
-        "stderr: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    serde_json::from_slice(&o.stdout).expect("one JSON object")
-}
 
 fn fails(o: &Output, needles: &[&str]) {
     let err = String::from_utf8_lossy(&o.stderr);

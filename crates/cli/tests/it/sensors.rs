@@ -1,7 +1,7 @@
 //! `satsim run` with `[sensors]`: the readings are columns of `trajectory.csv`, and bad
 //! sensor input exits with status 2 naming the scene file and line.
 
-mod common;
+use crate::common;
 
 use common::satsim_in;
 use std::path::PathBuf;
@@ -34,9 +34,7 @@ period = 0.5
 "#;
 
 fn setup(test: &str, text: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("satsim-sensors-{}-{test}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = satsim_testkit::temp_dir(&format!("sensors-{test}"));
     std::fs::write(dir.join("scene.toml"), text).unwrap();
     dir
 }

@@ -8,7 +8,7 @@
 //! skipped with a note otherwise. `SATSIM_CHROMIUM` names the browser's binary if it is not
 //! `chromium` (or `chromium-browser`, `google-chrome`) on the `PATH`.
 
-mod common;
+use crate::common;
 use common::{root, satsim_in};
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 use satsim_tree::io::parse_model_file;
@@ -20,10 +20,7 @@ use std::time::{Duration, Instant};
 type V3 = Vector3<f64>;
 
 fn temp_dir(test: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("satsim-view-{}-{test}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+    satsim_testkit::temp_dir(&format!("view-{test}"))
 }
 
 /// A scene of the satellite (`examples/satellite.toml`, with `shape` keys) whose panels start

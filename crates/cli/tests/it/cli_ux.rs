@@ -1,18 +1,16 @@
 //! Command-line conveniences of issue 12 item 4: `--set KEY=VALUE` on `run` and `campaign`,
 //! `DIR/events.csv`, a missing `model` file reported at the scene's line.
 
-mod common;
+use crate::common;
 use common::{root, satsim_in};
 use std::path::{Path, PathBuf};
 use std::process::Output;
 
 fn setup(test: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("satsim-cliux-{}-{test}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    for f in ["satellite.toml", "state.json"] {
-        std::fs::copy(root().join("examples").join(f), dir.join(f)).unwrap();
-    }
+    let dir = satsim_testkit::temp_dir_with(
+        &format!("cliux-{test}"),
+        &["examples/satellite.toml", "examples/state.json"],
+    );
     std::fs::write(dir.join("scene.toml"), SCENE).unwrap();
     dir
 }

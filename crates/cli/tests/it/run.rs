@@ -1,14 +1,11 @@
 //! `satsim run` (contract section 7): the trajectory CSV, plots, exit statuses.
 
-mod common;
-use common::{root, satsim_in};
+use crate::common;
+use common::satsim_in;
 use std::path::{Path, PathBuf};
 
 fn temp_dir(test: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("satsim-run-{}-{test}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+    satsim_testkit::temp_dir(&format!("run-{test}"))
 }
 
 fn csv(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
@@ -38,11 +35,10 @@ damping = [1.0, 1.0, 1.0, 0.5, 0.5]
 "#;
 
 fn setup(test: &str) -> PathBuf {
-    let dir = temp_dir(test);
-    for f in ["satellite.toml", "state.json"] {
-        std::fs::copy(root().join("examples").join(f), dir.join(f)).unwrap();
-    }
-    dir
+    satsim_testkit::temp_dir_with(
+        &format!("run-{test}"),
+        &["examples/satellite.toml", "examples/state.json"],
+    )
 }
 
 #[test]

@@ -1,36 +1,20 @@
 //! `satsim environment` (contract section 12): the keys and their meaning on the example
 //! deployment in orbit, the state reached at `--at T`, and exit status 2 on bad input.
 
-mod common;
-use common::{root, satsim_in};
+use crate::common;
+use common::{json, root, satsim_in};
 use serde_json::Value;
 use std::path::PathBuf;
-use std::process::Output;
 
 fn setup(test: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("satsim-env-{}-{test}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
+    let dir = satsim_testkit::temp_dir_with(&format!("env-{test}"), &["examples/satellite.toml"]);
     std::fs::create_dir_all(dir.join("scenes")).unwrap();
-    std::fs::copy(
-        root().join("examples/satellite.toml"),
-        dir.join("satellite.toml"),
-    )
-    .unwrap();
     std::fs::copy(
         root().join("examples/scenes/deploy_in_orbit.toml"),
         dir.join("scenes/orbit.toml"),
     )
     .unwrap();
     dir
-}
-
-fn json(o: &Output) -> Value {
-    assert!(
-        o.status.success(),
-        "stderr: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    serde_json::from_slice(&o.stdout).expect("one JSON object")
 }
 
 fn vec3(v: &Value) -> [f64; 3] {

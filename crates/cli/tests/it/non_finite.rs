@@ -2,7 +2,7 @@
 //! masses (1e-120 kg) either give finite output or exit 2 with one message naming the file
 //! and the quantity that overflowed, never `null`, never a panic.
 
-mod common;
+use crate::common;
 use common::{root, satsim_in};
 use std::path::PathBuf;
 use std::process::Output;
@@ -10,14 +10,8 @@ use std::process::Output;
 /// A folder with the example model and a state whose hinge rates are `rate`, and a model
 /// whose masses are scaled by `mass_scale` (`tiny.toml`).
 fn setup(test: &str, rate: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("satsim-nonfinite-{}-{test}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    std::fs::copy(
-        root().join("examples/satellite.toml"),
-        dir.join("satellite.toml"),
-    )
-    .unwrap();
+    let dir =
+        satsim_testkit::temp_dir_with(&format!("nonfinite-{test}"), &["examples/satellite.toml"]);
     let state = std::fs::read_to_string(root().join("examples/state.json"))
         .unwrap()
         .replace(

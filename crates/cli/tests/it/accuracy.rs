@@ -1,21 +1,13 @@
 //! `satsim accuracy`: the work-precision sweep writes its CSV, SVG diagrams and markdown
 //! table; bad input exits with status 2.
 
-mod common;
-use common::{root, satsim_in};
+use crate::common;
+use common::satsim_in;
 use std::path::PathBuf;
 use std::process::Output;
 
 fn temp_dir(test: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("satsim-accuracy-{}-{test}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    std::fs::copy(
-        root().join("examples/satellite.toml"),
-        dir.join("satellite.toml"),
-    )
-    .unwrap();
-    dir
+    satsim_testkit::temp_dir_with(&format!("accuracy-{test}"), &["examples/satellite.toml"])
 }
 
 /// A short scene: the preprint satellite swinging on its hinge springs, one panel hitting a

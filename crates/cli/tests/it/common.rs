@@ -1,0 +1,26 @@
+//! Helpers shared by the command-line tests (the rest is `satsim_testkit`'s).
+#![allow(dead_code)] // each module uses its own subset
+
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::Output;
+
+/// Runs the `satsim` binary built for these tests in `dir`.
+pub fn satsim_in(dir: &Path, args: &[&str]) -> Output {
+    satsim_testkit::run_in(env!("CARGO_BIN_EXE_satsim"), dir, args)
+}
+
+/// The repository root.
+pub fn root() -> PathBuf {
+    satsim_testkit::root()
+}
+
+/// The one JSON object a successful command printed.
+pub fn json(o: &Output) -> Value {
+    assert!(
+        o.status.success(),
+        "stderr: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    serde_json::from_slice(&o.stdout).expect("one JSON object")
+}
