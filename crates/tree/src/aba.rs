@@ -15,8 +15,9 @@ use crate::model::{BaseKind, Chain, ChainPart, Model};
 use crate::spatial::{ArticulatedInertia, Force, Mat3, Motion, Transform, Vec3, cross_columns};
 use nalgebra::DVector;
 
-/// Pivots `Dᵢ` below this fraction of the articulated inertia's scale are singular.
-pub const SINGULAR_PIVOT_RELATIVE: f64 = 1e-13;
+// The pivot test's bound, kept with the rest of the pivot test in `kernel_parts.rs`
+// (which the kernels outside this crate read).
+pub use crate::kernel_parts::SINGULAR_PIVOT_RELATIVE;
 
 /// Forward dynamics: the accelerations `q̈` produced by generalised forces `tau` and external
 /// body forces `fext` (conventions of [`crate::rnea()`]), into `data.ddq`.

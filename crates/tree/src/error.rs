@@ -1,7 +1,6 @@
 //! Errors of model construction and of the per-call algorithms, and [`Num`], the form every
 //! message prints a number in.
 
-use crate::facet::{MAX_FACET_AREA, MAX_FACET_DISTANCE};
 use std::fmt;
 use thiserror::Error;
 
@@ -158,11 +157,10 @@ pub enum ModelError {
         /// The area given.
         area: f64,
     },
-    /// A facet whose area is larger than [`MAX_FACET_AREA`].
+    /// A facet whose area is larger than [`MAX_FACET_AREA`](crate::facet::MAX_FACET_AREA).
     #[error(
-        "body `{body}`: facet {index}: area {} m² is more than {:e} m² (a square kilometre): no spacecraft's surface is that large",
-        Num(*area),
-        MAX_FACET_AREA
+        "body `{body}`: facet {index}: area {} m² is more than {max:e} m² (a square kilometre): no spacecraft's surface is that large",
+        Num(*area)
     )]
     FacetTooLarge {
         /// The body.
@@ -171,12 +169,14 @@ pub enum ModelError {
         index: usize,
         /// The area given.
         area: f64,
+        /// The largest area (m²): carried, not imported, so that the errors need no facet.
+        max: f64,
     },
-    /// A facet whose centroid lies farther than [`MAX_FACET_DISTANCE`] from its body's origin.
+    /// A facet whose centroid lies farther than
+    /// [`MAX_FACET_DISTANCE`](crate::facet::MAX_FACET_DISTANCE) from its body's origin.
     #[error(
-        "body `{body}`: facet {index}: its centroid `at` is {} m from the body's origin, more than {:e} m: no spacecraft is that large (lengths are in metres)",
-        Num(*distance),
-        MAX_FACET_DISTANCE
+        "body `{body}`: facet {index}: its centroid `at` is {} m from the body's origin, more than {max:e} m: no spacecraft is that large (lengths are in metres)",
+        Num(*distance)
     )]
     FacetTooFar {
         /// The body.
@@ -185,6 +185,8 @@ pub enum ModelError {
         index: usize,
         /// The centroid's distance from the body's origin (m).
         distance: f64,
+        /// The farthest distance (m).
+        max: f64,
     },
     /// A facet normal whose norm is not 1 (within 1e-6).
     #[error("body `{body}`: facet {index}: normal norm {norm} is not 1 (within 1e-6)")]

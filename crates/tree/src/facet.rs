@@ -13,8 +13,8 @@
 //! rectangle along a chosen direction.
 
 use crate::error::ModelError;
-use crate::model::{BoxShape, UNIT_NORM_TOLERANCE};
-use crate::spatial::Vec3;
+use crate::shape::BoxShape;
+use crate::spatial::{UNIT_NORM_TOLERANCE, Vec3};
 
 /// The default drag coefficient `C_D` of a facet (2.2, the usual value for a flat plate in
 /// free-molecular flow).
@@ -165,6 +165,7 @@ impl Facet {
                 body: body.to_owned(),
                 index,
                 area: self.area,
+                max: MAX_FACET_AREA,
             });
         }
         // Scaled, so that a centroid at 1e308 m is said to be there, not at infinity.
@@ -179,6 +180,7 @@ impl Facet {
                 body: body.to_owned(),
                 index,
                 distance,
+                max: MAX_FACET_DISTANCE,
             });
         }
         let norm = self.normal.norm();
@@ -285,7 +287,8 @@ mod tests {
             Err(ModelError::FacetTooLarge {
                 body: "bus".into(),
                 index: 2,
-                area: 1e30
+                area: 1e30,
+                max: MAX_FACET_AREA
             })
         );
         assert!(

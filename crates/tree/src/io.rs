@@ -57,12 +57,12 @@ mod state_file;
 pub use attitude::{Attitude, EULER_SEQUENCES, EulerSequence};
 pub use error::{FileError, SpannedError, line_of};
 pub use flex_file::{
-    BeamFile, FlexibleFile, MAX_FILE_MODES, MODES_FILE_NODE_TOLERANCE, ModesFile, NodeFile,
-    flex_model_of, parse_flex_model, parse_modes_file, read_flex_model, write_modes_file,
+    MAX_FILE_MODES, MODES_FILE_NODE_TOLERANCE, ModesFile, NodeFile, flex_model_of,
+    parse_flex_model, parse_modes_file, read_flex_model, write_modes_file,
 };
 pub use model_file::{
-    BaseFile, BaseKindFile, BodyFile, CoefficientsFile, FacetFile, HingeFile, ModelFile, ShapeFile,
-    parse_model, parse_model_file, read_model, with_key,
+    BaseFile, BaseKindFile, BeamFile, BodyFile, CoefficientsFile, FacetFile, FlexibleFile,
+    HingeFile, ModelFile, ShapeFile, parse_model, parse_model_file, read_model, with_key,
 };
 pub use state_file::{
     BaseFrame, BaseStateFile, FieldError, FrameMotion, HingesStateFile, RATE_WARNING,

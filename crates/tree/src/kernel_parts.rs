@@ -27,9 +27,12 @@ use crate::spatial::{
 };
 use nalgebra::Matrix3;
 
-pub use crate::aba::SINGULAR_PIVOT_RELATIVE;
 pub use crate::axis::CoordAxis;
 pub use crate::model::ChainPart;
+
+/// Pivots `Dᵢ` below this fraction of the articulated inertia's scale are singular (ABA's
+/// test, and every kernel's).
+pub const SINGULAR_PIVOT_RELATIVE: f64 = 1e-13;
 
 /// `Ok` where `got == expected`, else the [`DynamicsError::Dimension`] error naming `what`
 /// (the argument's name, as the engine's algorithms name theirs: `"q"`, `"v"`, `"tau"`,

@@ -69,6 +69,7 @@ pub mod model;
 pub mod real;
 pub mod rnea;
 pub mod samples;
+mod shape;
 pub mod spatial;
 
 pub use crba::crba;

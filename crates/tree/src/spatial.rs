@@ -28,6 +28,11 @@ pub type Vec3 = Vector3<f64>;
 /// 3x3 matrix of `f64`.
 pub type Mat3 = Matrix3<f64>;
 
+/// Tolerance on the norm of axes and quaternions given by the user (hinge axes, facet
+/// normals, attitudes): within it of 1 they are normalised, beyond it refused. Here, beside
+/// the vectors it judges, so that every module that reads them shares it.
+pub const UNIT_NORM_TOLERANCE: f64 = 1e-6;
+
 /// The matrix `[a]×` with `[a]× b = a × b`.
 ///
 /// ```

@@ -1,5 +1,8 @@
-//! The model file's `[body.flexible]` (contract section 14), the modes file a body may name
-//! instead of a `beam`, and their reading into a [`FlexModel`].
+//! The model file's `[body.flexible]` (contract section 14) read into a [`FlexModel`], and
+//! the modes file a body may name instead of a `beam`. The `[body.flexible]` table's own
+//! types ([`FlexibleFile`](super::FlexibleFile), [`BeamFile`]) are the model file's, in
+//! `model_file.rs` with the rest of its schema: this reader imports that file, not the
+//! reverse.
 //!
 //! The modes file (TOML, body frame of the body that names it, SI units):
 //! `frequencies_hz` (natural frequencies with the body frame held, Hz, one per mode),
@@ -12,7 +15,7 @@
 //! node whose `at` equals its own `at` within [`MODES_FILE_NODE_TOLERANCE`].
 
 use super::error::{FileError, SpannedError, line_of};
-use super::model_file::{ModelFile, parse_model_file, schema_message, with_key};
+use super::model_file::{BeamFile, ModelFile, parse_model_file, schema_message, with_key};
 use super::read_text;
 use crate::error::Num;
 use crate::flexible::model::MAX_BEAM_MODES;
@@ -33,56 +36,6 @@ pub const MODES_FILE_NODE_TOLERANCE: f64 = 1e-6;
 /// factorises the body's dense block of its modes (cost growing as their cube), and the
 /// highest mode sets the step an explicit method can take.
 pub const MAX_FILE_MODES: usize = 100;
-
-/// `[body.flexible]`: `beam` or `modes_file` (exactly one), `damping`, `stiffening`.
-#[derive(Clone, Debug, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields)]
-pub struct FlexibleFile {
-    /// An Euler-Bernoulli cantilever.
-    #[serde(default)]
-    pub beam: Option<Spanned<BeamFile>>,
-    /// A modes file, relative to the model file's folder.
-    #[serde(default)]
-    pub modes_file: Option<Spanned<String>>,
-    /// Modal damping ratio of every mode, `>= 0` (default 0, or the modes file's).
-    #[serde(default)]
-    pub damping: Option<Spanned<f64>>,
-    /// Centrifugal stiffening of a beam (default true; no effect on a modes file's modes).
-    #[serde(default)]
-    pub stiffening: Option<Spanned<bool>>,
-}
-
-impl FlexibleFile {
-    /// The span of `beam` or `modes_file`, whichever is given first.
-    pub(crate) fn key_span(&self) -> Option<Range<usize>> {
-        self.beam
-            .as_ref()
-            .map(Spanned::span)
-            .or_else(|| self.modes_file.as_ref().map(Spanned::span))
-    }
-}
-
-/// `beam = { root, axis, bend, length, EI, rho_A, modes }` (see [`Beam`]).
-#[derive(Clone, Debug, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields)]
-pub struct BeamFile {
-    /// The clamped end, body frame (m).
-    pub root: Spanned<[f64; 3]>,
-    /// Unit direction root to tip (normalised if within 1e-6 of unit).
-    pub axis: Spanned<[f64; 3]>,
-    /// Unit direction of the deflection, perpendicular to `axis` within 1e-6.
-    pub bend: Spanned<[f64; 3]>,
-    /// Length (m), positive.
-    pub length: Spanned<f64>,
-    /// Bending stiffness (N m²), positive.
-    #[serde(rename = "EI")]
-    pub ei: Spanned<f64>,
-    /// Mass per length (kg/m), positive.
-    #[serde(rename = "rho_A")]
-    pub rho_a: Spanned<f64>,
-    /// Number of cantilever modes, 1 to [`MAX_BEAM_MODES`].
-    pub modes: Spanned<i64>,
-}
 
 /// A modes file (see the module documentation), as written.
 #[derive(Clone, Debug, Deserialize, PartialEq)]

@@ -2,7 +2,6 @@
 //! a validated [`Model`].
 
 use super::error::{FileError, SpannedError, line_of};
-use super::flex_file::FlexibleFile;
 use super::read_text;
 use crate::error::ModelError;
 use crate::facet::{DEFAULT_DRAG, Facet, facets_of_box};
@@ -151,6 +150,58 @@ pub struct ShapeFile {
     /// The box's centre in the body frame (m), default the centre of mass.
     #[serde(default)]
     pub at: Option<Spanned<[f64; 3]>>,
+}
+
+/// `[body.flexible]`: `beam` or `modes_file` (exactly one), `damping`, `stiffening`.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct FlexibleFile {
+    /// An Euler-Bernoulli cantilever.
+    #[serde(default)]
+    pub beam: Option<Spanned<BeamFile>>,
+    /// A modes file, relative to the model file's folder.
+    #[serde(default)]
+    pub modes_file: Option<Spanned<String>>,
+    /// Modal damping ratio of every mode, `>= 0` (default 0, or the modes file's).
+    #[serde(default)]
+    pub damping: Option<Spanned<f64>>,
+    /// Centrifugal stiffening of a beam (default true; no effect on a modes file's modes).
+    #[serde(default)]
+    pub stiffening: Option<Spanned<bool>>,
+}
+
+impl FlexibleFile {
+    /// The span of `beam` or `modes_file`, whichever is given first.
+    pub(crate) fn key_span(&self) -> Option<Range<usize>> {
+        self.beam
+            .as_ref()
+            .map(Spanned::span)
+            .or_else(|| self.modes_file.as_ref().map(Spanned::span))
+    }
+}
+
+/// `beam = { root, axis, bend, length, EI, rho_A, modes }` (see
+/// [`Beam`](crate::flexible::Beam)).
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct BeamFile {
+    /// The clamped end, body frame (m).
+    pub root: Spanned<[f64; 3]>,
+    /// Unit direction root to tip (normalised if within 1e-6 of unit).
+    pub axis: Spanned<[f64; 3]>,
+    /// Unit direction of the deflection, perpendicular to `axis` within 1e-6.
+    pub bend: Spanned<[f64; 3]>,
+    /// Length (m), positive.
+    pub length: Spanned<f64>,
+    /// Bending stiffness (N m²), positive.
+    #[serde(rename = "EI")]
+    pub ei: Spanned<f64>,
+    /// Mass per length (kg/m), positive.
+    #[serde(rename = "rho_A")]
+    pub rho_a: Spanned<f64>,
+    /// Number of cantilever modes, 1 to
+    /// [`MAX_BEAM_MODES`](crate::flexible::model::MAX_BEAM_MODES).
+    pub modes: Spanned<i64>,
 }
 
 /// A `[[hinge]]` entry.
