@@ -4,7 +4,7 @@
 //! solve with the hinges locked, then RNEA for the torques they receive.
 
 use super::Simulation;
-use super::rhs::{flexible_dynamics, forward_dynamics};
+use super::solve::{flexible_dynamics, forward_dynamics};
 use satsim_integrate::SystemError;
 use satsim_tree::flexible;
 use satsim_tree::{Input, rnea};

@@ -62,6 +62,8 @@
 //!   effects → dynamics → pack), and the stages every other pass runs;
 //! - `model.rs` ([`SimModel`], made once), `data.rs` ([`SimData`], written by every pass),
 //!   `log.rs` ([`RunLog`]), `layout.rs` ([`StateLayout`]), `build.rs` ([`SimulationBuilder`]);
+//! - `solve.rs` (the dynamics stage's solves, which the right-hand side and the hold
+//!   torques share);
 //! - `context.rs` (what the effects' hooks see and write), `hold.rs` (hold torques),
 //!   `events.rs` (the event functions' pass, requests, impulses, energy jumps), `system.rs`
 //!   (the [`System`](satsim_integrate::System) the integrators see), `rows.rs` (output rows,
@@ -84,6 +86,7 @@ mod model;
 mod rhs;
 mod rows;
 mod run;
+mod solve;
 mod stepping;
 mod system;
 

@@ -12,20 +12,17 @@
 //!
 //! Every other pass runs the first three stages through [`Simulation::prepare_with`]: an
 //! output row, the event functions (only what they read, `events.rs`), the hold torques
-//! (`hold.rs`, which take the dynamics stage with other locks) and the linearisation (which
+//! (`hold.rs`, which take the dynamics stage's solves, `solve.rs`, with other locks) and the linearisation (which
 //! calls the right-hand side itself).
 
 use super::Simulation;
-use super::data::FlexWork;
 use super::hold::Hold;
-use super::model::SimModel;
+use super::solve::{flexible_dynamics, forward_dynamics};
 use crate::effects::{Context, Forces, Power};
 use satsim_integrate::SystemError;
-use satsim_tree::flexible::{self, FlexModel};
+use satsim_tree::flexible;
 use satsim_tree::spatial::{Force, Vec3};
-use satsim_tree::{
-    Data, DynamicsError, Input, forward_kinematics, forward_poses_of, momentum, rnea,
-};
+use satsim_tree::{DynamicsError, Input, forward_kinematics, forward_poses_of, momentum, rnea};
 
 impl Simulation {
     /// `dx = f(t, x)`; slices of the wrong length are an error, not a panic. The three
@@ -438,39 +435,6 @@ fn carry_net_force(ctx: &Context, forces: &mut Forces, orbit_dv: &mut [f64]) {
             forces.add_wrench(i, Force::new(body.com().cross(&lin), lin));
         }
     }
-}
-
-/// The flexible tree's accelerations `[q̈; η̈]` for the rigid generalised forces `tau` (the
-/// modes take none from the effects), hybrid with `locked`.
-pub(super) fn flexible_dynamics<'w>(
-    model: &FlexModel,
-    work: &'w mut FlexWork,
-    tau: &[f64],
-    fext: Option<&[Force]>,
-    locked: Option<&[bool]>,
-) -> Result<&'w [f64], DynamicsError> {
-    work.tau[..tau.len()].copy_from_slice(tau);
-    let FlexWork {
-        data, q, v, tau, ..
-    } = work;
-    let ddq = match locked {
-        Some(l) => flexible::aba_hybrid(model, data, q, v, tau, fext, l)?,
-        None => flexible::aba(model, data, q, v, tau, fext)?,
-    };
-    Ok(ddq.as_slice())
-}
-
-/// `q̈` into `ddq`: the one place the dynamics are solved, through the model's
-/// [`ForwardDynamics`](satsim_tree::ForwardDynamics) (chosen once: the layout's unrolled
-/// kernel where it takes the lock mask, else the generic ABA, hybrid when hinges are locked,
-/// reusing the transforms when they are current; bit for bit the algorithm it calls).
-pub(super) fn forward_dynamics(
-    m: &SimModel,
-    data: &mut Data,
-    input: Input,
-    ddq: &mut [f64],
-) -> Result<(), DynamicsError> {
-    m.fd.solve(&m.tree, data, input, ddq)
 }
 
 #[cfg(test)]

@@ -1,0 +1,42 @@
+//! The dynamics stage's two solves, `q̈` of the tree and `[q̈; η̈]` of the flexible tree:
+//! the right-hand side (`rhs.rs`) runs them with the hinges locked now, the hold torques
+//! (`hold.rs`) with other locks. Apart from both so that each imports this, not the other.
+
+use super::data::FlexWork;
+use super::model::SimModel;
+use satsim_tree::flexible::{self, FlexModel};
+use satsim_tree::spatial::Force;
+use satsim_tree::{Data, DynamicsError, Input};
+
+/// The flexible tree's accelerations `[q̈; η̈]` for the rigid generalised forces `tau` (the
+/// modes take none from the effects), hybrid with `locked`.
+pub(super) fn flexible_dynamics<'w>(
+    model: &FlexModel,
+    work: &'w mut FlexWork,
+    tau: &[f64],
+    fext: Option<&[Force]>,
+    locked: Option<&[bool]>,
+) -> Result<&'w [f64], DynamicsError> {
+    work.tau[..tau.len()].copy_from_slice(tau);
+    let FlexWork {
+        data, q, v, tau, ..
+    } = work;
+    let ddq = match locked {
+        Some(l) => flexible::aba_hybrid(model, data, q, v, tau, fext, l)?,
+        None => flexible::aba(model, data, q, v, tau, fext)?,
+    };
+    Ok(ddq.as_slice())
+}
+
+/// `q̈` into `ddq`: the one place the dynamics are solved, through the model's
+/// [`ForwardDynamics`](satsim_tree::ForwardDynamics) (chosen once: the layout's unrolled
+/// kernel where it takes the lock mask, else the generic ABA, hybrid when hinges are locked,
+/// reusing the transforms when they are current; bit for bit the algorithm it calls).
+pub(super) fn forward_dynamics(
+    m: &SimModel,
+    data: &mut Data,
+    input: Input,
+    ddq: &mut [f64],
+) -> Result<(), DynamicsError> {
+    m.fd.solve(&m.tree, data, input, ddq)
+}
