@@ -424,7 +424,7 @@ fn two_wings_latch_rebound_and_settle_with_zero_momentum() {
 /// the run of ever smaller rebounds near t = 7.09 s: a rebound of a few mrad/s left the stop
 /// and came back within one step, so the event function had the same sign at both ends of
 /// that step (crates/integrate/src/driver.rs now probes the dense output of a step that
-/// starts on a handled event; crates/integrate/tests/short_rebounds.rs).
+/// starts on a handled event; crates/integrate/tests/it/short_rebounds.rs).
 #[test]
 fn two_wings_boom_elbow_never_passes_its_stop() {
     let r = run("two_wings");

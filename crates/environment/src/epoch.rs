@@ -37,7 +37,7 @@ pub const END_YEAR: f64 = 2100.0;
 
 /// Refuses a run from `epoch` lasting `duration` seconds that leaves [`FIRST_YEAR`] to
 /// [`END_YEAR`]: the span over which the Sun's series is checked against ERFA's epv00
-/// ephemeris (`tests/sun.rs`, 0.5 arcsecond; epv00 itself covers 1900-2100). Outside it the
+/// ephemeris (`tests/it/sun.rs`, 0.5 arcsecond; epv00 itself covers 1900-2100). Outside it the
 /// truncated series and the IAU-1976 precession drift without bound (year 100000 puts the
 /// Sun at 2.4 AU), so a date there is almost always a typing error.
 ///

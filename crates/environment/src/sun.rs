@@ -2,7 +2,7 @@
 //! (VSOP87D: heliocentric ecliptic longitude, latitude and radius referred to the mean
 //! ecliptic and equinox of date), as Meeus prints it (Astronomical Algorithms, 2nd ed.,
 //! chapter 32 and Appendix III; the phases 3.142 and 3.14 are his rounded π's, kept as
-//! printed). Against ERFA's epv00 ephemeris over 1900-2100 (tests/sun.rs) the truncation is
+//! printed). Against ERFA's epv00 ephemeris over 1900-2100 (tests/it/sun.rs) the truncation is
 //! good to 0.5 arcsecond and 2e-6 in distance. The date's mean equator follows from the
 //! IAU-1976 obliquity, then the IAU-1976 precession (the same as [`crate::earth`]'s) takes it
 //! back to the J2000 mean equator and equinox, the GCRF's axes to 0.02 arcsecond (the frame

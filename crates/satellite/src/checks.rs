@@ -3,7 +3,7 @@
 //! its `Ω` matrix, and the gravity force approximation `F_i ≈ −μ m_i r_O / r_O³`.
 //!
 //! Each formula is implemented here as printed (and corrected where wrong); the tests in
-//! `tests/preprint_formulas.rs` compare them with a brute-force computation.
+//! `tests/it/preprint_formulas.rs` compare them with a brute-force computation.
 
 use super::closed_form::{Symbols, Variant};
 use nalgebra::{Matrix4, SymmetricEigen, UnitQuaternion, Vector4};

@@ -46,7 +46,7 @@
 //! Equal to [`satsim_tree::aba::aba`] to round-off (tested on the preprint satellite and on
 //! random models of the layout, in `kernel/tests.rs`; through
 //! [`satsim_tree::ForwardDynamics`], bit for bit the kernel's own result, in
-//! `tests/kernel.rs`).
+//! `tests/it/kernel.rs`).
 //!
 //! **Lanes of runs.** The kernel is written once over its scalar ([`Real`]): `UnrolledAba`
 //! is `UnrolledAba<f64>`, one run; [`UnrolledAba::gather`] makes `UnrolledAba<F64x<N>>`, `N`

@@ -6,7 +6,7 @@
 //!   (`root = (0, −0.5, 0)`, along y, bending along z, L = 1 m, EI = 500 N m², ρA = 10 kg/m,
 //!   3 modes, stiffening on): the flexible ABA, and the flexible CRBA + bias + dense Cholesky;
 //! - `chain40`, `chain80`: each beam a chain of 40 (80) rigid segments with hinge springs (the discretisation
-//!   of tests/flexible.rs, which gives the first two frequencies within 1 % at N = 40 after
+//!   of tests/it/flexible.rs, which gives the first two frequencies within 1 % at N = 40 after
 //!   extrapolation), the next panel hinged at the last segment's tip: the rigid ABA.
 //!
 //! `cargo bench -p satsim-tree --bench flexible`; the numbers are in the theory page

@@ -32,7 +32,7 @@
 //! contract, tested by the kernel), not bit for bit: a kernel orders the same arithmetic
 //! differently.
 //!
-//! The per-call path allocates nothing (`tests/no_alloc.rs`).
+//! The per-call path allocates nothing (`tests/it/no_alloc.rs`).
 //!
 //! ```
 //! use satsim_tree::{BaseKind, Data, ForwardDynamics, Input, samples::chain};

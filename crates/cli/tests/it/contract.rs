@@ -225,7 +225,7 @@ fn fails(o: &Output, needles: &[&str]) {
 
 #[test]
 fn usage_errors() {
-    // `satsim` alone runs the default scene (tests/run.rs). The messages are clap's: the
+    // `satsim` alone runs the default scene (tests/it/run.rs). The messages are clap's: the
     // problem naming the flag or command, then the command's usage.
     fails(
         &satsim(&["dynamics", "--state", "state.json"]),

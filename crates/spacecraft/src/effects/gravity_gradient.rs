@@ -15,7 +15,7 @@
 //! - [`GravityModel::Preprint`]: the preprint's section 2, per-body couples only, with the
 //!   sign corrected: the preprint prints `M_iG = −3 μ/r³ E × I_i E`, but the couple of a
 //!   brute-force sum of point masses is `+3 μ/r³ E × I_i E` (test `gravity_gradient_sign`
-//!   in `tests/physics.rs`); the printed sign would make the long-axis-vertical attitude
+//!   in `tests/it/physics.rs`); the printed sign would make the long-axis-vertical attitude
 //!   unstable. Its forces are the preprint's `F_i ≈ −μ m_i r_O / r_O³`, which cancel exactly
 //!   against the frame's acceleration.
 //! - [`GravityModel::Full`]: the couples plus the tidal forces `F_i`, applied at each body's

@@ -731,7 +731,7 @@ fn modal_damping_and_tip_deflection() {
 }
 
 // The rigid reader (`read_model`, so `satsim run`) refuses `[body.flexible]` with a clear error
-// naming the line; `read_flex_model` reads it (tests/flexible_io.rs).
+// naming the line; `read_flex_model` reads it (tests/it/flexible_io.rs).
 #[cfg(feature = "files")]
 #[test]
 fn model_file_rejects_flexible_bodies_for_now() {

@@ -305,7 +305,7 @@ fn worst(a: &[[f64; 2]], b: &[[f64; 2]]) -> [f64; 2] {
 // its undeformed line (the modal Σ φₖ(L) ηₖ; the chain's tip point in the bracket's frame),
 // sampled every millisecond over two first-mode periods after the pulse. The tolerance (2 %
 // of each beam's peak) holds because the three error sources are each far below it, and
-// measured here: the chains converge as 1/N (tests/flexible.rs, checked on the frequencies
+// measured here: the chains converge as 1/N (tests/it/flexible.rs, checked on the frequencies
 // with 160 segments; here the ratio of the 40 and 80 errors), so Richardson's 2 c₈₀ − c₄₀
 // leaves an O(1/N²) residue; modal truncation (6 modes against 9: 0.3 %, where 4 modes would
 // leave 1.2 %); the RK4 error (the modal model against half its step; the 80-segment chain's
@@ -566,7 +566,7 @@ fn rel(a: f64, b: f64) -> f64 {
     (a - b).abs() / a.abs().max(b.abs())
 }
 
-// The in-plane counterpart of tests/flexible.rs's Southwell check: a cantilever on a hub
+// The in-plane counterpart of tests/it/flexible.rs's Southwell check: a cantilever on a hub
 // spinning about an axis through its root, bending in the plane of rotation, has
 // ω² = ω₀² + (1.193 − 1) Ω² with one mode (the axial force's 1.193 Ω² less the sections' own
 // centrifugal load Ω²); without stiffening, the first-order model's ω₀².
