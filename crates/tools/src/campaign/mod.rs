@@ -26,6 +26,7 @@
 
 pub mod files;
 pub mod lanes;
+pub mod meta;
 pub mod plots;
 pub mod shard;
 pub mod spec;
@@ -736,7 +737,7 @@ pub fn run_campaign(
     campaign.nominal.check_rows(campaign.max_rows)?;
     std::fs::create_dir_all(dir).map_err(|e| CampaignError::io(dir, e))?;
     let digest = campaign.scene_digest();
-    let meta = files::Meta {
+    let meta = meta::Meta {
         scene: campaign.path.display().to_string(),
         runs: campaign.runs,
         seed: campaign.seed,
@@ -755,7 +756,7 @@ pub fn run_campaign(
                 dir.join(RUNS_CSV).display()
             )));
         }
-        let before = files::Meta::read(dir)?;
+        let before = meta::Meta::read(dir)?;
         match &before.scene_digest {
             None => {
                 return Err(CampaignError::Other(format!(

@@ -3,7 +3,7 @@
 //! runs at each sampled output time) and histograms of chosen statistics
 //! (`histogram_<column>.svg`, the failed runs counted in the note).
 
-use super::files::Meta;
+use super::meta::Meta;
 use super::stats::percentile;
 use crate::output::{Band, band_plot, histogram_plot};
 use std::collections::BTreeMap;
