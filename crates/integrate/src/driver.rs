@@ -249,7 +249,8 @@ where
             event_tol: opts.event_tol,
             grid_origin: opts.grid_origin,
             grid: None,
-            events: Vec::new(),
+            // Room for the events of most runs: handling one then allocates nothing.
+            events: Vec::with_capacity(if ne > 0 { 64 } else { 0 }),
             g_left: vec![0.0; ne],
             g_right: vec![0.0; ne],
             g_mid: vec![0.0; ne],

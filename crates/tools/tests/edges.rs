@@ -135,10 +135,10 @@ fn output_rows_do_not_allocate() {
 /// allocates nothing per step, for a fixed-step, two explicit adaptive and the implicit
 /// method: from the first output row past the start (the first step has grown the buffers)
 /// to the last row, the allocations between two rows are counted, and every stretch of steps
-/// without an event allocates nothing. The rows go to a sink that copies them into a buffer
-/// reserved beforehand, so the count is the integrator loop's, the right-hand side's, the
-/// event functions' and the row's. Handling an event (the impulse solve, the event log's
-/// message) allocates once per event, not per step: those stretches are only printed.
+/// allocates nothing, those with an event too. The rows go to a sink that copies them into a
+/// buffer reserved beforehand, so the count is the integrator loop's, the right-hand side's,
+/// the event functions', the events' (their impulse solve, their description in the event
+/// log) and the row's.
 #[test]
 fn a_whole_run_allocates_nothing_per_step() {
     use satsim_integrate::{Method, Options, Output};
@@ -183,6 +183,11 @@ fn a_whole_run_allocates_nothing_per_step() {
                 .any(|&(te, _)| te > t_previous && te <= t);
             if event {
                 at_events += n;
+                assert_eq!(
+                    n, 0,
+                    "{:?}: {n} allocations in ({t_previous}, {t}] s, handling an event",
+                    options.method
+                );
             } else {
                 quiet += n;
                 assert_eq!(

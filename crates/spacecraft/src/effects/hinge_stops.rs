@@ -10,7 +10,9 @@
 //! `−e φ̇`; a rebound slower than `min_rebound_rate` latches instead, so that a hinge pressed
 //! against its stop comes to rest rather than bouncing forever (Zeno).
 
-use super::{Context, Effect, EventReads, Forces, Request, SceneEffect, Section};
+use super::{
+    Context, EVENT_TEXT, Effect, EventReads, Forces, Request, SceneEffect, Section, set_text,
+};
 use satsim_integrate::{EventAction, EventDirection, SystemError};
 use satsim_tree::io::FileError;
 use serde::Deserialize;
@@ -61,7 +63,7 @@ impl HingeStops {
         Self {
             stops,
             latched: vec![false; n],
-            last: String::new(),
+            last: String::with_capacity(EVENT_TEXT),
             impacts: 0,
         }
     }
@@ -91,6 +93,8 @@ impl Effect for HingeStops {
         _own: &[f64],
         requests: &mut Vec<Request>,
     ) -> Result<(), SystemError> {
+        // Room for the events' descriptions (a clone keeps none): no allocation at an event.
+        self.last.reserve(EVENT_TEXT);
         for (s, stop) in self.stops.iter().enumerate() {
             let phi = ctx.angles[stop.hinge];
             let name = &ctx.model.hinge_names()[stop.hinge];
@@ -164,21 +168,30 @@ impl Effect for HingeStops {
             StopAction::Latch => {
                 self.latched[s] = true;
                 requests.push(Request::Lock(h));
-                self.last = format!("hinge `{name}` latched at its {side} stop ({rate:.4} rad/s)");
+                set_text(
+                    &mut self.last,
+                    format_args!("hinge `{name}` latched at its {side} stop ({rate:.4} rad/s)"),
+                );
             }
             StopAction::Rebound { restitution } => {
                 let after = -restitution * rate;
                 if after.abs() < stop.min_rebound_rate {
                     self.latched[s] = true;
                     requests.push(Request::Lock(h));
-                    self.last = format!("hinge `{name}` came to rest at its {side} stop");
+                    set_text(
+                        &mut self.last,
+                        format_args!("hinge `{name}` came to rest at its {side} stop"),
+                    );
                 } else {
                     requests.push(Request::SetRate {
                         hinge: h,
                         rate: after,
                     });
-                    self.last = format!(
-                        "hinge `{name}` rebounded at its {side} stop ({rate:.4} -> {after:.4} rad/s)"
+                    set_text(
+                        &mut self.last,
+                        format_args!(
+                            "hinge `{name}` rebounded at its {side} stop ({rate:.4} -> {after:.4} rad/s)"
+                        ),
                     );
                 }
             }
@@ -187,6 +200,9 @@ impl Effect for HingeStops {
     }
     fn describe_event(&self, _k: usize) -> String {
         self.last.clone()
+    }
+    fn describe_event_into(&self, _k: usize, out: &mut String) {
+        out.push_str(&self.last);
     }
 }
 

@@ -707,6 +707,23 @@ pub trait Effect: Send {
     fn describe_event(&self, _k: usize) -> String {
         String::new()
     }
+    /// [`Effect::describe_event`] appended to `out`, which the simulation's event log
+    /// reserved: an effect that keeps its description in a buffer of its own appends it here
+    /// without allocating (the default appends `describe_event`'s string).
+    fn describe_event_into(&self, k: usize, out: &mut String) {
+        out.push_str(&self.describe_event(k));
+    }
+}
+
+/// The room an effect reserves for its event descriptions (bytes): one written into it with
+/// [`set_text`] allocates nothing unless longer.
+pub(crate) const EVENT_TEXT: usize = 192;
+
+/// Replaces `out` with the formatted `args`, in its own storage (an event's description).
+pub(crate) fn set_text(out: &mut String, args: std::fmt::Arguments) {
+    use std::fmt::Write as _;
+    out.clear();
+    let _ = out.write_fmt(args);
 }
 
 /// Hamilton product of quaternions stored `[w, x, y, z]`.

@@ -54,8 +54,8 @@
 //! A wheel with `max_speed` 0 keeps the plain rule (no torque that speeds it up).
 
 use super::{
-    Context, Effect, EventReads, Forces, HoldReads, Links, Needs, Power, Request, Rotor,
-    SceneEffect, Section,
+    Context, EVENT_TEXT, Effect, EventReads, Forces, HoldReads, Links, Needs, Power, Request,
+    Rotor, SceneEffect, Section, set_text,
 };
 use satsim_integrate::{EventAction, EventDirection, SystemError};
 use satsim_tree::io::FileError;
@@ -193,7 +193,7 @@ impl ReactionWheels {
             motor: vec![0.0; n],
             side: vec![0.0; n],
             held: vec![false; n],
-            last: String::new(),
+            last: String::with_capacity(EVENT_TEXT),
         }
     }
     /// Whether wheel `j` is stuck (at rest under static friction).
@@ -265,15 +265,24 @@ impl ReactionWheels {
                 hinge: ctx.rotor_hinge(j),
                 rate: limit,
             });
-            self.last = format!(
-                "wheel `{name}` reached its speed limit {limit} rad/s and is held there ({tm:.4} N m of {c:.4} commanded)"
+            set_text(
+                &mut self.last,
+                format_args!(
+                    "wheel `{name}` reached its speed limit {limit} rad/s and is held there ({tm:.4} N m of {c:.4} commanded)"
+                ),
             );
         } else if s * tm < 0.0 {
             self.side[j] = s;
-            self.last = format!("wheel `{name}` is driven beyond its speed limit {limit} rad/s");
+            set_text(
+                &mut self.last,
+                format_args!("wheel `{name}` is driven beyond its speed limit {limit} rad/s"),
+            );
         } else {
             self.side[j] = 0.0;
-            self.last = format!("wheel `{name}` is inside its speed limits");
+            set_text(
+                &mut self.last,
+                format_args!("wheel `{name}` is inside its speed limits"),
+            );
         }
     }
     /// The friction wheel `j` needs to stay at rest, `H − τ` (NaN if the hold torque is
@@ -421,6 +430,8 @@ impl Effect for ReactionWheels {
         own: &[f64],
         requests: &mut Vec<Request>,
     ) -> Result<(), SystemError> {
+        // Room for the events' descriptions (a clone keeps none): no allocation at an event.
+        self.last.reserve(EVENT_TEXT);
         for (j, &speed) in own.iter().enumerate().take(self.wheels.len()) {
             let (limited, max) = (self.wheels[j].limit_events(), self.wheels[j].max_speed);
             if limited && speed.abs() >= max {
@@ -534,22 +545,34 @@ impl Effect for ReactionWheels {
             self.stuck[j] = false;
             self.dir[j] = (-need).signum();
             requests.push(Request::Unlock(h));
-            self.last = format!(
-                "wheel `{name}` broke free (needs {:.4} N m of friction, static {fs:.4})",
-                need.abs()
+            set_text(
+                &mut self.last,
+                format_args!(
+                    "wheel `{name}` broke free (needs {:.4} N m of friction, static {fs:.4})",
+                    need.abs()
+                ),
             );
         } else if need.abs() <= fs {
             self.stuck[j] = true;
             own[j] = 0.0;
             requests.push(Request::Lock(h));
-            self.last = format!("wheel `{name}` stopped and stuck");
+            set_text(
+                &mut self.last,
+                format_args!("wheel `{name}` stopped and stuck"),
+            );
         } else {
             let dir = (-need).signum();
-            self.last = if dir == self.dir[j] {
-                format!("wheel `{name}` touched zero speed and slips on")
+            if dir == self.dir[j] {
+                set_text(
+                    &mut self.last,
+                    format_args!("wheel `{name}` touched zero speed and slips on"),
+                );
             } else {
-                format!("wheel `{name}` reversed through zero speed")
-            };
+                set_text(
+                    &mut self.last,
+                    format_args!("wheel `{name}` reversed through zero speed"),
+                );
+            }
             self.dir[j] = dir;
         }
         EventAction::Reset
@@ -561,6 +584,9 @@ impl Effect for ReactionWheels {
     }
     fn describe_event(&self, _k: usize) -> String {
         self.last.clone()
+    }
+    fn describe_event_into(&self, _k: usize, out: &mut String) {
+        out.push_str(&self.last);
     }
 }
 
@@ -586,11 +612,17 @@ impl ReactionWheels {
             requests.push(Request::Unlock(ctx.rotor_hinge(j)));
             if s * (c - tm) <= s * tm {
                 self.side[j] = 0.0;
-                self.last = format!(
-                    "wheel `{name}` left its speed limit (command {c:.4} N m below the {tm:.4} that held it)"
+                set_text(
+                    &mut self.last,
+                    format_args!(
+                        "wheel `{name}` left its speed limit (command {c:.4} N m below the {tm:.4} that held it)"
+                    ),
                 );
             } else {
-                self.last = format!("wheel `{name}` is driven beyond its speed limit");
+                set_text(
+                    &mut self.last,
+                    format_args!("wheel `{name}` is driven beyond its speed limit"),
+                );
             }
             return;
         }
@@ -600,7 +632,10 @@ impl ReactionWheels {
             self.settle_at_limit(j, s, ctx, forces, omega, requests);
             if !self.held[j] {
                 self.side[j] = 0.0;
-                self.last = format!("wheel `{name}` came back inside its speed limits");
+                set_text(
+                    &mut self.last,
+                    format_args!("wheel `{name}` came back inside its speed limits"),
+                );
             }
             return;
         }

@@ -454,6 +454,9 @@ impl Simulation {
         let reqs = std::mem::take(&mut sim.data.requests);
         let before = sim.mechanical_energy(t0, &x0).map_err(SimError::Start)?;
         sim.apply_requests(&reqs, &mut x0)?;
+        // Its storage back, for the events' requests.
+        sim.data.requests = reqs;
+        sim.data.requests.clear();
         sim.book_jump(t0, &mut x0, before)
             .map_err(SimError::Start)?;
         // Every output quantity of the initial state must be finite (an energy or a momentum

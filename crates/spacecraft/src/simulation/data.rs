@@ -49,6 +49,9 @@ pub struct SimData {
     pub(super) scratch: Vec<f64>,
     /// The effects' requests at an event.
     pub(super) requests: Vec<Request>,
+    /// Buffers of an event's impulse solve (`events.rs`), reserved here so that handling an
+    /// event allocates nothing.
+    pub(super) impulse: ImpulseWork,
     /// Hold torques (see [`Context::hold_torque`](crate::effects::Context::hold_torque))
     /// and their work buffers.
     pub(super) hold: Vec<f64>,
@@ -82,6 +85,46 @@ pub struct SimData {
     pub(super) ahead: Ahead,
 }
 
+/// The buffers of [`Simulation::apply_requests`](super::Simulation) and its impulse solve:
+/// the matrices are lent to nalgebra as `DMatrix`es of the size at hand and taken back,
+/// their storage kept.
+#[derive(Clone, Debug, Default)]
+pub(super) struct ImpulseWork {
+    /// `(hinge, rate)` to set, and the hinges to lock.
+    pub(super) targets: Vec<(usize, f64)>,
+    pub(super) locks: Vec<usize>,
+    /// The free degrees of freedom, and the targets' positions among them.
+    pub(super) free: Vec<usize>,
+    pub(super) pos: Vec<usize>,
+    /// Storage of `M_ff`, `M_ff⁻¹ E`, `Eᵀ M_ff⁻¹ E`, the rate jumps wanted, `Δv`.
+    pub(super) m: Vec<f64>,
+    pub(super) col: Vec<f64>,
+    pub(super) a: Vec<f64>,
+    pub(super) b: Vec<f64>,
+    pub(super) dv: Vec<f64>,
+    /// The states of the effect whose event is handled.
+    pub(super) own: Vec<f64>,
+}
+
+impl ImpulseWork {
+    /// For at most `dofs` degrees of freedom, `hinges` hinges (each a target at most) and
+    /// `n_states` states.
+    fn new(dofs: usize, hinges: usize, n_states: usize) -> Self {
+        Self {
+            targets: Vec::with_capacity(hinges),
+            locks: Vec::with_capacity(hinges),
+            free: Vec::with_capacity(dofs),
+            pos: Vec::with_capacity(hinges),
+            m: Vec::with_capacity(dofs * dofs),
+            col: Vec::with_capacity(dofs * hinges),
+            a: Vec::with_capacity(hinges * hinges),
+            b: Vec::with_capacity(hinges),
+            dv: Vec::with_capacity(dofs),
+            own: Vec::with_capacity(n_states),
+        }
+    }
+}
+
 impl SimData {
     /// Buffers for `tree` with `n_states` states and `n_rotors` rotors.
     pub(super) fn new(tree: &Model, n_rotors: usize, n_states: usize) -> Self {
@@ -94,7 +137,9 @@ impl SimData {
             tau: vec![0.0; nv],
             forces: Forces::new(nh, tree.n_bodies(), n_rotors),
             scratch: vec![0.0; n_states],
-            requests: Vec::new(),
+            requests: Vec::with_capacity(4 * nh + 4),
+            // A flexible tree's elastic coordinates take two states each: at most half.
+            impulse: ImpulseWork::new(nv + n_states / 2, nh, n_states),
             hold: vec![f64::NAN; nh],
             hold_mask: vec![false; nh],
             hold_ddq: vec![0.0; nv],

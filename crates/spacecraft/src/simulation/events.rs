@@ -1,7 +1,7 @@
 //! What events do to the state: momentum-conserving impulses, the energy booked at a jump.
 
 use super::hold::Hold;
-use super::{SimError, Simulation};
+use super::{SimError, SimModel, Simulation};
 use crate::effects::{EventReads, Request};
 use nalgebra::{DMatrix, DVector};
 use satsim_integrate::SystemError;
@@ -62,8 +62,11 @@ impl Simulation {
         x: &mut [f64],
     ) -> Result<(), SimError> {
         self.forget_ahead();
-        let mut targets: Vec<(usize, f64)> = Vec::new();
-        let mut locks: Vec<usize> = Vec::new();
+        // The buffers are reserved when the simulation is built: no allocation here.
+        let mut targets = std::mem::take(&mut self.data.impulse.targets);
+        let mut locks = std::mem::take(&mut self.data.impulse.locks);
+        targets.clear();
+        locks.clear();
         for r in reqs {
             match *r {
                 Request::Unlock(h) => {
@@ -90,24 +93,22 @@ impl Simulation {
                 }
             }
         }
-        if !targets.is_empty() {
-            self.impulses(&targets, x)?;
-        }
-        for h in locks {
-            if !self.data.locked[h] {
-                self.data.locked[h] = true;
-                self.data.n_locked += 1;
+        let solved = if targets.is_empty() {
+            Ok(())
+        } else {
+            self.impulses(&targets, x)
+        };
+        if solved.is_ok() {
+            for &h in &locks {
+                if !self.data.locked[h] {
+                    self.data.locked[h] = true;
+                    self.data.n_locked += 1;
+                }
             }
         }
-        Ok(())
-    }
-
-    /// Index in `x` of tree hinge `h`'s rate.
-    pub(super) fn rate_index(&self, h: usize) -> usize {
-        match self.model.rotor_effect {
-            Some(i) if h >= self.model.n_user => self.model.own[i].start + (h - self.model.n_user),
-            _ => self.model.layout.rates.start + h,
-        }
+        self.data.impulse.targets = targets;
+        self.data.impulse.locks = locks;
+        solved
     }
 
     /// One momentum-conserving impulse solve that sets each hinge `h` of `targets` to its
@@ -129,52 +130,102 @@ impl Simulation {
         };
         let nb = self.model.tree.base_nv();
         let nv = self.model.tree.nv();
+        let locked = &self.data.locked;
         let is_target = |d: usize| d >= nb && targets.iter().any(|&(h, _)| h == d - nb);
-        let free: Vec<usize> = (0..mass.nrows())
-            .filter(|&d| d < nb || d >= nv || is_target(d) || !self.data.locked[d - nb])
-            .collect();
-        let m = DMatrix::from_fn(free.len(), free.len(), |r, c| mass[(free[r], free[c])]);
+        // The matrices live in `data.impulse`'s storage, lent to nalgebra as `DMatrix`es of
+        // the size at hand and taken back: handling an event allocates nothing (the values
+        // and the operations are those of fresh matrices, so the same bits).
+        let w = &mut self.data.impulse;
+        w.free.clear();
+        w.free.extend(
+            (0..mass.nrows()).filter(|&d| d < nb || d >= nv || is_target(d) || !locked[d - nb]),
+        );
+        let (nf, nt) = (w.free.len(), targets.len());
+        let free = &w.free;
+        let mut m = std::mem::take(&mut w.m);
+        m.clear();
+        // Column-major, as `DMatrix::from_vec` reads it.
+        m.extend((0..nf * nf).map(|i| mass[(free[i % nf], free[i / nf])]));
         let singular = || SimError::State("singular mass matrix at an impact".into());
-        let chol = m.cholesky().ok_or_else(singular)?;
+        let chol = DMatrix::from_vec(nf, nf, m)
+            .cholesky()
+            .ok_or_else(singular)?;
         // Positions of the targets among the free dofs.
-        let pos: Vec<usize> = targets
-            .iter()
-            .map(|&(h, _)| free.iter().position(|&d| d == nb + h).unwrap_or(0))
-            .collect();
-        let mut e = DMatrix::zeros(free.len(), targets.len());
-        for (j, &p) in pos.iter().enumerate() {
-            e[(p, j)] = 1.0;
+        w.pos.clear();
+        w.pos.extend(
+            targets
+                .iter()
+                .map(|&(h, _)| free.iter().position(|&d| d == nb + h).unwrap_or(0)),
+        );
+        let mut e = std::mem::take(&mut w.col);
+        e.clear();
+        e.resize(nf * nt, 0.0);
+        for (j, &p) in w.pos.iter().enumerate() {
+            e[j * nf + p] = 1.0;
         }
-        let col = chol.solve(&e);
-        let a = DMatrix::from_fn(targets.len(), targets.len(), |r, c| col[(pos[r], c)]);
-        let b = DVector::from_fn(targets.len(), |r, _| {
-            targets[r].1 - x[self.rate_index(targets[r].0)]
-        });
-        let lambda = a.cholesky().ok_or_else(singular)?.solve(&b);
-        let dv = &col * &lambda;
-        if !dv.iter().all(|v| v.is_finite()) {
-            return Err(SimError::State(
-                "an impact produced non-finite velocities".into(),
-            ));
-        }
-        for (c, &d) in free.iter().enumerate() {
-            let idx = if d >= nv {
-                self.model.layout.etadot.start + d - nv
-            } else if d < nb {
-                if d < 3 {
-                    self.model.layout.omega.start + d
+        let mut col = DMatrix::from_vec(nf, nt, e);
+        chol.solve_mut(&mut col);
+        w.m = chol.unpack().data.into();
+        let mut a = std::mem::take(&mut w.a);
+        a.clear();
+        a.extend((0..nt * nt).map(|i| col[(w.pos[i % nt], i / nt)]));
+        let mut b = std::mem::take(&mut w.b);
+        b.clear();
+        b.extend(
+            targets
+                .iter()
+                .map(|&(h, rate)| rate - x[rate_index(&self.model, h)]),
+        );
+        let mut lambda = DVector::from_vec(b);
+        let chol = DMatrix::from_vec(nt, nt, a)
+            .cholesky()
+            .ok_or_else(singular)?;
+        chol.solve_mut(&mut lambda);
+        w.a = chol.unpack().data.into();
+        let mut dv = std::mem::take(&mut w.dv);
+        dv.clear();
+        dv.resize(nf, 0.0);
+        let mut dv = DVector::from_vec(dv);
+        col.mul_to(&lambda, &mut dv);
+        w.col = col.data.into();
+        w.b = lambda.data.into();
+        let dv: Vec<f64> = dv.data.into();
+        let finite = dv.iter().all(|v| v.is_finite());
+        if finite {
+            for (c, &d) in w.free.iter().enumerate() {
+                let idx = if d >= nv {
+                    self.model.layout.etadot.start + d - nv
+                } else if d < nb {
+                    if d < 3 {
+                        self.model.layout.omega.start + d
+                    } else {
+                        self.model.layout.velocity.start + d - 3
+                    }
                 } else {
-                    self.model.layout.velocity.start + d - 3
-                }
-            } else {
-                self.rate_index(d - nb)
-            };
-            x[idx] += dv[c];
+                    rate_index(&self.model, d - nb)
+                };
+                x[idx] += dv[c];
+            }
+            for &(h, target) in targets {
+                x[rate_index(&self.model, h)] = target;
+            }
         }
-        for &(h, target) in targets {
-            x[self.rate_index(h)] = target;
+        w.dv = dv;
+        if finite {
+            Ok(())
+        } else {
+            Err(SimError::State(
+                "an impact produced non-finite velocities".into(),
+            ))
         }
-        Ok(())
+    }
+}
+
+/// Index in `x` of tree hinge `h`'s rate ([`Simulation::rate_index`], from the model alone).
+fn rate_index(model: &SimModel, h: usize) -> usize {
+    match model.rotor_effect {
+        Some(i) if h >= model.n_user => model.own[i].start + (h - model.n_user),
+        _ => model.layout.rates.start + h,
     }
 }
 

@@ -1,8 +1,12 @@
 //! [`RunLog`]: what a run has done so far.
 
+/// Events the log has room for when the simulation is built: handling the first this many
+/// allocates nothing; more grow it (amortised).
+const RESERVED_EVENTS: usize = 64;
+
 /// Counters and the record of handled events; the only part of a
 /// [`Simulation`](super::Simulation) that outlives a pass as history.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug)]
 pub struct RunLog {
     /// Right-hand-side evaluations.
     pub(super) rhs_evals: u64,
@@ -20,6 +24,25 @@ pub struct RunLog {
     /// Each handled event: `(t, description)`, and the effect whose event it was.
     pub(super) events: Vec<(f64, String)>,
     pub(super) event_effects: Vec<usize>,
+    /// Strings reserved for the events' descriptions, taken as events come.
+    pub(super) spare: Vec<String>,
+}
+
+impl Default for RunLog {
+    fn default() -> Self {
+        Self {
+            rhs_evals: 0,
+            lane_rhs: 0,
+            reused_rhs: 0,
+            lane_ahead: 0,
+            calls: Vec::new(),
+            events: Vec::with_capacity(RESERVED_EVENTS),
+            event_effects: Vec::with_capacity(RESERVED_EVENTS),
+            spare: (0..RESERVED_EVENTS)
+                .map(|_| String::with_capacity(crate::effects::EVENT_TEXT))
+                .collect(),
+        }
+    }
 }
 
 impl RunLog {

@@ -110,7 +110,7 @@ impl System for Simulation {
         }
         let kin = self.data.needs_kinematics;
         let mut action = EventAction::Continue;
-        let mut own_state = Vec::new();
+        let mut own_state = std::mem::take(&mut self.data.impulse.own);
         for &k in ks {
             let i = self.event_owner(k);
             let local = k - self.model.event_start[i];
@@ -122,12 +122,18 @@ impl System for Simulation {
             });
             x[r].copy_from_slice(&own_state);
             action = action.combine(a);
-            let what = self.effects[i].describe_event(local);
-            if !what.is_empty() {
+            // In a string the log reserved: no allocation for the first events.
+            let mut what = self.log.spare.pop().unwrap_or_default();
+            what.clear();
+            self.effects[i].describe_event_into(local, &mut what);
+            if what.is_empty() {
+                self.log.spare.push(what);
+            } else {
                 self.log.events.push((t, what));
                 self.log.event_effects.push(i);
             }
         }
+        self.data.impulse.own = own_state;
         let reqs = std::mem::take(&mut self.data.requests);
         let changed = !reqs.is_empty();
         let result = self.apply_requests(&reqs, x);
