@@ -24,3 +24,12 @@ pub fn json(o: &Output) -> Value {
     );
     serde_json::from_slice(&o.stdout).expect("one JSON object")
 }
+
+/// A JSON array of numbers.
+pub fn numbers(v: &Value) -> Vec<f64> {
+    v.as_array()
+        .expect("array")
+        .iter()
+        .map(|x| x.as_f64().expect("number"))
+        .collect()
+}

@@ -2,7 +2,7 @@
 //! built `satsim` binary.
 
 use crate::common;
-use common::root;
+use common::{numbers, root};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -29,14 +29,6 @@ fn stderr(o: &Output) -> String {
 /// A fresh directory under the system's temporary directory.
 fn temp_dir(test: &str) -> PathBuf {
     satsim_testkit::temp_dir(&format!("contract-{test}"))
-}
-
-fn numbers(v: &Value) -> Vec<f64> {
-    v.as_array()
-        .expect("array")
-        .iter()
-        .map(|x| x.as_f64().expect("number"))
-        .collect()
 }
 
 fn matrix(v: &Value) -> Vec<Vec<f64>> {

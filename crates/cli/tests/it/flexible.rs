@@ -5,8 +5,7 @@
 //! line, `dynamics` refuses a flexible model, and a campaign dispersing `EI` and `damping`.
 
 use crate::common;
-use common::json;
-use common::satsim_in;
+use common::{json, numbers, satsim_in};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::Output;
@@ -102,12 +101,7 @@ fn a_cantilever_on_a_fixed_base_has_the_analytic_frequencies() {
         ]
     );
     let v = json(&satsim_in(&dir, &["modes", "c.toml"]));
-    let f: Vec<f64> = v["frequencies_hz"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|x| x.as_f64().unwrap())
-        .collect();
+    let f = numbers(&v["frequencies_hz"]);
     assert_eq!(f.len(), 3, "{v}");
     for (k, bl) in BETA_L_CLAMPED.iter().enumerate() {
         let exact = beam_hz(*bl, EI);
@@ -137,12 +131,7 @@ fn a_free_bus_with_a_beam_vibrates_above_the_clamped_beam() {
     let dir = setup("bus");
     scene(&dir, "b.toml", "model = \"bus.toml\"\nduration = 1.0\n");
     let v = json(&satsim_in(&dir, &["modes", "b.toml"]));
-    let f: Vec<f64> = v["frequencies_hz"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|x| x.as_f64().unwrap())
-        .collect();
+    let f = numbers(&v["frequencies_hz"]);
     // Attitude and angular velocity: three double zeros; velocity: three simple ones; two
     // elastic modes.
     assert_eq!(v["rigid_modes"], 9, "{v}");

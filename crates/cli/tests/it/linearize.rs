@@ -2,7 +2,7 @@
 //! normalisation, the `--along` sweep, and exit status 2 on bad input.
 
 use crate::common;
-use common::{json, satsim_in};
+use common::{json, numbers, satsim_in};
 use std::path::PathBuf;
 use std::process::Output;
 
@@ -93,12 +93,7 @@ fn linearize_prints_states_inputs_a_and_b() {
 fn modes_prints_ascending_frequencies_and_normalised_shapes() {
     let dir = setup("modes");
     let v = json(&satsim_in(&dir, &["modes", "springs.toml"]));
-    let f: Vec<f64> = v["frequencies_hz"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|x| x.as_f64().unwrap())
-        .collect();
+    let f = numbers(&v["frequencies_hz"]);
     let z = v["damping_ratios"].as_array().unwrap();
     assert!(f.len() >= 5, "{f:?}");
     assert_eq!(z.len(), f.len());
