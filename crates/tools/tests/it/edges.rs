@@ -5,42 +5,13 @@
 use satsim_satellite::{PreprintParams, build_model, recognise, state_from_engine};
 use satsim_spacecraft::effects::{AttitudeControl, ReactionWheels, Target, Wheel};
 use satsim_spacecraft::simulation::Simulation;
+use satsim_testkit::alloc::allocations;
 use satsim_tools::scene::Scene;
 use satsim_tree::spatial::{Mat3, Vec3};
 use satsim_tree::{BaseKind, Body, ModelBuilder};
-use std::alloc::{GlobalAlloc, Layout, System as Sys};
-use std::cell::Cell;
 use std::path::Path;
 
 use satsim_integrate::System;
-
-/// Counts this thread's allocations (tests run on parallel threads).
-struct Counting;
-thread_local! {
-    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
-}
-fn count() {
-    let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
-}
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        count();
-        unsafe { Sys.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { Sys.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        count();
-        unsafe { Sys.realloc(ptr, layout, new_size) }
-    }
-}
-#[global_allocator]
-static GLOBAL: Counting = Counting;
-
-fn allocations() -> usize {
-    ALLOCATIONS.with(|c| c.get())
-}
 
 fn bus() -> satsim_tree::Model {
     ModelBuilder::new(BaseKind::Free)

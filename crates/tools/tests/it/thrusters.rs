@@ -311,7 +311,7 @@ fn the_energy_budget_closes_with_thrusters_firing() {
         let work = last(&run, "work_actuators");
         println!("orbit {orbit}: drift {drift:.3e} J of {scale:.3e} J, W {work:.4e} J");
         assert!(work.abs() > 1e-2, "the thrusters did work");
-        // As in tests/energy_budget.rs: within 1e-6 of the largest term.
+        // As in tests/it/energy_budget.rs: within 1e-6 of the largest term.
         assert!(drift < 1e-6 * scale, "drift {drift} of {scale}");
     }
 }

@@ -27,8 +27,7 @@ fn row(k: usize) -> Vec<f64> {
 
 #[test]
 fn a_plot_of_a_million_rows_is_small_and_keeps_the_extremes() {
-    let dir = std::env::temp_dir().join(format!("satsim-plots-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = satsim_testkit::temp_dir("plots");
     let n = 1_000_000;
     let mut plots = PlotRecorder::new(&columns());
     for k in 0..n {
@@ -86,8 +85,7 @@ fn the_decimation_keeps_first_last_min_and_max() {
     for k in 0..n {
         plots.push(&[k as f64 * 0.5, y(k)]);
     }
-    let dir = std::env::temp_dir().join(format!("satsim-plots-m4-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = satsim_testkit::temp_dir("plots-m4");
     plots.write(&dir).unwrap();
     let svg = std::fs::read_to_string(dir.join("momentum.svg")).unwrap();
     let _ = std::fs::remove_dir_all(&dir);

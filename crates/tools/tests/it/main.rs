@@ -1,0 +1,26 @@
+//! The tools' tests (scenes, runs, campaigns' lanes, linearisation, output): one binary (one
+//! link), one module per subject.
+
+mod edges;
+mod energy_budget;
+mod environment;
+mod event_slopes;
+mod flexible_scene;
+mod lanes;
+mod linearize;
+mod orbital_start;
+mod plots;
+mod roll_pitch_yaw;
+mod scene;
+mod sensors;
+mod simulation_passes;
+mod simultaneous_stops;
+mod stepping;
+mod thrusters;
+mod wheel_release;
+mod wheel_speed_limit;
+
+// `edges` counts the allocations of output rows and whole runs (per thread: the other tests
+// run in parallel threads).
+#[global_allocator]
+static GLOBAL: satsim_testkit::alloc::Counting = satsim_testkit::alloc::Counting;
