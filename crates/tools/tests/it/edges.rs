@@ -2,6 +2,7 @@
 //! than the scene has, slices of the wrong length given to public functions (an error, never
 //! a panic), and output rows or whole runs that allocate.
 
+use crate::common::example;
 use satsim_satellite::{PreprintParams, build_model, recognise, state_from_engine};
 use satsim_spacecraft::effects::{AttitudeControl, ReactionWheels, Target, Wheel};
 use satsim_spacecraft::simulation::Simulation;
@@ -9,7 +10,6 @@ use satsim_testkit::alloc::allocations;
 use satsim_tools::scene::Scene;
 use satsim_tree::spatial::{Mat3, Vec3};
 use satsim_tree::{BaseKind, Body, ModelBuilder};
-use std::path::Path;
 
 use satsim_integrate::System;
 
@@ -50,10 +50,7 @@ fn a_controller_runs_before_the_wheels_it_commands_and_is_refused_without_them()
 
 #[test]
 fn public_functions_refuse_short_slices() {
-    let scene = Scene::read(
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/scenes/deploy.toml"),
-    )
-    .unwrap();
+    let scene = Scene::read(example("scenes/deploy.toml")).unwrap();
     let mut sim = scene.simulation().unwrap();
     let n = sim.layout().len;
     let x = sim.x0().to_vec();
@@ -86,10 +83,7 @@ fn public_functions_refuse_short_slices() {
 /// nothing once its buffer has grown.
 #[test]
 fn output_rows_do_not_allocate() {
-    let scene = Scene::read(
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/scenes/deploy.toml"),
-    )
-    .unwrap();
+    let scene = Scene::read(example("scenes/deploy.toml")).unwrap();
     let mut sim = scene.simulation().unwrap();
     let x = sim.x0().to_vec();
     let mut row = Vec::new();
@@ -113,10 +107,7 @@ fn output_rows_do_not_allocate() {
 #[test]
 fn a_whole_run_allocates_nothing_per_step() {
     use satsim_integrate::{Method, Options, Output};
-    let scene = Scene::read(
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/scenes/deploy.toml"),
-    )
-    .unwrap();
+    let scene = Scene::read(example("scenes/deploy.toml")).unwrap();
     let methods = [
         Options::new(Method::Rk4).with_fixed_step(0.01),
         Options::new(Method::Dp54).with_tolerances(1e-9, 1e-9),

@@ -2,6 +2,7 @@
 //! against hand computations through `satsim_tools::environment`, which reports each
 //! effect's loads on every body and as generalised forces at a state.
 
+use crate::common::{body, z_hinge};
 use satsim_environment::sun::sun_position;
 use satsim_environment::{AU, SOLAR_PRESSURE_1AU, parse_epoch};
 use satsim_spacecraft::effects::drag::plate_force as drag_plate;
@@ -46,29 +47,18 @@ fn offset_panel(angle: f64, attitude: [f64; 4]) -> String {
 epoch = "{EPOCH}"
 duration = 10.0
 [model]
-[[model.body]]
-name = "bus"
-mass = 500.0
-inertia = [[100.0, 0.0, 0.0], [0.0, 100.0, 0.0], [0.0, 0.0, 100.0]]
-[[model.body]]
-name = "panel"
-mass = 10.0
-inertia = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
-facets = [{{ area = 2.0, normal = [1.0, 0.0, 0.0], at = [0.0, 1.0, 0.0] }}]
-[[model.hinge]]
-name = "h"
-parent = "bus"
-child = "panel"
-axis = [0.0, 0.0, 1.0]
-at = [1.0, 0.0, 0.0]
-[initial]
+{}{}facets = [{{ area = 2.0, normal = [1.0, 0.0, 0.0], at = [0.0, 1.0, 0.0] }}]
+{}[initial]
 base = {{ attitude = {attitude:?} }}
 hinges = {{ angle = [{angle}], rate = [0.0] }}
 [orbit]
 altitude = 500e3
 [effects.solar_radiation]
 shadow = "none"
-"#
+"#,
+        body("bus", 500.0, [100.0; 3]),
+        body("panel", 10.0, [1.0; 3]),
+        z_hinge("h", "bus", "panel", 1.0, None)
     )
 }
 

@@ -3,11 +3,11 @@
 //! wheels read hold torques at every step; panels latch; wheels break free) give the same
 //! rows, outcome and events bit for bit with the reuse on and off, and reuse it at most steps.
 
+use crate::common::example;
 use satsim_integrate::{Output, Stats};
 use satsim_spacecraft::simulation::{RunError, Simulation};
 use satsim_tools::campaign::Campaign;
 use satsim_tools::scene::Scene;
-use std::path::Path;
 
 /// A run's outcome (as text), rows (as bits) and events.
 type Outcome = (String, Vec<u64>, Vec<(u64, String)>);
@@ -37,8 +37,7 @@ fn run(scene: &Scene, reuse: bool) -> (Outcome, Simulation) {
 
 #[test]
 fn reusing_the_event_functions_slope_changes_no_bit() {
-    let path =
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/scenes/deploy_campaign.toml");
+    let path = example("scenes/deploy_campaign.toml");
     let campaign = Campaign::read(&path).unwrap();
     for k in 0..3 {
         let text = campaign.run_text(k, &campaign.draw(k));
@@ -72,7 +71,7 @@ fn reusing_the_event_functions_slope_changes_no_bit() {
 #[test]
 fn the_slope_is_reused_only_at_the_same_state() {
     use satsim_integrate::System;
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/scenes/deploy.toml");
+    let path = example("scenes/deploy.toml");
     let scene = Scene::read(&path).unwrap();
     let mut sim = scene.simulation().unwrap();
     let mut fresh = scene.simulation().unwrap();

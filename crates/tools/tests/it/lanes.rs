@@ -3,11 +3,11 @@
 //! and most of their dynamics are solved in lanes, the event functions' right-hand sides at
 //! the steps' ends included.
 
+use crate::common::example;
 use satsim_integrate::{Output, Stats};
 use satsim_spacecraft::simulation::{LaneJob, LaneJobs, RowSink, RunError, Simulation};
 use satsim_tools::campaign::Campaign;
 use satsim_tools::scene::Scene;
-use std::path::Path;
 
 /// Each row's time and entries, as bits.
 #[derive(Default)]
@@ -63,8 +63,7 @@ impl LaneJobs for Jobs {
 
 #[test]
 fn runs_in_lanes_are_the_runs_alone() {
-    let path =
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/scenes/deploy_campaign.toml");
+    let path = example("scenes/deploy_campaign.toml");
     let campaign = Campaign::read(&path).unwrap();
     let scenes: Vec<Scene> = (0..7)
         .map(|k| {

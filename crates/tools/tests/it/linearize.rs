@@ -2,6 +2,7 @@
 //! matrix) and nonlinear runs. Each test would fail for a wrong Jacobian, a wrong attitude
 //! error convention or a wrong eigen-analysis.
 
+use crate::common::{body, example, fixed_panel_model, z_hinge};
 use satsim_integrate::{Method, Options, Output};
 use satsim_tools::linearize::linearize;
 use satsim_tools::modes::{Along, modes, sweep};
@@ -24,27 +25,11 @@ fn fixed_panel(m: f64, j: f64, d: f64, k: f64, c: f64) -> String {
     format!(
         r#"
 duration = 1.0
-[model]
-base = {{ kind = "fixed" }}
-[[model.body]]
-name = "base"
-mass = 10.0
-inertia = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
-[[model.body]]
-name = "panel"
-mass = {m}
-inertia = [[{j}, 0.0, 0.0], [0.0, {j}, 0.0], [0.0, 0.0, {j}]]
-[[model.hinge]]
-name = "h"
-parent = "base"
-child = "panel"
-axis = [0.0, 0.0, 1.0]
-at = [0.5, 0.0, 0.0]
-child_at = [-{d}, 0.0, 0.0]
-[effects.hinge_springs]
+{}[effects.hinge_springs]
 stiffness = [{k}]
 damping = [{c}]
-"#
+"#,
+        fixed_panel_model(m, j, d)
     )
 }
 
@@ -95,25 +80,13 @@ fn free_bus_panel(extra: &str) -> String {
         r#"
 duration = 1.0
 [model]
-[[model.body]]
-name = "bus"
-mass = 300.0
-inertia = [[50.0, 0.0, 0.0], [0.0, 60.0, 0.0], [0.0, 0.0, 70.0]]
-[[model.body]]
-name = "panel"
-mass = 25.0
-inertia = [[2.0, 0.0, 0.0], [0.0, 8.0, 0.0], [0.0, 0.0, 9.0]]
-[[model.hinge]]
-name = "h"
-parent = "bus"
-child = "panel"
-axis = [0.0, 0.0, 1.0]
-at = [0.8, 0.0, 0.0]
-child_at = [-1.1, 0.0, 0.0]
-[effects.hinge_springs]
+{}{}{}[effects.hinge_springs]
 stiffness = [30.0]
 {extra}
-"#
+"#,
+        body("bus", 300.0, [50.0, 60.0, 70.0]),
+        body("panel", 25.0, [2.0, 8.0, 9.0]),
+        z_hinge("h", "bus", "panel", 0.8, Some(-1.1))
     )
 }
 
@@ -587,8 +560,7 @@ action = "latch"
 /// The example satellite of `deployment_modes.toml` with the gimbal springs (h1, h2, h3)
 /// set to `k`.
 fn satellite_with_gimbal_stiffness(k: &str) -> Scene {
-    let path =
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/scenes/deployment_modes.toml");
+    let path = example("scenes/deployment_modes.toml");
     let text = std::fs::read_to_string(&path).unwrap().replace(
         "stiffness = [50.0, 50.0, 50.0,",
         &format!("stiffness = [{k}, {k}, {k},"),

@@ -1,6 +1,7 @@
 //! The tools' tests (scenes, runs, campaigns' lanes, linearisation, output): one binary (one
 //! link), one module per subject.
 
+mod common;
 mod edges;
 mod energy_budget;
 mod environment;

@@ -5,12 +5,12 @@
 //! z towards the Earth's centre, y along the negative orbit normal `−r × v`, x = y × z
 //! (along-track on a circular orbit), turning at `r × v / r²`. Quaternions are `[w, x, y, z]`.
 
+use crate::common::example;
 use satsim_tools::api::{Trajectory, run_scene};
 use satsim_tools::scene::Scene;
-use std::path::Path;
 
 fn scene_path() -> std::path::PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/scenes/orbital_start_test.toml")
+    example("scenes/orbital_start_test.toml")
 }
 
 const BUS: &str = r#"
@@ -122,7 +122,7 @@ fn an_orbital_frame_start_without_an_orbit_is_an_error_at_its_line() {
 /// reads back to the same number, as `trajectory.csv` has them).
 #[test]
 fn a_run_restarts_from_a_row() {
-    let model = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/satellite.toml");
+    let model = example("satellite.toml");
     let body = |duration: f64, initial: &str, orbit: &str| {
         format!(
             r#"model = "{}"

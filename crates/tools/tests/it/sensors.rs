@@ -4,6 +4,7 @@
 //! readings, a campaign's runs draw their own; sensors leave the trajectory unchanged to the
 //! last bit; bad input is an error naming the file and line.
 
+use crate::common::example;
 use satsim_environment::parse_epoch;
 use satsim_environment::sun::sun_position;
 use satsim_spacecraft::effects::quat_mul;
@@ -224,8 +225,7 @@ noise = {mag_noise}
 
 /// `deploy_in_orbit.toml` cut to `duration`, with `extra` appended.
 fn deploy_in_orbit(duration: f64, extra: &str) -> Scene {
-    let path =
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/scenes/deploy_in_orbit.toml");
+    let path = example("scenes/deploy_in_orbit.toml");
     let text = std::fs::read_to_string(&path).unwrap();
     assert!(text.contains("duration = 600.0"));
     let text = text.replacen("duration = 600.0", &format!("duration = {duration}"), 1) + extra;

@@ -3,13 +3,13 @@
 //! latching and with rebounding stops, and one impulse solve for the simultaneous impacts
 //! keeps a symmetric deployment symmetric. The example scenes never pass a latching stop.
 
+use crate::common::example;
 use satsim_integrate::{Method, Options, Output};
 use satsim_spacecraft::effects::{HingeSprings, HingeStop, HingeStops, StopAction};
 use satsim_spacecraft::simulation::Simulation;
 use satsim_tools::scene::Scene;
 use satsim_tree::spatial::{Mat3, Vec3};
 use satsim_tree::{BaseKind, Body, Hinge, ModelBuilder, State};
-use std::path::Path;
 
 /// A panel: name, hinge point on the bus, its axis, the panel centre from the hinge, the
 /// stowed angle, and which side its stop (at 0) is on.
@@ -212,7 +212,7 @@ fn symmetric_panels_all_rebound_at_their_stops_under_every_integrator() {
 /// Every example scene: no hinge ever passes a latching stop (checked every 10 ms).
 #[test]
 fn no_example_scene_passes_a_latching_stop() {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/scenes");
+    let dir = example("scenes");
     let mut checked = 0;
     for entry in std::fs::read_dir(&dir).unwrap() {
         let path = entry.unwrap().path();

@@ -3,13 +3,14 @@
 //! built-in discrete controller equals the same law in a loop over the stepping API, and bad
 //! input changes nothing.
 
+use crate::common::{example, fixed_panel_model};
 use satsim_tools::api::{Trajectory, run_scene};
 use satsim_tools::scene::Scene;
 use satsim_tools::stepping::{SceneStepper, StepFailure};
 use std::path::{Path, PathBuf};
 
 fn deploy_path() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/scenes/deploy.toml")
+    example("scenes/deploy.toml")
 }
 
 /// `deploy.toml` with `edit` applied to its text (anchored at its own folder).
@@ -160,30 +161,14 @@ fn one_hinge_text(step: f64, integrator: &str) -> String {
     format!(
         r#"
 duration = 5.0
-[model]
-base = {{ kind = "fixed" }}
-[[model.body]]
-name = "base"
-mass = 10.0
-inertia = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
-[[model.body]]
-name = "panel"
-mass = {m}
-inertia = [[{j}, 0.0, 0.0], [0.0, {j}, 0.0], [0.0, 0.0, {j}]]
-[[model.hinge]]
-name = "h"
-parent = "base"
-child = "panel"
-axis = [0.0, 0.0, 1.0]
-at = [0.5, 0.0, 0.0]
-child_at = [-{d}, 0.0, 0.0]
-[initial]
+{}[initial]
 hinges = {{ angle = [0.4], rate = [-0.1] }}
 [integrator]
 {integrator}
 [output]
 every = 0.5
-"#
+"#,
+        fixed_panel_model(m, j, d)
     )
 }
 

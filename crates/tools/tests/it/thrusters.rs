@@ -4,6 +4,7 @@
 //! stepping API's `thrust_<name>` equals the same constant duty bit for bit, the energy
 //! budget closes, and bad input is an error naming the file and line, or the input.
 
+use crate::common::{body, z_hinge};
 use satsim_tools::api::{Trajectory, run_scene};
 use satsim_tools::scene::Scene;
 use satsim_tools::stepping::{SceneStepper, StepFailure};
@@ -430,22 +431,7 @@ fn panel_text(orbit: bool, duty: f64) -> String {
     format!(
         r#"duration = 0.5
 [model]
-[[model.body]]
-name = "bus"
-mass = 80.0
-inertia = [[6.0, 0.0, 0.0], [0.0, 8.0, 0.0], [0.0, 0.0, 10.0]]
-[[model.body]]
-name = "panel"
-mass = 20.0
-inertia = [[1.0, 0.0, 0.0], [0.0, 2.0, 0.0], [0.0, 0.0, 3.0]]
-[[model.hinge]]
-name = "h"
-parent = "bus"
-child = "panel"
-axis = [0.0, 0.0, 1.0]
-at = [0.5, 0.0, 0.0]
-child_at = [-1.0, 0.0, 0.0]
-{orbit}
+{}{}{}{orbit}
 [initial]
 base = {{ attitude = [1.0, 0.0, 0.0, 0.0], angular_velocity = [0.0, 0.0, 0.0] }}
 hinges = {{ angle = [0.0], rate = [0.0] }}
@@ -465,7 +451,10 @@ at = [-1.2, 0.0, 0.7]
 direction = [0.0, 0.0, 1.0]
 thrust = 3.0
 duty = {duty}
-"#
+"#,
+        body("bus", 80.0, [6.0, 8.0, 10.0]),
+        body("panel", 20.0, [1.0, 2.0, 3.0]),
+        z_hinge("h", "bus", "panel", 0.5, Some(-1.0))
     )
 }
 

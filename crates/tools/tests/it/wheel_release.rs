@@ -8,13 +8,13 @@
 //! scene contains that release (at t ≈ 5.6 ms); over its 300 s, RK4 converges at fourth
 //! order (the first seconds alone are dominated by the controller's saturation kinks).
 
+use crate::common::example;
 use satsim_integrate::{Method, Options};
 use satsim_tools::accuracy::{compare, run};
 use satsim_tools::scene::Scene;
-use std::path::Path;
 
 fn deploy(duration: f64) -> Scene {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/scenes/deploy.toml");
+    let path = example("scenes/deploy.toml");
     let mut scene = Scene::read(path).expect("the default scene loads");
     scene.duration = duration;
     scene

@@ -7,13 +7,13 @@
 //! is now a mode held between events and the wheel is held at it while the command drives
 //! it outwards. A run that does run out of steps says what it was stepping through.
 
+use crate::common::example;
 use satsim_integrate::{Method, Options, Output};
 use satsim_tools::accuracy::run;
 use satsim_tools::scene::Scene;
-use std::path::Path;
 
 fn limited_deploy(duration: f64) -> Scene {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/scenes/deploy.toml");
+    let path = example("scenes/deploy.toml");
     let text = std::fs::read_to_string(&path).unwrap().replacen(
         "max_speed = 600.0        # rad/s",
         "max_speed = 3.0",
