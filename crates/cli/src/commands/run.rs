@@ -17,8 +17,8 @@
 
 use super::{CliError, Output, stem};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use satsim_integrate::Output as Times;
-use satsim_spacecraft::simulation::RunError;
+use satsim_integrate::{Output as Times, Stats};
+use satsim_spacecraft::simulation::{RunError, Simulation};
 use satsim_tools::output::{CsvWriter, PlotRecorder, write_events};
 use satsim_tools::scene::{DEFAULT_MAX_ROWS, Scene};
 use satsim_tools::scene_keys::Override;
@@ -138,57 +138,113 @@ pub fn run_scene_with(
     run_limited(scene_path, out, overrides, DEFAULT_MAX_ROWS)
 }
 
-/// [`run_scene_with`], refusing a run of more than `max_rows` rows before it starts.
+/// [`run_scene_with`], refusing a run of more than `max_rows` rows before it starts. Four
+/// steps: read the scene, build its simulation and open its files, run it with every row
+/// streamed out, then write what follows the run and the summary.
 pub fn run_limited(
     scene_path: &Path,
     out: Option<PathBuf>,
     overrides: &[Override],
     max_rows: u64,
 ) -> Result<Output, Failure> {
-    let scene = Scene::read_with(scene_path, overrides).map_err(CliError::File)?;
-    super::print_warnings(&scene.warnings);
-    scene.check_rows(max_rows).map_err(CliError::File)?;
+    let scene = read(scene_path, overrides, max_rows)?;
     let mut sim = scene
         .simulation()
         .map_err(|e| CliError::Other(format!("{}: {e}", scene_path.display())))?;
-    let stem = stem(scene_path);
-    let dir = out.unwrap_or_else(|| Path::new("out").join(&stem));
-    std::fs::create_dir_all(&dir).map_err(|e| {
-        CliError::Other(format!(
-            "cannot create the output folder {}: {e}",
-            dir.display()
-        ))
-    })?;
-    let csv_path = dir.join("trajectory.csv");
-    let columns = sim.columns();
-    let mut csv = CsvWriter::create(&csv_path, &columns)
-        .map_err(|e| CliError::Other(format!("cannot write {}: {e}", csv_path.display())))?;
+    let mut files = RunFiles::open(scene_path, out, &scene, &sim)?;
+    let streamed = stream(&scene, &mut sim, &mut files);
+    let done = finish(scene_path, &scene, &sim, files, streamed)?;
+    Ok(summary(scene_path, &scene, &sim, &done))
+}
 
-    // The 3-D playback (`view.html`, contract section 11): poses recorded at every row.
-    let title = scene_path
-        .file_name()
-        .map_or(stem.clone(), |n| n.to_string_lossy().into());
-    let mut poses = match scene.view {
-        true => Some(
-            PoseRecorder::new(sim.model(), &columns, &title)
-                .and_then(|r| match sim.flex_model() {
-                    Some(f) => r.with_flexible(f, &columns),
-                    None => Ok(r),
-                })
-                .and_then(|r| r.with_rotors(sim.model().n_hinges() - sim.layout().n_hinges))
-                .map_err(|e| CliError::Other(e.to_string()))?,
-        ),
-        false => None,
-    };
+/// The scene with its overrides, its warnings printed, refused past `max_rows` rows.
+fn read(scene_path: &Path, overrides: &[Override], max_rows: u64) -> Result<Scene, Failure> {
+    let scene = Scene::read_with(scene_path, overrides).map_err(CliError::File)?;
+    super::print_warnings(&scene.warnings);
+    scene.check_rows(max_rows).map_err(CliError::File)?;
+    Ok(scene)
+}
 
+/// What a run streams into: the output folder, `trajectory.csv` and the 3-D view's poses.
+struct RunFiles {
+    dir: PathBuf,
+    csv_path: PathBuf,
+    columns: Vec<String>,
+    csv: CsvWriter,
+    /// The 3-D playback (`view.html`, contract section 11): poses recorded at every row.
+    poses: Option<PoseRecorder>,
+}
+
+impl RunFiles {
+    /// Creates the folder (`out`, default `out/<scene stem>`) and the CSV's header, and the
+    /// poses' recorder when the scene asks for the view.
+    fn open(
+        scene_path: &Path,
+        out: Option<PathBuf>,
+        scene: &Scene,
+        sim: &Simulation,
+    ) -> Result<Self, Failure> {
+        let stem = stem(scene_path);
+        let dir = out.unwrap_or_else(|| Path::new("out").join(&stem));
+        std::fs::create_dir_all(&dir).map_err(|e| {
+            CliError::Other(format!(
+                "cannot create the output folder {}: {e}",
+                dir.display()
+            ))
+        })?;
+        let csv_path = dir.join("trajectory.csv");
+        let columns = sim.columns();
+        let csv = CsvWriter::create(&csv_path, &columns)
+            .map_err(|e| CliError::Other(format!("cannot write {}: {e}", csv_path.display())))?;
+        let title = scene_path
+            .file_name()
+            .map_or(stem.clone(), |n| n.to_string_lossy().into());
+        let poses = match scene.view {
+            true => Some(
+                PoseRecorder::new(sim.model(), &columns, &title)
+                    .and_then(|r| match sim.flex_model() {
+                        Some(f) => r.with_flexible(f, &columns),
+                        None => Ok(r),
+                    })
+                    .and_then(|r| r.with_rotors(sim.model().n_hinges() - sim.layout().n_hinges))
+                    .map_err(|e| CliError::Other(e.to_string()))?,
+            ),
+            false => None,
+        };
+        Ok(Self {
+            dir,
+            csv_path,
+            columns,
+            csv,
+            poses,
+        })
+    }
+}
+
+/// What the run left: its outcome, and what the rows' sink kept of the rows.
+struct Streamed {
+    result: Result<Stats, RunError<Stop>>,
+    /// Wall-clock seconds of the run.
+    elapsed: f64,
+    /// The plots' min/max decimation: bounded memory, the rows never go into a list.
+    plots: PlotRecorder,
+    first_row: Option<Vec<f64>>,
+    last_row: Vec<f64>,
+    /// The CSV's flush, done whatever happened: every row written reaches the file.
+    flushed: std::io::Result<()>,
+}
+
+/// Runs the scene, each row to the CSV, the poses and the plots' decimation as it comes,
+/// with the progress bar and Ctrl-C checked after every row.
+fn stream(scene: &Scene, sim: &mut Simulation, files: &mut RunFiles) -> Streamed {
     let (t0, t_end) = (sim.t0(), sim.t0() + scene.duration);
     let started = Instant::now();
     let bar = progress_bar(t0, t_end);
     let mut last_message = started;
-    // Bounded memory: rows go to the CSV and to the plots' decimation, never into a list.
-    let mut plots = PlotRecorder::new(&columns);
+    let mut plots = PlotRecorder::new(&files.columns);
     let mut first_row: Option<Vec<f64>> = None;
     let mut last_row: Vec<f64> = Vec::new();
+    let (csv, poses) = (&mut files.csv, &mut files.poses);
     interrupt::install();
     let result = sim.run(
         &scene.options,
@@ -220,10 +276,50 @@ pub fn run_limited(
     );
     bar.finish_and_clear();
     let elapsed = started.elapsed().as_secs_f64();
-    let n_rows = plots.rows();
-    let last_t = last_row.first().copied();
-    // Every row written reaches the file, whatever happened.
-    let flushed = csv.flush();
+    let flushed = files.csv.flush();
+    Streamed {
+        result,
+        elapsed,
+        plots,
+        first_row,
+        last_row,
+        flushed,
+    }
+}
+
+/// A finished run and the files written after it, for the summary.
+struct Done {
+    stats: Stats,
+    elapsed: f64,
+    columns: Vec<String>,
+    csv_path: PathBuf,
+    n_rows: usize,
+    first_row: Option<Vec<f64>>,
+    last_row: Vec<f64>,
+    events_path: PathBuf,
+    n_events: usize,
+    /// The plots' file names.
+    plots: Vec<String>,
+    view: Option<PathBuf>,
+}
+
+/// After the run: `events.csv` always; then a failed run's message, or an interrupted run's
+/// plots and message; else the CSV's flush checked, the plots and the 3-D view.
+fn finish(
+    scene_path: &Path,
+    scene: &Scene,
+    sim: &Simulation,
+    files: RunFiles,
+    streamed: Streamed,
+) -> Result<Done, Failure> {
+    let RunFiles {
+        dir,
+        csv_path,
+        columns,
+        poses,
+        ..
+    } = files;
+    let n_rows = streamed.plots.rows();
     let draw = |plots: &PlotRecorder| {
         if scene.plots {
             plots.write(&dir).map_err(|e| {
@@ -237,44 +333,28 @@ pub fn run_limited(
     let events_path = dir.join("events.csv");
     let n_events = write_events(&events_path, sim.event_records())
         .map_err(|e| Failure::Run(format!("cannot write {}: {e}", events_path.display())))?;
-    let stats = match result {
+    let stats = match streamed.result {
         Ok(stats) => stats,
         Err(RunError::Sink {
             t,
             error: Stop::Interrupted,
         }) => {
             // The plots of what ran, then the message.
-            draw(&plots)?;
+            draw(&streamed.plots)?;
             return Err(Failure::Interrupted(format!(
                 "interrupted at t = {t} s; {n_rows} rows written to {}",
                 csv_path.display()
             )));
         }
         Err(e) => {
-            let why = match e {
-                RunError::Integrate(e) => e.to_string(),
-                RunError::Sink {
-                    t,
-                    error: Stop::View(e),
-                } => format!("at t = {t} s: {e}"),
-                RunError::Sink { t, error } => {
-                    format!("cannot write {} at t = {t} s: {error}", csv_path.display())
-                }
-            };
-            let kept = match last_t {
-                Some(t) => format!("{} holds the rows up to t = {t} s", csv_path.display()),
-                None => format!("{} holds only the header", csv_path.display()),
-            };
-            return Err(Failure::Run(format!(
-                "{}: the run failed: {why}; {kept}",
-                scene_path.display()
-            )));
+            let last_t = streamed.last_row.first().copied();
+            return Err(run_failed(scene_path, &csv_path, e, last_t));
         }
     };
-
-    flushed.map_err(|e| Failure::Run(format!("cannot write {}: {e}", csv_path.display())))?;
-    let plots = draw(&plots)?;
-
+    streamed
+        .flushed
+        .map_err(|e| Failure::Run(format!("cannot write {}: {e}", csv_path.display())))?;
+    let plots = draw(&streamed.plots)?;
     let view = match poses {
         Some(p) => Some(
             p.finish(sim.event_log())
@@ -283,8 +363,53 @@ pub fn run_limited(
         ),
         None => None,
     };
+    Ok(Done {
+        stats,
+        elapsed: streamed.elapsed,
+        columns,
+        csv_path,
+        n_rows,
+        first_row: streamed.first_row,
+        last_row: streamed.last_row,
+        events_path,
+        n_events,
+        plots,
+        view,
+    })
+}
 
-    // Summary.
+/// A run that failed part-way: why, and how far `trajectory.csv` got (`last_t`: its last
+/// row's time).
+fn run_failed(
+    scene_path: &Path,
+    csv_path: &Path,
+    e: RunError<Stop>,
+    last_t: Option<f64>,
+) -> Failure {
+    let why = match e {
+        RunError::Integrate(e) => e.to_string(),
+        RunError::Sink {
+            t,
+            error: Stop::View(e),
+        } => format!("at t = {t} s: {e}"),
+        RunError::Sink { t, error } => {
+            format!("cannot write {} at t = {t} s: {error}", csv_path.display())
+        }
+    };
+    let kept = match last_t {
+        Some(t) => format!("{} holds the rows up to t = {t} s", csv_path.display()),
+        None => format!("{} holds only the header", csv_path.display()),
+    };
+    Failure::Run(format!(
+        "{}: the run failed: {why}; {kept}",
+        scene_path.display()
+    ))
+}
+
+/// The summary on standard output: the scene, the model, the effects, the state, the run's
+/// counts, the first ten events, the energy and budget lines, the files written.
+fn summary(scene_path: &Path, scene: &Scene, sim: &Simulation, done: &Done) -> Output {
+    let (stats, t0) = (&done.stats, sim.t0());
     let model = sim.model();
     let n_rotors = model.n_hinges() - sim.layout().n_hinges;
     let mut s = String::new();
@@ -324,7 +449,7 @@ pub fn run_limited(
         stats.steps_rejected,
         stats.rhs_evals,
         stats.events.len(),
-        elapsed
+        done.elapsed
     );
     for (t, what) in sim.event_log().iter().take(10) {
         let _ = writeln!(s, "  event    t = {t:.4} s: {what}");
@@ -332,14 +457,19 @@ pub fn run_limited(
     if sim.event_log().len() > 10 {
         let _ = writeln!(s, "  ...      {} more events", sim.event_log().len() - 10);
     }
-    if n_events > 0 {
-        let _ = writeln!(s, "events     {n_events} in {}", events_path.display());
+    if done.n_events > 0 {
+        let _ = writeln!(
+            s,
+            "events     {} in {}",
+            done.n_events,
+            done.events_path.display()
+        );
     }
     if let (Some(first), Some(last)) = (
-        first_row.as_ref(),
-        Some(&last_row).filter(|r| !r.is_empty()),
+        done.first_row.as_ref(),
+        Some(&done.last_row).filter(|r| !r.is_empty()),
     ) {
-        let col = |name: &str| columns.iter().position(|c| c == name);
+        let col = |name: &str| done.columns.iter().position(|c| c == name);
         if let (Some(e), Some(h)) = (col("total_energy"), col("h_norm")) {
             let _ = writeln!(
                 s,
@@ -362,18 +492,22 @@ pub fn run_limited(
     let _ = writeln!(
         s,
         "wrote      {} ({} rows){}",
-        csv_path.display(),
-        n_rows,
-        if plots.is_empty() {
+        done.csv_path.display(),
+        done.n_rows,
+        if done.plots.is_empty() {
             String::new()
         } else {
-            format!(" and {} plots ({})", plots.len(), plots.join(", "))
+            format!(
+                " and {} plots ({})",
+                done.plots.len(),
+                done.plots.join(", ")
+            )
         }
     );
-    if let Some(v) = view {
+    if let Some(v) = &done.view {
         let _ = writeln!(s, "view       {}", v.display());
     }
-    Ok(s)
+    s
 }
 
 /// Progress in milliseconds of simulated time (indicatif counts in whole units).
