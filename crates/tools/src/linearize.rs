@@ -298,90 +298,13 @@ pub fn linearize_simulation(sim: &mut Simulation) -> Result<Linearization, Linea
     let locked = sim.locked().to_vec();
     let hinge_names = &model.hinge_names();
 
-    // The linear states: names, where they live in x, and their step scales.
-    let mut states: Vec<String> = Vec::new();
-    let mut x_index: Vec<Option<usize>> = Vec::new(); // None: attitude error component
-    let mut scale: Vec<f64> = Vec::new();
-    let mut frozen: Vec<bool> = Vec::new();
-    let mut groups: Vec<(String, Range<usize>)> = Vec::new();
-    let mut group = |name: &str, states: &[String]| {
-        let start = groups
-            .last()
-            .map_or(0, |(_, r): &(String, Range<usize>)| r.end);
-        if states.len() > start {
-            groups.push((name.to_owned(), start..states.len()));
-        }
-    };
-    if layout.free {
-        for c in ["x", "y", "z"] {
-            states.push(format!("att_{c}"));
-            x_index.push(None);
-            scale.push(1.0);
-            frozen.push(false);
-        }
-        group("attitude (rad/s)", &states);
-        for (prefix, range, g) in [
-            ("omega", &layout.omega, "angular velocity (rad/s²)"),
-            ("vel", &layout.velocity, "velocity (m/s²)"),
-        ] {
-            for (k, c) in ["x", "y", "z"].iter().enumerate() {
-                states.push(format!("{prefix}_{c}"));
-                x_index.push(Some(range.start + k));
-                scale.push(1.0);
-                frozen.push(false);
-            }
-            group(g, &states);
-        }
-    }
-    for (prefix, range, g) in [
-        ("angle", &layout.angles, "hinge angles (rad/s)"),
-        ("rate", &layout.rates, "hinge rates (rad/s²)"),
-    ] {
-        for k in 0..n_user {
-            states.push(format!("{prefix}_{}", hinge_names[k]));
-            x_index.push(Some(range.start + k));
-            scale.push(1.0);
-            frozen.push(locked[k]);
-        }
-        group(g, &states);
-    }
-    // A flexible body's modal coordinates and rates (√kg m, √kg m/s), after the hinge rates.
-    let elastic = sim.elastic_names();
-    for (prefix, range, g) in [
-        ("eta", &layout.eta, "elastic coordinates (√kg m/s)"),
-        ("etadot", &layout.etadot, "elastic rates (√kg m/s²)"),
-    ] {
-        for (name, i) in elastic.iter().zip(range.clone()) {
-            states.push(format!("{prefix}_{name}"));
-            x_index.push(Some(i));
-            scale.push(1.0);
-            frozen.push(false);
-        }
-        group(g, &states);
-    }
-    for (name, range) in &layout.effects {
-        if range.is_empty() {
-            continue;
-        }
-        let names = sim
-            .effect(name)
-            .map(|e| e.state_names())
-            .unwrap_or_default();
-        let norm = x0[range.clone()].iter().map(|v| v * v).sum::<f64>().sqrt();
-        let rotors = sim.effect(name).is_some_and(|e| !e.rotors().is_empty());
-        for (k, i) in range.clone().enumerate() {
-            states.push(
-                names
-                    .get(k)
-                    .cloned()
-                    .unwrap_or_else(|| format!("{name}_{k}")),
-            );
-            x_index.push(Some(i));
-            scale.push(1.0f64.max(STEP * norm));
-            frozen.push(rotors && locked.get(n_user + k).copied().unwrap_or(false));
-        }
-        group(&format!("{name} (per second)"), &states);
-    }
+    let LinearStates {
+        names: states,
+        x_index,
+        scale,
+        frozen,
+        groups,
+    } = linear_states(sim, &x0, &locked);
     let n = states.len();
 
     // The inputs: one torque per hinge, one motor torque per rotor.
@@ -539,6 +462,117 @@ pub fn linearize_simulation(sim: &mut Simulation) -> Result<Linearization, Linea
         residual,
         groups,
     })
+}
+
+/// The linear states, the rows and columns of `A`: attitude error, rates and velocity (free
+/// base), hinge angles and rates, elastic coordinates and rates, then each effect's own.
+struct LinearStates {
+    names: Vec<String>,
+    /// Where each lives in `x`; `None` for a component of the attitude error.
+    x_index: Vec<Option<usize>>,
+    /// The least step scale of each.
+    scale: Vec<f64>,
+    /// Held by a lock (its row and column of `A` stay zero).
+    frozen: Vec<bool>,
+    /// The states' groups, by which the not-an-equilibrium residual is reported.
+    groups: Vec<(String, Range<usize>)>,
+}
+
+/// The linear states of `sim` at `x0` with the hinges `locked` (tree order).
+fn linear_states(sim: &Simulation, x0: &[f64], locked: &[bool]) -> LinearStates {
+    let layout = sim.layout();
+    let n_user = layout.n_hinges;
+    let hinge_names = sim.model().hinge_names();
+    let mut states: Vec<String> = Vec::new();
+    let mut x_index: Vec<Option<usize>> = Vec::new(); // None: attitude error component
+    let mut scale: Vec<f64> = Vec::new();
+    let mut frozen: Vec<bool> = Vec::new();
+    let mut groups: Vec<(String, Range<usize>)> = Vec::new();
+    let mut group = |name: &str, states: &[String]| {
+        let start = groups
+            .last()
+            .map_or(0, |(_, r): &(String, Range<usize>)| r.end);
+        if states.len() > start {
+            groups.push((name.to_owned(), start..states.len()));
+        }
+    };
+    if layout.free {
+        for c in ["x", "y", "z"] {
+            states.push(format!("att_{c}"));
+            x_index.push(None);
+            scale.push(1.0);
+            frozen.push(false);
+        }
+        group("attitude (rad/s)", &states);
+        for (prefix, range, g) in [
+            ("omega", &layout.omega, "angular velocity (rad/s²)"),
+            ("vel", &layout.velocity, "velocity (m/s²)"),
+        ] {
+            for (k, c) in ["x", "y", "z"].iter().enumerate() {
+                states.push(format!("{prefix}_{c}"));
+                x_index.push(Some(range.start + k));
+                scale.push(1.0);
+                frozen.push(false);
+            }
+            group(g, &states);
+        }
+    }
+    for (prefix, range, g) in [
+        ("angle", &layout.angles, "hinge angles (rad/s)"),
+        ("rate", &layout.rates, "hinge rates (rad/s²)"),
+    ] {
+        for k in 0..n_user {
+            states.push(format!("{prefix}_{}", hinge_names[k]));
+            x_index.push(Some(range.start + k));
+            scale.push(1.0);
+            frozen.push(locked[k]);
+        }
+        group(g, &states);
+    }
+    // A flexible body's modal coordinates and rates (√kg m, √kg m/s), after the hinge rates.
+    let elastic = sim.elastic_names();
+    for (prefix, range, g) in [
+        ("eta", &layout.eta, "elastic coordinates (√kg m/s)"),
+        ("etadot", &layout.etadot, "elastic rates (√kg m/s²)"),
+    ] {
+        for (name, i) in elastic.iter().zip(range.clone()) {
+            states.push(format!("{prefix}_{name}"));
+            x_index.push(Some(i));
+            scale.push(1.0);
+            frozen.push(false);
+        }
+        group(g, &states);
+    }
+    for (name, range) in &layout.effects {
+        if range.is_empty() {
+            continue;
+        }
+        let names = sim
+            .effect(name)
+            .map(|e| e.state_names())
+            .unwrap_or_default();
+        let norm = x0[range.clone()].iter().map(|v| v * v).sum::<f64>().sqrt();
+        let rotors = sim.effect(name).is_some_and(|e| !e.rotors().is_empty());
+        for (k, i) in range.clone().enumerate() {
+            states.push(
+                names
+                    .get(k)
+                    .cloned()
+                    .unwrap_or_else(|| format!("{name}_{k}")),
+            );
+            x_index.push(Some(i));
+            scale.push(1.0f64.max(STEP * norm));
+            frozen.push(rotors && locked.get(n_user + k).copied().unwrap_or(false));
+        }
+        group(&format!("{name} (per second)"), &states);
+    }
+    LinearStates {
+        names: states,
+        x_index,
+        scale,
+        frozen,
+        groups,
+    }
 }
 
 /// An error naming the first entry of `A` (then `B`) beyond [`LARGEST_ENTRY`].
