@@ -741,8 +741,8 @@ fn ten_orbits_torque_free() {
     assert!(r.norm_error <= 1e-12, "{:e}", r.norm_error);
 }
 
-/// The 100-orbit run (5.7e5 s): `cargo test --release -p satsim --test hard_cases --
-/// --ignored --nocapture hundred`.
+/// The 100-orbit run (5.7e5 s): `cargo test --release -p satsim --test it --
+/// --ignored --nocapture hard_cases::hundred`.
 #[test]
 #[ignore = "long: 100 orbits; see docs/src/results/hard-cases.md"]
 fn hundred_orbits_torque_free() {
