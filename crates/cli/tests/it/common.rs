@@ -33,3 +33,25 @@ pub fn numbers(v: &Value) -> Vec<f64> {
         .map(|x| x.as_f64().expect("number"))
         .collect()
 }
+
+/// Every row has every column and parses; returns (header, rows).
+pub fn csv(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
+    let text = std::fs::read_to_string(path).unwrap();
+    assert!(text.ends_with('\n'), "the last row is complete");
+    let mut lines = text.lines();
+    let header: Vec<String> = lines.next().unwrap().split(',').map(String::from).collect();
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| {
+            let r: Vec<f64> = l
+                .split(',')
+                .map(|v| {
+                    v.parse::<f64>()
+                        .unwrap_or_else(|_| panic!("bad number in {l}"))
+                })
+                .collect();
+            assert_eq!(r.len(), header.len(), "{l}");
+            r
+        })
+        .collect();
+    (header, rows)
+}

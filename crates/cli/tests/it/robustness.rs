@@ -4,8 +4,8 @@
 //! hinges and the time and keeps its CSV; Ctrl-C stops a run cleanly with exit status 130.
 
 use crate::common;
-use common::{root, satsim_in};
-use std::path::{Path, PathBuf};
+use common::{csv, root, satsim_in};
+use std::path::PathBuf;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
@@ -14,28 +14,6 @@ fn setup(test: &str) -> PathBuf {
         &format!("robust-{test}"),
         &["examples/satellite.toml", "examples/state.json"],
     )
-}
-
-/// Every row has every column and parses; returns (header, rows).
-fn csv(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
-    let text = std::fs::read_to_string(path).unwrap();
-    assert!(text.ends_with('\n'), "the last row is complete");
-    let mut lines = text.lines();
-    let header: Vec<String> = lines.next().unwrap().split(',').map(String::from).collect();
-    let rows: Vec<Vec<f64>> = lines
-        .map(|l| {
-            let r: Vec<f64> = l
-                .split(',')
-                .map(|v| {
-                    v.parse::<f64>()
-                        .unwrap_or_else(|_| panic!("bad number in {l}"))
-                })
-                .collect();
-            assert_eq!(r.len(), header.len(), "{l}");
-            r
-        })
-        .collect();
-    (header, rows)
 }
 
 /// A valid scene: lines are numbered in the comments the cases below rely on.

@@ -1,24 +1,11 @@
 //! `satsim run` (contract section 7): the trajectory CSV, plots, exit statuses.
 
 use crate::common;
-use common::satsim_in;
-use std::path::{Path, PathBuf};
+use common::{csv, satsim_in};
+use std::path::PathBuf;
 
 fn temp_dir(test: &str) -> PathBuf {
     satsim_testkit::temp_dir(&format!("run-{test}"))
-}
-
-fn csv(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
-    let text = std::fs::read_to_string(path).unwrap();
-    let mut lines = text.lines();
-    let header: Vec<String> = lines.next().unwrap().split(',').map(String::from).collect();
-    let rows: Vec<Vec<f64>> = lines
-        .map(|l| l.split(',').map(|v| v.parse::<f64>().unwrap()).collect())
-        .collect();
-    for r in &rows {
-        assert_eq!(r.len(), header.len());
-    }
-    (header, rows)
 }
 
 const SCENE: &str = r#"model = "satellite.toml"

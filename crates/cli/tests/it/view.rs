@@ -9,7 +9,7 @@
 //! `chromium` (or `chromium-browser`, `google-chrome`) on the `PATH`.
 
 use crate::common;
-use common::{root, satsim_in};
+use common::{csv, root, satsim_in};
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 use satsim_tree::io::parse_model_file;
 use std::collections::HashMap;
@@ -56,16 +56,6 @@ fn setup(test: &str, scene_text: &str) -> PathBuf {
     let o = satsim_in(&dir, &["run", "deploy.toml", "--out", "out"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     dir
-}
-
-fn csv(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
-    let text = std::fs::read_to_string(path).unwrap();
-    let mut lines = text.lines();
-    let header = lines.next().unwrap().split(',').map(String::from).collect();
-    let rows = lines
-        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
-        .collect();
-    (header, rows)
 }
 
 // ---------------------------------------------------------------------------------------------
