@@ -36,3 +36,16 @@ def cli() -> Path:
         pytest.skip("no `satsim` binary: run `cargo build --release` or set SATSIM_BIN")
     assert path.is_file(), f"SATSIM_BIN={path} does not exist"
     return path
+
+
+@pytest.fixture
+def python_sigint():
+    """Python's own SIGINT handler for the test: a runner started in the background (a shell's
+    `cmd &`) inherits SIGINT ignored, and then `_thread.interrupt_main()`, the tests' Ctrl-C,
+    does nothing."""
+    import signal
+
+    before = signal.getsignal(signal.SIGINT)
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, before)

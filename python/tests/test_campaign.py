@@ -110,7 +110,7 @@ def test_bad_campaign_input(scene):
         satsim.campaign(bad, base_dir=SCENES)
 
 
-def test_ctrl_c_stops_a_campaign(tmp_path):
+def test_ctrl_c_stops_a_campaign(tmp_path, python_sigint):
     # 2000 runs of 60 s would take minutes: an interrupt 0.5 s in stops every run at its next
     # output row and raises KeyboardInterrupt at once (the bound below is 100 times the time
     # it takes, and far below what the campaign would take were the interrupt seen only at

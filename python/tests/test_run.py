@@ -124,7 +124,7 @@ def test_example_model_path_with_run(tmp_path):
     np.testing.assert_array_equal(r.t, [0.0, 1.0, 2.0])
 
 
-def test_ctrl_c_stops_a_run(tmp_path):
+def test_ctrl_c_stops_a_run(tmp_path, python_sigint):
     # The run checks for signals while it computes: an interrupt stops it before it ends, so
     # the trajectory it would have written at the end never appears. (Were the interrupt seen
     # only after the call, the run would have finished and written trajectory.csv first.)
