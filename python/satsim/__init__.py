@@ -32,7 +32,7 @@ import math
 import os
 import warnings
 from pathlib import Path
-from typing import Any, Dict, Iterator, List, Mapping, Optional, Tuple, Union
+from typing import Any, Callable, Dict, Iterator, List, Mapping, Optional, Tuple, Union
 
 import numpy as np
 
@@ -42,6 +42,7 @@ from ._satsim import SatsimError
 __all__ = [
     "CampaignResult",
     "Model",
+    "Run",
     "SatsimError",
     "Simulation",
     "Trajectory",
@@ -347,7 +348,7 @@ class CampaignResult:
     str, any other ``c["final_angle_h4"]`` a column of ``data``.
     """
 
-    __slots__ = ("columns", "data", "status", "messages", "_index")
+    __slots__ = ("columns", "data", "status", "messages", "out", "_index")
 
     def __init__(
         self, columns: List[str], data: np.ndarray, status: List[str], messages: List[str]
@@ -359,7 +360,14 @@ class CampaignResult:
         self.data: np.ndarray = data
         self.status: List[str] = list(status)
         self.messages: List[str] = list(messages)
+        #: The campaign folder written (``out=``), or ``None`` for a campaign in memory.
+        self.out: Optional[str] = None
         self._index = {c: i for i, c in enumerate(self.columns)}
+
+    @property
+    def table(self) -> "CampaignResult":
+        """``runs.csv`` as a table: this object itself (contract section 15's ``res.table``)."""
+        return self
 
     def __getitem__(self, column: str) -> np.ndarray:
         """One column, by name: an array of str for ``status`` and ``message``, a 1-D float
@@ -436,23 +444,92 @@ def campaign(
     shard: Optional[Union[str, "tuple[int, int]"]] = None,
     *,
     base_dir: Optional[PathLike] = None,
+    controller: Optional[Callable[["Run"], Any]] = None,
+    period: Optional[float] = None,
+    metrics: Optional[Callable[["Run", Trajectory], Mapping[str, float]]] = None,
+    out: Optional[PathLike] = None,
+    workers: Optional[int] = None,
+    executor: Any = None,
+    resume: bool = False,
+    max_rows: Optional[int] = None,
+    progress: Optional[Callable[[int, int], None]] = None,
 ) -> CampaignResult:
-    """A Monte Carlo campaign (contract section 8), as ``satsim campaign`` runs it, in memory.
+    """A Monte Carlo campaign (contract sections 8 and 15): ``runs.csv`` as a table.
 
-    ``scene`` is the path or the text of a scene with a ``[campaign]`` table. ``threads``:
-    worker threads (default every core). ``shard``: ``(i, n)`` or ``"i/n"`` runs only the runs
-    ``k`` with ``k % n == i``; the shards' rows together are the whole campaign's, whatever
-    the threads and the sharding (run ``k`` depends on ``(seed, k)`` alone).
+    ``scene`` is the path or the text of a scene with a ``[campaign]`` table (``base_dir``
+    anchors a text's relative paths). ``shard``: ``(i, n)`` or ``"i/n"`` makes only the runs
+    ``k`` with ``k % n == i``; the shards' rows together are the whole campaign's (run ``k``
+    depends on ``(seed, k)`` alone). A run that fails is a row with status ``failed``, not an
+    error; bad input raises :class:`SatsimError` with the command line's message.
 
-    Nothing is written to disk (``satsim campaign`` writes the folder, summary and plots). A
-    run that fails is a row with status ``failed``, not an error; bad input raises
-    :class:`SatsimError` with the command line's message. Ctrl-C stops a campaign (no run
-    starts, the running ones stop at their next output row) and raises
-    ``KeyboardInterrupt``.
+    **The built-in controllers** (no ``controller``): as ``satsim campaign`` runs it, on
+    ``threads`` threads (default every core), in memory. Ctrl-C stops it (no run starts, the
+    running ones stop at their next output row) and raises ``KeyboardInterrupt``.
+
+    **Your flight software** (``controller=``, ``period=``, contract section 15)::
+
+        def make_fsw(run):              # run: satsim.Run: .index (k), .seed, .values
+            return MyFsw(gain=2.0)
+        class MyFsw:
+            def step(self, t, meas, row):   # sim.measure(), sim.row() (the truth)
+                return {"wheel_x": 0.01}    # inputs by name; {} leaves them as they are
+
+        res = satsim.campaign("scene.toml", controller=make_fsw, period=0.1,
+                              out="out/mc", workers=4)
+        res.table                           # runs.csv
+
+    Run ``k`` draws the values and the sensor seed ``satsim campaign`` draws for it, builds
+    its controller with ``controller(run)`` and steps the drawn scene as
+    :class:`Simulation` does: at ``t = t0, t0 + period, ...`` ``inputs = fsw.step(t,
+    measurements, row)`` (called from the native side, no Python loop around it), then
+    ``set_inputs(inputs)`` and an advance to the next instant (the last piece ends at the
+    scene's end). Its rows are reduced as ``satsim campaign`` reduces them, so a controller
+    that returns ``{}`` gives ``satsim campaign``'s rows bit for bit (with a fixed-step
+    integrator and ``period`` a whole number of its steps; within the tolerance otherwise).
+
+    - ``metrics(run, trajectory) -> dict`` (optional): more columns of ``runs.csv`` after
+      the statistics (settling time, RMS error over a window...), with their percentiles in
+      ``summary.json``; every run must return the same keys (letters, digits, ``_``) with
+      finite values, in the same order.
+    - ``out``: the folder, written as ``satsim campaign`` writes it (``runs.csv``,
+      ``traces.csv``, ``summary.json``, ``campaign.json``, the plots); rows are streamed as
+      runs finish and sorted at the end. ``None``: a temporary folder, removed after.
+      ``resume=True`` continues the campaign in ``out`` (its finished runs are kept; it
+      must have been made with the same scene, shard, controller, period and metrics).
+    - ``workers=N``: N worker processes (the factory and ``metrics`` must be importable,
+      as for :mod:`multiprocessing`); ``executor=``: any :class:`concurrent.futures.Executor`
+      (a Dask ``Client.get_executor()``, Ray's); neither: this process. The files are the
+      same bytes whatever ran them.
+    - A controller (or factory, or ``metrics``) that raises, returns an unknown input name,
+      a non-finite or out-of-range value makes that run ``failed``, its message naming the
+      run, the time and the cause (the exception's last line); the other runs go on.
+    - Ctrl-C keeps every finished run in ``out`` (worker processes are stopped, an
+      executor's pending runs cancelled) and raises ``KeyboardInterrupt``; ``resume=True``
+      goes on.
+    - ``progress(done, total)`` is called after each run; ``max_rows`` bounds a run's rows.
     """
-    origin, text = _scene_args(scene, base_dir)
-    columns, data, status, messages = _satsim.campaign(origin, text, threads, _shard(shard))
-    return CampaignResult(columns, data, status, messages)
+    if controller is None:
+        extra = {"period": period, "metrics": metrics, "out": out, "workers": workers,
+                 "executor": executor, "progress": progress, "max_rows": max_rows}
+        given = [k for k, v in extra.items() if v is not None] + (["resume"] if resume else [])
+        if given:
+            raise SatsimError(
+                f"{', '.join(given)} need{'s' if len(given) == 1 else ''} controller= "
+                "(your flight software); the built-in controllers' campaign takes threads "
+                "and shard (or use `satsim campaign` for its folder)")
+        origin, text = _scene_args(scene, base_dir)
+        columns, data, status, messages = _satsim.campaign(origin, text, threads, _shard(shard))
+        return CampaignResult(columns, data, status, messages)
+    if period is None:
+        raise SatsimError("controller= needs period= (s): the control instants are "
+                          "t0, t0 + period, t0 + 2 period, ...")
+    if threads is not None:
+        raise SatsimError("threads= is the built-in controllers' campaign's: with controller=, "
+                          "give workers= (processes) or executor=")
+    return _stepped.campaign(
+        scene, controller=controller, period=period, metrics=metrics, out=out,
+        workers=workers, executor=executor, resume=resume, shard=shard, base_dir=base_dir,
+        max_rows=max_rows, progress=progress)
 
 
 def modes(scene: PathLike, *, base_dir: Optional[PathLike] = None) -> Dict[str, Any]:
@@ -665,3 +742,7 @@ class Simulation:
 
     def __repr__(self) -> str:
         return f"<satsim.Simulation t={self.t} inputs={self.inputs}>"
+
+
+from . import _stepped  # noqa: E402  (uses the classes above)
+from ._stepped import Run  # noqa: E402

@@ -13,6 +13,8 @@
 
 #![forbid(unsafe_code)]
 
+mod stepped;
+
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -638,6 +640,9 @@ fn _satsim(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("SatsimError", m.py().get_type::<SatsimError>())?;
     m.add_class::<NativeModel>()?;
     m.add_class::<NativeSimulation>()?;
+    m.add_class::<stepped::NativeCampaign>()?;
+    m.add_class::<stepped::NativeFolder>()?;
+    m.add_function(wrap_pyfunction!(stepped::choose_shard, m)?)?;
     m.add_function(wrap_pyfunction!(run_file, m)?)?;
     m.add_function(wrap_pyfunction!(run_text, m)?)?;
     m.add_function(wrap_pyfunction!(campaign, m)?)?;

@@ -258,6 +258,26 @@ impl SceneStepper {
     /// the same grid.
     pub fn advance(&mut self, dt: f64) -> Result<Vec<EventRecord>, StepFailure> {
         self.check_open()?;
+        if !(dt > 0.0 && dt.is_finite() && (self.t() + dt).is_finite()) {
+            return Err(StepFailure::Input(format!(
+                "dt must be a finite number > 0, got {dt}"
+            )));
+        }
+        self.advance_to(self.t() + dt)
+    }
+
+    /// As [`SceneStepper::advance`], to the time `t_end` (after [`SceneStepper::t`]): a loop
+    /// that advances to `t0 + i · period` lands on those instants exactly, where adding
+    /// `period` again and again would drift by round-off.
+    pub fn advance_to(&mut self, t_end: f64) -> Result<Vec<EventRecord>, StepFailure> {
+        self.check_open()?;
+        if !(t_end.is_finite() && t_end > self.t()) {
+            return Err(StepFailure::Input(format!(
+                "the end time must be a finite number after t = {}, got {t_end}",
+                self.t()
+            )));
+        }
+        let dt = t_end - self.t();
         let kept = self.trajectory.n_rows() as u64;
         let room = self.max_rows.saturating_sub(kept);
         let cap = usize::try_from(room).unwrap_or(usize::MAX - 1);
@@ -279,7 +299,7 @@ impl SceneStepper {
             ..
         } = self;
         stepping
-            .advance(options, dt, |_, row| Self::record(trajectory, out, row))
+            .advance_to(options, t_end, |_, row| Self::record(trajectory, out, row))
             .map_err(|e| match e {
                 StepError::Sink { error, .. } => error,
                 other => StepFailure::from(other),

@@ -62,15 +62,26 @@ fn complete_lines(text: &str) -> (Vec<&str>, usize) {
     (text[..end].lines().collect(), end)
 }
 
+/// `runs.csv` and `traces.csv` opened for streaming ([`open_streams`]).
+pub(crate) struct Streams {
+    pub(crate) runs: Appender,
+    pub(crate) traces: Appender,
+    /// The rows a resumed `runs.csv` holds, as `(k, fields)`.
+    pub(crate) done: Vec<(u64, Vec<String>)>,
+    /// The columns a resumed `runs.csv` has after `header` (the user's metrics).
+    pub(crate) extra: Vec<String>,
+}
+
 /// Opens `runs.csv` and `traces.csv` for streaming. Fresh (header written) unless `resume`
-/// and `runs.csv` exists; then its header must be `header`, a cut-off last line (a campaign
-/// killed mid-write) is removed, and the rows it holds are returned as `(k, fields)`.
-#[allow(clippy::type_complexity)]
+/// and `runs.csv` exists; then its header must be `header` (followed by more columns, the
+/// user's metrics, where `extra` allows), a cut-off last line (a campaign killed mid-write)
+/// is removed, and the rows it holds are returned.
 pub(crate) fn open_streams(
     dir: &Path,
     header: &[String],
     resume: bool,
-) -> Result<(Appender, Appender, Vec<(u64, Vec<String>)>), CampaignError> {
+    extra: bool,
+) -> Result<Streams, CampaignError> {
     let runs_path = dir.join(RUNS_CSV);
     let traces_path = dir.join(TRACES_CSV);
     let head = header
@@ -79,31 +90,33 @@ pub(crate) fn open_streams(
         .collect::<Vec<_>>()
         .join(",");
     let mut done = Vec::new();
+    let mut more = Vec::new();
     let resuming = resume && runs_path.exists();
     if resuming {
         let text =
             std::fs::read_to_string(&runs_path).map_err(|e| CampaignError::io(&runs_path, e))?;
         let (lines, end) = complete_lines(&text);
-        if lines.first() != Some(&head.as_str()) {
-            return Err(CampaignError::Other(format!(
-                "{}: its header is not this campaign's (other dispersions or another scene): use another --out, or run without --resume to start again",
-                runs_path.display()
-            )));
+        let first = lines.first().copied().unwrap_or_default();
+        match first.strip_prefix(head.as_str()) {
+            Some("") => {}
+            Some(rest) if extra && rest.starts_with(',') => more = split(&rest[1..]),
+            _ => {
+                return Err(CampaignError::Other(format!(
+                    "{}: its header is not this campaign's (other dispersions or another scene): use another --out, or run without --resume to start again",
+                    runs_path.display()
+                )));
+            }
         }
+        let width = header.len() + more.len();
         for (n, line) in lines.iter().enumerate().skip(1) {
             let fields = split(line);
             let k = fields[0].parse::<u64>().map_err(|_| {
                 CampaignError::io(&runs_path, format!("line {}: bad run number", n + 1))
             })?;
-            if fields.len() != header.len() {
+            if fields.len() != width {
                 return Err(CampaignError::io(
                     &runs_path,
-                    format!(
-                        "line {}: {} fields, expected {}",
-                        n + 1,
-                        fields.len(),
-                        header.len()
-                    ),
+                    format!("line {}: {} fields, expected {width}", n + 1, fields.len()),
                 ));
             }
             done.push((k, fields));
@@ -120,18 +133,46 @@ pub(crate) fn open_streams(
             .map_err(|e| CampaignError::io(&runs_path, e))?;
         std::fs::write(&traces_path, "").map_err(|e| CampaignError::io(&traces_path, e))?;
     }
-    let open = |p: &Path| -> Result<Appender, CampaignError> {
-        let f = OpenOptions::new()
-            .append(true)
-            .create(true)
-            .open(p)
-            .map_err(|e| CampaignError::io(p, e))?;
-        Ok(Appender {
-            path: p.to_path_buf(),
-            out: BufWriter::new(f),
-        })
-    };
-    Ok((open(&runs_path)?, open(&traces_path)?, done))
+    let open = open_append;
+    Ok(Streams {
+        runs: open(&runs_path)?,
+        traces: open(&traces_path)?,
+        done,
+        extra: more,
+    })
+}
+
+/// Opens `path` for appending.
+pub(crate) fn open_append(path: &Path) -> Result<Appender, CampaignError> {
+    let f = OpenOptions::new()
+        .append(true)
+        .create(true)
+        .open(path)
+        .map_err(|e| CampaignError::io(path, e))?;
+    Ok(Appender {
+        path: path.to_path_buf(),
+        out: BufWriter::new(f),
+    })
+}
+
+/// Gives `runs.csv` (whose rows are all failed runs) the columns `more` after its own, the
+/// failed rows' fields for them empty: the user's metrics, named by the first run that
+/// finished. Rewritten whole through a temporary file.
+pub(crate) fn add_columns(path: &Path, more: &[String]) -> Result<(), CampaignError> {
+    let text = std::fs::read_to_string(path).map_err(|e| CampaignError::io(path, e))?;
+    let (lines, _) = complete_lines(&text);
+    let mut out = String::with_capacity(text.len() + lines.len() * (more.len() + 1));
+    for (n, line) in lines.iter().enumerate() {
+        out.push_str(line);
+        for m in more {
+            out.push(',');
+            if n == 0 {
+                out.push_str(&quote(m));
+            }
+        }
+        out.push('\n');
+    }
+    replace(path, &out)
 }
 
 fn truncate(path: &Path, len: usize) -> Result<(), CampaignError> {
@@ -467,6 +508,19 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<Finished, CampaignError> {
                     first.scene_digest.as_deref().unwrap_or_default()
                 )));
             }
+            Some(first) if first.controller != m.controller => {
+                let name = |c: &Option<String>| {
+                    c.as_deref()
+                        .map_or("the built-in controllers".to_owned(), |c| format!("`{c}`"))
+                };
+                return Err(CampaignError::Other(format!(
+                    "{} was run with another controller ({}) than {} ({})",
+                    d.display(),
+                    name(&m.controller),
+                    dirs[0].display(),
+                    name(&first.controller)
+                )));
+            }
             Some(first) if first.runs != m.runs || first.seed != m.seed => {
                 return Err(CampaignError::Other(format!(
                     "{} is another campaign ({} runs, seed {}) than {} ({} runs, seed {})",
@@ -564,6 +618,7 @@ mod tests {
             shard: Shard::new(0, 1).unwrap(),
             histograms: Vec::new(),
             scene_digest: None,
+            controller: None,
         };
         let done = finish(&dir, &meta).unwrap();
         assert_eq!((done.ok, done.failed), (2, 1));

@@ -21,6 +21,11 @@ pub struct Meta {
     /// [`super::Campaign::scene_digest`] of the scene the runs were made with (`None` in a
     /// folder written before it was recorded).
     pub scene_digest: Option<String>,
+    /// The flight software that stepped the runs (`satsim.campaign(controller=...)`: its
+    /// factory, period and metrics, as [`super::stepped::Stepped::identity`] writes them);
+    /// `None` for the built-in controllers (`satsim campaign`). A folder is resumed and
+    /// merged only with the same.
+    pub controller: Option<String>,
 }
 
 impl Meta {
@@ -30,7 +35,7 @@ impl Meta {
     }
 
     pub(crate) fn write(&self, dir: &Path) -> Result<(), CampaignError> {
-        let v = serde_json::json!({
+        let mut v = serde_json::json!({
             "scene": self.scene,
             "runs": self.runs,
             "seed": self.seed,
@@ -38,6 +43,9 @@ impl Meta {
             "histograms": self.histograms,
             "scene_digest": self.scene_digest,
         });
+        if let Some(c) = &self.controller {
+            v["controller"] = c.clone().into();
+        }
         let path = dir.join(CAMPAIGN_JSON);
         let text = serde_json::to_string_pretty(&v).expect("JSON serialises") + "\n";
         std::fs::write(&path, text).map_err(|e| CampaignError::io(&path, e))
@@ -70,6 +78,7 @@ impl Meta {
                 })
                 .collect::<Result<_, _>>()?,
             scene_digest: v["scene_digest"].as_str().map(str::to_owned),
+            controller: v["controller"].as_str().map(str::to_owned),
         })
     }
 }

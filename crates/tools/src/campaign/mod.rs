@@ -25,14 +25,17 @@
 //! it); the integration itself does not allocate in its inner loop.
 
 pub mod files;
+pub mod folder;
 pub mod lanes;
 pub mod meta;
 pub mod plots;
 pub mod shard;
 pub mod spec;
 pub mod stats;
+pub mod stepped;
 
 pub use files::{Finished, finish, merge};
+pub use folder::Folder;
 pub use shard::{Shard, ShardChoice, choose_shard};
 pub use spec::{Dispersed, Law, Segment, draw, run_rng};
 
@@ -44,11 +47,10 @@ use satsim_spacecraft::simulation::{RowSink, RunError, Simulation};
 use satsim_tree::io::{FileError, line_of, with_key};
 use serde::Deserialize;
 use spec::CampaignFile;
-use std::collections::HashSet;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::AtomicU64;
 use thiserror::Error;
 use toml::{Spanned, Table};
 
@@ -158,6 +160,9 @@ pub struct RunRecord {
     pub outcome: Result<RunStats, String>,
     /// Samples of the trace columns (`t` first), every `stride` output rows.
     pub trace: Vec<Vec<f64>>,
+    /// The user's metrics of the run (`name`, value), columns after the statistics
+    /// ([`stepped`]); empty for a campaign of the built-in controllers.
+    pub metrics: Vec<(String, f64)>,
 }
 
 #[derive(Deserialize)]
@@ -469,6 +474,19 @@ impl Campaign {
     /// Run `k`'s scene with the drawn `values`, parsed, checked and built as `satsim run`
     /// builds it; the message of a failed run where it cannot be.
     fn prepare(&self, k: u64, values: &[f64]) -> Result<(Scene, Simulation), String> {
+        let scene = self.drawn_scene(k, values)?;
+        let sim = scene.simulation().map_err(|e| e.to_string())?;
+        if sim.columns() != self.columns {
+            return Err(
+                "the drawn scene's trajectory columns differ from the nominal scene's".into(),
+            );
+        }
+        Ok((scene, sim))
+    }
+
+    /// Run `k`'s scene with the drawn `values`, parsed and checked as `satsim run` checks
+    /// it; the message of a failed run where it cannot be.
+    pub(crate) fn drawn_scene(&self, k: u64, values: &[f64]) -> Result<Scene, String> {
         let text = self.run_text(k, values);
         // The drawn text is rewritten: its errors are placed where the value is written.
         let scene = Scene::parse(&text, &self.path).map_err(|e| {
@@ -479,13 +497,7 @@ impl Campaign {
             FileError::Schema { message, .. } => format!("the drawn scene is refused: {message}"),
             other => other.to_string(),
         })?;
-        let sim = scene.simulation().map_err(|e| e.to_string())?;
-        if sim.columns() != self.columns {
-            return Err(
-                "the drawn scene's trajectory columns differ from the nominal scene's".into(),
-            );
-        }
-        Ok((scene, sim))
+        Ok(scene)
     }
 
     /// The `runs.csv` row of a record (with its newline).
@@ -574,21 +586,27 @@ impl<'c> Collect<'c> {
         if self.stopped {
             return None;
         }
-        let outcome = match result {
-            Ok(_) if self.rows == 0 => Err("the run wrote no output row".into()),
-            Ok(_) => Ok(self.stats),
-            Err(RunError::Integrate(e)) => Err(e.to_string()),
-            Err(RunError::Sink { error, .. }) => Err(format!("non-finite result: {error}")),
-        };
-        Some(match outcome {
-            Ok(stats) => RunRecord {
-                k: self.k,
-                values,
-                outcome: Ok(stats),
-                trace: self.trace,
-            },
-            Err(why) => RunRecord::failed(self.k, values, why),
+        Some(match result {
+            Ok(_) => self.into_record(values),
+            Err(RunError::Integrate(e)) => RunRecord::failed(self.k, values, e.to_string()),
+            Err(RunError::Sink { error, .. }) => {
+                RunRecord::failed(self.k, values, format!("non-finite result: {error}"))
+            }
         })
+    }
+
+    /// The record of a run that ended at its end time, from the rows collected.
+    pub(crate) fn into_record(self, values: Vec<f64>) -> RunRecord {
+        if self.rows == 0 {
+            return RunRecord::failed(self.k, values, "the run wrote no output row".into());
+        }
+        RunRecord {
+            k: self.k,
+            values,
+            outcome: Ok(self.stats),
+            trace: self.trace,
+            metrics: Vec::new(),
+        }
     }
 }
 
@@ -626,12 +644,13 @@ impl RowSink for Collect<'_> {
 
 impl RunRecord {
     /// A failed run's record.
-    pub(crate) fn failed(k: u64, values: Vec<f64>, why: String) -> Self {
+    pub fn failed(k: u64, values: Vec<f64>, why: String) -> Self {
         RunRecord {
             k,
             values,
             outcome: Err(why),
             trace: Vec::new(),
+            metrics: Vec::new(),
         }
     }
 }
@@ -734,87 +753,21 @@ pub fn run_campaign(
     opts: &RunOptions,
     progress: &dyn Progress,
 ) -> Result<Report, CampaignError> {
-    campaign.nominal.check_rows(campaign.max_rows)?;
-    std::fs::create_dir_all(dir).map_err(|e| CampaignError::io(dir, e))?;
-    let digest = campaign.scene_digest();
-    let meta = meta::Meta {
-        scene: campaign.path.display().to_string(),
-        runs: campaign.runs,
-        seed: campaign.seed,
-        shard: opts.shard,
-        histograms: campaign.histograms.clone(),
-        scene_digest: Some(digest.clone()),
-    };
-    // A folder is resumed only with the scene its runs were made with: the drawn values
-    // alone would not notice a changed model file or a different `--set`.
-    let json = dir.join(CAMPAIGN_JSON);
-    // Without a digest nothing says which scene the runs there were made with: refused.
-    if opts.resume && (json.exists() || dir.join(RUNS_CSV).exists()) {
-        if !json.exists() {
-            return Err(CampaignError::Other(format!(
-                "{}: no {CAMPAIGN_JSON} beside it, so nothing says which scene its runs were made with: --resume needs the folder a campaign wrote whole; use another --out",
-                dir.join(RUNS_CSV).display()
-            )));
-        }
-        let before = meta::Meta::read(dir)?;
-        match &before.scene_digest {
-            None => {
-                return Err(CampaignError::Other(format!(
-                    "{}: has no scene digest (written by an older satsim), so nothing says which scene its runs were made with: use another --out",
-                    json.display()
-                )));
-            }
-            Some(d) if *d != digest => {
-                return Err(CampaignError::Other(format!(
-                    "{}: its runs were made with another scene (a changed scene, model file or --set value; scene digest {d} here, {digest} now): resume with the same scene and --set, or use another --out",
-                    json.display(),
-                )));
-            }
-            Some(_) => {}
-        }
-    }
-    meta.write(dir)?;
-    let header = campaign.header();
-    let (runs, traces, done) = files::open_streams(dir, &header, opts.resume)?;
-    // Rows already there must be this campaign's (same draws), and this shard's.
-    for (k, fields) in &done {
-        if *k >= campaign.runs || !opts.shard.contains(*k) {
-            return Err(CampaignError::Other(format!(
-                "{}: holds run {k}, which is not in shard {} of a {}-run campaign: resume with the same --shard, or use another --out",
-                dir.join(RUNS_CSV).display(),
-                opts.shard,
-                campaign.runs
-            )));
-        }
-        let drawn: Vec<String> = campaign.draw(*k).iter().map(|v| v.to_string()).collect();
-        if fields[1..=drawn.len()] != drawn[..] {
-            return Err(CampaignError::Other(format!(
-                "{}: run {k} holds other drawn values than this campaign draws (was the seed or a dispersion changed?): use another --out",
-                dir.join(RUNS_CSV).display()
-            )));
-        }
-    }
-    let done: HashSet<u64> = done.into_iter().map(|(k, _)| k).collect();
-    let todo: Vec<u64> = (0..campaign.runs)
-        .filter(|k| opts.shard.contains(*k) && !done.contains(k))
-        .collect();
-    progress.start(todo.len() as u64, done.len() as u64);
+    let folder = Folder::open(campaign, dir, opts.shard, opts.resume, None, false)?;
+    let todo = folder.todo().to_vec();
+    let skipped = folder.skipped();
+    progress.start(todo.len() as u64, skipped);
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(opts.threads.unwrap_or(0))
         .build()
         .map_err(|e| CampaignError::Other(format!("cannot start the thread pool: {e}")))?;
-    let sinks = Mutex::new((runs, traces));
-    let ran = AtomicU64::new(0);
-    // A record to the files: traces first, so that a row in runs.csv always has its traces.
+    let folder = Mutex::new(folder);
     let emit = |r: RunRecord| -> Result<(), CampaignError> {
-        let row = campaign.csv_row(&r);
-        let lines = campaign.trace_lines(&r);
-        let mut s = sinks.lock().unwrap_or_else(|p| p.into_inner());
-        s.1.append(&lines)?;
-        s.0.append(&row)?;
-        drop(s);
-        progress.finished(r.outcome.is_ok());
-        ran.fetch_add(1, Ordering::Relaxed);
+        let ok = folder
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .emit(campaign, r)?;
+        progress.finished(ok);
         Ok(())
     };
     let mut lane_use = None;
@@ -869,22 +822,15 @@ pub fn run_campaign(
                 })
         })?;
     }
-    drop(sinks);
-    let ran = ran.into_inner();
-    if ran < todo.len() as u64 {
-        // Stopped: runs.csv stays as streamed (complete rows, completion order), not
-        // sorted or summarised, so that --resume takes it up.
-        return Err(CampaignError::Interrupted {
-            runs_csv: dir.join(RUNS_CSV),
-            held: done.len() as u64 + ran,
-            left: todo.len() as u64 - ran,
-        });
-    }
-    let finished = finish(dir, &meta)?;
+    let folder = folder.into_inner().unwrap_or_else(|p| p.into_inner());
+    let ran = folder.ran();
+    // Stopped part-way: runs.csv stays as streamed (complete rows, completion order), not
+    // sorted or summarised, so that --resume takes it up (CampaignError::Interrupted).
+    let finished = folder.close()?;
     Ok(Report {
         lanes: lane_use,
         ran,
-        skipped: done.len() as u64,
+        skipped,
         finished,
     })
 }
