@@ -21,7 +21,7 @@ profile=${SATSIM_PYTHON_PROFILE:-release}
 case "$profile" in dev) dir=debug ;; *) dir=$profile ;; esac
 export MATURIN_PEP517_ARGS="--profile $profile"
 log="$venv/pip.log"
-if ! "$venv/bin/pip" install -v "./python[examples,test,gym]" pin==4.1.0 > "$log" 2>&1; then
+if ! "$venv/bin/pip" install -v "./python[examples,test,gym,ray]" pin==4.1.0 > "$log" 2>&1; then
   tail -n 60 "$log"; exit 1
 fi
 grep -E '^ *(Compiling|Finished) ' "$log" || true
@@ -36,6 +36,8 @@ if [ ! -x "$SATSIM_BIN" ]; then cargo build --profile "$profile" -p satsim-cli; 
 export SATSIM_REQUIRE_PINOCCHIO=1
 # The same for satsim.gym's tests and Gymnasium (the `gym` extra).
 export SATSIM_REQUIRE_GYM=1
+# And for the Ray executor's test (the `ray` extra).
+export SATSIM_REQUIRE_RAY=1
 # From the workspace root, so that `import satsim` finds the installed package (python/satsim
 # alone has no native module).
 "$venv/bin/python" -m pytest python/tests -q -rs

@@ -39,6 +39,15 @@ order hold, see :class:`satsim.Simulation`), then the simulation advances ``peri
   the same seed gives the same episode and episodes differ.
 
 ``info`` holds ``t`` and the ``events`` that fired during the step (``(t, effect, text)``).
+
+**The runs of a campaign** (a scene with a ``[campaign]`` table, contract sections 8 and 15):
+:class:`CampaignEnv` flies run ``k``'s drawn spacecraft in each episode (its dispersed
+values, its own sensor noise: what ``satsim.campaign(controller=...)`` flies), and
+:func:`make_vector` spreads the runs over ``gymnasium.vector.AsyncVectorEnv``'s worker
+processes, one environment each::
+
+    envs = satsim.gym.make_vector("mc.toml", 8, actions={...}, reward=my_reward)
+    obs, info = envs.reset(seed=0)        # env i starts with run i, then i + 8, i + 16, ...
 """
 
 from __future__ import annotations
@@ -57,7 +66,7 @@ except ImportError as e:  # pragma: no cover - exercised only without the extra
 
 from . import PathLike, SatsimError, Simulation
 
-__all__ = ["Env"]
+__all__ = ["CampaignEnv", "Env", "make_vector"]
 
 Reward = Callable[[Dict[str, float], Dict[str, Any], Dict[str, float]], float]
 Terminated = Callable[[Dict[str, float], Dict[str, Any]], bool]
@@ -231,3 +240,68 @@ class Env(gymnasium.Env):
             self._sim.close()
             self._sim = None
 
+
+class CampaignEnv(Env):
+    """:class:`Env` over the runs of a campaign: episode ``e`` of this environment flies run
+    ``k = (first + e * stride) % runs`` of the scene's ``[campaign]`` (its drawn values and its
+    own sensor seed, as ``satsim.campaign`` draws them), or the run ``reset(options={"run":
+    k})`` names. ``info["run"]`` is the episode's run. The spaces are those of run ``first``'s
+    scene (every run has the nominal scene's columns and inputs). Same arguments as
+    :class:`Env`, plus ``first`` and ``stride``."""
+
+    def __init__(self, scene: PathLike, actions: Mapping[str, Tuple[float, float]], *,
+                 first: int = 0, stride: int = 1, base_dir: Optional[PathLike] = None,
+                 **kw: Any) -> None:
+        import os
+
+        from . import _satsim, _scene_args
+
+        origin, text = _scene_args(scene, base_dir)
+        self._campaign = _satsim.NativeCampaign(origin, text)
+        if not (isinstance(first, int) and isinstance(stride, int) and first >= 0 and stride >= 1):
+            raise SatsimError(f"first must be >= 0 and stride >= 1, got {first!r}, {stride!r}")
+        self._runs_dir = os.path.dirname(os.path.abspath(origin)) if text is None else (
+            None if base_dir is None else os.fspath(base_dir))
+        self._first, self._stride, self._episode = first, stride, 0
+        self._run = first % self._campaign.runs
+        super().__init__(scene, actions, base_dir=base_dir, **kw)
+
+    def _new_simulation(self, seed: Optional[int]) -> Simulation:
+        # The run's scene carries its own sensor seed: `seed` (the episode's) is not used.
+        return Simulation(self._campaign.run_text(self._run), base_dir=self._runs_dir)
+
+    def reset(self, *, seed: Optional[int] = None, options: Optional[Dict[str, Any]] = None
+              ) -> Tuple[np.ndarray, Dict[str, Any]]:
+        runs = self._campaign.runs
+        if options is not None and "run" in options:
+            k = options["run"]
+            if not (isinstance(k, (int, np.integer)) and 0 <= k < runs):
+                raise SatsimError(f"options['run'] must be a run 0 to {runs - 1}, got {k!r}")
+            self._run = int(k)
+        else:
+            self._run = (self._first + self._episode * self._stride) % runs
+            self._episode += 1
+        obs, info = super().reset(seed=seed, options=options)
+        info["run"] = self._run
+        return obs, info
+
+    def step(self, action: Any) -> Tuple[np.ndarray, float, bool, bool, Dict[str, Any]]:
+        obs, reward, done, truncated, info = super().step(action)
+        info["run"] = self._run
+        return obs, reward, done, truncated, info
+
+
+def make_vector(scene: PathLike, num_envs: int, actions: Mapping[str, Tuple[float, float]], *,
+                asynchronous: bool = True, **kw: Any) -> Any:
+    """``num_envs`` :class:`CampaignEnv` over the campaign's runs (env ``i`` flies runs ``i``,
+    ``i + num_envs``, ...), in ``gymnasium.vector.AsyncVectorEnv`` (one worker process each:
+    the arguments must pickle, so ``reward`` and ``terminated`` are importable functions) or,
+    with ``asynchronous=False``, ``SyncVectorEnv`` (this process)."""
+    import functools
+
+    if not (isinstance(num_envs, int) and num_envs >= 1):
+        raise SatsimError(f"num_envs must be a whole number >= 1, got {num_envs!r}")
+    fns = [functools.partial(CampaignEnv, scene, dict(actions), first=i, stride=num_envs, **kw)
+           for i in range(num_envs)]
+    vector = gymnasium.vector.AsyncVectorEnv if asynchronous else gymnasium.vector.SyncVectorEnv
+    return vector(fns)

@@ -246,6 +246,17 @@ impl NativeCampaign {
     fn sensor_seed(&self, k: u64) -> u64 {
         self.c.sensor_seed(k)
     }
+    /// Run `k`'s scene as TOML text: the drawn values in place, its sensor seed, the model
+    /// and the initial state inline (`satsim run` of it gives run `k`'s row).
+    fn run_text(&self, k: u64) -> PyResult<String> {
+        if k >= self.c.runs {
+            return Err(err(format!(
+                "run {k} is not in the campaign (runs 0 to {})",
+                self.c.runs.saturating_sub(1)
+            )));
+        }
+        Ok(self.c.run_text(k, &self.c.draw(k)))
+    }
     /// Refuses a `period` that cannot step the scene.
     fn check_period(&self, period: f64) -> PyResult<()> {
         self.c.check_period(period).map_err(err)

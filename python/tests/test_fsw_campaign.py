@@ -286,3 +286,25 @@ def test_bad_arguments_are_refused_before_any_run(tmp_path):
         satsim.campaign(scene, controller=ctl.nothing, period=0.1, threads=2)
     with pytest.raises(satsim.SatsimError, match="importable"):
         satsim.campaign(scene, controller=lambda run: ctl.Nothing(), period=0.1, workers=2)
+
+
+def test_on_a_local_ray_cluster_the_files_are_the_same(tmp_path, monkeypatch):
+    if os.environ.get("SATSIM_REQUIRE_RAY") != "1":
+        pytest.importorskip("ray", reason="needs `pip install ray` (the `ray` extra)")
+    import ray
+
+    from satsim.executors import RayExecutor
+
+    scene = write_scene(tmp_path, runs=6, failing=True)
+    satsim.campaign(scene, controller=ctl.pd, period=0.1, metrics=ctl.settling,
+                    out=tmp_path / "here")
+    # The workers import the controllers' module as this process does.
+    monkeypatch.setenv("PYTHONPATH", str(TESTS) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    monkeypatch.setenv("RAY_AUTH_MODE", "disabled")
+    ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False)
+    try:
+        satsim.campaign(scene, controller=ctl.pd, period=0.1, metrics=ctl.settling,
+                        out=tmp_path / "ray", executor=RayExecutor())
+    finally:
+        ray.shutdown()
+    same_files(tmp_path / "here", tmp_path / "ray")

@@ -203,3 +203,53 @@ at = [0.0, 0.5, 0.0]
 direction = [0.0, 0.0, 1.0]
 thrust = 2.0
 """
+
+
+CAMPAIGN = """
+[campaign]
+runs = 4
+seed = 5
+[[campaign.disperse]]
+key = "initial.base.angular_velocity"
+normal = { sigma = 0.002 }
+"""
+
+
+@pytest.mark.parametrize("asynchronous", [False, True])
+def test_the_vector_env_flies_the_campaigns_runs(asynchronous):
+    """Env i of 2 flies runs i, i + 2: with zero actions each episode ends where the
+    campaign's run with a controller that sets nothing ends (its final row, bit for bit)."""
+    text = deploy_text(1.0, SENSORS + CAMPAIGN)
+    envs = satsim.gym.make_vector(text, 2, WHEELS, observation="row", base_dir=SCENES,
+                                  asynchronous=asynchronous)
+    try:
+        finals = {}
+        obs, info = envs.reset(seed=0)
+        assert list(info["run"]) == [0, 1]
+        for episode in range(2):
+            runs = [int(k) for k in info["run"]]
+            done = np.zeros(2, dtype=bool)
+            while not done.all():
+                obs, _, term, trunc, info = envs.step(np.zeros((2, 3)))
+                for i in np.flatnonzero(trunc | term):
+                    if not done[i]:
+                        finals[runs[i]] = obs[i].copy() if "final_obs" not in info else \
+                            info["final_obs"][i]
+                done |= trunc | term
+            if episode == 0:
+                obs, info = envs.reset()
+                assert list(info["run"]) == [2, 3]
+    finally:
+        envs.close()
+    assert sorted(finals) == [0, 1, 2, 3]
+
+    class Nothing:
+        def step(self, t, meas, row):
+            return {}
+
+    res = satsim.campaign(text, base_dir=SCENES, controller=lambda run: Nothing(), period=0.1)
+    sim = satsim.Simulation(deploy_text(1.0, SENSORS), base_dir=SCENES)
+    columns = [c for c in sim.columns if c != "t"]
+    for k, final in finals.items():
+        expected = np.array([res[f"final_{c}"][k] for c in columns])
+        assert np.array_equal(np.asarray(final).view(np.uint64), expected.view(np.uint64)), k
