@@ -32,7 +32,9 @@ order hold, see :class:`satsim.Simulation`), then the simulation advances ``peri
   and the readings as dicts and the action as a dict of input values (default: 0), and
   ``terminated(row, reading)`` (default: never). The episode is truncated at the scene's
   end, ``t0 + duration`` (``max_time``, a finite time after ``t0``, to change it); ``period``
-  (a finite number of seconds > 0) may not exceed the episode.
+  (a finite number of seconds > 0) may not exceed the episode. An episode keeps at most
+  ``max_rows`` rows of the scene's output grid (default 1 000 000, as
+  :class:`satsim.Simulation`): raise it, or the scene's ``output.every``, for longer ones.
 - **Order**: ``step`` before the first ``reset`` raises :class:`satsim.SatsimError`.
 - **Seeding**: ``reset(seed=...)`` seeds the environment's generator, and each episode's
   sensor noise is drawn from a seed it takes from there (``satsim.Simulation(seed=...)``), so
@@ -117,9 +119,11 @@ class Env(gymnasium.Env):
         terminated: Optional[Terminated] = None,
         max_time: Optional[float] = None,
         base_dir: Optional[PathLike] = None,
+        max_rows: int = Simulation.MAX_ROWS,
     ) -> None:
         super().__init__()
         self._scene, self._base_dir = scene, base_dir
+        self._max_rows = max_rows
         if not (_is_number(period) and np.isfinite(period) and period > 0):
             raise SatsimError(f"period must be a finite number > 0, got {period!r}")
         self._period = float(period)
@@ -172,7 +176,8 @@ class Env(gymnasium.Env):
         sim.close()
 
     def _new_simulation(self, seed: Optional[int]) -> Simulation:
-        return Simulation(self._scene, base_dir=self._base_dir, seed=seed)
+        return Simulation(self._scene, base_dir=self._base_dir, seed=seed,
+                          max_rows=self._max_rows)
 
     def _observation_columns(self, observation: Union[str, Sequence[str]], sim: Simulation) -> List[str]:
         if isinstance(observation, str):
@@ -268,7 +273,8 @@ class CampaignEnv(Env):
 
     def _new_simulation(self, seed: Optional[int]) -> Simulation:
         # The run's scene carries its own sensor seed: `seed` (the episode's) is not used.
-        return Simulation(self._campaign.run_text(self._run), base_dir=self._runs_dir)
+        return Simulation(self._campaign.run_text(self._run), base_dir=self._runs_dir,
+                          max_rows=self._max_rows)
 
     def reset(self, *, seed: Optional[int] = None, options: Optional[Dict[str, Any]] = None
               ) -> Tuple[np.ndarray, Dict[str, Any]]:

@@ -253,3 +253,18 @@ def test_the_vector_env_flies_the_campaigns_runs(asynchronous):
     for k, final in finals.items():
         expected = np.array([res[f"final_{c}"][k] for c in columns])
         assert np.array_equal(np.asarray(final).view(np.uint64), expected.view(np.uint64)), k
+
+
+def test_an_episode_longer_than_max_rows_is_refused_when_it_would_pass_it():
+    """`max_rows` reaches the episode's simulation: a step that would keep more rows raises
+    before it integrates; a larger bound lets the same episode run."""
+    text = deploy_text(2.0, SENSORS)
+    env = satsim.gym.Env(text, WHEELS, base_dir=SCENES, max_rows=3)
+    env.reset(seed=0)
+    with pytest.raises(satsim.SatsimError, match="max_rows"):
+        for _ in range(100):
+            env.step(np.zeros(3))
+    env = satsim.gym.Env(text, WHEELS, base_dir=SCENES, max_rows=1000)
+    env.reset(seed=0)
+    for _ in range(20):
+        env.step(np.zeros(3))
