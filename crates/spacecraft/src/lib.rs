@@ -19,5 +19,7 @@
 #![warn(missing_docs)]
 
 pub mod effects;
+/// Built-in flight software (contract section 16): the attitude and gyro-bias MEKF.
+pub mod fsw;
 pub mod sensors;
 pub mod simulation;
