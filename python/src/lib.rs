@@ -13,6 +13,7 @@
 
 #![forbid(unsafe_code)]
 
+mod fsw;
 mod stepped;
 
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods};
@@ -643,6 +644,8 @@ fn _satsim(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<stepped::NativeCampaign>()?;
     m.add_class::<stepped::NativeFolder>()?;
     m.add_function(wrap_pyfunction!(stepped::choose_shard, m)?)?;
+    m.add_class::<fsw::NativeMekf>()?;
+    m.add_function(wrap_pyfunction!(fsw::attitude_error_py, m)?)?;
     m.add_function(wrap_pyfunction!(run_file, m)?)?;
     m.add_function(wrap_pyfunction!(run_text, m)?)?;
     m.add_function(wrap_pyfunction!(campaign, m)?)?;
