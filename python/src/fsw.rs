@@ -76,7 +76,7 @@ impl NativeMekf {
     fn covariance<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let c = self.inner.covariance();
         let flat: Vec<f64> = c.iter().flatten().copied().collect();
-        Ok(flat.to_pyarray(py).reshape([6, 6])?)
+        flat.to_pyarray(py).reshape([6, 6])
     }
     /// The rate estimate `omega - bias` (rad/s).
     fn rate(&self, omega: [f64; 3]) -> [f64; 3] {
