@@ -97,8 +97,10 @@ def test_an_empty_controller_is_the_command_line_campaign_byte_for_byte(cli, tmp
             if header[j] not in ("status", "message") and v:
                 assert res.data[i, j] == float(v)
     # The same bytes from worker processes, and in memory (no folder).
-    satsim.campaign(scene, controller=ctl.nothing, period=0.1, out=tmp_path / "w2", workers=2)
-    same_files(tmp_path / "cli", tmp_path / "w2")
+    for workers in (2, 4):
+        w = tmp_path / f"w{workers}"
+        satsim.campaign(scene, controller=ctl.nothing, period=0.1, out=w, workers=workers)
+        same_files(tmp_path / "cli", w)
     mem = satsim.campaign(scene, controller=ctl.nothing, period=0.1)
     assert mem.out is None
     assert np.array_equal(mem.data.view(np.uint64), res.data.view(np.uint64))
@@ -123,6 +125,12 @@ def test_sensor_noise_comes_from_each_runs_seed_as_in_the_command_line(cli, tmp_
         assert [values[c] for c in dispersed] == [float(r[1 + i]) for i in
                                                    range(len(dispersed))]
     assert len({s[1] for s in seen}) == 4
+    # Each seed is the one its run's scene carries (`[sensors] seed`), the scene the rows
+    # above (equal to the command line's) were made from.
+    tomllib = pytest.importorskip("tomllib")
+    native = satsim._satsim.NativeCampaign(str(scene))
+    for k, seed, _ in seen:
+        assert tomllib.loads(native.run_text(k))["sensors"]["seed"] == seed
     ctl.SEEN.clear()
     satsim.campaign(scene, controller=ctl.recording, period=0.1)
     assert sorted(ctl.SEEN) == seen
