@@ -509,16 +509,12 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<Finished, CampaignError> {
                 )));
             }
             Some(first) if first.controller != m.controller => {
-                let name = |c: &Option<String>| {
-                    c.as_deref()
-                        .map_or("the built-in controllers".to_owned(), |c| format!("`{c}`"))
-                };
                 return Err(CampaignError::Other(format!(
                     "{} was run with another controller ({}) than {} ({})",
                     d.display(),
-                    name(&m.controller),
+                    m.controller_name(),
                     dirs[0].display(),
-                    name(&first.controller)
+                    first.controller_name()
                 )));
             }
             Some(first) if first.runs != m.runs || first.seed != m.seed => {

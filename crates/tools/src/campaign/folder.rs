@@ -89,15 +89,11 @@ impl Folder {
                 Some(_) => {}
             }
             if before.controller != meta.controller {
-                let name = |c: &Option<String>| {
-                    c.as_deref()
-                        .map_or("the built-in controllers".to_owned(), |c| format!("`{c}`"))
-                };
                 return Err(CampaignError::Other(format!(
                     "{}: its runs were made with another controller ({} there, {} now): resume with the same, or use another --out",
                     json.display(),
-                    name(&before.controller),
-                    name(&meta.controller)
+                    before.controller_name(),
+                    meta.controller_name()
                 )));
             }
         }
@@ -283,16 +279,6 @@ fn metric_names_refused(campaign: &Campaign, names: &[&str]) -> Option<String> {
 mod tests {
     use super::*;
 
-    fn short() -> Campaign {
-        let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("../../examples/scenes/deploy_campaign.toml");
-        let text = std::fs::read_to_string(&path)
-            .unwrap()
-            .replace("duration = 60.0", "duration = 0.5")
-            .replace("runs = 64", "runs = 4");
-        Campaign::parse(&text, &path).unwrap()
-    }
-
     fn with(mut r: RunRecord, metrics: &[(&str, f64)]) -> RunRecord {
         r.metrics = metrics.iter().map(|(n, v)| ((*n).to_owned(), *v)).collect();
         r
@@ -302,7 +288,7 @@ mod tests {
     /// get the fields empty; a run with other keys, or a non-finite value, is failed.
     #[test]
     fn metrics_become_columns_named_by_the_first_finished_run() {
-        let c = short();
+        let c = super::super::tests::short_example(0.5, 4);
         let dir = std::env::temp_dir().join(format!("satsim-folder-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
         let mut f = Folder::open(

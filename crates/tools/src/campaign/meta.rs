@@ -34,6 +34,14 @@ impl Meta {
         (0..self.runs).filter(|k| self.shard.contains(*k)).count() as u64
     }
 
+    /// The flight software, as messages name it: `` `its identity` ``, or "the built-in
+    /// controllers".
+    pub fn controller_name(&self) -> String {
+        self.controller
+            .as_deref()
+            .map_or("the built-in controllers".to_owned(), |c| format!("`{c}`"))
+    }
+
     pub(crate) fn write(&self, dir: &Path) -> Result<(), CampaignError> {
         let mut v = serde_json::json!({
             "scene": self.scene,

@@ -843,6 +843,15 @@ mod tests {
         Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/scenes/deploy_campaign.toml")
     }
 
+    /// The example campaign shortened to `duration` seconds and `runs` runs (RK4, 0.01 s).
+    pub(crate) fn short_example(duration: f64, runs: u64) -> Campaign {
+        let text = std::fs::read_to_string(example())
+            .unwrap()
+            .replace("duration = 60.0", &format!("duration = {duration:?}"))
+            .replace("runs = 64", &format!("runs = {runs}"));
+        Campaign::parse(&text, &example()).unwrap()
+    }
+
     #[test]
     fn the_scene_digest_follows_the_scene_not_the_campaign_table() {
         let text = std::fs::read_to_string(example()).unwrap();

@@ -145,24 +145,12 @@ impl Campaign {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use std::path::Path;
-
-    /// The example campaign shortened to 2 s, 4 runs (RK4 at 0.01 s).
-    fn short() -> Campaign {
-        let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("../../examples/scenes/deploy_campaign.toml");
-        let text = std::fs::read_to_string(&path)
-            .unwrap()
-            .replace("duration = 60.0", "duration = 2.0")
-            .replace("runs = 64", "runs = 4");
-        Campaign::parse(&text, &path).unwrap()
-    }
 
     /// A controller that sets no input gives the record of the run alone, bit for bit, with
     /// the control instants at `t0 + i · period` and the last piece ending at the end.
     #[test]
     fn stepping_without_inputs_is_the_run_bit_for_bit() {
-        let c = short();
+        let c = super::super::tests::short_example(2.0, 4);
         for k in 0..c.runs {
             let mut instants = Vec::new();
             let s = c
@@ -188,7 +176,7 @@ mod tests {
     /// an input is applied (the run differs from the run alone).
     #[test]
     fn a_failing_controller_fails_its_run_and_inputs_act() {
-        let c = short();
+        let c = super::super::tests::short_example(2.0, 4);
         let s = c
             .run_stepped(1, 0.1, &mut |t, _| {
                 if t > 0.25 {
