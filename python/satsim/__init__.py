@@ -544,7 +544,8 @@ def modes(scene: PathLike, *, base_dir: Optional[PathLike] = None) -> Dict[str, 
 def linearize(scene: PathLike, *, base_dir: Optional[PathLike] = None) -> Dict[str, Any]:
     """The linear model ``dz/dt = A z + B u`` of a scene at its initial state, as ``satsim
     linearize`` (contract section 9): a dict with ``states`` and ``inputs`` (lists of str),
-    ``A`` and ``B`` (2-D numpy arrays), ``error_estimate``, ``locked`` and ``released``."""
+    ``A`` and ``B`` (2-D numpy arrays), ``error_estimate``, ``locked``, ``released`` and
+    ``residual`` (``dz/dt`` at the point, by state: zero at an equilibrium; a numpy array)."""
     return _satsim.linearize(*_scene_args(scene, base_dir))
 
 

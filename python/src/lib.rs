@@ -16,7 +16,7 @@
 mod fsw;
 mod stepped;
 
-use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods};
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods, ToPyArray};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -430,6 +430,7 @@ fn linearize<'py>(
     d.set_item("error_estimate", lin.error_estimate)?;
     d.set_item("locked", &lin.locked)?;
     d.set_item("released", &lin.released)?;
+    d.set_item("residual", lin.residual.to_pyarray(py))?;
     Ok(d)
 }
 

@@ -34,6 +34,8 @@ def test_linearize_equals_the_command_line(cli):
     np.testing.assert_array_equal(bits(got["B"]), bits(want["B"]))
     assert got["error_estimate"] == want["error_estimate"]
     assert got["locked"] == want["locked"] and got["released"] == want["released"]
+    assert len(got["residual"]) == len(want["states"])
+    np.testing.assert_array_equal(bits(got["residual"]), bits(want["residual"]))
 
 
 def test_modes_equal_the_command_line(cli):
