@@ -7,9 +7,10 @@
 //! (the Python binding calls the user's `step(t, measure(), row())` there and sets the
 //! inputs it returns), then advances to the next instant (the last piece ends at the
 //! scene's end). The rows are reduced to the same record as a run of the built-in
-//! controllers ([`Collect`]): a controller that sets no input gives the row `satsim
-//! campaign` gives, bit for bit where stepping in pieces reproduces a run (a fixed-step
-//! integrator, `period` a whole number of steps: [`SceneStepper::advance`]).
+//! controllers (as [`Campaign::run_one`] reduces them): a controller that sets no input
+//! gives the row `satsim campaign` gives, bit for bit where stepping in pieces reproduces a
+//! run (a fixed-step integrator, `period` a whole number of steps:
+//! [`SceneStepper::advance`]).
 //!
 //! A controller that fails (raises, returns an unknown input or a non-finite value) fails
 //! its run only, with a message naming the run, the time and the cause.
