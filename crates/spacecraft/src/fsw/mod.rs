@@ -4,10 +4,25 @@
 //! - [`mekf`](crate::fsw::mekf): [`Mekf`](crate::fsw::Mekf), the multiplicative extended
 //!   Kalman filter for the attitude and the gyro bias from a gyro and one or more star
 //!   trackers (`[fsw.estimator] kind = "mekf"`).
+//! - [`guidance`](crate::fsw::guidance): [`Guidance`](crate::fsw::Guidance), the reference
+//!   attitude and rate (`[fsw.guidance] mode = "inertial"` or `"nadir"`).
+//! - [`control`](crate::fsw::control): [`Pid`](crate::fsw::Pid), the attitude PID on the
+//!   estimate's error to the reference and its least-squares allocation to the reaction
+//!   wheels (`[fsw.control] kind = "pid"`, `actuator = "wheels"`).
+//! - [`onboard`](crate::fsw::onboard): [`Onboard`](crate::fsw::Onboard), the blocks wired to a
+//!   scene's sensors and clocked by them (hosted by the
+//!   [`Sensors`](crate::sensors::Sensors) effect, so that they read the readings taken at
+//!   the same instant).
 //!
-//! Each block is a plain, allocation-free-per-step type that the scene wiring drives on its
-//! own clock; it knows nothing of scenes or of the simulation.
+//! Each block is a plain type that the wiring drives on its own clock; the filter and the
+//! law know nothing of scenes or of the simulation.
 
+pub mod control;
+pub mod guidance;
 pub mod mekf;
+pub mod onboard;
 
+pub use control::Pid;
+pub use guidance::{Guidance, Reference};
 pub use mekf::{GyroModel, Mekf, MekfParams, SteadyState, attitude_error, steady_state};
+pub use onboard::{ControlSpec, EstimatorSpec, Onboard};

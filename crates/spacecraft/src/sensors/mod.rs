@@ -23,6 +23,11 @@
 //! `<name>_q_z`), each holding the reading last taken. A row at a sample instant holds the
 //! reading taken there (the one the sample will latch, from the same state).
 //!
+//! Flight software: the set may host a scene's `[fsw]` blocks ([`Sensors::set_fsw`],
+//! [`crate::fsw::Onboard`]), which run at a sample instant right after the sensors sampled,
+//! on the readings just taken. With a control among them the set commands the wheels and no
+//! longer only observes.
+//!
 //! Noise: one ChaCha12 stream per sensor (its index in the set) from the set's seed
 //! ([`Noise`]), and a fixed block of that stream per sample, so that a sensor's readings
 //! depend on the seed, its index and its sample count only, not on the other sensors or on
@@ -38,7 +43,8 @@ pub use magnetometer::Magnetometer;
 pub use star_tracker::StarTracker;
 pub use sun_sensor::SunSensor;
 
-use crate::effects::{Context, Effect, Forces, OrbitState, Sampling};
+use crate::effects::{Context, Effect, Forces, Links, Needs, OrbitState, Sampling};
+use crate::fsw::Onboard;
 use chacha20::ChaCha12Rng;
 use nalgebra::UnitQuaternion;
 use rand_core::SeedableRng;
@@ -262,6 +268,16 @@ impl Sensor {
     pub fn last_reading(&self) -> &[f64] {
         &self.reading[..self.kind.width()]
     }
+    /// Its next sample instant (`-∞` before the first).
+    pub fn next_sample(&self) -> f64 {
+        self.clock.next()
+    }
+    /// The reading at `ctx`: the one taken there when a sample is due (not yet latched),
+    /// else the one last taken (NaN where it cannot be read). Only the first
+    /// [`Kind::width`] values count.
+    pub fn reading_at(&self, ctx: &Context) -> [f64; 4] {
+        self.current(ctx)
+    }
     /// The reading of the next sample at `ctx` (the state it would sample), into `out`.
     fn pending(&self, ctx: &Context, out: &mut [f64; 4]) -> Result<(), String> {
         let mut d = self.noise.sample(self.taken);
@@ -316,6 +332,8 @@ pub type Reading = (String, Vec<f64>);
 pub struct Sensors {
     seed: u64,
     sensors: Vec<Sensor>,
+    /// The flight software that reads these sensors (`[fsw]`), if any.
+    fsw: Option<Box<Onboard>>,
 }
 
 impl Sensors {
@@ -324,7 +342,18 @@ impl Sensors {
         Self {
             seed,
             sensors: Vec::new(),
+            fsw: None,
         }
+    }
+    /// Hosts the flight software `fsw`, whose blocks read these sensors (the indices of its
+    /// specs are indices into [`Sensors::sensors`]): it runs at each sample instant after
+    /// the sensors sampled (see [`crate::fsw::onboard`]).
+    pub fn set_fsw(&mut self, fsw: Onboard) {
+        self.fsw = Some(Box::new(fsw));
+    }
+    /// The flight software it hosts.
+    pub fn fsw(&self) -> Option<&Onboard> {
+        self.fsw.as_deref()
     }
     /// Adds a sensor; its noise is stream `i` of the seed, `i` its index in the set.
     pub fn push(&mut self, mut s: Sensor) {
@@ -366,16 +395,33 @@ impl Effect for Sensors {
     fn name(&self) -> &str {
         "sensors"
     }
+    fn needs(&self) -> Needs {
+        self.fsw.as_ref().map_or_else(Needs::default, |f| f.needs())
+    }
     fn observes_only(&self) -> bool {
-        true
+        self.fsw.as_ref().is_none_or(|f| !f.commands_rotors())
+    }
+    fn commands_rotors(&self) -> bool {
+        self.fsw.as_ref().is_some_and(|f| f.commands_rotors())
+    }
+    fn before(&self) -> &[&str] {
+        if self.commands_rotors() {
+            &["reaction_wheels"]
+        } else {
+            &[]
+        }
+    }
+    fn connect(&mut self, links: &Links) {
+        if let Some(f) = &mut self.fsw {
+            f.connect(links);
+        }
     }
     fn sample_reads_kinematics(&self) -> bool {
         self.sensors.iter().any(|s| s.body != 0)
     }
     fn next_sample(&self) -> f64 {
-        self.sensors
-            .iter()
-            .fold(f64::INFINITY, |m, s| m.min(s.clock.next()))
+        let fsw = self.fsw.as_ref().map_or(f64::INFINITY, |f| f.next_sample());
+        self.sensors.iter().fold(fsw, |m, s| m.min(s.clock.next()))
     }
     fn sample(&mut self, ctx: &Context) -> Result<(), SystemError> {
         for s in &mut self.sensors {
@@ -383,23 +429,36 @@ impl Effect for Sensors {
                 s.take(ctx)?;
             }
         }
+        if let Some(f) = &mut self.fsw {
+            f.sample(ctx, &self.sensors)?;
+        }
         Ok(())
     }
     fn apply(
         &mut self,
         _ctx: &Context,
-        _forces: &mut Forces,
+        forces: &mut Forces,
         _own: &[f64],
         _own_dot: &mut [f64],
     ) -> Result<(), SystemError> {
+        if let Some(f) = &self.fsw {
+            f.apply(forces);
+        }
         Ok(())
     }
     fn output_columns(&self) -> Vec<String> {
-        self.columns()
+        let mut c = self.columns();
+        if let Some(f) = &self.fsw {
+            c.extend(f.columns());
+        }
+        c
     }
     fn output(&self, ctx: &Context, _own: &[f64], row: &mut Vec<f64>) {
         for s in &self.sensors {
             row.extend_from_slice(&s.current(ctx)[..s.kind.width()]);
+        }
+        if let Some(f) = &self.fsw {
+            f.output(ctx, &self.sensors, row);
         }
     }
     fn measure(&self, ctx: &Context, out: &mut Vec<Reading>) {

@@ -1,6 +1,6 @@
 //! The scene file's top level as written: `model`, `initial`, `duration`, `armature`,
-//! `[integrator]`, `[output]`, `[orbit]`, `[sensors]` and the `[effects.<name>]` sections (read by the
-//! effects themselves, see [`satsim_spacecraft::effects::registry`]).
+//! `[integrator]`, `[output]`, `[orbit]`, `[sensors]`, `[fsw]` and the `[effects.<name>]`
+//! sections (read by the effects themselves, see [`satsim_spacecraft::effects::registry`]).
 
 use super::flexible::ElasticFile;
 use satsim_tree::io::{BaseStateFile, HingesStateFile, ModelFile, StateFile};
@@ -123,6 +123,9 @@ pub struct SceneFile {
     /// `[sensors]`: gyros, star trackers, Sun sensors, magnetometers ([`super::sensors`]).
     #[serde(default)]
     pub sensors: Option<Spanned<super::sensors::SensorsFile>>,
+    /// `[fsw]`: built-in flight software on the sensors ([`super::fsw`]).
+    #[serde(default)]
+    pub fsw: Option<Spanned<super::fsw::FswFile>>,
     /// `[campaign]`: read by `satsim campaign` ([`crate::campaign`]); a single run ignores it
     /// and runs the nominal scene.
     #[serde(default)]

@@ -33,10 +33,12 @@
 //! - [`parse`], the reader (model, initial state, armature, the effect sections);
 //! - [`integrator`], the `[integrator]` table;
 //! - [`orbit`], the `[orbit]` table;
-//! - [`sensors`](mod@sensors), the `[sensors]` table.
+//! - [`sensors`](mod@sensors), the `[sensors]` table;
+//! - [`fsw`](mod@fsw), the `[fsw]` table (built-in flight software on the sensors).
 
 pub mod file;
 pub mod flexible;
+pub mod fsw;
 pub mod integrator;
 pub mod orbit;
 pub mod parse;

@@ -186,6 +186,9 @@ impl<'a> Parser<'a> {
             effects.insert(set);
             clocks.extend(super::sensors::clocks(self, s));
         }
+        if let Some(f) = &file.fsw {
+            super::fsw::read(self, f, &model, &mut effects, &mut clocks)?;
+        }
         let scene = Scene {
             path,
             model,

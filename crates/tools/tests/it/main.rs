@@ -7,6 +7,7 @@ mod energy_budget;
 mod environment;
 mod event_slopes;
 mod flexible_scene;
+mod fsw;
 mod lanes;
 mod linearize;
 mod orbital_start;

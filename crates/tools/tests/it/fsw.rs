@@ -1,0 +1,574 @@
+//! Built-in flight software (`[fsw]`, `satsim_spacecraft::fsw::Onboard`): the estimator in a
+//! scene is the standalone MEKF on the same readings, bit for bit, and its error stays
+//! within its 3σ; an estimator alone leaves the truth unchanged to the last bit; the nadir
+//! reference is the orbital frame; the closed loop on the sensors (MEKF, guidance, PID on
+//! the wheels) points the deploying satellite within the estimator's 3σ plus a small
+//! margin, inertially and at nadir, as well as the truth-based controller or better; bad
+//! input is an error naming the file and line.
+
+use crate::common::example;
+use nalgebra::{Quaternion, UnitQuaternion, Vector3};
+use satsim_spacecraft::effects::OrbitState;
+use satsim_spacecraft::fsw::{GyroModel, Mekf, MekfParams, Pid, attitude_error};
+use satsim_spacecraft::sensors::star_tracker::ARCSEC;
+use satsim_spacecraft::sensors::{Kind, Sensors};
+use satsim_tools::api::{Trajectory, run_scene};
+use satsim_tools::scene::Scene;
+use satsim_tools::scene_keys::Override;
+use satsim_tools::stepping::SceneStepper;
+use std::path::PathBuf;
+
+/// The closed-loop example.
+const POINTING: &str = "scenes/fsw_mekf_pointing.toml";
+
+/// After the deployment (the panels latch by 10 s; the bus settles by 120 s).
+const SETTLED: f64 = 150.0;
+
+/// The controller's margin over the estimator's 3σ (rad): 10 arc seconds, what the loop adds
+/// to the estimate's error (its response to the estimate's noise, the wheels' friction and
+/// the gravity gradient).
+const MARGIN: f64 = 10.0 * ARCSEC;
+
+fn path_in_examples(name: &str) -> PathBuf {
+    example("scenes").join(name)
+}
+
+fn parse(text: &str, name: &str) -> Scene {
+    Scene::parse(text, &path_in_examples(name)).unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn read(path: &str, sets: &[&str]) -> Scene {
+    let o: Vec<Override> = sets.iter().map(|s| Override::parse(s).unwrap()).collect();
+    Scene::read_with(example(path), &o).unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn run(scene: &Scene) -> Trajectory {
+    run_scene(scene, || false).unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn col(t: &Trajectory, name: &str) -> usize {
+    t.columns
+        .iter()
+        .position(|c| c == name)
+        .unwrap_or_else(|| panic!("no column `{name}`"))
+}
+
+fn get<const N: usize>(t: &Trajectory, row: &[f64], names: [&str; N]) -> [f64; N] {
+    names.map(|n| row[col(t, n)])
+}
+
+fn norm(v: [f64; 3]) -> f64 {
+    (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
+}
+
+/// fsw_in_the_loop.toml (the deploying satellite held by the truth-based controller, a 10 Hz
+/// gyro and star tracker) for 120 s with rows every gyro sample, plus `fsw`.
+fn in_the_loop(fsw: &str) -> Scene {
+    let text = std::fs::read_to_string(example("scenes/fsw_in_the_loop.toml")).unwrap();
+    let text = text
+        .replacen("duration = 600.0", "duration = 120.0", 1)
+        .replacen("every = 1.0", "every = 0.1", 1);
+    parse(&format!("{text}\n{fsw}"), "fsw_in_the_loop.toml")
+}
+
+#[test]
+fn the_estimator_is_the_standalone_mekf_on_the_same_readings_and_within_its_3_sigma() {
+    let scene =
+        in_the_loop("[fsw.estimator]\nkind = \"mekf\"\ngyro = \"gyro\"\nstar_tracker = \"st\"\n");
+    let t = run(&scene);
+    // The filter's noises are the gyro's.
+    let sensors = scene.effects.get::<Sensors>().unwrap();
+    let Kind::Gyro(g) = sensors.sensors()[0].kind() else {
+        panic!("the first sensor is the gyro")
+    };
+    let Kind::StarTracker(st) = sensors.sensors()[1].kind() else {
+        panic!("the second sensor is the star tracker")
+    };
+    assert_eq!(st.noise, [5.0 * ARCSEC, 5.0 * ARCSEC, 40.0 * ARCSEC]);
+    let params = MekfParams {
+        sigma_v: g.noise_density,
+        sigma_u: g.bias_walk,
+        sigma_attitude: 0.01,
+        sigma_bias: 1e-4,
+    };
+    assert_eq!((params.sigma_v, params.sigma_u), (1e-5, 1e-7));
+    // Each row is a gyro sample: it holds the readings taken there and the estimate after
+    // that sample's update. The standalone filter: start at the first star tracker reading,
+    // then update, compare, propagate with the gyro reading over its period, and so on.
+    let mut filter: Option<Mekf> = None;
+    let (mut n, mut within, mut within_norm) = (0usize, [0usize; 3], 0usize);
+    let mut worst = 0.0f64;
+    for row in t.rows() {
+        let time = row[0];
+        let q_st = get(&t, row, ["st_q_w", "st_q_x", "st_q_y", "st_q_z"]);
+        let gyro = get(&t, row, ["gyro_x", "gyro_y", "gyro_z"]);
+        let f = filter.get_or_insert_with(|| {
+            Mekf::new(params, q_st, [0.0; 3])
+                .unwrap()
+                .with_gyro_model(GyroModel::Sampled)
+        });
+        f.update_attitude(q_st, st.noise).unwrap();
+        let est = get(&t, row, ["est_q_w", "est_q_x", "est_q_y", "est_q_z"]);
+        let bias = get(&t, row, ["est_bias_x", "est_bias_y", "est_bias_z"]);
+        let sigma = get(&t, row, ["est_sigma_x", "est_sigma_y", "est_sigma_z"]);
+        assert_eq!(est, f.attitude(), "t = {time}");
+        assert_eq!(bias, f.bias(), "t = {time}");
+        assert_eq!(sigma, f.sigma_attitude(), "t = {time}");
+        // The estimate against the truth, over the second half.
+        let truth = get(&t, row, ["q_w", "q_x", "q_y", "q_z"]);
+        let e = attitude_error(est, truth);
+        let est_error = row[col(&t, "est_error")];
+        assert!((est_error - norm(e)).abs() < 1e-15, "t = {time}");
+        if time >= 60.0 {
+            n += 1;
+            for a in 0..3 {
+                within[a] += usize::from(e[a].abs() <= 3.0 * sigma[a]);
+                worst = worst.max(e[a].abs() / sigma[a]);
+            }
+            within_norm += usize::from(est_error <= 3.0 * norm(sigma));
+        }
+        f.propagate(gyro, 0.1).unwrap();
+    }
+    assert_eq!(n, 601);
+    let share = within.map(|w| w as f64 / n as f64);
+    let share_norm = within_norm as f64 / n as f64;
+    eprintln!(
+        "est_error within 3 sigma over 60..120 s: per axis {share:?}, |error| <= 3 |sigma| {share_norm}; worst |error|/sigma {worst:.2}"
+    );
+    assert!(share.iter().all(|s| *s > 0.98), "{share:?}");
+    assert!(share_norm > 0.98, "{share_norm}");
+}
+
+#[test]
+fn an_estimator_alone_leaves_the_truth_unchanged_to_the_last_bit() {
+    let with = run(&in_the_loop(
+        "[fsw.estimator]\ngyro = \"gyro\"\nstar_tracker = [\"st\"]\nperiod = 0.1\n[fsw.guidance]\nmode = \"nadir\"\n",
+    ));
+    let without = run(&in_the_loop(""));
+    let fsw = |c: &str| c.starts_with("est_") || c.starts_with("ref_") || c == "pointing_error";
+    let kept: Vec<&String> = with.columns.iter().filter(|c| !fsw(c)).collect();
+    assert_eq!(kept, without.columns.iter().collect::<Vec<_>>());
+    for (a, b) in with.rows().zip(without.rows()) {
+        for (i, c) in without.columns.iter().enumerate() {
+            assert_eq!(
+                a[col(&with, c)].to_bits(),
+                b[i].to_bits(),
+                "column {c} at t = {}",
+                b[0]
+            );
+        }
+    }
+}
+
+/// The orbital frame and its rate at a row, from the orbit's columns.
+fn orbital(t: &Trajectory, row: &[f64]) -> OrbitState {
+    let [rx, ry, rz, vx, vy, vz] = get(
+        t,
+        row,
+        [
+            "orbit_r_x",
+            "orbit_r_y",
+            "orbit_r_z",
+            "orbit_v_x",
+            "orbit_v_y",
+            "orbit_v_z",
+        ],
+    );
+    OrbitState {
+        r: Vector3::new(rx, ry, rz),
+        v: Vector3::new(vx, vy, vz),
+        mu: 3.986004418e14,
+    }
+}
+
+fn quaternion(q: [f64; 4]) -> UnitQuaternion<f64> {
+    UnitQuaternion::new_normalize(Quaternion::new(q[0], q[1], q[2], q[3]))
+}
+
+#[test]
+fn the_nadir_reference_is_the_orbital_frame_at_every_row() {
+    let scene = read(
+        POINTING,
+        &[
+            "duration=60.0",
+            "output.every=0.5",
+            "fsw.guidance.mode=nadir",
+            "initial.base.frame=orbital",
+        ],
+    );
+    let t = run(&scene);
+    assert_eq!(t.rows().count(), 121);
+    let mut worst = (0.0f64, 0.0f64);
+    for row in t.rows() {
+        let o = orbital(&t, row);
+        let frame = o.orbital_frame();
+        let q = frame.quaternion();
+        let s = if q.w < 0.0 { -1.0 } else { 1.0 };
+        let want = [s * q.w, s * q.i, s * q.j, s * q.k];
+        let got = get(&t, row, ["ref_q_w", "ref_q_x", "ref_q_y", "ref_q_z"]);
+        let dq = (0..4).fold(0.0f64, |m, i| m.max((got[i] - want[i]).abs()));
+        // The rate, in the reference's axes: the orbit's r × v / r², (0, −n, 0) on a circle.
+        let w = frame.inverse_transform_vector(&o.orbital_rate());
+        let got_w = get(&t, row, ["ref_omega_x", "ref_omega_y", "ref_omega_z"]);
+        let dw = (0..3).fold(0.0f64, |m, i| m.max((got_w[i] - w[i]).abs()));
+        worst = (worst.0.max(dq), worst.1.max(dw));
+        // pointing_error: the truth against this frame.
+        let truth = quaternion(get(&t, row, ["q_w", "q_x", "q_y", "q_z"]));
+        let pe = row[col(&t, "pointing_error")];
+        assert!(
+            (pe - (frame.inverse() * truth).angle()).abs() < 1e-9,
+            "t = {}",
+            row[0]
+        );
+    }
+    eprintln!(
+        "nadir reference against the orbital frame: |dq| <= {:.1e}, |dw| <= {:.1e} rad/s",
+        worst.0, worst.1
+    );
+    assert!(worst.0 <= 1e-12 && worst.1 <= 1e-18, "{worst:?}");
+    // On the circular orbit the reference turns at (0, −n, 0).
+    let n = (3.986004418e14 / (6378137.0f64 + 500e3).powi(3)).sqrt();
+    let row = t.rows().last().unwrap();
+    let w = get(&t, row, ["ref_omega_x", "ref_omega_y", "ref_omega_z"]);
+    assert!(
+        w[0].abs() < 1e-12 && (w[1] + n).abs() < 1e-9 * n && w[2].abs() < 1e-12,
+        "{w:?}"
+    );
+}
+
+/// Pointing error statistics after [`SETTLED`]: the largest excess over the estimator's
+/// 3σ (norm of the three sigmas) plus [`MARGIN`], the largest error and the RMS (rad).
+fn pointing(t: &Trajectory) -> (f64, f64, f64) {
+    let (mut excess, mut max, mut sum, mut n) = (f64::NEG_INFINITY, 0.0f64, 0.0, 0);
+    for row in t.rows().filter(|r| r[0] >= SETTLED) {
+        let pe = row[col(t, "pointing_error")];
+        let sigma = get(t, row, ["est_sigma_x", "est_sigma_y", "est_sigma_z"]);
+        excess = excess.max(pe - (3.0 * norm(sigma) + MARGIN));
+        max = max.max(pe);
+        sum += pe * pe;
+        n += 1;
+    }
+    assert!(n > 100);
+    (excess, max, (sum / n as f64).sqrt())
+}
+
+fn closed_loop(extra: &[&str]) {
+    let truth_sets = [
+        "effects.attitude_control.enabled=true",
+        "fsw.control.enabled=false",
+    ];
+    let with = |more: &[&str]| -> Vec<String> {
+        extra
+            .iter()
+            .chain(more)
+            .map(|s| s.to_string())
+            .collect::<Vec<_>>()
+    };
+    let sets = |v: &[String]| read(POINTING, &v.iter().map(|s| s.as_str()).collect::<Vec<_>>());
+    let fsw = run(&sets(&with(&[])));
+    let fsw_pd = run(&sets(&with(&["fsw.control.ki=[0.0, 0.0, 0.0]"])));
+    let truth = run(&sets(&with(&truth_sets)));
+    let (excess, max, rms) = pointing(&fsw);
+    let (_, max_pd, rms_pd) = pointing(&fsw_pd);
+    let (_, max_truth, rms_truth) = pointing(&truth);
+    let last = fsw.rows().last().unwrap();
+    let sigma3 = 3.0
+        * norm(get(
+            &fsw,
+            last,
+            ["est_sigma_x", "est_sigma_y", "est_sigma_z"],
+        ));
+    let arcsec = |x: f64| x / ARCSEC;
+    eprintln!(
+        "{extra:?} after {SETTLED} s: fsw PID max {:.1}\" rms {:.1}\"; fsw PD (ki = 0) max {:.1}\" rms {:.1}\"; truth-based PD max {:.1}\" rms {:.1}\"; estimator 3 sigma {:.1}\" + margin {:.0}\"",
+        arcsec(max),
+        arcsec(rms),
+        arcsec(max_pd),
+        arcsec(rms_pd),
+        arcsec(max_truth),
+        arcsec(rms_truth),
+        arcsec(sigma3),
+        arcsec(MARGIN)
+    );
+    assert!(
+        excess <= 0.0,
+        "pointing error {:.1}\" over 3 sigma + margin",
+        arcsec(excess)
+    );
+    // The PID on the estimate points better than the truth-based PD of the same kp and kd
+    // (the integral removes the disturbances' offset); without the integral, within the
+    // estimator's 3σ of it.
+    assert!(rms < rms_truth, "{rms} >= {rms_truth}");
+    assert!(
+        rms_pd <= rms_truth + sigma3,
+        "{rms_pd} > {rms_truth} + {sigma3}"
+    );
+    // The truth-based run's estimator still runs (observes only): the same readings.
+    let first = |t: &Trajectory| t.rows().next().unwrap()[col(t, "st_q_w")];
+    assert_eq!(first(&fsw), first(&truth));
+}
+
+#[test]
+fn the_closed_loop_on_the_sensors_holds_an_inertial_attitude_within_3_sigma_and_margin() {
+    closed_loop(&[]);
+}
+
+#[test]
+fn the_closed_loop_on_the_sensors_points_at_nadir_within_3_sigma_and_margin() {
+    closed_loop(&[
+        "fsw.guidance.mode=nadir",
+        "initial.base.frame=orbital",
+        "effects.attitude_control.target=orbital",
+    ]);
+}
+
+#[test]
+fn the_control_commands_only_the_wheels_within_their_limits() {
+    // A short run: the held commands are what the wheels get (no larger than max_torque,
+    // 1 N m), and the controller's clock is counted among the scene's samplers.
+    // A control every 0.05 s (two per gyro sample: the estimate turned on by the gyro's
+    // rate in between) makes 401 samples in 20 s, the gyro 201.
+    let scene = read(POINTING, &["duration=20.0", "fsw.control.period=0.05"]);
+    assert!(
+        scene
+            .clocks
+            .iter()
+            .any(|c| c.what == "`fsw.control`" && c.period == 0.05),
+        "{:?}",
+        scene.clocks
+    );
+    let err = scene.check_rows(300).unwrap_err().to_string();
+    let text = std::fs::read_to_string(example(POINTING)).unwrap();
+    let line = text
+        .lines()
+        .position(|l| l.starts_with("period = 0.1                # s"))
+        .unwrap()
+        + 1;
+    assert!(
+        err.contains("`fsw.control`") && err.contains(&format!("fsw_mekf_pointing.toml:{line}")),
+        "{err}"
+    );
+    let t = run(&scene);
+    assert!(t.columns.iter().any(|c| c == "pointing_error"));
+    let sensors = scene.effects.get::<Sensors>().unwrap();
+    assert!(sensors.fsw().unwrap().commands_rotors());
+}
+
+#[test]
+fn star_trackers_of_a_longer_period_update_only_when_they_sampled() {
+    // A second tracker on the bus every 0.3 s, listed after the first: the filter updates
+    // with `st` at every gyro sample and with `st3` at every third.
+    let st3 = "[[sensors.star_tracker]]\nname = \"st3\"\nbody = \"bus\"\nperiod = 0.3\nnoise_arcsec = [20.0, 20.0, 20.0]\n";
+    let scene = in_the_loop(&format!(
+        "{st3}\n[fsw.estimator]\ngyro = \"gyro\"\nstar_tracker = [\"st\", \"st3\"]\nsigma_attitude = 0.02\nsigma_bias = 1e-3\n"
+    ));
+    let scene = Scene {
+        duration: 30.0,
+        ..scene
+    };
+    let t = run(&scene);
+    let params = MekfParams {
+        sigma_v: 1e-5,
+        sigma_u: 1e-7,
+        sigma_attitude: 0.02,
+        sigma_bias: 1e-3,
+    };
+    let (n1, n3) = ([5.0, 5.0, 40.0].map(|a| a * ARCSEC), [20.0 * ARCSEC; 3]);
+    let mut f: Option<Mekf> = None;
+    for (k, row) in t.rows().enumerate() {
+        let q1 = get(&t, row, ["st_q_w", "st_q_x", "st_q_y", "st_q_z"]);
+        let q3 = get(&t, row, ["st3_q_w", "st3_q_x", "st3_q_y", "st3_q_z"]);
+        let f = f.get_or_insert_with(|| {
+            Mekf::new(params, q1, [0.0; 3])
+                .unwrap()
+                .with_gyro_model(GyroModel::Sampled)
+        });
+        f.update_attitude(q1, n1).unwrap();
+        if k % 3 == 0 {
+            f.update_attitude(q3, n3).unwrap();
+        }
+        let est = get(&t, row, ["est_q_w", "est_q_x", "est_q_y", "est_q_z"]);
+        let sigma = get(&t, row, ["est_sigma_x", "est_sigma_y", "est_sigma_z"]);
+        assert_eq!(
+            (est, sigma),
+            (f.attitude(), f.sigma_attitude()),
+            "t = {}",
+            row[0]
+        );
+        f.propagate(get(&t, row, ["gyro_x", "gyro_y", "gyro_z"]), 0.1)
+            .unwrap();
+    }
+    // A tracker whose period is not a whole number of the gyro's is refused.
+    let bad = std::fs::read_to_string(example("scenes/fsw_in_the_loop.toml")).unwrap()
+        + &st3.replace("0.3", "0.25")
+        + "\n[fsw.estimator]\ngyro = \"gyro\"\nstar_tracker = [\"st\", \"st3\"]\n";
+    let err = error_of(&bad);
+    let line = bad
+        .lines()
+        .position(|l| l.starts_with("star_tracker = ["))
+        .unwrap()
+        + 1;
+    assert!(
+        err.contains("not a whole multiple") && err.contains(&format!("bad_fsw.toml:{line}")),
+        "{err}"
+    );
+}
+
+/// The built-in blocks against the same MEKF and PID written outside, in a stepping loop on
+/// `measure()`: the same readings at the same instants, the same held commands, so the
+/// same trajectory to the last bit.
+#[test]
+fn the_built_in_blocks_equal_the_same_laws_in_a_stepping_loop_on_the_readings() {
+    let short = ["duration=60.0"];
+    let builtin = run(&read(POINTING, &short));
+    let outside = read(
+        POINTING,
+        &[
+            "duration=60.0",
+            "fsw.estimator.enabled=false",
+            "fsw.guidance.enabled=false",
+            "fsw.control.enabled=false",
+        ],
+    );
+    let mut s = SceneStepper::new(&outside, None, "test").unwrap();
+    let params = MekfParams {
+        sigma_v: 1e-5,
+        sigma_u: 1e-7,
+        sigma_attitude: 0.01,
+        sigma_bias: 1e-4,
+    };
+    let noise = [5.0, 5.0, 40.0].map(|a| a * ARCSEC);
+    let mut pid = Pid::new([40.0; 3], [2.0; 3], [300.0; 3], None);
+    pid.allocate(&[Vector3::x(), Vector3::y(), Vector3::z()], &[1.0; 3]);
+    let mut filter: Option<Mekf> = None;
+    let mut last_gyro = [0.0; 3];
+    while s.t() < 60.0 - 1e-9 {
+        let meas = s.measure().unwrap();
+        let reading = |name: &str| meas.iter().find(|(n, _)| n == name).unwrap().1.clone();
+        let (g, q) = (reading("gyro"), reading("st"));
+        let (g, q) = ([g[0], g[1], g[2]], [q[0], q[1], q[2], q[3]]);
+        let f = match &mut filter {
+            Some(f) => {
+                f.propagate(last_gyro, 0.1).unwrap();
+                f
+            }
+            None => filter.insert(
+                Mekf::new(params, q, [0.0; 3])
+                    .unwrap()
+                    .with_gyro_model(GyroModel::Sampled),
+            ),
+        };
+        f.update_attitude(q, noise).unwrap();
+        last_gyro = g;
+        let u = pid.torque(
+            &f.unit_attitude(),
+            &Vector3::from(f.rate(g)),
+            &UnitQuaternion::identity(),
+            &Vector3::zeros(),
+            0.1,
+        );
+        let mut c = [0.0; 3];
+        pid.commands(&u, &mut c);
+        s.set_inputs(&[("wheel_x", c[0]), ("wheel_y", c[1]), ("wheel_z", c[2])])
+            .unwrap();
+        s.advance(0.1).unwrap();
+    }
+    let got = s.trajectory();
+    assert_eq!(got.n_rows(), builtin.n_rows());
+    let mut compared = 0;
+    for (c, name) in got.columns.iter().enumerate() {
+        let Some(b) = builtin.columns.iter().position(|n| n == name) else {
+            continue;
+        };
+        for (x, y) in got.rows().zip(builtin.rows()) {
+            assert_eq!(x[c].to_bits(), y[b].to_bits(), "{name} at t = {}", x[0]);
+        }
+        compared += 1;
+    }
+    assert!(compared >= 50, "{compared}");
+}
+
+fn error_of(text: &str) -> String {
+    match Scene::parse(text, &path_in_examples("bad_fsw.toml")) {
+        Ok(_) => panic!("accepted:\n{text}"),
+        Err(e) => e.to_string(),
+    }
+}
+
+#[test]
+fn bad_fsw_input_is_an_error_naming_the_file_and_line() {
+    let base = std::fs::read_to_string(example(POINTING)).unwrap();
+    let est = "star_tracker = \"st\"\n";
+    let tracker2 = "[[sensors.star_tracker]]\nname = \"st2\"\nbody = \"panel1\"\nperiod = 0.1\n\n[fsw.estimator]";
+    let control_on = "[effects.attitude_control]   # the truth-based controller, off: [fsw.control] flies the bus\nenabled = true";
+    // (edit, the text of the line the error names, what it says)
+    let cases: Vec<(String, &str, &str)> = vec![
+        (base.replacen("gyro = \"gyro\"", "gyro = \"gyro9\"", 1), "gyro = \"gyro9\"", "unknown sensor `gyro9`"),
+        (base.replacen("gyro = \"gyro\"", "gyro = \"st\"", 1), "gyro = \"st\"", "is a star_tracker, not a gyro"),
+        (base.replacen(est, "star_tracker = [\"st\", \"nope\"]\n", 1), "star_tracker = [", "unknown sensor `nope`"),
+        (base.replacen(est, "star_tracker = \"st2\"\n", 1).replacen("[fsw.estimator]", tracker2, 1), "star_tracker = \"st2\"", "on body `panel1`"),
+        (base.replacen(est, "star_tracker = \"st\"\nperiod = 0.2\n", 1), "period = 0.2", "must be the gyro `gyro`'s period"),
+        (base.replacen("sigma_attitude = 0.01", "sigma_attitude = -1.0", 1), "sigma_attitude", "> 0"),
+        (base.replacen("kind = \"mekf\"", "kind = \"ukf\"", 1), "kind = \"ukf\"", "unknown kind"),
+        (base.replacen("kind = \"mekf\"", "kind = \"mekf\"\nenabled = false", 1), "[fsw.control]", "needs an estimator"),
+        (base.replacen("[effects.attitude_control]   # the truth-based controller, off: [fsw.control] flies the bus\nenabled = false", control_on, 1), "[fsw.control]", "would both command the wheels"),
+        (base.replacen("mode = \"inertial\"", "mode = \"sun\"", 1), "mode = \"sun\"", "not yet supported"),
+        (base.replacen("mode = \"inertial\"", "mode = \"target\"", 1), "mode = \"target\"", "not yet supported"),
+        (base.replacen("mode = \"inertial\"", "mode = \"inertial\"\nmax_rate = 0.02", 1), "max_rate", "not yet supported"),
+        (base.replacen("mode = \"inertial\"", "mode = \"inertial\"\nmax_acceleration = 0.001", 1), "max_acceleration", "not yet supported"),
+        (base.replacen("mode = \"inertial\"", "mode = \"spin\"", 1), "mode = \"spin\"", "unknown mode"),
+        (base.replacen("attitude = [1.0, 0.0, 0.0, 0.0]\n\n[fsw.control]", "\n[fsw.control]", 1), "mode = \"inertial\"", "needs `attitude"),
+        (base.replacen("actuator = \"wheels\"", "actuator = \"torquers\"", 1), "actuator = \"torquers\"", "not yet supported"),
+        (base.replacen("actuator = \"wheels\"", "actuator = \"thrusters\"", 1), "actuator = \"thrusters\"", "not yet supported"),
+        (base.replacen("kp = [40.0, 40.0, 40.0]", "kp = [40.0, -1.0, 40.0]", 1), "kp = [40.0, -1.0", ">= 0"),
+        (base.replacen("period = 0.1                # s\n", "period = 0.0\n", 1), "period = 0.0", "> 0"),
+        (format!("{base}\n[fsw.momentum]\ngain = 1e-3\nmagnetometer = \"mag\"\n"), "[fsw.momentum]", "not yet supported: [fsw.momentum]"),
+        (format!("{base}\n[fsw.bdot]\nmagnetometer = \"mag\"\ngain = 4e5\n"), "[fsw.bdot]", "not yet supported: [fsw.bdot]"),
+        (format!("{base}\n[[fsw.mode]]\nname = \"detumble\"\nblocks = [\"bdot\"]\n"), "[[fsw.mode]]", "not yet supported: [[fsw.mode]]"),
+        (format!("{base}\n[fsw.camera]\n"), "[fsw.camera]", "unknown key `camera`"),
+    ];
+    for (text, at, needle) in cases {
+        let err = error_of(&text);
+        let line = text
+            .lines()
+            .position(|l| l.trim_start().starts_with(at))
+            .unwrap_or_else(|| panic!("no `{at}`"))
+            + 1;
+        assert!(err.contains(needle), "`{needle}` not in: {err}");
+        assert!(
+            err.contains(&format!("bad_fsw.toml:{line}")),
+            "line {line} (`{at}`) not in: {err}"
+        );
+    }
+    // Nadir without an orbit; a control without the wheels; guidance without an estimator.
+    let no_orbit = base
+        .replacen("[orbit]\nmodel = \"kepler\"\naltitude = 500e3          # m, circular\ninclination_deg = 51.6\n", "", 1)
+        .replacen("[effects.gravity_gradient]\nmodel = \"full\"\n", "", 1)
+        .replacen("mode = \"inertial\"", "mode = \"nadir\"", 1);
+    let err = error_of(&no_orbit);
+    let line = no_orbit
+        .lines()
+        .position(|l| l.contains("mode = \"nadir\""))
+        .unwrap()
+        + 1;
+    assert!(
+        err.contains("needs an [orbit]") && err.contains(&format!("bad_fsw.toml:{line}")),
+        "{err}"
+    );
+    let no_estimator = "[fsw.guidance]\nmode = \"inertial\"\nattitude = [1.0, 0.0, 0.0, 0.0]\n";
+    let text = std::fs::read_to_string(example("scenes/fsw_in_the_loop.toml")).unwrap();
+    let err = error_of(&format!("{text}\n{no_estimator}"));
+    assert!(
+        err.contains("needs an estimator") && err.contains("bad_fsw.toml:"),
+        "{err}"
+    );
+    // A scene without sensors: the estimator's gyro is unknown.
+    let deploy = std::fs::read_to_string(example("scenes/deploy.toml")).unwrap();
+    let err = error_of(&format!(
+        "{deploy}\n[fsw.estimator]\ngyro = \"gyro\"\nstar_tracker = \"st\"\n"
+    ));
+    assert!(
+        err.contains("the scene has no sensors") && err.contains("bad_fsw.toml:"),
+        "{err}"
+    );
+}
