@@ -1,5 +1,6 @@
 //! [`Onboard`]: a scene's built-in flight software (`[fsw]`, contract section 16), the
-//! estimator, guidance and control blocks wired to the scene's sensors.
+//! estimator, guidance and control blocks and the magnetic block (B-dot or momentum
+//! dumping) wired to the scene's sensors.
 //!
 //! # Reading the sensors at the instant they sample
 //!
@@ -38,10 +39,14 @@
 //! axes, rad), `est_error` (rad: the angle between the estimate and the true attitude of
 //! the estimator's body — a diagnostic, the only place the truth is read). With guidance:
 //! `ref_q_w..z`, `ref_omega_x..z` (rad/s, the reference's axes) and `pointing_error` (rad:
-//! the angle between the true attitude and the reference).
+//! the angle between the true attitude and the reference). With `[fsw.bdot]` or
+//! `[fsw.momentum]` ([`crate::fsw::magnetic`], run at its magnetometer's samples, after the
+//! other blocks): `fsw_dipole_x..z` (A m², body axes: the dipole commanded, before the
+//! torquers clamp it).
 
 use super::control::{Pid, rotation_vector};
 use super::guidance::{Guidance, Reference};
+use super::magnetic::{DipoleBlock, DipoleSpec};
 use super::mekf::{GyroModel, Mekf, MekfParams};
 use crate::effects::{Context, Forces, Links, Needs, OrbitState, Sampling};
 use crate::sensors::{Pose, Sensor};
@@ -153,6 +158,8 @@ pub struct Onboard {
     estimator: Option<Estimator>,
     guidance: Option<(Guidance, Option<Reference>)>,
     control: Option<Control>,
+    /// `[fsw.bdot]` or `[fsw.momentum]`.
+    magnetic: Option<DipoleBlock>,
 }
 
 impl Onboard {
@@ -192,7 +199,24 @@ impl Onboard {
             }),
             guidance: guidance.map(|g| (g, None)),
             control,
+            magnetic: None,
         })
+    }
+
+    /// Adds a magnetic block (`[fsw.bdot]` or `[fsw.momentum]`, see
+    /// [`crate::fsw::magnetic`]): it reads its magnetometer and commands the torquers.
+    pub fn with_magnetic(mut self, spec: DipoleSpec) -> Self {
+        self.magnetic = Some(DipoleBlock::new(spec));
+        self
+    }
+
+    /// The dipole the magnetic block holds (body axes, A m²), if there is one.
+    pub fn dipole(&self) -> Option<[f64; 3]> {
+        self.magnetic.as_ref().map(|m| m.dipole().into())
+    }
+    /// Whether a magnetic block commands the torquers.
+    pub fn commands_dipoles(&self) -> bool {
+        self.magnetic.is_some()
     }
 
     /// The filter as of the last estimator sample (`None` before the first).
@@ -243,6 +267,9 @@ impl Onboard {
             c.pid.allocate(&axes, &limits);
             c.held = vec![0.0; links.rotors.len()];
             c.scratch = vec![0.0; c.rotor.len()];
+        }
+        if let Some(m) = &mut self.magnetic {
+            m.connect(links);
         }
     }
 
@@ -317,15 +344,21 @@ impl Onboard {
             }
             c.clock.taken(t);
         }
+        if let Some(m) = &mut self.magnetic {
+            m.sample(sensors, ctx.rotor_rates);
+        }
         Ok(())
     }
 
-    /// Writes the held wheel commands.
+    /// Writes the held wheel commands and adds the held torquer commands.
     pub fn apply(&self, forces: &mut Forces) {
         if let Some(c) = &self.control {
             for (out, held) in forces.rotor_command.iter_mut().zip(&c.held) {
                 *out = *held;
             }
+        }
+        if let Some(m) = &self.magnetic {
+            m.apply(forces);
         }
     }
 
@@ -346,12 +379,23 @@ impl Onboard {
             add(&mut c, "ref_omega", &["x", "y", "z"]);
             c.push("pointing_error".into());
         }
+        if self.magnetic.is_some() {
+            add(&mut c, "fsw_dipole", &["x", "y", "z"]);
+        }
         c
     }
 
     /// The columns' values at `ctx`: at a sample instant, what the sample there latches
     /// (worked out on a copy, from the readings the sensors take there); else what is held.
     pub fn output(&self, ctx: &Context, sensors: &[Sensor], row: &mut Vec<f64>) {
+        self.output_estimate(ctx, sensors, row);
+        if let Some(m) = &self.magnetic {
+            row.extend_from_slice(m.dipole_at(ctx, sensors).as_slice());
+        }
+    }
+
+    /// The estimator's and the guidance's columns.
+    fn output_estimate(&self, ctx: &Context, sensors: &[Sensor], row: &mut Vec<f64>) {
         let t = ctx.t;
         let Some(e) = &self.estimator else {
             return;
@@ -456,6 +500,31 @@ mod tests {
         assert_eq!(all.columns().len(), 19);
         assert!(all.commands_rotors() && all.needs().rotors && !all.needs().orbit);
         assert_eq!(all.next_sample(), f64::NEG_INFINITY);
+    }
+
+    #[test]
+    fn a_magnetic_block_adds_the_dipole_columns_and_has_the_sensors_command_the_torquers() {
+        use crate::effects::Effect;
+        use crate::fsw::{DipoleLaw, DipoleSpec};
+        let spec = DipoleSpec {
+            law: DipoleLaw::Bdot { gain: 1e6 },
+            magnetometer: 0,
+            period: 1.0,
+            every: 1,
+            wheels: Vec::new(),
+        };
+        let b = Onboard::new(None, None, None).unwrap().with_magnetic(spec);
+        assert_eq!(
+            b.columns(),
+            ["fsw_dipole_x", "fsw_dipole_y", "fsw_dipole_z"]
+        );
+        assert!(b.commands_dipoles() && !b.commands_rotors());
+        assert_eq!(b.dipole(), Some([0.0; 3]));
+        let mut set = crate::sensors::Sensors::new(1);
+        assert!(set.observes_only() && !set.commands_dipoles());
+        set.set_fsw(b);
+        assert!(!set.observes_only() && set.commands_dipoles());
+        assert_eq!(set.before(), ["magnetic"]);
     }
 
     #[test]

@@ -25,8 +25,8 @@
 //!
 //! Flight software: the set may host a scene's `[fsw]` blocks ([`Sensors::set_fsw`],
 //! [`crate::fsw::Onboard`]), which run at a sample instant right after the sensors sampled,
-//! on the readings just taken. With a control among them the set commands the wheels and no
-//! longer only observes.
+//! on the readings just taken. With a control among them the set commands the wheels, with
+//! `[fsw.bdot]` or `[fsw.momentum]` the magnetic torquers, and no longer only observes.
 //!
 //! Noise: one ChaCha12 stream per sensor (its index in the set) from the set's seed
 //! ([`Noise`]), and a fixed block of that stream per sample, so that a sensor's readings
@@ -399,16 +399,22 @@ impl Effect for Sensors {
         self.fsw.as_ref().map_or_else(Needs::default, |f| f.needs())
     }
     fn observes_only(&self) -> bool {
-        self.fsw.as_ref().is_none_or(|f| !f.commands_rotors())
+        self.fsw
+            .as_ref()
+            .is_none_or(|f| !f.commands_rotors() && !f.commands_dipoles())
     }
     fn commands_rotors(&self) -> bool {
         self.fsw.as_ref().is_some_and(|f| f.commands_rotors())
     }
+    fn commands_dipoles(&self) -> bool {
+        self.fsw.as_ref().is_some_and(|f| f.commands_dipoles())
+    }
     fn before(&self) -> &[&str] {
-        if self.commands_rotors() {
-            &["reaction_wheels"]
-        } else {
-            &[]
+        match (self.commands_rotors(), self.commands_dipoles()) {
+            (true, true) => &["reaction_wheels", "magnetic"],
+            (true, false) => &["reaction_wheels"],
+            (false, true) => &["magnetic"],
+            (false, false) => &[],
         }
     }
     fn connect(&mut self, links: &Links) {

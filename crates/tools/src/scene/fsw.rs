@@ -20,16 +20,26 @@
 //! period = 0.1             # s (default: the estimator's)
 //! actuator = "wheels"      # (default)
 //! inertia = [[...], [...], [...]]   # optional: the feed-forward ω × (J ω)
+//! [fsw.bdot]               # B-dot on a magnetometer's readings, to the torquers
+//! magnetometer = "mag"     # a [[sensors.magnetometer]] on the root body
+//! gain = 4e5               # A m² s/T
+//! period = 1.0             # optional: a whole multiple of the magnetometer's (default it)
+//! [fsw.momentum]           # or: wheel momentum dumping through the torquers
+//! gain = 1e-3              # 1/s
+//! magnetometer = "mag"
 //! ```
 //!
-//! Every block accepts `enabled = false` (read and checked, then left out). Not yet
-//! supported, each refused at its line: guidance modes `"sun"` and `"target"`, `max_rate`
-//! and `max_acceleration`, `actuator = "torquers"` and `"thrusters"`, `[fsw.momentum]`,
-//! `[fsw.bdot]` and `[[fsw.mode]]`. Every error names the scene file and the line.
+//! `[fsw.bdot]` and `[fsw.momentum]` need magnetic torquers on the root body; at most one of
+//! them (and not `[effects.bdot]`) is enabled. Every block accepts `enabled = false` (read
+//! and checked, then left out). Not yet supported, each refused at its line: guidance modes
+//! `"sun"` and `"target"`, `max_rate` and `max_acceleration`, `actuator = "torquers"` and
+//! `"thrusters"`, and `[[fsw.mode]]`. Every error names the scene file and the line.
 
 use nalgebra::{Quaternion, UnitQuaternion};
 use satsim_spacecraft::effects::{EffectSet, ReactionWheels, SceneText};
-use satsim_spacecraft::fsw::{ControlSpec, EstimatorSpec, Guidance, MekfParams, Onboard, Pid};
+use satsim_spacecraft::fsw::{
+    ControlSpec, DipoleLaw, DipoleSpec, EstimatorSpec, Guidance, MekfParams, Onboard, Pid,
+};
 use satsim_spacecraft::sensors::{Kind, Sensors};
 use satsim_tree::error::Num;
 use satsim_tree::io::{FileError, line_of};
@@ -51,12 +61,12 @@ pub struct FswFile {
     /// `[fsw.control]`.
     #[serde(default)]
     pub control: Option<Spanned<ControlFile>>,
-    /// `[fsw.momentum]`: not yet supported.
+    /// `[fsw.momentum]`: wheel momentum dumping through the torquers.
     #[serde(default)]
-    pub momentum: Option<Spanned<toml::Value>>,
-    /// `[fsw.bdot]`: not yet supported.
+    pub momentum: Option<Spanned<MomentumFile>>,
+    /// `[fsw.bdot]`: B-dot on the magnetometer's readings.
     #[serde(default)]
-    pub bdot: Option<Spanned<toml::Value>>,
+    pub bdot: Option<Spanned<BdotFile>>,
     /// `[[fsw.mode]]`: not yet supported.
     #[serde(default)]
     pub mode: Option<Spanned<toml::Value>>,
@@ -151,6 +161,38 @@ pub struct ControlFile {
     pub enabled: Option<bool>,
 }
 
+/// `[fsw.bdot]`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BdotFile {
+    /// The magnetometer's name (a [[sensors.magnetometer]] on the root body).
+    pub magnetometer: Spanned<String>,
+    /// The gain k (A m² s/T, > 0).
+    pub gain: Spanned<f64>,
+    /// Sample period (s, default the magnetometer's; a whole multiple of it).
+    #[serde(default)]
+    pub period: Option<Spanned<f64>>,
+    /// Off without removing the table (default true).
+    #[serde(default)]
+    pub enabled: Option<bool>,
+}
+
+/// `[fsw.momentum]`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MomentumFile {
+    /// The gain k (1/s, > 0).
+    pub gain: Spanned<f64>,
+    /// The magnetometer's name (a [[sensors.magnetometer]] on the root body).
+    pub magnetometer: Spanned<String>,
+    /// Sample period (s, default the magnetometer's; a whole multiple of it).
+    #[serde(default)]
+    pub period: Option<Spanned<f64>>,
+    /// Off without removing the table (default true).
+    #[serde(default)]
+    pub enabled: Option<bool>,
+}
+
 fn not_yet(text: &SceneText, span: Range<usize>, what: &str) -> FileError {
     text.error(Some(span), format!("not yet supported: {what}"))
 }
@@ -170,20 +212,21 @@ fn finite3(text: &SceneText, x: &Spanned<[f64; 3]>, what: &str) -> Result<[f64; 
     }
 }
 
-/// The sensor called `name` of kind `kind` (`gyro`, `star_tracker`): its index in the set.
+/// The sensor called `name` of kind `kind` (`gyro`, `star_tracker`, `magnetometer`) that
+/// `block`'s `key` names (`block` as `fsw.estimator`): its index in the set.
 fn sensor(
     text: &SceneText,
     sensors: Option<&Sensors>,
     name: &str,
     span: Range<usize>,
     kind: &str,
-    key: &str,
+    (block, key): (&str, &str),
 ) -> Result<usize, FileError> {
     let Some(set) = sensors else {
         return Err(text.error(
             Some(span),
             format!(
-                "`fsw.estimator.{key}`: unknown sensor `{name}`: the scene has no sensors (add a [[sensors.{kind}]] named `{name}`)"
+                "`{block}.{key}`: unknown sensor `{name}`: the scene has no sensors (add a [[sensors.{kind}]] named `{name}`)"
             ),
         ));
     };
@@ -197,7 +240,7 @@ fn sensor(
         return Err(text.error(
             Some(span),
             format!(
-                "`fsw.estimator.{key}`: unknown sensor `{name}` (the scene's {kind} sensors: {})",
+                "`{block}.{key}`: unknown sensor `{name}` (the scene's {kind} sensors: {})",
                 if of_kind.is_empty() {
                     "none".to_string()
                 } else {
@@ -210,7 +253,7 @@ fn sensor(
         return Err(text.error(
             Some(span),
             format!(
-                "`fsw.estimator.{key}`: sensor `{name}` is a {}, not a {kind}",
+                "`{block}.{key}`: sensor `{name}` is a {}, not a {kind}",
                 list[i].kind().name()
             ),
         ));
@@ -229,20 +272,6 @@ pub(crate) fn read(
     clocks: &mut Vec<super::Clock>,
 ) -> Result<(), FileError> {
     let f = file.get_ref();
-    if let Some(m) = &f.momentum {
-        return Err(not_yet(
-            text,
-            m.span(),
-            "[fsw.momentum] (wheel momentum dumping through the torquers)",
-        ));
-    }
-    if let Some(b) = &f.bdot {
-        return Err(not_yet(
-            text,
-            b.span(),
-            "[fsw.bdot] (use [effects.bdot] for a B-dot detumbling law)",
-        ));
-    }
     if let Some(m) = &f.mode {
         return Err(not_yet(
             text,
@@ -274,7 +303,7 @@ pub(crate) fn read(
             e.gyro.get_ref(),
             e.gyro.span(),
             "gyro",
-            "gyro",
+            ("fsw.estimator", "gyro"),
         )?;
         let list = sensors.expect("a sensor was found").sensors();
         let g = &list[gyro];
@@ -304,7 +333,7 @@ pub(crate) fn read(
                 name,
                 span.clone(),
                 "star_tracker",
-                "star_tracker",
+                ("fsw.estimator", "star_tracker"),
             )?;
             let st = &list[i];
             if st.body() != g.body() {
@@ -607,15 +636,152 @@ pub(crate) fn read(
             "[fsw.guidance] needs an estimator: add [fsw.estimator] (the guidance runs on its clock and points the body it estimates)",
         ));
     }
-    let Some(onboard) = Onboard::new(estimator.map(|e| e.0), guidance.map(|g| g.0), control) else {
+    let magnetic = magnetic_block(text, f, effects)?;
+    let Some(mut onboard) = Onboard::new(estimator.map(|e| e.0), guidance.map(|g| g.0), control)
+    else {
         return Err(text.error(Some(file.span()), "[fsw]: inconsistent blocks"));
     };
+    if let Some(spec) = magnetic {
+        onboard = onboard.with_magnetic(spec);
+    }
     if onboard.columns().is_empty() {
         return Ok(());
     }
     effects
         .get_mut::<Sensors>()
-        .expect("an estimator reads the sensors")
+        .expect("every block reads the sensors")
         .set_fsw(onboard);
     Ok(())
+}
+
+/// `[fsw.bdot]` or `[fsw.momentum]` (at most one enabled), checked against the scene.
+fn magnetic_block(
+    text: &SceneText,
+    f: &FswFile,
+    effects: &EffectSet,
+) -> Result<Option<DipoleSpec>, FileError> {
+    let on = |e: Option<bool>| e != Some(false);
+    // (block, its span, magnetometer, gain, period, enabled)
+    let mut blocks = Vec::new();
+    if let Some(b) = &f.bdot {
+        let r = b.get_ref();
+        blocks.push((
+            "bdot",
+            b.span(),
+            &r.magnetometer,
+            &r.gain,
+            &r.period,
+            r.enabled,
+        ));
+    }
+    if let Some(m) = &f.momentum {
+        let r = m.get_ref();
+        blocks.push((
+            "momentum",
+            m.span(),
+            &r.magnetometer,
+            &r.gain,
+            &r.period,
+            r.enabled,
+        ));
+    }
+    let mut spec = None;
+    for (block, span, mag, gain, period, enabled) in blocks {
+        let name = format!("fsw.{block}");
+        let sensors = effects.get::<Sensors>();
+        let i = sensor(
+            text,
+            sensors,
+            mag.get_ref(),
+            mag.span(),
+            "magnetometer",
+            (&name, "magnetometer"),
+        )?;
+        let s = &sensors.expect("a sensor was found").sensors()[i];
+        if s.body() != 0 {
+            return Err(text.error(
+                Some(mag.span()),
+                format!(
+                    "`{name}.magnetometer`: magnetometer `{}` is not on the root body: the torquers it commands are the bus's, put it on the root body",
+                    s.name()
+                ),
+            ));
+        }
+        let k = text.positive(gain, &format!("{name}.gain"))?;
+        let mag_period = s.period();
+        let (period, every) = match period {
+            Some(p) => {
+                let v = text.positive(p, &format!("{name}.period"))?;
+                let ratio = v / mag_period;
+                if !(ratio.round() >= 1.0 && (ratio - ratio.round()).abs() <= 1e-9 * ratio) {
+                    return Err(text.error(
+                        Some(p.span()),
+                        format!(
+                            "`{name}.period` = {} s is not a whole multiple of the magnetometer `{}`'s period {} s: the block runs at its samples",
+                            Num(v),
+                            s.name(),
+                            Num(mag_period)
+                        ),
+                    ));
+                }
+                (ratio.round() * mag_period, ratio.round() as u64)
+            }
+            None => (mag_period, 1),
+        };
+        if !on(enabled) {
+            continue;
+        }
+        let title = format!("[fsw.{block}]");
+        if !effects
+            .iter()
+            .any(|e| e.torquers().iter().any(|t| t.body == 0))
+        {
+            return Err(text.error(
+                Some(span),
+                format!(
+                    "{title} commands the magnetic torquers, but the scene has none on the root body: add [[effects.magnetic.torquer]] to [effects.magnetic]"
+                ),
+            ));
+        }
+        if effects.contains("bdot") {
+            return Err(text.error(
+                Some(span),
+                format!(
+                    "{title} and [effects.bdot] would both command the torquers: set `enabled = false` in one of them"
+                ),
+            ));
+        }
+        if spec.is_some() {
+            return Err(text.error(
+                Some(span),
+                "[fsw.momentum] and [fsw.bdot] would both command the torquers: set `enabled = false` in one of them (switching between them, [[fsw.mode]], is not yet supported)",
+            ));
+        }
+        let (law, wheels) = if block == "bdot" {
+            (DipoleLaw::Bdot { gain: k }, Vec::new())
+        } else {
+            let wheels: Vec<String> = match effects.get::<ReactionWheels>() {
+                Some(w) if !w.wheels.is_empty() => w
+                    .wheels
+                    .iter()
+                    .map(|w| format!("wheel_{}", w.name))
+                    .collect(),
+                _ => {
+                    return Err(text.error(
+                        Some(span),
+                        "[fsw.momentum] dumps the reaction wheels' momentum: it needs [effects.reaction_wheels] with at least one [[effects.reaction_wheels.wheel]]",
+                    ));
+                }
+            };
+            (DipoleLaw::Momentum { gain: k }, wheels)
+        };
+        spec = Some(DipoleSpec {
+            law,
+            magnetometer: i,
+            period,
+            every,
+            wheels,
+        });
+    }
+    Ok(spec)
 }
