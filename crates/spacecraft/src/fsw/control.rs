@@ -22,6 +22,7 @@
 //! `min_j τ_max,j / |A⁺_ji|`. The commands are held until the next sample (zero-order hold);
 //! the wheels then apply their own torque and speed limits and their friction.
 
+use super::mekf::log_rotation;
 use nalgebra::{DMatrix, Matrix3, UnitQuaternion, Vector3};
 
 /// The PID's gains and state, and the wheel allocation.
@@ -104,7 +105,7 @@ impl Pid {
         omega_ref: &Vector3<f64>,
         dt: f64,
     ) -> Vector3<f64> {
-        let e = rotation_vector(&(q_ref.inverse() * q_est));
+        let e = log_rotation(&(q_ref.inverse() * q_est));
         let w_ref = q_est.inverse_transform_vector(&q_ref.transform_vector(omega_ref));
         self.integral += e * dt;
         for i in 0..3 {
@@ -143,21 +144,6 @@ impl Pid {
     pub fn n_wheels(&self) -> usize {
         self.allocation.nrows()
     }
-}
-
-/// The rotation vector of `q` (rad), the shorter way round.
-pub(crate) fn rotation_vector(q: &UnitQuaternion<f64>) -> Vector3<f64> {
-    let q = q.quaternion();
-    let (w, v) = if q.w < 0.0 {
-        (-q.w, -q.imag())
-    } else {
-        (q.w, q.imag())
-    };
-    let n = v.norm();
-    if n == 0.0 {
-        return Vector3::zeros();
-    }
-    v * (2.0 * n.atan2(w) / n)
 }
 
 #[cfg(test)]

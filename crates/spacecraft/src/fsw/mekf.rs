@@ -429,7 +429,7 @@ fn exp_rotation(v: &Vector3<f64>) -> UnitQuaternion<f64> {
 }
 
 /// The rotation vector of `q` (rad), the shorter way round (`|v| <= π`).
-fn log_rotation(q: &UnitQuaternion<f64>) -> Vector3<f64> {
+pub(crate) fn log_rotation(q: &UnitQuaternion<f64>) -> Vector3<f64> {
     let q = q.quaternion();
     let (w, v) = if q.w < 0.0 {
         (-q.w, -q.imag())

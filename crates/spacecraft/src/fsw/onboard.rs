@@ -44,9 +44,10 @@
 //! other blocks): `fsw_dipole_x..z` (A m², body axes: the dipole commanded, before the
 //! torquers clamp it).
 
-use super::control::{Pid, rotation_vector};
+use super::control::Pid;
 use super::guidance::{Guidance, Reference};
 use super::magnetic::{DipoleBlock, DipoleSpec};
+use super::mekf::log_rotation;
 use super::mekf::{GyroModel, Mekf, MekfParams};
 use crate::effects::{Context, Forces, Links, Needs, OrbitState, Sampling};
 use crate::sensors::{Pose, Sensor};
@@ -422,7 +423,7 @@ impl Onboard {
                 row.extend_from_slice(&f.attitude());
                 row.extend_from_slice(&f.bias());
                 row.extend_from_slice(&f.sigma_attitude());
-                row.push(rotation_vector(&(f.unit_attitude().inverse() * truth)).norm());
+                row.push(log_rotation(&(f.unit_attitude().inverse() * truth)).norm());
             }
             None => row.extend_from_slice(&[f64::NAN; 11]),
         }
@@ -444,7 +445,7 @@ impl Onboard {
                 let s = if q.w < 0.0 { -1.0 } else { 1.0 };
                 row.extend_from_slice(&[s * q.w, s * q.i, s * q.j, s * q.k]);
                 row.extend_from_slice(r.rate.as_slice());
-                row.push(rotation_vector(&(r.attitude.inverse() * truth)).norm());
+                row.push(log_rotation(&(r.attitude.inverse() * truth)).norm());
             }
             None => row.extend_from_slice(&[f64::NAN; 8]),
         }
