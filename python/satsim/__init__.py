@@ -747,3 +747,4 @@ class Simulation:
 
 from . import _stepped  # noqa: E402  (uses the classes above)
 from ._stepped import Run  # noqa: E402
+from . import fsw  # noqa: E402,F401  (satsim.fsw.Mekf without another import)
