@@ -530,17 +530,7 @@ fn bad_fsw_input_is_an_error_naming_the_file_and_line() {
         (format!("{base}\n[fsw.camera]\n"), "[fsw.camera]", "unknown key `camera`"),
     ];
     for (text, at, needle) in cases {
-        let err = error_of(&text);
-        let line = text
-            .lines()
-            .position(|l| l.trim_start().starts_with(at))
-            .unwrap_or_else(|| panic!("no `{at}`"))
-            + 1;
-        assert!(err.contains(needle), "`{needle}` not in: {err}");
-        assert!(
-            err.contains(&format!("bad_fsw.toml:{line}")),
-            "line {line} (`{at}`) not in: {err}"
-        );
+        assert_error_at(&text, at, needle);
     }
     // Nadir without an orbit; a control without the wheels; guidance without an estimator.
     let no_orbit = base
@@ -952,17 +942,7 @@ fn bad_magnetic_blocks_are_errors_at_their_line() {
         ),
     ];
     for (text, at, needle) in cases {
-        let err = error_of(&text);
-        let line = text
-            .lines()
-            .position(|l| l.trim_start().starts_with(at))
-            .unwrap_or_else(|| panic!("no `{at}`"))
-            + 1;
-        assert!(err.contains(needle), "`{needle}` not in: {err}");
-        assert!(
-            err.contains(&format!("bad_fsw.toml:{line}")),
-            "line {line} (`{at}`) not in: {err}"
-        );
+        assert_error_at(&text, at, needle);
     }
     // Switched off, the truth-based B-dot leaves the torquers to [fsw.bdot]; a period of
     // three magnetometer samples is accepted; `enabled = false` leaves a block out.
@@ -1003,4 +983,20 @@ fn bad_magnetic_blocks_are_errors_at_their_line() {
         "tumbling.toml",
     );
     assert!(off.effects.get::<Sensors>().unwrap().fsw().is_none());
+}
+
+/// The scene `text` is refused with a message holding `needle` and the line of the first
+/// line that starts with `at`.
+fn assert_error_at(text: &str, at: &str, needle: &str) {
+    let err = error_of(text);
+    let line = text
+        .lines()
+        .position(|l| l.trim_start().starts_with(at))
+        .unwrap_or_else(|| panic!("no `{at}`"))
+        + 1;
+    assert!(err.contains(needle), "`{needle}` not in: {err}");
+    assert!(
+        err.contains(&format!("bad_fsw.toml:{line}")),
+        "line {line} (`{at}`) not in: {err}"
+    );
 }
