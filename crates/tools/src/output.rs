@@ -551,7 +551,7 @@ pub fn plot_curves(title: &str, xlabel: &str, curves: &[(&str, Vec<(f64, f64)>)]
 
 /// The plots `satsim run` draws from a finished trajectory: `(file name, title, columns)`.
 /// Groups whose columns are absent are skipped.
-pub const PLOT_GROUPS: [(&str, &str, &[&str]); 9] = [
+pub const PLOT_GROUPS: [(&str, &str, &[&str]); 12] = [
     (
         "attitude.svg",
         "Attitude quaternion",
@@ -603,6 +603,17 @@ pub const PLOT_GROUPS: [(&str, &str, &[&str]); 9] = [
         "magnetic_field.svg",
         "Geomagnetic field, bus axes (T)",
         &["magnetic_field_*"],
+    ),
+    (
+        "fsw_pointing.svg",
+        "Flight software: pointing and estimation errors (rad)",
+        &["pointing_error", "est_error"],
+    ),
+    ("fsw_mode.svg", "Flight software mode", &["fsw_mode"]),
+    (
+        "fsw_dipole.svg",
+        "Flight software: dipole commanded, bus axes (A m²)",
+        &["fsw_dipole_*"],
     ),
 ];
 

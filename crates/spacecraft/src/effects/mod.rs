@@ -713,6 +713,10 @@ pub trait Effect: Send {
     fn describe_event_into(&self, k: usize, out: &mut String) {
         out.push_str(&self.describe_event(k));
     }
+    /// What happened at its last [`Effect::sample`] that the run's event log should show (a
+    /// flight software's mode switch), moved into `out`: the simulation logs each at the
+    /// sample's time. The default logs nothing.
+    fn drain_sample_log(&mut self, _out: &mut Vec<String>) {}
 }
 
 /// The room an effect reserves for its event descriptions (bytes): one written into it with

@@ -25,6 +25,69 @@
 use super::mekf::log_rotation;
 use nalgebra::{DMatrix, Matrix3, UnitQuaternion, Vector3};
 
+/// A least-squares allocation of a body vector `v` over unit axes `a_j` within per-axis
+/// limits: `x = s A⁺ v`, `A = [a_1 … a_k]`, `A⁺` its pseudo-inverse (the smallest `x` with
+/// `A x = v` when the axes span `v`), `s = min(1, min_j max_j / |(A⁺ v)_j|)` so that the
+/// whole vector scales down, keeping its direction, when one entry would exceed its limit.
+/// The wheels' torques and the torquers' dipoles are allocated this way.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Allocation {
+    /// `A⁺` (k × 3).
+    pinv: DMatrix<f64>,
+    /// Each axis' limit, in the same order.
+    max: Vec<f64>,
+}
+
+impl Allocation {
+    /// Over these unit axes (body axes) with these limits (`∞` for none).
+    pub fn new(axes: &[Vector3<f64>], max: &[f64]) -> Self {
+        let k = axes.len();
+        let pinv = if k == 0 {
+            DMatrix::zeros(0, 3)
+        } else {
+            DMatrix::from_fn(3, k, |r, c| axes[c][r])
+                .pseudo_inverse(1e-12)
+                .unwrap_or_else(|_| DMatrix::zeros(k, 3))
+        };
+        Self {
+            pinv,
+            max: max.to_vec(),
+        }
+    }
+    /// The largest `|v_i|` about each body axis `i` within the limits.
+    pub fn capability(&self) -> Vector3<f64> {
+        Vector3::from_fn(|i, _| {
+            (0..self.pinv.nrows()).fold(f64::INFINITY, |m, j| {
+                let a = self.pinv[(j, i)].abs();
+                if a == 0.0 { m } else { m.min(self.max[j] / a) }
+            })
+        })
+    }
+    /// `x = s A⁺ v` into `out` (one entry per axis).
+    pub fn solve(&self, v: &Vector3<f64>, out: &mut [f64]) {
+        let mut scale: f64 = 1.0;
+        for (j, c) in out.iter_mut().enumerate() {
+            let row = self.pinv.row(j);
+            *c = row[0] * v.x + row[1] * v.y + row[2] * v.z;
+            let m = self.max[j];
+            if c.abs() > m {
+                scale = scale.min(m / c.abs());
+            }
+        }
+        if scale < 1.0 {
+            out.iter_mut().for_each(|c| *c *= scale);
+        }
+    }
+    /// Number of axes.
+    pub fn len(&self) -> usize {
+        self.pinv.nrows()
+    }
+    /// Whether it has no axes.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
 /// The PID's gains and state, and the wheel allocation.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Pid {
@@ -38,10 +101,8 @@ pub struct Pid {
     pub inertia: Option<Matrix3<f64>>,
     /// `∫ e dt` (rad s).
     integral: Vector3<f64>,
-    /// `A⁺` (k × 3).
-    allocation: DMatrix<f64>,
-    /// Each wheel's `max_torque` (N m), in the allocation's order.
-    max_torque: Vec<f64>,
+    /// The wheels' torques.
+    allocation: Allocation,
     /// The largest torque about each body axis (N m).
     capability: Vector3<f64>,
 }
@@ -55,33 +116,20 @@ impl Pid {
             kd: kd.into(),
             inertia: inertia.map(|m| Matrix3::from_fn(|r, c| m[r][c])),
             integral: Vector3::zeros(),
-            allocation: DMatrix::zeros(0, 3),
-            max_torque: Vec::new(),
+            allocation: Allocation::new(&[], &[]),
             capability: Vector3::repeat(f64::INFINITY),
         }
     }
 
     /// Sets the wheels: unit axes (body axes) and torque limits (N m, `∞` for none).
     pub fn allocate(&mut self, axes: &[Vector3<f64>], max_torque: &[f64]) {
-        let k = axes.len();
-        self.allocation = if k == 0 {
-            DMatrix::zeros(0, 3)
-        } else {
-            DMatrix::from_fn(3, k, |r, c| axes[c][r])
-                .pseudo_inverse(1e-12)
-                .unwrap_or_else(|_| DMatrix::zeros(k, 3))
-        };
-        self.max_torque = max_torque.to_vec();
-        self.capability = Vector3::from_fn(|i, _| {
-            (0..k).fold(f64::INFINITY, |m, j| {
-                let a = self.allocation[(j, i)].abs();
-                if a == 0.0 {
-                    m
-                } else {
-                    m.min(self.max_torque[j] / a)
-                }
-            })
-        });
+        self.allocation = Allocation::new(axes, max_torque);
+        self.capability = self.allocation.capability();
+    }
+
+    /// Starts afresh: the integral back to zero.
+    pub fn reset(&mut self) {
+        self.integral = Vector3::zeros();
     }
 
     /// The largest torque the wheels make about each body axis (N m).
@@ -126,23 +174,13 @@ impl Pid {
     /// The wheels' motor commands (N m, one per wheel, into `out`) for the body torque `u`,
     /// scaled down as a whole when one would exceed its limit.
     pub fn commands(&self, u: &Vector3<f64>, out: &mut [f64]) {
-        let mut scale: f64 = 1.0;
-        for (j, c) in out.iter_mut().enumerate() {
-            let row = self.allocation.row(j);
-            *c = -(row[0] * u.x + row[1] * u.y + row[2] * u.z);
-            let m = self.max_torque[j];
-            if c.abs() > m {
-                scale = scale.min(m / c.abs());
-            }
-        }
-        if scale < 1.0 {
-            out.iter_mut().for_each(|c| *c *= scale);
-        }
+        // The wheels apply −Σ τ_j a_j to the body.
+        self.allocation.solve(&-u, out);
     }
 
     /// Number of wheels allocated to.
     pub fn n_wheels(&self) -> usize {
-        self.allocation.nrows()
+        self.allocation.len()
     }
 }
 

@@ -182,21 +182,13 @@ impl DipoleBlock {
         self.last_b = Some(b);
     }
 
-    /// The dipole a row at this instant shows: at one of the block's samples, the one it
-    /// latches there (from the reading the magnetometer takes there); else the one held.
-    pub(crate) fn dipole_at(
-        &self,
-        ctx: &crate::effects::Context,
-        sensors: &[Sensor],
-    ) -> Vector3<f64> {
-        let mag = &sensors[self.spec.magnetometer];
-        if satsim_integrate::stop_due(ctx.t, mag.next_sample()) && self.runs_at(mag.samples_taken())
-        {
-            let b = vector(&mag.reading_at(ctx));
-            self.law(&b, self.last_b.as_ref(), ctx.rotor_rates)
-        } else {
-            self.dipole
-        }
+    /// Starts afresh from the magnetometer's samples so far: no previous reading, no
+    /// dipole held.
+    pub(crate) fn reset(&mut self, sensors: &[Sensor]) {
+        self.seen = sensors[self.spec.magnetometer].samples_taken();
+        self.last_b = None;
+        self.dipole = Vector3::zeros();
+        self.held.fill(0.0);
     }
 
     /// The dipole held (body axes, A m²).

@@ -2,18 +2,27 @@
 //! never the truth.
 //!
 //! - [`mekf`](crate::fsw::mekf): [`Mekf`](crate::fsw::Mekf), the multiplicative extended
-//!   Kalman filter for the attitude and the gyro bias from a gyro and one or more star
-//!   trackers (`[fsw.estimator] kind = "mekf"`).
+//!   Kalman filter for the attitude and the gyro bias, on attitude (star tracker) or
+//!   direction (Sun sensor, magnetometer) updates; [`triad`](mod@crate::fsw::triad) starts it
+//!   from two directions.
+//! - [`estimator`](crate::fsw::estimator): the filter wired to a gyro and a star tracker
+//!   (`[fsw.estimator] kind = "mekf"`) or to a Sun sensor and a magnetometer (`"sun_mag"`,
+//!   the safe mode's).
 //! - [`guidance`](crate::fsw::guidance): [`Guidance`](crate::fsw::Guidance), the reference
-//!   attitude and rate (`[fsw.guidance] mode = "inertial"` or `"nadir"`).
+//!   attitude, rate and acceleration (`[fsw.guidance] mode = "inertial"`, `"nadir"`,
+//!   `"sun"`, `"target"`), shaped by [`slew`](crate::fsw::slew) within `max_rate` and
+//!   `max_acceleration`.
 //! - [`control`](crate::fsw::control): [`Pid`](crate::fsw::Pid), the attitude PID on the
-//!   estimate's error to the reference and its least-squares allocation to the reaction
-//!   wheels (`[fsw.control] kind = "pid"`, `actuator = "wheels"`).
+//!   estimate's error to the reference, and its least-squares
+//!   [`Allocation`](crate::fsw::Allocation) to the reaction wheels or the torquers
+//!   (`[fsw.control] kind = "pid"`).
 //! - [`magnetic`](crate::fsw::magnetic): B-dot on the magnetometer's readings
 //!   (`[fsw.bdot]`) and wheel momentum dumping (`[fsw.momentum]`), both on the magnetic
 //!   torquers ([`DipoleSpec`](crate::fsw::DipoleSpec)).
+//! - [`modes`](crate::fsw::modes): [`Mode`](crate::fsw::Mode), which blocks run and the
+//!   [`Condition`](crate::fsw::Condition) that ends it (`[[fsw.mode]]`).
 //! - [`onboard`](crate::fsw::onboard): [`Onboard`](crate::fsw::Onboard), the blocks wired to a
-//!   scene's sensors and clocked by them (hosted by the
+//!   scene's sensors, clocked by them and run in modes (hosted by the
 //!   [`Sensors`](crate::sensors::Sensors) effect, so that they read the readings taken at
 //!   the same instant).
 //!
@@ -21,13 +30,21 @@
 //! law know nothing of scenes or of the simulation.
 
 pub mod control;
+pub mod estimator;
 pub mod guidance;
 pub mod magnetic;
 pub mod mekf;
+pub mod modes;
 pub mod onboard;
+pub mod slew;
+pub mod triad;
 
-pub use control::Pid;
-pub use guidance::{Guidance, Reference};
+pub use control::{Allocation, Pid};
+pub use estimator::{Aiding, EstimatorSpec};
+pub use guidance::{Guidance, Reference, geodetic_to_itrf};
 pub use magnetic::{DipoleLaw, DipoleSpec, bdot_dipole, momentum_dipole};
 pub use mekf::{GyroModel, Mekf, MekfParams, SteadyState, attitude_error, steady_state};
-pub use onboard::{ControlSpec, EstimatorSpec, Onboard};
+pub use modes::{Condition, Mode};
+pub use onboard::{Actuator, ControlSpec, Onboard};
+pub use slew::Slew;
+pub use triad::{TRIAD_MIN_SIN, triad, triad_covariance};

@@ -1,6 +1,6 @@
-//! [`Onboard`]: a scene's built-in flight software (`[fsw]`, contract section 16), the
-//! estimator, guidance and control blocks and the magnetic block (B-dot or momentum
-//! dumping) wired to the scene's sensors.
+//! [`Onboard`]: a scene's built-in flight software (`[fsw]`, contract section 16), its
+//! estimator, guidance, control and magnetic blocks wired to the scene's sensors and run in
+//! modes ([`crate::fsw::modes`]).
 //!
 //! # Reading the sensors at the instant they sample
 //!
@@ -14,23 +14,22 @@
 //!
 //! # Timing (zero-order hold)
 //!
-//! - **Estimator** ([`EstimatorSpec`], a [`Mekf`] with [`GyroModel::Sampled`]): runs at each
-//!   gyro sample `t_k` (its period is the gyro's): it propagates the estimate from `t_{k−1}`
-//!   with the gyro reading taken there, held over the period, then updates it with the
-//!   reading of each star tracker that sampled at `t_k` (in the order listed). So the filter
-//!   does, in turn, update at `t_k`, propagate over `[t_k, t_{k+1}]` with the reading of
-//!   `t_k`, update at `t_{k+1}`, …, exactly as a standalone [`Mekf`] driven by the same
-//!   readings. The first gyro sample initialises it at the first star tracker's reading,
-//!   bias 0, covariance `diag(σ_att², σ_bias²)` (no truth), then updates as above. The
-//!   estimate held between samples is the one of the last sample (after its updates).
+//! - **Estimator** ([`crate::fsw::estimator`]): at its gyro's samples.
 //! - **Guidance**: evaluated at the control's samples (without a control, at the
-//!   estimator's), from the orbit; held in between.
+//!   estimator's), from the orbit; held in between. With slew limits it is shaped by a
+//!   [`Slew`] stepped at those samples.
 //! - **Control**: at its own samples (`t = 0, period, …`); the estimate it reads is the last
 //!   one, turned on to the control instant by the gyro's rate less the estimated bias when
-//!   the instant lies between gyro samples. Its wheel commands are held in between.
+//!   the instant lies between gyro samples. Without an estimate yet (a Sun and field
+//!   estimator before the Sun is seen) it commands nothing. Its commands are held in
+//!   between.
+//! - **Magnetic** ([`crate::fsw::magnetic`]): at its magnetometer's samples, after the
+//!   other blocks.
+//! - **Modes**: checked last, at every sample instant.
 //!
 //! A row written at a sample instant holds what that sample latches (the sensors' readings
-//! taken there, the estimate after its update), as the sensors' columns do.
+//! taken there, the estimate after its update, the mode after its check), as the sensors'
+//! columns do: [`Sensors`](crate::sensors::Sensors) works it out on a copy.
 //!
 //! # Columns
 //!
@@ -38,328 +37,563 @@
 //! `est_bias_x..z` (rad/s), `est_sigma_x..z` (1σ of the attitude error about the body's
 //! axes, rad), `est_error` (rad: the angle between the estimate and the true attitude of
 //! the estimator's body — a diagnostic, the only place the truth is read). With guidance:
-//! `ref_q_w..z`, `ref_omega_x..z` (rad/s, the reference's axes) and `pointing_error` (rad:
-//! the angle between the true attitude and the reference). With `[fsw.bdot]` or
-//! `[fsw.momentum]` ([`crate::fsw::magnetic`], run at its magnetometer's samples, after the
-//! other blocks): `fsw_dipole_x..z` (A m², body axes: the dipole commanded, before the
-//! torquers clamp it).
+//! `ref_q_w..z`, `ref_omega_x..z` (rad/s, the reference's axes), `ref_alpha_x..z` (rad/s²,
+//! likewise) and `pointing_error` (rad: the angle between the true attitude and the
+//! reference). With `[fsw.bdot]` or `[fsw.momentum]`: `fsw_dipole_x..z` (A m², body axes:
+//! the dipole commanded, before the torquers clamp it). With `[[fsw.mode]]`: `fsw_mode`
+//! (the mode's index, from 0). Where the current mode runs no estimator (or its estimator has
+//! no estimate yet: a Sun and field estimator before it saw the Sun) the `est_` columns are
+//! all zero, `est_q` included (no attitude); likewise the `ref_` columns and
+//! `pointing_error` without a guidance, and the dipole without a magnetic block.
 
-use super::control::Pid;
+use super::control::{Allocation, Pid};
+use super::estimator::{Estimator, EstimatorSpec};
 use super::guidance::{Guidance, Reference};
 use super::magnetic::{DipoleBlock, DipoleSpec};
 use super::mekf::log_rotation;
-use super::mekf::{GyroModel, Mekf, MekfParams};
-use crate::effects::{Context, Forces, Links, Needs, OrbitState, Sampling};
+use super::modes::{Condition, Mode};
+use super::slew::Slew;
+use crate::effects::{Context, Forces, Links, Needs, Sampling};
 use crate::sensors::{Pose, Sensor};
 use nalgebra::{UnitQuaternion, Vector3};
 use satsim_integrate::{SystemError, stop_due};
 
-/// The estimator's wiring: which sensors it reads (indices in the
-/// [`Sensors`](crate::sensors::Sensors) set) and its
-/// filter's parameters.
+/// What a control commands.
 #[derive(Clone, Debug, PartialEq)]
-pub struct EstimatorSpec {
-    /// The gyro (index in the sensor set).
-    pub gyro: usize,
-    /// The gyro's period (s): the filter's propagation step.
-    pub period: f64,
-    /// The star trackers (indices in the sensor set) and their 1σ noise about the body's
-    /// x, y, z (rad), in update order.
-    pub star_trackers: Vec<(usize, [f64; 3])>,
-    /// The body whose attitude it estimates (the gyro's, and the trackers').
-    pub body: usize,
-    /// The filter's noises and initial sigmas.
-    pub params: MekfParams,
+pub enum Actuator {
+    /// Reaction wheels: rotor names (`wheel_<name>`) and `max_torque` (N m). The body torque
+    /// is allocated over their axes by least squares ([`Pid::commands`]).
+    Wheels(Vec<(String, f64)>),
+    /// The magnetic torquers on the root body, on the reading of this magnetometer (index in
+    /// the sensor set): the dipole `m = (B × u) / |B|²`, whose torque `m × B` is the part of
+    /// `u` across the field (the part along it cannot be made), allocated over the torquers'
+    /// axes by least squares within their `max_dipole`.
+    Torquers {
+        /// The magnetometer.
+        magnetometer: usize,
+    },
 }
 
-/// The filter between samples: what a row at a sample instant recomputes from a copy.
-#[derive(Clone, Debug, PartialEq)]
-struct Estimate {
-    /// `None` before the first gyro sample.
-    filter: Option<Mekf>,
-    /// The gyro reading of the last sample (rad/s), held over the next period.
-    gyro: [f64; 3],
-    /// The time of the last sample (s).
-    t: f64,
-}
-
-#[derive(Clone, Debug, PartialEq)]
-struct Estimator {
-    spec: EstimatorSpec,
-    state: Estimate,
-    /// Samples taken by the gyro and by each tracker, as last seen.
-    seen_gyro: u64,
-    seen: Vec<u64>,
-}
-
-impl Estimator {
-    /// One filter step at `t` on the gyro reading `gyro` and the trackers' readings
-    /// (`reading(k)`: tracker `k`'s reading when it sampled at `t`).
-    fn step(
-        spec: &EstimatorSpec,
-        state: &mut Estimate,
-        t: f64,
-        gyro: [f64; 3],
-        reading: impl Fn(usize) -> Option<[f64; 4]>,
-    ) -> Result<(), String> {
-        let f = match &mut state.filter {
-            Some(f) => {
-                f.propagate(state.gyro, spec.period)?;
-                f
-            }
-            None => {
-                let q0 = (0..spec.star_trackers.len())
-                    .find_map(&reading)
-                    .ok_or("no star tracker reading at the first gyro sample to start from")?;
-                state.filter.insert(
-                    Mekf::new(spec.params, q0, [0.0; 3])?.with_gyro_model(GyroModel::Sampled),
-                )
-            }
-        };
-        for (k, (_, sigma)) in spec.star_trackers.iter().enumerate() {
-            if let Some(q) = reading(k) {
-                f.update_attitude(q, *sigma)?;
-            }
-        }
-        state.gyro = gyro;
-        state.t = t;
-        Ok(())
-    }
-}
-
-/// Where the control's commands go and how it is timed.
+/// A control block: its law, clock and actuator.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ControlSpec {
     /// The law.
     pub pid: Pid,
     /// Sample period (s).
     pub period: f64,
-    /// The wheels it commands: rotor names (`wheel_<name>`) and `max_torque` (N m).
-    pub wheels: Vec<(String, f64)>,
+    /// What it commands.
+    pub actuator: Actuator,
 }
 
 #[derive(Clone, Debug, PartialEq)]
 struct Control {
     pid: Pid,
     clock: Sampling,
-    wheels: Vec<(String, f64)>,
-    /// Rotor index (tree order, after the model's hinges) of each wheel, from `connect`.
-    rotor: Vec<usize>,
-    /// The motor commands held (one per rotor of the tree).
+    actuator: Actuator,
+    /// Rotor indices (wheels) or torquer indices (torquers) of the commanded actuators,
+    /// from `connect`.
+    targets: Vec<usize>,
+    /// The torquers' allocation (torquers only).
+    dipoles: Allocation,
+    /// The commands held: one per rotor (wheels) or per torquer (torquers).
     held: Vec<f64>,
-    /// The commands of the wheels, in `wheels` order (room for one sample's).
+    /// One sample's commands, in `targets` order.
     scratch: Vec<f64>,
     /// The body torque wanted at the last sample (N m, body axes).
     torque: Vector3<f64>,
 }
 
+impl Control {
+    fn reset(&mut self) {
+        self.pid.reset();
+        self.held.fill(0.0);
+        self.torque = Vector3::zeros();
+    }
+}
+
+/// A guidance block: its law, its slew shaper and the reference it holds.
+#[derive(Clone, Debug)]
+struct GuidanceBlock {
+    law: Guidance,
+    slew: Option<Slew>,
+    /// Whether the shaper starts from the estimate at its next evaluation.
+    restart: bool,
+    /// The reference held (shaped).
+    held: Option<Reference>,
+    /// The law's own reference at the same instant (unshaped): what `error < x` reads.
+    target: Option<Reference>,
+}
+
 /// A scene's flight software: see the module documentation.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug)]
 pub struct Onboard {
-    estimator: Option<Estimator>,
-    guidance: Option<(Guidance, Option<Reference>)>,
-    control: Option<Control>,
-    /// `[fsw.bdot]` or `[fsw.momentum]`.
-    magnetic: Option<DipoleBlock>,
+    estimators: Vec<Estimator>,
+    guidances: Vec<GuidanceBlock>,
+    controls: Vec<Control>,
+    magnetics: Vec<DipoleBlock>,
+    modes: Vec<Mode>,
+    /// Whether the modes were given (`fsw_mode` column), rather than the one of every block.
+    moded: bool,
+    /// The current mode and when it began.
+    mode: usize,
+    since: f64,
+    /// Since when the current mode's condition has held (its `hold`).
+    holding: Option<f64>,
+    /// Mode switches not yet logged.
+    log: Vec<String>,
+}
+
+impl Default for Onboard {
+    fn default() -> Self {
+        Self::new()
+    }
 }
 
 impl Onboard {
-    /// Blocks: an estimator, a guidance law (it needs the estimator: its clock and the body
-    /// it points), a control (it needs both). `None` when a block lacks what it needs.
-    pub fn new(
-        estimator: Option<EstimatorSpec>,
-        guidance: Option<Guidance>,
-        control: Option<ControlSpec>,
-    ) -> Option<Self> {
-        if (guidance.is_some() && estimator.is_none()) || (control.is_some() && guidance.is_none())
-        {
-            return None;
+    /// No block yet: add them, then the modes that run them (or none: one mode of every
+    /// block, see [`Onboard::finish`]).
+    pub fn new() -> Self {
+        Self {
+            estimators: Vec::new(),
+            guidances: Vec::new(),
+            controls: Vec::new(),
+            magnetics: Vec::new(),
+            modes: Vec::new(),
+            moded: false,
+            mode: 0,
+            since: 0.0,
+            holding: None,
+            log: Vec::new(),
         }
-        let control = match control {
-            Some(c) => Some(Control {
-                pid: c.pid,
-                clock: Sampling::new(c.period)?,
-                wheels: c.wheels,
-                rotor: Vec::new(),
-                held: Vec::new(),
-                scratch: Vec::new(),
-                torque: Vector3::zeros(),
-            }),
-            None => None,
-        };
-        Some(Self {
-            estimator: estimator.map(|spec| Estimator {
-                seen: vec![0; spec.star_trackers.len()],
-                spec,
-                state: Estimate {
-                    filter: None,
-                    gyro: [0.0; 3],
-                    t: f64::NEG_INFINITY,
-                },
-                seen_gyro: 0,
-            }),
-            guidance: guidance.map(|g| (g, None)),
-            control,
-            magnetic: None,
-        })
     }
 
+    /// Adds an estimator; its index.
+    pub fn add_estimator(&mut self, spec: EstimatorSpec) -> usize {
+        self.estimators.push(Estimator::new(spec));
+        self.estimators.len() - 1
+    }
+    /// Adds a guidance law, shaped by `slew` when given; its index.
+    pub fn add_guidance(&mut self, law: Guidance, slew: Option<Slew>) -> usize {
+        self.guidances.push(GuidanceBlock {
+            law,
+            slew,
+            restart: true,
+            held: None,
+            target: None,
+        });
+        self.guidances.len() - 1
+    }
+    /// Adds a control; its index (`None` for a period that is not finite and > 0).
+    pub fn add_control(&mut self, spec: ControlSpec) -> Option<usize> {
+        self.controls.push(Control {
+            pid: spec.pid,
+            clock: Sampling::new(spec.period)?,
+            actuator: spec.actuator,
+            targets: Vec::new(),
+            dipoles: Allocation::new(&[], &[]),
+            held: Vec::new(),
+            scratch: Vec::new(),
+            torque: Vector3::zeros(),
+        });
+        Some(self.controls.len() - 1)
+    }
     /// Adds a magnetic block (`[fsw.bdot]` or `[fsw.momentum]`, see
-    /// [`crate::fsw::magnetic`]): it reads its magnetometer and commands the torquers.
-    pub fn with_magnetic(mut self, spec: DipoleSpec) -> Self {
-        self.magnetic = Some(DipoleBlock::new(spec));
-        self
+    /// [`crate::fsw::magnetic`]); its index.
+    pub fn add_magnetic(&mut self, spec: DipoleSpec) -> usize {
+        self.magnetics.push(DipoleBlock::new(spec));
+        self.magnetics.len() - 1
     }
 
-    /// The dipole the magnetic block holds (body axes, A m²), if there is one.
+    /// Adds a mode (they run in the order added). An error when it names a block that does
+    /// not exist, runs a guidance without an estimator or a control without both, has its
+    /// control and a magnetic block both command the torquers, or follows a mode that lasts.
+    pub fn add_mode(&mut self, mode: Mode) -> Result<(), String> {
+        let name = &mode.name;
+        let exists = |i: Option<usize>, n: usize, what: &str| match i {
+            Some(i) if i >= n => Err(format!("mode `{name}`: no {what} {i}")),
+            _ => Ok(()),
+        };
+        exists(mode.estimator, self.estimators.len(), "estimator")?;
+        exists(mode.guidance, self.guidances.len(), "guidance")?;
+        exists(mode.control, self.controls.len(), "control")?;
+        exists(mode.magnetic, self.magnetics.len(), "magnetic block")?;
+        if mode.guidance.is_some() && mode.estimator.is_none() {
+            return Err(format!(
+                "mode `{name}` runs a guidance without an estimator (the guidance runs on its clock and points the body it estimates)"
+            ));
+        }
+        if mode.control.is_some() && (mode.estimator.is_none() || mode.guidance.is_none()) {
+            return Err(format!(
+                "mode `{name}` runs a control without an estimator and a guidance"
+            ));
+        }
+        if let (Some(c), Some(_)) = (mode.control, mode.magnetic)
+            && matches!(self.controls[c].actuator, Actuator::Torquers { .. })
+        {
+            return Err(format!(
+                "mode `{name}`: its control and its magnetic block would both command the torquers"
+            ));
+        }
+        if let Some(last) = self.modes.last()
+            && last.until.is_none()
+        {
+            return Err(format!(
+                "mode `{name}` follows `{}`, which has no `until`: it would never begin",
+                last.name
+            ));
+        }
+        match mode.until {
+            Some(Condition::RateBelow(_)) if mode.estimator.is_none() && mode.gyro.is_none() => {
+                return Err(format!(
+                    "mode `{name}`: `rate < x` needs a gyro or an estimator in the mode"
+                ));
+            }
+            Some(Condition::ErrorBelow(_))
+                if mode.estimator.is_none() || mode.guidance.is_none() =>
+            {
+                return Err(format!(
+                    "mode `{name}`: `error < x` needs an estimator and a guidance in the mode"
+                ));
+            }
+            _ => {}
+        }
+        if !(mode.hold.is_finite() && mode.hold >= 0.0) {
+            return Err(format!("mode `{name}`: `hold` must be finite and >= 0"));
+        }
+        self.modes.push(mode);
+        self.moded = true;
+        Ok(())
+    }
+
+    /// Ends the building: without modes, one mode that runs every block (at most one of each
+    /// kind, an error otherwise) and lasts. The blocks of the first mode start.
+    pub fn finish(mut self) -> Result<Self, String> {
+        if self.modes.is_empty() {
+            let one = |n: usize, what: &str| match n {
+                0 => Ok(None),
+                1 => Ok(Some(0)),
+                _ => Err(format!(
+                    "{n} {what} blocks but no [[fsw.mode]] to say which runs when"
+                )),
+            };
+            let mode = Mode {
+                estimator: one(self.estimators.len(), "estimator")?,
+                guidance: one(self.guidances.len(), "guidance")?,
+                control: one(self.controls.len(), "control")?,
+                magnetic: one(self.magnetics.len(), "magnetic")?,
+                ..Mode::new("all")
+            };
+            self.add_mode(mode)?;
+            self.moded = false;
+        }
+        if let Some(last) = self.modes.last()
+            && let Some(c) = last.until
+        {
+            return Err(format!(
+                "the last mode `{}` has `until = \"{c}\"` but no mode follows it",
+                last.name
+            ));
+        }
+        Ok(self)
+    }
+
+    /// The current mode's index and name.
+    pub fn mode(&self) -> (usize, &str) {
+        (self.mode, &self.modes[self.mode].name)
+    }
+    /// The modes.
+    pub fn modes(&self) -> &[Mode] {
+        &self.modes
+    }
+    fn current(&self) -> &Mode {
+        &self.modes[self.mode]
+    }
+
+    /// The dipole the current mode's magnetic block holds (body axes, A m²), if it runs one.
     pub fn dipole(&self) -> Option<[f64; 3]> {
-        self.magnetic.as_ref().map(|m| m.dipole().into())
+        self.current()
+            .magnetic
+            .map(|m| self.magnetics[m].dipole().into())
     }
-    /// Whether a magnetic block commands the torquers.
+    /// Whether a block commands the torquers.
     pub fn commands_dipoles(&self) -> bool {
-        self.magnetic.is_some()
+        !self.magnetics.is_empty()
+            || self
+                .controls
+                .iter()
+                .any(|c| matches!(c.actuator, Actuator::Torquers { .. }))
     }
-
-    /// The filter as of the last estimator sample (`None` before the first).
-    pub fn filter(&self) -> Option<&Mekf> {
-        self.estimator.as_ref()?.state.filter.as_ref()
+    /// The current mode's filter as of its last sample (`None` before the first, or
+    /// without an estimator).
+    pub fn filter(&self) -> Option<&super::Mekf> {
+        self.estimators[self.current().estimator?].filter.as_ref()
     }
-    /// The reference held since the last guidance sample.
+    /// The reference the current mode's guidance holds.
     pub fn reference(&self) -> Option<Reference> {
-        self.guidance.as_ref()?.1
+        self.guidances[self.current().guidance?].held
     }
-    /// The body torque the control wanted at its last sample (N m, body axes).
+    /// The body torque the current mode's control wanted at its last sample (N m, body
+    /// axes).
     pub fn control_torque(&self) -> Option<[f64; 3]> {
-        self.control.as_ref().map(|c| c.torque.into())
+        self.current()
+            .control
+            .map(|c| self.controls[c].torque.into())
     }
     /// Whether a control commands the wheels.
     pub fn commands_rotors(&self) -> bool {
-        self.control.is_some()
+        self.controls
+            .iter()
+            .any(|c| matches!(c.actuator, Actuator::Wheels(_)))
     }
     /// What the blocks need of the scene.
     pub fn needs(&self) -> Needs {
         Needs {
-            orbit: self.guidance.as_ref().is_some_and(|g| g.0.needs_orbit()),
-            rotors: self.control.is_some(),
-            free_base: self.control.is_some(),
+            orbit: self.guidances.iter().any(|g| g.law.needs_orbit()),
+            rotors: self.commands_rotors(),
+            free_base: !self.controls.is_empty(),
             ..Needs::default()
         }
     }
-    /// The next control sample (`∞` without a control; the estimator runs on the gyro's
-    /// samples).
+    /// The next control sample (`∞` without a control; the other blocks run on the
+    /// sensors' samples).
     pub fn next_sample(&self) -> f64 {
-        self.control
-            .as_ref()
-            .map_or(f64::INFINITY, |c| c.clock.next())
+        self.controls
+            .iter()
+            .fold(f64::INFINITY, |m, c| m.min(c.clock.next()))
     }
-    /// The wheels' axes and rotor indices from the simulation.
+    /// The actuators' axes and indices from the simulation.
     pub fn connect(&mut self, links: &Links) {
-        if let Some(c) = &mut self.control {
+        for c in &mut self.controls {
+            c.targets.clear();
             let mut axes = Vec::new();
             let mut limits = Vec::new();
-            c.rotor.clear();
-            for (name, max) in &c.wheels {
-                if let Some(j) = links.rotors.iter().position(|r| &r.name == name) {
-                    c.rotor.push(j);
-                    axes.push(links.rotors[j].axis);
-                    limits.push(*max);
+            match &c.actuator {
+                Actuator::Wheels(wheels) => {
+                    for (name, max) in wheels {
+                        if let Some(j) = links.rotors.iter().position(|r| &r.name == name) {
+                            c.targets.push(j);
+                            axes.push(links.rotors[j].axis);
+                            limits.push(*max);
+                        }
+                    }
+                    c.pid.allocate(&axes, &limits);
+                    c.held = vec![0.0; links.rotors.len()];
+                }
+                Actuator::Torquers { .. } => {
+                    for (j, t) in links.torquers.iter().enumerate() {
+                        if t.body == 0 {
+                            c.targets.push(j);
+                            axes.push(t.axis);
+                            limits.push(t.max_dipole);
+                        }
+                    }
+                    c.pid.allocate(&[], &[]);
+                    c.dipoles = Allocation::new(&axes, &limits);
+                    c.held = vec![0.0; links.torquers.len()];
                 }
             }
-            c.pid.allocate(&axes, &limits);
-            c.held = vec![0.0; links.rotors.len()];
-            c.scratch = vec![0.0; c.rotor.len()];
+            c.scratch = vec![0.0; c.targets.len()];
         }
-        if let Some(m) = &mut self.magnetic {
+        for m in &mut self.magnetics {
             m.connect(links);
         }
     }
 
-    /// Runs the blocks due at `ctx.t`, after the sensors took their samples there.
+    /// Runs the current mode's blocks due at `ctx.t`, after the sensors took their samples
+    /// there, then checks its condition.
     pub fn sample(&mut self, ctx: &Context, sensors: &[Sensor]) -> Result<(), SystemError> {
         let t = ctx.t;
+        let mode = self.modes[self.mode].clone();
         let mut estimated = false;
-        if let Some(Estimator {
-            spec,
-            state,
-            seen_gyro,
-            seen,
-        }) = &mut self.estimator
-        {
-            let g = &sensors[spec.gyro];
-            if g.samples_taken() > *seen_gyro {
-                *seen_gyro = g.samples_taken();
-                // A tracker's reading counts when it sampled now (since the last look).
-                let reading = |k: usize| {
-                    let s = &sensors[spec.star_trackers[k].0];
-                    (s.samples_taken() > seen[k]).then(|| quaternion(s.last_reading()))
-                };
-                let gyro = vector(g.last_reading());
-                Estimator::step(spec, state, t, gyro, reading)
-                    .map_err(|m| SystemError::new(format!("fsw.estimator at t = {t} s: {m}")))?;
-                for (k, (i, _)) in spec.star_trackers.iter().enumerate() {
-                    seen[k] = sensors[*i].samples_taken();
-                }
-                estimated = true;
-            }
+        if let Some(e) = mode.estimator {
+            estimated = self.estimators[e]
+                .sample(t, sensors, ctx.orbit.as_ref())
+                .map_err(|m| SystemError::new(format!("fsw.estimator at t = {t} s: {m}")))?;
         }
-        let control_due = self
+        let control_due = mode
             .control
-            .as_ref()
-            .is_some_and(|c| stop_due(t, c.clock.next()));
-        if let Some((law, held)) = &mut self.guidance
-            && (control_due || (self.control.is_none() && estimated))
+            .is_some_and(|c| stop_due(t, self.controls[c].clock.next()));
+        if let Some(g) = mode.guidance
+            && (control_due || (mode.control.is_none() && estimated))
         {
-            *held = Some(
-                law.reference(ctx.orbit.as_ref())
-                    .map_err(|m| SystemError::new(format!("fsw.guidance: {m}")))?,
-            );
+            let dt = match mode.control {
+                Some(c) => self.controls[c].clock.period(),
+                None => mode
+                    .estimator
+                    .map_or(0.0, |e| self.estimators[e].spec.period),
+            };
+            let est = mode.estimator.map(|e| &self.estimators[e]);
+            let block = &mut self.guidances[g];
+            let target = block
+                .law
+                .reference_at(t, ctx.orbit.as_ref())
+                .map_err(|m| SystemError::new(format!("fsw.guidance at t = {t} s: {m}")))?;
+            block.target = Some(target);
+            block.held = Some(match &mut block.slew {
+                Some(slew) => {
+                    if block.restart {
+                        block.restart = false;
+                        // From the estimate now; without one, from the law's reference.
+                        match est.and_then(|e| Some((e.filter.as_ref()?, e.rate()?))) {
+                            Some((f, w)) => slew.reset(f.unit_attitude(), w),
+                            None => {
+                                *slew = Slew::new(slew.max_rate(), slew.max_acceleration())
+                                    .expect("limits already checked")
+                            }
+                        }
+                    }
+                    slew.step(&target, dt)
+                }
+                None => target,
+            });
         }
-        if let Some(c) = &mut self.control
+        if let Some(ci) = mode.control
             && control_due
         {
-            let e = self.estimator.as_ref().expect("a control has an estimator");
-            let r = self
-                .guidance
-                .as_ref()
-                .and_then(|g| g.1)
-                .expect("a control has a guidance, evaluated above");
-            let f = e.state.filter.as_ref().ok_or_else(|| {
-                SystemError::new(format!(
-                    "fsw.control at t = {t} s: the estimator has no estimate yet"
-                ))
-            })?;
-            let omega = Vector3::from(f.rate(e.state.gyro));
-            let ahead = t - e.state.t;
-            let q = if ahead > 0.0 {
-                f.unit_attitude() * UnitQuaternion::from_scaled_axis(omega * ahead)
-            } else {
-                f.unit_attitude()
-            };
-            c.torque = c
-                .pid
-                .torque(&q, &omega, &r.attitude, &r.rate, c.clock.period());
-            c.pid.commands(&c.torque, &mut c.scratch);
+            let e = &self.estimators[mode.estimator.expect("a control has an estimator")];
+            let r = self.guidances[mode.guidance.expect("a control has a guidance")]
+                .held
+                .expect("evaluated above");
+            let c = &mut self.controls[ci];
             c.held.fill(0.0);
-            for (&rotor, &cmd) in c.rotor.iter().zip(&c.scratch) {
-                c.held[rotor] = cmd;
+            c.torque = Vector3::zeros();
+            if let (Some(f), Some(omega)) = (e.filter.as_ref(), e.rate()) {
+                let ahead = t - e.t;
+                let q = if ahead > 0.0 {
+                    f.unit_attitude() * UnitQuaternion::from_scaled_axis(omega * ahead)
+                } else {
+                    f.unit_attitude()
+                };
+                c.torque = c
+                    .pid
+                    .torque(&q, &omega, &r.attitude, &r.rate, c.clock.period());
+                match &c.actuator {
+                    Actuator::Wheels(_) => c.pid.commands(&c.torque, &mut c.scratch),
+                    Actuator::Torquers { magnetometer } => {
+                        let b = reading3(&sensors[*magnetometer]);
+                        let b2 = b.norm_squared();
+                        let m = if b2 > 0.0 {
+                            b.cross(&c.torque) / b2
+                        } else {
+                            Vector3::zeros()
+                        };
+                        c.dipoles.solve(&m, &mut c.scratch);
+                    }
+                }
+                for (&j, &cmd) in c.targets.iter().zip(&c.scratch) {
+                    c.held[j] = cmd;
+                }
             }
-            c.clock.taken(t);
         }
-        if let Some(m) = &mut self.magnetic {
-            m.sample(sensors, ctx.rotor_rates);
+        // Every control's clock moves on, running or not, so that none is ever behind.
+        for c in &mut self.controls {
+            if stop_due(t, c.clock.next()) {
+                c.clock.taken(t);
+            }
         }
+        if let Some(m) = mode.magnetic {
+            self.magnetics[m].sample(sensors, ctx.rotor_rates);
+        }
+        self.check_mode(t, sensors);
         Ok(())
     }
 
-    /// Writes the held wheel commands and adds the held torquer commands.
-    pub fn apply(&self, forces: &mut Forces) {
-        if let Some(c) = &self.control {
-            for (out, held) in forces.rotor_command.iter_mut().zip(&c.held) {
-                *out = *held;
+    /// The current mode's condition, then the switch when it has held long enough.
+    fn check_mode(&mut self, t: f64, sensors: &[Sensor]) {
+        let mode = &self.modes[self.mode];
+        let Some(until) = mode.until else {
+            return;
+        };
+        let est = mode.estimator.map(|e| &self.estimators[e]);
+        let rate = match (est.and_then(|e| e.rate()), mode.gyro) {
+            (Some(w), _) => Some(w.norm()),
+            (None, Some(g)) if sensors[g].samples_taken() > 0 => Some(reading3(&sensors[g]).norm()),
+            _ => None,
+        };
+        let error = match (est.and_then(|e| e.filter.as_ref()), mode.guidance) {
+            (Some(f), Some(g)) => self.guidances[g]
+                .target
+                .map(|r| log_rotation(&(r.attitude.inverse() * f.unit_attitude())).norm()),
+            _ => None,
+        };
+        if !until.holds(rate, error, t - self.since) {
+            self.holding = None;
+            return;
+        }
+        let from = *self.holding.get_or_insert(t);
+        if t - from < mode.hold {
+            return;
+        }
+        let seen = match until {
+            Condition::RateBelow(_) => format!("rate {} rad/s", rate.unwrap_or(f64::NAN)),
+            Condition::ErrorBelow(_) => format!("error {} rad", error.unwrap_or(f64::NAN)),
+            Condition::TimeAfter(_) => format!("{} s in the mode", t - self.since),
+        };
+        let next = self.mode + 1;
+        self.log.push(format!(
+            "fsw mode {next} `{}` after `{}`: {until} ({seen})",
+            self.modes[next].name, mode.name
+        ));
+        self.switch(next, t, sensors);
+    }
+
+    /// Makes mode `next` the current one at `t`: the blocks not in both start afresh.
+    fn switch(&mut self, next: usize, t: f64, sensors: &[Sensor]) {
+        let (a, b) = (&self.modes[self.mode], &self.modes[next]);
+        let fresh = |x: Option<usize>, y: Option<usize>, i: usize| x != Some(i) || y != Some(i);
+        for (i, e) in self.estimators.iter_mut().enumerate() {
+            if fresh(a.estimator, b.estimator, i) {
+                e.reset(sensors);
             }
         }
-        if let Some(m) = &self.magnetic {
-            m.apply(forces);
+        for (i, g) in self.guidances.iter_mut().enumerate() {
+            if fresh(a.guidance, b.guidance, i) {
+                g.held = None;
+                g.target = None;
+                g.restart = true;
+            }
+        }
+        for (i, c) in self.controls.iter_mut().enumerate() {
+            if fresh(a.control, b.control, i) {
+                c.reset();
+            }
+        }
+        for (i, m) in self.magnetics.iter_mut().enumerate() {
+            if fresh(a.magnetic, b.magnetic, i) {
+                m.reset(sensors);
+            }
+        }
+        self.mode = next;
+        self.since = t;
+        self.holding = None;
+    }
+
+    /// Moves the mode switches not yet logged into `out`.
+    pub fn drain_log(&mut self, out: &mut Vec<String>) {
+        out.append(&mut self.log);
+    }
+
+    /// Writes the held commands of the current mode: the wheels' (set) and the torquers'
+    /// (added).
+    pub fn apply(&self, forces: &mut Forces) {
+        let mode = self.current();
+        if let Some(c) = mode.control {
+            let c = &self.controls[c];
+            match c.actuator {
+                Actuator::Wheels(_) => {
+                    for (out, held) in forces.rotor_command.iter_mut().zip(&c.held) {
+                        *out = *held;
+                    }
+                }
+                Actuator::Torquers { .. } => {
+                    for (out, held) in forces.dipole_command.iter_mut().zip(&c.held) {
+                        *out += *held;
+                    }
+                }
+            }
+        }
+        if let Some(m) = mode.magnetic {
+            self.magnetics[m].apply(forces);
         }
     }
 
@@ -369,111 +603,97 @@ impl Onboard {
         let add = |c: &mut Vec<String>, p: &str, s: &[&str]| {
             c.extend(s.iter().map(|s| format!("{p}_{s}")));
         };
-        if self.estimator.is_some() {
+        if !self.estimators.is_empty() {
             add(&mut c, "est_q", &["w", "x", "y", "z"]);
             add(&mut c, "est_bias", &["x", "y", "z"]);
             add(&mut c, "est_sigma", &["x", "y", "z"]);
             c.push("est_error".into());
         }
-        if self.guidance.is_some() {
+        if !self.guidances.is_empty() {
             add(&mut c, "ref_q", &["w", "x", "y", "z"]);
             add(&mut c, "ref_omega", &["x", "y", "z"]);
+            add(&mut c, "ref_alpha", &["x", "y", "z"]);
             c.push("pointing_error".into());
         }
-        if self.magnetic.is_some() {
+        if !self.magnetics.is_empty() {
             add(&mut c, "fsw_dipole", &["x", "y", "z"]);
+        }
+        if self.moded {
+            c.push("fsw_mode".into());
         }
         c
     }
 
-    /// The columns' values at `ctx`: at a sample instant, what the sample there latches
-    /// (worked out on a copy, from the readings the sensors take there); else what is held.
-    pub fn output(&self, ctx: &Context, sensors: &[Sensor], row: &mut Vec<f64>) {
-        self.output_estimate(ctx, sensors, row);
-        if let Some(m) = &self.magnetic {
-            row.extend_from_slice(m.dipole_at(ctx, sensors).as_slice());
+    /// The columns' values at `ctx` of what the blocks hold (at a sample instant, call it on
+    /// the copy that sampled there).
+    pub fn output(&self, ctx: &Context, row: &mut Vec<f64>) {
+        let mode = self.current();
+        if !self.estimators.is_empty() {
+            let est = mode.estimator.map(|e| &self.estimators[e]);
+            match est.and_then(|e| Some((e, e.filter.as_ref()?))) {
+                Some((e, f)) => {
+                    let truth = Pose::of(ctx, e.spec.body).attitude;
+                    row.extend_from_slice(&f.attitude());
+                    row.extend_from_slice(&f.bias());
+                    row.extend_from_slice(&f.sigma_attitude());
+                    row.push(log_rotation(&(f.unit_attitude().inverse() * truth)).norm());
+                }
+                None => row.extend_from_slice(&[0.0; 11]),
+            }
+        }
+        if !self.guidances.is_empty() {
+            let body = mode.estimator.map_or(0, |e| self.estimators[e].spec.body);
+            match mode.guidance.and_then(|g| self.guidances[g].held) {
+                Some(r) => {
+                    let truth = Pose::of(ctx, body).attitude;
+                    let q = r.attitude.quaternion();
+                    let s = if q.w < 0.0 { -1.0 } else { 1.0 };
+                    row.extend_from_slice(&[s * q.w, s * q.i, s * q.j, s * q.k]);
+                    row.extend_from_slice(r.rate.as_slice());
+                    row.extend_from_slice(r.acceleration.as_slice());
+                    row.push(log_rotation(&(r.attitude.inverse() * truth)).norm());
+                }
+                None => row.extend_from_slice(&[0.0; 11]),
+            }
+        }
+        if !self.magnetics.is_empty() {
+            let d = self.dipole().unwrap_or([0.0; 3]);
+            row.extend_from_slice(&d);
+        }
+        if self.moded {
+            row.push(self.mode as f64);
         }
     }
 
-    /// The estimator's and the guidance's columns.
-    fn output_estimate(&self, ctx: &Context, sensors: &[Sensor], row: &mut Vec<f64>) {
-        let t = ctx.t;
-        let Some(e) = &self.estimator else {
-            return;
-        };
-        let truth = Pose::of(ctx, e.spec.body).attitude;
-        let gyro_due = stop_due(t, sensors[e.spec.gyro].next_sample());
-        let pending;
-        let state = if gyro_due {
-            let mut s = e.state.clone();
-            let reading = |k: usize| {
-                let st = &sensors[e.spec.star_trackers[k].0];
-                stop_due(t, st.next_sample()).then(|| quaternion(&st.reading_at(ctx)))
-            };
-            let gyro = vector(&sensors[e.spec.gyro].reading_at(ctx));
-            pending = Estimator::step(&e.spec, &mut s, t, gyro, reading)
-                .ok()
-                .map(|_| s);
-            pending.as_ref()
-        } else {
-            Some(&e.state)
-        };
-        match state.and_then(|s| s.filter.as_ref()) {
-            Some(f) => {
-                row.extend_from_slice(&f.attitude());
-                row.extend_from_slice(&f.bias());
-                row.extend_from_slice(&f.sigma_attitude());
-                row.push(log_rotation(&(f.unit_attitude().inverse() * truth)).norm());
-            }
-            None => row.extend_from_slice(&[f64::NAN; 11]),
-        }
-        let Some((law, held)) = &self.guidance else {
-            return;
-        };
-        let due = match &self.control {
-            Some(c) => stop_due(t, c.clock.next()),
-            None => gyro_due,
-        };
-        let r = if due {
-            law.reference(ctx.orbit.as_ref()).ok()
-        } else {
-            *held
-        };
-        match r {
-            Some(r) => {
-                let q = r.attitude.quaternion();
-                let s = if q.w < 0.0 { -1.0 } else { 1.0 };
-                row.extend_from_slice(&[s * q.w, s * q.i, s * q.j, s * q.k]);
-                row.extend_from_slice(r.rate.as_slice());
-                row.push(log_rotation(&(r.attitude.inverse() * truth)).norm());
-            }
-            None => row.extend_from_slice(&[f64::NAN; 8]),
-        }
-    }
-
-    /// The reference of the guidance law at an orbit (for checks against it).
-    pub fn reference_at(&self, orbit: Option<&OrbitState>) -> Option<Reference> {
-        self.guidance.as_ref()?.0.reference(orbit).ok()
+    /// The current mode's guidance law's reference at `t` and an orbit, unshaped (for
+    /// checks against it).
+    pub fn reference_at(
+        &self,
+        t: f64,
+        orbit: Option<&crate::effects::OrbitState>,
+    ) -> Option<Reference> {
+        self.guidances[self.current().guidance?]
+            .law
+            .reference_at(t, orbit)
+            .ok()
     }
 }
 
-fn quaternion(r: &[f64]) -> [f64; 4] {
-    [r[0], r[1], r[2], r[3]]
-}
-
-fn vector(r: &[f64]) -> [f64; 3] {
-    [r[0], r[1], r[2]]
+fn reading3(s: &Sensor) -> Vector3<f64> {
+    let r = s.last_reading();
+    Vector3::new(r[0], r[1], r[2])
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::fsw::{Aiding, MekfParams};
 
     fn spec() -> EstimatorSpec {
         EstimatorSpec {
             gyro: 0,
             period: 0.1,
-            star_trackers: vec![(1, [1e-5; 3])],
+            aiding: Aiding::StarTrackers(vec![(1, [1e-5; 3])]),
             body: 0,
             params: MekfParams {
                 sigma_v: 1e-5,
@@ -484,23 +704,93 @@ mod tests {
         }
     }
 
+    fn control() -> ControlSpec {
+        ControlSpec {
+            pid: Pid::new([1.0; 3], [0.0; 3], [1.0; 3], None),
+            period: 0.1,
+            actuator: Actuator::Wheels(vec![("wheel_x".into(), 1.0)]),
+        }
+    }
+
     #[test]
     fn a_block_without_what_it_reads_is_refused_and_the_columns_follow_the_blocks() {
         let inertial = Guidance::Inertial(UnitQuaternion::identity());
-        assert!(Onboard::new(None, Some(inertial), None).is_none());
-        let control = ControlSpec {
-            pid: Pid::new([1.0; 3], [0.0; 3], [1.0; 3], None),
-            period: 0.1,
-            wheels: vec![("wheel_x".into(), 1.0)],
-        };
-        assert!(Onboard::new(Some(spec()), None, Some(control.clone())).is_none());
-        let est = Onboard::new(Some(spec()), None, None).unwrap();
+        let mut g = Onboard::new();
+        g.add_guidance(inertial, None);
+        assert!(g.finish().is_err());
+        let mut c = Onboard::new();
+        c.add_estimator(spec());
+        c.add_control(control()).unwrap();
+        assert!(c.finish().is_err());
+        let mut est = Onboard::new();
+        est.add_estimator(spec());
+        let est = est.finish().unwrap();
         assert_eq!(est.columns().len(), 11);
         assert!(!est.commands_rotors() && est.next_sample() == f64::INFINITY);
-        let all = Onboard::new(Some(spec()), Some(inertial), Some(control)).unwrap();
-        assert_eq!(all.columns().len(), 19);
+        let mut all = Onboard::new();
+        all.add_estimator(spec());
+        all.add_guidance(inertial, None);
+        all.add_control(control()).unwrap();
+        let all = all.finish().unwrap();
+        assert_eq!(all.columns().len(), 22);
         assert!(all.commands_rotors() && all.needs().rotors && !all.needs().orbit);
         assert_eq!(all.next_sample(), f64::NEG_INFINITY);
+        // Two of a kind need modes.
+        let mut two = Onboard::new();
+        two.add_estimator(spec());
+        two.add_estimator(spec());
+        assert!(two.finish().unwrap_err().contains("2 estimator blocks"));
+    }
+
+    #[test]
+    fn modes_are_checked_as_they_are_added() {
+        let mut o = Onboard::new();
+        let e = o.add_estimator(spec());
+        let g = o.add_guidance(Guidance::Inertial(UnitQuaternion::identity()), None);
+        let c = o.add_control(control()).unwrap();
+        let bad = |o: &mut Onboard, m: Mode| o.clone().add_mode(m).unwrap_err();
+        let m = |until| Mode {
+            until,
+            ..Mode::new("m")
+        };
+        assert!(
+            bad(
+                &mut o,
+                Mode {
+                    guidance: Some(g),
+                    ..m(None)
+                }
+            )
+            .contains("without an estimator")
+        );
+        assert!(
+            bad(
+                &mut o,
+                Mode {
+                    estimator: Some(e),
+                    control: Some(c),
+                    ..m(None)
+                }
+            )
+            .contains("without an estimator and a guidance")
+        );
+        assert!(bad(&mut o, m(Some(Condition::RateBelow(0.1)))).contains("needs a gyro"));
+        assert!(bad(&mut o, m(Some(Condition::ErrorBelow(0.1)))).contains("needs an estimator"));
+        assert!(
+            bad(
+                &mut o,
+                Mode {
+                    estimator: Some(3),
+                    ..m(None)
+                }
+            )
+            .contains("no estimator 3")
+        );
+        o.add_mode(m(None)).unwrap();
+        assert!(bad(&mut o, m(None)).contains("never begin"));
+        let mut p = Onboard::new();
+        p.add_mode(m(Some(Condition::TimeAfter(1.0)))).unwrap();
+        assert!(p.finish().unwrap_err().contains("no mode follows"));
     }
 
     #[test]
@@ -514,7 +804,9 @@ mod tests {
             every: 1,
             wheels: Vec::new(),
         };
-        let b = Onboard::new(None, None, None).unwrap().with_magnetic(spec);
+        let mut b = Onboard::new();
+        b.add_magnetic(spec);
+        let b = b.finish().unwrap();
         assert_eq!(
             b.columns(),
             ["fsw_dipole_x", "fsw_dipole_y", "fsw_dipole_z"]
@@ -526,34 +818,5 @@ mod tests {
         set.set_fsw(b);
         assert!(!set.observes_only() && set.commands_dipoles());
         assert_eq!(set.before(), ["magnetic"]);
-    }
-
-    #[test]
-    fn the_first_step_starts_at_the_first_tracker_reading_then_updates_with_it() {
-        let spec = spec();
-        let mut state = Estimate {
-            filter: None,
-            gyro: [0.0; 3],
-            t: f64::NEG_INFINITY,
-        };
-        let q = [0.6, 0.8, 0.0, 0.0];
-        Estimator::step(&spec, &mut state, 0.0, [1e-3, 0.0, 0.0], |_| Some(q)).unwrap();
-        let mut want = Mekf::new(spec.params, q, [0.0; 3])
-            .unwrap()
-            .with_gyro_model(GyroModel::Sampled);
-        want.update_attitude(q, [1e-5; 3]).unwrap();
-        assert_eq!(state.filter.as_ref(), Some(&want));
-        // The next: propagate with the held reading, then update.
-        Estimator::step(&spec, &mut state, 0.1, [0.0; 3], |_| Some(q)).unwrap();
-        want.propagate([1e-3, 0.0, 0.0], 0.1).unwrap();
-        want.update_attitude(q, [1e-5; 3]).unwrap();
-        assert_eq!(state.filter.as_ref(), Some(&want));
-        // No tracker reading at the first sample: an error.
-        let mut empty = Estimate {
-            filter: None,
-            gyro: [0.0; 3],
-            t: 0.0,
-        };
-        assert!(Estimator::step(&spec, &mut empty, 0.0, [0.0; 3], |_| None).is_err());
     }
 }

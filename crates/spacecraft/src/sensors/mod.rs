@@ -464,7 +464,22 @@ impl Effect for Sensors {
             row.extend_from_slice(&s.current(ctx)[..s.kind.width()]);
         }
         if let Some(f) = &self.fsw {
-            f.output(ctx, &self.sensors, row);
+            if stop_due(ctx.t, self.next_sample()) {
+                // What the sample here latches: worked out on a copy.
+                let mut copy = self.clone();
+                match copy.sample(ctx) {
+                    Ok(()) => copy.fsw.as_ref().expect("cloned").output(ctx, row),
+                    // The sample itself fails there and ends the run with its error.
+                    Err(_) => f.output(ctx, row),
+                }
+            } else {
+                f.output(ctx, row);
+            }
+        }
+    }
+    fn drain_sample_log(&mut self, out: &mut Vec<String>) {
+        if let Some(f) = &mut self.fsw {
+            f.drain_log(out);
         }
     }
     fn measure(&self, ctx: &Context, out: &mut Vec<Reading>) {

@@ -549,6 +549,14 @@ impl Simulation {
             }
             Ok::<(), SystemError>(())
         })?;
+        let mut said = Vec::new();
+        for (i, e) in self.effects.iter_mut().enumerate() {
+            e.drain_sample_log(&mut said);
+            for what in said.drain(..) {
+                self.log.events.push((t, what));
+                self.log.event_effects.push(i);
+            }
+        }
         self.settle_events(t, x, &before)?;
         Ok(changes)
     }

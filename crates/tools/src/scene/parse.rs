@@ -187,7 +187,7 @@ impl<'a> Parser<'a> {
             clocks.extend(super::sensors::clocks(self, s));
         }
         if let Some(f) = &file.fsw {
-            super::fsw::read(self, f, &model, &mut effects, &mut clocks)?;
+            super::fsw::read(self, f, &model, epoch, &mut effects, &mut clocks)?;
         }
         let scene = Scene {
             path,

@@ -502,6 +502,7 @@ fn bad_fsw_input_is_an_error_naming_the_file_and_line() {
     let base = std::fs::read_to_string(example(POINTING)).unwrap();
     let est = "star_tracker = \"st\"\n";
     let tracker2 = "[[sensors.star_tracker]]\nname = \"st2\"\nbody = \"panel1\"\nperiod = 0.1\n\n[fsw.estimator]";
+    let dated = format!("epoch = \"2026-03-20T12:00:00 UTC\"\n{base}");
     let control_on = "[effects.attitude_control]   # the truth-based controller, off: [fsw.control] flies the bus\nenabled = true";
     // (edit, the text of the line the error names, what it says)
     let cases: Vec<(String, &str, &str)> = vec![
@@ -514,19 +515,28 @@ fn bad_fsw_input_is_an_error_naming_the_file_and_line() {
         (base.replacen("kind = \"mekf\"", "kind = \"ukf\"", 1), "kind = \"ukf\"", "unknown kind"),
         (base.replacen("kind = \"mekf\"", "kind = \"mekf\"\nenabled = false", 1), "[fsw.control]", "needs an estimator"),
         (base.replacen("[effects.attitude_control]   # the truth-based controller, off: [fsw.control] flies the bus\nenabled = false", control_on, 1), "[fsw.control]", "would both command the wheels"),
-        (base.replacen("mode = \"inertial\"", "mode = \"sun\"", 1), "mode = \"sun\"", "not yet supported"),
-        (base.replacen("mode = \"inertial\"", "mode = \"target\"", 1), "mode = \"target\"", "not yet supported"),
-        (base.replacen("mode = \"inertial\"", "mode = \"inertial\"\nmax_rate = 0.02", 1), "max_rate", "not yet supported"),
-        (base.replacen("mode = \"inertial\"", "mode = \"inertial\"\nmax_acceleration = 0.001", 1), "max_acceleration", "not yet supported"),
+        (base.replacen("mode = \"inertial\"\nattitude = [1.0, 0.0, 0.0, 0.0]", "mode = \"sun\"\nattitude = [0.6, 0.8, 0.0, 0.0]", 1), "attitude = [0.6", "belongs to mode = \"inertial\" or \"nadir\""),
+        (dated.replacen("mode = \"inertial\"\nattitude = [1.0, 0.0, 0.0, 0.0]", "mode = \"sun\"\naxis = [0.0, 0.0, 1.0]", 1), "mode = \"sun\"", "needs `secondary = [x, y, z]`"),
+        (base.replacen("mode = \"inertial\"\nattitude = [1.0, 0.0, 0.0, 0.0]", "mode = \"sun\"\naxis = [0.0, 0.0, 1.0]\nsecondary = [0.0, 1.0, 0.0]", 1), "mode = \"sun\"", "needs the scene's `epoch`"),
+        (dated.replacen("mode = \"inertial\"\nattitude = [1.0, 0.0, 0.0, 0.0]", "mode = \"sun\"\naxis = [0.0, 0.0, 1.0]\nsecondary = [0.0, 0.0, 2.0]", 1), "secondary = [0.0, 0.0, 2.0]", "parallel"),
+        (dated.replacen("mode = \"inertial\"\nattitude = [1.0, 0.0, 0.0, 0.0]", "mode = \"target\"\nlatitude_deg = 95.0\nlongitude_deg = 0.0", 1), "latitude_deg = 95.0", "within ±90"),
+        (dated.replacen("mode = \"inertial\"\nattitude = [1.0, 0.0, 0.0, 0.0]", "mode = \"target\"\nlongitude_deg = 0.0", 1), "mode = \"target\"", "needs `latitude_deg`"),
+        (base.replacen("mode = \"inertial\"", "mode = \"inertial\"\naxis = [0.5, 0.0, 0.0]", 1), "axis = [0.5", "`fsw.guidance.axis` belongs to mode = \"sun\" or \"target\""),
+        (base.replacen("mode = \"inertial\"", "mode = \"inertial\"\nmax_rate = -0.02", 1), "max_rate", "`fsw.guidance.max_rate` must be a finite number > 0"),
+        (base.replacen("mode = \"inertial\"", "mode = \"inertial\"\nmax_acceleration = 0.0", 1), "max_acceleration", "must be a finite number > 0"),
         (base.replacen("mode = \"inertial\"", "mode = \"spin\"", 1), "mode = \"spin\"", "unknown mode"),
         (base.replacen("attitude = [1.0, 0.0, 0.0, 0.0]\n\n[fsw.control]", "\n[fsw.control]", 1), "mode = \"inertial\"", "needs `attitude"),
-        (base.replacen("actuator = \"wheels\"", "actuator = \"torquers\"", 1), "actuator = \"torquers\"", "not yet supported"),
+        (base.replacen("actuator = \"wheels\"", "actuator = \"torquers\"", 1), "[fsw.control]", "needs `magnetometer`"),
+        (base.replacen("actuator = \"wheels\"", "actuator = \"wheels\"\nmagnetometer = \"mag\"", 1), "magnetometer = \"mag\"", "belongs to actuator = \"torquers\""),
+        (base.replacen("actuator = \"wheels\"", "actuator = \"torquers\"\nmagnetometer = \"gyro\"", 1), "magnetometer = \"gyro\"", "is a gyro, not a magnetometer"),
+        (base.replacen("actuator = \"wheels\"", "actuator = \"ion_engines\"", 1), "actuator = \"ion_engines\"", "unknown actuator"),
         (base.replacen("actuator = \"wheels\"", "actuator = \"thrusters\"", 1), "actuator = \"thrusters\"", "not yet supported"),
         (base.replacen("kp = [40.0, 40.0, 40.0]", "kp = [40.0, -1.0, 40.0]", 1), "kp = [40.0, -1.0", ">= 0"),
         (base.replacen("period = 0.1                # s\n", "period = 0.0\n", 1), "period = 0.0", "> 0"),
         (format!("{base}\n[fsw.momentum]\ngain = 1e-3\nmagnetometer = \"mag\"\n"), "magnetometer = \"mag\"", "`fsw.momentum.magnetometer`: unknown sensor `mag` (the scene's magnetometer sensors: none)"),
         (format!("{base}\n[fsw.bdot]\nmagnetometer = \"mag\"\ngain = 4e5\n"), "magnetometer = \"mag\"", "`fsw.bdot.magnetometer`: unknown sensor `mag`"),
-        (format!("{base}\n[[fsw.mode]]\nname = \"detumble\"\nblocks = [\"bdot\"]\n"), "[[fsw.mode]]", "not yet supported: [[fsw.mode]]"),
+        (format!("{base}\n[[fsw.mode]]\nname = \"detumble\"\nblocks = [\"bdot\"]\n"), "blocks = [\"bdot\"]", "no [fsw.bdot]"),
+        (format!("{base}\n[[fsw.mode]]\nname = \"a\"\nblocks = [\"estimator\"]\n"), "[fsw.guidance]", "runs in no [[fsw.mode]]"),
         (format!("{base}\n[fsw.camera]\n"), "[fsw.camera]", "unknown key `camera`"),
     ];
     for (text, at, needle) in cases {
@@ -999,4 +1009,108 @@ fn assert_error_at(text: &str, at: &str, needle: &str) {
         err.contains(&format!("bad_fsw.toml:{line}")),
         "line {line} (`{at}`) not in: {err}"
     );
+}
+
+/// A run's rows and its event log.
+fn run_logged(scene: &Scene) -> (Trajectory, Vec<(f64, String)>) {
+    let mut sim = scene.simulation().unwrap_or_else(|e| panic!("{e}"));
+    let mut out = Trajectory {
+        columns: sim.columns(),
+        values: Vec::new(),
+    };
+    let t_end = sim.t0() + scene.duration;
+    sim.run(
+        &scene.options,
+        t_end,
+        &satsim_integrate::Output::Interval(scene.every),
+        |_, row| -> Result<(), std::convert::Infallible> {
+            out.values.extend_from_slice(row);
+            Ok(())
+        },
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    (out, sim.event_log().to_vec())
+}
+
+/// A small bus with a gyro and a star tracker at 1 Hz, a B-dot block and an estimator, run
+/// in the modes `modes`.
+fn moded(modes: &str) -> Scene {
+    let sensors = "[[sensors.gyro]]\nname = \"gyro\"\nbody = \"bus\"\nperiod = 1.0\nnoise_density = 1e-6\n[[sensors.star_tracker]]\nname = \"st\"\nbody = \"bus\"\nperiod = 1.0\nnoise_arcsec = [5.0, 5.0, 20.0]\n";
+    let blocks = "[fsw.bdot]\nmagnetometer = \"mag\"\ngain = 1e7\n[fsw.estimator]\ngyro = \"gyro\"\nstar_tracker = \"st\"\n";
+    let mut s = parse(
+        &tumbling_text(&format!("{sensors}{blocks}{modes}")),
+        "moded.toml",
+    );
+    s.duration = 40.0;
+    s.every = 1.0;
+    s
+}
+
+#[test]
+fn modes_switch_on_their_conditions_log_each_switch_and_start_their_blocks_afresh() {
+    // `time > x` counts from the mode's start; it is checked at every sample instant (1 s);
+    // `hold` asks the condition to hold that long first.
+    let (t, log) = run_logged(&moded(
+        "[[fsw.mode]]\nname = \"a\"\nblocks = [\"bdot\", \"estimator\"]\nuntil = \"time > 10\"\n\
+         [[fsw.mode]]\nname = \"b\"\nblocks = [\"estimator\"]\nuntil = \"time > 2\"\nhold = 3.0\n\
+         [[fsw.mode]]\nname = \"c\"\nblocks = [\"bdot\"]\nuntil = \"time > 5\"\n\
+         [[fsw.mode]]\nname = \"d\"\nblocks = [\"estimator\"]\n",
+    ));
+    let times: Vec<f64> = log.iter().map(|e| e.0).collect();
+    // a: 11 > 10; b: 14 − 11 = 3 > 2 first at 14, held 3 s to 17; c: 23 − 17 > 5; d lasts.
+    assert_eq!(times, [11.0, 17.0, 23.0], "{log:?}");
+    assert!(log[0].1.contains("fsw mode 1 `b` after `a`: time > 10"), "{}", log[0].1);
+    let mode: Vec<f64> = t.rows().map(|r| r[col(&t, "fsw_mode")]).collect();
+    for (k, m) in mode.iter().enumerate() {
+        let want = match k {
+            0..=10 => 0.0,
+            11..=16 => 1.0,
+            17..=22 => 2.0,
+            _ => 3.0,
+        };
+        assert_eq!(*m, want, "row {k}");
+    }
+    let rows: Vec<&[f64]> = t.rows().collect();
+    let bias = |k: usize| norm(get(&t, rows[k], ["est_bias_x", "est_bias_y", "est_bias_z"]));
+    let dipole =
+        |k: usize| norm(get(&t, rows[k], ["fsw_dipole_x", "fsw_dipole_y", "fsw_dipole_z"]));
+    let est = |k: usize| &rows[k][col(&t, "est_q_w")..=col(&t, "est_error")];
+    // A fresh filter starts with bias 0 and its first update leaves it there (no
+    // correlation yet); the estimator runs on from a to b, so its bias estimate is not 0.
+    assert_eq!(bias(0), 0.0);
+    assert!(bias(12) > 0.0);
+    // In c it does not run: all its columns zero; B-dot commands.
+    assert!(est(20).iter().all(|v| *v == 0.0));
+    assert!(dipole(20) > 0.0 && dipole(14) == 0.0);
+    // B-dot starts afresh in c (from 17): no command at its first sample (no difference).
+    assert!(dipole(17) == 0.0 && dipole(18) == 0.0 && dipole(19) > 0.0);
+    // Back in d (from 23) the estimator starts again at its next gyro sample: a fresh
+    // filter, the same as at t = 0 after its first update.
+    assert!(est(23).iter().all(|v| *v == 0.0));
+    assert_eq!(bias(24), 0.0);
+    assert_eq!(rows[24][col(&t, "est_sigma_x")], rows[0][col(&t, "est_sigma_x")]);
+}
+
+#[test]
+fn bad_modes_are_errors_at_their_line() {
+    let two = "[[fsw.mode]]\nname = \"a\"\nblocks = [\"bdot\"]\nuntil = \"rate < 0.01\"\n[[fsw.mode]]\nname = \"b\"\nblocks = [\"estimator\"]\n";
+    let cases: Vec<(String, &str, &str)> = vec![
+        (two.replacen("rate < 0.01", "speed < 1", 1), "until = \"speed", "unknown condition `speed < 1`"),
+        (two.replacen("rate < 0.01", "time < 5", 1), "until = \"time", "unknown condition"),
+        (two.replacen("rate < 0.01", "error < -1", 1), "until = \"error", "not a finite number >= 0"),
+        (two.replacen("[\"bdot\"]", "[\"bdot\", \"camera\"]", 1), "blocks = [\"bdot\", \"camera\"]", "unknown block `camera`"),
+        (two.replacen("[\"bdot\"]", "[\"bdot\", \"bdot\"]", 1), "blocks = [\"bdot\", \"bdot\"]", "lists `bdot` twice"),
+        (two.replacen("[\"bdot\"]", "[\"guidance\", \"estimator\"]", 1), "blocks = [\"guidance\"", "no [fsw.guidance]"),
+        (two.replacen("name = \"b\"", "name = \"a\"  # again", 1), "name = \"a\"  # again", "two modes are called `a`"),
+        (format!("{two}until = \"time > 1\"\n"), "until = \"time > 1\"", "the last mode `b` has no mode to switch to"),
+        (two.replacen("until = \"rate < 0.01\"\n", "", 1), "[[fsw.mode]]", "mode `a` needs `until`"),
+        (two.replacen("until = \"rate < 0.01\"", "until = \"rate < 0.01\"\nhold = -1.0", 1), "hold = -1.0", ">= 0"),
+        (format!("{two}[fsw.mode.guidance]\nmode = \"nadir\"\n"), "[fsw.mode.guidance]", "do not list \"guidance\""),
+    ];
+    for (modes, at, needle) in cases {
+        let sensors = "[[sensors.gyro]]\nname = \"gyro\"\nbody = \"bus\"\nperiod = 1.0\n[[sensors.star_tracker]]\nname = \"st\"\nbody = \"bus\"\nperiod = 1.0\n";
+        let blocks = "[fsw.bdot]\nmagnetometer = \"mag\"\ngain = 1e7\n[fsw.estimator]\ngyro = \"gyro\"\nstar_tracker = \"st\"\n";
+        let text = tumbling_text(&format!("{sensors}{blocks}{modes}"));
+        assert_error_at(&text, at, needle);
+    }
 }
