@@ -20,8 +20,8 @@
 //!
 //! The estimator runs at each gyro sample `t_k`: it propagates the estimate from `t_{k−1}`
 //! with the gyro reading taken there, held over the period, then updates it with each aiding
-//! sensor that sampled at `t_k` (in the order listed). The first gyro sample initialises it
-//! (at the first star tracker's reading, or at TRIAD), bias 0, covariance
+//! sensor that sampled at `t_k` (in the order listed). The first gyro sample where it can
+//! start initialises it (at a star tracker's reading taken there, or at TRIAD), bias 0, covariance
 //! `diag(σ_att², σ_bias²)` (no truth), then updates as above. The estimate held between
 //! samples is the one of the last sample (after its updates).
 
@@ -185,10 +185,12 @@ impl Estimator {
         match &spec.aiding {
             Aiding::StarTrackers(trackers) => {
                 if self.filter.is_none() {
-                    let q0 = fresh
-                        .iter()
-                        .find_map(|r| r.map(quaternion))
-                        .ok_or("no star tracker reading at the first gyro sample to start from")?;
+                    let Some(q0) = fresh.iter().find_map(|r| r.map(quaternion)) else {
+                        // Not yet: it starts at a gyro sample where a star tracker sampled.
+                        self.gyro = gyro;
+                        self.t = t;
+                        return Ok(());
+                    };
                     self.filter = Some(
                         Mekf::new(spec.params, q0, [0.0; 3])?.with_gyro_model(GyroModel::Sampled),
                     );
@@ -326,8 +328,9 @@ mod tests {
         want.propagate([1e-3, 0.0, 0.0], 0.1).unwrap();
         want.update_attitude(q, [1e-5; 3]).unwrap();
         assert_eq!(e.filter.as_ref(), Some(&want));
-        // No tracker reading at the first sample: an error.
+        // No tracker reading at the first sample: no estimate yet, and no error.
         let mut empty = Estimator::new(spec);
-        assert!(empty.step(0.0, [0.0; 3], &[None], &[], None).is_err());
+        empty.step(0.0, [0.0; 3], &[None], &[], None).unwrap();
+        assert!(empty.filter.is_none());
     }
 }
