@@ -40,7 +40,7 @@ pub mod slew;
 pub mod triad;
 
 pub use control::{Allocation, Pid};
-pub use estimator::{Aiding, EstimatorSpec};
+pub use estimator::{Aiding, EstimatorSpec, gyro_mean};
 pub use guidance::{Guidance, Reference, geodetic_to_itrf};
 pub use magnetic::{DipoleLaw, DipoleSpec, bdot_dipole, momentum_dipole};
 pub use mekf::{GyroModel, Mekf, MekfParams, SteadyState, attitude_error, steady_state};

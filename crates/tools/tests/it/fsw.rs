@@ -11,7 +11,7 @@
 use crate::common::example;
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 use satsim_spacecraft::effects::OrbitState;
-use satsim_spacecraft::fsw::{GyroModel, Mekf, MekfParams, Pid, attitude_error};
+use satsim_spacecraft::fsw::{GyroModel, Mekf, MekfParams, Pid, attitude_error, gyro_mean};
 use satsim_spacecraft::sensors::star_tracker::ARCSEC;
 use satsim_spacecraft::sensors::{Kind, Sensors};
 use satsim_tools::api::{Trajectory, run_scene};
@@ -96,19 +96,28 @@ fn the_estimator_is_the_standalone_mekf_on_the_same_readings_and_within_its_3_si
     assert_eq!((params.sigma_v, params.sigma_u), (1e-5, 1e-7));
     // Each row is a gyro sample: it holds the readings taken there and the estimate after
     // that sample's update. The standalone filter: start at the first star tracker reading,
-    // then update, compare, propagate with the gyro reading over its period, and so on.
+    // then update and compare; at each next sample propagate with the mean of the gyro's
+    // readings at the period's ends, update, compare, and so on.
     let mut filter: Option<Mekf> = None;
+    let mut last_gyro = [0.0; 3];
     let (mut n, mut within, mut within_norm) = (0usize, [0usize; 3], 0usize);
     let mut worst = 0.0f64;
     for row in t.rows() {
         let time = row[0];
         let q_st = get(&t, row, ["st_q_w", "st_q_x", "st_q_y", "st_q_z"]);
         let gyro = get(&t, row, ["gyro_x", "gyro_y", "gyro_z"]);
-        let f = filter.get_or_insert_with(|| {
-            Mekf::new(params, q_st, [0.0; 3])
-                .unwrap()
-                .with_gyro_model(GyroModel::Sampled)
-        });
+        let f = match &mut filter {
+            Some(f) => {
+                f.propagate(gyro_mean(&last_gyro, &gyro), 0.1).unwrap();
+                f
+            }
+            None => filter.insert(
+                Mekf::new(params, q_st, [0.0; 3])
+                    .unwrap()
+                    .with_gyro_model(GyroModel::Sampled),
+            ),
+        };
+        last_gyro = gyro;
         f.update_attitude(q_st, st.noise).unwrap();
         let est = get(&t, row, ["est_q_w", "est_q_x", "est_q_y", "est_q_z"]);
         let bias = get(&t, row, ["est_bias_x", "est_bias_y", "est_bias_z"]);
@@ -129,7 +138,6 @@ fn the_estimator_is_the_standalone_mekf_on_the_same_readings_and_within_its_3_si
             }
             within_norm += usize::from(est_error <= 3.0 * norm(sigma));
         }
-        f.propagate(gyro, 0.1).unwrap();
     }
     assert_eq!(n, 601);
     let share = within.map(|w| w as f64 / n as f64);
@@ -377,14 +385,23 @@ fn star_trackers_of_a_longer_period_update_only_when_they_sampled() {
     };
     let (n1, n3) = ([5.0, 5.0, 40.0].map(|a| a * ARCSEC), [20.0 * ARCSEC; 3]);
     let mut f: Option<Mekf> = None;
+    let mut last_gyro = [0.0; 3];
     for (k, row) in t.rows().enumerate() {
         let q1 = get(&t, row, ["st_q_w", "st_q_x", "st_q_y", "st_q_z"]);
         let q3 = get(&t, row, ["st3_q_w", "st3_q_x", "st3_q_y", "st3_q_z"]);
-        let f = f.get_or_insert_with(|| {
-            Mekf::new(params, q1, [0.0; 3])
-                .unwrap()
-                .with_gyro_model(GyroModel::Sampled)
-        });
+        let gyro = get(&t, row, ["gyro_x", "gyro_y", "gyro_z"]);
+        let f = match &mut f {
+            Some(f) => {
+                f.propagate(gyro_mean(&last_gyro, &gyro), 0.1).unwrap();
+                f
+            }
+            None => f.insert(
+                Mekf::new(params, q1, [0.0; 3])
+                    .unwrap()
+                    .with_gyro_model(GyroModel::Sampled),
+            ),
+        };
+        last_gyro = gyro;
         f.update_attitude(q1, n1).unwrap();
         if k % 3 == 0 {
             f.update_attitude(q3, n3).unwrap();
@@ -397,8 +414,6 @@ fn star_trackers_of_a_longer_period_update_only_when_they_sampled() {
             "t = {}",
             row[0]
         );
-        f.propagate(get(&t, row, ["gyro_x", "gyro_y", "gyro_z"]), 0.1)
-            .unwrap();
     }
     // A tracker whose period is not a whole number of the gyro's is refused.
     let bad = std::fs::read_to_string(example("scenes/fsw_in_the_loop.toml")).unwrap()
@@ -451,7 +466,7 @@ fn the_built_in_blocks_equal_the_same_laws_in_a_stepping_loop_on_the_readings() 
         let (g, q) = ([g[0], g[1], g[2]], [q[0], q[1], q[2], q[3]]);
         let f = match &mut filter {
             Some(f) => {
-                f.propagate(last_gyro, 0.1).unwrap();
+                f.propagate(gyro_mean(&last_gyro, &g), 0.1).unwrap();
                 f
             }
             None => filter.insert(
@@ -1214,14 +1229,17 @@ fn the_full_adcs_example_detumbles_acquires_the_sun_then_points_at_nadir_and_dum
     for k in at(t1 - 60.0)..at(t1) {
         assert!(gyro(k) < 0.005 && mode(k) == 0.0, "t = {}", rows[k][0]);
     }
-    // Sun acquisition: the Sun and field estimate within 5 mrad once started (measured:
-    // 3.6 mrad at most; its sigma says 0.5 mrad while the bus brakes at the end of the slew:
-    // the gyro's reading held over each 1 s sample is the propagation's error, which the
-    // field's updates (sigma about 3 mrad) correct slowly), and the Sun sensor sees the Sun
-    // on the arrays' normal (-z) at the switch.
+    // Sun acquisition: the Sun and field estimate within 3 sigma (the norms) once started,
+    // through the slew and the braking (measured: 1.3 sigma at most), and the Sun sensor
+    // sees the Sun on the arrays' normal (-z) at the switch.
     for k in at(t1 + 60.0)..at(t2) {
+        let s = norm(get(
+            &t,
+            rows[k],
+            ["est_sigma_x", "est_sigma_y", "est_sigma_z"],
+        ));
         let e = rows[k][col(&t, "est_error")];
-        assert!(e < 5e-3, "t = {}: {e}", rows[k][0]);
+        assert!(e < 3.0 * s, "t = {}: {e} against 3 x {s}", rows[k][0]);
     }
     let sun = get(&t, rows[at(t2)], ["sun_x", "sun_y", "sun_z"]);
     assert!(angle(sun, [0.0, 0.0, -1.0]) < 0.03, "{sun:?}");
