@@ -10,7 +10,8 @@
 //!   the on-board models of both at the orbit's position (the Sun's ephemeris of the Sun
 //!   sensor's epoch, the magnetometer's field model: the scene's). It starts from the
 //!   TRIAD attitude of the two directions (the Sun the primary) at the first gyro sample
-//!   where both are read (the Sun lit), with TRIAD's covariance
+//!   where both are read (the Sun lit) and are not nearly parallel
+//!   ([`TRIAD_MIN_SIN`](super::triad::TRIAD_MIN_SIN)), with TRIAD's covariance
 //!   ([`triad_covariance`]) and bias 0, σ_bias as given;
 //!   before that it has no estimate. In eclipse it goes
 //!   on the gyro and the field alone: the attitude about the field is then unobservable and
@@ -242,7 +243,12 @@ impl Estimator {
                     };
                     let s_i = s_i.as_ref().map_err(String::clone)?;
                     let b_i = b_i.as_ref().map_err(String::clone)?;
-                    let q0 = triad(s_b, b_b, s_i, b_i)?;
+                    // Nearly parallel directions fix no attitude: wait for the next sample.
+                    let Ok(q0) = triad(s_b, b_b, s_i, b_i) else {
+                        self.gyro = gyro;
+                        self.t = t;
+                        return Ok(());
+                    };
                     let q = q0.quaternion();
                     // The attitude's covariance is TRIAD's (Shuster and Oh 1981) for the
                     // two readings' noise.

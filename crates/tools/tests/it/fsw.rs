@@ -1223,7 +1223,7 @@ fn the_full_adcs_example_detumbles_acquires_the_sun_then_points_at_nadir_and_dum
     assert!(t1 < 2000.0 && t2 > t1 + 120.0 && t2 < 4000.0, "{t1} {t2}");
     let gyro = |k: usize| norm(get(&t, rows[k], ["gyro_x", "gyro_y", "gyro_z"]));
     let mode = |k: usize| rows[k][col(&t, "fsw_mode")];
-    // Detumble: B-dot commands, the rate falls from 1.7 deg/s; the gyro reads below 0.005
+    // Detumble: B-dot commands, the rate falls from 1.5 deg/s; the gyro reads below 0.005
     // rad/s for the minute before the switch.
     assert!(gyro(0) > 0.025);
     for k in at(t1 - 60.0)..at(t1) {
