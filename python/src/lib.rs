@@ -647,6 +647,14 @@ fn _satsim(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(stepped::choose_shard, m)?)?;
     m.add_class::<fsw::NativeMekf>()?;
     m.add_function(wrap_pyfunction!(fsw::attitude_error_py, m)?)?;
+    m.add_class::<fsw::NativeGuidance>()?;
+    m.add_class::<fsw::NativeSlew>()?;
+    m.add_class::<fsw::NativePid>()?;
+    m.add_function(wrap_pyfunction!(fsw::triad_py, m)?)?;
+    m.add_function(wrap_pyfunction!(fsw::triad_covariance_py, m)?)?;
+    m.add_function(wrap_pyfunction!(fsw::gyro_mean_py, m)?)?;
+    m.add_function(wrap_pyfunction!(fsw::bdot_dipole_py, m)?)?;
+    m.add_function(wrap_pyfunction!(fsw::momentum_dipole_py, m)?)?;
     m.add_function(wrap_pyfunction!(run_file, m)?)?;
     m.add_function(wrap_pyfunction!(run_text, m)?)?;
     m.add_function(wrap_pyfunction!(campaign, m)?)?;
