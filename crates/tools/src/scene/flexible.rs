@@ -166,3 +166,63 @@ pub fn json_line(text: &str, body: &str) -> Option<usize> {
     let at = text[start..].find(&format!("\"{body}\""))? + start;
     Some(line_of(text, at))
 }
+
+/// RK4's stability limit on the imaginary axis: an undamped oscillation of angular frequency
+/// `ω` stays bounded for `ω h <= 2√2` (the largest `|λ h|` on the imaginary axis where
+/// `|1 + z + z²/2 + z³/6 + z⁴/24| <= 1`).
+pub const RK4_LIMIT: f64 = 2.0 * std::f64::consts::SQRT_2;
+
+/// The highest angular frequency (rad/s) of the structure at `q`: the largest `ω` with
+/// `K x = ω² M(q) x`, `M` the flexible tree's mass matrix and `K` the modes' stiffness
+/// (`ωₖ²` on each elastic coordinate, zero on the rigid ones: hinge springs, geometric
+/// stiffening and the control left out), and the elastic coordinate (index among them)
+/// that moves most in it. `None` without elastic coordinates or when `M` is not positive
+/// definite at `q`.
+pub fn highest_frequency(flex: &FlexModel, q: &[f64]) -> Option<(f64, usize)> {
+    use nalgebra::{DMatrix, SymmetricEigen};
+    use satsim_tree::flexible::{FlexData, crba};
+    if flex.n_elastic() == 0 {
+        return None;
+    }
+    let mut data = FlexData::new(flex);
+    let m = crba(flex, &mut data, q).ok()?.clone();
+    let n = m.nrows();
+    let l = m.cholesky()?.l();
+    let l_inv = l.clone().try_inverse()?;
+    let first = flex.rigid().nv();
+    let mut k = DMatrix::zeros(n, n);
+    for (e, w2) in flex.stiffness().iter().enumerate() {
+        k[(first + e, first + e)] = *w2;
+    }
+    // L⁻¹ K L⁻ᵀ: symmetric, with the eigenvalues of M⁻¹ K.
+    let a = &l_inv * k * l_inv.transpose();
+    let eig = SymmetricEigen::new((&a + a.transpose()) * 0.5);
+    let (top, &w2) = eig
+        .eigenvalues
+        .iter()
+        .enumerate()
+        .max_by(|a, b| a.1.total_cmp(b.1))?;
+    // The mode shape in the coordinates: x = L⁻ᵀ y.
+    let x = l_inv.transpose() * eig.eigenvectors.column(top);
+    let (e, _) = (0..flex.n_elastic())
+        .map(|e| (e, x[first + e].abs()))
+        .max_by(|a, b| a.1.total_cmp(&b.1))?;
+    (w2 > 0.0 && w2.is_finite()).then(|| (w2.sqrt(), e))
+}
+
+/// The body (name) and mode number (from 1) of elastic coordinate `e`.
+pub fn mode_of(flex: &FlexModel, e: usize) -> (String, usize) {
+    let rigid = flex.rigid();
+    (0..rigid.n_bodies())
+        .find(|&i| {
+            let (o, m) = (flex.elastic_offset(i), flex.modes(i));
+            m > 0 && e >= o && e < o + m
+        })
+        .map(|i| {
+            (
+                rigid.bodies()[i].name().to_owned(),
+                e - flex.elastic_offset(i) + 1,
+            )
+        })
+        .unwrap_or_default()
+}

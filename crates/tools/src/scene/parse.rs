@@ -10,6 +10,7 @@ use crate::scene_keys;
 use satsim_integrate::Options;
 use satsim_spacecraft::effects::section::reword;
 use satsim_spacecraft::effects::{EffectSet, Registry, SceneText, Section};
+use satsim_tree::error::Num;
 use satsim_tree::flexible::FlexModel;
 use satsim_tree::io::{FileError, FrameMotion, ModelFile, flex_model_of, line_of, with_key};
 use satsim_tree::{Model, State};
@@ -152,6 +153,9 @@ impl<'a> Parser<'a> {
             None => None,
         };
         let options = self.integrator(file.integrator.as_ref())?;
+        if let (Some(f), Some(h)) = (flex.as_ref(), options.fixed_step) {
+            self.check_modal_step(&file, f, &initial, &elastic, h)?;
+        }
         let (every, plots, view, energy_budget) = match &file.output {
             None => (duration / 100.0, true, true, true),
             Some(o) => {
@@ -219,6 +223,45 @@ impl<'a> Parser<'a> {
     /// A fixed step longer than the duration or the output interval is silently cut to it
     /// (steps land on output times), so the run is not at the step the user chose: say so,
     /// naming the keys, at `integrator.step`'s line.
+    /// A fixed RK4 step must resolve the structure's highest frequency at the initial state
+    /// ([`super::flexible::highest_frequency`]): beyond RK4's stability limit
+    /// ([`super::flexible::RK4_LIMIT`]) the modes grow without bound, so it is an error at
+    /// `integrator.step` naming the mode, its frequency and the largest stable step.
+    fn check_modal_step(
+        &self,
+        file: &SceneFile,
+        flex: &satsim_tree::flexible::FlexModel,
+        initial: &State,
+        elastic: &Elastic,
+        h: f64,
+    ) -> Result<(), FileError> {
+        use super::flexible::{RK4_LIMIT, highest_frequency, mode_of};
+        let q: Vec<f64> = initial.q.iter().chain(&elastic.eta).copied().collect();
+        let Some((w, e)) = highest_frequency(flex, &q) else {
+            return Ok(());
+        };
+        if w * h <= RK4_LIMIT {
+            return Ok(());
+        }
+        let (body, mode) = mode_of(flex, e);
+        let span = file
+            .integrator
+            .as_ref()
+            .and_then(|i| i.get_ref().step.as_ref())
+            .map(|s| s.span());
+        let stable = RK4_LIMIT / w;
+        Err(self.error(
+            span,
+            format!(
+                "`integrator.step` = {h} s is too long for rk4 with the flexible modes: the structure's highest mode (mostly body `{body}`'s mode {mode}) is at {:.4} Hz (ω = {:.4} rad/s) and rk4 is stable only for ω × step <= 2√2 = 2.83 (here {:.3}): set `step` at most {} s (the largest stable step is {stable:.4e} s), or use an adaptive method (`method = \"dop853\"`)",
+                w / std::f64::consts::TAU,
+                w,
+                w * h,
+                Num(0.9 * stable)
+            ),
+        ))
+    }
+
     fn step_warning(
         &self,
         file: &SceneFile,

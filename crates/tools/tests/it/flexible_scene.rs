@@ -121,3 +121,64 @@ fn stepping_a_flexible_scene_reproduces_the_run_with_its_elastic_columns() {
     }
     assert_eq!(st.trajectory(), &run);
 }
+
+/// The largest |η| of a run's rows (`None` when the run failed).
+fn largest_eta(scene: &Scene) -> Option<f64> {
+    let t = run_scene(scene, || false).ok()?;
+    let cols: Vec<usize> = (0..t.columns.len())
+        .filter(|&c| t.columns[c].starts_with("eta_"))
+        .collect();
+    Some(
+        t.rows()
+            .flat_map(|r| cols.iter().map(move |&c| r[c].abs()))
+            .fold(0.0, f64::max),
+    )
+    .filter(|m: &f64| m.is_finite())
+}
+
+#[test]
+fn an_rk4_step_beyond_the_highest_modes_stability_limit_is_refused_and_the_limit_is_sharp() {
+    use satsim_tools::scene::flexible::{RK4_LIMIT, highest_frequency, mode_of};
+    let s = scene("");
+    let flex = s.flexible.as_ref().unwrap();
+    let q: Vec<f64> = s.initial.q.iter().chain(&s.elastic.eta).copied().collect();
+    let (w, e) = highest_frequency(flex, &q).unwrap();
+    // The hub's antenna (EI 20, ρA 1, 1 m): its third clamped mode is 61.70 rad/s × 4.47 =
+    // 275.9 rad/s; on the free hub its coupled frequency is a little higher.
+    assert_eq!(mode_of(flex, e), ("hub".to_string(), 3));
+    assert!(w > 275.0 && w < 300.0, "{w}");
+    let limit = RK4_LIMIT / w;
+    // Just under the limit the modes stay bounded (RK4 damps them a little); just over it
+    // they grow by about 15 % per step: the limit the check uses is the dynamics' own.
+    let with_step = |h: f64| {
+        let mut s = scene("");
+        s.options = s.options.clone().with_fixed_step(h);
+        s.duration = 2.0;
+        // The highest mode deflected at the start.
+        let third = s.flexible.as_ref().unwrap().elastic_offset(0) + 2;
+        s.elastic.eta[third] = 0.01;
+        s
+    };
+    let at_rest = largest_eta(&with_step(0.005)).unwrap();
+    let under = largest_eta(&with_step(0.98 * limit)).unwrap();
+    assert!(under < 2.0 * at_rest, "{under} against {at_rest}");
+    let over = largest_eta(&with_step(1.02 * limit));
+    assert!(over.is_none_or(|m| m > 1e3 * at_rest), "{over:?}");
+    // Read from the file, a step over the limit is an error at its line naming the mode.
+    let text = |h: f64| {
+        format!(
+            "duration = 1.0\n[model]\n[[model.body]]\nname = \"hub\"\nmass = 50.0\ninertia = [[5.0, 0.0, 0.0], [0.0, 5.0, 0.0], [0.0, 0.0, 5.0]]\n[model.body.flexible]\nbeam = {{ root = [0.0, 0.0, 0.5], axis = [0.0, 0.0, 1.0], bend = [1.0, 0.0, 0.0], length = 1.0, EI = 20.0, rho_A = 1.0, modes = 3 }}\n[integrator]\nmethod = \"rk4\"\nstep = {h}\n"
+        )
+    };
+    let Err(err) = Scene::parse(&text(0.02), Path::new("flex.toml")) else {
+        panic!("a step beyond the limit was accepted")
+    };
+    let err = err.to_string();
+    assert!(
+        err.contains("flex.toml:11")
+            && err.contains("body `hub`'s mode 3")
+            && err.contains("use an adaptive method"),
+        "{err}"
+    );
+    Scene::parse(&text(0.005), Path::new("flex.toml")).expect("a stable step");
+}
