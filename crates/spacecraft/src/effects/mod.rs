@@ -421,6 +421,9 @@ pub struct Links<'a> {
     pub torquers: &'a [Torquer],
     /// Whether an enabled effect writes [`Forces::dipole_command`] ([`Effect::commands_dipoles`]).
     pub dipoles_commanded: bool,
+    /// The thrusters of every effect ([`Effect::thrusters`]), in the effects' order: the
+    /// order of [`Effect::thrust_commands`].
+    pub thrusters: &'a [Thruster],
     /// The tree every [`Context::model`] will be (the scene's model plus the rotors), for
     /// per-body constants an effect works out once rather than at every evaluation.
     pub model: &'a Model,
@@ -552,6 +555,23 @@ pub trait Effect: Send {
     /// from the first period start at or after `t` (a period start at `t` already latched
     /// is latched again).
     fn hold_thrust_input(&mut self, _j: usize, _duty: f64, _t: f64) {}
+    /// Whether it commands the thrusters ([`Effect::thrust_commands`]; at most one enabled
+    /// effect does).
+    fn commands_thrusters(&self) -> bool {
+        false
+    }
+    /// The duties (each in [0, 1]) it commands now, one per thruster of [`Links::thrusters`]
+    /// (empty when it commands none). The simulation reads them after every time stop's
+    /// samples and holds each on the effect that owns the thruster
+    /// ([`Effect::hold_thrust_command`]), so that a command sampled at a period start is
+    /// latched at that start, and one sampled between period starts at the next.
+    fn thrust_commands(&self) -> &[f64] {
+        &[]
+    }
+    /// Holds a controller's duty `duty` (in [0, 1]) for its thruster `j` (in
+    /// [`Effect::thrusters`] order), set at time `t`: added to the thruster's constant duty
+    /// and the stepping API's input, latched as [`Effect::hold_thrust_input`] is.
+    fn hold_thrust_command(&mut self, _j: usize, _duty: f64, _t: f64) {}
     /// Effects (by [`Effect::name`]) that must run before this one in every evaluation, e.g.
     /// because it reads what they write into [`Forces`]. Each must be enabled: a missing one
     /// or a cycle is a setup error.

@@ -797,6 +797,7 @@ mod tests {
             rotors_commanded: commanded,
             torquers: &[],
             dipoles_commanded: false,
+            thrusters: &[],
             model: &model,
         };
         let free = Wheel::new("w", Vec3::z(), 0.1);

@@ -13,10 +13,13 @@
 //!
 //! At the start of the run and at every multiple of `period` after it (`t = 0, period,
 //! 2 period, …`, the time stops of a [`Sampling`] clock) each thruster latches its duty
-//! `d = clamp(duty + input, 0, 1)`, `duty` its constant and `input` the stepping API's held
-//! `thrust_<name>` (0 unless set: [`Effect::hold_thrust_input`], latched at the first period
-//! start at or after the time it is set, so that a loop stepping by whole periods commands
-//! each period from its start), and holds it for the period. Its on-time is then
+//! `d = clamp(duty + input + command, 0, 1)`, `duty` its constant, `input` the stepping
+//! API's held `thrust_<name>` and `command` the flight software's (`[fsw.control] actuator =
+//! "thrusters"`, [`Effect::hold_thrust_command`]), each 0 unless set and latched at the
+//! first period start at or after the time it is set (so that a loop stepping by whole
+//! periods, or a control sampled at period starts, commands each period from its start;
+//! [`Effect::hold_thrust_input`]), and holds it for the period. The three add, as a wheel's
+//! input adds to its controller's command. Its on-time is then
 //!
 //! - `"pwm"` (default): `d · period`, from the period's start;
 //! - `"on_off"`: the whole period when `d >= 0.5`, else none;
@@ -116,6 +119,8 @@ pub struct Thrusters {
     duty: Vec<f64>,
     /// Each thruster's duty held from outside (`thrust_<name>`), latched at a period start.
     input: Vec<f64>,
+    /// Each thruster's duty commanded by the flight software, latched likewise.
+    command: Vec<f64>,
     /// Whether each thruster fires now.
     firing: Vec<bool>,
     /// Each thruster's pending switch-off instant (`∞` when none).
@@ -134,6 +139,7 @@ impl Thrusters {
             sampling: Sampling::new(period)?,
             duty: vec![0.0; n],
             input: vec![0.0; n],
+            command: vec![0.0; n],
             firing: vec![false; n],
             off_at: vec![f64::INFINITY; n],
             latched_at: f64::NEG_INFINITY,
@@ -164,9 +170,17 @@ impl Thrusters {
             self.latch_one(j, t);
         }
     }
+    /// Thruster `j`'s duty changed at `t`: set at the period start just latched (a loop
+    /// stepping by whole periods, a control sampled there), it acts from that start, as a
+    /// law sampled there would.
+    fn relatch(&mut self, j: usize, t: f64) {
+        if stop_due(t, self.latched_at) && stop_due(self.latched_at, t) {
+            self.latch_one(j, self.latched_at);
+        }
+    }
     /// Latches thruster `j`'s duty at the period start `t` (the clock already moved on).
     fn latch_one(&mut self, j: usize, t: f64) {
-        let d = (self.duty[j] + self.input[j]).clamp(0.0, 1.0);
+        let d = (self.duty[j] + self.input[j] + self.command[j]).clamp(0.0, 1.0);
         let (period, next) = (self.sampling.period(), self.sampling.next());
         let on = self.thrusters[j].on_time(d, period, t, next);
         self.firing[j] = on.is_some();
@@ -196,11 +210,14 @@ impl Effect for Thrusters {
             return;
         }
         self.input[j] = duty;
-        // Set at the period start just latched (a loop stepping by whole periods): it acts
-        // from that start, as a law sampled there would.
-        if stop_due(t, self.latched_at) && stop_due(self.latched_at, t) {
-            self.latch_one(j, self.latched_at);
+        self.relatch(j, t);
+    }
+    fn hold_thrust_command(&mut self, j: usize, duty: f64, t: f64) {
+        if j >= self.command.len() || self.command[j] == duty {
+            return;
         }
+        self.command[j] = duty;
+        self.relatch(j, t);
     }
     fn next_sample(&self) -> f64 {
         self.off_at
@@ -454,5 +471,24 @@ mod tests {
         assert!(e.firing[0]);
         // 0.9 + 0.5 clamps to 1: on to the next start, no switch-off stop.
         assert_eq!(e.next_sample(), 2.0 * 0.1);
+    }
+
+    #[test]
+    fn a_commanded_duty_adds_to_the_input_and_relatches_only_at_the_start_just_latched() {
+        let mut e = Thrusters::new(vec![thruster(ThrustMode::Pwm, 0.0)], 0.1).unwrap();
+        e.latch(0.0);
+        assert!(!e.firing[0]);
+        // Commanded at the start just latched: fires from it.
+        e.hold_thrust_command(0, 0.2, 0.0);
+        assert!(e.firing[0] && e.next_sample() == 0.2 * 0.1);
+        // Between starts: waits for the next.
+        e.hold_thrust_command(0, 0.6, 0.05);
+        assert_eq!(e.next_sample(), 0.2 * 0.1);
+        e.hold_thrust_input(0, 0.3, 0.05);
+        e.latch(0.1);
+        // 0.6 + 0.3: both count.
+        assert!((e.next_sample() - (0.1 + 0.9 * 0.1)).abs() < 1e-15);
+        e.hold_thrust_command(0, 0.0, 0.1);
+        assert!((e.next_sample() - (0.1 + 0.3 * 0.1)).abs() < 1e-15);
     }
 }

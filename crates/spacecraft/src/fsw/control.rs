@@ -127,6 +127,12 @@ impl Pid {
         self.capability = self.allocation.capability();
     }
 
+    /// Sets the largest torque about each body axis (N m, the integral's clamp) where the
+    /// actuator is not the wheels ([`Pid::allocate`] works it out for them).
+    pub fn set_capability(&mut self, capability: [f64; 3]) {
+        self.capability = capability.into();
+    }
+
     /// Starts afresh: the integral back to zero.
     pub fn reset(&mut self) {
         self.integral = Vector3::zeros();

@@ -15,7 +15,9 @@
 //! - [`control`](crate::fsw::control): [`Pid`](crate::fsw::Pid), the attitude PID on the
 //!   estimate's error to the reference, and its least-squares
 //!   [`Allocation`](crate::fsw::Allocation) to the reaction wheels or the torquers
-//!   (`[fsw.control] kind = "pid"`).
+//!   (`[fsw.control] kind = "pid"`); [`thrust`](crate::fsw::thrust): its
+//!   [`ThrustAllocation`](crate::fsw::ThrustAllocation) to thrusters, which only push
+//!   (non-negative least squares, [`nnls`](crate::fsw::nnls)).
 //! - [`magnetic`](crate::fsw::magnetic): B-dot on the magnetometer's readings
 //!   (`[fsw.bdot]`) and wheel momentum dumping (`[fsw.momentum]`), both on the magnetic
 //!   torquers ([`DipoleSpec`](crate::fsw::DipoleSpec)).
@@ -37,6 +39,7 @@ pub mod mekf;
 pub mod modes;
 pub mod onboard;
 pub mod slew;
+pub mod thrust;
 pub mod triad;
 
 pub use control::{Allocation, Pid};
@@ -47,4 +50,5 @@ pub use mekf::{GyroModel, Mekf, MekfParams, SteadyState, attitude_error, steady_
 pub use modes::{Condition, Mode};
 pub use onboard::{Actuator, ControlSpec, Onboard};
 pub use slew::Slew;
+pub use thrust::{ThrustAllocation, nnls};
 pub use triad::{TRIAD_MIN_SIN, triad, triad_covariance};

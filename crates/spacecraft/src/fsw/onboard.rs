@@ -23,6 +23,12 @@
 //!   the instant lies between gyro samples. Without an estimate yet (a Sun and field
 //!   estimator before the Sun is seen) it commands nothing. Its commands are held in
 //!   between.
+//!   A control on the thrusters ([`Actuator::Thrusters`]) hands its duties to the
+//!   thrusters through [`Onboard::thrust_commands`]: the simulation holds them on the
+//!   thrusters right after the sample ([`Effect::hold_thrust_command`]), which latch them at
+//!   their period start at that instant (the scene asks the control's period to be a whole
+//!   multiple of theirs) or, between period starts, at the next. Where the current mode
+//!   runs no thruster control the commands are zeros.
 //! - **Magnetic** ([`crate::fsw::magnetic`]): at its magnetometer's samples, after the
 //!   other blocks.
 //! - **Modes**: checked last, at every sample instant.
@@ -53,6 +59,9 @@ use super::magnetic::{DipoleBlock, DipoleSpec};
 use super::mekf::log_rotation;
 use super::modes::{Condition, Mode};
 use super::slew::Slew;
+use super::thrust::ThrustAllocation;
+#[cfg(doc)]
+use crate::effects::Effect;
 use crate::effects::{Context, Forces, Links, Needs, Sampling};
 use crate::sensors::{Pose, Sensor};
 use nalgebra::{UnitQuaternion, Vector3};
@@ -72,6 +81,12 @@ pub enum Actuator {
         /// The magnetometer.
         magnetometer: usize,
     },
+    /// The thrusters on the root body ([`Links::thrusters`] whose `body` is 0): the body
+    /// torque about the system's centre of mass is allocated as non-negative forces by
+    /// [`ThrustAllocation`], then duties (each in [0, 1], scaled down as a whole when one
+    /// would exceed 1). The duties leave through [`Onboard::thrust_commands`] and are
+    /// latched by the thrusters at their period starts (see the module documentation).
+    Thrusters,
 }
 
 /// A control block: its law, clock and actuator.
@@ -95,7 +110,10 @@ struct Control {
     targets: Vec<usize>,
     /// The torquers' allocation (torquers only).
     dipoles: Allocation,
-    /// The commands held: one per rotor (wheels) or per torquer (torquers).
+    /// The thrusters' allocation (thrusters only).
+    thrust: ThrustAllocation,
+    /// The commands held: one per rotor (wheels), per torquer (torquers) or per thruster
+    /// (thrusters: the duties).
     held: Vec<f64>,
     /// One sample's commands, in `targets` order.
     scratch: Vec<f64>,
@@ -141,6 +159,10 @@ pub struct Onboard {
     holding: Option<f64>,
     /// Mode switches not yet logged.
     log: Vec<String>,
+    /// The duties commanded to the thrusters, one per thruster of [`Links::thrusters`]:
+    /// the current mode's thruster control's, zeros without one (empty when no control
+    /// commands the thrusters).
+    thrust: Vec<f64>,
 }
 
 impl Default for Onboard {
@@ -164,6 +186,7 @@ impl Onboard {
             since: 0.0,
             holding: None,
             log: Vec::new(),
+            thrust: Vec::new(),
         }
     }
 
@@ -191,6 +214,7 @@ impl Onboard {
             actuator: spec.actuator,
             targets: Vec::new(),
             dipoles: Allocation::new(&[], &[]),
+            thrust: ThrustAllocation::new(&[], &[], &[]),
             held: Vec::new(),
             scratch: Vec::new(),
             torque: Vector3::zeros(),
@@ -339,6 +363,19 @@ impl Onboard {
             .control
             .map(|c| self.controls[c].torque.into())
     }
+    /// Whether a control commands the thrusters.
+    pub fn commands_thrusters(&self) -> bool {
+        self.controls
+            .iter()
+            .any(|c| matches!(c.actuator, Actuator::Thrusters))
+    }
+    /// The duties commanded to the thrusters (one per thruster of [`Links::thrusters`], each
+    /// in [0, 1]) as of the last sample: the current mode's thruster control's, zeros
+    /// where the current mode runs none (so that a mode that stops the control stops the
+    /// thrusters from their next period start). Empty when no control commands them.
+    pub fn thrust_commands(&self) -> &[f64] {
+        &self.thrust
+    }
     /// Whether a control commands the wheels.
     pub fn commands_rotors(&self) -> bool {
         self.controls
@@ -351,6 +388,7 @@ impl Onboard {
             orbit: self.guidances.iter().any(|g| g.law.needs_orbit()),
             rotors: self.commands_rotors(),
             free_base: !self.controls.is_empty(),
+            com: self.commands_thrusters(),
             ..Needs::default()
         }
     }
@@ -391,12 +429,31 @@ impl Onboard {
                     c.dipoles = Allocation::new(&axes, &limits);
                     c.held = vec![0.0; links.torquers.len()];
                 }
+                Actuator::Thrusters => {
+                    let (mut at, mut thrust) = (Vec::new(), Vec::new());
+                    for (j, t) in links.thrusters.iter().enumerate() {
+                        if t.body == 0 {
+                            c.targets.push(j);
+                            at.push(t.at);
+                            axes.push(t.direction);
+                            thrust.push(t.thrust);
+                        }
+                    }
+                    c.pid.allocate(&[], &[]);
+                    c.thrust = ThrustAllocation::new(&at, &axes, &thrust);
+                    c.held = vec![0.0; links.thrusters.len()];
+                }
             }
             c.scratch = vec![0.0; c.targets.len()];
         }
         for m in &mut self.magnetics {
             m.connect(links);
         }
+        self.thrust = if self.commands_thrusters() {
+            vec![0.0; links.thrusters.len()]
+        } else {
+            Vec::new()
+        };
     }
 
     /// Runs the current mode's blocks due at `ctx.t`, after the sensors took their samples
@@ -464,6 +521,19 @@ impl Onboard {
                 } else {
                     f.unit_attitude()
                 };
+                // The centre of mass in the root's frame (thrusters only).
+                let com = match c.actuator {
+                    Actuator::Thrusters => {
+                        let com = ctx.com_or_err("fsw.control")?;
+                        let rot = &ctx.data.rotation[0];
+                        let c0 = rot.tr_mul(&(com - ctx.data.position[0]));
+                        if c.pid.ki.iter().any(|&k| k > 0.0) {
+                            c.pid.set_capability(c.thrust.capability(&c0));
+                        }
+                        c0
+                    }
+                    _ => Vector3::zeros(),
+                };
                 c.torque = c
                     .pid
                     .torque(&q, &omega, &r.attitude, &r.rate, c.clock.period());
@@ -479,6 +549,7 @@ impl Onboard {
                         };
                         c.dipoles.solve(&m, &mut c.scratch);
                     }
+                    Actuator::Thrusters => c.thrust.duties(&com, &c.torque, &mut c.scratch),
                 }
                 for (&j, &cmd) in c.targets.iter().zip(&c.scratch) {
                     c.held[j] = cmd;
@@ -495,6 +566,14 @@ impl Onboard {
             self.magnetics[m].sample(sensors, ctx.rotor_rates);
         }
         self.check_mode(t, sensors);
+        if !self.thrust.is_empty() {
+            self.thrust.fill(0.0);
+            if let Some(c) = self.current().control
+                && matches!(self.controls[c].actuator, Actuator::Thrusters)
+            {
+                self.thrust.copy_from_slice(&self.controls[c].held);
+            }
+        }
         Ok(())
     }
 
@@ -590,6 +669,8 @@ impl Onboard {
                         *out += *held;
                     }
                 }
+                // The duties leave through `thrust_commands`, latched by the thrusters.
+                Actuator::Thrusters => {}
             }
         }
         if let Some(m) = mode.magnetic {

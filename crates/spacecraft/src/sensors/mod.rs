@@ -25,8 +25,9 @@
 //!
 //! Flight software: the set may host a scene's `[fsw]` blocks ([`Sensors::set_fsw`],
 //! [`crate::fsw::Onboard`]), which run at a sample instant right after the sensors sampled,
-//! on the readings just taken. With a control among them the set commands the wheels, with
-//! `[fsw.bdot]` or `[fsw.momentum]` the magnetic torquers, and no longer only observes.
+//! on the readings just taken. With a control among them the set commands the wheels (or
+//! the torquers, or the thrusters: [`Effect::thrust_commands`]), with `[fsw.bdot]` or
+//! `[fsw.momentum]` the magnetic torquers, and no longer only observes.
 //!
 //! Noise: one ChaCha12 stream per sensor (its index in the set) from the set's seed
 //! ([`Noise`]), and a fixed block of that stream per sample, so that a sensor's readings
@@ -399,9 +400,15 @@ impl Effect for Sensors {
         self.fsw.as_ref().map_or_else(Needs::default, |f| f.needs())
     }
     fn observes_only(&self) -> bool {
-        self.fsw
-            .as_ref()
-            .is_none_or(|f| !f.commands_rotors() && !f.commands_dipoles())
+        self.fsw.as_ref().is_none_or(|f| {
+            !f.commands_rotors() && !f.commands_dipoles() && !f.commands_thrusters()
+        })
+    }
+    fn commands_thrusters(&self) -> bool {
+        self.fsw.as_ref().is_some_and(|f| f.commands_thrusters())
+    }
+    fn thrust_commands(&self) -> &[f64] {
+        self.fsw.as_ref().map_or(&[], |f| f.thrust_commands())
     }
     fn commands_rotors(&self) -> bool {
         self.fsw.as_ref().is_some_and(|f| f.commands_rotors())
@@ -410,7 +417,12 @@ impl Effect for Sensors {
         self.fsw.as_ref().is_some_and(|f| f.commands_dipoles())
     }
     fn before(&self) -> &[&str] {
+        let thrusters = self.commands_thrusters();
         match (self.commands_rotors(), self.commands_dipoles()) {
+            (true, true) if thrusters => &["reaction_wheels", "magnetic", "thrusters"],
+            (true, false) if thrusters => &["reaction_wheels", "thrusters"],
+            (false, true) if thrusters => &["magnetic", "thrusters"],
+            (false, false) if thrusters => &["thrusters"],
             (true, true) => &["reaction_wheels", "magnetic"],
             (true, false) => &["reaction_wheels"],
             (false, true) => &["magnetic"],

@@ -4,7 +4,9 @@
 use super::data::FlexWork;
 use super::hold::Hold;
 use super::{RunLog, SimData, SimError, SimModel, Simulation, StateLayout};
-use crate::effects::{AnyEffect, Effect, EffectSet, Forces, Links, Rotor, Torquer, order};
+use crate::effects::{
+    AnyEffect, Effect, EffectSet, Forces, Links, Rotor, Thruster, Torquer, order,
+};
 use satsim_integrate::SystemError;
 use satsim_satellite::kernel::UnrolledAba;
 use satsim_tree::flexible::FlexModel;
@@ -244,6 +246,22 @@ impl Simulation {
                 "more than one effect owns magnetic torquers: give them all to one".into(),
             ));
         }
+        let thrust_commander = {
+            let commanders: Vec<usize> = (0..effects.len())
+                .filter(|&i| effects[i].commands_thrusters())
+                .collect();
+            if commanders.len() > 1 {
+                return Err(SimError::Needs(
+                    "more than one effect commands the thrusters".into(),
+                ));
+            }
+            commanders.first().copied()
+        };
+        let thruster_owners: Vec<(usize, usize)> = effects
+            .iter()
+            .enumerate()
+            .flat_map(|(i, e)| (0..e.thrusters().len()).map(move |j| (i, j)))
+            .collect();
         let model = if rotors.is_empty() {
             user.clone()
         } else {
@@ -360,6 +378,8 @@ impl Simulation {
                 orbit_effect,
                 net_force_to,
                 needs_com,
+                thrust_commander,
+                thruster_owners,
                 needs_hold,
                 needs_at_start: (needs_kinematics, needs_velocities),
                 work,
@@ -477,11 +497,13 @@ impl Simulation {
 
 /// Tells every effect what the rest of the simulation provides ([`Effect::connect`]).
 fn connect(effects: &mut [Box<dyn Effect>], rotors: &[Rotor], torquers: &[Torquer], model: &Model) {
+    let thrusters: Vec<Thruster> = effects.iter().flat_map(|e| e.thrusters()).collect();
     let links = Links {
         rotors,
         rotors_commanded: effects.iter().any(|e| e.commands_rotors()),
         torquers,
         dipoles_commanded: effects.iter().any(|e| e.commands_dipoles()),
+        thrusters: &thrusters,
         model,
     };
     for e in effects {

@@ -39,6 +39,10 @@ pub struct SimModel {
     /// Whether an effect reads [`Context::com`](crate::effects::Context::com) (computed
     /// only then), or hold torques.
     pub(super) needs_com: bool,
+    /// The effect that commands the thrusters ([`Effect::commands_thrusters`](crate::effects::Effect::commands_thrusters)),
+    /// and each thruster's owner and index there ([`Links::thrusters`](crate::effects::Links::thrusters) order).
+    pub(super) thrust_commander: Option<usize>,
+    pub(super) thruster_owners: Vec<(usize, usize)>,
     pub(super) needs_hold: bool,
     /// [`SimData`](super::SimData)'s `needs_kinematics` and `needs_velocities` as built
     /// (a run may turn them on), for a run that starts again.

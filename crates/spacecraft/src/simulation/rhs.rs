@@ -495,6 +495,7 @@ mod tests {
             rotors_commanded: false,
             torquers: &[],
             dipoles_commanded: false,
+            thrusters: &[],
             model: sim.model(),
         });
         assert!(connected.idle);

@@ -23,7 +23,8 @@
 //!   to the wheel's command (the controller's, or its constant `torque`) before its torque
 //!   and speed limits; `dipole_<torquer>` for each magnetic torquer, a dipole (A m²)
 //!   added to its command before its clamp; and `thrust_<thruster>` for each thruster, a
-//!   duty in [0, 1] added to its constant `duty` and latched at the first period start at
+//!   duty in [0, 1] added to its constant `duty` (and to the flight software's command,
+//!   `[fsw.control] actuator = "thrusters"`) and latched at the first period start at
 //!   or after the current time (set at a period start, it acts from that start).
 //!   Held until changed (zero-order hold). An event whose function the
 //!   change moves across zero (a wheel held at its speed limit whose command drops) is
@@ -549,6 +550,7 @@ impl Simulation {
             }
             Ok::<(), SystemError>(())
         })?;
+        self.hand_thrust_commands(t);
         let mut said = Vec::new();
         for (i, e) in self.effects.iter_mut().enumerate() {
             e.drain_sample_log(&mut said);
@@ -559,6 +561,20 @@ impl Simulation {
         }
         self.settle_events(t, x, &before)?;
         Ok(changes)
+    }
+
+    /// The thrust commands of the effect that commands the thrusters (as sampled), held on
+    /// the thrusters' owners at `t`: a period start at `t` already latched is latched again
+    /// (so the order the effects sampled in does not matter), otherwise they wait for the
+    /// next period start.
+    fn hand_thrust_commands(&mut self, t: f64) {
+        let Some(k) = self.model.thrust_commander else {
+            return;
+        };
+        let commands = self.effects[k].thrust_commands().to_vec();
+        for (&(i, j), &d) in self.model.thruster_owners.iter().zip(&commands) {
+            self.effects[i].hold_thrust_command(j, d, t);
+        }
     }
 
     /// Handles, at once, the events whose functions went from `before` to their values now

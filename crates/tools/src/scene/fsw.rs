@@ -18,7 +18,7 @@
 //! ki = [0.1, 0.1, 0.1]     # N m/(rad s) (default 0)
 //! kd = [150.0, 150.0, 150.0]  # N m s/rad
 //! period = 0.1             # s (default: the estimator's)
-//! actuator = "wheels"      # (default)
+//! actuator = "wheels"      # (default), "torquers" (with magnetometer = "mag") or "thrusters"
 //! inertia = [[...], [...], [...]]   # optional: the feed-forward ω × (J ω)
 //! [fsw.bdot]               # B-dot on a magnetometer's readings, to the torquers
 //! magnetometer = "mag"     # a [[sensors.magnetometer]] on the root body
@@ -29,8 +29,11 @@
 //! magnetometer = "mag"
 //! ```
 //!
-//! `[fsw.bdot]` and `[fsw.momentum]` need magnetic torquers on the root body, and not
-//! `[effects.bdot]`. Every block accepts `enabled = false` (read and checked, then left
+//! `actuator = "thrusters"` needs `[effects.thrusters]` with thrusters on the root body (only
+//! those are commanded) and a control `period` that is a whole multiple of the thrusters'
+//! `period` (they latch its duties at their period starts); it may run beside
+//! `[effects.attitude_control]` on the wheels. `[fsw.bdot]` and `[fsw.momentum]` need
+//! magnetic torquers on the root body, and not `[effects.bdot]`. Every block accepts `enabled = false` (read and checked, then left
 //! out).
 //!
 //! # Modes
@@ -60,12 +63,11 @@
 //! ```
 //!
 //! A block the scene gives at the top and two modes run is one block, running on across
-//! the switch; a mode's own block is its own. `actuator = "thrusters"` is not yet
-//! supported (refused at its line). Every error names the scene file and the line.
+//! the switch; a mode's own block is its own. Every error names the scene file and the line.
 
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 use satsim_environment::Epoch;
-use satsim_spacecraft::effects::{EffectSet, ReactionWheels, SceneText};
+use satsim_spacecraft::effects::{EffectSet, ReactionWheels, SceneText, Thrusters};
 use satsim_spacecraft::fsw::{
     Actuator, Aiding, Condition, ControlSpec, DipoleLaw, DipoleSpec, EstimatorSpec, Guidance,
     MekfParams, Mode, Onboard, Pid, Slew,
@@ -219,7 +221,7 @@ pub struct ControlFile {
     /// Sample period (s, default the estimator's).
     #[serde(default)]
     pub period: Option<Spanned<f64>>,
-    /// `"wheels"` (the default) or `"torquers"` (`"thrusters"`: not yet supported).
+    /// `"wheels"` (the default), `"torquers"` or `"thrusters"`.
     #[serde(default)]
     pub actuator: Option<Spanned<String>>,
     /// `actuator = "torquers"`: the magnetometer whose reading the dipole is worked out on.
@@ -263,10 +265,6 @@ pub struct MomentumFile {
     /// Off without removing the table (default true).
     #[serde(default)]
     pub enabled: Option<bool>,
-}
-
-fn not_yet(text: &SceneText, span: Range<usize>, what: &str) -> FileError {
-    text.error(Some(span), format!("not yet supported: {what}"))
 }
 
 fn finite3(text: &SceneText, x: &Spanned<[f64; 3]>, what: &str) -> Result<[f64; 3], FileError> {
@@ -732,26 +730,18 @@ impl Within<'_> {
             .as_ref()
             .map(|a| (a.get_ref().as_str(), a.span()));
         match actuator {
-            None | Some(("wheels" | "torquers", _)) => {}
-            Some(("thrusters", span)) => {
-                return Err(not_yet(
-                    text,
-                    span,
-                    &format!(
-                        "`{at}.actuator` = \"thrusters\": the control commands the reaction wheels (\"wheels\") or the magnetic torquers (\"torquers\")"
-                    ),
-                ));
-            }
+            None | Some(("wheels" | "torquers" | "thrusters", _)) => {}
             Some((other, span)) => {
                 return Err(text.error(
                     Some(span),
                     format!(
-                        "`{at}.actuator`: unknown actuator `{other}`, expected \"wheels\" or \"torquers\""
+                        "`{at}.actuator`: unknown actuator `{other}`, expected \"wheels\", \"torquers\" or \"thrusters\""
                     ),
                 ));
             }
         }
         let torquers = matches!(actuator, Some(("torquers", _)));
+        let thrusters = matches!(actuator, Some(("thrusters", _)));
         if let (Some(m), false) = (&c.magnetometer, torquers) {
             return Err(text.error(
                 Some(m.span()),
@@ -778,7 +768,7 @@ impl Within<'_> {
             }
             None => None,
         };
-        if self.effects.contains("attitude_control") && !torquers {
+        if self.effects.contains("attitude_control") && !torquers && !thrusters {
             return Err(text.error(
                 Some(span),
                 format!("{title} and [effects.attitude_control] would both command the wheels: set `enabled = false` in one of them"),
@@ -830,6 +820,24 @@ impl Within<'_> {
                 ));
             }
             Actuator::Torquers { magnetometer: i }
+        } else if thrusters {
+            let owned: Vec<_> = self.effects.iter().flat_map(|e| e.thrusters()).collect();
+            if owned.is_empty() {
+                return Err(text.error(
+                    Some(span),
+                    format!("{title} actuator = \"thrusters\" needs [effects.thrusters] with at least one [[effects.thrusters.thruster]]"),
+                ));
+            }
+            if !owned.iter().any(|t| t.body == 0) {
+                return Err(text.error(
+                    Some(span),
+                    format!(
+                        "{title} actuator = \"thrusters\" needs thrusters on the root body `{}` (the control torques it): none of [[effects.thrusters.thruster]] is on it",
+                        self.model.bodies()[0].name()
+                    ),
+                ));
+            }
+            Actuator::Thrusters
         } else {
             match self.effects.get::<ReactionWheels>() {
                 Some(w) if !w.wheels.is_empty() => Actuator::Wheels(
@@ -864,6 +872,22 @@ impl Within<'_> {
                 ));
             }
         };
+        if thrusters
+            && let Some(th) = self.effects.get::<Thrusters>()
+            && !Self::multiple(period, th.period())
+        {
+            // A command sampled between the thrusters' period starts would wait for the
+            // next one: the control's samples must be period starts.
+            let at_line = c.period.as_ref().map_or(span, |p| p.span());
+            return Err(text.error(
+                Some(at_line),
+                format!(
+                    "`{at}.period` ({period} s{}) must be a whole multiple of [effects.thrusters] `period` ({} s): the thrusters latch the control's duties at their period starts",
+                    if c.period.is_none() { ", the estimator's" } else { "" },
+                    th.period()
+                ),
+            ));
+        }
         Ok(ControlSpec {
             pid: Pid::new(kp, ki, kd, inertia),
             period,

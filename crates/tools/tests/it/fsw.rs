@@ -545,7 +545,7 @@ fn bad_fsw_input_is_an_error_naming_the_file_and_line() {
         (base.replacen("actuator = \"wheels\"", "actuator = \"wheels\"\nmagnetometer = \"mag\"", 1), "magnetometer = \"mag\"", "belongs to actuator = \"torquers\""),
         (base.replacen("actuator = \"wheels\"", "actuator = \"torquers\"\nmagnetometer = \"gyro\"", 1), "magnetometer = \"gyro\"", "is a gyro, not a magnetometer"),
         (base.replacen("actuator = \"wheels\"", "actuator = \"ion_engines\"", 1), "actuator = \"ion_engines\"", "unknown actuator"),
-        (base.replacen("actuator = \"wheels\"", "actuator = \"thrusters\"", 1), "actuator = \"thrusters\"", "not yet supported"),
+        (base.replacen("actuator = \"wheels\"", "actuator = \"thrusters\"", 1), "[fsw.control]", "needs [effects.thrusters]"),
         (base.replacen("kp = [40.0, 40.0, 40.0]", "kp = [40.0, -1.0, 40.0]", 1), "kp = [40.0, -1.0", ">= 0"),
         (base.replacen("period = 0.1                # s\n", "period = 0.0\n", 1), "period = 0.0", "> 0"),
         (format!("{base}\n[fsw.momentum]\ngain = 1e-3\nmagnetometer = \"mag\"\n"), "magnetometer = \"mag\"", "`fsw.momentum.magnetometer`: unknown sensor `mag` (the scene's magnetometer sensors: none)"),
@@ -1349,4 +1349,196 @@ fn sun_pointing_slews_within_its_limits_and_points_the_axis_at_the_sun() {
     let sun = get(&t, end, ["sun_x", "sun_y", "sun_z"]);
     assert!(angle(sun, [1.0, 0.0, 0.0]) < 1e-3, "{sun:?}");
     assert!(end[col(&t, "pointing_error")] < 1e-3);
+}
+
+/// Twelve thrusters of `thrust` N in couples on the tumbling bus (`period` s PWM): about
+/// each body axis, each way, two pushing in opposite directions 0.5 m either side of the
+/// centre of mass, so that they make torque and no net force.
+fn thruster_couples(thrust: f64, period: f64) -> String {
+    let mut s = format!("[effects.thrusters]\nperiod = {period}\n");
+    let e = |i: usize, v: f64| {
+        let mut a = [0.0; 3];
+        a[i] = v;
+        format!("[{:?}, {:?}, {:?}]", a[0], a[1], a[2])
+    };
+    for (i, axis) in ["x", "y", "z"].iter().enumerate() {
+        let (j, k) = ((i + 1) % 3, (i + 2) % 3);
+        for (sign, way) in [(1.0, "p"), (-1.0, "m")] {
+            for (n, side) in [(1, 1.0), (2, -1.0)] {
+                s += &format!(
+                    "[[effects.thrusters.thruster]]\nname = \"{axis}{way}{n}\"\nat = {}\ndirection = {}\nthrust = {thrust}\n",
+                    e(j, 0.5 * side),
+                    e(k, sign * side)
+                );
+            }
+        }
+    }
+    s
+}
+
+const THRUSTER_NAMES: [&str; 12] = [
+    "thrust_xp1",
+    "thrust_xp2",
+    "thrust_xm1",
+    "thrust_xm2",
+    "thrust_yp1",
+    "thrust_yp2",
+    "thrust_ym1",
+    "thrust_ym2",
+    "thrust_zp1",
+    "thrust_zp2",
+    "thrust_zm1",
+    "thrust_zm2",
+];
+
+/// The tumbling bus with a 10 Hz gyro and star tracker, the twelve thrusters of 0.5 N
+/// (10 Hz PWM) and the estimator, an inertial guidance and a PID on the thrusters (5 Hz),
+/// plus `extra`, for `duration` s with rows every `every` s (a row at a period start shows
+/// the thrust just before it: rows between them see the pulses).
+fn on_thrusters(control: &str, extra: &str, duration: f64, every: f64) -> Scene {
+    let mut s = parse(&on_thrusters_text(control, extra), "thrusters.toml");
+    s.duration = duration;
+    s.every = every;
+    s
+}
+
+fn on_thrusters_text(control: &str, extra: &str) -> String {
+    let sensors = "[[sensors.gyro]]\nname = \"gyro\"\nbody = \"bus\"\nperiod = 0.1\nnoise_density = 1e-5\n[[sensors.star_tracker]]\nname = \"st\"\nbody = \"bus\"\nperiod = 0.1\nnoise_arcsec = [5.0, 5.0, 20.0]\n";
+    let fsw = format!(
+        "[fsw.estimator]\ngyro = \"gyro\"\nstar_tracker = \"st\"\n[fsw.guidance]\nmode = \"inertial\"\nattitude = [0.5, 0.5, 0.5, 0.5]\n[fsw.control]\n{control}actuator = \"thrusters\"\nperiod = 0.2\n"
+    );
+    tumbling_text(&format!(
+        "{sensors}{}{fsw}{extra}",
+        thruster_couples(THRUST, 0.1)
+    ))
+}
+
+/// The thrusters' force (N): 0.2 N m about each axis at most.
+const THRUST: f64 = 0.2;
+
+/// Every thrust column is 0 or the thrust (the PWM's two values), and some fire.
+fn thrust_columns_are_pwm(t: &Trajectory, thrust: f64) -> usize {
+    let mut on = 0;
+    for r in t.rows() {
+        for v in get(t, r, THRUSTER_NAMES) {
+            assert!(v == 0.0 || v == thrust, "{v}");
+            on += usize::from(v == thrust);
+        }
+    }
+    on
+}
+
+#[test]
+fn a_rate_damping_control_on_the_thrusters_stops_the_tumble() {
+    // kp = 0: the PID damps the estimated rate (4.1 deg/s) through the thrusters' couples,
+    // 0.5 N m about each axis at most: the momentum (0.19 N m s) is gone within seconds.
+    let t = run(&on_thrusters(
+        "kp = [0.0, 0.0, 0.0]\nkd = [2.0, 2.0, 2.0]\n",
+        "",
+        60.0,
+        0.01,
+    ));
+    let rate: Vec<f64> = t
+        .rows()
+        .map(|r| norm(get(&t, r, ["omega_x", "omega_y", "omega_z"])))
+        .collect();
+    assert!(rate[0] > 0.07, "{}", rate[0]);
+    let last = *rate.last().unwrap();
+    assert!(last < 1e-4, "{last}");
+    // The loop's time constant is J / kd, about 1.25 s: well under 1e-3 rad/s by 10 s.
+    assert!(rate[1000] < 1e-3, "{}", rate[1000]);
+    assert!(thrust_columns_are_pwm(&t, THRUST) > 10);
+}
+
+#[test]
+fn an_inertial_hold_on_the_thrusters_converges_from_two_radians_to_a_milliradian() {
+    let t = run(&on_thrusters(
+        "kp = [0.1, 0.1, 0.1]\nkd = [1.0, 1.0, 1.0]\n",
+        "",
+        150.0,
+        0.5,
+    ));
+    let pointing: Vec<f64> = t
+        .rows()
+        .map(|r| get(&t, r, ["pointing_error"])[0])
+        .collect();
+    assert!(pointing[0] > 1.0, "{}", pointing[0]);
+    // From 2.1 rad to within 1e-3 rad by 100 s (the loop's time constant is about 10 s),
+    // at rest. The estimate's error (1e-4 rad here, over its 1σ of 1e-5) comes mostly from
+    // the gyro sampling the rate at instants while the PWM's torque changes it within the
+    // period (the estimator integrates the samples' mean); the pointing error is that and
+    // the PD's response to the noise.
+    for r in t.rows().filter(|r| r[0] >= 100.0) {
+        let [p, e] = get(&t, r, ["pointing_error", "est_error"]);
+        assert!(
+            p < 1e-3 && e < 3e-4,
+            "t = {}: pointing {p}, estimate {e}",
+            r[0]
+        );
+        let w = norm(get(&t, r, ["omega_x", "omega_y", "omega_z"]));
+        assert!(w < 1e-4, "t = {}: {w}", r[0]);
+    }
+}
+
+#[test]
+fn a_mode_without_the_control_stops_the_thrusters_from_their_next_period() {
+    let modes = "[[fsw.mode]]\nname = \"hold\"\nblocks = [\"estimator\", \"guidance\", \"control\"]\nuntil = \"time > 20\"\n[[fsw.mode]]\nname = \"coast\"\nblocks = [\"estimator\"]\n";
+    let t = run(&on_thrusters(
+        "kp = [0.1, 0.1, 0.1]\nkd = [1.0, 1.0, 1.0]\n",
+        modes,
+        30.0,
+        0.01,
+    ));
+    let fired = |r: &[f64]| get(&t, r, THRUSTER_NAMES).iter().any(|&v| v > 0.0);
+    // Still acquiring at 20 s: they fire up to the switch at the 20.1 s sample (a period
+    // start, whose duties the switch zeroes), then never again.
+    assert!(t.rows().filter(|r| r[0] < 20.0).any(fired));
+    assert!(t.rows().filter(|r| r[0] >= 20.5).all(|r| !fired(r)));
+    let modes: Vec<f64> = t.rows().map(|r| get(&t, r, ["fsw_mode"])[0]).collect();
+    assert_eq!((modes[0], *modes.last().unwrap()), (0.0, 1.0));
+}
+
+#[test]
+fn bad_thruster_controls_are_errors_at_their_line() {
+    let base = std::fs::read_to_string(example(POINTING)).unwrap();
+    let to_thrusters =
+        |text: &str| text.replacen("actuator = \"wheels\"", "actuator = \"thrusters\"", 1);
+    // (No [effects.thrusters]: in bad_fsw_input_is_an_error_naming_the_file_and_line.)
+    // Thrusters, none on the root body.
+    let on_panel = "[effects.thrusters]\nperiod = 0.1\n[[effects.thrusters.thruster]]\nname = \"a\"\nbody = \"panel1\"\nat = [0.0, 0.0, 0.0]\ndirection = [1.0, 0.0, 0.0]\nthrust = 1.0\n";
+    assert_error_at(
+        &format!("{}\n{on_panel}", to_thrusters(&base)),
+        "[fsw.control]",
+        "needs thrusters on the root body",
+    );
+    // A control period that is not a whole multiple of the thrusters' period: at the
+    // control's `period`, or at the table when it takes the estimator's.
+    let ok = on_thrusters_text("kp = [0.1, 0.1, 0.1]\nkd = [1.0, 1.0, 1.0]\n", "");
+    let text = ok.replacen("period = 0.2\n", "period = 0.25\n", 1);
+    parse(
+        &ok.replacen("period = 0.2\n", "period = 0.3\n", 1),
+        "ok.toml",
+    );
+    assert_error_at(
+        &text,
+        "period = 0.25",
+        "must be a whole multiple of [effects.thrusters] `period` (0.1 s)",
+    );
+    let slow = text.replacen("period = 0.25\n", "", 1).replacen(
+        "[effects.thrusters]\nperiod = 0.1",
+        "[effects.thrusters]\nperiod = 0.3",
+        1,
+    );
+    assert_error_at(
+        &slow,
+        "[fsw.control]",
+        "(0.1 s, the estimator's) must be a whole multiple",
+    );
+    // A disabled [effects.thrusters] has no thrusters.
+    let disabled = text.replacen(
+        "[effects.thrusters]\nperiod = 0.1",
+        "[effects.thrusters]\nperiod = 0.1\nenabled = false",
+        1,
+    );
+    assert_error_at(&disabled, "[fsw.control]", "needs [effects.thrusters]");
 }
