@@ -312,10 +312,11 @@ fn vector(r: &[f64]) -> [f64; 3] {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
-    fn spec() -> EstimatorSpec {
+    /// A gyro (sensor 0) and a star tracker (sensor 1) at 10 Hz.
+    pub(crate) fn spec() -> EstimatorSpec {
         EstimatorSpec {
             gyro: 0,
             period: 0.1,

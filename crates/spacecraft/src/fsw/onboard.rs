@@ -768,22 +768,7 @@ fn reading3(s: &Sensor) -> Vector3<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fsw::{Aiding, MekfParams};
-
-    fn spec() -> EstimatorSpec {
-        EstimatorSpec {
-            gyro: 0,
-            period: 0.1,
-            aiding: Aiding::StarTrackers(vec![(1, [1e-5; 3])]),
-            body: 0,
-            params: MekfParams {
-                sigma_v: 1e-5,
-                sigma_u: 1e-7,
-                sigma_attitude: 0.01,
-                sigma_bias: 1e-4,
-            },
-        }
-    }
+    use crate::fsw::estimator::tests::spec;
 
     fn control() -> ControlSpec {
         ControlSpec {

@@ -1041,7 +1041,20 @@ pub(crate) fn read(
         effects,
         epoch,
     };
-    // Without an estimator's table a mode's own may still give the control its period.
+    // A magnetic block: read, and checked against the scene when it is enabled.
+    let magnetic =
+        |block: &str,
+         span: Range<usize>,
+         (mag, gain, period): (&Spanned<String>, &Spanned<f64>, &Option<Spanned<f64>>),
+         enabled: Option<bool>| {
+            let spec = w.magnetic(block, mag, gain, period)?;
+            let spec = if on(enabled) {
+                w.magnetic_checks(block, span.clone(), spec)?
+            } else {
+                spec
+            };
+            Ok::<_, FileError>((spec, span, on(enabled)))
+        };
     let top = TopBlocks {
         estimator: f
             .estimator
@@ -1074,13 +1087,12 @@ pub(crate) fn read(
             .as_ref()
             .map(|b| {
                 let r = b.get_ref();
-                let spec = w.magnetic("bdot", &r.magnetometer, &r.gain, &r.period)?;
-                let spec = if on(r.enabled) {
-                    w.magnetic_checks("bdot", b.span(), spec)?
-                } else {
-                    spec
-                };
-                Ok((spec, b.span(), on(r.enabled)))
+                magnetic(
+                    "bdot",
+                    b.span(),
+                    (&r.magnetometer, &r.gain, &r.period),
+                    r.enabled,
+                )
             })
             .transpose()?,
         momentum: f
@@ -1088,13 +1100,12 @@ pub(crate) fn read(
             .as_ref()
             .map(|m| {
                 let r = m.get_ref();
-                let spec = w.magnetic("momentum", &r.magnetometer, &r.gain, &r.period)?;
-                let spec = if on(r.enabled) {
-                    w.magnetic_checks("momentum", m.span(), spec)?
-                } else {
-                    spec
-                };
-                Ok((spec, m.span(), on(r.enabled)))
+                magnetic(
+                    "momentum",
+                    m.span(),
+                    (&r.magnetometer, &r.gain, &r.period),
+                    r.enabled,
+                )
             })
             .transpose()?,
     };
