@@ -77,7 +77,7 @@ fn articulated<'d>(
         let mut h = inertia.mul_motion(&vi);
         let co = data.c_offset[i];
         for k in 0..m {
-            let pk = model.momentum[o + k];
+            let pk = model.momentum_at(i, q, k);
             h += pk * v[nv + o + k];
             data.b[o + k] = pk;
             data.pe[o + k] =
@@ -88,7 +88,7 @@ fn articulated<'d>(
         }
         data.ia[i] = ArticulatedInertia::from(*inertia);
         data.pa[i] = vi.cross_force(&h);
-        model.add_stiffening(i, q, v, &vi.ang, &mut data.pa[i], &mut data.pe[o..o + m]);
+        model.add_stiffening(i, q, v, &vi, &mut data.pa[i], &mut data.pe[o..o + m]);
         if let Some(fe) = fext {
             data.pa[i] -= fe[i];
         }

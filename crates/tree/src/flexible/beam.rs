@@ -233,6 +233,11 @@ impl Beam {
 /// - The deflection's own rotational inertia `∫ ρA (|u|² 1 − u uᵀ) = A₂ ηᵀη`,
 ///   `A₂ = 1 − b bᵀ` (mass-orthonormal modes along one `bend` `b`): the deflected sections'
 ///   centrifugal load, `−(ωᵀ A₂ ω) η` on the modes (the softening of in-plane bending).
+/// - The foreshortening's translation: the first moment less `½ (ηᵀ J₀ η) a` and the modal
+///   momentum `Pₖ − (J₀ η)ₖ c`, `c = [r₀ × a; a]`. With them the axial load is that of the
+///   frame's whole acceleration: `K_g(v)` adds `((ω × a) · v_O) J₀` (the frame origin's
+///   centripetal acceleration: a hub's radius for a beam on a hinge off the spin axis), and
+///   `P(η)ᵀ a` the frame's linear and angular acceleration along the beam (thrust, spin-up).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Stiffening {
     /// `A₀` (m), body axes.
@@ -245,6 +250,18 @@ pub struct Stiffening {
     pub j1: Vec<f64>,
     /// `A₂ = 1 − b bᵀ`, body axes.
     pub a2: crate::spatial::Mat3,
+    /// The beam's axis `a` (unit), body axes: the foreshortening moves the first moment of
+    /// mass by `−½ (ηᵀ J₀ η) a`.
+    pub axis: Vec3,
+    /// `c = [r₀ × a; a]`: the spatial momentum (about the frame origin) of a uniform axial
+    /// velocity of the whole beam per kg; the foreshortening's rate `u̇ₐ` gives the beam the
+    /// momentum `−c (η̇ᵀ J₀ η)`, so the modal momentum columns are `Pₖ − (J₀ η)ₖ c`.
+    pub shortening: Force,
+    /// Per mode `k`, the first-order change of the body's inertia per unit `ηₖ` (mass 0):
+    /// first moment `b S₁ₖ`, rotational inertia about the origin
+    /// `2 (r₀·b) S₁ₖ 1 − (r₀ S₁ₖ + a S₂ₖ) bᵀ − b (r₀ S₁ₖ + a S₂ₖ)ᵀ` (`S₁ₖ = ∫ ρA φₖ`,
+    /// `S₂ₖ = ∫ ρA x φₖ`): the deflected mass, a dynamic imbalance under spin.
+    pub first: Vec<crate::spatial::RigidInertia>,
 }
 
 impl Beam {
@@ -273,12 +290,30 @@ impl Beam {
         let a = self.axis;
         let ra = self.root * a.transpose();
         let id = crate::spatial::Mat3::identity();
+        let (b, r0) = (self.bend, self.root);
+        let first = modes
+            .iter()
+            .map(|md| {
+                let s1 = self.rho_a * integrate(l, PANELS, &rule, |x| md.shape(x)[0]);
+                let s2 = self.rho_a * integrate(l, PANELS, &rule, |x| x * md.shape(x)[0]);
+                let d = r0 * s1 + a * s2;
+                let db = d * b.transpose();
+                crate::spatial::RigidInertia {
+                    mass: 0.0,
+                    h: b * s1,
+                    inertia: id * (2.0 * r0.dot(&b) * s1) - db - db.transpose(),
+                }
+            })
+            .collect();
         Stiffening {
             a0: id * self.root.dot(&a) - (ra + ra.transpose()) * 0.5,
             a1: id - a * a.transpose(),
             j0,
             j1,
             a2: id - self.bend * self.bend.transpose(),
+            axis: a,
+            shortening: Force::new(self.root.cross(&a), a),
+            first,
         }
     }
 }
@@ -313,11 +348,31 @@ impl Stiffening {
     pub(crate) fn g(&self, s: &[f64; 3]) -> crate::spatial::Mat3 {
         self.a0 * s[0] + self.a1 * s[1] - self.a2 * s[2]
     }
-    /// `out[k] += (K_g(ω) η − (ωᵀ A₂ ω) η)ₖ` (`−∂T/∂η` of the second-order inertia).
+    /// `(J₀ x)ₖ`.
     #[inline]
-    pub(crate) fn add_force(&self, omega: &Vec3, eta: &[f64], out: &mut [f64]) {
+    pub(crate) fn j0_row(&self, k: usize, x: &[f64]) -> f64 {
+        let m = x.len();
+        let mut s = 0.0;
+        for l in 0..m {
+            s += self.j0[k * m + l] * x[l];
+        }
+        s
+    }
+    /// `xᵀ J₀ y`.
+    #[inline]
+    pub(crate) fn j0_form(&self, x: &[f64], y: &[f64]) -> f64 {
+        (0..x.len()).map(|k| x[k] * self.j0_row(k, y)).sum()
+    }
+    /// `out[k] += (K_g(v) η − (ωᵀ A₂ ω) η)ₖ` (`−∂T/∂η` of the second-order inertia) for the
+    /// frame moving at `v = [ω; v_O]`: `K_g(v) = (ωᵀ A₀ ω + (ω × a) · v_O) J₀ + (ωᵀ A₁ ω) J₁`,
+    /// the axial load of the centripetal acceleration of the sections (about the frame
+    /// origin, `A₀` and `A₁`) and of the frame origin's own velocity product `ω × v_O`.
+    #[inline]
+    pub(crate) fn add_force(&self, v: &crate::spatial::Motion, eta: &[f64], out: &mut [f64]) {
         let m = eta.len();
-        let (w0, w1) = (omega.dot(&(self.a0 * omega)), omega.dot(&(self.a1 * omega)));
+        let omega = &v.ang;
+        let w0 = omega.dot(&(self.a0 * omega)) + omega.cross(&self.axis).dot(&v.lin);
+        let w1 = omega.dot(&(self.a1 * omega));
         let w2 = omega.dot(&(self.a2 * omega));
         for k in 0..m {
             let mut s = -w2 * eta[k];

@@ -96,7 +96,7 @@ fn mass_matrix(model: &FlexModel, data: &mut FlexData, q: &[f64]) {
         }
         // The modal columns of body j: its own momentum plus its children's subtrees.
         for k in 0..mj {
-            data.cols[k] = model.momentum[o + k];
+            data.cols[k] = model.momentum_at(j, q, k);
             for r in 0..mj {
                 m[(nv + o + r, nv + o + k)] = if r == k { 1.0 } else { 0.0 };
             }

@@ -41,27 +41,37 @@ pub fn forward_kinematics(
 
 /// Total linear momentum (N s) and angular momentum about the system's centre of mass
 /// (N m s), inertial axes, after [`forward_kinematics`] on `(q, v)`: each body's
-/// `[[I, P], [Pᵀ, 1]] [vᵢ; η̇ᵢ]`'s frame part, `I vᵢ + P η̇ᵢ` (with stiffening, `I` less
-/// `G(η)`), the momentum conjugate to the frame's motion. The centre of mass is the
-/// undeformed bodies' (the model is linear in the deformation: its first moment `P η`
-/// moves the centre of mass to first order, and that shift is left out consistently with
-/// the kinetic energy).
+/// `[[I, P], [Pᵀ, 1]] [vᵢ; η̇ᵢ]`'s frame part, `I vᵢ + P η̇ᵢ` (with stiffening, `I(η)` and
+/// `P(η)` at the deformation), the momentum conjugate to the frame's motion. The centre of mass is the
+/// undeformed bodies' (the linear model leaves the deformation's first moment out of the
+/// kinetic energy, and so out of the centre of mass) unless a body has `stiffening`: then
+/// the first moments at the deformation (`b S₁ᵀ η − ½ (ηᵀ J₀ η) a` of each stiffened beam),
+/// the centre of mass whose velocity is the linear momentum over the mass, about which the
+/// angular momentum is conserved whatever the linear momentum.
 pub fn momentum(model: &FlexModel, data: &Data, q: &[f64], v: &[f64]) -> (Vec3, Vec3) {
     let rigid = &model.rigid;
     let nv = rigid.nv();
     let mut p = Vec3::zeros();
     let mut h_origin = Vec3::zeros();
+    let (mut mass, mut first) = (0.0, Vec3::zeros());
     for i in 0..rigid.n_bodies() {
-        let mut f = model.inertia_at(i, q).mul_motion(&data.v[i]);
+        let inertia = model.inertia_at(i, q);
+        mass += inertia.mass;
+        first += data.position[i] * inertia.mass + data.rotation[i] * inertia.h;
+        let mut f = inertia.mul_motion(&data.v[i]);
         for k in 0..model.modes[i] {
             let e = model.offset[i] + k;
-            f += model.momentum[e] * v[nv + e];
+            f += model.momentum_at(i, q, k) * v[nv + e];
         }
         let r = &data.rotation[i];
         let lin = r * f.lin;
         p += lin;
         h_origin += r * f.ang + data.position[i].cross(&lin);
     }
-    let c = center_of_mass(rigid, data);
+    let c = if model.stiffening.iter().any(Option::is_some) {
+        first / mass
+    } else {
+        center_of_mass(rigid, data)
+    };
     (p, h_origin - c.cross(&p))
 }

@@ -10,11 +10,17 @@
 //!   [`momentum`].
 //!
 //! Coordinates: `q = [rigid q…, η…]`, `v = [rigid v…, η̇…]` (see [`model`]). The model is
-//! linear in the deformation (modal integrals evaluated undeformed) and exactly Lagrangian:
+//! linear in the deformation (modal integrals evaluated undeformed; with a beam's
+//! `stiffening`, consistent to second order, below) and exactly Lagrangian:
 //! with no damping, kinetic plus strain energy is conserved. The derivation is the theory
-//! page "Flexible bodies". A beam's centrifugal stiffening is in the same Lagrangian (the
-//! foreshortening's kinetic energy and the deflection's own rotational inertia,
-//! `−½ ωᵀ G(η) ω`).
+//! page "Flexible bodies". A beam's geometric stiffening is in the same Lagrangian (Kane,
+//! Ryan and Banerjee's consistent linearisation): the deflection's first-order inertia
+//! (first moment `b S₁ᵀ η` and products of inertia: a dynamic imbalance under spin, the
+//! centrifugal load on the modes), the foreshortening's kinetic energy and the
+//! deflection's own rotational inertia (`−½ ωᵀ G(η) ω`), the foreshortening's shift of the
+//! first moment and its momentum (`P(η) = P − c (J₀ η)ᵀ`), so the axial load is that of the
+//! frame's whole acceleration: the spin about its own origin, the origin's centripetal
+//! acceleration (a hub's radius), thrust along the beam, a spin-up.
 //!
 //! ```
 //! use satsim_tree::{BaseKind, Body, Hinge, ModelBuilder, spatial::{Mat3, Vec3}};
@@ -59,8 +65,9 @@ pub use rnea::{bias, rnea};
 
 use crate::error::DynamicsError;
 
-/// Kinetic energy `½ Σ ([vᵢ; η̇ᵢ]ᵀ [[I, P], [Pᵀ, 1]] [vᵢ; η̇ᵢ]) + ½ Σ armature φ̇²` and strain
-/// energy `½ Σ ωₖ² ηₖ²` (J), as `(kinetic, strain)`.
+/// Kinetic energy `½ Σ ([vᵢ; η̇ᵢ]ᵀ [[I, P], [Pᵀ, 1]] [vᵢ; η̇ᵢ]) + ½ Σ armature φ̇²` (with
+/// stiffening, `I(η)` and `P(η)` at the deformation) and strain energy `½ Σ ωₖ² ηₖ²` (J), as
+/// `(kinetic, strain)`.
 pub fn energy(
     model: &FlexModel,
     data: &mut FlexData,
@@ -78,8 +85,9 @@ pub fn energy(
         for k in 0..model.modes[i] {
             let e = model.offset[i] + k;
             // ½ (vᵀ P η̇ + η̇ᵀ Pᵀ v) adds vᵀ P η̇ once: half of it through h.
-            h += model.momentum[e] * v[nv + e];
-            t += 0.5 * v[nv + e] * (v[nv + e] + vi.dot(&model.momentum[e]));
+            let pk = model.momentum_at(i, q, k);
+            h += pk * v[nv + e];
+            t += 0.5 * v[nv + e] * (v[nv + e] + vi.dot(&pk));
         }
         t += 0.5 * vi.dot(&h);
     }

@@ -9,7 +9,7 @@ use super::modal::{ModalData, NodeShape};
 use super::node::Node;
 use crate::error::ModelError;
 use crate::model::{Model, ModelBuilder, UNIT_NORM_TOLERANCE};
-use crate::spatial::{Force, Mat3, RigidInertia, Vec3};
+use crate::spatial::{Force, Mat3, Motion, RigidInertia};
 use thiserror::Error;
 
 /// Largest number of beam modes (the beam integrals' quadrature is sized for it).
@@ -39,9 +39,12 @@ pub struct Flexible {
     pub modes: Modes,
     /// Modal damping ratio `ζ` of every mode, `>= 0`.
     pub damping: f64,
-    /// Geometric (centrifugal) stiffening of a beam (ignored for given modes): its
-    /// second-order inertia, the foreshortening's axial load and the deflection's own
-    /// centrifugal load (the softening of bending across the spin).
+    /// The consistent terms of a beam (ignored for given modes): the deflection's
+    /// first-order inertia (its first moment and products of inertia) and, for the
+    /// geometric stiffening, its second-order inertia: the axial load of the frame's whole
+    /// acceleration (centrifugal about the frame's origin, the origin's own centripetal and
+    /// linear acceleration, the angular acceleration) through the foreshortening, and the
+    /// deflection's own centrifugal load (the softening of bending across the spin).
     pub stiffening: bool,
 }
 
@@ -395,9 +398,11 @@ impl FlexModel {
                 .sum(),
         )
     }
-    /// Body `i`'s rigid inertia at the deformation in `q`: with stiffening, the angular block
-    /// less `G(η)` (the foreshortening's kinetic energy `−½ ωᵀ (A₀ s₀ + A₁ s₁) ω` and the
-    /// deflection's own `½ ωᵀ A₂ ω ηᵀη`); else the rigid model's.
+    /// Body `i`'s rigid inertia at the deformation in `q`: with stiffening, plus the
+    /// deflection's first-order inertia `Σ ηₖ Iₖ`, the angular block less `G(η)` (the
+    /// foreshortening's kinetic energy `−½ ωᵀ (A₀ s₀ + A₁ s₁) ω` and the deflection's own
+    /// `½ ωᵀ A₂ ω ηᵀη`) and the first moment less `½ s₀ a` (the foreshortening's shift of
+    /// the beam's mass towards its root); else the rigid model's.
     #[inline]
     pub(crate) fn inertia_at(&self, i: usize, q: &[f64]) -> RigidInertia {
         let mut inertia = self.rigid.bodies[i].inertia;
@@ -405,19 +410,41 @@ impl FlexModel {
             let eta = &q[self.rigid.nq() + self.offset[i]..][..self.modes[i]];
             let (f, _) = s.forms(eta, eta);
             inertia.inertia -= s.g(&f);
+            inertia.h -= s.axis * (0.5 * f[0]);
+            for (ik, e) in s.first.iter().zip(eta) {
+                inertia.h += ik.h * *e;
+                inertia.inertia += ik.inertia * *e;
+            }
         }
         inertia
     }
-    /// With stiffening, the second-order inertia's terms in body `i`'s equations: the frame
-    /// force `−Ġ ω` (moment) and the modal forces `K_g(ω) η − (ωᵀ A₂ ω) η`, added to `frame`
-    /// and `modal`.
+    /// Body `i`'s modal momentum column `k` at the deformation in `q`: with stiffening,
+    /// `Pₖ − (J₀ η)ₖ [r₀ × a; a]` (the foreshortening's rate moves the beam along its axis);
+    /// else `Pₖ`.
+    #[inline]
+    pub(crate) fn momentum_at(&self, i: usize, q: &[f64], k: usize) -> Force {
+        let pk = self.momentum[self.offset[i] + k];
+        match &self.stiffening[i] {
+            Some(s) => {
+                let eta = &q[self.rigid.nq() + self.offset[i]..][..self.modes[i]];
+                pk - s.shortening * s.j0_row(k, eta)
+            }
+            None => pk,
+        }
+    }
+    /// With stiffening, the deformation-dependent inertia's terms in body `i`'s equations
+    /// (`vi` the frame's velocity): the frame force `İ(η) v + Ṗ(η) η̇` (`İ` of mass 0: first
+    /// moment `Σ η̇ₖ b S₁ₖ − (η̇ᵀ J₀ η) a`, rotational `Σ η̇ₖ Dₖ − Ġ`;
+    /// `Ṗ η̇ = −c (η̇ᵀ J₀ η̇)`) and the modal forces `−∂T/∂η`: `−½ vᵀ Iₖ v` (the centrifugal
+    /// load of the first-order inertia) and `K_g(v) η − (ωᵀ A₂ ω) η` (the `η`-derivative of
+    /// `vᵀ P(η) η̇` cancels against `Ṗᵀ v`), added to `frame` and `modal`.
     #[inline]
     pub(crate) fn add_stiffening(
         &self,
         i: usize,
         q: &[f64],
         v: &[f64],
-        omega: &Vec3,
+        vi: &Motion,
         frame: &mut Force,
         modal: &mut [f64],
     ) {
@@ -426,8 +453,20 @@ impl FlexModel {
             let eta = &q[self.rigid.nq() + o..][..m];
             let etad = &v[self.rigid.nv() + o..][..m];
             let (_, rate) = s.forms(eta, etad);
-            frame.ang -= s.g(&rate) * omega;
-            s.add_force(omega, eta, modal);
+            let mut idot = RigidInertia {
+                mass: 0.0,
+                h: -s.axis * (0.5 * rate[0]),
+                inertia: -s.g(&rate),
+            };
+            for (k, ik) in s.first.iter().enumerate() {
+                idot.h += ik.h * etad[k];
+                idot.inertia += ik.inertia * etad[k];
+                // −∂T/∂ηₖ of the first-order inertia: −½ vᵀ Iₖ v.
+                modal[k] -= 0.5 * vi.dot(&ik.mul_motion(vi));
+            }
+            *frame += idot.mul_motion(vi);
+            *frame -= s.shortening * s.j0_form(etad, etad);
+            s.add_force(vi, eta, modal);
         }
     }
     /// Largest number of modes of one body.

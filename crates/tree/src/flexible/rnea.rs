@@ -49,7 +49,7 @@ pub fn rnea<'d>(
         let mut h = inertia.mul_motion(&vi);
         let mut f = inertia.mul_motion(&data.a[i]);
         for k in 0..m {
-            let pk = model.momentum[o + k];
+            let pk = model.momentum_at(i, q, k);
             h += pk * v[nv + o + k];
             f += pk * a[nv + o + k];
             data.tau[nv + o + k] = data.a[i].dot(&pk)
@@ -59,7 +59,7 @@ pub fn rnea<'d>(
         }
         data.f[i] = f + vi.cross_force(&h);
         let modal = &mut data.tau.as_mut_slice()[nv + o..nv + o + m];
-        model.add_stiffening(i, q, v, &vi.ang, &mut data.f[i], modal);
+        model.add_stiffening(i, q, v, &vi, &mut data.f[i], modal);
         if let Some(fe) = fext {
             data.f[i] -= fe[i];
         }

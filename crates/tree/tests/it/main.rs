@@ -8,6 +8,7 @@ mod flexible;
 mod flexible_dynamics;
 #[cfg(feature = "files")]
 mod flexible_io;
+mod flexible_spin;
 #[cfg(feature = "files")]
 mod gimbal_lock;
 mod gyrostat;
