@@ -26,8 +26,9 @@ use satsim_tools::linearize::linearize as linearize_scene;
 use satsim_tools::modes::{Mode, modes as modes_of_scene};
 use satsim_tools::output::{CsvWriter, write_plots};
 use satsim_tools::scene::Scene;
+use satsim_tools::scene::flexible::{CoupledModes, Elastic};
 use satsim_tools::stepping::SceneStepper;
-use satsim_tree::io::{self as tio, FileError};
+use satsim_tree::io::FileError;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Mutex, MutexGuard};
@@ -48,19 +49,25 @@ fn file_err(e: FileError) -> PyErr {
     err(e.to_string())
 }
 
-/// A model (contract section 1), read and checked.
+/// A model (contract section 1), read and checked; with flexible bodies (section 14), its
+/// flexible model too.
 #[pyclass(module = "satsim._satsim", name = "NativeModel", frozen)]
 struct NativeModel {
-    model: satsim_tree::Model,
+    model: api::DynamicsModel,
     origin: PathBuf,
 }
+
+/// `(omega, shapes)`: the coupled modes' angular frequencies (rad/s) and shapes (`dof x n`).
+type ModesOut<'py> = (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray2<f64>>);
 
 #[pymethods]
 impl NativeModel {
     /// Reads the model file at `path`.
     #[staticmethod]
     fn from_file(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
-        let model = py.detach(|| tio::read_model(&path)).map_err(file_err)?;
+        let model = py
+            .detach(|| api::DynamicsModel::read(&path))
+            .map_err(file_err)?;
         Ok(Self {
             model,
             origin: path,
@@ -71,9 +78,8 @@ impl NativeModel {
     #[staticmethod]
     fn from_toml(py: Python<'_>, text: String, origin: PathBuf) -> PyResult<Self> {
         let model = py
-            .detach(|| tio::parse_model(&text, &origin))
-            .map_err(file_err)?
-            .0;
+            .detach(|| api::DynamicsModel::parse(&text, &origin))
+            .map_err(file_err)?;
         Ok(Self { model, origin })
     }
 
@@ -86,22 +92,23 @@ impl NativeModel {
     /// `"free"` or `"fixed"`.
     #[getter]
     fn base(&self) -> &'static str {
-        match self.model.base() {
+        match self.model.rigid.base() {
             satsim_tree::BaseKind::Free => "free",
             satsim_tree::BaseKind::Fixed => "fixed",
         }
     }
 
-    /// Degrees of freedom (the length of the generalised velocity).
+    /// Degrees of freedom (the length of the generalised velocity, the modes included).
     #[getter]
     fn dof(&self) -> usize {
-        self.model.nv()
+        self.model.dof()
     }
 
     /// Body names, the root first (the engine's order: parents before children).
     #[getter]
     fn body_names(&self) -> Vec<String> {
         self.model
+            .rigid
             .bodies()
             .iter()
             .map(|b| b.name().to_owned())
@@ -111,20 +118,32 @@ impl NativeModel {
     /// Hinge names in the model file's order (the order of the state's arrays).
     #[getter]
     fn hinge_names(&self) -> Vec<String> {
-        self.model.hinge_names().to_vec()
+        self.model.rigid.hinge_names().to_vec()
     }
 
     /// Total mass (kg).
     #[getter]
     fn total_mass(&self) -> f64 {
-        self.model.total_mass()
+        self.model.rigid.total_mass()
+    }
+
+    /// The flexible bodies and their numbers of modes, in the model's order.
+    #[getter]
+    fn flexible(&self) -> Vec<(String, usize)> {
+        self.model.flexible_bodies()
+    }
+
+    /// The flexible bodies and their clamped modal frequencies (Hz), in the model's order.
+    #[getter]
+    fn modal_frequencies(&self) -> Vec<(String, Vec<f64>)> {
+        self.model.modal_frequencies()
     }
 
     /// The dynamics of the state file at `path`.
     fn dynamics_file<'py>(&self, py: Python<'py>, path: PathBuf) -> PyResult<DynamicsOut<'py>> {
         let result = py.detach(|| {
-            let state = tio::read_state(&path, &self.model).map_err(|e| e.to_string())?;
-            self.compute(&state, &path)
+            let (state, elastic) = self.model.read_state(&path).map_err(|e| e.to_string())?;
+            self.compute(&state, &elastic, &path)
         });
         dynamics_out(py, result.map_err(err)?)
     }
@@ -137,10 +156,39 @@ impl NativeModel {
         origin: PathBuf,
     ) -> PyResult<DynamicsOut<'py>> {
         let result = py.detach(|| {
-            let state = tio::parse_state(&text, &origin, &self.model).map_err(|e| e.to_string())?;
-            self.compute(&state, &origin)
+            let (state, elastic) = self
+                .model
+                .parse_state(&text, &origin)
+                .map_err(|e| e.to_string())?;
+            self.compute(&state, &elastic, &origin)
         });
         dynamics_out(py, result.map_err(err)?)
+    }
+
+    /// The coupled undamped modes at the state file at `path`.
+    fn modes_file<'py>(&self, py: Python<'py>, path: PathBuf) -> PyResult<ModesOut<'py>> {
+        let result = py.detach(|| {
+            let (state, elastic) = self.model.read_state(&path).map_err(|e| e.to_string())?;
+            self.coupled(&state, &elastic, &path)
+        });
+        modes_out(py, result.map_err(err)?)
+    }
+
+    /// The coupled undamped modes at a state given as JSON text.
+    fn modes_json<'py>(
+        &self,
+        py: Python<'py>,
+        text: String,
+        origin: PathBuf,
+    ) -> PyResult<ModesOut<'py>> {
+        let result = py.detach(|| {
+            let (state, elastic) = self
+                .model
+                .parse_state(&text, &origin)
+                .map_err(|e| e.to_string())?;
+            self.coupled(&state, &elastic, &origin)
+        });
+        modes_out(py, result.map_err(err)?)
     }
 }
 
@@ -149,9 +197,10 @@ impl NativeModel {
     fn compute(
         &self,
         state: &satsim_tree::State,
+        elastic: &Elastic,
         state_origin: &Path,
     ) -> Result<api::Dynamics, String> {
-        api::dynamics(&self.model, state).map_err(|e| match e {
+        self.model.dynamics(state, elastic).map_err(|e| match e {
             DynamicsFailure::Engine(e) => format!(
                 "{}: {e} (model {})",
                 state_origin.display(),
@@ -160,6 +209,27 @@ impl NativeModel {
             DynamicsFailure::NonFinite => format!("{}: {e}", state_origin.display()),
         })
     }
+
+    /// The coupled modes, the message naming the state.
+    fn coupled(
+        &self,
+        state: &satsim_tree::State,
+        elastic: &Elastic,
+        state_origin: &Path,
+    ) -> Result<CoupledModes, String> {
+        self.model.modes(state, elastic).map_err(|e| {
+            format!(
+                "{}: {e} (model {})",
+                state_origin.display(),
+                self.origin.display()
+            )
+        })
+    }
+}
+
+/// numpy arrays of [`CoupledModes`].
+fn modes_out(py: Python<'_>, m: CoupledModes) -> PyResult<ModesOut<'_>> {
+    Ok((m.omega.into_pyarray(py), matrix(py, &m.shapes)?))
 }
 
 /// `(dof, mass_matrix, bias, acceleration, kinetic_energy)`.

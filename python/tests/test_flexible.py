@@ -1,14 +1,20 @@
 """Flexible bodies from Python (contract section 14): the elastic columns flow through
-satsim.run and satsim.Simulation, the modal coordinates are states (not inputs), and modes
-and linearize list them after the hinge rates."""
+satsim.run and satsim.Simulation, the modal coordinates are states (not inputs), modes
+and linearize list them after the hinge rates, and satsim.Model reads a flexible model: its
+dynamics (the command line's bits) and its coupled modes (a cantilever's are
+Euler-Bernoulli's)."""
 
 from __future__ import annotations
 
+import json
 import math
+import subprocess
 
 import numpy as np
+import pytest
 
 import satsim
+from conftest import EXAMPLES
 
 # A hub with a hinged panel whose beam has two modes; the panel's first mode starts deflected.
 SCENE = """
@@ -81,3 +87,146 @@ def test_modes_and_linearize_list_the_elastic_states(tmp_path):
     ]
     m = satsim.modes(SCENE, base_dir=tmp_path)
     assert any("eta_panel_1" in mode["shape"] for mode in m["modes"])
+
+
+# --- satsim.Model of a model with flexible bodies: dynamics and modes ---------------------
+
+FLEXIBLE_SATELLITE = EXAMPLES / "satellite_flexible.toml"
+
+# A state of the flexible satellite: every panel deformed or vibrating, torques on h3-h5.
+FLEX_STATE = {
+    "base": {"angular_velocity": [0.01, -0.02, 0.015], "velocity": [0.1, 0.0, -0.2]},
+    "hinges": {
+        "angle": [0.3, -0.2, 0.1, 1.2, -1.0],
+        "rate": [0.1, 0.2, -0.1, 0.5, -0.4],
+        "torque": [0.0, 0.0, 0.3, -0.5, 0.4],
+    },
+    "flexible": {
+        "panel1": {"eta": [0.02, -0.004, 0.001], "etadot": [0.1, 0.02, -0.01]},
+        "panel2": {"eta": [-0.01, 0.003, 0.0]},
+        "panel3": {"etadot": [-0.05, 0.0, 0.03]},
+    },
+}
+
+
+def test_a_flexible_model_has_the_rigid_dof_plus_its_modes():
+    flex = satsim.Model.from_file(FLEXIBLE_SATELLITE)
+    rigid = satsim.Model.from_file(EXAMPLES / "satellite.toml")
+    assert flex.flexible == {"panel1": 3, "panel2": 3, "panel3": 3}
+    assert rigid.flexible == {} and rigid.modal_frequencies == {}
+    assert flex.dof == rigid.dof + 9 == 20
+    assert flex.body_names == rigid.body_names and flex.hinge_names == rigid.hinge_names
+    assert math.isclose(flex.total_mass, rigid.total_mass, rel_tol=1e-12)
+    # Each strip (EI = 100, rho_A = 10, L = 1): 1.8751^2 sqrt(EI / (rho_A L^4)) / 2 pi.
+    hz = flex.modal_frequencies
+    assert list(hz) == ["panel1", "panel2", "panel3"]
+    for f in hz.values():
+        assert f.shape == (3,)
+        assert math.isclose(f[0], 3.516015268 * math.sqrt(10.0) / (2 * math.pi), rel_tol=1e-6)
+    # from_toml reads the same model.
+    text = FLEXIBLE_SATELLITE.read_text()
+    assert satsim.Model.from_toml(text).flexible == flex.flexible
+
+
+def test_a_flexible_models_dynamics_solve_their_equation_and_equal_the_command_line(cli, tmp_path):
+    m = satsim.Model.from_file(FLEXIBLE_SATELLITE)
+    d = m.dynamics(FLEX_STATE)
+    assert d["dof"] == 20
+    M, a, b = d["mass_matrix"], d["acceleration"], d["bias"]
+    assert M.shape == (20, 20) and a.shape == b.shape == (20,)
+    np.testing.assert_array_equal(M, M.T)
+    tau = np.zeros(20)
+    tau[6:11] = FLEX_STATE["hinges"]["torque"]
+    scale = max(np.abs(M @ a).max(), np.abs(b).max())
+    assert np.abs(M @ a + b - tau).max() <= 1e-10 * scale
+    # v = [omega, v, rates, etadot]: T = v' M v / 2.
+    f = FLEX_STATE["flexible"]
+    etadot = f["panel1"]["etadot"] + [0.0, 0.0, 0.0] + f["panel3"]["etadot"]
+    v = np.concatenate([
+        FLEX_STATE["base"]["angular_velocity"], FLEX_STATE["base"]["velocity"],
+        FLEX_STATE["hinges"]["rate"], etadot,
+    ])
+    assert math.isclose(d["kinetic_energy"], 0.5 * v @ M @ v, rel_tol=1e-12)
+    # The command line, on the same state file, to the last bit.
+    path = tmp_path / "flex_state.json"
+    path.write_text(json.dumps(FLEX_STATE))
+    out = subprocess.run(
+        [cli, "dynamics", "--model", FLEXIBLE_SATELLITE, "--state", path],
+        check=True, capture_output=True, text=True,
+    ).stdout
+    want = json.loads(out)
+    got = m.dynamics(path)
+    assert got["dof"] == want["dof"] == 20
+    for key in ("mass_matrix", "bias", "acceleration", "kinetic_energy"):
+        np.testing.assert_array_equal(bits(got[key]), bits(want[key]), err_msg=key)
+
+
+def test_an_undeformed_flexible_model_is_close_to_its_rigid_twin():
+    # satellite_flexible.toml differs from satellite.toml by the bending only (and the
+    # rounding of the panels' rigid inertia, 0.834 for 10/12): at eta = 0, the rigid block
+    # of the mass matrix is the rigid model's.
+    flex = satsim.Model.from_file(FLEXIBLE_SATELLITE).dynamics(EXAMPLES / "state.json")
+    rigid = satsim.Model.from_file(EXAMPLES / "satellite.toml").dynamics(EXAMPLES / "state.json")
+    M = rigid["mass_matrix"]
+    assert np.abs(flex["mass_matrix"][:11, :11] - M).max() < 1e-3 * np.abs(M).max()
+    assert math.isclose(flex["kinetic_energy"], rigid["kinetic_energy"], rel_tol=1e-5)
+
+
+def test_a_flexible_model_refuses_a_wrong_elastic_state_naming_it(tmp_path):
+    m = satsim.Model.from_file(FLEXIBLE_SATELLITE)
+    bad = {"hinges": {"angle": [0.0] * 5, "rate": [0.0] * 5},
+           "flexible": {"panel2": {"eta": [0.1, 0.2]}}}
+    with pytest.raises(satsim.SatsimError, match=r"flexible\.panel2\.eta: expected 3 values"):
+        m.dynamics(bad)
+    path = tmp_path / "bad.json"
+    path.write_text(json.dumps(bad, indent=2))
+    with pytest.raises(satsim.SatsimError) as e:
+        m.dynamics(path)
+    assert str(e.value).startswith(f"{path}:") and "expected 3 values" in str(e.value)
+    with pytest.raises(satsim.SatsimError, match="not flexible"):
+        m.modes({"flexible": {"bus": {"eta": [1.0]}}})
+
+
+# (beta_n L)^2, the roots of cos x cosh x = -1 squared: a clamped-free beam's omega_n with
+# EI = rho_A = L = 1.
+CLAMPED = [3.516015268, 22.03449187, 61.69721435]
+
+
+def test_a_cantilever_models_modes_are_euler_bernoullis():
+    m = satsim.Model.from_toml("""
+[base]
+kind = "fixed"
+[[body]]
+name = "beam"
+mass = 0.0
+inertia = [[0.1, 0.0, 0.0], [0.0, 0.1, 0.0], [0.0, 0.0, 0.1]]
+[body.flexible]
+beam = { root = [0.0, 0.0, 0.0], axis = [0.0, 1.0, 0.0], bend = [0.0, 0.0, 1.0],
+         length = 1.0, EI = 1.0, rho_A = 1.0, modes = 3 }
+""")
+    assert m.dof == 3 and m.flexible == {"beam": 3}
+    modes = m.modes({})
+    np.testing.assert_allclose(modes["omega"], CLAMPED, rtol=1e-4)
+    np.testing.assert_allclose(modes["frequencies_hz"], modes["omega"] / (2 * math.pi))
+    np.testing.assert_allclose(m.modal_frequencies["beam"], modes["frequencies_hz"], rtol=1e-12)
+    # A cantilever alone: M = 1, its own modes are the shapes.
+    np.testing.assert_allclose(np.abs(modes["shapes"]), np.eye(3), atol=1e-12)
+
+
+def test_a_flexible_models_coupled_modes_solve_k_x_equals_omega2_m_x():
+    m = satsim.Model.from_file(FLEXIBLE_SATELLITE)
+    modes = m.modes(FLEX_STATE)
+    w, X = modes["omega"], modes["shapes"]
+    assert w.shape == (9,) and X.shape == (20, 9)
+    assert np.all(np.diff(w) >= 0) and w[0] > 0
+    M = m.dynamics(FLEX_STATE)["mass_matrix"]
+    K = np.zeros((20, 20))
+    clamped = np.concatenate(list(m.modal_frequencies.values())) * 2 * math.pi
+    K[11:, 11:] = np.diag(clamped**2)
+    np.testing.assert_allclose(X.T @ M @ X, np.eye(9), atol=1e-9)
+    for k in range(9):
+        r = K @ X[:, k] - w[k] ** 2 * (M @ X[:, k])
+        assert np.abs(r).max() <= 1e-8 * w[k] ** 2
+    # A rigid model has none.
+    rigid = satsim.Model.from_file(EXAMPLES / "satellite.toml").modes(EXAMPLES / "state.json")
+    assert rigid["omega"].shape == (0,) and rigid["shapes"].shape == (11, 0)

@@ -1,9 +1,11 @@
 //! `satsim dynamics --model MODEL.toml --state STATE.json` (contract section 3): the mass
 //! matrix, the bias forces, the forward-dynamics acceleration (ABA) and the kinetic energy
-//! of one state, as one JSON object with every number at full `f64` precision.
+//! of one state, as one JSON object with every number at full `f64` precision. A model with
+//! flexible bodies (contract section 14) evaluates the flexible algorithms: its elastic
+//! coordinates follow the hinge rates, and the state file may give them (`flexible`).
 
-use super::{CliError, ModelAndState, ModelStateArgs, Output, rows, to_json};
-use satsim_tools::api::{Dynamics, DynamicsFailure, dynamics};
+use super::{CliError, ModelStateArgs, Output, rows, to_json};
+use satsim_tools::api::{Dynamics, DynamicsFailure, DynamicsModel};
 use serde::Serialize;
 
 /// The flags of `satsim dynamics`.
@@ -21,19 +23,16 @@ struct Json {
 
 /// Runs the command.
 pub fn run(args: &Args) -> Result<Output, CliError> {
-    let ModelAndState {
-        model_path,
-        state_path,
-        model,
-        state,
-    } = ModelAndState::read(args, "dynamics")?;
+    let (model_path, state_path) = (&args.model, &args.state);
+    let model = DynamicsModel::read(model_path)?;
+    let (state, elastic) = model.read_state(state_path)?;
     let Dynamics {
         dof,
         mass_matrix,
         bias,
         acceleration,
         kinetic_energy,
-    } = dynamics(&model, &state).map_err(|e| match e {
+    } = model.dynamics(&state, &elastic).map_err(|e| match e {
         DynamicsFailure::Engine(e) => CliError::Other(format!(
             "{}: {e} (model {})",
             state_path.display(),

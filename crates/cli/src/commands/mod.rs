@@ -173,8 +173,9 @@ pub struct ModelAndState {
 }
 
 /// Reads the rigid model file at `path` for `satsim <command>`. A model with flexible bodies
-/// (`[body.flexible]`) is refused at the body's line: `dynamics`, `preprint` and `bench`
-/// evaluate the rigid algorithms; a flexible model runs in a scene.
+/// (`[body.flexible]`) is refused at the body's line: `preprint` and `bench` evaluate the
+/// rigid algorithms (`dynamics` reads a flexible model with
+/// [`satsim_tools::api::DynamicsModel`]); a flexible model runs in a scene.
 pub fn read_rigid_model(path: &Path, command: &str) -> Result<satsim_tree::Model, CliError> {
     let e = match satsim_tree::io::read_model(path) {
         Ok(m) => return Ok(m),
@@ -196,7 +197,7 @@ pub fn read_rigid_model(path: &Path, command: &str) -> Result<satsim_tree::Model
             message: format!(
                 "body `{body}` is flexible: `satsim {command}` takes rigid models only; \
                  run a model with flexible bodies in a scene (`satsim run`, `satsim modes`, \
-                 `satsim linearize`)"
+                 `satsim linearize`) or with `satsim dynamics`"
             ),
         },
         None => e,

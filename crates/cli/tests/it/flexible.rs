@@ -2,7 +2,7 @@
 //! base against the analytic frequencies, of a free bus with a beam between the clamped and
 //! the free-free beam's, `[initial] flexible` and a state file's `flexible` (the run starts
 //! there and vibrates at the analytic frequency), bad elastic states exit 2 naming file and
-//! line, `dynamics` refuses a flexible model, and a campaign dispersing `EI` and `damping`.
+//! line, `dynamics` of a flexible model, and a campaign dispersing `EI` and `damping`.
 
 use crate::common;
 use common::{json, numbers, satsim_in};
@@ -283,8 +283,49 @@ fn bad_elastic_states_exit_2_naming_file_and_line() {
         &satsim_in(&dir, &["run", "j.toml"]),
         &["s.json:3", "expected 3 values"],
     );
-    // `dynamics` evaluates the rigid algorithms: it refuses a flexible model, at its line.
-    std::fs::write(dir.join("rest.json"), "{}").unwrap();
+    // `dynamics` takes the same state file: the elastic coordinates after the hinge rates.
+    std::fs::write(
+        dir.join("bent.json"),
+        "{\"flexible\": {\"beam\": {\"eta\": [0.01, -0.002, 0.0005], \"etadot\": [0.1, 0.0, 0.0]}}}",
+    )
+    .unwrap();
+    let o = satsim_in(
+        &dir,
+        &[
+            "dynamics",
+            "--model",
+            "cantilever.toml",
+            "--state",
+            "bent.json",
+        ],
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let d = json(&o);
+    assert_eq!(d["dof"], 3);
+    // A cantilever's mass matrix is the identity (mass-normalised modes); at eta its bias
+    // holds omega_k^2 eta_k and the damping (none here), so a = -omega^2 eta.
+    let m = d["mass_matrix"].as_array().unwrap();
+    for (i, row) in m.iter().enumerate() {
+        for (j, x) in numbers(row).iter().enumerate() {
+            assert!(
+                (x - f64::from(u8::from(i == j))).abs() < 1e-12,
+                "{i} {j}: {x}"
+            );
+        }
+    }
+    let eta = [0.01, -0.002, 0.0005];
+    for (k, (a, b)) in numbers(&d["acceleration"])
+        .iter()
+        .zip(numbers(&d["bias"]))
+        .enumerate()
+    {
+        let w = 2.0 * std::f64::consts::PI * beam_hz(BETA_L_CLAMPED[k], EI);
+        assert!((b / (w * w * eta[k]) - 1.0).abs() < 1e-6, "mode {k}: {b}");
+        assert!((a + b).abs() < 1e-9 * b.abs(), "mode {k}: {a} {b}");
+    }
+    let t = d["kinetic_energy"].as_f64().unwrap();
+    assert!((t - 0.5 * 0.1 * 0.1).abs() < 1e-15, "{t}");
+    // A wrong number of values is an error at the file's line.
     fails(
         &satsim_in(
             &dir,
@@ -293,13 +334,18 @@ fn bad_elastic_states_exit_2_naming_file_and_line() {
                 "--model",
                 "cantilever.toml",
                 "--state",
-                "rest.json",
+                "s.json",
             ],
         ),
+        &["s.json:3", "flexible.beam.eta: expected 3 values"],
+    );
+    // `preprint` and `bench` evaluate the rigid algorithms: they refuse it, at its line.
+    fails(
+        &satsim_in(&dir, &["bench", "--model", "cantilever.toml"]),
         &[
             "cantilever.toml:8",
             "flexible",
-            "satsim dynamics",
+            "satsim bench",
             "rigid models only",
         ],
     );

@@ -12,6 +12,7 @@
 //! one value per mode, each default zeros. The result is in [`FlexModel`]'s coordinate order:
 //! bodies in the model's depth-first order, modes from 1.
 
+use nalgebra::{DMatrix, DVector};
 use satsim_spacecraft::effects::section::reword;
 use satsim_tree::Model;
 use satsim_tree::flexible::FlexModel;
@@ -167,23 +168,25 @@ pub fn json_line(text: &str, body: &str) -> Option<usize> {
     Some(line_of(text, at))
 }
 
-/// RK4's stability limit on the imaginary axis: an undamped oscillation of angular frequency
-/// `ω` stays bounded for `ω h <= 2√2` (the largest `|λ h|` on the imaginary axis where
-/// `|1 + z + z²/2 + z³/6 + z⁴/24| <= 1`).
-pub const RK4_LIMIT: f64 = 2.0 * std::f64::consts::SQRT_2;
+/// The coupled undamped modes of the structure at `q`: `K x = ω² M(q) x`, `M` the flexible
+/// tree's mass matrix and `K` the modes' stiffness (`ωₖ²` on each elastic coordinate, zero on
+/// the rigid ones: hinge springs, geometric stiffening and the control left out).
+#[derive(Clone, Debug, PartialEq)]
+pub struct CoupledModes {
+    /// The angular frequencies `ω` (rad/s), ascending, one per elastic coordinate (the rigid
+    /// coordinates' zero frequencies left out).
+    pub omega: Vec<f64>,
+    /// The shapes, one column per frequency, in the generalised velocity's coordinates (rigid
+    /// `v…`, then `η̇…`): mass-normalised (`xᵀ M x = 1`), signed so that the elastic entry of
+    /// largest modulus is positive.
+    pub shapes: DMatrix<f64>,
+}
 
-/// The highest angular frequency (rad/s) of the structure at `q`: the largest `ω` with
-/// `K x = ω² M(q) x`, `M` the flexible tree's mass matrix and `K` the modes' stiffness
-/// (`ωₖ²` on each elastic coordinate, zero on the rigid ones: hinge springs, geometric
-/// stiffening and the control left out), and the elastic coordinate (index among them)
-/// that moves most in it. `None` without elastic coordinates or when `M` is not positive
-/// definite at `q`.
-pub fn highest_frequency(flex: &FlexModel, q: &[f64]) -> Option<(f64, usize)> {
-    use nalgebra::{DMatrix, SymmetricEigen};
+/// The eigenvalues `ω²` of `M⁻¹ K` at `q` (unsorted) and the matrix whose columns are their
+/// shapes (`xᵀ M x = 1`). `None` when `M` is not positive definite at `q`.
+fn eigen(flex: &FlexModel, q: &[f64]) -> Option<(DVector<f64>, DMatrix<f64>)> {
+    use nalgebra::SymmetricEigen;
     use satsim_tree::flexible::{FlexData, crba};
-    if flex.n_elastic() == 0 {
-        return None;
-    }
     let mut data = FlexData::new(flex);
     let m = crba(flex, &mut data, q).ok()?.clone();
     let n = m.nrows();
@@ -197,15 +200,59 @@ pub fn highest_frequency(flex: &FlexModel, q: &[f64]) -> Option<(f64, usize)> {
     // L⁻¹ K L⁻ᵀ: symmetric, with the eigenvalues of M⁻¹ K.
     let a = &l_inv * k * l_inv.transpose();
     let eig = SymmetricEigen::new((&a + a.transpose()) * 0.5);
-    let (top, &w2) = eig
-        .eigenvalues
-        .iter()
-        .enumerate()
-        .max_by(|a, b| a.1.total_cmp(b.1))?;
-    // The mode shape in the coordinates: x = L⁻ᵀ y.
-    let x = l_inv.transpose() * eig.eigenvectors.column(top);
+    // The mode shapes in the coordinates: x = L⁻ᵀ y.
+    let shapes = l_inv.transpose() * eig.eigenvectors;
+    Some((eig.eigenvalues, shapes))
+}
+
+/// The coupled undamped modes of `flex` at `q` ([`CoupledModes`]): empty without elastic
+/// coordinates; `None` when `M` is not positive definite at `q` or a result is not finite.
+pub fn coupled_modes(flex: &FlexModel, q: &[f64]) -> Option<CoupledModes> {
+    let n_elastic = flex.n_elastic();
+    if n_elastic == 0 {
+        return Some(CoupledModes {
+            omega: Vec::new(),
+            shapes: DMatrix::zeros(flex.nv(), 0),
+        });
+    }
+    let (w2, x) = eigen(flex, q)?;
+    let mut order: Vec<usize> = (0..w2.len()).collect();
+    order.sort_by(|a, b| w2[*a].total_cmp(&w2[*b]));
+    // `K` has rank n_elastic at most: the rigid coordinates' eigenvalues are the lowest.
+    let kept = &order[order.len() - n_elastic..];
+    let first = flex.rigid().nv();
+    let mut shapes = DMatrix::zeros(flex.nv(), n_elastic);
+    let mut omega = Vec::with_capacity(n_elastic);
+    for (c, &j) in kept.iter().enumerate() {
+        omega.push(w2[j].max(0.0).sqrt());
+        let col = x.column(j);
+        let largest = (first..flex.nv())
+            .max_by(|a, b| col[*a].abs().total_cmp(&col[*b].abs()))
+            .expect("an elastic coordinate");
+        let sign = if col[largest] < 0.0 { -1.0 } else { 1.0 };
+        shapes.set_column(c, &(col * sign));
+    }
+    let finite = omega.iter().chain(shapes.iter()).all(|v| v.is_finite());
+    finite.then_some(CoupledModes { omega, shapes })
+}
+
+/// RK4's stability limit on the imaginary axis: an undamped oscillation of angular frequency
+/// `ω` stays bounded for `ω h <= 2√2` (the largest `|λ h|` on the imaginary axis where
+/// `|1 + z + z²/2 + z³/6 + z⁴/24| <= 1`).
+pub const RK4_LIMIT: f64 = 2.0 * std::f64::consts::SQRT_2;
+
+/// The highest angular frequency (rad/s) of the structure at `q` (the highest of
+/// [`coupled_modes`]) and the elastic coordinate (index among them) that moves most in it.
+/// `None` without elastic coordinates or when `M` is not positive definite at `q`.
+pub fn highest_frequency(flex: &FlexModel, q: &[f64]) -> Option<(f64, usize)> {
+    if flex.n_elastic() == 0 {
+        return None;
+    }
+    let (w2, x) = eigen(flex, q)?;
+    let (top, &w2) = w2.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1))?;
+    let first = flex.rigid().nv();
     let (e, _) = (0..flex.n_elastic())
-        .map(|e| (e, x[first + e].abs()))
+        .map(|e| (e, x[(first + e, top)].abs()))
         .max_by(|a, b| a.1.total_cmp(&b.1))?;
     (w2 > 0.0 && w2.is_finite()).then(|| (w2.sqrt(), e))
 }
