@@ -80,7 +80,8 @@ def _is_scene_text(scene: str) -> bool:
 
 
 class Model:
-    """A hinged tree (contract section 1), read and checked. Immutable.
+    """A hinged tree (contract section 1), read and checked. Immutable. Its bodies may be
+    flexible (``[body.flexible]``, contract section 14).
 
     Build it with :meth:`from_file` or :meth:`from_toml`; bad input raises
     :class:`SatsimError` with the command line's message (file, line, key).
@@ -108,7 +109,8 @@ class Model:
 
     @property
     def dof(self) -> int:
-        """Degrees of freedom: 6 + hinges for a free base, the hinges for a fixed one."""
+        """Degrees of freedom: 6 + hinges for a free base, the hinges for a fixed one, plus
+        the flexible bodies' modes."""
         return self._native.dof
 
     @property
@@ -136,36 +138,80 @@ class Model:
         """The model file's path, or ``<model text>``."""
         return os.fspath(self._native.origin)
 
+    @property
+    def flexible(self) -> Dict[str, int]:
+        """The flexible bodies (contract section 14) and their numbers of modes, in the
+        model's order (parents before children); ``{}`` for a rigid model. The elastic
+        coordinates follow the hinge rates in this order, each body's mode 1 first."""
+        return dict(self._native.flexible)
+
+    @property
+    def modal_frequencies(self) -> Dict[str, np.ndarray]:
+        """The flexible bodies' clamped modal frequencies (Hz), mode 1 first: each body's
+        own modes with its hinge and the rest of the tree held still (``ωₖ / 2π``)."""
+        return {
+            body: np.asarray(hz, dtype=np.float64)
+            for body, hz in self._native.modal_frequencies
+        }
+
+    def _state_call(self, state: Union[PathLike, str, Mapping[str, Any]], what: str) -> Any:
+        """Calls the native ``<what>_file`` or ``<what>_json`` with ``state``."""
+        if isinstance(state, Mapping):
+            text = json.dumps(state, default=_json_default)
+            return getattr(self._native, f"{what}_json")(text, STATE_DICT)
+        if isinstance(state, str) and state.lstrip().startswith("{"):
+            return getattr(self._native, f"{what}_json")(state, STATE_TEXT)
+        if isinstance(state, (str, os.PathLike)):
+            return getattr(self._native, f"{what}_file")(os.fspath(state))
+        raise TypeError(
+            "state must be a path, a state file's JSON text or a dict, "
+            f"got {type(state).__name__}"
+        )
+
     def dynamics(self, state: Union[PathLike, str, Mapping[str, Any]]) -> Dict[str, Any]:
         """The dynamics of one state, as ``satsim dynamics`` (contract section 3).
 
         ``state`` is a state file's path, a state file's JSON text (a string starting with
         ``{``) or a dict with the state file's keys (lists or numpy arrays), for example
-        ``{"hinges": {"angle": [...], "rate": [...]}}``.
+        ``{"hinges": {"angle": [...], "rate": [...]}}``. With flexible bodies it may give
+        their elastic state: ``{"flexible": {"panel1": {"eta": [...], "etadot": [...]}}}``
+        (default zeros).
 
         Returns a dict: ``dof`` (int), ``mass_matrix`` (``dof x dof`` float64 array),
         ``bias`` and ``acceleration`` (float64 arrays of length ``dof``) and
         ``kinetic_energy`` (float, J), with ``mass_matrix @ acceleration + bias == tau``.
+        With flexible bodies the modes follow the hinge rates (see :attr:`flexible`), the
+        bias includes the modal stiffness and damping forces, and ``tau`` is zero on them.
         """
-        if isinstance(state, Mapping):
-            text = json.dumps(state, default=_json_default)
-            out = self._native.dynamics_json(text, STATE_DICT)
-        elif isinstance(state, str) and state.lstrip().startswith("{"):
-            out = self._native.dynamics_json(state, STATE_TEXT)
-        elif isinstance(state, (str, os.PathLike)):
-            out = self._native.dynamics_file(os.fspath(state))
-        else:
-            raise TypeError(
-                "state must be a path, a state file's JSON text or a dict, "
-                f"got {type(state).__name__}"
-            )
-        dof, mass_matrix, bias, acceleration, kinetic_energy = out
+        dof, mass_matrix, bias, acceleration, kinetic_energy = self._state_call(
+            state, "dynamics"
+        )
         return {
             "dof": dof,
             "mass_matrix": mass_matrix,
             "bias": bias,
             "acceleration": acceleration,
             "kinetic_energy": kinetic_energy,
+        }
+
+    def modes(self, state: Union[PathLike, str, Mapping[str, Any]]) -> Dict[str, Any]:
+        """The coupled undamped structural modes at the configuration of ``state`` (as
+        :meth:`dynamics` takes it): the solutions of ``K x = ω² M(q) x``, ``M`` the mass
+        matrix of :meth:`dynamics` and ``K`` the modal stiffness (``ωₖ²`` on each elastic
+        coordinate, zero on the rigid ones: hinge springs, geometric stiffening, damping and
+        any control left out). The velocities in ``state`` are not used.
+
+        Returns a dict: ``omega`` (rad/s, ascending, one per elastic coordinate: the rigid
+        coordinates' zero frequencies left out), ``frequencies_hz`` (``omega / 2π``) and
+        ``shapes`` (``dof x len(omega)``, one column per mode, in the generalised velocity's
+        coordinates, mass-normalised ``xᵀ M x = 1``, the largest elastic entry positive).
+        Empty for a rigid model.
+        """
+        omega, shapes = self._state_call(state, "modes")
+        return {
+            "omega": omega,
+            "frequencies_hz": omega / (2.0 * np.pi),
+            "shapes": shapes,
         }
 
     def __repr__(self) -> str:
@@ -714,13 +760,17 @@ class Simulation:
             m["gyro_x"]    # wx
         """
         out: Dict[str, Union[float, List[float]]] = {}
-        suffixes3 = ("_x", "_y", "_z")
-        suffixes4 = ("_q_w", "_q_x", "_q_y", "_q_z")
+        # As the trajectory's columns: a quaternion, a GPS's position and velocity, a
+        # vector; a single value (a coarse Sun sensor, a star tracker's `_valid`) has none.
+        suffixes = {
+            1: (),
+            4: ("_q_w", "_q_x", "_q_y", "_q_z"),
+            6: ("_x", "_y", "_z", "_vx", "_vy", "_vz"),
+        }
         for name, values in self._native.measure():
             reading = [float(v) for v in values]
             out[name] = reading
-            suffixes = suffixes4 if len(reading) == 4 else suffixes3
-            for suffix, v in zip(suffixes, reading):
+            for suffix, v in zip(suffixes.get(len(reading), ("_x", "_y", "_z")), reading):
                 out[name + suffix] = v
         return out
 

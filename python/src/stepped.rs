@@ -86,12 +86,14 @@ fn last_line(py: Python<'_>, e: &PyErr) -> String {
 }
 
 /// The keys of `measure()`'s dict for one sensor: its name, then one per value (as
-/// `satsim.Simulation.measure`: `_q_w`.. for a star tracker's quaternion, `_x`.. else).
+/// `satsim.Simulation.measure`: `_q_w`.. for a star tracker's quaternion, `_x`.. `_vz` for a
+/// GPS's position and velocity, `_x`.. for a vector, none for a single value).
 fn sensor_keys<'py>(py: Python<'py>, name: &str, n: usize) -> Vec<Bound<'py, PyString>> {
-    let suffixes: &[&str] = if n == 4 {
-        &["_q_w", "_q_x", "_q_y", "_q_z"]
-    } else {
-        &["_x", "_y", "_z"]
+    let suffixes: &[&str] = match n {
+        1 => &[],
+        4 => &["_q_w", "_q_x", "_q_y", "_q_z"],
+        6 => &["_x", "_y", "_z", "_vx", "_vy", "_vz"],
+        _ => &["_x", "_y", "_z"],
     };
     let mut keys = vec![PyString::intern(py, name)];
     keys.extend(

@@ -19,6 +19,10 @@
 //! - `sun.rs`: the Sun's position (truncated VSOP87, Meeus);
 //! - `shadow.rs`: the Earth's shadow, conical or cylindrical (Montenbruck & Gill 3.4.2);
 //! - `earth.rs`: GCRF to ITRF (IAU-1976 precession, IAU-82 GMST) and the Earth's spin;
+//! - `moon.rs`: the Moon's position (truncated ELP-2000/82, Meeus chapter 47);
+//! - `gravity.rs`: the Earth's spherical-harmonic gravity (EGM2008 to degree and order 70,
+//!   the coefficients in `data/egm2008_70.gfc`) and the third bodies' point-mass
+//!   perturbations;
 //! - `magnetic/`: the geomagnetic field, IGRF-14 (`igrf.rs`, the coefficients in
 //!   `data/igrf14coeffs.txt`) or its tilted dipole (`dipole.rs`);
 
@@ -28,7 +32,9 @@
 pub mod atmosphere;
 pub mod earth;
 pub mod epoch;
+pub mod gravity;
 pub mod magnetic;
+pub mod moon;
 pub mod shadow;
 pub mod sun;
 

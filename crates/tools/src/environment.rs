@@ -6,13 +6,18 @@
 //! The environment quantities come from the same models the effects use: the shadow from
 //! `[effects.solar_radiation]`'s model (conical without it), the density from
 //! `[effects.drag]`'s atmosphere (0 without it), the field from `[effects.magnetic]`'s
-//! (zeros without it).
+//! (zeros without it). With an orbit, `gravity` is the Earth's gravitational acceleration
+//! in the orbit's field (point mass, J2 or EGM2008's harmonics: [`Orbit::gravity`]); with
+//! third bodies, `moon` is the Moon's position (when it is one of them) and `third_body` their
+//! perturbing acceleration ([`Orbit::third_body`]), from the same tracks the orbit follows.
+//! The gravity-gradient torque in `effects` keeps the point-mass gradient (`μ/r³`) whatever
+//! the orbit's field.
 
 use crate::scene::Scene;
 use satsim_environment::shadow::{ShadowModel, shadow_fraction};
 use satsim_environment::sun::SunTrack;
 use satsim_integrate::SystemError;
-use satsim_spacecraft::effects::{Drag, Magnetic, SolarRadiation};
+use satsim_spacecraft::effects::{Drag, Magnetic, Orbit, SolarRadiation};
 use satsim_spacecraft::simulation::{RunError, SimError};
 use satsim_tree::spatial::Vec3;
 use std::convert::Infallible;
@@ -60,6 +65,13 @@ pub struct Environment {
     pub density: Option<f64>,
     /// The geomagnetic field (T, GCRF; zeros without the magnetic effect), with an orbit.
     pub magnetic_field: Option<Vec3>,
+    /// The Earth's gravitational acceleration at the position (m/s², GCRF) in the orbit's
+    /// field, with an orbit.
+    pub gravity: Option<Vec3>,
+    /// The Moon's position from the Earth's centre (m, GCRF), when it is a third body.
+    pub moon: Option<Vec3>,
+    /// The third bodies' perturbing acceleration (m/s², GCRF), when the orbit has any.
+    pub third_body: Option<Vec3>,
     /// Every enabled effect that applies loads, in the order they run.
     pub effects: Vec<EffectReport>,
 }
@@ -149,6 +161,20 @@ pub fn environment(scene: &Scene, at: f64) -> Result<Environment, EnvironmentErr
             .get::<Magnetic>()
             .map_or(Vec3::zeros(), |m| m.field().field_gcrf(t, &r))
     });
+    let orbit_effect = scene.effects.get::<Orbit>();
+    let gravity = match (orbit, orbit_effect) {
+        (Some((r, _)), Some(o)) => Some(o.gravity(t, &r)?),
+        _ => None,
+    };
+    let (moon, third_body) = match (orbit, orbit_effect) {
+        (Some((r, _)), Some(o)) if o.third_bodies.any() => {
+            // A fresh copy: its tracks' knots depend on t only, so it sees the orbit's bits.
+            let mut o = o.clone();
+            let (_, moon) = o.third_body_positions(t);
+            (moon, Some(o.third_body(t, &r)?))
+        }
+        _ => (None, None),
+    };
     Ok(Environment {
         t,
         epoch: scene.epoch.map(|e| e.to_string()),
@@ -157,6 +183,9 @@ pub fn environment(scene: &Scene, at: f64) -> Result<Environment, EnvironmentErr
         shadow: sun.map(|(_, _, nu)| nu),
         density,
         magnetic_field,
+        gravity,
+        moon,
+        third_body,
         effects,
     })
 }

@@ -1,5 +1,6 @@
 //! `satsim environment SCENE.toml [--at T]` (contract section 12): the orbit, the Sun and
-//! the Earth's shadow, the density, the geomagnetic field, and every enabled effect's loads
+//! the Earth's shadow, the density, the geomagnetic field, the gravity (and the Moon and the
+//! third bodies' pull, when the orbit has them), and every enabled effect's loads
 //! on every body and as generalised forces, at the state the scene's run reaches at `T`
 //! (default 0, the initial state), as one JSON object. The work is
 //! [`satsim_tools::environment`]'s.
@@ -67,6 +68,15 @@ impl Serialize for Json<'_> {
         }
         if let Some(b) = &e.magnetic_field {
             m.serialize_entry("magnetic_field", &v(b))?;
+        }
+        if let Some(g) = &e.gravity {
+            m.serialize_entry("gravity", &v(g))?;
+        }
+        if let Some(r) = &e.moon {
+            m.serialize_entry("moon", &v(r))?;
+        }
+        if let Some(a) = &e.third_body {
+            m.serialize_entry("third_body", &v(a))?;
         }
         m.serialize_entry("effects", &Effects(&e.effects))?;
         m.end()

@@ -131,3 +131,32 @@ fn bad_input_exits_2_naming_the_file() {
         assert!(err.contains(needle), "{args:?}: `{needle}` not in {err}");
     }
 }
+
+#[test]
+fn environment_prints_the_gravity_the_moon_and_the_third_bodies_pull() {
+    let dir = setup("gravity");
+    let path = dir.join("scenes/orbit.toml");
+    let text = std::fs::read_to_string(&path).unwrap();
+    // Without `gravity`: today's point mass, and no third bodies.
+    let v = json(&satsim_in(&dir, &["environment", "scenes/orbit.toml"]));
+    let r = vec3(&v["position"]);
+    let g = vec3(&v["gravity"]);
+    let point = 3.986004418e14 / norm(r).powi(2);
+    assert!((norm(g) - point).abs() < 1e-12 * point, "{g:?}");
+    assert!(v.get("moon").is_none() && v.get("third_body").is_none());
+    let text = text.replacen(
+        "model = \"kepler\"",
+        "gravity = { model = \"egm2008\", degree = 20, order = 20 }\nthird_body = [\"sun\", \"moon\"]",
+        1,
+    );
+    std::fs::write(&path, text).unwrap();
+    let v = json(&satsim_in(&dir, &["environment", "scenes/orbit.toml"]));
+    // The harmonics change the pull by about 1e-3 (J2) and turn it off the vertical.
+    let g = vec3(&v["gravity"]);
+    let change = (norm(g) - point).abs() / point;
+    assert!(change > 1e-4 && change < 3e-3, "{change}");
+    let moon = norm(vec3(&v["moon"]));
+    assert!(moon > 356e6 && moon < 407e6, "{moon}");
+    let a = norm(vec3(&v["third_body"]));
+    assert!(a > 1e-7 && a < 3e-6, "{a}");
+}

@@ -1,6 +1,8 @@
 //! The environment's tests: one binary (one link), one module per subject.
 
 mod earth;
+mod gravity;
 mod magnetic;
+mod moon;
 mod shadow;
 mod sun;

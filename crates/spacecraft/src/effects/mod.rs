@@ -51,7 +51,7 @@ pub use hinge_control::{HingeControl, HingeProfile};
 pub use hinge_springs::HingeSprings;
 pub use hinge_stops::{HingeStop, HingeStops, StopAction};
 pub use magnetic::Magnetic;
-pub use orbit::{Elements, Orbit, OrbitModel};
+pub use orbit::{Elements, Orbit, OrbitModel, ThirdBodies};
 pub use reaction_wheels::{ReactionWheels, Wheel};
 pub use registry::{AnyEffect, EffectSet, Registry, SceneEffect, needs_met};
 pub use sampling::Sampling;

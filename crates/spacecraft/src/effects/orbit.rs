@@ -1,6 +1,13 @@
-//! The orbit of the system's centre of mass: Keplerian (preprint eq. 17) or J2-perturbed
-//! (eq. 18 with `F_per` the J2 zonal acceleration). States: position `r` and velocity `v`,
-//! inertial (Earth-centred, Z along the Earth's pole), SI units.
+//! The orbit of the system's centre of mass: Keplerian (preprint eq. 17), J2-perturbed
+//! (eq. 18 with `F_per` the J2 zonal acceleration), or in the Earth's spherical-harmonic field
+//! ([`Orbit::harmonics`]: EGM2008 to a chosen degree and order, evaluated in the Earth-fixed
+//! frame at the epoch), optionally with the Sun's and the Moon's point-mass perturbations
+//! ([`Orbit::third_bodies`]). States: position `r` and velocity `v`, inertial (GCRF:
+//! Earth-centred, Z along the Earth's pole), SI units.
+//!
+//! The gravity-gradient torque ([`super::gravity_gradient`]) keeps the point-mass field's
+//! gradient (`μ/r³` with the orbit's `mu`) whatever the orbit's field: J2's and the
+//! harmonics' gradients are about 1e-3 of it, the third bodies' 1e-7 (LEO) to 1e-5 (GEO).
 //!
 //! The attitude and hinge motion are integrated in the frame that translates with the centre
 //! of mass (free-falling, not rotating); the orbit effect carries that frame's motion. To the
@@ -14,8 +21,13 @@
 
 use super::{Context, Effect, Forces, OrbitState};
 use nalgebra::UnitQuaternion;
+use satsim_environment::Epoch;
+use satsim_environment::gravity::{HarmonicField, MU_MOON, MU_SUN, third_body_acceleration};
+use satsim_environment::moon::MoonTrack;
+use satsim_environment::sun::SunTrack;
 use satsim_integrate::SystemError;
 use satsim_tree::spatial::Vec3;
+use std::sync::Arc;
 
 /// Earth's gravitational parameter μ (m³/s², EGM96/WGS-84).
 pub const MU_EARTH: f64 = 3.986004418e14;
@@ -85,11 +97,49 @@ impl Elements {
     }
 }
 
+/// Which third bodies perturb the orbit (point masses, [`third_body_acceleration`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub struct ThirdBodies {
+    /// The Sun ([`MU_SUN`], position from [`SunTrack`]).
+    pub sun: bool,
+    /// The Moon ([`MU_MOON`], position from [`MoonTrack`]).
+    pub moon: bool,
+}
+
+impl ThirdBodies {
+    /// Whether any is on.
+    pub fn any(&self) -> bool {
+        self.sun || self.moon
+    }
+}
+
+/// The Sun's and the Moon's tracks (caches: knots that depend only on `t`, so two orbits
+/// with the same settings compare equal whatever their caches hold).
+#[derive(Clone, Debug, Default)]
+struct Tracks {
+    sun: Option<SunTrack>,
+    moon: Option<MoonTrack>,
+}
+
+impl PartialEq for Tracks {
+    fn eq(&self, _: &Self) -> bool {
+        true
+    }
+}
+
 /// The orbit effect.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Orbit {
-    /// Kepler or J2.
+    /// Kepler or J2 (the Earth's field when [`Orbit::harmonics`] is `None`).
     pub model: OrbitModel,
+    /// The Earth's spherical-harmonic field (GM and radius its own), which replaces `model`'s
+    /// when set; it needs [`Orbit::epoch`]. Give `mu` the field's GM too (the scene reader
+    /// does): the elements' conversion and the gravity-gradient torque use `mu`.
+    pub harmonics: Option<Arc<HarmonicField>>,
+    /// The third bodies; any needs [`Orbit::epoch`].
+    pub third_bodies: ThirdBodies,
+    /// t = 0 of the run: the Earth's orientation and the third bodies' positions.
+    pub epoch: Option<Epoch>,
     /// Gravitational parameter (m³/s²).
     pub mu: f64,
     /// Equatorial radius used by J2 (m).
@@ -100,6 +150,7 @@ pub struct Orbit {
     pub r0: Vec3,
     /// Initial velocity (m/s, inertial).
     pub v0: Vec3,
+    tracks: Tracks,
 }
 
 impl Orbit {
@@ -112,6 +163,10 @@ impl Orbit {
             j2: J2_EARTH,
             r0,
             v0,
+            harmonics: None,
+            third_bodies: ThirdBodies::default(),
+            epoch: None,
+            tracks: Tracks::default(),
         }
     }
     /// An Earth orbit from classical elements.
@@ -119,7 +174,7 @@ impl Orbit {
         let (r, v) = el.to_cartesian(MU_EARTH);
         Self::new(model, r, v)
     }
-    /// The gravitational acceleration at `r` (inertial).
+    /// The gravitational acceleration of `model` (Kepler or J2) at `r` (inertial).
     pub fn acceleration(&self, r: &Vec3) -> Vec3 {
         let r2 = r.norm_squared();
         let rn = r2.sqrt();
@@ -134,6 +189,60 @@ impl Orbit {
             );
         }
         a
+    }
+    /// The Earth's gravitational acceleration (m/s², GCRF) at `r` (GCRF) at time `t`: the
+    /// harmonic field's, turned to and from the Earth-fixed frame at `epoch + t`, when
+    /// [`Orbit::harmonics`] is set, otherwise [`Orbit::acceleration`].
+    pub fn gravity(&self, t: f64, r: &Vec3) -> Result<Vec3, SystemError> {
+        match (&self.harmonics, self.epoch) {
+            (None, _) => Ok(self.acceleration(r)),
+            (Some(field), Some(epoch)) => Ok(field.acceleration_gcrf(epoch, t, r)),
+            (Some(_), None) => Err(SystemError::new(
+                "orbit: the harmonic gravity field needs an epoch (the Earth's orientation)",
+            )),
+        }
+    }
+    /// The third bodies' positions (m, GCRF, from the Earth's centre) at `t`: the Sun's and
+    /// the Moon's, each when it is on (`None` when off, or without an epoch).
+    pub fn third_body_positions(&mut self, t: f64) -> (Option<Vec3>, Option<Vec3>) {
+        let Some(epoch) = self.epoch else {
+            return (None, None);
+        };
+        let tracks = &mut self.tracks;
+        let sun = self.third_bodies.sun.then(|| {
+            tracks
+                .sun
+                .get_or_insert_with(|| SunTrack::new(epoch))
+                .position(t)
+        });
+        let moon = self.third_bodies.moon.then(|| {
+            tracks
+                .moon
+                .get_or_insert_with(|| MoonTrack::new(epoch))
+                .position(t)
+        });
+        (sun, moon)
+    }
+    /// The third bodies' perturbing acceleration (m/s², GCRF) at `r` (GCRF) at `t`: the sum
+    /// of [`third_body_acceleration`] over those on (zero when none is).
+    pub fn third_body(&mut self, t: f64, r: &Vec3) -> Result<Vec3, SystemError> {
+        if !self.third_bodies.any() {
+            return Ok(Vec3::zeros());
+        }
+        if self.epoch.is_none() {
+            return Err(SystemError::new(
+                "orbit: the third bodies need an epoch (their positions)",
+            ));
+        }
+        let (sun, moon) = self.third_body_positions(t);
+        let mut a = Vec3::zeros();
+        if let Some(s) = sun {
+            a += third_body_acceleration(MU_SUN, &s, r);
+        }
+        if let Some(m) = moon {
+            a += third_body_acceleration(MU_MOON, &m, r);
+        }
+        Ok(a)
     }
     /// Roll, pitch and yaw (rad) of `attitude` (bus to inertial) relative to the local
     /// orbital frame of the orbit state `own` (see [`Effect::output_columns`]).
@@ -184,7 +293,7 @@ impl Effect for Orbit {
     }
     fn apply(
         &mut self,
-        _ctx: &Context,
+        ctx: &Context,
         _forces: &mut Forces,
         own: &[f64],
         own_dot: &mut [f64],
@@ -195,7 +304,7 @@ impl Effect for Orbit {
                 "orbit: the centre of mass reached the Earth's centre",
             ));
         }
-        let a = self.acceleration(&r);
+        let a = self.gravity(ctx.t, &r)? + self.third_body(ctx.t, &r)?;
         own_dot[..3].copy_from_slice(&own[3..6]);
         own_dot[3..].copy_from_slice(a.as_slice());
         Ok(())

@@ -4,7 +4,8 @@
 //! # Kinds
 //!
 //! - **`"mekf"`** ([`Aiding::StarTrackers`]): the MEKF on the gyro and one or more star
-//!   trackers (attitude updates).
+//!   trackers (attitude updates). A tracker's sample that its exclusion angles flagged
+//!   invalid ([`Sensor::valid`]) is skipped: no update, as if it had not sampled.
 //! - **`"sun_mag"`**, the safe mode's ([`Aiding::SunMag`]): the same MEKF updated with two
 //!   directions instead, the Sun sensor's Sun direction and the magnetometer's field, against
 //!   the on-board models of both at the orbit's position (the Sun's ephemeris of the Sun
@@ -160,13 +161,15 @@ impl Estimator {
         }
         self.seen_gyro = g.samples_taken();
         let gyro = vector(g.last_reading());
-        // An aiding sensor's reading counts when it sampled now (since the last look).
+        // An aiding sensor's reading counts when it sampled now (since the last look) and
+        // the reading is valid (not a star tracker's excluded one, which holds an old one).
         let fresh: Vec<Option<&[f64]>> = self
             .aids
             .iter()
             .zip(&self.seen)
             .map(|(&i, &seen)| {
-                (sensors[i].samples_taken() > seen).then(|| sensors[i].last_reading())
+                (sensors[i].samples_taken() > seen && sensors[i].valid())
+                    .then(|| sensors[i].last_reading())
             })
             .collect();
         let result = self.step(t, gyro, &fresh, sensors, orbit);
@@ -352,5 +355,49 @@ pub(crate) mod tests {
         let mut empty = Estimator::new(spec);
         empty.step(0.0, [0.0; 3], &[None], &[], None).unwrap();
         assert!(empty.filter.is_none());
+    }
+
+    #[test]
+    fn a_star_tracker_reading_flagged_invalid_does_not_update_the_filter() {
+        use crate::sensors::star_tracker::Exclusion;
+        use crate::sensors::{Gyro, StarTracker};
+        let spec = spec();
+        let gyro = Gyro::new(1e-5, 1e-7, nalgebra::Vector3::zeros());
+        let tracker = StarTracker::from_arcsec([2.0; 3]).with_exclusion(Exclusion {
+            sun: None,
+            earth: Some(0.3),
+        });
+        let mut sensors = vec![
+            Sensor::new("gyro", 0, 0.1, Kind::Gyro(gyro)).unwrap(),
+            Sensor::new("st", 0, 0.1, Kind::StarTracker(tracker)).unwrap(),
+        ];
+        let q = [0.6, 0.8, 0.0, 0.0];
+        let w = [1e-3, 0.0, 0.0];
+        let mut e = Estimator::new(spec.clone());
+        // Excluded at the first sample: nothing to start from.
+        sensors[0].latch(&w, true);
+        sensors[1].latch(&q, false);
+        assert!(e.sample(0.0, &sensors, None).unwrap());
+        assert!(e.filter.is_none());
+        // Valid at the next: it starts there, and updates.
+        sensors[0].latch(&w, true);
+        sensors[1].latch(&q, true);
+        assert!(e.sample(0.1, &sensors, None).unwrap());
+        let mut want = Mekf::new(spec.params, q, [0.0; 3])
+            .unwrap()
+            .with_gyro_model(GyroModel::Sampled);
+        want.update_attitude(q, [1e-5; 3]).unwrap();
+        assert_eq!(e.filter.as_ref(), Some(&want));
+        // Excluded again, holding a valid reading: propagation only, no update.
+        sensors[0].latch(&w, true);
+        sensors[1].latch(&[0.0, 1.0, 0.0, 0.0], false);
+        assert_eq!(sensors[1].last_reading(), q);
+        assert!(e.sample(0.2, &sensors, None).unwrap());
+        want.propagate(w, 0.1).unwrap();
+        assert_eq!(e.filter.as_ref(), Some(&want));
+        // The same sample valid would have updated it.
+        let mut updated = want.clone();
+        updated.update_attitude(q, [1e-5; 3]).unwrap();
+        assert_ne!(updated, want);
     }
 }

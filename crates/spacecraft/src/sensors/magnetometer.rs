@@ -1,4 +1,5 @@
-//! [`Magnetometer`]: the geomagnetic field at the centre of mass in the body's axes (T), plus
+//! [`Magnetometer`]: the geomagnetic field at the centre of mass in the sensor's axes (T:
+//! the body's, turned by its [misalignment](super::mounting) when it has one), plus
 //! white noise `N(0, noise)` per axis; the field model and epoch are those of the scene's
 //! `[effects.magnetic]`, so that without noise the reading on the root body is that
 //! effect's `magnetic_field_*` columns.
@@ -20,7 +21,7 @@ impl Magnetometer {
         &self,
         pose: &Pose,
         d: &mut Draws,
-        out: &mut [f64; 4],
+        out: &mut [f64; 6],
     ) -> Result<(), String> {
         let orbit = pose
             .orbit

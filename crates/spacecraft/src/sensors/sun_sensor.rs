@@ -1,11 +1,12 @@
-//! [`SunSensor`]: the unit vector from the spacecraft to the Sun, in the body's axes.
+//! [`SunSensor`]: the unit vector from the spacecraft to the Sun, in the sensor's axes (the
+//! body's, turned by its [misalignment](super::mounting) when it has one).
 //!
 //! The Sun is [`sun_position`] (from the scene's `epoch`), seen from the centre of mass (the
 //! parallax over the spacecraft is negligible); the Earth's shadow is [`shadow_fraction`]
 //! with the solar-pressure effect's model when it is enabled, else the conical one. In umbra
 //! (lit fraction 0) the reading is zeros; with any part of the Sun's disk visible (penumbra
 //! included) it is the unit vector, turned by a small random rotation `δθ_i ~ N(0, noise)`
-//! about the body's axes.
+//! about the sensor's axes.
 
 use super::{Draws, Pose};
 use nalgebra::UnitQuaternion;
@@ -21,7 +22,7 @@ pub struct SunSensor {
     pub epoch: Epoch,
     /// The Earth's shadow.
     pub shadow: ShadowModel,
-    /// Standard deviation of the error rotation about each body axis (rad).
+    /// Standard deviation of the error rotation about each sensor axis (rad).
     pub noise: f64,
 }
 
@@ -30,7 +31,7 @@ impl SunSensor {
         &self,
         pose: &Pose,
         d: &mut Draws,
-        out: &mut [f64; 4],
+        out: &mut [f64; 6],
     ) -> Result<(), String> {
         let orbit = pose
             .orbit

@@ -2,4 +2,5 @@
 
 mod flexible;
 mod integrators;
+mod orbit_fields;
 mod physics;

@@ -192,6 +192,14 @@ pub struct OrbitFile {
     /// `"kepler"` (default) or `"j2"`.
     #[serde(default)]
     pub model: Option<Spanned<String>>,
+    /// The Earth's field: `"point"`, `"j2"`, `"egm2008"`, or a table
+    /// `{ model = "egm2008", degree = 20, order = 20 }` (replaces `model`; see
+    /// `scene/orbit.rs`).
+    #[serde(default)]
+    pub gravity: Option<Spanned<toml::Value>>,
+    /// Point-mass third bodies: `["sun", "moon"]`.
+    #[serde(default)]
+    pub third_body: Option<Spanned<Vec<Spanned<String>>>>,
     /// Altitude of a circular orbit above R_E (m): an alternative to `semi_major_axis`.
     #[serde(default)]
     pub altitude: Option<Spanned<f64>>,

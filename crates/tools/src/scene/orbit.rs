@@ -1,12 +1,27 @@
 //! `[orbit]`: the orbit of the centre of mass, by elements or by position and velocity
-//! (inertial frame, SI units; angles in degrees in the file).
+//! (inertial frame, SI units; angles in degrees in the file), and the fields it moves in.
+//!
+//! The Earth's field is `model` (`"kepler"`, the default, or `"j2"`, as before) or `gravity`
+//! (contract section 17), which replaces it: `"point"` is `model = "kepler"`, `"j2"` is
+//! `model = "j2"` (with `j2`, `mu`, `radius` as before), and `"egm2008"` or
+//! `{ model = "egm2008", degree = N, order = M }` the spherical harmonics to degree N
+//! (default 20, at most 70) and order M (default N, at most N), with EGM2008's own GM and
+//! radius (GM also becomes the orbit's `mu`: the elements' conversion and the
+//! gravity-gradient torque use it). Both keys may be given only when they say the same;
+//! with `"egm2008"`, `model`, `mu` and `j2` would be ignored and are refused (`radius` stays
+//! the altitude's reference). `third_body = ["sun", "moon"]` adds their point-mass
+//! perturbations. The harmonics and the third bodies need the scene's `epoch`; each
+//! refusal names the line of the key at fault.
 
 use super::file::OrbitFile;
 use super::parse::Parser;
-use satsim_spacecraft::effects::{Elements, Orbit, OrbitModel};
+use satsim_environment::Epoch;
+use satsim_environment::gravity::{HarmonicField, MAX_DEGREE, egm2008};
+use satsim_spacecraft::effects::{Elements, Orbit, OrbitModel, ThirdBodies};
 use satsim_tree::error::Num;
 use satsim_tree::io::FileError;
 use satsim_tree::spatial::Vec3;
+use std::sync::Arc;
 use toml::Spanned;
 
 /// The lowest orbit altitude a scene accepts (m): below it the atmosphere ends an orbit
@@ -17,18 +32,7 @@ impl Parser<'_> {
     pub(super) fn orbit(&self, o: &Spanned<OrbitFile>) -> Result<Orbit, FileError> {
         let span = Some(o.span());
         let f = o.get_ref();
-        let model = match f.model.as_ref().map(|m| (m.get_ref().as_str(), m.span())) {
-            None | Some(("kepler", _)) => OrbitModel::Kepler,
-            Some(("j2", _)) => OrbitModel::J2,
-            Some((other, s)) => {
-                return Err(self.error(
-                    Some(s),
-                    format!(
-                        "`orbit.model`: unknown value `{other}`, expected \"kepler\" or \"j2\""
-                    ),
-                ));
-            }
-        };
+        let (model, harmonics) = self.gravity(f)?;
         let vec = |v: Option<[f64; 3]>, k: usize| v.map(|v| v[k]);
         self.check_numbers(
             o.span(),
@@ -72,6 +76,11 @@ impl Parser<'_> {
         if let Some(mu) = f.mu {
             orbit.mu = mu;
         }
+        if let Some(field) = harmonics {
+            orbit.mu = field.gm;
+            orbit.harmonics = Some(Arc::new(field));
+        }
+        orbit.third_bodies = self.third_bodies(f)?;
         if let Some(j2) = f.j2 {
             orbit.j2 = j2;
         }
@@ -183,5 +192,191 @@ impl Parser<'_> {
             }
         }
         Ok(orbit)
+    }
+
+    /// The Earth's field from `model` and `gravity`: the model, and the harmonic field when
+    /// `gravity` asks for one.
+    fn gravity(&self, f: &OrbitFile) -> Result<(OrbitModel, Option<HarmonicField>), FileError> {
+        let model = match f.model.as_ref().map(|m| (m.get_ref().as_str(), m.span())) {
+            None => None,
+            Some(("kepler", _)) => Some(OrbitModel::Kepler),
+            Some(("j2", _)) => Some(OrbitModel::J2),
+            Some((other, s)) => {
+                return Err(self.error(
+                    Some(s),
+                    format!(
+                        "`orbit.model`: unknown value `{other}`, expected \"kepler\" or \"j2\""
+                    ),
+                ));
+            }
+        };
+        let Some(g) = &f.gravity else {
+            return Ok((model.unwrap_or_default(), None));
+        };
+        let at = |m: String| self.error(Some(g.span()), m);
+        // The name, and the degree and order when given.
+        let (name, degree, order) = match g.get_ref() {
+            toml::Value::String(s) => (s.clone(), None, None),
+            toml::Value::Table(t) => {
+                if let Some(k) = t
+                    .keys()
+                    .find(|k| !["model", "degree", "order"].contains(&k.as_str()))
+                {
+                    return Err(at(format!(
+                        "`orbit.gravity.{k}`: unknown key, expected `model`, `degree` or `order`"
+                    )));
+                }
+                let name = match t.get("model") {
+                    Some(toml::Value::String(s)) => s.clone(),
+                    _ => {
+                        return Err(at(
+                            "`orbit.gravity` needs `model = \"point\" | \"j2\" | \"egm2008\"`"
+                                .into(),
+                        ));
+                    }
+                };
+                let int = |key: &str| match t.get(key) {
+                    None => Ok(None),
+                    Some(toml::Value::Integer(n)) => Ok(Some(*n)),
+                    Some(_) => Err(at(format!(
+                        "`orbit.gravity.{key}` must be a whole number (e.g. `{key} = 20`)"
+                    ))),
+                };
+                (name, int("degree")?, int("order")?)
+            }
+            _ => {
+                return Err(at(
+                    "`orbit.gravity` must be \"point\", \"j2\", \"egm2008\" or a table `{ model = \"egm2008\", degree = 20, order = 20 }`".into(),
+                ));
+            }
+        };
+        let chosen = match name.as_str() {
+            "point" => Some(OrbitModel::Kepler),
+            "j2" => Some(OrbitModel::J2),
+            "egm2008" => None,
+            other => {
+                return Err(at(format!(
+                    "`orbit.gravity`: unknown model `{other}`, expected \"point\", \"j2\" or \"egm2008\""
+                )));
+            }
+        };
+        if let Some(chosen) = chosen {
+            if degree.is_some() || order.is_some() {
+                return Err(at(format!(
+                    "`orbit.gravity`: `degree` and `order` belong to \"egm2008\", not to \"{name}\""
+                )));
+            }
+            if let Some(m) = model
+                && m != chosen
+            {
+                return Err(at(format!(
+                    "`orbit.gravity = \"{name}\"` contradicts `orbit.model = \"{}\"`: give one of them (`gravity` replaces `model`)",
+                    if m == OrbitModel::J2 { "j2" } else { "kepler" }
+                )));
+            }
+            if chosen == OrbitModel::Kepler && f.j2.is_some() {
+                return Err(at(
+                    "`orbit.j2` is given but `orbit.gravity = \"point\"` has no J2 term".into(),
+                ));
+            }
+            return Ok((chosen, None));
+        }
+        if model.is_some() {
+            return Err(at(
+                "`orbit.gravity = \"egm2008\"` replaces `orbit.model`: leave `model` out".into(),
+            ));
+        }
+        for (key, given) in [("j2", f.j2.is_some()), ("mu", f.mu.is_some())] {
+            if given {
+                return Err(at(format!(
+                    "`orbit.{key}` is given but `orbit.gravity = \"egm2008\"` uses the model's own {}: leave `{key}` out",
+                    if key == "mu" {
+                        "GM (3.986004415e14 m^3/s^2)"
+                    } else {
+                        "coefficients"
+                    }
+                )));
+            }
+        }
+        let degree = degree.unwrap_or(20);
+        let order = order.unwrap_or(degree);
+        if !(2..=MAX_DEGREE as i64).contains(&degree) {
+            return Err(at(format!(
+                "`orbit.gravity.degree` is {degree}: EGM2008 is shipped to degree {MAX_DEGREE}, and the harmonics start at 2"
+            )));
+        }
+        if !(0..=degree).contains(&order) {
+            return Err(at(format!(
+                "`orbit.gravity.order` is {order}: the order lies from 0 to the degree ({degree})"
+            )));
+        }
+        let field = egm2008()
+            .and_then(|c| HarmonicField::new(c, degree as usize, order as usize))
+            .map_err(|e| at(format!("`orbit.gravity`: {e}")))?;
+        Ok((OrbitModel::Kepler, Some(field)))
+    }
+
+    /// `third_body = ["sun", "moon"]`.
+    fn third_bodies(&self, f: &OrbitFile) -> Result<ThirdBodies, FileError> {
+        let mut bodies = ThirdBodies::default();
+        for b in f.third_body.iter().flat_map(|l| l.get_ref()) {
+            let slot = match b.get_ref().as_str() {
+                "sun" => &mut bodies.sun,
+                "moon" => &mut bodies.moon,
+                other => {
+                    return Err(self.error(
+                        Some(b.span()),
+                        format!(
+                            "`orbit.third_body`: unknown body `{other}`, expected \"sun\" or \"moon\""
+                        ),
+                    ));
+                }
+            };
+            if *slot {
+                return Err(self.error(
+                    Some(b.span()),
+                    format!("`orbit.third_body`: `{}` is listed twice", b.get_ref()),
+                ));
+            }
+            *slot = true;
+        }
+        Ok(bodies)
+    }
+
+    /// Gives the orbit the scene's `epoch`, which the harmonic field (the Earth's
+    /// orientation) and the third bodies (their positions) need: without one, an error at
+    /// the key that needs it.
+    pub(super) fn orbit_epoch(
+        &self,
+        o: &Spanned<OrbitFile>,
+        orbit: &mut Orbit,
+        epoch: Option<Epoch>,
+    ) -> Result<(), FileError> {
+        orbit.epoch = epoch;
+        if epoch.is_some() {
+            return Ok(());
+        }
+        let f = o.get_ref();
+        let need = |span: std::ops::Range<usize>, what: &str| {
+            Err(self.error(
+                Some(span),
+                format!(
+                    "{what} needs the scene's `epoch` (t = 0 as a date, e.g. `epoch = \"2026-03-20T12:00:00 UTC\"` at the top of the file)"
+                ),
+            ))
+        };
+        if let (Some(_), Some(g)) = (&orbit.harmonics, &f.gravity) {
+            return need(
+                g.span(),
+                "`orbit.gravity = \"egm2008\"` turns the field with the Earth: it",
+            );
+        }
+        if let (true, Some(t)) = (orbit.third_bodies.any(), &f.third_body) {
+            return need(
+                t.span(),
+                "`orbit.third_body` places the Sun and the Moon by date: it",
+            );
+        }
+        Ok(())
     }
 }

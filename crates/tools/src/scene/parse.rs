@@ -176,7 +176,8 @@ impl<'a> Parser<'a> {
             warnings.push(w);
         }
         let mut effects = EffectSet::default();
-        if let Some(o) = orbit {
+        if let (Some(mut o), Some(f)) = (orbit, &file.orbit) {
+            self.orbit_epoch(f, &mut o, epoch)?;
             effects.insert(o);
         }
         let mut clocks = Vec::new();

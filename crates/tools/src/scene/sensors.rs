@@ -1,13 +1,15 @@
-//! The scene's `[sensors]` table (contract section 13): the seed and the arrays
-//! `[[sensors.gyro]]`, `[[sensors.star_tracker]]`, `[[sensors.sun_sensor]]` and
-//! `[[sensors.magnetometer]]`, read into one [`Sensors`] effect
-//! ([`satsim_spacecraft::sensors`]). Every error names the scene file and the line.
+//! The scene's `[sensors]` table (contract sections 13 and 17): the seed and the arrays
+//! `[[sensors.gyro]]`, `[[sensors.star_tracker]]`, `[[sensors.sun_sensor]]`,
+//! `[[sensors.magnetometer]]`, `[[sensors.coarse_sun]]` and `[[sensors.gps]]`, read into one
+//! [`Sensors`] effect ([`satsim_spacecraft::sensors`]). Every error names the scene file and
+//! the line.
 
 use satsim_environment::Epoch;
 use satsim_environment::shadow::ShadowModel;
 use satsim_spacecraft::effects::{EffectSet, Magnetic, SceneText, SolarRadiation};
+use satsim_spacecraft::sensors::star_tracker::Exclusion;
 use satsim_spacecraft::sensors::{
-    Gyro, Kind, Magnetometer, Sensor, Sensors, StarTracker, SunSensor,
+    CoarseSun, Gps, Gyro, Kind, Magnetometer, Misalignment, Sensor, Sensors, StarTracker, SunSensor,
 };
 use satsim_tree::Model;
 use satsim_tree::error::Num;
@@ -36,6 +38,37 @@ pub struct SensorsFile {
     /// Magnetometers.
     #[serde(default)]
     pub magnetometer: Vec<Spanned<MagnetometerFile>>,
+    /// Coarse Sun sensors (photodiodes).
+    #[serde(default)]
+    pub coarse_sun: Vec<Spanned<CoarseSunFile>>,
+    /// GPS receivers.
+    #[serde(default)]
+    pub gps: Vec<Spanned<GpsFile>>,
+}
+
+/// A gyro's `scale_factor`: one relative error for the three axes, or one per axis.
+#[derive(Clone, Copy, Debug, Deserialize)]
+#[serde(
+    untagged,
+    expecting = "a number or an array of three numbers (relative scale factor errors)"
+)]
+pub enum ScaleFactorFile {
+    /// The same error on the three axes.
+    All(f64),
+    /// One per axis (x, y, z).
+    PerAxis([f64; 3]),
+}
+
+/// A star tracker's `exclusion_deg`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ExclusionFile {
+    /// The least angle between the boresight and the Sun (degrees).
+    #[serde(default)]
+    pub sun: Option<Spanned<f64>>,
+    /// The least angle between the boresight and the Earth's limb (degrees).
+    #[serde(default)]
+    pub earth: Option<Spanned<f64>>,
 }
 
 /// `[[sensors.gyro]]`.
@@ -54,9 +87,18 @@ pub struct GyroFile {
     /// Bias random walk (rad/s²/√Hz, default 0).
     #[serde(default)]
     pub bias_walk: Option<Spanned<f64>>,
-    /// Initial bias, body axes (rad/s, default 0).
+    /// Initial bias, sensor axes (rad/s, default 0).
     #[serde(default)]
     pub bias: Option<Spanned<[f64; 3]>>,
+    /// Scale factor error (relative; a number or one per axis, default none).
+    #[serde(default)]
+    pub scale_factor: Option<Spanned<ScaleFactorFile>>,
+    /// Misalignment, a rotation vector (rad, default none).
+    #[serde(default)]
+    pub misalignment: Option<Spanned<[f64; 3]>>,
+    /// Quantisation step (rad/s, default none).
+    #[serde(default)]
+    pub quantization: Option<Spanned<f64>>,
 }
 
 /// `[[sensors.star_tracker]]`.
@@ -69,9 +111,18 @@ pub struct StarTrackerFile {
     pub body: Spanned<String>,
     /// Sample period (s, > 0).
     pub period: Spanned<f64>,
-    /// Standard deviation about the body's x, y, z axes (arc seconds, default 0).
+    /// Standard deviation about the sensor's x, y, z axes (arc seconds, default 0).
     #[serde(default)]
     pub noise_arcsec: Option<Spanned<[f64; 3]>>,
+    /// Misalignment, a rotation vector (rad, default none).
+    #[serde(default)]
+    pub misalignment: Option<Spanned<[f64; 3]>>,
+    /// Quantisation step of the quaternion's components (default none).
+    #[serde(default)]
+    pub quantization: Option<Spanned<f64>>,
+    /// Exclusion angles (degrees, default none: always valid, no `_valid` column).
+    #[serde(default)]
+    pub exclusion_deg: Option<Spanned<ExclusionFile>>,
 }
 
 /// `[[sensors.sun_sensor]]`.
@@ -84,9 +135,15 @@ pub struct SunSensorFile {
     pub body: Spanned<String>,
     /// Sample period (s, > 0).
     pub period: Spanned<f64>,
-    /// Standard deviation of the direction's error about each body axis (rad, default 0).
+    /// Standard deviation of the direction's error about each sensor axis (rad, default 0).
     #[serde(default)]
     pub noise: Option<Spanned<f64>>,
+    /// Misalignment, a rotation vector (rad, default none).
+    #[serde(default)]
+    pub misalignment: Option<Spanned<[f64; 3]>>,
+    /// Quantisation step of the unit vector's components (default none).
+    #[serde(default)]
+    pub quantization: Option<Spanned<f64>>,
 }
 
 /// `[[sensors.magnetometer]]`.
@@ -102,6 +159,62 @@ pub struct MagnetometerFile {
     /// Per-sample standard deviation on each axis (T, default 0).
     #[serde(default)]
     pub noise: Option<Spanned<f64>>,
+    /// Misalignment, a rotation vector (rad, default none).
+    #[serde(default)]
+    pub misalignment: Option<Spanned<[f64; 3]>>,
+    /// Quantisation step (T, default none).
+    #[serde(default)]
+    pub quantization: Option<Spanned<f64>>,
+}
+
+/// `[[sensors.coarse_sun]]`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CoarseSunFile {
+    /// Unique name (the column).
+    pub name: Spanned<String>,
+    /// The body it is fixed to.
+    pub body: Spanned<String>,
+    /// Sample period (s, > 0).
+    pub period: Spanned<f64>,
+    /// The photodiode's normal, body axes (non-zero; normalised).
+    pub normal: Spanned<[f64; 3]>,
+    /// The field of view's half-angle (degrees, in (0, 90], default 90).
+    #[serde(default)]
+    pub fov_deg: Option<Spanned<f64>>,
+    /// The reading at normal incidence in full sunlight (default 1).
+    #[serde(default)]
+    pub scale: Option<Spanned<f64>>,
+    /// Per-sample standard deviation of the additive noise (default 0).
+    #[serde(default)]
+    pub noise: Option<Spanned<f64>>,
+    /// Whether the Earth's albedo is seen (default false).
+    #[serde(default)]
+    pub albedo: Option<bool>,
+    /// Misalignment, a rotation vector (rad, default none).
+    #[serde(default)]
+    pub misalignment: Option<Spanned<[f64; 3]>>,
+    /// Quantisation step (default none).
+    #[serde(default)]
+    pub quantization: Option<Spanned<f64>>,
+}
+
+/// `[[sensors.gps]]`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GpsFile {
+    /// Unique name.
+    pub name: Spanned<String>,
+    /// The body it is fixed to.
+    pub body: Spanned<String>,
+    /// Sample period (s, > 0).
+    pub period: Spanned<f64>,
+    /// Per-sample standard deviation of the position on each axis (m, default 0).
+    #[serde(default)]
+    pub noise_position: Option<Spanned<f64>>,
+    /// Per-sample standard deviation of the velocity on each axis (m/s, default 0).
+    #[serde(default)]
+    pub noise_velocity: Option<Spanned<f64>>,
 }
 
 /// What every sensor has, with where it is written.
@@ -111,6 +224,9 @@ struct Common<'a> {
     name: &'a Spanned<String>,
     body: &'a Spanned<String>,
     period: &'a Spanned<f64>,
+    /// The misalignment and quantisation step (checked).
+    mount: Option<Misalignment>,
+    quantization: Option<f64>,
 }
 
 /// Reads `[sensors]` against the scene's model, epoch and enabled effects (the orbit, the
@@ -156,15 +272,30 @@ pub(crate) fn read(
                 ));
             }
         };
-        let gyro = Gyro::new(
+        let mut gyro = Gyro::new(
             non_negative(&r.noise_density, "sensors.gyro.noise_density")?,
             non_negative(&r.bias_walk, "sensors.gyro.bias_walk")?,
             bias,
         );
-        all.push((
-            common("gyro", g, &r.name, &r.body, &r.period),
-            Kind::Gyro(gyro),
-        ));
+        if let Some(k) = &r.scale_factor {
+            let v = match *k.get_ref() {
+                ScaleFactorFile::All(v) => [v; 3],
+                ScaleFactorFile::PerAxis(v) => v,
+            };
+            if !v.iter().all(|x| x.is_finite() && *x > -1.0) {
+                return Err(text.error(
+                    Some(k.span()),
+                    format!(
+                        "`sensors.gyro.scale_factor` must be finite numbers > -1 (relative errors: the rate read is (1 + s) times the rate), got [{}]",
+                        v.map(|x| Num(x).to_string()).join(", ")
+                    ),
+                ));
+            }
+            gyro = gyro.with_scale_factor(Vec3::from(v));
+        }
+        let c = common("gyro", g, &r.name, &r.body, &r.period);
+        let c = c.mounted(text, &r.misalignment, &r.quantization)?;
+        all.push((c, Kind::Gyro(gyro)));
     }
     for s in &f.star_tracker {
         let r = s.get_ref();
@@ -188,30 +319,26 @@ pub(crate) fn read(
                 ));
             }
         };
-        all.push((
-            common("star_tracker", s, &r.name, &r.body, &r.period),
-            Kind::StarTracker(StarTracker::from_arcsec(noise)),
-        ));
+        let c = common("star_tracker", s, &r.name, &r.body, &r.period);
+        let c = c.mounted(text, &r.misalignment, &r.quantization)?;
+        let mut tracker = StarTracker::from_arcsec(noise);
+        if let Some(ex) = &r.exclusion_deg {
+            tracker = tracker.with_exclusion(exclusion(text, ex, &c, epoch, effects)?);
+        }
+        all.push((c, Kind::StarTracker(tracker)));
     }
     for s in &f.sun_sensor {
         let r = s.get_ref();
         let c = common("sun_sensor", s, &r.name, &r.body, &r.period);
-        let epoch = epoch.ok_or_else(|| {
-            text.error(
-                Some(c.span.clone()),
-                "[[sensors.sun_sensor]] needs the scene's `epoch` (t = 0 as a date): add e.g. `epoch = \"2026-03-20T12:00:00 UTC\"` at the top of the scene",
-            )
-        })?;
+        let epoch = needs_epoch(text, &c, epoch)?;
         needs_orbit(text, &c, effects)?;
-        let shadow = effects
-            .get::<SolarRadiation>()
-            .map_or(ShadowModel::Conical, |s| s.shadow_model());
         let noise = non_negative(&r.noise, "sensors.sun_sensor.noise")?;
+        let c = c.mounted(text, &r.misalignment, &r.quantization)?;
         all.push((
             c,
             Kind::SunSensor(SunSensor {
                 epoch,
-                shadow,
+                shadow: shadow(effects),
                 noise,
             }),
         ));
@@ -227,11 +354,71 @@ pub(crate) fn read(
         })?;
         needs_orbit(text, &c, effects)?;
         let noise = non_negative(&r.noise, "sensors.magnetometer.noise")?;
+        let c = c.mounted(text, &r.misalignment, &r.quantization)?;
         all.push((
             c,
             Kind::Magnetometer(Magnetometer {
                 field: field.field().clone(),
                 noise,
+            }),
+        ));
+    }
+    for s in &f.coarse_sun {
+        let r = s.get_ref();
+        let c = common("coarse_sun", s, &r.name, &r.body, &r.period);
+        let epoch = needs_epoch(text, &c, epoch)?;
+        needs_orbit(text, &c, effects)?;
+        let n = Vec3::from(*r.normal.get_ref());
+        if !(n.iter().all(|v| v.is_finite()) && n.norm() > 0.0) {
+            return Err(text.error(
+                Some(r.normal.span()),
+                "`sensors.coarse_sun.normal` must be three finite numbers, not all zero (the photodiode's normal in body axes)",
+            ));
+        }
+        let fov = match &r.fov_deg {
+            None => 90.0,
+            Some(x) => {
+                let v = text.positive(x, "sensors.coarse_sun.fov_deg")?;
+                if v > 90.0 {
+                    return Err(text.error(
+                        Some(x.span()),
+                        format!(
+                            "`sensors.coarse_sun.fov_deg` is the field of view's half-angle, in (0, 90] degrees, got {}",
+                            Num(v)
+                        ),
+                    ));
+                }
+                v
+            }
+        };
+        let scale = match &r.scale {
+            None => 1.0,
+            Some(x) => text.positive(x, "sensors.coarse_sun.scale")?,
+        };
+        let noise = non_negative(&r.noise, "sensors.coarse_sun.noise")?;
+        let c = c.mounted(text, &r.misalignment, &r.quantization)?;
+        all.push((
+            c,
+            Kind::CoarseSun(CoarseSun {
+                epoch,
+                shadow: shadow(effects),
+                normal: n.normalize(),
+                fov: fov.to_radians(),
+                scale,
+                noise,
+                albedo: r.albedo.unwrap_or(false),
+            }),
+        ));
+    }
+    for g in &f.gps {
+        let r = g.get_ref();
+        let c = common("gps", g, &r.name, &r.body, &r.period);
+        needs_orbit(text, &c, effects)?;
+        all.push((
+            c,
+            Kind::Gps(Gps {
+                noise_position: non_negative(&r.noise_position, "sensors.gps.noise_position")?,
+                noise_velocity: non_negative(&r.noise_velocity, "sensors.gps.noise_velocity")?,
             }),
         ));
     }
@@ -261,8 +448,16 @@ pub(crate) fn read(
             )
         })?;
         let period = text.positive(c.period, &format!("sensors.{}.period", c.table))?;
-        let sensor = Sensor::new(name.clone(), body, period, kind)
+        let mut sensor = Sensor::new(name.clone(), body, period, kind)
             .expect("the period was checked finite and > 0");
+        if let Some(m) = c.mount {
+            sensor = sensor.with_misalignment(m);
+        }
+        if let Some(q) = c.quantization {
+            sensor = sensor
+                .with_quantization(q)
+                .expect("the step was checked finite and > 0");
+        }
         set.push(sensor);
     }
     Ok((!set.sensors().is_empty()).then_some(set))
@@ -281,7 +476,112 @@ fn common<'a, T>(
         name,
         body,
         period,
+        mount: None,
+        quantization: None,
     }
+}
+
+impl Common<'_> {
+    /// With the sensor's `misalignment` (finite, at most half a turn) and `quantization` (> 0).
+    fn mounted(
+        mut self,
+        text: &SceneText,
+        misalignment: &Option<Spanned<[f64; 3]>>,
+        quantization: &Option<Spanned<f64>>,
+    ) -> Result<Self, FileError> {
+        let table = self.table;
+        if let Some(m) = misalignment {
+            let v = Vec3::from(*m.get_ref());
+            if !(v.iter().all(|x| x.is_finite()) && v.norm() <= std::f64::consts::PI) {
+                return Err(text.error(
+                    Some(m.span()),
+                    format!(
+                        "`sensors.{table}.misalignment` must be a rotation vector [rx, ry, rz] of finite numbers (rad), at most half a turn (|r| <= pi), got [{}]",
+                        m.get_ref().map(|x| Num(x).to_string()).join(", ")
+                    ),
+                ));
+            }
+            self.mount = Some(Misalignment::new(v));
+        }
+        if let Some(q) = quantization {
+            self.quantization = Some(text.positive(q, &format!("sensors.{table}.quantization"))?);
+        }
+        Ok(self)
+    }
+}
+
+fn needs_epoch(text: &SceneText, c: &Common, epoch: Option<Epoch>) -> Result<Epoch, FileError> {
+    epoch.ok_or_else(|| {
+        text.error(
+            Some(c.span.clone()),
+            format!(
+                "[[sensors.{}]] needs the scene's `epoch` (t = 0 as a date): add e.g. `epoch = \"2026-03-20T12:00:00 UTC\"` at the top of the scene",
+                c.table
+            ),
+        )
+    })
+}
+
+/// The Sun sensors' shadow model: the solar pressure's when it is enabled, else conical.
+fn shadow(effects: &EffectSet) -> ShadowModel {
+    effects
+        .get::<SolarRadiation>()
+        .map_or(ShadowModel::Conical, |s| s.shadow_model())
+}
+
+/// A star tracker's `exclusion_deg`: `sun` and `earth` in [0, 180] degrees, at least one;
+/// the Sun's needs the epoch, either the orbit.
+fn exclusion(
+    text: &SceneText,
+    ex: &Spanned<ExclusionFile>,
+    c: &Common,
+    epoch: Option<Epoch>,
+    effects: &EffectSet,
+) -> Result<Exclusion, FileError> {
+    let e = ex.get_ref();
+    let angle = |x: &Spanned<f64>, key: &str| -> Result<f64, FileError> {
+        let v = text.non_negative(x, &format!("sensors.star_tracker.exclusion_deg.{key}"))?;
+        if v > 180.0 {
+            return Err(text.error(
+                Some(x.span()),
+                format!(
+                    "`sensors.star_tracker.exclusion_deg.{key}` must be an angle in [0, 180] degrees, got {}",
+                    Num(v)
+                ),
+            ));
+        }
+        Ok(v.to_radians())
+    };
+    if e.sun.is_none() && e.earth.is_none() {
+        return Err(text.error(
+            Some(ex.span()),
+            "`sensors.star_tracker.exclusion_deg` needs `sun` or `earth` (degrees), e.g. `{ sun = 30.0, earth = 20.0 }`",
+        ));
+    }
+    let sun = match &e.sun {
+        None => None,
+        Some(x) => {
+            let a = angle(x, "sun")?;
+            let epoch = epoch.ok_or_else(|| {
+                text.error(
+                    Some(x.span()),
+                    "`sensors.star_tracker.exclusion_deg.sun` needs the scene's `epoch` (t = 0 as a date): add e.g. `epoch = \"2026-03-20T12:00:00 UTC\"` at the top of the scene",
+                )
+            })?;
+            Some((a, epoch))
+        }
+    };
+    let earth = e.earth.as_ref().map(|x| angle(x, "earth")).transpose()?;
+    if !effects.contains("orbit") {
+        return Err(text.error(
+            Some(ex.span()),
+            format!(
+                "`sensors.star_tracker.exclusion_deg` needs an [orbit] table (the Sun and the Earth seen from the orbit), for star tracker `{}`",
+                c.name.get_ref()
+            ),
+        ));
+    }
+    Ok(Exclusion { sun, earth })
 }
 
 fn needs_orbit(text: &SceneText, c: &Common, effects: &EffectSet) -> Result<(), FileError> {
@@ -319,6 +619,16 @@ pub(crate) fn clocks(text: &SceneText, file: &Spanned<SensorsFile>) -> Vec<super
             f.magnetometer
                 .iter()
                 .map(|s| (&s.get_ref().name, &s.get_ref().period)),
+        )
+        .chain(
+            f.coarse_sun
+                .iter()
+                .map(|s| (&s.get_ref().name, &s.get_ref().period)),
+        )
+        .chain(
+            f.gps
+                .iter()
+                .map(|s| (&s.get_ref().name, &s.get_ref().period)),
         );
     named
         .map(|(name, period)| super::Clock {
@@ -343,12 +653,14 @@ pub(crate) fn check_columns(
         .map(|s| &s.get_ref().name)
         .chain(f.star_tracker.iter().map(|s| &s.get_ref().name))
         .chain(f.sun_sensor.iter().map(|s| &s.get_ref().name))
-        .chain(f.magnetometer.iter().map(|s| &s.get_ref().name));
+        .chain(f.magnetometer.iter().map(|s| &s.get_ref().name))
+        .chain(f.coarse_sun.iter().map(|s| &s.get_ref().name))
+        .chain(f.gps.iter().map(|s| &s.get_ref().name));
     for name in names {
         let prefix = format!("{}_", name.get_ref());
         if let Some(c) = columns
             .iter()
-            .filter(|c| c.starts_with(&prefix))
+            .filter(|c| c.starts_with(&prefix) || *c == name.get_ref())
             .find(|c| columns.iter().filter(|o| o == c).count() > 1)
         {
             return Err(text.error(

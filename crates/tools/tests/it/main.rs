@@ -10,6 +10,7 @@ mod flexible_scene;
 mod fsw;
 mod lanes;
 mod linearize;
+mod orbit_gravity;
 mod orbital_start;
 mod plots;
 mod roll_pitch_yaw;
