@@ -37,6 +37,7 @@ pub mod magnetic;
 pub mod moon;
 pub mod shadow;
 pub mod sun;
+pub mod track;
 
 pub use epoch::{Epoch, parse_epoch};
 

@@ -293,40 +293,19 @@ pub fn moon_position(epoch: Epoch, t: f64) -> Vec3 {
 /// assert!((a - b).norm() < 200.0);
 /// ```
 #[derive(Clone, Debug)]
-pub struct MoonTrack {
-    epoch: Epoch,
-    knot: i64,
-    at_knot: Vec3,
-    at_next: Vec3,
-}
+pub struct MoonTrack(crate::track::Track);
 
 impl MoonTrack {
     /// Seconds between knots.
     pub const STEP: f64 = 600.0;
 
-    /// The Moon along a run that starts at `epoch`.
+    /// Along a run that starts at `epoch`.
     pub fn new(epoch: Epoch) -> Self {
-        Self {
-            epoch,
-            knot: i64::MIN,
-            at_knot: Vec3::zeros(),
-            at_next: Vec3::zeros(),
-        }
+        Self(crate::track::Track::new(epoch, Self::STEP, moon_position))
     }
 
-    /// The Moon's position (m, GCRF, from the Earth's centre) at `epoch + t`.
+    /// The position (m, GCRF, from the Earth's centre) at `epoch + t`.
     pub fn position(&mut self, t: f64) -> Vec3 {
-        let s = t / Self::STEP;
-        let k = s.floor();
-        if !k.is_finite() {
-            return moon_position(self.epoch, t);
-        }
-        let knot = k as i64;
-        if knot != self.knot {
-            self.at_knot = moon_position(self.epoch, k * Self::STEP);
-            self.at_next = moon_position(self.epoch, (k + 1.0) * Self::STEP);
-            self.knot = knot;
-        }
-        self.at_knot + (self.at_next - self.at_knot) * (s - k)
+        self.0.position(t)
     }
 }
