@@ -67,6 +67,34 @@ pub enum DynamicsFailure {
     NonFinite,
 }
 
+impl Dynamics {
+    /// The result, or [`DynamicsFailure::NonFinite`] when a number is not finite.
+    fn finite(
+        dof: usize,
+        mass_matrix: DMatrix<f64>,
+        bias: DVector<f64>,
+        acceleration: DVector<f64>,
+        kinetic_energy: f64,
+    ) -> Result<Self, DynamicsFailure> {
+        let finite = mass_matrix
+            .iter()
+            .chain(bias.iter())
+            .chain(acceleration.iter())
+            .all(|x| x.is_finite())
+            && kinetic_energy.is_finite();
+        if !finite {
+            return Err(DynamicsFailure::NonFinite);
+        }
+        Ok(Self {
+            dof,
+            mass_matrix,
+            bias,
+            acceleration,
+            kinetic_energy,
+        })
+    }
+}
+
 /// The mass matrix, bias, forward-dynamics acceleration and kinetic energy of `state`.
 /// Every number is finite, or the result is an error.
 pub fn dynamics(model: &Model, state: &State) -> Result<Dynamics, DynamicsFailure> {
@@ -75,22 +103,7 @@ pub fn dynamics(model: &Model, state: &State) -> Result<Dynamics, DynamicsFailur
     let bias = bias(model, &mut data, &state.q, &state.v, None)?.clone();
     let acceleration = aba(model, &mut data, &state.q, &state.v, &state.tau, None)?.clone();
     let kinetic_energy = kinetic_energy(model, &mut data, &state.q, &state.v)?;
-    let finite = mass_matrix
-        .iter()
-        .chain(bias.iter())
-        .chain(acceleration.iter())
-        .all(|x| x.is_finite())
-        && kinetic_energy.is_finite();
-    if !finite {
-        return Err(DynamicsFailure::NonFinite);
-    }
-    Ok(Dynamics {
-        dof: model.nv(),
-        mass_matrix,
-        bias,
-        acceleration,
-        kinetic_energy,
-    })
+    Dynamics::finite(model.nv(), mass_matrix, bias, acceleration, kinetic_energy)
 }
 
 /// The dynamics of a state of a model with flexible bodies (contract sections 3 and 14): the
@@ -116,22 +129,7 @@ pub fn flex_dynamics(
     let bias = flexible::bias(model, &mut data, &q, &v, None)?.clone();
     let acceleration = flexible::aba(model, &mut data, &q, &v, &tau, None)?.clone();
     let (kinetic_energy, _strain) = flexible::energy(model, &mut data, &q, &v)?;
-    let finite = mass_matrix
-        .iter()
-        .chain(bias.iter())
-        .chain(acceleration.iter())
-        .all(|x| x.is_finite())
-        && kinetic_energy.is_finite();
-    if !finite {
-        return Err(DynamicsFailure::NonFinite);
-    }
-    Ok(Dynamics {
-        dof: model.nv(),
-        mass_matrix,
-        bias,
-        acceleration,
-        kinetic_energy,
-    })
+    Dynamics::finite(model.nv(), mass_matrix, bias, acceleration, kinetic_energy)
 }
 
 /// A model file read for `satsim dynamics` and `satsim.Model`: its rigid tree and, when a

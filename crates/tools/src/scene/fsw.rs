@@ -95,10 +95,10 @@ pub struct FswFile {
     pub control: Option<Spanned<ControlFile>>,
     /// `[fsw.momentum]`: wheel momentum dumping through the torquers.
     #[serde(default)]
-    pub momentum: Option<Spanned<MomentumFile>>,
+    pub momentum: Option<Spanned<MagneticFile>>,
     /// `[fsw.bdot]`: B-dot on the magnetometer's readings.
     #[serde(default)]
-    pub bdot: Option<Spanned<BdotFile>>,
+    pub bdot: Option<Spanned<MagneticFile>>,
     /// `[[fsw.mode]]`: the modes, in order.
     #[serde(default)]
     pub mode: Option<Vec<Spanned<ModeFile>>>,
@@ -235,30 +235,14 @@ pub struct ControlFile {
     pub enabled: Option<bool>,
 }
 
-/// `[fsw.bdot]`.
+/// `[fsw.bdot]` (gain in A m² s/T) or `[fsw.momentum]` (gain in 1/s).
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct BdotFile {
+pub struct MagneticFile {
     /// The magnetometer's name (a [[sensors.magnetometer]] on the root body).
     pub magnetometer: Spanned<String>,
-    /// The gain k (A m² s/T, > 0).
+    /// The gain k (> 0).
     pub gain: Spanned<f64>,
-    /// Sample period (s, default the magnetometer's; a whole multiple of it).
-    #[serde(default)]
-    pub period: Option<Spanned<f64>>,
-    /// Off without removing the table (default true).
-    #[serde(default)]
-    pub enabled: Option<bool>,
-}
-
-/// `[fsw.momentum]`.
-#[derive(Clone, Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct MomentumFile {
-    /// The gain k (1/s, > 0).
-    pub gain: Spanned<f64>,
-    /// The magnetometer's name (a [[sensors.magnetometer]] on the root body).
-    pub magnetometer: Spanned<String>,
     /// Sample period (s, default the magnetometer's; a whole multiple of it).
     #[serde(default)]
     pub period: Option<Spanned<f64>>,
@@ -1042,19 +1026,16 @@ pub(crate) fn read(
         epoch,
     };
     // A magnetic block: read, and checked against the scene when it is enabled.
-    let magnetic =
-        |block: &str,
-         span: Range<usize>,
-         (mag, gain, period): (&Spanned<String>, &Spanned<f64>, &Option<Spanned<f64>>),
-         enabled: Option<bool>| {
-            let spec = w.magnetic(block, mag, gain, period)?;
-            let spec = if on(enabled) {
-                w.magnetic_checks(block, span.clone(), spec)?
-            } else {
-                spec
-            };
-            Ok::<_, FileError>((spec, span, on(enabled)))
+    let magnetic = |block: &str, file: &Spanned<MagneticFile>| {
+        let (r, span) = (file.get_ref(), file.span());
+        let spec = w.magnetic(block, &r.magnetometer, &r.gain, &r.period)?;
+        let spec = if on(r.enabled) {
+            w.magnetic_checks(block, span.clone(), spec)?
+        } else {
+            spec
         };
+        Ok::<_, FileError>((spec, span, on(r.enabled)))
+    };
     let top = TopBlocks {
         estimator: f
             .estimator
@@ -1082,31 +1063,11 @@ pub(crate) fn read(
             .control
             .as_ref()
             .map(|c| (c.clone(), on(c.get_ref().enabled))),
-        bdot: f
-            .bdot
-            .as_ref()
-            .map(|b| {
-                let r = b.get_ref();
-                magnetic(
-                    "bdot",
-                    b.span(),
-                    (&r.magnetometer, &r.gain, &r.period),
-                    r.enabled,
-                )
-            })
-            .transpose()?,
+        bdot: f.bdot.as_ref().map(|b| magnetic("bdot", b)).transpose()?,
         momentum: f
             .momentum
             .as_ref()
-            .map(|m| {
-                let r = m.get_ref();
-                magnetic(
-                    "momentum",
-                    m.span(),
-                    (&r.magnetometer, &r.gain, &r.period),
-                    r.enabled,
-                )
-            })
+            .map(|m| magnetic("momentum", m))
             .transpose()?,
     };
     let onboard = match &f.mode {
