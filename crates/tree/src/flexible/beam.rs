@@ -264,10 +264,24 @@ pub struct Stiffening {
     pub first: Vec<crate::spatial::RigidInertia>,
 }
 
+/// The integrals over a beam-like structure's length from which its [`Stiffening`] follows
+/// (mass-normalised modes `φₖ(x)` along the axis, `x` from the root): what a modes file's
+/// `[stiffening]` block gives for modes not computed here.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StiffeningIntegrals {
+    /// `J₀ = ρA ∫ (L − x) φᵢ' φⱼ' dx` (1/m), row-major `m x m`.
+    pub j0: Vec<f64>,
+    /// `J₁ = ρA ∫ (L² − x²)/2 φᵢ' φⱼ' dx` (dimensionless), row-major `m x m`.
+    pub j1: Vec<f64>,
+    /// `S₁ₖ = ∫ ρA φₖ dx` (√kg), per mode.
+    pub s1: Vec<f64>,
+    /// `S₂ₖ = ∫ ρA x φₖ dx` (√kg m), per mode.
+    pub s2: Vec<f64>,
+}
+
 impl Beam {
-    /// The beam's second-order inertia: the centrifugal-stiffening integrals and the
-    /// deflection's own inertia.
-    pub fn stiffening(&self) -> Stiffening {
+    /// The integrals of the beam's second-order inertia (Gauss–Legendre over the length).
+    pub fn stiffening_integrals(&self) -> StiffeningIntegrals {
         let rule = gauss_legendre(POINTS);
         let modes = self.cantilever_modes();
         let m = modes.len();
@@ -287,32 +301,53 @@ impl Beam {
                 }
             }
         }
-        let a = self.axis;
-        let ra = self.root * a.transpose();
-        let id = crate::spatial::Mat3::identity();
-        let (b, r0) = (self.bend, self.root);
-        let first = modes
+        let s1 = modes
             .iter()
-            .map(|md| {
-                let s1 = self.rho_a * integrate(l, PANELS, &rule, |x| md.shape(x)[0]);
-                let s2 = self.rho_a * integrate(l, PANELS, &rule, |x| x * md.shape(x)[0]);
-                let d = r0 * s1 + a * s2;
-                let db = d * b.transpose();
-                crate::spatial::RigidInertia {
-                    mass: 0.0,
-                    h: b * s1,
-                    inertia: id * (2.0 * r0.dot(&b) * s1) - db - db.transpose(),
-                }
-            })
+            .map(|md| self.rho_a * integrate(l, PANELS, &rule, |x| md.shape(x)[0]))
             .collect();
+        let s2 = modes
+            .iter()
+            .map(|md| self.rho_a * integrate(l, PANELS, &rule, |x| x * md.shape(x)[0]))
+            .collect();
+        StiffeningIntegrals { j0, j1, s1, s2 }
+    }
+
+    /// The beam's second-order inertia: the centrifugal-stiffening integrals and the
+    /// deflection's own inertia.
+    pub fn stiffening(&self) -> Stiffening {
+        Stiffening::along(self.root, self.axis, self.bend, self.stiffening_integrals())
+    }
+}
+
+impl Stiffening {
+    /// The second-order inertia of a structure along the unit `axis` from `root` (body
+    /// frame), bending along the unit `bend` (normal to `axis`), with the integrals `s`.
+    pub fn along(root: Vec3, axis: Vec3, bend: Vec3, s: StiffeningIntegrals) -> Self {
+        let a = axis;
+        let ra = root * a.transpose();
+        let id = crate::spatial::Mat3::identity();
+        let (b, r0) = (bend, root);
+        let first =
+            s.s1.iter()
+                .zip(&s.s2)
+                .map(|(&s1, &s2)| {
+                    let d = r0 * s1 + a * s2;
+                    let db = d * b.transpose();
+                    crate::spatial::RigidInertia {
+                        mass: 0.0,
+                        h: b * s1,
+                        inertia: id * (2.0 * r0.dot(&b) * s1) - db - db.transpose(),
+                    }
+                })
+                .collect();
         Stiffening {
-            a0: id * self.root.dot(&a) - (ra + ra.transpose()) * 0.5,
+            a0: id * root.dot(&a) - (ra + ra.transpose()) * 0.5,
             a1: id - a * a.transpose(),
-            j0,
-            j1,
-            a2: id - self.bend * self.bend.transpose(),
+            j0: s.j0,
+            j1: s.j1,
+            a2: id - bend * bend.transpose(),
             axis: a,
-            shortening: Force::new(self.root.cross(&a), a),
+            shortening: Force::new(root.cross(&a), a),
             first,
         }
     }

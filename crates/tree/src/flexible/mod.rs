@@ -55,7 +55,7 @@ mod node;
 pub mod rnea;
 
 pub use aba::{aba, aba_hybrid};
-pub use beam::Beam;
+pub use beam::{Beam, Stiffening, StiffeningIntegrals};
 pub use crba::crba;
 pub use data::FlexData;
 pub use kinematics::{forward_kinematics, momentum};

@@ -27,6 +27,9 @@ pub enum Modes {
         data: ModalData,
         /// Per child hinge (its name): the shapes at its `at`.
         nodes: Vec<(String, NodeShape)>,
+        /// The second-order inertia of a beam-like structure along one axis (a modes file's
+        /// `[stiffening]`), or none: the stiffening of given modes is what this says.
+        stiffening: Option<Box<Stiffening>>,
     },
 }
 
@@ -39,7 +42,8 @@ pub struct Flexible {
     pub modes: Modes,
     /// Modal damping ratio `ζ` of every mode, `>= 0`.
     pub damping: f64,
-    /// The consistent terms of a beam (ignored for given modes): the deflection's
+    /// The consistent terms of a beam, or of given modes with their `stiffening` (for given
+    /// modes without it, `true` is refused: [`FlexError::Invalid`]): the deflection's
     /// first-order inertia (its first moment and products of inertia) and, for the
     /// geometric stiffening, its second-order inertia: the axial load of the frame's whole
     /// acceleration (centrifugal about the frame's origin, the origin's own centripetal and
@@ -220,9 +224,35 @@ impl FlexModel {
                         omega: (1..=beam.modes).map(|k| beam.omega(k)).collect(),
                     }
                 }
-                Modes::Given { data, .. } => {
+                Modes::Given {
+                    data,
+                    stiffening: given,
+                    ..
+                } => {
                     if data.momentum.len() != data.omega.len() {
                         return Err(invalid(&f.body, "momentum and omega lengths differ"));
+                    }
+                    if f.stiffening {
+                        let m = data.omega.len();
+                        match given {
+                            None => {
+                                return Err(invalid(
+                                    &f.body,
+                                    "stiffening needs the modes' second-order inertia (a modes file's [stiffening] block)",
+                                ));
+                            }
+                            Some(s)
+                                if s.j0.len() != m * m
+                                    || s.j1.len() != m * m
+                                    || s.first.len() != m =>
+                            {
+                                return Err(invalid(
+                                    &f.body,
+                                    "the stiffening's integrals do not match the number of modes",
+                                ));
+                            }
+                            Some(s) => stiffening[b] = Some(s.as_ref().clone()),
+                        }
                     }
                     if !data.omega.iter().all(|w| *w > 0.0 && w.is_finite()) {
                         return Err(invalid(&f.body, "frequencies must be positive and finite"));

@@ -12,14 +12,21 @@
 //! `[n; p]` = `[angular; linear]` about the body origin that a unit modal rate gives, modes
 //! mass-normalised), and `[[node]]` entries (`name`, `at`, per mode the `translation` and
 //! `rotation` of the structure at `at`). A hinge whose parent is the body is carried by the
-//! node whose `at` equals its own `at` within [`MODES_FILE_NODE_TOLERANCE`].
+//! node whose `at` equals its own `at` within [`MODES_FILE_NODE_TOLERANCE`]. An optional
+//! `[stiffening]` block ([`StiffeningFile`]) gives the modes' second-order inertia as a
+//! structure along one axis has it (a beam's, written by [`write_modes_file`]): with it the
+//! body stiffens under spin and acceleration as a `beam` does, and `stiffening` defaults to
+//! on; without it `stiffening = true` is refused (nothing would compute the terms).
 
 use super::error::{FileError, SpannedError, line_of};
 use super::model_file::{BeamFile, ModelFile, parse_model_file, schema_message, with_key};
 use super::read_text;
 use crate::error::Num;
 use crate::flexible::model::MAX_BEAM_MODES;
-use crate::flexible::{Beam, FlexError, FlexModel, Flexible, ModalData, Modes, NodeShape};
+use crate::flexible::{
+    Beam, FlexError, FlexModel, Flexible, ModalData, Modes, NodeShape, Stiffening,
+    StiffeningIntegrals,
+};
 use crate::model::{Body, UNIT_NORM_TOLERANCE};
 use crate::spatial::{Force, Mat3, RigidInertia, Vec3, skew};
 use serde::Deserialize;
@@ -58,6 +65,32 @@ pub struct ModesFile {
     /// The nodes where hinges may sit.
     #[serde(default)]
     pub node: Vec<Spanned<NodeFile>>,
+    /// The second-order inertia of a beam-like structure (optional; needed for
+    /// `stiffening`).
+    #[serde(default)]
+    pub stiffening: Option<Spanned<StiffeningFile>>,
+}
+
+/// A modes file's `[stiffening]`: the modes' second-order inertia, for a structure along one
+/// axis bending along one direction (a beam, a boom, a long panel), as
+/// [`Stiffening::along`] takes it.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct StiffeningFile {
+    /// The root of the structure's axis, body frame (m).
+    pub root: Spanned<[f64; 3]>,
+    /// The axis (unit), body axes.
+    pub axis: Spanned<[f64; 3]>,
+    /// The bending direction (unit, normal to `axis`), body axes.
+    pub bend: Spanned<[f64; 3]>,
+    /// `J₀ = ρA ∫ (L − x) φᵢ' φⱼ' dx` (1/m), `m` rows of `m`, symmetric.
+    pub j0: Spanned<Vec<Vec<f64>>>,
+    /// `J₁ = ρA ∫ (L² − x²)/2 φᵢ' φⱼ' dx`, `m` rows of `m`, symmetric.
+    pub j1: Spanned<Vec<Vec<f64>>>,
+    /// `S₁ₖ = ∫ ρA φₖ dx` (√kg), per mode.
+    pub s1: Spanned<Vec<f64>>,
+    /// `S₂ₖ = ∫ ρA x φₖ dx` (√kg m), per mode.
+    pub s2: Spanned<Vec<f64>>,
 }
 
 /// A modes file's `[[node]]`.
@@ -118,6 +151,90 @@ impl ModesFile {
                 r[0][0], r[0][1], r[0][2], r[1][0], r[1][1], r[1][2], r[2][0], r[2][1], r[2][2],
             ),
         )
+    }
+
+    /// The `[stiffening]` block as the engine takes it (axis and bend normalised).
+    pub fn stiffening(&self) -> Option<Box<Stiffening>> {
+        let s = self.stiffening.as_ref()?.get_ref();
+        let flat = |rows: &[Vec<f64>]| rows.concat();
+        Some(Box::new(Stiffening::along(
+            v3(s.root.get_ref()),
+            v3(s.axis.get_ref()).normalize(),
+            v3(s.bend.get_ref()).normalize(),
+            StiffeningIntegrals {
+                j0: flat(s.j0.get_ref()),
+                j1: flat(s.j1.get_ref()),
+                s1: s.s1.get_ref().clone(),
+                s2: s.s2.get_ref().clone(),
+            },
+        )))
+    }
+
+    /// Checks the `[stiffening]` block of a file of `m` modes.
+    fn validate_stiffening(&self, m: usize) -> Result<(), (Range<usize>, String)> {
+        let Some(block) = &self.stiffening else {
+            return Ok(());
+        };
+        let s = block.get_ref();
+        for (key, v) in [("root", &s.root), ("axis", &s.axis), ("bend", &s.bend)] {
+            if !v.get_ref().iter().all(|x| x.is_finite()) {
+                return Err((v.span(), format!("`stiffening.{key}` is not finite")));
+            }
+        }
+        let (a, b) = (v3(s.axis.get_ref()), v3(s.bend.get_ref()));
+        for (key, v, span) in [("axis", a, s.axis.span()), ("bend", b, s.bend.span())] {
+            if (v.norm() - 1.0).abs() > UNIT_NORM_TOLERANCE {
+                return Err((
+                    span,
+                    format!(
+                        "`stiffening.{key}` must be a unit vector, its norm is {}",
+                        Num(v.norm())
+                    ),
+                ));
+            }
+        }
+        if a.dot(&b).abs() > UNIT_NORM_TOLERANCE {
+            return Err((
+                s.bend.span(),
+                format!(
+                    "`stiffening.bend` must be normal to `axis` (their dot product is {})",
+                    Num(a.dot(&b))
+                ),
+            ));
+        }
+        for (key, rows) in [("j0", &s.j0), ("j1", &s.j1)] {
+            let r = rows.get_ref();
+            if r.len() != m || r.iter().any(|row| row.len() != m) {
+                return Err((
+                    rows.span(),
+                    format!("`stiffening.{key}`: {m} rows of {m} expected (one per mode)"),
+                ));
+            }
+            if !r.iter().flatten().all(|x| x.is_finite()) {
+                return Err((rows.span(), format!("`stiffening.{key}` is not finite")));
+            }
+            let scale = r.iter().flatten().fold(0.0f64, |a, x| a.max(x.abs()));
+            for (i, row) in r.iter().enumerate() {
+                if let Some(j) = (0..i).find(|&j| (row[j] - r[j][i]).abs() > 1e-9 * scale) {
+                    return Err((
+                        rows.span(),
+                        format!("`stiffening.{key}` must be symmetric: rows {i} and {j} differ"),
+                    ));
+                }
+            }
+        }
+        for (key, v) in [("s1", &s.s1), ("s2", &s.s2)] {
+            if v.get_ref().len() != m {
+                return Err((
+                    v.span(),
+                    format!("`stiffening.{key}`: {m} entries expected (one per mode)"),
+                ));
+            }
+            if !v.get_ref().iter().all(|x| x.is_finite()) {
+                return Err((v.span(), format!("`stiffening.{key}` is not finite")));
+            }
+        }
+        Ok(())
     }
 
     /// Checks counts, signs and finiteness; the span and message of the first fault.
@@ -196,7 +313,7 @@ impl ModesFile {
                 }
             }
         }
-        Ok(())
+        self.validate_stiffening(m)
     }
 }
 
@@ -273,6 +390,22 @@ pub fn write_modes_file(beam: &Beam, damping: Option<f64>, nodes: &[(&str, Vec3)
         .map(|c| format!("  {},", list(&c.to_array())))
         .collect();
     let _ = writeln!(s, "momentum = [\n{}\n]", p.join("\n"));
+    let si = beam.stiffening_integrals();
+    let square = |x: &[f64]| {
+        let rows: Vec<String> = x.chunks(m).map(list).collect();
+        format!("[\n  {},\n]", rows.join(",\n  "))
+    };
+    let _ = writeln!(
+        s,
+        "\n# The second-order inertia (stiffening), per the model file reference.\n[stiffening]\nroot = {}\naxis = {}\nbend = {}\nj0 = {}\nj1 = {}\ns1 = {}\ns2 = {}",
+        list(beam.root.as_slice()),
+        list(beam.axis.as_slice()),
+        list(beam.bend.as_slice()),
+        square(&si.j0),
+        square(&si.j1),
+        list(&si.s1),
+        list(&si.s2)
+    );
     for (name, at) in nodes {
         let shape = beam.node(at);
         let rows = |x: &[Vec3]| {
@@ -422,6 +555,8 @@ pub fn flex_model_of(file: &ModelFile, text: &str, origin: &Path) -> Result<Flex
             }
             None => None,
         };
+        // A beam's default is on; given modes' is whether the file gives the terms.
+        let mut stiffen = spec.stiffening.as_ref().is_none_or(|s| *s.get_ref());
         let modes = match (&spec.beam, &spec.modes_file) {
             (Some(_), Some(m)) => {
                 return Err(schema(
@@ -503,9 +638,24 @@ pub fn flex_model_of(file: &ModelFile, text: &str, origin: &Path) -> Result<Flex
                     };
                     nodes.push((h.name.get_ref().clone(), modes.node_shape(k)));
                 }
+                if let Some(on) = &spec.stiffening
+                    && *on.get_ref()
+                    && modes.stiffening.is_none()
+                {
+                    return Err(schema(
+                        on.span(),
+                        format!(
+                            "`stiffening = true`: the modes file {} has no [stiffening] block (the modes' second-order inertia, see the model file reference); give one, or leave `stiffening` out",
+                            path.display()
+                        ),
+                    ));
+                }
+                stiffen = modes.stiffening.is_some()
+                    && spec.stiffening.as_ref().is_none_or(|s| *s.get_ref());
                 Modes::Given {
                     data: modes.modal_data(),
                     nodes,
+                    stiffening: modes.stiffening(),
                 }
             }
         };
@@ -513,7 +663,7 @@ pub fn flex_model_of(file: &ModelFile, text: &str, origin: &Path) -> Result<Flex
             body: name.clone(),
             modes,
             damping: damping.unwrap_or(0.0),
-            stiffening: spec.stiffening.as_ref().is_none_or(|s| *s.get_ref()),
+            stiffening: stiffen,
         });
     }
     let mut model = FlexModel::build(builder, &flex).map_err(|e| {

@@ -165,7 +165,8 @@ pub struct FlexibleFile {
     /// Modal damping ratio of every mode, `>= 0` (default 0, or the modes file's).
     #[serde(default)]
     pub damping: Option<Spanned<f64>>,
-    /// Centrifugal stiffening of a beam (default true; no effect on a modes file's modes).
+    /// The consistent terms (default true for a beam; for a modes file, whether it has a
+    /// `[stiffening]` block, and `true` refused without one).
     #[serde(default)]
     pub stiffening: Option<Spanned<bool>>,
 }

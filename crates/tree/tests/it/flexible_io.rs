@@ -201,6 +201,31 @@ fn example_nodes() -> [(&'static str, Vec3); 3] {
 
 /// The ABA's and CRBA's results of two models agree to `1e-12` of their scale at a state
 /// away from symmetry.
+/// Whether `a` and `b` give the same accelerations (to 1e-12) at `same_dynamics`' state.
+fn same_accelerations(a: &FlexModel, b: &FlexModel) -> bool {
+    let (q, v, tau) = test_state(a);
+    let xa = flexible::aba(a, &mut FlexData::new(a), &q, &v, &tau, None)
+        .unwrap()
+        .clone();
+    let xb = flexible::aba(b, &mut FlexData::new(b), &q, &v, &tau, None)
+        .unwrap()
+        .clone();
+    (&xa - &xb).amax() <= 1e-12 * xa.amax()
+}
+
+/// A spinning, deformed state of the test model.
+fn test_state(a: &FlexModel) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+    let mut q = a.neutral();
+    let nq = a.rigid().nq();
+    q[7..nq].copy_from_slice(&[0.3, -0.2]);
+    for (k, x) in q[nq..].iter_mut().enumerate() {
+        *x = 0.01 * (1.0 + k as f64).cos();
+    }
+    let v: Vec<f64> = (0..a.nv()).map(|k| 0.2 * (1.0 + k as f64).sin()).collect();
+    let tau: Vec<f64> = (0..a.nv()).map(|k| (2.0 + k as f64).cos()).collect();
+    (q, v, tau)
+}
+
 fn same_dynamics(a: &FlexModel, b: &FlexModel) {
     assert_eq!((a.nq(), a.nv()), (b.nq(), b.nv()));
     let mut q = a.neutral();
@@ -237,19 +262,66 @@ fn the_beam_as_a_modes_file_gives_the_same_dynamics() {
         "examples/modes/panel_beam_modes.toml is stale"
     );
 
-    // Modes files carry no stiffening: compare with the beam's stiffening off.
-    let beam = MODEL.replace("stiffening = true", "stiffening = false");
-    let a = parse_flex_model(&beam, Path::new("flex.toml")).unwrap();
+    // The file's [stiffening] block: the beam's dynamics, spinning and deformed (the
+    // state `same_dynamics` takes), with the stiffening on, its default for both.
     let beam_line = MODEL.lines().nth(9).unwrap();
-    let given = beam.replace(beam_line, "modes_file = \"modes/panel_beam_modes.toml\"");
     let origin = example_path()
         .parent()
         .unwrap()
         .parent()
         .unwrap()
         .join("flex.toml");
+    let stiff = parse_flex_model(
+        &MODEL.replace("stiffening = true\n", ""),
+        Path::new("flex.toml"),
+    )
+    .unwrap();
+    let given = MODEL
+        .replace(beam_line, "modes_file = \"modes/panel_beam_modes.toml\"")
+        .replace("stiffening = true\n", "");
+    let from_file = parse_flex_model(&given, &origin).unwrap();
+    same_dynamics(&stiff, &from_file);
+    // And without: the stiffening off in both, which the spinning state tells apart.
+    let beam = MODEL.replace("stiffening = true", "stiffening = false");
+    let a = parse_flex_model(&beam, Path::new("flex.toml")).unwrap();
+    let given = beam.replace(beam_line, "modes_file = \"modes/panel_beam_modes.toml\"");
     let b = parse_flex_model(&given, &origin).unwrap();
     same_dynamics(&a, &b);
+    assert!(
+        !same_accelerations(&a, &stiff),
+        "the stiffening changed nothing"
+    );
+    // A file without the block: `stiffening = true` is refused at its line.
+    let dir = scratch("unstiff");
+    let bare: String = written
+        .split("\n# The second-order inertia")
+        .next()
+        .unwrap()
+        .to_owned()
+        + &written[written.find("\n[[node]]").unwrap()..];
+    assert!(!bare.contains("[stiffening]"));
+    std::fs::write(dir.join("m.toml"), &bare).unwrap();
+    let err = parse_flex_model(
+        &MODEL.replace(beam_line, "modes_file = \"m.toml\""),
+        &dir.join("flex.toml"),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        err.contains("flex.toml:12: body `panel`: `stiffening = true`: the modes file")
+            && err.contains("has no [stiffening] block"),
+        "{err}"
+    );
+    // Left out, the bare file's modes do not stiffen: the beam's without stiffening.
+    let c = parse_flex_model(
+        &beam
+            .replace(beam_line, "modes_file = \"m.toml\"")
+            .replace("stiffening = false\n", ""),
+        &dir.join("flex.toml"),
+    )
+    .unwrap();
+    same_dynamics(&a, &c);
+    std::fs::remove_dir_all(dir).unwrap();
     assert_eq!(a.damping().len(), 3);
     for (x, y) in a.damping().iter().zip(b.damping()) {
         assert!((x - y).abs() <= 1e-12 * x, "{x} vs {y}");
@@ -323,6 +395,26 @@ fn bad_modes_files_name_their_file_and_line() {
             good.replacen("mass = ", "damping = [0.1]\nmass = ", 1),
             "damping",
             "`damping`: 3 entries expected",
+        ),
+        (
+            set("s1", "[1.0]"),
+            "s1",
+            "`stiffening.s1`: 3 entries expected",
+        ),
+        (
+            set("bend", "[0.0, 1.0, 0.0]"),
+            "bend",
+            "`stiffening.bend` must be normal to `axis`",
+        ),
+        (
+            set("axis", "[0.0, 2.0, 0.0]"),
+            "axis",
+            "`stiffening.axis` must be a unit vector",
+        ),
+        (
+            good.replacen("j0 = [\n  [", "j0 = [\n  [7.0, ", 1),
+            "j0",
+            "`stiffening.j0`: 3 rows of 3 expected",
         ),
     ] {
         let err = read(&text);
