@@ -24,7 +24,19 @@ pub(crate) struct Ctx {
     pub steps_rejected: usize,
     pub jacobian_evals: usize,
     pub lu_decompositions: usize,
+    /// Trial stages the system refused ([`Ctx::stage_refused`]) since the steps last went
+    /// past the earliest of them.
+    pub stages_refused: u32,
+    /// The time of the earliest of those refused stages.
+    pub refused_at: f64,
 }
+
+/// How many trial stages in a row the system may refuse before its error ends the run: each
+/// retry quarters the step, so 12 take it below 1e-7 of where it started.
+pub(crate) const STAGE_RETRIES: u32 = 12;
+
+/// The factor a step is cut by when the system refuses one of its trial stages.
+pub(crate) const STAGE_RETRY_FACTOR: f64 = 0.25;
 
 impl Ctx {
     pub fn new<S: System + ?Sized>(sys: &S, opts: &Options) -> Result<Self, IntegrateError> {
@@ -50,6 +62,8 @@ impl Ctx {
             steps_rejected: 0,
             jacobian_evals: 0,
             lu_decompositions: 0,
+            stages_refused: 0,
+            refused_at: f64::INFINITY,
         })
     }
 
@@ -84,6 +98,37 @@ impl Ctx {
             return Err(IntegrateError::non_finite_derivative(t, dx));
         }
         Ok(())
+    }
+
+    /// An adaptive step's trial stage (a state the step reached towards, not an accepted one)
+    /// that the system refused: a state outside its domain (a flexible body's mass matrix
+    /// indefinite at a deformation the step overshot to, a derivative that is not finite).
+    /// `Ok` when the step is to be retried shorter (by [`STAGE_RETRY_FACTOR`]; the caller
+    /// counts the rejection); the error itself with a fixed step, after [`STAGE_RETRIES`]
+    /// refusals in a row, or for an error that is not the system's.
+    ///
+    /// The refusals count until an accepted step goes past the earliest of them: a state the
+    /// steps overshot to is left behind at once, while a system that refuses everything past
+    /// some time (a singular configuration ahead) ends the run there with its own error.
+    pub fn stage_refused(&mut self, e: IntegrateError) -> Result<(), IntegrateError> {
+        let t = match &e {
+            IntegrateError::System { t, .. } | IntegrateError::NonFinite { t, .. } => *t,
+            _ => return Err(e),
+        };
+        if self.fixed.is_some() || self.stages_refused >= STAGE_RETRIES {
+            return Err(e);
+        }
+        self.stages_refused += 1;
+        self.refused_at = self.refused_at.min(t);
+        Ok(())
+    }
+
+    /// A step accepted up to `t`: the refusals it went past are forgotten.
+    pub fn passed(&mut self, t: f64) {
+        if t > self.refused_at {
+            self.stages_refused = 0;
+            self.refused_at = f64::INFINITY;
+        }
     }
 
     /// Fails once the step budget is spent.

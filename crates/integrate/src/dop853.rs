@@ -10,7 +10,10 @@
 #![allow(clippy::excessive_precision)]
 
 use crate::{
-    common::{Ctx, PiController, Stepper, all_finite, check_step_size, clamp_to_limit, combine},
+    common::{
+        Ctx, PiController, STAGE_RETRY_FACTOR, Stepper, all_finite, check_step_size,
+        clamp_to_limit, combine,
+    },
     error::IntegrateError,
     system::System,
 };
@@ -255,7 +258,7 @@ impl Stepper for Dop853 {
             self.f_valid = true;
         }
         self.x_old.copy_from_slice(&self.x);
-        loop {
+        'step: loop {
             ctx.check_budget(t)?;
             let (h, land) = clamp_to_limit(t, self.h.min(ctx.h_max), limit);
             if ctx.fixed.is_none() {
@@ -263,12 +266,23 @@ impl Stepper for Dop853 {
             }
             for s in 1..12 {
                 combine(&mut self.tmp, &self.x_old, h, A[s], &self.k[..s]);
-                ctx.eval(sys, t + C[s] * h, &self.tmp, &mut self.k[s])?;
+                if let Err(e) = ctx.eval(sys, t + C[s] * h, &self.tmp, &mut self.k[s]) {
+                    ctx.stage_refused(e)?;
+                    ctx.steps_rejected += 1;
+                    self.h = h * STAGE_RETRY_FACTOR;
+                    continue 'step;
+                }
             }
             // x_new = x + h Σ b_j k_j; `x` holds it from here on (x_old is kept).
             combine(&mut self.x, &self.x_old, h, &B, &self.k[..12]);
             let (k_lo, k_hi) = self.k.split_at_mut(12);
-            ctx.eval(sys, t + h, &self.x, &mut k_hi[0])?;
+            if let Err(e) = ctx.eval(sys, t + h, &self.x, &mut k_hi[0]) {
+                ctx.stage_refused(e)?;
+                ctx.steps_rejected += 1;
+                self.h = h * STAGE_RETRY_FACTOR;
+                self.x.copy_from_slice(&self.x_old);
+                continue 'step;
+            }
             let accepted = if ctx.fixed.is_some() {
                 if !all_finite(&self.x) {
                     return Err(IntegrateError::non_finite_state(t + h, &self.x));
@@ -302,6 +316,7 @@ impl Stepper for Dop853 {
             self.fsal_pending = true;
             self.dense_ready = false;
             ctx.steps_accepted += 1;
+            ctx.passed(self.t);
             return Ok(());
         }
     }

@@ -3,7 +3,8 @@
 
 use crate::{
     common::{
-        Ctx, PiController, Stepper, all_finite, check_step_size, clamp_to_limit, combine, lincomb,
+        Ctx, PiController, STAGE_RETRY_FACTOR, Stepper, all_finite, check_step_size,
+        clamp_to_limit, combine, lincomb,
     },
     error::IntegrateError,
     system::System,
@@ -129,7 +130,7 @@ impl Stepper for Dp54 {
             ctx.eval(sys, t, &self.x, &mut self.k[0])?;
             self.fsal_valid = true;
         }
-        loop {
+        'step: loop {
             ctx.check_budget(t)?;
             let (h, land) = clamp_to_limit(t, self.h.min(ctx.h_max), limit);
             if ctx.fixed.is_none() {
@@ -137,7 +138,12 @@ impl Stepper for Dp54 {
             }
             for s in 1..7 {
                 combine(&mut self.tmp, &self.x, h, A[s], &self.k[..s]);
-                ctx.eval(sys, t + C[s] * h, &self.tmp, &mut self.k[s])?;
+                if let Err(e) = ctx.eval(sys, t + C[s] * h, &self.tmp, &mut self.k[s]) {
+                    ctx.stage_refused(e)?;
+                    ctx.steps_rejected += 1;
+                    self.h = h * STAGE_RETRY_FACTOR;
+                    continue 'step;
+                }
                 if s == 6 {
                     self.x_new.copy_from_slice(&self.tmp);
                 }
@@ -178,6 +184,7 @@ impl Stepper for Dp54 {
             self.t_old = t;
             self.t = if land { limit } else { t + h };
             ctx.steps_accepted += 1;
+            ctx.passed(self.t);
             return Ok(());
         }
     }

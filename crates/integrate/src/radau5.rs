@@ -18,7 +18,7 @@ use faer::{
 };
 
 use crate::{
-    common::{Ctx, Stepper, all_finite, check_step_size, clamp_to_limit},
+    common::{Ctx, STAGE_RETRY_FACTOR, Stepper, all_finite, check_step_size, clamp_to_limit},
     error::IntegrateError,
     system::System,
 };
@@ -345,12 +345,16 @@ impl Radau5 {
                 for i in 0..n {
                     self.tmp[i] = self.x[i] + self.z[s * n + i];
                 }
-                ctx.eval(
+                // A stage the system refuses: the step is retried shorter.
+                if let Err(e) = ctx.eval(
                     sys,
                     t + C[s] * h,
                     &self.tmp,
                     &mut self.fz[s * n..(s + 1) * n],
-                )?;
+                ) {
+                    ctx.stage_refused(e)?;
+                    return Ok(Err(STAGE_RETRY_FACTOR));
+                }
             }
             // Residual -Z + h (A⊗I) F(Z), then ΔZ from the factored iteration matrix.
             for s in 0..3 {
@@ -556,6 +560,7 @@ impl Stepper for Radau5 {
                     return Err(IntegrateError::non_finite_state(t_new, &self.x));
                 }
                 ctx.steps_accepted += 1;
+                ctx.passed(t_new);
                 return Ok(());
             }
             let err = self.error_estimate(sys, ctx, h)?;
@@ -577,6 +582,7 @@ impl Stepper for Radau5 {
                 self.erracc = err.max(1e-2);
                 self.accept(h, t_new);
                 ctx.steps_accepted += 1;
+                ctx.passed(t_new);
                 h_new = h_new.min(ctx.h_max);
                 if self.reject {
                     h_new = h_new.min(h);

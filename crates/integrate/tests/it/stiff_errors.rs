@@ -406,3 +406,85 @@ fn error_weights_exclude_components() {
     let included = run(&mut Weighted(false), &opts, &[1.0, 0.0], 0.0, 5.0).unwrap();
     assert!(excluded.steps_accepted * 3 < included.steps_accepted);
 }
+
+/// `y' = 1 − y` from 0, whose solution `1 − e^{−t}` stays below 1, refusing any state above
+/// 1 (a state outside the system's domain, as a flexible body's indefinite mass matrix is):
+/// a long step's trial stages overshoot there.
+struct Bounded {
+    refused: usize,
+}
+impl System for Bounded {
+    fn dim(&self) -> usize {
+        1
+    }
+    fn rhs(&mut self, _t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), SystemError> {
+        if x[0] > 1.0 {
+            self.refused += 1;
+            return Err(SystemError::new(format!("y = {} is beyond 1", x[0])));
+        }
+        dx[0] = 1.0 - x[0];
+        Ok(())
+    }
+}
+
+#[test]
+fn adaptive_methods_retry_a_step_whose_trial_stage_the_system_refuses() {
+    for method in [Method::Dp54, Method::Dop853, Method::Radau5] {
+        let mut sys = Bounded { refused: 0 };
+        let opts = Options::new(method)
+            .with_tolerances(1e-9, 1e-12)
+            .with_h0(6.0);
+        let stats =
+            run(&mut sys, &opts, &[0.0], 0.0, 12.0).unwrap_or_else(|e| panic!("{method:?}: {e}"));
+        assert!(sys.refused > 0, "{method:?}: no stage was refused");
+        assert!(stats.steps_rejected >= sys.refused.min(1), "{method:?}");
+        let mut last = 0.0;
+        integrate(
+            &mut Bounded { refused: 0 },
+            &opts,
+            0.0,
+            &[0.0],
+            12.0,
+            &Output::Times(vec![12.0]),
+            |_, x| {
+                last = x[0];
+                std::ops::ControlFlow::Continue(())
+            },
+        )
+        .unwrap();
+        let exact = 1.0 - (-12.0f64).exp();
+        assert!((last - exact).abs() < 1e-7, "{method:?}: {last} vs {exact}");
+    }
+    // A fixed step is never shortened: the system's error ends the run.
+    let opts = Options::new(Method::Rk4).with_fixed_step(6.0);
+    let err = run(&mut Bounded { refused: 0 }, &opts, &[0.0], 0.0, 12.0).unwrap_err();
+    assert!(err.to_string().contains("is beyond 1"), "{err}");
+}
+
+/// A system that refuses every state past t = 1: after the retries the run ends with its own
+/// error, not with the step size's underflow.
+struct Cliff;
+impl System for Cliff {
+    fn dim(&self) -> usize {
+        1
+    }
+    fn rhs(&mut self, t: f64, _x: &[f64], dx: &mut [f64]) -> Result<(), SystemError> {
+        if t > 1.0 {
+            return Err(SystemError::new("past the cliff"));
+        }
+        dx[0] = 1.0;
+        Ok(())
+    }
+}
+
+#[test]
+fn a_system_that_keeps_refusing_ends_the_run_with_its_own_error() {
+    for method in [Method::Dp54, Method::Dop853, Method::Radau5] {
+        let err = run(&mut Cliff, &Options::new(method), &[0.0], 0.0, 3.0).unwrap_err();
+        assert!(
+            matches!(err, IntegrateError::System { .. })
+                && err.to_string().contains("past the cliff"),
+            "{method:?}: {err}"
+        );
+    }
+}
