@@ -146,3 +146,56 @@ fn reach_interpolates_in_log_log() {
     assert_eq!(report.csv().lines().count(), 3);
     assert!(report.markdown().contains("| DP5(4) | tol 1e-6 |"));
 }
+
+/// On a flexible scene, an RK4 step beyond the stability limit of its highest mode is not
+/// run (it would blow up): the sweep says why, with the limit, and runs the stable steps.
+#[test]
+fn rk4_steps_beyond_the_modes_stability_limit_are_not_run() {
+    let text = r#"duration = 0.5
+[model]
+[model.base]
+kind = "fixed"
+[[model.body]]
+name = "beam"
+mass = 1.0
+inertia = [[0.1, 0.0, 0.0], [0.0, 0.1, 0.0], [0.0, 0.0, 0.1]]
+[model.body.flexible]
+beam = { root = [0.0, 0.0, 0.0], axis = [0.0, 1.0, 0.0], bend = [0.0, 0.0, 1.0], length = 2.0, EI = 500.0, rho_A = 5.0, modes = 2 }
+[initial]
+flexible = { beam = { eta = [0.01, 0.0] } }
+[integrator]
+method = "dp54"
+[output]
+every = 0.25
+plots = false
+view = false
+"#;
+    let scene = crate::scene::Scene::parse(text, std::path::Path::new("beam.toml")).unwrap();
+    let (stable, hz) = crate::scene::flexible::rk4_stable_step(&scene).unwrap();
+    // The second clamped mode: (4.694)² √(EI / ρA L⁴) / 2π.
+    let expected = 4.694091f64.powi(2) * (500.0f64 / (5.0 * 16.0)).sqrt() / std::f64::consts::TAU;
+    assert!(
+        (hz - expected).abs() < 1e-4 * expected,
+        "{hz} Hz, expected {expected}"
+    );
+    let sweep = Sweep {
+        methods: vec![Method::Rk4],
+        tolerances: vec![],
+        rk4_steps: vec![4.0 * stable, 0.5 * stable],
+        atol_scale: 1.0,
+        repeats: 1,
+        reference: (Method::Dop853, 1e-10),
+        cross_reference: (Method::Dp54, 1e-10),
+    };
+    let report = sweep::sweep(&scene, &sweep, |_| {}).unwrap();
+    let beyond = report.points[0].result.as_ref().unwrap_err();
+    assert!(
+        beyond.starts_with("not run: h = ") && beyond.contains("beyond rk4's stability limit"),
+        "{beyond}"
+    );
+    assert!(
+        report.points[1].result.is_ok(),
+        "{:?}",
+        report.points[1].result
+    );
+}

@@ -273,3 +273,20 @@ pub fn mode_of(flex: &FlexModel, e: usize) -> (String, usize) {
         })
         .unwrap_or_default()
 }
+
+/// The largest step RK4 is stable at for `scene`'s flexible modes (s), with the highest
+/// mode's frequency (Hz); `None` for a rigid scene. What the scene reader checks a given
+/// `integrator.step` against, for the callers that choose steps themselves (the accuracy
+/// sweep).
+pub fn rk4_stable_step(scene: &super::Scene) -> Option<(f64, f64)> {
+    let flex = scene.flexible.as_ref()?;
+    let q: Vec<f64> = scene
+        .initial
+        .q
+        .iter()
+        .chain(&scene.elastic.eta)
+        .copied()
+        .collect();
+    let (w, _) = highest_frequency(flex, &q)?;
+    Some((RK4_LIMIT / w, w / std::f64::consts::TAU))
+}
