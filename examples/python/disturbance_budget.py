@@ -1,6 +1,7 @@
 """The disturbance budget of a run: per phase, the largest and the RMS magnitude of each
 disturbance torque about the centre of mass (columns gg_torque_*, srp_torque_*,
-drag_torque_*, magnetic_torque_*), and which one dominates.
+earth_radiation_torque_* with `albedo = true`, drag_torque_*, magnetic_torque_*), and which one
+dominates.
 
     satsim run examples/scenes/deploy_in_orbit.toml --out out/deploy_in_orbit
     python3 examples/python/disturbance_budget.py out/deploy_in_orbit/trajectory.csv 0 3 12 100 600
@@ -12,8 +13,8 @@ import csv
 import math
 import sys
 
-EFFECTS = [("gravity gradient", "gg"), ("solar pressure", "srp"), ("drag", "drag"),
-           ("magnetic", "magnetic")]
+EFFECTS = [("gravity gradient", "gg"), ("solar pressure", "srp"),
+           ("Earth's light", "earth_radiation"), ("drag", "drag"), ("magnetic", "magnetic")]
 
 
 def main(path, bounds):

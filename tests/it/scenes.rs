@@ -317,6 +317,141 @@ fn spin_down_stops_on_time_and_hands_its_momentum_to_the_bus() {
     assert!(r.last("omega_x").abs() < 1e-12 && r.last("omega_y").abs() < 1e-12);
 }
 
+/// The control-moment gyro (`examples/scenes/cmg.toml`): a frictionless wheel on a gimbal
+/// body keeps its absolute spin, and the bus receives the gyroscopic torque of its momentum
+/// `h` turned by the gimbal, `τ = h × δ̇ ẑ − ω × h` in bus axes (`ḣ = δ̇ ẑ × h` relative to
+/// the bus). The torque the bus receives is measured from its own motion, `J ω̇ + ω × J ω`
+/// (`ω̇` by central differences of the rows); the gimbal's and the rotor's transverse inertia
+/// (6e-3 kg m², which the law leaves out) bound the difference. A wheel carried by the bus
+/// instead would give the bus no torque at all; total momentum is conserved.
+#[test]
+fn a_wheel_on_a_gimbal_gives_the_bus_h_cross_the_gimbal_rate() {
+    let r = run("cmg");
+    let j = [1000.0, 800.0, 600.0];
+    let (iw, omega0) = (0.01, 600.0);
+    let h0 = r.vec3(&r.rows[0], "h");
+    let mut dh = 0.0f64;
+    for row in &r.rows {
+        dh = dh.max(dist(r.vec3(row, "h"), h0) / norm(h0));
+    }
+    assert!(dh < 1e-9, "angular momentum drifts by {dh:e} (relative)");
+    assert!((norm(h0) - iw * omega0).abs() < 1e-12, "{h0:?}");
+    let cross = |a: [f64; 3], b: [f64; 3]| {
+        [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ]
+    };
+    let (mut worst, mut peak) = (0.0f64, 0.0f64);
+    for k in 1..r.rows.len() - 1 {
+        let (a, row, b) = (&r.rows[k - 1], &r.rows[k], &r.rows[k + 1]);
+        let dt = b[0] - a[0];
+        let w = r.vec3(row, "omega");
+        let (wa, wb) = (r.vec3(a, "omega"), r.vec3(b, "omega"));
+        let jw = [j[0] * w[0], j[1] * w[1], j[2] * w[2]];
+        let gyro = cross(w, jw);
+        let felt: [f64; 3] = std::array::from_fn(|i| j[i] * (wb[i] - wa[i]) / dt + gyro[i]);
+        // The wheel's absolute axial momentum along its axis (turned by the gimbal angle).
+        let delta = row[r.col("angle_gimbal")];
+        let rate = row[r.col("rate_gimbal")];
+        let axis = [delta.cos(), delta.sin(), 0.0];
+        let spin = row[r.col("wheel_cmg_speed")] + w[0] * axis[0] + w[1] * axis[1];
+        let h = axis.map(|x| iw * spin * x);
+        let turned = cross(h, [0.0, 0.0, rate]);
+        let carried = cross(w, h);
+        let law: [f64; 3] = std::array::from_fn(|i| turned[i] - carried[i]);
+        worst = worst.max(dist(felt, law));
+        peak = peak.max(norm(law));
+    }
+    // Peak h δ̇ ≈ 6 N m s × 0.12 rad/s.
+    assert!(
+        peak > 0.5,
+        "the gimbal hardly turned: peak torque {peak} N m"
+    );
+    assert!(
+        worst < 2e-3 * peak,
+        "the bus felt {worst:e} N m away from h x gimbal rate (peak {peak} N m)"
+    );
+    // The momentum the wheel handed over: from +x to +y of the bus, so the bus turns about
+    // +x and −y at about h / J.
+    let w = r.vec3(r.rows.last().unwrap(), "omega");
+    assert!((w[0] - 6.0 / j[0]).abs() < 0.05 * 6.0 / j[0], "{w:?}");
+    assert!((w[1] + 6.0 / j[1]).abs() < 0.05 * 6.0 / j[1], "{w:?}");
+}
+
+/// The energy sink (`examples/scenes/spinning_booms.toml`): spinning about its axis of least
+/// inertia with two damped flexible booms, the spacecraft keeps its angular momentum while the
+/// booms' bending dissipates energy, and ends near the flat spin about its axis of greatest
+/// inertia, the least energy `H² / 2 I_max` at that momentum; without the damping, the same
+/// spin stays put. `I_max` from the scene's numbers: the bus's 8 kg m² about y and two
+/// uniform 0.5 kg booms from 0.4 m to 2.4 m, `ρA (2.4³ − 0.4³) / 3` each.
+#[test]
+fn spinning_booms_sink_the_spins_energy_into_a_flat_spin() {
+    let i_max = 8.0 + 2.0 * 0.25 * (2.4f64.powi(3) - 0.4f64.powi(3)) / 3.0;
+    let r = run("spinning_booms");
+    let h0 = r.vec3(&r.rows[0], "h");
+    let flat = norm(h0).powi(2) / (2.0 * i_max);
+    let (mut dh, mut last) = (0.0f64, f64::INFINITY);
+    for row in &r.rows {
+        dh = dh.max(dist(r.vec3(row, "h"), h0) / norm(h0));
+        let e = row[r.col("total_energy")];
+        assert!(e <= last + 1e-9, "energy rose at t = {}", row[0]);
+        last = e;
+    }
+    assert!(dh < 1e-9, "angular momentum drifts by {dh:e}");
+    let (first, end) = (&r.rows[0], r.rows.last().unwrap());
+    let budget = (end[r.col("energy_budget")] - first[r.col("energy_budget")]).abs();
+    assert!(
+        budget < 1e-8 * first[r.col("total_energy")],
+        "budget {budget:e}"
+    );
+    let e_end = end[r.col("kinetic_energy")];
+    assert!(
+        e_end < 1.03 * flat && e_end > (1.0 - 1e-3) * flat,
+        "final energy {e_end} J, flat spin {flat} J (from {} J)",
+        first[r.col("kinetic_energy")]
+    );
+    // The momentum's angle from the bus's z axis (its spin axis at the start), from the
+    // attitude: h is inertial.
+    let tilt = |run: &Run, row: &[f64], axis: usize| {
+        let q = ["q_w", "q_x", "q_y", "q_z"].map(|c| row[run.col(c)]);
+        let q = nalgebra::UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(
+            q[0], q[1], q[2], q[3],
+        ));
+        let h = nalgebra::Vector3::from(run.vec3(row, "h"));
+        let body = q.inverse_transform_vector(&h) / h.norm();
+        body[axis].abs().acos().to_degrees()
+    };
+    assert!(tilt(&r, &r.rows[0], 2) < 2.0);
+    assert!(
+        tilt(&r, end, 1) < 18.0,
+        "the spin ended {} deg from y",
+        tilt(&r, end, 1)
+    );
+    let at_1000 = r.rows.iter().find(|row| row[0] >= 1000.0).unwrap();
+    assert!(tilt(&r, at_1000, 2) > 30.0, "{}", tilt(&r, at_1000, 2));
+    // Without the booms' damping: no sink, the spin stays about z.
+    let path = scene_path("spinning_booms");
+    let text = std::fs::read_to_string(&path)
+        .unwrap()
+        .replace("damping = 0.3", "damping = 0.0")
+        .replace("duration = 4000.0", "duration = 1000.0");
+    let undamped = run_scene(&Scene::parse(&text, &path).unwrap());
+    let worst = undamped
+        .rows
+        .iter()
+        .map(|row| tilt(&undamped, row, 2))
+        .fold(0.0, f64::max);
+    assert!(
+        worst < 2.5,
+        "without damping the spin tilted by {worst} deg"
+    );
+    let e = |row: &[f64]| row[undamped.col("total_energy")];
+    let e0 = e(&undamped.rows[0]);
+    assert!((e(undamped.rows.last().unwrap()) - e0).abs() < 1e-8 * e0);
+}
+
 /// The deployment: each folded panel latches once at its deployed stop (the outer hinge h5
 /// first, then h4) and stays exactly there; the controller brings the bus back to rest at its target
 /// attitude, and the gimbal springs the gimbal back to zero.

@@ -15,9 +15,12 @@
 //! # Files
 //!
 //! - `epoch.rs`: reading an epoch, and the time arguments the series take;
-//! - `atmosphere.rs`: the exponential atmosphere (Vallado's table);
+//! - `atmosphere/`: the exponential atmosphere (Vallado's table) and NRLMSISE-00 (the
+//!   `nrlmsise00` crate) with its space-weather file and the lattice a run reads it through;
 //! - `sun.rs`: the Sun's position (truncated VSOP87, Meeus);
 //! - `shadow.rs`: the Earth's shadow, conical or cylindrical (Montenbruck & Gill 3.4.2);
+//! - `earth_radiation.rs`: the Earth's reflected sunlight (albedo) and emitted infrared on a
+//!   plate, and the view factor from a plate to a sphere;
 //! - `earth.rs`: GCRF to ITRF (IAU-1976 precession, IAU-82 GMST) and the Earth's spin;
 //! - `moon.rs`: the Moon's position (truncated ELP-2000/82, Meeus chapter 47);
 //! - `gravity.rs`: the Earth's spherical-harmonic gravity (EGM2008 to degree and order 70,
@@ -31,6 +34,7 @@
 
 pub mod atmosphere;
 pub mod earth;
+pub mod earth_radiation;
 pub mod epoch;
 pub mod gravity;
 pub mod magnetic;

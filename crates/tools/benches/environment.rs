@@ -2,7 +2,8 @@
 //! the 24 facets of `examples/satellite.toml` (the bus' and the three panels' box faces),
 //! panels half open (so that they shade each other and the bus), on a 500 km orbit in
 //! sunlight: the orbit alone, then each effect added to it alone, solar pressure with and
-//! without self-shadowing at 4, 8 and 16 rays per facet side, and everything together.
+//! without self-shadowing at 4, 8 and 16 rays per facet side, and everything together; then
+//! every effect with the simple models of the world and with the flight-fidelity ones.
 //!
 //! `cargo bench -p satsim-tools --bench environment`
 
@@ -35,9 +36,33 @@ const IGRF: &str = "[effects.magnetic]\nfield = \"igrf14\"\nresidual_dipole = [0
 const DIPOLE: &str = "[effects.magnetic]\nfield = \"dipole\"\nresidual_dipole = [0.5, 0.5, 1.0]\n";
 const GG: &str = "[effects.gravity_gradient]\nmodel = \"full\"\n";
 
+/// Gravity gradient, solar pressure, drag and the field with the simple models: the orbit's
+/// point-mass gravity, the exponential atmosphere, the dipole, no Earth light.
+fn simple_models() -> String {
+    format!("{GG}{}{DRAG}{DIPOLE}", srp(false, 8))
+}
+
+/// The same effects with the flight-fidelity models: EGM2008 to degree and order 20, the
+/// Sun's and the Moon's pull, NRLMSISE-00, IGRF-14, the Earth's reflected and emitted light.
+fn flight_models() -> String {
+    format!(
+        "{GG}{}albedo = true\n[effects.drag]\natmosphere = \"nrlmsise00\"\n{IGRF}",
+        srp(false, 8)
+    )
+}
+
+/// The orbit's table for [`flight_models`].
+const FLIGHT_ORBIT: &str = "gravity = { model = \"egm2008\", degree = 20, order = 20 }\nthird_body = [\"sun\", \"moon\"]\n";
+
 fn scene(extra: &str) -> Scene {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/scenes/bench.toml");
-    Scene::parse(&format!("{BASE}{extra}"), &path).expect("bench scene")
+    // The orbit's keys go in its table, which `BASE` ends with.
+    let orbit = if extra.contains("nrlmsise00") {
+        FLIGHT_ORBIT
+    } else {
+        ""
+    };
+    Scene::parse(&format!("{BASE}{orbit}{extra}"), &path).expect("bench scene")
 }
 
 fn rhs(c: &mut Criterion) {
@@ -54,6 +79,11 @@ fn rhs(c: &mut Criterion) {
         ("magnetic_igrf14", IGRF.into()),
         ("magnetic_dipole", DIPOLE.into()),
         ("all", all),
+        // Every effect on without self-shadowing (the facets' geometry is no model of the
+        // world), with the simple models, then with the flight-fidelity ones: their
+        // difference is what the models of the world cost in a right-hand side.
+        ("all_simple_models", simple_models()),
+        ("all_flight_models", flight_models()),
     ];
     for (name, extra) in cases {
         let mut sim = scene(&extra).simulation().unwrap();

@@ -11,14 +11,19 @@
 //! third bodies, `moon` is the Moon's position (when it is one of them) and `third_body` their
 //! perturbing acceleration ([`Orbit::third_body`]), from the same tracks the orbit follows.
 //! The gravity-gradient torque in `effects` keeps the point-mass gradient (`μ/r³`) whatever
-//! the orbit's field.
+//! the orbit's field. With `[effects.solar_radiation] albedo = true`, the solar-radiation
+//! effect's loads are reported as two: `solar_radiation`, the Sun's light, and
+//! `earth_radiation`, the Earth's reflected and emitted light, each computed at the same
+//! state by a copy of the scene's simulation applying that light alone (they add up to what
+//! the run applies).
 
 use crate::scene::Scene;
 use satsim_environment::shadow::{ShadowModel, shadow_fraction};
 use satsim_environment::sun::SunTrack;
 use satsim_integrate::SystemError;
+use satsim_spacecraft::effects::solar_radiation::LightSources;
 use satsim_spacecraft::effects::{Drag, Magnetic, Orbit, SolarRadiation};
-use satsim_spacecraft::simulation::{RunError, SimError};
+use satsim_spacecraft::simulation::{EffectLoads, RunError, SimError};
 use satsim_tree::spatial::Vec3;
 use std::convert::Infallible;
 use thiserror::Error;
@@ -100,6 +105,42 @@ pub enum EnvironmentError {
     Time(f64, f64),
 }
 
+/// The solar-radiation effect's loads at `t`, `x` split by the light's source (the Sun's,
+/// named `solar_radiation`, and the Earth's, `earth_radiation`) when the Earth's light is on;
+/// `None` when it is off.
+fn split_light(
+    scene: &Scene,
+    t: f64,
+    x: &[f64],
+) -> Result<Option<[EffectLoads; 2]>, EnvironmentError> {
+    if scene
+        .effects
+        .get::<SolarRadiation>()
+        .and_then(|s| s.earth_radiation())
+        .is_none()
+    {
+        return Ok(None);
+    }
+    let alone = |sources: LightSources, name: &str| -> Result<EffectLoads, EnvironmentError> {
+        let mut one = scene.clone();
+        if let Some(s) = one.effects.get_mut::<SolarRadiation>() {
+            s.set_sources(sources);
+        }
+        let mut loads = one.simulation()?.loads(t, x)?;
+        let i = loads
+            .iter()
+            .position(|l| l.name == "solar_radiation")
+            .ok_or_else(|| SystemError::new("the solar-radiation effect is missing"))?;
+        let mut l = loads.swap_remove(i);
+        l.name = name.to_owned();
+        Ok(l)
+    };
+    Ok(Some([
+        alone(LightSources::Sun, "solar_radiation")?,
+        alone(LightSources::Earth, "earth_radiation")?,
+    ]))
+}
+
 /// The environment and loads of `scene` at time `at` (s, from 0 to its duration): at the
 /// initial state for 0, otherwise at the state its run reaches at `at`.
 pub fn environment(scene: &Scene, at: f64) -> Result<Environment, EnvironmentError> {
@@ -110,7 +151,12 @@ pub fn environment(scene: &Scene, at: f64) -> Result<Environment, EnvironmentErr
     let (t, x) = sim
         .state_at(&scene.options, at)
         .map_err(|source| EnvironmentError::Run { at, source })?;
-    let loads = sim.loads(t, &x)?;
+    let mut loads = sim.loads(t, &x)?;
+    if let Some(i) = loads.iter().position(|l| l.name == "solar_radiation")
+        && let Some([sun, earth]) = split_light(scene, t, &x)?
+    {
+        loads.splice(i..=i, [sun, earth]);
+    }
     let model = &scene.model;
     let effects = loads
         .into_iter()
@@ -149,12 +195,12 @@ pub fn environment(scene: &Scene, at: f64) -> Result<Environment, EnvironmentErr
         }
         _ => None,
     };
-    let density = orbit.map(|(r, _)| {
-        scene
-            .effects
-            .get::<Drag>()
-            .map_or(0.0, |d| d.density(r.norm()))
-    });
+    // The drag effect's atmosphere at (t, r): the run's `density` column's bits.
+    let density = match (orbit, scene.effects.get::<Drag>()) {
+        (Some((r, _)), Some(d)) => Some(d.density(t, &r)?),
+        (Some(_), None) => Some(0.0),
+        (None, _) => None,
+    };
     let magnetic_field = orbit.map(|(r, _)| {
         scene
             .effects

@@ -590,6 +590,7 @@ pub const PLOT_GROUPS: [(&str, &str, &[&str]); 12] = [
         &[
             "gg_torque_*",
             "srp_torque_*",
+            "earth_radiation_torque_*",
             "drag_torque_*",
             "magnetic_torque_*",
         ],

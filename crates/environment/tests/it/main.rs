@@ -4,5 +4,6 @@ mod earth;
 mod gravity;
 mod magnetic;
 mod moon;
+mod msis;
 mod shadow;
 mod sun;

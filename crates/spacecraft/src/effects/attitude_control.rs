@@ -174,7 +174,19 @@ impl Effect for AttitudeControl {
         &["reaction_wheels"]
     }
     fn connect(&mut self, links: &Links) {
-        let axes: Vec<Vec3> = links.rotors.iter().map(|r| r.axis).collect();
+        // The bus's wheels as designed; a rotor on another body (a control-moment gyro's)
+        // gets no command (a zero column of the allocation).
+        let axes: Vec<Vec3> = links
+            .rotors
+            .iter()
+            .map(|r| {
+                if r.on_root() {
+                    r.nominal
+                } else {
+                    Vec3::zeros()
+                }
+            })
+            .collect();
         self.allocate(&axes);
     }
     fn output_columns(&self) -> Vec<String> {

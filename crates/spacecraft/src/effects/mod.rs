@@ -28,11 +28,13 @@ pub mod attitude_control;
 pub mod bdot;
 pub mod drag;
 pub mod facets;
+pub mod faults;
 pub mod gravity_gradient;
 pub mod hinge_control;
 pub mod hinge_springs;
 pub mod hinge_stops;
 pub mod magnetic;
+pub mod modal_loads;
 pub mod orbit;
 pub mod order;
 pub mod reaction_wheels;
@@ -46,6 +48,7 @@ pub use attitude_control::{AttitudeControl, Target};
 pub use bdot::Bdot;
 pub use drag::Drag;
 pub use facets::Facets;
+pub use faults::{FaultKind, Schedule};
 pub use gravity_gradient::{GravityGradient, GravityModel};
 pub use hinge_control::{HingeControl, HingeProfile};
 pub use hinge_springs::HingeSprings;
@@ -61,6 +64,7 @@ pub use thrusters::{ThrustMode, Thruster, Thrusters};
 
 use nalgebra::UnitQuaternion;
 use satsim_integrate::{EventAction, EventDirection, SystemError};
+use satsim_tree::flexible::FlexModel;
 use satsim_tree::spatial::{Force, Mat3, Motion, Vec3};
 use satsim_tree::{Data, Model};
 
@@ -103,16 +107,21 @@ pub struct Needs {
 }
 
 /// An axisymmetric rotor body that an effect adds to the tree (a reaction wheel, a momentum
-/// wheel, a control-moment gyro's rotor), hinged to
-/// the root about `axis`. Its dynamics do not depend on its angle, which is therefore not a
-/// state: its spin rate relative to the root is.
+/// wheel, a control-moment gyro's rotor), hinged to its carrier (the root unless `body` names
+/// another body) about `axis`. Its dynamics do not depend on its angle, which is therefore not
+/// a state: its spin rate relative to the carrier is.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Rotor {
     /// Body and hinge name (the reaction wheels use `wheel_<name>`).
     pub name: String,
-    /// Unit spin axis, root-body axes.
+    /// The carrier body's name; `None`: the root.
+    pub body: Option<String>,
+    /// Unit spin axis, the carrier's axes: the true axis, misalignment included.
     pub axis: Vec3,
-    /// Centre of the rotor in the root body's frame (m).
+    /// The unit spin axis the flight software assumes (the carrier's axes): `axis` without
+    /// its misalignment. Controllers allocate torques with this one.
+    pub nominal: Vec3,
+    /// Centre of the rotor in the carrier's frame (m).
     pub at: Vec3,
     /// Mass (kg, default 0: the wheel's mass is usually part of the bus).
     pub mass: f64,
@@ -123,12 +132,17 @@ pub struct Rotor {
 }
 
 impl Rotor {
-    /// The rotor's inertia tensor about its centre, root-body axes (the rotor frame is
-    /// parallel to the root's at zero angle, and the tensor is invariant under spin).
+    /// The rotor's inertia tensor about its centre, the carrier's axes (the rotor frame is
+    /// parallel to the carrier's at zero angle, and the tensor is invariant under spin).
     pub fn inertia(&self) -> Mat3 {
         let a = self.axis;
         let aat = a * a.transpose();
         aat * self.axial + (Mat3::identity() - aat) * self.transverse
+    }
+    /// Whether the root carries it (the controllers' allocations use only those: they work
+    /// in the bus's axes, which a rotor on a moving body leaves).
+    pub fn on_root(&self) -> bool {
+        self.body.is_none()
     }
 }
 
@@ -216,6 +230,10 @@ pub struct Context<'a> {
     pub omega: Vec3,
     /// Rotor spin rates relative to the bus (rad/s), one per rotor.
     pub rotor_rates: &'a [f64],
+    /// The flexible bodies' elastic coordinates `η` (the layout's order; empty without).
+    pub eta: &'a [f64],
+    /// Their rates `η̇`.
+    pub etadot: &'a [f64],
     /// Per hinge (model hinges then rotors): the total torque the hinge must receive to have
     /// zero acceleration, everything else as now (the locked hinges locked): `(M q̈ + C −
     /// Jᵀfext)_k` with `q̈` from hybrid dynamics. A hinge held by friction sticks while the
@@ -301,6 +319,12 @@ pub struct Forces {
     /// order: the stepping API's `dipole_<name>` inputs), added by the effect that owns the
     /// torquers to its command before it clamps it. Kept between evaluations.
     pub dipole_input: Vec<f64>,
+    /// Generalised force on each elastic coordinate `ηₖ` of the flexible bodies (the
+    /// layout's `eta` order; N √kg⁻¹·m… the work per unit `ηₖ`): where a load on a flexible
+    /// body reaches its modes, `Σ φₖ(p)·f + ψₖ(p)·n` for a force `f` and couple `n` at the
+    /// point `p` of the body (its mode shapes there, [`Links::flex`]). Zeroed before every
+    /// evaluation; empty without flexible bodies.
+    pub elastic: Vec<f64>,
 }
 
 impl Forces {
@@ -315,7 +339,17 @@ impl Forces {
             dipole_command: Vec::new(),
             rotor_input: vec![0.0; n_rotors],
             dipole_input: Vec::new(),
+            elastic: Vec::new(),
         }
+    }
+    /// Room for `n` elastic coordinates' generalised forces.
+    pub fn with_elastic(mut self, n: usize) -> Self {
+        self.elastic = vec![0.0; n];
+        self
+    }
+    /// The power (W) of the elastic forces, `Σ_k Q_k η̇_k`.
+    pub fn elastic_power(&self, etadot: &[f64]) -> f64 {
+        self.elastic.iter().zip(etadot).map(|(q, e)| q * e).sum()
     }
     /// Room for `n` torquers' commands.
     pub fn with_torquers(mut self, n: usize) -> Self {
@@ -333,6 +367,7 @@ impl Forces {
         self.wrenches_added = 0;
         self.rotor_command.fill(0.0);
         self.dipole_command.fill(0.0);
+        self.elastic.fill(0.0);
     }
     /// As [`Forces::clear`], with the hinge torques set to `hinge_torque` (one copy rather
     /// than zeroing first: this runs at every right-hand side).
@@ -345,6 +380,7 @@ impl Forces {
         self.wrenches_added = 0;
         self.rotor_command.fill(0.0);
         self.dipole_command.fill(0.0);
+        self.elastic.fill(0.0);
     }
     /// The power (W) of the hinge torques, `Σ_k τ_k q̇_k`, with `v` the tree's velocity
     /// vector (its first `n_base` entries the root's). The wheel commands are not forces
@@ -427,6 +463,9 @@ pub struct Links<'a> {
     /// The tree every [`Context::model`] will be (the scene's model plus the rotors), for
     /// per-body constants an effect works out once rather than at every evaluation.
     pub model: &'a Model,
+    /// The flexible bodies, when the tree has any: their mode shapes at a point
+    /// ([`FlexModel::point_shape`]) turn a load there into [`Forces::elastic`].
+    pub flex: Option<&'a FlexModel>,
 }
 
 /// What an effect's event functions ([`Effect::events`]) read beyond the state, so that the

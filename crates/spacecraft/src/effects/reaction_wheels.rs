@@ -52,7 +52,14 @@
 //!   `min(s·(c − τₘ), s·τₘ) = 0`, falling. Both releases leave the motor torque continuous.
 //!
 //! A wheel with `max_speed` 0 keeps the plain rule (no torque that speeds it up).
+//!
+//! Faults ([`super::faults`]): a `wheel_off` wheel's motor gives no torque (its speed-limit
+//! events then stay off; friction goes on); a `wheel_stuck` wheel's hinge is locked for good
+//! by a momentum-conserving impulse, with no stick/slip or speed-limit events. Each fault's
+//! time is a stop where its event function falls through zero, so that the simulation
+//! carries out the lock as it does a stiction's.
 
+use super::faults::{FaultKind, Schedule};
 use super::{
     Context, EVENT_TEXT, Effect, EventReads, Forces, HoldReads, Links, Needs, Power, Request,
     Rotor, SceneEffect, Section, set_text,
@@ -68,9 +75,15 @@ use toml::Spanned;
 pub struct Wheel {
     /// Name (the rotor body is `wheel_<name>`).
     pub name: String,
-    /// Unit spin axis, bus axes.
+    /// The body that carries it (`None`: the bus, the root). A wheel on a gimbal body driven
+    /// by a hinge controller is a control-moment gyro.
+    pub body: Option<String>,
+    /// Unit spin axis as designed, the carrier's axes (what the flight software assumes).
     pub axis: Vec3,
-    /// Centre of the rotor in the bus frame (m).
+    /// Rotation vector of the mounting error (rad, the carrier's axes): the true spin axis is
+    /// `exp([r]×) axis`. `None`: mounted as designed.
+    pub misalignment: Option<Vec3>,
+    /// Centre of the rotor in the carrier's frame (m).
     pub at: Vec3,
     /// Rotor mass (kg; default 0, the wheel's mass being part of the bus).
     pub mass: f64,
@@ -101,7 +114,9 @@ impl Wheel {
     pub fn new(name: impl Into<String>, axis: Vec3, inertia: f64) -> Self {
         Self {
             name: name.into(),
+            body: None,
             axis: axis.normalize(),
+            misalignment: None,
             at: Vec3::zeros(),
             mass: 0.0,
             inertia,
@@ -114,6 +129,14 @@ impl Wheel {
             viscous: 0.0,
             speed: 0.0,
             torque: 0.0,
+        }
+    }
+    /// The true spin axis (unit, the carrier's axes): the designed one turned by the
+    /// misalignment.
+    pub fn true_axis(&self) -> Vec3 {
+        match self.misalignment {
+            Some(r) => nalgebra::UnitQuaternion::from_scaled_axis(r) * self.axis,
+            None => self.axis,
         }
     }
     /// Static friction `α0 + α1` (N m).
@@ -178,6 +201,15 @@ pub struct ReactionWheels {
     /// Whether each wheel is held at its speed limit (its hinge locked there).
     held: Vec<bool>,
     last: String,
+    /// Faults on the wheels ([`super::faults`]): each a time stop, and an event function
+    /// (after the stick/slip and speed-limit ones) that falls through zero when its stop
+    /// marks it due, so that it is carried out as an event (a seized wheel's lock is an
+    /// impulse).
+    faults: Schedule,
+    /// Whether each wheel's motor gives no torque (a `wheel_off` or `wheel_stuck` fault).
+    motor_off: Vec<bool>,
+    /// Whether each wheel is seized (`wheel_stuck`): its hinge locked for good.
+    seized: Vec<bool>,
 }
 
 impl ReactionWheels {
@@ -194,7 +226,67 @@ impl ReactionWheels {
             side: vec![0.0; n],
             held: vec![false; n],
             last: String::with_capacity(EVENT_TEXT),
+            faults: Schedule::default(),
+            motor_off: vec![false; n],
+            seized: vec![false; n],
         }
+    }
+    /// Adds the fault `kind` (`wheel_stuck` or `wheel_off`) on wheel `target` (index in
+    /// `wheels`) at `at` (s, finite, >= 0); refused, with the reason, otherwise.
+    pub fn add_fault(&mut self, at: f64, target: usize, kind: FaultKind) -> Result<(), String> {
+        if target >= self.wheels.len() {
+            return Err(format!("no wheel {target}"));
+        }
+        if !(at.is_finite() && at >= 0.0) {
+            return Err(format!("`at` must be a finite time >= 0 (s), got {at}"));
+        }
+        if !matches!(kind, FaultKind::WheelStuck | FaultKind::WheelOff) {
+            return Err(format!("a wheel cannot have a `{}` fault", kind.name()));
+        }
+        self.faults.push(at, target, kind);
+        Ok(())
+    }
+    /// Whether wheel `j` is seized (a `wheel_stuck` fault happened).
+    pub fn is_seized(&self, j: usize) -> bool {
+        self.seized[j]
+    }
+    /// The event functions before the faults' (stick/slip, then speed limits).
+    fn n_mode_events(&self) -> usize {
+        self.n_stick_events()
+            + if self.has_limits() {
+                self.wheels.len()
+            } else {
+                0
+            }
+    }
+    /// Carries out fault `k` at its event (its stop marked it due).
+    fn on_fault(&mut self, k: usize, ctx: &Context, own: &[f64], requests: &mut Vec<Request>) {
+        let f = &self.faults.list()[k];
+        let j = f.target;
+        let name = &self.wheels[j].name;
+        self.motor_off[j] = true;
+        self.motor[j] = 0.0;
+        self.side[j] = 0.0;
+        let h = ctx.rotor_hinge(j);
+        if f.kind == FaultKind::WheelStuck {
+            // The impulse that locks the hinge removes the speed, conserving momentum.
+            let lost = own[j];
+            (self.seized[j], self.stuck[j], self.held[j]) = (true, false, false);
+            requests.push(Request::Lock(h));
+            set_text(
+                &mut self.last,
+                format_args!("fault: wheel `{name}` stuck (speed {lost} rad/s lost)"),
+            );
+            return;
+        }
+        if self.held[j] {
+            self.held[j] = false;
+            requests.push(Request::Unlock(h));
+        }
+        set_text(
+            &mut self.last,
+            format_args!("fault: wheel `{name}` off (its motor gives no torque)"),
+        );
     }
     /// Whether wheel `j` is stuck (at rest under static friction).
     pub fn is_stuck(&self, j: usize) -> bool {
@@ -221,6 +313,9 @@ impl ReactionWheels {
     /// The motor torque of wheel `j` for the command `c` at speed `omega` in its mode.
     fn torque(&self, j: usize, c: f64, omega: f64) -> f64 {
         let w = &self.wheels[j];
+        if self.motor_off[j] {
+            return 0.0;
+        }
         if !w.limit_events() {
             return w.limited(c, omega);
         }
@@ -329,7 +424,9 @@ impl Effect for ReactionWheels {
             .iter()
             .map(|w| Rotor {
                 name: format!("wheel_{}", w.name),
-                axis: w.axis,
+                body: w.body.clone(),
+                axis: w.true_axis(),
+                nominal: w.axis,
                 at: w.at,
                 mass: w.mass,
                 axial: w.inertia,
@@ -363,7 +460,7 @@ impl Effect for ReactionWheels {
         let rotors = forces.hinge_torque[n..].iter_mut().zip(&ctx.locked[n..]);
         let commands = &forces.rotor_command;
         let inputs = &forces.rotor_input;
-        let side = &self.side;
+        let (side, off) = (&self.side, &self.motor_off);
         let wheels = self
             .wheels
             .iter()
@@ -377,7 +474,9 @@ impl Effect for ReactionWheels {
             } else {
                 w.torque
             } + inputs.get(j).copied().unwrap_or(0.0);
-            let tau = if !w.limit_events() {
+            let tau = if off[j] {
+                0.0
+            } else if !w.limit_events() {
                 w.limited(c, omega)
             } else {
                 let t = c.clamp(-w.max_torque, w.max_torque);
@@ -463,20 +562,21 @@ impl Effect for ReactionWheels {
     }
     /// One stick/slip event per wheel when any has stiction, then one speed-limit event per
     /// wheel when any has a limit (see the module documentation).
+    /// Then one per fault, `1` until its stop marks it due, then `-1`.
     fn n_events(&self) -> usize {
-        self.n_stick_events()
-            + if self.has_limits() {
-                self.wheels.len()
-            } else {
-                0
-            }
+        self.n_mode_events() + self.faults.len()
     }
     fn events(&self, ctx: &Context, forces: &Forces, own: &[f64], g: &mut [f64]) {
+        let nf = self.n_mode_events();
+        for (g, f) in g[nf..].iter_mut().zip(self.faults.list()) {
+            *g = if f.done { -1.0 } else { 1.0 };
+        }
         let n = self.n_stick_events();
         if self.has_limits() {
             for (j, w) in self.wheels.iter().enumerate() {
                 let s = self.side[j];
-                g[n + j] = if !w.limit_events() {
+                // A motor that is off has no speed limit to keep.
+                g[n + j] = if !w.limit_events() || self.motor_off[j] {
                     1.0
                 } else if self.held[j] {
                     let c = self.clamped(j, forces);
@@ -495,7 +595,7 @@ impl Effect for ReactionWheels {
         }
         for (j, w) in self.wheels.iter().enumerate() {
             let fs = w.static_friction();
-            g[j] = if fs == 0.0 {
+            g[j] = if fs == 0.0 || self.seized[j] {
                 1.0
             } else if self.stuck[j] {
                 fs - self.needed_friction(j, ctx, forces).abs()
@@ -532,6 +632,11 @@ impl Effect for ReactionWheels {
         own: &mut [f64],
         requests: &mut Vec<Request>,
     ) -> EventAction {
+        let nf = self.n_mode_events();
+        if j >= nf {
+            self.on_fault(j - nf, ctx, own, requests);
+            return EventAction::Reset;
+        }
         let n = self.n_stick_events();
         if j >= n {
             self.on_limit(j - n, ctx, forces, own, requests);
@@ -579,8 +684,17 @@ impl Effect for ReactionWheels {
     }
     fn event_direction(&self, _k: usize) -> EventDirection {
         // Stuck: the needed friction grows past the static one; slipping: d·Ω falls through 0;
-        // the speed limits' functions fall through 0 when the mode ends.
+        // the speed limits' functions fall through 0 when the mode ends; a fault's when due.
         EventDirection::Falling
+    }
+    fn next_sample(&self) -> f64 {
+        self.faults.next()
+    }
+    /// Marks the faults due: their event functions fall through zero, and the events carry
+    /// them out.
+    fn sample(&mut self, ctx: &Context) -> Result<(), SystemError> {
+        while self.faults.take_due(ctx.t).is_some() {}
+        Ok(())
     }
     fn describe_event(&self, _k: usize) -> String {
         self.last.clone()
@@ -675,6 +789,12 @@ pub struct WheelFile {
     /// Rotor centre, bus frame (m, default origin).
     #[serde(default)]
     pub at: Option<[f64; 3]>,
+    /// The carrier body's name (default the root).
+    #[serde(default)]
+    pub body: Option<Spanned<String>>,
+    /// Mounting error, a rotation vector (rad, the carrier's axes; default none).
+    #[serde(default)]
+    pub misalignment: Option<[f64; 3]>,
     /// Torque limit (N m, default unlimited).
     #[serde(default)]
     pub max_torque: Option<f64>,
@@ -760,6 +880,36 @@ impl SceneEffect for ReactionWheels {
             };
             wheel.mass = nn(f.mass, "mass", 0.0)?;
             wheel.at = f.at.map(Vec3::from).unwrap_or_else(Vec3::zeros);
+            if let Some(b) = &f.body {
+                let model = section.model();
+                if model.body_index(b.get_ref()).is_none() {
+                    let names: Vec<&str> = model.bodies().iter().map(|b| b.name()).collect();
+                    return Err(section.error(
+                        Some(b.span()),
+                        format!(
+                            "wheel `{}`: unknown body `{}` (the model's bodies: {})",
+                            wheel.name,
+                            b.get_ref(),
+                            names.join(", ")
+                        ),
+                    ));
+                }
+                if model.body_index(b.get_ref()) != Some(0) {
+                    wheel.body = Some(b.get_ref().clone());
+                }
+            }
+            if let Some(m) = f.misalignment {
+                if !m
+                    .iter()
+                    .all(|x| x.is_finite() && x.abs() <= std::f64::consts::PI)
+                {
+                    return Err(section.error(
+                        span.clone(),
+                        "`misalignment` must be three finite angles within ±π (rad)",
+                    ));
+                }
+                wheel.misalignment = Some(Vec3::from(m));
+            }
             wheel.max_torque = nn(f.max_torque, "max_torque", f64::INFINITY)?;
             wheel.max_speed = nn(f.max_speed, "max_speed", f64::INFINITY)?;
             wheel.coulomb = nn(f.coulomb, "coulomb", 0.0)?;
@@ -799,6 +949,7 @@ mod tests {
             dipoles_commanded: false,
             thrusters: &[],
             model: &model,
+            flex: None,
         };
         let free = Wheel::new("w", Vec3::z(), 0.1);
         let idle = |w: &Wheel, commanded| {

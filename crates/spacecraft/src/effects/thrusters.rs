@@ -38,12 +38,20 @@
 //!
 //! Energy: the thrust's work is an actuator's (the default [`Power`](super::Power)); with an
 //! orbit only its part in the falling frame counts (the work on the orbit is the orbit's).
+//!
+//! Faults ([`super::faults`]): from a `thruster_stuck_on` fault's time a thruster fires
+//! whatever its duty, from a `thruster_off` fault's it never fires; each fault's time is a
+//! time stop, logged in the run's events.
 
+use super::faults::{FaultKind, Schedule};
 use super::{Bound, Context, Effect, Forces, Needs, Sampling, SceneEffect, Section};
+use nalgebra::UnitQuaternion;
 use satsim_integrate::{SystemError, stop_due};
 use satsim_tree::io::FileError;
 use satsim_tree::spatial::{Force, Vec3};
 use serde::Deserialize;
+use std::f64::consts::PI;
+use std::ops::Range;
 use toml::Spanned;
 
 /// The fraction of a period within which an on-time counts as zero or as reaching the next
@@ -75,8 +83,12 @@ pub struct Thruster {
     pub body: usize,
     /// Point of application, body frame (m).
     pub at: Vec3,
-    /// Unit direction of the force on the spacecraft, body axes.
+    /// Unit direction of the force on the spacecraft, body axes: the true one, misalignment
+    /// included.
     pub direction: Vec3,
+    /// The unit direction the flight software assumes (body axes): `direction` without its
+    /// misalignment. The thrusters' allocation uses this one.
+    pub nominal: Vec3,
     /// The force while on (N, > 0).
     pub thrust: f64,
     /// The minimum impulse bit (N s, >= 0): a shorter pulse is not fired.
@@ -127,6 +139,16 @@ pub struct Thrusters {
     off_at: Vec<f64>,
     /// The last period start latched (`-∞` before the first).
     latched_at: f64,
+    /// Faults on the thrusters ([`super::faults`]), each a time stop.
+    faults: Schedule,
+    /// Each thruster's fault once it happened: `Some(true)` stuck on, `Some(false)` off.
+    failed: Vec<Option<bool>>,
+    /// Faults happened and not yet logged.
+    said: Vec<String>,
+    /// Per thruster on a flexible body: where its body's modes lie among the elastic
+    /// coordinates, and the translation `φₖ` of each mode at its point (body axes): its
+    /// force `f` loads mode `k` with `φₖ · f` (set by `connect`).
+    modal: Vec<Option<(Range<usize>, Vec<Vec3>)>>,
 }
 
 impl Thrusters {
@@ -143,7 +165,27 @@ impl Thrusters {
             firing: vec![false; n],
             off_at: vec![f64::INFINITY; n],
             latched_at: f64::NEG_INFINITY,
+            faults: Schedule::default(),
+            failed: vec![None; n],
+            said: Vec::new(),
+            modal: vec![None; n],
         })
+    }
+    /// Adds the fault `kind` (`thruster_stuck_on` or `thruster_off`) on thruster `target`
+    /// (index in [`Thrusters::list`]) at `at` (s, finite, >= 0); refused, with the reason,
+    /// otherwise.
+    pub fn add_fault(&mut self, at: f64, target: usize, kind: FaultKind) -> Result<(), String> {
+        if target >= self.thrusters.len() {
+            return Err(format!("no thruster {target}"));
+        }
+        if !(at.is_finite() && at >= 0.0) {
+            return Err(format!("`at` must be a finite time >= 0 (s), got {at}"));
+        }
+        if !matches!(kind, FaultKind::ThrusterStuckOn | FaultKind::ThrusterOff) {
+            return Err(format!("a thruster cannot have a `{}` fault", kind.name()));
+        }
+        self.faults.push(at, target, kind);
+        Ok(())
     }
     /// The control period (s).
     pub fn period(&self) -> f64 {
@@ -188,6 +230,11 @@ impl Thrusters {
             Some(s) if s.is_finite() => t + s,
             _ => f64::INFINITY,
         };
+        // A failed valve ignores its duty.
+        if let Some(on) = self.failed[j] {
+            self.firing[j] = on;
+            self.off_at[j] = f64::INFINITY;
+        }
     }
 }
 
@@ -222,7 +269,9 @@ impl Effect for Thrusters {
     fn next_sample(&self) -> f64 {
         self.off_at
             .iter()
-            .fold(self.sampling.next(), |s, &t| s.min(t))
+            .fold(self.sampling.next().min(self.faults.next()), |s, &t| {
+                s.min(t)
+            })
     }
     fn sample(&mut self, ctx: &Context) -> Result<(), SystemError> {
         let t = ctx.t;
@@ -235,7 +284,25 @@ impl Effect for Thrusters {
         if stop_due(t, self.sampling.next()) {
             self.latch(t);
         }
+        // Faults after the latch: they override its duty from `t` on.
+        while let Some(k) = self.faults.take_due(t) {
+            let f = &self.faults.list()[k];
+            let (j, on) = (f.target, f.kind == FaultKind::ThrusterStuckOn);
+            self.failed[j] = Some(on);
+            self.firing[j] = on;
+            self.off_at[j] = f64::INFINITY;
+            let what = if on {
+                "stuck on (full thrust)"
+            } else {
+                "off (fires no more)"
+            };
+            let name = &self.thrusters[j].name;
+            self.said.push(format!("fault: thruster `{name}` {what}"));
+        }
         Ok(())
+    }
+    fn drain_sample_log(&mut self, out: &mut Vec<String>) {
+        out.append(&mut self.said);
     }
     fn apply(
         &mut self,
@@ -244,13 +311,29 @@ impl Effect for Thrusters {
         _own: &[f64],
         _own_dot: &mut [f64],
     ) -> Result<(), SystemError> {
-        for (th, &on) in self.thrusters.iter().zip(&self.firing) {
+        for ((th, &on), modal) in self.thrusters.iter().zip(&self.firing).zip(&self.modal) {
             if on {
                 let f = th.thrust * th.direction;
                 forces.add_wrench(th.body, Force::new(th.at.cross(&f), f));
+                // On a flexible body the force also bends it: its work on each mode.
+                if let Some((range, phi)) = modal {
+                    for (q, p) in forces.elastic[range.clone()].iter_mut().zip(phi) {
+                        *q += p.dot(&f);
+                    }
+                }
             }
         }
         Ok(())
+    }
+    fn connect(&mut self, links: &super::Links) {
+        self.modal = self
+            .thrusters
+            .iter()
+            .map(|th| {
+                let (range, shape) = links.flex?.point_shape(th.body, &th.at)?;
+                Some((range, shape.phi))
+            })
+            .collect();
     }
     fn output_columns(&self) -> Vec<String> {
         self.thrusters
@@ -278,6 +361,10 @@ pub struct ThrusterFile {
     pub at: Spanned<[f64; 3]>,
     /// Direction of the force on the spacecraft, body axes (normalised; not zero).
     pub direction: Spanned<[f64; 3]>,
+    /// Mounting error, a rotation vector (rad, body axes; default none): the true direction
+    /// is `exp([r]×) direction`.
+    #[serde(default)]
+    pub misalignment: Option<Spanned<[f64; 3]>>,
     /// The force while on (N, > 0).
     pub thrust: Spanned<f64>,
     /// The minimum impulse bit (N s, >= 0, default 0).
@@ -393,11 +480,27 @@ impl SceneEffect for Thrusters {
                     ));
                 }
             };
+            let nominal = direction / norm;
+            let true_direction = match &t.misalignment {
+                None => nominal,
+                Some(m) if m.get_ref().iter().all(|x| x.is_finite() && x.abs() <= PI) => {
+                    UnitQuaternion::from_scaled_axis(Vec3::from(*m.get_ref())) * nominal
+                }
+                Some(m) => {
+                    return Err(section.error(
+                        Some(m.span()),
+                        format!(
+                            "thruster `{name}`: `misalignment` must be three finite angles within ±π (rad)"
+                        ),
+                    ));
+                }
+            };
             thrusters.push(Thruster {
                 name: name.clone(),
                 body,
                 at,
-                direction: direction / norm,
+                direction: true_direction,
+                nominal,
                 thrust,
                 min_impulse,
                 mode,
@@ -421,6 +524,7 @@ mod tests {
             body: 0,
             at: Vec3::zeros(),
             direction: Vec3::z(),
+            nominal: Vec3::z(),
             thrust: 2.0,
             min_impulse,
             mode,

@@ -125,7 +125,7 @@ impl DipoleBlock {
             .filter_map(|name| {
                 let j = links.rotors.iter().position(|r| &r.name == name)?;
                 let r = &links.rotors[j];
-                Some((j, r.axis, r.axial))
+                Some((j, r.nominal, r.axial))
             })
             .collect();
     }

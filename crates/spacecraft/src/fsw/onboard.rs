@@ -410,7 +410,7 @@ impl Onboard {
                     for (name, max) in wheels {
                         if let Some(j) = links.rotors.iter().position(|r| &r.name == name) {
                             c.targets.push(j);
-                            axes.push(links.rotors[j].axis);
+                            axes.push(links.rotors[j].nominal);
                             limits.push(*max);
                         }
                     }
@@ -435,7 +435,7 @@ impl Onboard {
                         if t.body == 0 {
                             c.targets.push(j);
                             at.push(t.at);
-                            axes.push(t.direction);
+                            axes.push(t.nominal);
                             thrust.push(t.thrust);
                         }
                     }

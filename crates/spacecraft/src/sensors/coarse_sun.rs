@@ -24,10 +24,9 @@ use satsim_environment::shadow::{ShadowModel, shadow_fraction};
 use satsim_environment::sun::sun_position;
 use satsim_environment::{Epoch, R_EARTH};
 use satsim_tree::spatial::Vec3;
-use std::f64::consts::PI;
 
-/// The Earth's uniform albedo (the Bond albedo, 0.3).
-pub const ALBEDO: f64 = 0.3;
+// The Earth's light as the effects see it (`[effects.solar_radiation] albedo`): one model.
+pub use satsim_environment::earth_radiation::{ALBEDO, sphere_view_factor};
 
 /// A coarse Sun sensor (one photodiode).
 #[derive(Clone, Debug, PartialEq)]
@@ -79,36 +78,4 @@ impl CoarseSun {
         out[0] = self.scale * (direct + earth) + d.normal(self.noise);
         Ok(())
     }
-}
-
-/// The view factor from a small plate to a sphere: the plate at `h` radii from the
-/// sphere's centre (`h >= 1`), its normal at `β` from the direction to the centre
-/// (`cos_beta = cos β`). The closed form (Howell's catalogue of configuration factors,
-/// "differential planar element to sphere"): `cos β / h²` while the whole sphere is above the
-/// plate's horizon (`cos β >= 1/h`); 0 when none of it is (`cos β <= −1/h`); between,
-///
-/// `1/2 − asin(x / (h sin β)) / π + (cos β acos(−x cot β) − x √(1 − h² cos² β)) / (π h²)`,
-/// `x = √(h² − 1)`.
-///
-/// ```
-/// use satsim_spacecraft::sensors::coarse_sun::sphere_view_factor;
-/// assert_eq!(sphere_view_factor(1.0, 2.0), 0.25); // facing the centre: (R / r)²
-/// assert_eq!(sphere_view_factor(-0.6, 2.0), 0.0);  // facing away
-/// ```
-pub fn sphere_view_factor(cos_beta: f64, h: f64) -> f64 {
-    let h = h.max(1.0);
-    let cos_beta = cos_beta.clamp(-1.0, 1.0);
-    let h2 = h * h;
-    if cos_beta * h >= 1.0 {
-        return cos_beta / h2;
-    }
-    if cos_beta * h <= -1.0 {
-        return 0.0;
-    }
-    let sin_beta = (1.0 - cos_beta * cos_beta).sqrt();
-    let x = (h2 - 1.0).sqrt();
-    let a = (x / (h * sin_beta)).min(1.0).asin();
-    let b = (-x * cos_beta / sin_beta).clamp(-1.0, 1.0).acos();
-    let c = (1.0 - h2 * cos_beta * cos_beta).max(0.0).sqrt();
-    (0.5 - a / PI + (cos_beta * b - x * c) / (PI * h2)).max(0.0)
 }

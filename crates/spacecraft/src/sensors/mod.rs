@@ -65,6 +65,7 @@ pub use mounting::Misalignment;
 pub use star_tracker::StarTracker;
 pub use sun_sensor::SunSensor;
 
+use crate::effects::faults::{FaultKind, Schedule, show};
 use crate::effects::{Context, Effect, Forces, Links, Needs, OrbitState, Sampling};
 use crate::fsw::Onboard;
 use chacha20::ChaCha12Rng;
@@ -286,6 +287,11 @@ pub struct Sensor {
     mount: Option<Misalignment>,
     quantization: Option<f64>,
     kind: Kind,
+    /// The time of its `sensor_stuck` fault (`∞`: none): readings from then on are held.
+    stuck_from: f64,
+    /// The time of its `sensor_bias` fault (`∞`: none), and the bias (its units).
+    bias_from: f64,
+    bias: [f64; 6],
 }
 
 impl Sensor {
@@ -304,6 +310,9 @@ impl Sensor {
             mount: None,
             quantization: None,
             kind,
+            stuck_from: f64::INFINITY,
+            bias_from: f64::INFINITY,
+            bias: [0.0; 6],
         })
     }
     /// The same sensor with its axes turned from its body's by `misalignment` (see
@@ -406,10 +415,14 @@ impl Sensor {
         if let Kind::Gyro(g) = &mut self.kind {
             g.walk(self.clock.period(), &mut d);
         }
-        if valid {
-            self.reading = r;
+        // Stuck: the reading and its validity stay those last taken before the fault.
+        if !self.stuck(ctx.t) {
+            self.biased(ctx.t, &mut r);
+            if valid {
+                self.reading = r;
+            }
+            self.valid = valid;
         }
-        self.valid = valid;
         self.taken += 1;
         self.clock.taken(ctx.t);
         Ok(())
@@ -418,15 +431,33 @@ impl Sensor {
     /// yet latched), else the one last taken. NaN where it cannot be read (no orbit).
     fn current(&self, ctx: &Context) -> ([f64; 6], f64) {
         let flag = |v: bool| if v { 1.0 } else { 0.0 };
-        if stop_due(ctx.t, self.clock.next()) {
+        if stop_due(ctx.t, self.clock.next()) && !self.stuck(ctx.t) {
             let mut r = [0.0; 6];
             match self.read(ctx, &mut self.noise.sample(self.taken), &mut r) {
-                Ok(true) => (r, 1.0),
+                Ok(true) => {
+                    self.biased(ctx.t, &mut r);
+                    (r, 1.0)
+                }
                 Ok(false) => (self.reading, 0.0),
                 Err(_) => ([f64::NAN; 6], f64::NAN),
             }
         } else {
             (self.reading, flag(self.valid))
+        }
+    }
+    /// Whether a sample at `t` holds the reading last taken (a `sensor_stuck` fault at or
+    /// before `t`).
+    fn stuck(&self, t: f64) -> bool {
+        stop_due(t, self.stuck_from)
+    }
+    /// Adds the `sensor_bias` fault's bias to the reading `r` of a sample at `t` (after the
+    /// quantisation: the bias is the reading's error) when the fault is at or before `t`.
+    fn biased(&self, t: f64, r: &mut [f64; 6]) {
+        if stop_due(t, self.bias_from) {
+            let w = self.kind.width();
+            for (v, b) in r[..w].iter_mut().zip(&self.bias[..w]) {
+                *v += b;
+            }
         }
     }
     /// Latches `reading` as a sample's (kept when `valid`), as [`Sensor::take`] does: for
@@ -468,6 +499,11 @@ pub struct Sensors {
     sensors: Vec<Sensor>,
     /// The flight software that reads these sensors (`[fsw]`), if any.
     fsw: Option<Box<Onboard>>,
+    /// The sensors' faults, each a time stop at which it is logged (a sensor applies its
+    /// own by time: [`Sensor::stuck`], [`Sensor::biased`]).
+    faults: Schedule,
+    /// Faults happened and not yet logged.
+    said: Vec<String>,
 }
 
 impl Sensors {
@@ -477,7 +513,48 @@ impl Sensors {
             seed,
             sensors: Vec::new(),
             fsw: None,
+            faults: Schedule::default(),
+            said: Vec::new(),
         }
+    }
+    /// Adds the fault `kind` on sensor `target` (index in [`Sensors::sensors`]) at `at` (s,
+    /// finite, >= 0): a `sensor_stuck` or a `sensor_bias` whose bias has one value per
+    /// component of the sensor's reading. Refused, with the reason, otherwise, or when the
+    /// sensor already has a fault of that kind.
+    pub fn add_fault(&mut self, at: f64, target: usize, kind: FaultKind) -> Result<(), String> {
+        let s = self
+            .sensors
+            .get_mut(target)
+            .ok_or_else(|| format!("no sensor {target}"))?;
+        if !(at.is_finite() && at >= 0.0) {
+            return Err(format!("`at` must be a finite time >= 0 (s), got {at}"));
+        }
+        let twice = |k: &str| format!("sensor `{}` has two `{k}` faults", s.name);
+        match &kind {
+            FaultKind::SensorStuck if s.stuck_from.is_finite() => return Err(twice(kind.name())),
+            FaultKind::SensorStuck => s.stuck_from = at,
+            FaultKind::SensorBias(_) if s.bias_from.is_finite() => {
+                return Err(twice(kind.name()));
+            }
+            FaultKind::SensorBias(b) => {
+                let w = s.kind.width();
+                if b.len() != w || !b.iter().all(|v| v.is_finite()) {
+                    return Err(format!(
+                        "a `sensor_bias` of {} `{}` needs {} finite number{} (one per component of its reading, its units), got {}",
+                        s.kind.name(),
+                        s.name,
+                        w,
+                        if w == 1 { "" } else { "s" },
+                        show(b)
+                    ));
+                }
+                s.bias[..w].copy_from_slice(b);
+                s.bias_from = at;
+            }
+            other => return Err(format!("a sensor cannot have a `{}` fault", other.name())),
+        }
+        self.faults.push(at, target, kind);
+        Ok(())
     }
     /// Hosts the flight software `fsw`, whose blocks read these sensors (the indices of its
     /// specs are indices into [`Sensors::sensors`]): it runs at each sample instant after
@@ -571,9 +648,33 @@ impl Effect for Sensors {
     }
     fn next_sample(&self) -> f64 {
         let fsw = self.fsw.as_ref().map_or(f64::INFINITY, |f| f.next_sample());
-        self.sensors.iter().fold(fsw, |m, s| m.min(s.clock.next()))
+        let own = self.faults.next().min(fsw);
+        self.sensors.iter().fold(own, |m, s| m.min(s.clock.next()))
     }
     fn sample(&mut self, ctx: &Context) -> Result<(), SystemError> {
+        // A fault's stop logs it (before a sample at the same time, which it affects).
+        while let Some(k) = self.faults.take_due(ctx.t) {
+            let f = &self.faults.list()[k];
+            let s = &self.sensors[f.target];
+            self.said.push(match &f.kind {
+                FaultKind::SensorBias(b) => {
+                    format!("fault: sensor `{}` biased by {}", s.name, show(&b[..]))
+                }
+                _ => format!(
+                    "fault: sensor `{}` stuck (reading held at {})",
+                    s.name,
+                    show(s.last_reading())
+                ),
+            });
+        }
+        // The sensors and the flight software sample on their clocks only.
+        let fsw_due = self
+            .fsw
+            .as_ref()
+            .is_some_and(|f| stop_due(ctx.t, f.next_sample()));
+        if !fsw_due && !self.sensors.iter().any(|s| stop_due(ctx.t, s.clock.next())) {
+            return Ok(());
+        }
         for s in &mut self.sensors {
             if stop_due(ctx.t, s.clock.next()) {
                 s.take(ctx)?;
@@ -626,6 +727,7 @@ impl Effect for Sensors {
         }
     }
     fn drain_sample_log(&mut self, out: &mut Vec<String>) {
+        out.append(&mut self.said);
         if let Some(f) = &mut self.fsw {
             f.drain_log(out);
         }
@@ -707,6 +809,41 @@ mod tests {
         assert_eq!(g.bias, b0 + step);
         assert_eq!(g.white_std(0.25), 0.0);
         assert_eq!(Gyro::new(1e-4, 0.0, Vec3::zeros()).white_std(0.25), 2e-4);
+    }
+
+    #[test]
+    fn a_sensor_fault_is_a_stop_and_is_refused_when_it_does_not_fit_its_sensor() {
+        let mut set = Sensors::new(1);
+        let gyro = Gyro::new(0.0, 0.0, Vec3::zeros());
+        set.push(Sensor::new("g", 0, 0.1, Kind::Gyro(gyro)).unwrap());
+        let st = StarTracker::from_arcsec([0.0; 3]);
+        set.push(Sensor::new("st", 0, 0.1, Kind::StarTracker(st)).unwrap());
+        let bias = |v: &[f64]| FaultKind::SensorBias(v.to_vec());
+        assert!(set.add_fault(0.25, 0, bias(&[1.0, 2.0, 3.0])).is_ok());
+        assert!(set.add_fault(0.35, 1, FaultKind::SensorStuck).is_ok());
+        // The sensors' clocks start at -∞; past the first samples, the faults are stops.
+        for s in &mut set.sensors {
+            s.clock.taken(0.2);
+        }
+        assert_eq!(set.next_sample(), 0.25);
+        assert!(set.sensors[1].stuck(0.35) && !set.sensors[1].stuck(0.3));
+        let mut r = [0.0; 6];
+        set.sensors[0].biased(0.2, &mut r);
+        assert_eq!(r, [0.0; 6]);
+        set.sensors[0].biased(0.25, &mut r);
+        assert_eq!(r, [1.0, 2.0, 3.0, 0.0, 0.0, 0.0]);
+        let refused = |set: &mut Sensors, at, j, kind| set.add_fault(at, j, kind).unwrap_err();
+        let e = refused(&mut set, 1.0, 1, bias(&[1.0, 2.0, 3.0]));
+        assert!(
+            e.contains("star_tracker `st` needs 4 finite numbers"),
+            "{e}"
+        );
+        assert!(refused(&mut set, 1.0, 1, bias(&[f64::NAN; 4])).contains("finite"));
+        assert!(set.add_fault(1.0, 1, bias(&[0.0; 4])).is_ok());
+        assert!(refused(&mut set, 2.0, 1, bias(&[0.0; 4])).contains("two `sensor_bias`"));
+        assert!(refused(&mut set, 1.0, 1, FaultKind::SensorStuck).contains("two"));
+        assert!(refused(&mut set, -1.0, 0, FaultKind::SensorStuck).contains(">= 0"));
+        assert!(refused(&mut set, 1.0, 0, FaultKind::WheelOff).contains("cannot"));
     }
 
     // ---- Misalignment, scale factor, exclusion, coarse Sun sensor (contract section 17).

@@ -10,9 +10,7 @@ use crate::effects::{
 use satsim_integrate::SystemError;
 use satsim_satellite::kernel::UnrolledAba;
 use satsim_tree::flexible::FlexModel;
-use satsim_tree::{
-    BaseKind, Body, ForwardDynamics, Hinge, Kernel, Model, ModelError, State, forward_poses,
-};
+use satsim_tree::{BaseKind, Body, ForwardDynamics, Hinge, Kernel, Model, State, forward_poses};
 use std::ops::Range;
 
 /// Builds a [`Simulation`] from a model, an initial state and effects.
@@ -128,17 +126,28 @@ impl SimulationBuilder {
     }
 }
 
-/// The model plus rotor bodies hinged to its root (appended after its hinges).
-pub(super) fn with_rotors(model: &Model, rotors: &[Rotor]) -> Result<Model, ModelError> {
+/// The model plus rotor bodies hinged to their carriers (the root unless a rotor names
+/// another body; appended after the model's hinges).
+pub(super) fn with_rotors(model: &Model, rotors: &[Rotor]) -> Result<Model, SimError> {
     let mut b = model.to_builder();
     let root = model.bodies()[0].name().to_owned();
     for r in rotors {
+        let carrier = match &r.body {
+            None => root.clone(),
+            Some(name) if model.body_index(name).is_some() => name.clone(),
+            Some(name) => {
+                let names: Vec<&str> = model.bodies().iter().map(|b| b.name()).collect();
+                return Err(SimError::Needs(format!(
+                    "rotor `{}`: unknown body `{name}` (the model's bodies: {})",
+                    r.name,
+                    names.join(", ")
+                )));
+            }
+        };
         b.push_body(Body::new(r.name.clone(), r.mass, r.inertia()));
-        b.push_hinge(
-            Hinge::revolute(r.name.clone(), root.clone(), r.name.clone(), r.axis).at(r.at),
-        );
+        b.push_hinge(Hinge::revolute(r.name.clone(), carrier, r.name.clone(), r.axis).at(r.at));
     }
-    b.build()
+    Ok(b.build()?)
 }
 
 impl Simulation {
@@ -267,13 +276,13 @@ impl Simulation {
         } else {
             with_rotors(&user, &rotors)?
         };
-        connect(&mut effects, &rotors, &torquers, &model);
         let orbit_effect = effects.iter().position(|e| e.name() == "orbit");
         let flex = match flex {
             Some(f) if rotors.is_empty() => Some(f),
             Some(f) => Some(f.with_rigid(model.clone())?),
             None => None,
         };
+        connect(&mut effects, &rotors, &torquers, &model, flex.as_ref());
         let n_elastic = flex.as_ref().map_or(0, |f| f.n_elastic());
         let (eta0, etadot0) =
             elastic.unwrap_or_else(|| (vec![0.0; n_elastic], vec![0.0; n_elastic]));
@@ -351,8 +360,9 @@ impl Simulation {
             .map(|k| Box::new(k) as Box<dyn Kernel>);
         let fd = ForwardDynamics::new(&model).with_optional_kernel(kernel);
         let mut data = SimData::new(&model, n_rotors, layout.len);
-        data.forces =
-            std::mem::replace(&mut data.forces, Forces::new(0, 0, 0)).with_torquers(torquers.len());
+        data.forces = std::mem::replace(&mut data.forces, Forces::new(0, 0, 0))
+            .with_torquers(torquers.len())
+            .with_elastic(n_elastic);
         data.needs_kinematics = needs_kinematics;
         data.needs_velocities = needs_velocities;
         if !rotor_poses {
@@ -440,7 +450,13 @@ impl Simulation {
             .map(|i| effects[i].rotors())
             .unwrap_or_default();
         let torquers: Vec<Torquer> = effects.iter().flat_map(|e| e.torquers()).collect();
-        connect(&mut effects, &rotors, &torquers, &self.model.tree);
+        connect(
+            &mut effects,
+            &rotors,
+            &torquers,
+            &self.model.tree,
+            self.model.flex.as_ref(),
+        );
         self.effects = effects;
         self.log = RunLog {
             calls: vec![0; self.effects.len()],
@@ -496,7 +512,13 @@ impl Simulation {
 }
 
 /// Tells every effect what the rest of the simulation provides ([`Effect::connect`]).
-fn connect(effects: &mut [Box<dyn Effect>], rotors: &[Rotor], torquers: &[Torquer], model: &Model) {
+fn connect(
+    effects: &mut [Box<dyn Effect>],
+    rotors: &[Rotor],
+    torquers: &[Torquer],
+    model: &Model,
+    flex: Option<&FlexModel>,
+) {
     let thrusters: Vec<Thruster> = effects.iter().flat_map(|e| e.thrusters()).collect();
     let links = Links {
         rotors,
@@ -505,6 +527,7 @@ fn connect(effects: &mut [Box<dyn Effect>], rotors: &[Rotor], torquers: &[Torque
         dipoles_commanded: effects.iter().any(|e| e.commands_dipoles()),
         thrusters: &thrusters,
         model,
+        flex,
     };
     for e in effects {
         e.connect(&links);

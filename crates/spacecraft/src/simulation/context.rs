@@ -111,6 +111,8 @@ impl Simulation {
             attitude,
             omega,
             rotor_rates: &v[nb + *n_user..],
+            eta: &x[layout.eta.clone()],
+            etadot: &x[layout.etadot.clone()],
             hold_torque: hold,
             power,
         };

@@ -75,8 +75,9 @@ impl Simulation {
             (Some(f), Some(w)) => {
                 // The accelerations go to `a`, which RNEA then reads beside `w`'s buffers.
                 let mut a = std::mem::take(&mut w.a);
-                let solved = flexible_dynamics(f, w, &d.tau, fext, Some(&d.hold_mask))
-                    .map(|ddq| a.copy_from_slice(ddq));
+                let solved =
+                    flexible_dynamics(f, w, &d.tau, &d.forces.elastic, fext, Some(&d.hold_mask))
+                        .map(|ddq| a.copy_from_slice(ddq));
                 let need = solved.and_then(|()| {
                     flexible::rnea(f, &mut w.data, &w.q, &w.v, &a, fext).map(|_| ())
                 });

@@ -333,7 +333,9 @@ pub fn attitude_norm_error(layout: &StateLayout, x: &[f64]) -> f64 {
 pub fn rotor_inertia(axis: Vec3, axial: f64, transverse: f64) -> Mat3 {
     Rotor {
         name: String::new(),
+        body: None,
         axis,
+        nominal: axis,
         at: Vec3::zeros(),
         mass: 0.0,
         axial,

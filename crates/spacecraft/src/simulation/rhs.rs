@@ -302,7 +302,7 @@ impl Simulation {
             // Energy budget: the constant torques are an actuator's; each effect's forces
             // are measured by the change of the total power it makes.
             let mut hinges = if track {
-                h.forces.hinge_power(ctx.v, nb)
+                h.forces.hinge_power(ctx.v, nb) + h.forces.elastic_power(ctx.etadot)
             } else {
                 0.0
             };
@@ -314,7 +314,7 @@ impl Simulation {
                 }
                 e.apply(ctx, h.forces, &x[r.clone()], &mut own_dot[r.clone()])?;
                 if track {
-                    let now = h.forces.hinge_power(ctx.v, nb);
+                    let now = h.forces.hinge_power(ctx.v, nb) + h.forces.elastic_power(ctx.etadot);
                     let mut applied = now - hinges;
                     hinges = now;
                     if h.forces.wrenches_added() != added {
@@ -382,7 +382,8 @@ impl Simulation {
             (Some(f), Some(w)) => {
                 let locked = (d.n_locked > 0).then_some(d.locked.as_slice());
                 let fext = fext.then_some(d.forces.body_wrench.as_slice());
-                let ddq = flexible_dynamics(f, w, &d.tau, fext, locked).map_err(err)?;
+                let ddq = flexible_dynamics(f, w, &d.tau, &d.forces.elastic, fext, locked)
+                    .map_err(err)?;
                 let nv = d.ddq.len();
                 d.ddq.copy_from_slice(&ddq[..nv]);
                 dx[m.layout.etadot.clone()].copy_from_slice(&ddq[nv..]);
@@ -497,6 +498,7 @@ mod tests {
             dipoles_commanded: false,
             thrusters: &[],
             model: sim.model(),
+            flex: None,
         });
         assert!(connected.idle);
     }

@@ -14,10 +14,15 @@ pub(super) fn flexible_dynamics<'w>(
     model: &FlexModel,
     work: &'w mut FlexWork,
     tau: &[f64],
+    elastic: &[f64],
     fext: Option<&[Force]>,
     locked: Option<&[bool]>,
 ) -> Result<&'w [f64], DynamicsError> {
     work.tau[..tau.len()].copy_from_slice(tau);
+    // The loads' generalised forces on the modes (empty: none).
+    if !elastic.is_empty() {
+        work.tau[tau.len()..].copy_from_slice(elastic);
+    }
     let FlexWork {
         data, q, v, tau, ..
     } = work;

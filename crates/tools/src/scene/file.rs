@@ -126,6 +126,9 @@ pub struct SceneFile {
     /// `[fsw]`: built-in flight software on the sensors ([`super::fsw`]).
     #[serde(default)]
     pub fsw: Option<Spanned<super::fsw::FswFile>>,
+    /// `[[faults]]`: faults injected at a time ([`super::faults`]).
+    #[serde(default)]
+    pub faults: Vec<Spanned<super::faults::FaultFile>>,
     /// `[campaign]`: read by `satsim campaign` ([`crate::campaign`]); a single run ignores it
     /// and runs the nominal scene.
     #[serde(default)]

@@ -825,8 +825,11 @@ impl Within<'_> {
         } else {
             match self.effects.get::<ReactionWheels>() {
                 Some(w) if !w.wheels.is_empty() => Actuator::Wheels(
+                    // The bus's wheels: a wheel on another body (a control-moment gyro's
+                    // rotor) turns with it, out of the bus's fixed axes the PID allocates in.
                     w.wheels
                         .iter()
+                        .filter(|w| w.body.is_none())
                         .map(|w| (format!("wheel_{}", w.name), w.max_torque))
                         .collect(),
                 ),
@@ -977,6 +980,7 @@ impl Within<'_> {
                 Some(w) if !w.wheels.is_empty() => w
                     .wheels
                     .iter()
+                    .filter(|w| w.body.is_none())
                     .map(|w| format!("wheel_{}", w.name))
                     .collect(),
                 _ => {

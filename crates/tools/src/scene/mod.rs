@@ -34,8 +34,11 @@
 //! - [`integrator`], the `[integrator]` table;
 //! - [`orbit`], the `[orbit]` table;
 //! - [`sensors`](mod@sensors), the `[sensors]` table;
-//! - [`fsw`](mod@fsw), the `[fsw]` table (built-in flight software on the sensors).
+//! - [`fsw`](mod@fsw), the `[fsw]` table (built-in flight software on the sensors);
+//! - [`faults`](mod@faults), the `[[faults]]` (each handed to the effect that owns its
+//!   target).
 
+pub mod faults;
 pub mod file;
 pub mod flexible;
 pub mod fsw;

@@ -194,6 +194,7 @@ impl<'a> Parser<'a> {
         if let Some(f) = &file.fsw {
             super::fsw::read(self, f, &model, epoch, &mut effects, &mut clocks)?;
         }
+        super::faults::read(self, &file.faults, &mut effects)?;
         let scene = Scene {
             path,
             model,

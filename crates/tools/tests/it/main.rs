@@ -2,14 +2,18 @@
 //! link), one module per subject.
 
 mod common;
+mod earth_radiation;
 mod edges;
 mod energy_budget;
 mod environment;
 mod event_slopes;
+mod faults;
+mod flexible_loads;
 mod flexible_scene;
 mod fsw;
 mod lanes;
 mod linearize;
+mod mounting;
 mod orbit_gravity;
 mod orbital_start;
 mod plots;

@@ -415,6 +415,19 @@ impl FlexModel {
         q.resize(self.nq(), 0.0);
         q
     }
+    /// The mode shapes of body `i` at its point `p` (body frame, m), with where its modes lie
+    /// among the elastic coordinates: a load `(n, f)` (couple, force; body axes) at `p`
+    /// does the work `Σₖ (ψₖ·n + φₖ·f) δηₖ`, its generalised forces on them. `None` for a
+    /// rigid body, and for given modes (a modes file's shapes are known at its nodes only).
+    pub fn point_shape(
+        &self,
+        i: usize,
+        p: &crate::spatial::Vec3,
+    ) -> Option<(std::ops::Range<usize>, NodeShape)> {
+        let beam = self.beams.get(i)?.as_ref()?;
+        let at = self.offset[i];
+        Some((at..at + self.modes[i], beam.node(p)))
+    }
     /// The deflection of body `i`'s beam tip along `bend` (m) in `q`; `None` unless its
     /// modes are a beam's.
     pub fn tip_deflection(&self, i: usize, q: &[f64]) -> Option<f64> {
