@@ -228,14 +228,7 @@ fn test_state(a: &FlexModel) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
 
 fn same_dynamics(a: &FlexModel, b: &FlexModel) {
     assert_eq!((a.nq(), a.nv()), (b.nq(), b.nv()));
-    let mut q = a.neutral();
-    let nq = a.rigid().nq();
-    q[7..nq].copy_from_slice(&[0.3, -0.2]);
-    for (k, x) in q[nq..].iter_mut().enumerate() {
-        *x = 0.01 * (1.0 + k as f64).cos();
-    }
-    let v: Vec<f64> = (0..a.nv()).map(|k| 0.2 * (1.0 + k as f64).sin()).collect();
-    let tau: Vec<f64> = (0..a.nv()).map(|k| (2.0 + k as f64).cos()).collect();
+    let (q, v, tau) = test_state(a);
     let (mut da, mut db) = (FlexData::new(a), FlexData::new(b));
     let xa = flexible::aba(a, &mut da, &q, &v, &tau, None)
         .unwrap()
