@@ -57,7 +57,7 @@ const FLIGHT_ORBIT: &str = "gravity = { model = \"egm2008\", degree = 20, order 
 fn scene(extra: &str) -> Scene {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/scenes/bench.toml");
     // The orbit's keys go in its table, which `BASE` ends with.
-    let orbit = if extra.contains("nrlmsise00") {
+    let orbit = if extra.contains("albedo") && extra.contains("nrlmsise00") {
         FLIGHT_ORBIT
     } else {
         ""
@@ -82,11 +82,24 @@ fn rhs(c: &mut Criterion) {
         // Every effect on without self-shadowing (the facets' geometry is no model of the
         // world), with the simple models, then with the flight-fidelity ones: their
         // difference is what the models of the world cost in a right-hand side.
+        // Each flight-fidelity model alone, beside the simple one it replaces.
+        ("gravity_egm2008_20", String::new()),
+        ("third_body_sun_moon", String::new()),
+        (
+            "drag_nrlmsise00",
+            "[effects.drag]\natmosphere = \"nrlmsise00\"\n".into(),
+        ),
+        ("srp_albedo", format!("{}albedo = true\n", srp(false, 8))),
         ("all_simple_models", simple_models()),
         ("all_flight_models", flight_models()),
     ];
     for (name, extra) in cases {
-        let mut sim = scene(&extra).simulation().unwrap();
+        let orbit = match name {
+            "gravity_egm2008_20" => "gravity = { model = \"egm2008\", degree = 20, order = 20 }\n",
+            "third_body_sun_moon" => "third_body = [\"sun\", \"moon\"]\n",
+            _ => "",
+        };
+        let mut sim = scene(&format!("{orbit}{extra}")).simulation().unwrap();
         let x = sim.x0().to_vec();
         let mut dx = vec![0.0; x.len()];
         g.bench_function(name, |b| {
