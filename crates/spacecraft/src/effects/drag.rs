@@ -164,16 +164,23 @@ impl Effect for Drag {
             Some(epoch) => earth_rotation_gcrf(epoch, ctx.t),
             None => Vec3::zeros(),
         };
-        self.facets.place(ctx.data);
+        let modes = &self.modes;
+        self.facets
+            .place_deflected(ctx.data, |k| modes.deflection(k, ctx.eta));
         let mut moment = Vec3::zeros();
         let mut flow_power = 0.0;
         for k in 0..self.facets.len() {
             let facet = self.facets.facet(k);
-            let i = self.facets.body(k);
+            let (i, at) = (self.facets.body(k), *self.facets.at(k));
             let rot = &ctx.data.rotation[i];
-            // The centroid's velocity in the falling frame (body axes, then inertial).
+            // The centroid's velocity in the falling frame (body axes, then inertial), its
+            // deflection's rate included.
             let vb = &ctx.data.v[i];
-            let own = rot * (vb.lin + vb.ang.cross(&facet.at));
+            let bending = self
+                .modes
+                .deflection(k, ctx.etadot)
+                .map_or(Vec3::zeros(), |(u, _)| u);
+            let own = rot * (vb.lin + vb.ang.cross(&at) + bending);
             let c = self.facets.centroid(k) - com;
             let flow = orbit.v - earth.cross(&(orbit.r + c));
             let (n, area, cd) = (self.facets.normal(k), facet.area, facet.drag);
@@ -186,7 +193,7 @@ impl Effect for Drag {
                 continue;
             }
             let lin = rot.tr_mul(&f);
-            forces.add_wrench(i, Force::new(facet.at.cross(&lin), lin));
+            forces.add_wrench(i, Force::new(at.cross(&lin), lin));
             self.modes.add(k, &lin, &mut forces.elastic);
             moment += c.cross(&f);
         }

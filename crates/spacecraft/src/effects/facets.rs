@@ -277,6 +277,9 @@ pub struct Facets {
     body: Vec<usize>,
     /// Per facet: as given (body frame, unit normal).
     facet: Vec<Facet>,
+    /// Body-frame centroid (m) as placed: the given one, plus the deflection of a flexible
+    /// body's facet ([`Facets::place_deflected`]).
+    at: Vec<Vec3>,
     /// World centroid (m), relative to the tree's reference point.
     centroid: Vec<Vec3>,
     /// World unit normal.
@@ -333,6 +336,7 @@ impl Facets {
         let n = facet.len();
         Self {
             body,
+            at: facet.iter().map(|f| f.at).collect(),
             centroid: facet.iter().map(|f| f.at).collect(),
             normal: facet.iter().map(|f| f.normal).collect(),
             edges: facet.iter().map(|f| f.edges).collect(),
@@ -367,6 +371,12 @@ impl Facets {
     pub fn facet(&self, k: usize) -> &Facet {
         &self.facet[k]
     }
+    /// Facet `k`'s centroid in its body's frame (m) as of the last [`Facets::place`] (the
+    /// given one) or [`Facets::place_deflected`] (moved by the deflection): where its loads
+    /// act on the body.
+    pub fn at(&self, k: usize) -> &Vec3 {
+        &self.at[k]
+    }
     /// Facet `k`'s centroid in the world frame (m), relative to the tree's reference point,
     /// as of the last [`Facets::place`].
     pub fn centroid(&self, k: usize) -> &Vec3 {
@@ -394,12 +404,33 @@ impl Facets {
     /// forward kinematics: `data.rotation`, `data.position`): centroid
     /// `position[i] + rotation[i] · at`, normal `rotation[i] · n`, edges `rotation[i] · e`.
     pub fn place(&mut self, data: &Data) {
+        self.place_deflected(data, |_| None);
+    }
+
+    /// [`Facets::place`] with facet `k` moved by `deflection(k) = Some((u, θ))` (body axes):
+    /// its centroid by `u`, its normal and edges turned by the small rotation `θ`
+    /// (`v + θ × v`, the normal renormalised): a flexible body's facet riding its deflected
+    /// shape ([`super::modal_loads::FacetModes::deflection`]). `None` leaves it as given.
+    pub fn place_deflected(
+        &mut self,
+        data: &Data,
+        deflection: impl Fn(usize) -> Option<(Vec3, Vec3)>,
+    ) {
         for (k, f) in self.facet.iter().enumerate() {
             let i = self.body[k];
             let r = &data.rotation[i];
-            let n = r * f.normal;
-            let [e0, e1] = [r * f.edges[0], r * f.edges[1]];
-            self.centroid[k] = data.position[i] + r * f.at;
+            let (at, n, e) = match deflection(k) {
+                Some((u, theta)) => (
+                    f.at + u,
+                    (f.normal + theta.cross(&f.normal)).normalize(),
+                    f.edges.map(|e| e + theta.cross(&e)),
+                ),
+                None => (f.at, f.normal, f.edges),
+            };
+            let n = r * n;
+            let [e0, e1] = [r * e[0], r * e[1]];
+            self.at[k] = at;
+            self.centroid[k] = data.position[i] + r * at;
             self.normal[k] = n;
             self.edges[k] = [e0, e1];
             self.dual[k] = [e1.cross(&n) / f.area, n.cross(&e0) / f.area];

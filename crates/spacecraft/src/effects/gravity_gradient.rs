@@ -26,6 +26,16 @@
 //!   dropped moment is the larger one. The tidal forces sum to zero (Σ m_i ρ_i = 0), so the
 //!   orbit is unaffected.
 //!
+//! A flexible body with `stiffening` (its mass distribution following its deformation to
+//! the order the dynamics keeps) feels `full`'s field over its deformed mass rather than at
+//! its undeformed centre of mass: [`FlexModel::linear_field`] gives the wrench on its frame
+//! and the loads on its modes (the lateral load over a beam's length, the deflected mass's
+//! own, and the geometric stiffness of the field's axial load: a boom along the local
+//! vertical is in tension), all gradients of the same potential, so the energy budget
+//! closes; the system's centre of mass takes the deformed first moments. A body without
+//! `stiffening` keeps its undeformed inertia in the dynamics, and so here (its modes feel
+//! no field); so does a flexible body carrying rotors, and every body under `preprint`.
+//!
 //! The potential energy counted in the total energy is the same expansion:
 //! `V = Σ k/2 (3 E·I_i E − tr I_i)` (plus `−Σ k m_i/2 (3 (E·ρ_i)² − ρ_i²)` for `full`). In a
 //! rotating orbit it is not conserved on its own: the field turns with the local vertical
@@ -36,6 +46,7 @@
 
 use super::{Context, Effect, Forces, Links, Needs, OrbitState, Power, SceneEffect, Section};
 use satsim_integrate::SystemError;
+use satsim_tree::flexible::FlexModel;
 use satsim_tree::io::FileError;
 use satsim_tree::kernel_parts;
 use satsim_tree::spatial::{Force, Mat3, Vec3, skew};
@@ -70,6 +81,10 @@ pub struct GravityGradient {
     /// For `full`, each loaded body's centre of mass in inertial axes from the system's
     /// origin, by `apply` (room made once, by `connect`).
     at: Vec<Vec3>,
+    /// For `full` on a tree with a stiffened flexible body: the flexible model, whose
+    /// [`FlexModel::linear_field`] spreads the tidal field over such a body's deformed mass
+    /// and onto its modes (see the module's documentation).
+    flex: Option<Box<FlexModel>>,
 }
 
 /// A body the field loads: its per-body constants, worked out once.
@@ -100,6 +115,9 @@ struct Loaded {
     trace: f64,
     /// Whether it is a gyrostat rotor, loaded alone.
     rotor: bool,
+    /// Whether it is a stiffened flexible body (with no rotors): its mass distribution
+    /// follows its deformation, and the field reaches its modes.
+    deformable: bool,
 }
 
 /// Whether body `carrier` takes its gyrostat rotors under `gm` ([`Loaded`]).
@@ -142,6 +160,7 @@ impl Loaded {
             inertia,
             trace: inertia.trace(),
             rotor: model.gyrostats().iter().any(|g| g.body() == i),
+            deformable: false,
         })
     }
 }
@@ -158,12 +177,24 @@ fn tidal(k: f64, e: &Vec3, m: f64, rho: &Vec3) -> Vec3 {
     k * m * (3.0 * e.dot(rho) * e - rho)
 }
 
+/// The tidal field's tensor `k (3 E Eᵀ − 1)` (1/s²) for the local vertical `eb`, and its
+/// rate `k̇ (3 E Eᵀ − 1) + 3k (Ė Eᵀ + E Ėᵀ)` for `eb_dot`, in the same axes.
+fn field(k: f64, eb: &Vec3, k_dot: f64, eb_dot: &Vec3) -> (Mat3, Mat3) {
+    let shape = eb * eb.transpose() * 3.0 - Mat3::identity();
+    let turn = (eb_dot * eb.transpose() + eb * eb_dot.transpose()) * (3.0 * k);
+    (shape * k, shape * k_dot + turn)
+}
+
 impl GravityGradient {
     /// Each loaded body's centre of mass (`at`, inertial axes) from the poses; for `full`.
     fn place(&mut self, ctx: &Context) {
         for (p, l) in self.at.iter_mut().zip(&self.loaded) {
             let i = l.body;
-            *p = ctx.data.position[i] + ctx.data.rotation[i] * l.com;
+            let com = match &self.flex {
+                Some(flex) if l.deformable => flex.deformed_inertia(i, ctx.eta).h / l.mass,
+                _ => l.com,
+            };
+            *p = ctx.data.position[i] + ctx.data.rotation[i] * com;
         }
     }
 
@@ -182,6 +213,34 @@ impl GravityGradient {
         if m > 0.0 { mc / m } else { Vec3::zeros() }
     }
 
+    /// The flexible model, when body `i` is loaded as deformable.
+    fn deformable(&self, i: usize) -> Option<&FlexModel> {
+        let flex = self.flex.as_deref()?;
+        self.loaded
+            .iter()
+            .any(|l| l.body == i && l.deformable)
+            .then_some(flex)
+    }
+
+    /// The system's centre of mass (inertial axes, from the tree's reference point), the
+    /// deformable bodies' first moments at their deformation.
+    fn system_com(&self, ctx: &Context) -> Vec3 {
+        let Some(flex) = &self.flex else {
+            return center_of_mass(ctx.model, ctx.data);
+        };
+        let (mut m, mut first) = (0.0, Vec3::zeros());
+        for (i, body) in ctx.model.bodies().iter().enumerate() {
+            let h = if self.deformable(i).is_some() {
+                flex.deformed_inertia(i, ctx.eta).h
+            } else {
+                body.com() * body.mass()
+            };
+            m += body.mass();
+            first += ctx.data.position[i] * body.mass() + ctx.data.rotation[i] * h;
+        }
+        if m > 0.0 { first / m } else { Vec3::zeros() }
+    }
+
     /// The effect with the given model.
     pub fn new(model: GravityModel) -> Self {
         Self {
@@ -190,6 +249,7 @@ impl GravityGradient {
             loaded: Vec::new(),
             n_bodies: 0,
             at: Vec::new(),
+            flex: None,
         }
     }
 
@@ -219,6 +279,17 @@ impl GravityGradient {
             let i = l.body;
             let rot = &ctx.data.rotation[i];
             let eb = rot.tr_mul(&e);
+            if let Some(flex) = self.flex.as_ref().filter(|_| l.deformable) {
+                // The field over the deformed mass, its origin at `ρ` from the centre of mass.
+                let rho = rot.tr_mul(&(ctx.data.position[i] - com));
+                let (t, t_dot) = field(k, &eb, k_dot, &rot.tr_mul(&e_dot));
+                let load = flex.linear_field(i, ctx.eta, &t, &rho, &mut forces.elastic);
+                forces.add_wrench(i, load.wrench);
+                if POWER {
+                    field_power += flex.field_potential(i, ctx.eta, &t_dot, &rho);
+                }
+                continue;
+            }
             let ie = l.inertia * eb;
             let mut ang = couple(k, &eb, &l.inertia);
             if POWER {
@@ -266,6 +337,16 @@ impl Effect for GravityGradient {
             .collect();
         self.n_bodies = model.n_bodies();
         self.at = vec![Vec3::zeros(); self.loaded.len()];
+        self.flex = None;
+        if let Some(flex) = links.flex.filter(|_| self.model == GravityModel::Full) {
+            for l in &mut self.loaded {
+                l.deformable = flex.stiffened(l.body)
+                    && !model.gyrostats().iter().any(|g| g.parent() == l.body);
+            }
+            if self.loaded.iter().any(|l| l.deformable) {
+                self.flex = Some(Box::new(flex.clone()));
+            }
+        }
     }
     fn apply(
         &mut self,
@@ -324,12 +405,20 @@ impl Effect for GravityGradient {
             row.extend_from_slice(&[f64::NAN; 3]);
             return;
         };
-        let com = center_of_mass(ctx.model, ctx.data);
+        let com = self.system_com(ctx);
         let r = orbit.r.norm();
         let (k, e) = (orbit.mu / (r * r * r), orbit.r / r);
         let mut moment = Vec3::zeros();
         for (i, body) in ctx.model.bodies().iter().enumerate() {
             let rot = &ctx.data.rotation[i];
+            if let Some(flex) = self.deformable(i) {
+                let rho = rot.tr_mul(&(ctx.data.position[i] - com));
+                let (t, _) = field(k, &rot.tr_mul(&e), 0.0, &Vec3::zeros());
+                let mut scratch = vec![0.0; ctx.eta.len()];
+                let w = flex.linear_field(i, ctx.eta, &t, &rho, &mut scratch).wrench;
+                moment += rot * w.ang + (ctx.data.position[i] - com).cross(&(rot * w.lin));
+                continue;
+            }
             moment += rot * couple(k, &rot.tr_mul(&e), body.inertia_com());
             if self.model == GravityModel::Full && body.mass() > 0.0 {
                 let rho = ctx.data.position[i] + rot * body.com() - com;
@@ -343,11 +432,17 @@ impl Effect for GravityGradient {
         let r = orbit.r.norm();
         let k = orbit.mu / (r * r * r);
         let e = orbit.r / r;
-        let com = center_of_mass(ctx.model, ctx.data);
+        let com = self.system_com(ctx);
         let mut v = 0.0;
         for (i, body) in ctx.model.bodies().iter().enumerate() {
             let rot = &ctx.data.rotation[i];
             let eb = rot.tr_mul(&e);
+            if let Some(flex) = self.deformable(i) {
+                let rho = rot.tr_mul(&(ctx.data.position[i] - com));
+                let (t, _) = field(k, &eb, 0.0, &Vec3::zeros());
+                v += flex.field_potential(i, ctx.eta, &t, &rho);
+                continue;
+            }
             v += 0.5 * k * (3.0 * eb.dot(&(body.inertia_com() * eb)) - body.inertia_com().trace());
             if self.model == GravityModel::Full {
                 let rho = ctx.data.position[i] + rot * body.com() - com;

@@ -5,8 +5,13 @@
 //! ([`FlexModel::point_shape`]). A rigid body's facets, and a modes file's (its shapes known
 //! at its nodes only), load no modes.
 //!
-//! The facet is the undeformed one: its centroid and normal do not follow the deflection
-//! (the load's change with the deflection is second order in it).
+//! The facet rides the deflection: [`FacetModes::deflection`] gives its mean translation
+//! `Σₖ φ̄ₖ ηₖ` and mean rotation `Σₖ ψ̄ₖ ηₖ` (the local slope, `ψ̄ₖ` each mode's rotation
+//! averaged the same way), with which [`super::facets::Facets::place_deflected`] moves its
+//! centroid and turns its normal and edges (to first order in the slope), so that the
+//! pressure acts on the deflected plate, at its deflected place, and shading sees it there.
+//! The projection on the modes keeps the undeformed `φ̄ₖ` (its change with the deflection
+//! is second order).
 
 use satsim_tree::facet::Facet;
 use satsim_tree::flexible::FlexModel;
@@ -19,10 +24,21 @@ use std::ops::Range;
 const POINTS: usize = 16;
 
 /// Per facet (in its owner's order): where its body's modes lie among the elastic
-/// coordinates and each mode's mean translation over it; `None` for a facet that loads no
-/// modes.
+/// coordinates and each mode's mean translation and rotation over it; `None` for a facet
+/// that loads no modes.
 #[derive(Clone, Debug, Default, PartialEq)]
-pub struct FacetModes(Vec<Option<(Range<usize>, Vec<Vec3>)>>);
+pub struct FacetModes(Vec<Option<FacetShape>>);
+
+/// One facet's share of its body's modes.
+#[derive(Clone, Debug, PartialEq)]
+struct FacetShape {
+    /// The body's modes among the elastic coordinates.
+    range: Range<usize>,
+    /// Per mode, the mean translation over the facet (body axes, per unit `ηₖ`).
+    phi: Vec<Vec3>,
+    /// Per mode, the mean rotation vector over the facet (body axes, per unit `ηₖ`).
+    psi: Vec<Vec3>,
+}
 
 impl FacetModes {
     /// The facets `(body, facet)` of the tree whose flexible bodies are `flex`.
@@ -39,17 +55,22 @@ impl FacetModes {
                 .into_iter()
                 .map(|(body, f)| {
                     let (range, _) = flex.point_shape(body, &f.at)?;
-                    let mut mean = vec![Vec3::zeros(); range.len()];
+                    let mut phi = vec![Vec3::zeros(); range.len()];
+                    let mut psi = phi.clone();
                     for &(u, wu) in &rule {
                         for &(v, wv) in &rule {
                             let p = f.at + f.edges[0] * (0.5 * u) + f.edges[1] * (0.5 * v);
                             let (_, shape) = flex.point_shape(body, &p)?;
-                            for (m, phi) in mean.iter_mut().zip(&shape.phi) {
-                                *m += phi * (0.25 * wu * wv);
+                            let w = 0.25 * wu * wv;
+                            for (m, s) in phi.iter_mut().zip(&shape.phi) {
+                                *m += s * w;
+                            }
+                            for (m, s) in psi.iter_mut().zip(&shape.psi) {
+                                *m += s * w;
                             }
                         }
                     }
-                    Some((range, mean))
+                    Some(FacetShape { range, phi, psi })
                 })
                 .collect(),
         )
@@ -64,11 +85,27 @@ impl FacetModes {
     /// coordinates' generalised forces `elastic`.
     #[inline]
     pub fn add(&self, j: usize, force: &Vec3, elastic: &mut [f64]) {
-        if let Some(Some((range, mean))) = self.0.get(j) {
-            for (q, phi) in elastic[range.clone()].iter_mut().zip(mean) {
+        if let Some(Some(f)) = self.0.get(j) {
+            for (q, phi) in elastic[f.range.clone()].iter_mut().zip(&f.phi) {
                 *q += phi.dot(force);
             }
         }
+    }
+
+    /// Facet `j`'s mean translation (m) and mean rotation vector (rad), body axes, at the
+    /// elastic coordinates `eta` (all of them, the layout's order); given the rates `η̇`,
+    /// their rates. `None` for a facet that loads no modes (or `eta` too short).
+    #[inline]
+    pub fn deflection(&self, j: usize, eta: &[f64]) -> Option<(Vec3, Vec3)> {
+        let f = self.0.get(j)?.as_ref()?;
+        let eta = eta.get(f.range.clone())?;
+        let mut u = Vec3::zeros();
+        let mut theta = Vec3::zeros();
+        for ((e, phi), psi) in eta.iter().zip(&f.phi).zip(&f.psi) {
+            u += phi * *e;
+            theta += psi * *e;
+        }
+        Some((u, theta))
     }
 }
 

@@ -393,6 +393,16 @@ impl Stiffening {
         }
         s
     }
+    /// `(J₁ x)ₖ`.
+    #[inline]
+    pub(crate) fn j1_row(&self, k: usize, x: &[f64]) -> f64 {
+        let m = x.len();
+        let mut s = 0.0;
+        for l in 0..m {
+            s += self.j1[k * m + l] * x[l];
+        }
+        s
+    }
     /// `xᵀ J₀ y`.
     #[inline]
     pub(crate) fn j0_form(&self, x: &[f64], y: &[f64]) -> f64 {

@@ -376,6 +376,11 @@ impl FlexModel {
     pub fn flexible(&self) -> &[Flexible] {
         &self.spec
     }
+    /// Whether body `i` has `stiffening`: its inertia then depends on its deformation
+    /// ([`FlexModel::deformed_inertia`]).
+    pub fn stiffened(&self, i: usize) -> bool {
+        self.stiffening.get(i).is_some_and(Option::is_some)
+    }
     /// Body `i`'s beam, when its modes are a beam's.
     pub fn beam(&self, i: usize) -> Option<&Beam> {
         self.beams[i].as_ref()
@@ -448,9 +453,18 @@ impl FlexModel {
     /// the beam's mass towards its root); else the rigid model's.
     #[inline]
     pub(crate) fn inertia_at(&self, i: usize, q: &[f64]) -> RigidInertia {
+        self.deformed_inertia(i, &q[self.rigid.nq()..])
+    }
+    /// Body `i`'s inertia (mass, first moment and rotational inertia about its frame's
+    /// origin, body axes) at the elastic coordinates `eta` (all of them, coordinate order):
+    /// the rigid model's, and with `stiffening` the deflection's first- and second-order
+    /// terms (see [`Stiffening`]). What the dynamics uses, and so what the centre of mass and
+    /// a field acting on the mass distribution ([`FlexModel::linear_field`]) must use.
+    #[inline]
+    pub fn deformed_inertia(&self, i: usize, eta: &[f64]) -> RigidInertia {
         let mut inertia = self.rigid.bodies[i].inertia;
         if let Some(s) = &self.stiffening[i] {
-            let eta = &q[self.rigid.nq() + self.offset[i]..][..self.modes[i]];
+            let eta = &eta[self.offset[i]..][..self.modes[i]];
             let (f, _) = s.forms(eta, eta);
             inertia.inertia -= s.g(&f);
             inertia.h -= s.axis * (0.5 * f[0]);

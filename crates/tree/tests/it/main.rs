@@ -6,6 +6,7 @@ mod chains;
 mod common;
 mod flexible;
 mod flexible_dynamics;
+mod flexible_field;
 #[cfg(feature = "files")]
 mod flexible_io;
 mod flexible_spin;

@@ -1,0 +1,106 @@
+//! A linear force field over a flexible body's deformed mass: the gravity gradient's tidal
+//! field `f(x) = T x` per unit mass (`T = μ/r³ (3 E Eᵀ − 1)`, `x` from the system's centre
+//! of mass), distributed over the body rather than lumped at its frame.
+//!
+//! With `x = ρ + p` for a point `p` of body `i` (its frame's origin at `ρ` from the field's
+//! centre, both in body axes), the field's potential over the body is
+//!
+//! `V = −½ m ρᵀTρ − ρᵀT h − ½ tr(T J)`, `J = ∫ p pᵀ dm = ½ tr(I) 1 − I`,
+//!
+//! with `m`, `h` (first moment) and `I` (rotational inertia about the origin) the body's
+//! inertia at its deformation, [`FlexModel::deformed_inertia`]: what the dynamics uses. Its
+//! wrench on the frame (about the origin, body axes) is `F = T (m ρ + h)`,
+//! `N = h × Tρ − vec(I T)` (`vec(M) = [M₂₃ − M₃₂, M₃₁ − M₁₃, M₁₂ − M₂₁]`; `3k E × I E` for
+//! the tidal `T`), and its generalised force on mode `k` is `Qₖ = −∂V/∂ηₖ`: with a beam's
+//! `stiffening` (`h(η) = h₀ + Σ b S₁ₖ ηₖ − ½ (ηᵀJ₀η) a`, `I(η) = I₀ + Σ Iₖ ηₖ − G(η)`,
+//! [`super::Stiffening`]),
+//!
+//! `Qₖ = ρᵀT (b S₁ₖ − (J₀η)ₖ a) + c(Iₖ) − 2 (J₀η)ₖ c(A₀) − 2 (J₁η)ₖ c(A₁) + 2 ηₖ c(A₂)`,
+//! `c(A) = ¼ tr T tr A − ½ tr(T A)`,
+//!
+//! which for the tidal field is `Qₖ = bᵀT (ρ + r₀) S₁ₖ + bᵀT a S₂ₖ + (bᵀT b) ηₖ
+//! − [(aᵀT (ρ + r₀)) J₀ + (aᵀT a) J₁] η`: the lateral load over the length, the deflected
+//! mass's own, and the geometric stiffness of the field's axial load (a beam hanging along
+//! the local vertical is in tension, `N(x) = 2k ρA ∫ₓᴸ (r₀ + ξ) dξ` from a root at `r₀`).
+//! Without `stiffening` the model keeps the undeformed inertia, so `V` does not depend on
+//! `η` and the modes feel no field (the lumped load only), consistently.
+
+use super::FlexModel;
+use crate::spatial::{Force, Mat3, RigidInertia, Vec3};
+
+/// What a linear field does to one body ([`FlexModel::linear_field`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FieldLoad {
+    /// The field's wrench on the body's frame (about its origin, body axes; N m, N).
+    pub wrench: Force,
+    /// The field's potential over the body (J).
+    pub potential: f64,
+}
+
+/// `vec(M) = [M₂₃ − M₃₂, M₃₁ − M₁₃, M₁₂ − M₂₁]`: `(∫ p × T p dm)` is `vec(J T)`.
+fn vec(m: &Mat3) -> Vec3 {
+    Vec3::new(
+        m[(1, 2)] - m[(2, 1)],
+        m[(2, 0)] - m[(0, 2)],
+        m[(0, 1)] - m[(1, 0)],
+    )
+}
+
+/// `V = −½ m ρᵀTρ − ρᵀT h − ½ tr(T J)`, `tr(T J) = ½ tr T tr I − tr(T I)`.
+fn potential(inertia: &RigidInertia, t: &Mat3, rho: &Vec3) -> f64 {
+    let tj = 0.5 * t.trace() * inertia.inertia.trace() - t.component_mul(&inertia.inertia).sum();
+    -0.5 * inertia.mass * rho.dot(&(t * rho)) - rho.dot(&(t * inertia.h)) - 0.5 * tj
+}
+
+impl FlexModel {
+    /// The potential `V` of the linear field `f(x) = T x` (per unit mass, `t` symmetric,
+    /// body axes, 1/s²) over body `i` at the elastic coordinates `eta` (all of them), its
+    /// frame's origin at `rho` (m, body axes) from the field's centre (see the module's
+    /// documentation). Linear in `t`: with `Ṫ` it is the field's `∂V/∂t`.
+    pub fn field_potential(&self, i: usize, eta: &[f64], t: &Mat3, rho: &Vec3) -> f64 {
+        potential(&self.deformed_inertia(i, eta), t, rho)
+    }
+
+    /// The linear field `f(x) = T x` (per unit mass, `t` symmetric, body axes, 1/s²) over
+    /// body `i`'s deformed mass at the elastic coordinates `eta` (all of them), its frame's
+    /// origin at `rho` (m, body axes) from the field's centre: its wrench on the frame and
+    /// its potential, and its generalised forces `−∂V/∂ηₖ` added to `elastic` (all the
+    /// elastic coordinates; only a beam with `stiffening` has any). See the module's page.
+    pub fn linear_field(
+        &self,
+        i: usize,
+        eta: &[f64],
+        t: &Mat3,
+        rho: &Vec3,
+        elastic: &mut [f64],
+    ) -> FieldLoad {
+        let inertia = self.deformed_inertia(i, eta);
+        let t_rho = t * rho;
+        let wrench = Force::new(
+            inertia.h.cross(&t_rho) - vec(&(inertia.inertia * t)),
+            t * (rho * inertia.mass + inertia.h),
+        );
+        let potential = potential(&inertia, t, rho);
+        if let Some(s) = &self.stiffening[i] {
+            // ½ tr(T ∂J) for an inertia change `a` (`∂J = ½ tr(a) 1 − a`).
+            let tr = t.trace();
+            let c = |a: &Mat3| 0.25 * tr * a.trace() - 0.5 * t.component_mul(a).sum();
+            let (c0, c1, c2) = (c(&s.a0), c(&s.a1), c(&s.a2));
+            let rta = t_rho.dot(&s.axis);
+            let at = self.offset[i];
+            let eta = &eta[at..][..self.modes[i]];
+            for (k, (q, first)) in elastic[at..][..eta.len()]
+                .iter_mut()
+                .zip(&s.first)
+                .enumerate()
+            {
+                let j0 = s.j0_row(k, eta);
+                let j1 = s.j1_row(k, eta);
+                *q += t_rho.dot(&first.h) - j0 * rta + c(&first.inertia)
+                    - 2.0 * (j0 * c0 + j1 * c1)
+                    + 2.0 * eta[k] * c2;
+            }
+        }
+        FieldLoad { wrench, potential }
+    }
+}
