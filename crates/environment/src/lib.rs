@@ -28,6 +28,9 @@
 //!   perturbations;
 //! - `magnetic/`: the geomagnetic field, IGRF-14 (`igrf.rs`, the coefficients in
 //!   `data/igrf14coeffs.txt`) or its tilted dipole (`dipole.rs`);
+//! - `lattice.rs`: an Earth-fixed lattice a run reads a smooth field through (the gravity
+//!   harmonics beyond J2, IGRF-14), each node a function of its indices only;
+//! - `earth_radiation.rs` also holds the table of the cap's moments a run reads.
 
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
@@ -37,6 +40,7 @@ pub mod earth;
 pub mod earth_radiation;
 pub mod epoch;
 pub mod gravity;
+pub mod lattice;
 pub mod magnetic;
 pub mod moon;
 pub mod shadow;

@@ -5,6 +5,9 @@
 //! without self-shadowing at 4, 8 and 16 rays per facet side, and everything together; then
 //! every effect with the simple models of the world and with the flight-fidelity ones.
 //!
+//! Then the world models' calls of one such right-hand side alone (`environment_world`): what
+//! the flight models cost of it.
+//!
 //! `cargo bench -p satsim-tools --bench environment`
 
 use criterion::{Criterion, criterion_group, criterion_main};
@@ -109,5 +112,90 @@ fn rhs(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, rhs);
+/// The world models' calls of one right-hand side with every flight model on (what
+/// `all_flight_models` asks of `satsim-environment`), timed alone: the harmonic gravity on
+/// its lattice, the Sun and the Moon on their tracks and their pulls, NRLMSISE-00 on its
+/// lattice, IGRF-14 on its lattice, the Earth's rotation for the co-rotating air, the
+/// shadow, the Earth's exitance and the cap's moments of the 24 facets. `at_rest`: at the
+/// benchmark state's place and time, as `environment_rhs` evaluates them (every lattice
+/// cell made); `along_the_orbit`: marching 0.2 s a call along the orbit, its cells made as
+/// it goes, at the rate a run meets them.
+fn world(c: &mut Criterion) {
+    use satsim_environment::atmosphere::nrlmsise::{Drivers, Msis, MsisTrack};
+    use satsim_environment::earth::earth_rotation_gcrf;
+    use satsim_environment::earth_radiation::{CapTable, EarthRadiation};
+    use satsim_environment::gravity::{
+        HarmonicField, HarmonicLattice, LATTICE_DEG, MU_MOON, MU_SUN, egm2008,
+        third_body_acceleration,
+    };
+    use satsim_environment::magnetic::{FieldModel, GeoField};
+    use satsim_environment::moon::MoonTrack;
+    use satsim_environment::shadow::{ShadowModel, shadow_fraction};
+    use satsim_environment::sun::SunTrack;
+    use satsim_environment::{R_EARTH, Vec3, parse_epoch};
+    use std::sync::Arc;
+
+    let epoch = parse_epoch("2026-03-20T12:00:00 UTC").unwrap();
+    let field = Arc::new(HarmonicField::new(egm2008().unwrap(), 20, 20).unwrap());
+    let mut gravity = HarmonicLattice::new(field, LATTICE_DEG).unwrap();
+    let (mut sun, mut moon) = (SunTrack::new(epoch), MoonTrack::new(epoch));
+    let mut air = MsisTrack::new(Msis::new(epoch, Drivers::default()), 300.0);
+    let magnetic = GeoField::new(FieldModel::Igrf14, epoch)
+        .unwrap()
+        .with_lattice(satsim_environment::magnetic::LATTICE_DEG);
+    let light = EarthRadiation::default();
+    // The 24 facets' normals: the six faces of four boxes, turned apart.
+    let normals: Vec<Vec3> = (0..4)
+        .flat_map(|b| {
+            let turn = nalgebra::Rotation3::new(Vec3::new(0.3 * b as f64, 0.7, -0.2 * b as f64));
+            [
+                Vec3::x(),
+                -Vec3::x(),
+                Vec3::y(),
+                -Vec3::y(),
+                Vec3::z(),
+                -Vec3::z(),
+            ]
+            .map(|n| turn * n)
+        })
+        .collect();
+    let (a, n_rate, inc) = (R_EARTH + 500e3, 1.1e-3, 51.6f64.to_radians());
+    let place = |t: f64| {
+        let u = n_rate * t;
+        Vec3::new(u.cos(), u.sin() * inc.cos(), u.sin() * inc.sin()) * a
+    };
+    let mut calls = |t: f64, r: &Vec3| {
+        let mut acc = gravity.acceleration_gcrf(epoch, t, r);
+        let (r_sun, r_moon) = (sun.position(t), moon.position(t));
+        acc += third_body_acceleration(MU_SUN, &r_sun, r);
+        acc += third_body_acceleration(MU_MOON, &r_moon, r);
+        let rho = air.density(t, r).unwrap();
+        let b = magnetic.field_gcrf(t, r);
+        let w = earth_rotation_gcrf(epoch, t);
+        let shadow = shadow_fraction(ShadowModel::Conical, r, &r_sun);
+        let m = light.exitance(r, &r_sun).total();
+        let cap = CapTable::shared().at_altitude(r.norm() / R_EARTH);
+        let nadir = -r.normalize();
+        let mut sum = 0.0;
+        for n in &normals {
+            sum += cap.moments(n, &nadir).irradiance;
+        }
+        acc.x + rho + b.x + w.z + shadow + m + sum
+    };
+    let mut g = c.benchmark_group("environment_world");
+    let r0 = place(0.0);
+    g.bench_function("flight_models_at_rest", |b| {
+        b.iter(|| calls(0.0, black_box(&r0)))
+    });
+    let mut t = 0.0;
+    g.bench_function("flight_models_along_the_orbit", |b| {
+        b.iter(|| {
+            t += 0.2;
+            calls(t, black_box(&place(t)))
+        })
+    });
+    g.finish();
+}
+
+criterion_group!(benches, rhs, world);
 criterion_main!(benches);

@@ -150,7 +150,7 @@ fn parse(text: &str) -> Result<Box<Table>, String> {
 
 impl Table {
     /// The model before `year` and the years since it (before 1900: 1900's model).
-    fn interval(year: f64) -> (usize, f64) {
+    pub(super) fn interval(year: f64) -> (usize, f64) {
         let k = ((year - FIRST_YEAR) / 5.0)
             .floor()
             .clamp(0.0, (MODELS - 1) as f64) as usize;
@@ -171,7 +171,24 @@ impl Table {
     pub(super) fn field(&self, year: f64, r: &Vec3) -> Vec3 {
         let (k, dt) = Self::interval(year);
         let (g, h, gr, hr) = (&self.g[k], &self.h[k], &self.g_rate[k], &self.h_rate[k]);
+        let basis = self.basis(r);
+        basis.sum(|n, m| (g[n][m] + gr[n][m] * dt, h[n][m] + hr[n][m] * dt))
+    }
 
+    /// The model `k` (of [`Table::interval`]) at the Earth-fixed `r` (m): its field (nT) at
+    /// its epoch and its rate (nT/year), Earth-fixed Cartesian axes; the field at `dt` years
+    /// after the epoch is the first plus `dt` times the second.
+    pub(super) fn model_and_rate(&self, k: usize, r: &Vec3) -> [Vec3; 2] {
+        let (g, h, gr, hr) = (&self.g[k], &self.h[k], &self.g_rate[k], &self.h_rate[k]);
+        let basis = self.basis(r);
+        [
+            basis.sum(|n, m| (g[n][m], h[n][m])),
+            basis.sum(|n, m| (gr[n][m], hr[n][m])),
+        ]
+    }
+
+    /// The Legendre functions and the angles at `r`.
+    fn basis(&self, r: &Vec3) -> Basis {
         let rho = r.x.hypot(r.y);
         let d = rho.hypot(r.z);
         // Colatitude θ and longitude φ; on the axis φ = 0 (any φ would do: the components
@@ -212,18 +229,47 @@ impl Table {
                 dp[n][m] = k1 * (ct * dp[n - 1][m] - st * p[n - 1][m]) - k2 * d2;
             }
         }
+        Basis {
+            p,
+            q,
+            dp,
+            d,
+            st,
+            ct,
+            sp,
+            cp,
+        }
+    }
+}
 
+/// The Legendre functions at a position (see [`Table::basis`]), its distance and the sines
+/// and cosines of its colatitude and longitude.
+struct Basis {
+    p: Coeffs,
+    q: Coeffs,
+    dp: Coeffs,
+    d: f64,
+    st: f64,
+    ct: f64,
+    sp: f64,
+    cp: f64,
+}
+
+impl Basis {
+    /// The field (nT, Earth-fixed Cartesian axes) of the Gauss coefficients `gh(n, m)`.
+    fn sum(&self, gh: impl Fn(usize, usize) -> (f64, f64)) -> Vec3 {
+        let (p, q, dp) = (&self.p, &self.q, &self.dp);
+        let (st, ct, sp, cp) = (self.st, self.ct, self.sp, self.cp);
         // B = −∇V, V = a Σ (a/r)^(n+1) Σ (g cos mφ + h sin mφ) P_n^m.
         let (mut b_r, mut b_t, mut b_p) = (0.0, 0.0, 0.0);
-        let ratio = A_REF / d;
+        let ratio = A_REF / self.d;
         let mut rn = ratio * ratio; // (a/r)^(n+2), from n = 0
         for n in 1..=N_MAX {
             rn *= ratio;
             let (mut cm, mut sm) = (1.0, 0.0); // cos mφ, sin mφ
             let (mut sum_r, mut sum_t, mut sum_p) = (0.0, 0.0, 0.0);
             for m in 0..=n {
-                let gnm = g[n][m] + gr[n][m] * dt;
-                let hnm = h[n][m] + hr[n][m] * dt;
+                let (gnm, hnm) = gh(n, m);
                 let c = gnm * cm + hnm * sm;
                 sum_r += c * p[n][m];
                 sum_t += c * dp[n][m];

@@ -2,6 +2,7 @@
 
 mod earth;
 mod gravity;
+mod lattice;
 mod magnetic;
 mod moon;
 mod msis;

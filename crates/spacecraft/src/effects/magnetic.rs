@@ -3,7 +3,9 @@
 //!
 //! The field `B` (tesla) at the centre of mass is IGRF-14 (degree 13 with its secular
 //! variation) or its tilted dipole, through the Earth's rotation from the scene's epoch
-//! ([`satsim_environment::magnetic`]). A dipole `m` (A m²) on body `i` feels the couple
+//! ([`satsim_environment::magnetic`]), read through an Earth-fixed lattice of `lattice_deg`
+//! degrees (default [`LATTICE_DEG`]; 0: IGRF-14 at every call; a magnetometer on the effect's
+//! field reads the same values). A dipole `m` (A m²) on body `i` feels the couple
 //! `τ = m × B` (both in the body's axes), a pure torque on that body; the field's gradient
 //! force (of order `3 m B / r`, 1e-10 N for 10 A m²) is left out.
 //!
@@ -22,7 +24,7 @@
 
 use super::{Bound, Context, Effect, Forces, Links, Needs, SceneEffect, Section, Torquer};
 use satsim_environment::Epoch;
-use satsim_environment::magnetic::{FieldModel, GeoField};
+use satsim_environment::magnetic::{FieldModel, GeoField, LATTICE_DEG};
 use satsim_integrate::SystemError;
 use satsim_tree::io::FileError;
 use satsim_tree::spatial::{Force, Vec3};
@@ -36,6 +38,10 @@ pub const MAX_DIPOLE: Bound = Bound {
     unit: "A m²",
     why: "a thousand times the strongest magnetic torquer flown",
 };
+
+/// The largest lattice spacing a scene gives the field (degrees): beyond it the
+/// interpolation's error passes 0.1 % of the field.
+pub const MAX_LATTICE_DEG: f64 = 10.0;
 
 /// The magnetic effect.
 #[derive(Clone, Debug)]
@@ -53,7 +59,8 @@ pub struct Magnetic {
 }
 
 impl Magnetic {
-    /// The field `model` from `epoch`, a residual dipole (root axes, A m²) and `torquers`.
+    /// The field `model` from `epoch` (on the lattice of [`LATTICE_DEG`]), a residual dipole
+    /// (root axes, A m²) and `torquers`.
     pub fn new(
         model: FieldModel,
         epoch: Epoch,
@@ -62,7 +69,7 @@ impl Magnetic {
     ) -> Result<Self, String> {
         let n = torquers.len();
         Ok(Self {
-            field: GeoField::new(model, epoch)?,
+            field: GeoField::new(model, epoch)?.with_lattice(LATTICE_DEG),
             residual,
             command: vec![0.0; n],
             torquers,
@@ -71,6 +78,12 @@ impl Magnetic {
             dipoles: vec![0.0; n],
             torque: Vec3::zeros(),
         })
+    }
+    /// The same with the field on a lattice of `cell_deg` degrees (0: IGRF-14 at every call;
+    /// [`GeoField::with_lattice`]).
+    pub fn with_lattice(mut self, cell_deg: f64) -> Self {
+        self.field = self.field.exact().with_lattice(cell_deg);
+        self
     }
     /// The field model.
     pub fn field(&self) -> &GeoField {
@@ -195,6 +208,10 @@ pub struct MagneticFile {
     /// The spacecraft's residual dipole, root axes (A m², default 0).
     #[serde(default)]
     pub residual_dipole: Option<Spanned<[f64; 3]>>,
+    /// The spacing (degrees) of the Earth-fixed lattice IGRF-14 is read through (default
+    /// [`LATTICE_DEG`]; 0: the model at every call; at most [`MAX_LATTICE_DEG`]).
+    #[serde(default)]
+    pub lattice_deg: Option<Spanned<f64>>,
     /// Magnetic torquers.
     #[serde(default)]
     pub torquer: Vec<TorquerFile>,
@@ -311,6 +328,21 @@ impl SceneEffect for Magnetic {
             });
             command.push(c);
         }
+        let lattice = match &file.lattice_deg {
+            None => LATTICE_DEG,
+            Some(d) => {
+                let v = section.non_negative(d, "effects.magnetic.lattice_deg")?;
+                if v > MAX_LATTICE_DEG {
+                    return Err(section.error(
+                        Some(d.span()),
+                        format!(
+                            "`effects.magnetic.lattice_deg` is {v}: the lattice's spacing lies from 0 (IGRF-14 at every call) to {MAX_LATTICE_DEG} degrees"
+                        ),
+                    ));
+                }
+                v
+            }
+        };
         let epoch = section.epoch()?;
         let mut m = Magnetic::new(model, epoch, residual, torquers).map_err(|e| {
             section.error(
@@ -322,6 +354,6 @@ impl SceneEffect for Magnetic {
             )
         })?;
         m.command = command;
-        Ok(m)
+        Ok(m.with_lattice(lattice))
     }
 }

@@ -1,7 +1,8 @@
 //! The orbit of the system's centre of mass: Keplerian (preprint eq. 17), J2-perturbed
 //! (eq. 18 with `F_per` the J2 zonal acceleration), or in the Earth's spherical-harmonic field
 //! ([`Orbit::harmonics`]: EGM2008 to a chosen degree and order, evaluated in the Earth-fixed
-//! frame at the epoch), optionally with the Sun's and the Moon's point-mass perturbations
+//! frame at the epoch; a run reads all but its central term and J2 through an Earth-fixed
+//! lattice of [`Orbit::lattice_deg`], [`HarmonicLattice`]), optionally with the Sun's and the Moon's point-mass perturbations
 //! ([`Orbit::third_bodies`]). States: position `r` and velocity `v`, inertial (GCRF:
 //! Earth-centred, Z along the Earth's pole), SI units.
 //!
@@ -22,7 +23,9 @@
 use super::{Context, Effect, Forces, OrbitState};
 use nalgebra::UnitQuaternion;
 use satsim_environment::Epoch;
-use satsim_environment::gravity::{HarmonicField, MU_MOON, MU_SUN, third_body_acceleration};
+use satsim_environment::gravity::{
+    HarmonicField, HarmonicLattice, LATTICE_DEG, MU_MOON, MU_SUN, third_body_acceleration,
+};
 use satsim_environment::moon::MoonTrack;
 use satsim_environment::sun::SunTrack;
 use satsim_integrate::SystemError;
@@ -113,12 +116,15 @@ impl ThirdBodies {
     }
 }
 
-/// The Sun's and the Moon's tracks (caches: knots that depend only on `t`, so two orbits
-/// with the same settings compare equal whatever their caches hold).
+/// The Sun's and the Moon's tracks and the harmonics' lattice (caches: knots that depend
+/// only on `t` or on the lattice's indices, so two orbits with the same settings compare
+/// equal whatever their caches hold).
 #[derive(Clone, Debug, Default)]
 struct Tracks {
     sun: Option<SunTrack>,
     moon: Option<MoonTrack>,
+    /// The lattice and the spacing it was made for.
+    harmonics: Option<(f64, HarmonicLattice)>,
 }
 
 impl PartialEq for Tracks {
@@ -136,6 +142,10 @@ pub struct Orbit {
     /// when set; it needs [`Orbit::epoch`]. Give `mu` the field's GM too (the scene reader
     /// does): the elements' conversion and the gravity-gradient torque use `mu`.
     pub harmonics: Option<Arc<HarmonicField>>,
+    /// The spacing (degrees) of the Earth-fixed lattice a run reads [`Orbit::harmonics`]
+    /// through, less their central term and J2 ([`HarmonicLattice`]); 0: the series at every
+    /// call. Default [`LATTICE_DEG`].
+    pub lattice_deg: f64,
     /// The third bodies; any needs [`Orbit::epoch`].
     pub third_bodies: ThirdBodies,
     /// t = 0 of the run: the Earth's orientation and the third bodies' positions.
@@ -164,6 +174,7 @@ impl Orbit {
             r0,
             v0,
             harmonics: None,
+            lattice_deg: LATTICE_DEG,
             third_bodies: ThirdBodies::default(),
             epoch: None,
             tracks: Tracks::default(),
@@ -192,7 +203,9 @@ impl Orbit {
     }
     /// The Earth's gravitational acceleration (m/s², GCRF) at `r` (GCRF) at time `t`: the
     /// harmonic field's, turned to and from the Earth-fixed frame at `epoch + t`, when
-    /// [`Orbit::harmonics`] is set, otherwise [`Orbit::acceleration`].
+    /// [`Orbit::harmonics`] is set, otherwise [`Orbit::acceleration`]. The series itself,
+    /// not its lattice: a run's acceleration ([`Orbit::gravity_on_lattice`]) differs from it
+    /// by the lattice's interpolation error (`satsim_environment::gravity`'s page).
     pub fn gravity(&self, t: f64, r: &Vec3) -> Result<Vec3, SystemError> {
         match (&self.harmonics, self.epoch) {
             (None, _) => Ok(self.acceleration(r)),
@@ -200,6 +213,28 @@ impl Orbit {
             (Some(_), None) => Err(SystemError::new(
                 "orbit: the harmonic gravity field needs an epoch (the Earth's orientation)",
             )),
+        }
+    }
+    /// The Earth's gravitational acceleration (m/s², GCRF) at `r` (GCRF) at time `t` as a run
+    /// sees it: [`Orbit::gravity`], with the harmonics beyond J2 read through the lattice
+    /// when [`Orbit::lattice_deg`] is not 0. A function of `(t, r)` alone, whatever the
+    /// calls before.
+    pub fn gravity_on_lattice(&mut self, t: f64, r: &Vec3) -> Result<Vec3, SystemError> {
+        let (Some(field), Some(epoch)) = (&self.harmonics, self.epoch) else {
+            return self.gravity(t, r);
+        };
+        let deg = self.lattice_deg;
+        let cache = &mut self.tracks.harmonics;
+        // The settings are public: a changed field or spacing is a new lattice.
+        if cache
+            .as_ref()
+            .is_none_or(|(d, l)| *d != deg || !Arc::ptr_eq(l.field(), field))
+        {
+            *cache = HarmonicLattice::new(field.clone(), deg).map(|l| (deg, l));
+        }
+        match cache {
+            Some((_, l)) => Ok(l.acceleration_gcrf(epoch, t, r)),
+            None => self.gravity(t, r),
         }
     }
     /// The third bodies' positions (m, GCRF, from the Earth's centre) at `t`: the Sun's and
@@ -304,7 +339,7 @@ impl Effect for Orbit {
                 "orbit: the centre of mass reached the Earth's centre",
             ));
         }
-        let a = self.gravity(ctx.t, &r)? + self.third_body(ctx.t, &r)?;
+        let a = self.gravity_on_lattice(ctx.t, &r)? + self.third_body(ctx.t, &r)?;
         own_dot[..3].copy_from_slice(&own[3..6]);
         own_dot[3..].copy_from_slice(a.as_slice());
         Ok(())
@@ -336,5 +371,36 @@ impl Effect for Orbit {
         row.extend_from_slice(&own[..6]);
         let (roll, pitch, yaw) = self.attitude_in_orbit(ctx.attitude, own);
         row.extend_from_slice(&[roll, pitch, yaw]);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use satsim_environment::gravity::egm2008;
+    use satsim_environment::parse_epoch;
+
+    #[test]
+    fn a_run_reads_the_harmonics_on_the_lattice_and_0_degrees_is_the_series() {
+        let field = Arc::new(HarmonicField::new(egm2008().unwrap(), 20, 20).unwrap());
+        let el = Elements::circular(6_878e3, 51.6f64.to_radians());
+        let mut orbit = Orbit::from_elements(OrbitModel::Kepler, &el);
+        orbit.harmonics = Some(field);
+        orbit.epoch = Some(parse_epoch("2026-03-20T12:00:00 UTC").unwrap());
+        let (t, r) = (123.4, orbit.r0);
+        let exact = orbit.gravity(t, &r).unwrap();
+        let on = orbit.gravity_on_lattice(t, &r).unwrap();
+        // Within the lattice's documented 8e-7 m/s², and not the series' bits.
+        assert!((on - exact).norm() < 1e-6 && on != exact, "{on} {exact}");
+        // A copy with another history reads the same bits.
+        let mut other = orbit.clone();
+        other.gravity_on_lattice(0.0, &(r * 1.01)).unwrap();
+        assert_eq!(other.gravity_on_lattice(t, &r).unwrap(), on);
+        // A changed spacing is a new lattice; 0 is the series.
+        orbit.lattice_deg = 3.0;
+        let coarse = orbit.gravity_on_lattice(t, &r).unwrap();
+        assert!(coarse != on && (coarse - exact).norm() < 1e-5);
+        orbit.lattice_deg = 0.0;
+        assert_eq!(orbit.gravity_on_lattice(t, &r).unwrap(), exact);
     }
 }

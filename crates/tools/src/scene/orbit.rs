@@ -4,9 +4,11 @@
 //! The Earth's field is `model` (`"kepler"`, the default, or `"j2"`, as before) or `gravity`
 //! (contract section 17), which replaces it: `"point"` is `model = "kepler"`, `"j2"` is
 //! `model = "j2"` (with `j2`, `mu`, `radius` as before), and `"egm2008"` or
-//! `{ model = "egm2008", degree = N, order = M }` the spherical harmonics to degree N
-//! (default 20, at most 70) and order M (default N, at most N), with EGM2008's own GM and
-//! radius (GM also becomes the orbit's `mu`: the elements' conversion and the
+//! `{ model = "egm2008", degree = N, order = M, lattice_deg = D }` the spherical harmonics to
+//! degree N (default 20, at most 70) and order M (default N, at most N), all but their
+//! central term and J2 read through an Earth-fixed lattice of D degrees (default
+//! [`LATTICE_DEG`], at most [`MAX_LATTICE_DEG`]; 0: the series at every call), with EGM2008's
+//! own GM and radius (GM also becomes the orbit's `mu`: the elements' conversion and the
 //! gravity-gradient torque use it). Both keys may be given only when they say the same;
 //! with `"egm2008"`, `model`, `mu` and `j2` would be ignored and are refused (`radius` stays
 //! the altitude's reference). `third_body = ["sun", "moon"]` adds their point-mass
@@ -16,7 +18,7 @@
 use super::file::OrbitFile;
 use super::parse::Parser;
 use satsim_environment::Epoch;
-use satsim_environment::gravity::{HarmonicField, MAX_DEGREE, egm2008};
+use satsim_environment::gravity::{HarmonicField, LATTICE_DEG, MAX_DEGREE, egm2008};
 use satsim_spacecraft::effects::{Elements, Orbit, OrbitModel, ThirdBodies};
 use satsim_tree::error::Num;
 use satsim_tree::io::FileError;
@@ -28,11 +30,16 @@ use toml::Spanned;
 /// within hours, and a smaller number is almost always kilometres written as metres.
 pub const MIN_ALTITUDE: f64 = 100e3;
 
+/// The largest lattice spacing `orbit.gravity.lattice_deg` accepts (degrees): at 10 degrees
+/// the interpolation's error in low orbit is already as large as the degree 21 to 30 terms a
+/// 20x20 field leaves out.
+pub const MAX_LATTICE_DEG: f64 = 10.0;
+
 impl Parser<'_> {
     pub(super) fn orbit(&self, o: &Spanned<OrbitFile>) -> Result<Orbit, FileError> {
         let span = Some(o.span());
         let f = o.get_ref();
-        let (model, harmonics) = self.gravity(f)?;
+        let (model, harmonics, lattice_deg) = self.gravity(f)?;
         let vec = |v: Option<[f64; 3]>, k: usize| v.map(|v| v[k]);
         self.check_numbers(
             o.span(),
@@ -79,6 +86,7 @@ impl Parser<'_> {
         if let Some(field) = harmonics {
             orbit.mu = field.gm;
             orbit.harmonics = Some(Arc::new(field));
+            orbit.lattice_deg = lattice_deg;
         }
         orbit.third_bodies = self.third_bodies(f)?;
         if let Some(j2) = f.j2 {
@@ -194,9 +202,12 @@ impl Parser<'_> {
         Ok(orbit)
     }
 
-    /// The Earth's field from `model` and `gravity`: the model, and the harmonic field when
-    /// `gravity` asks for one.
-    fn gravity(&self, f: &OrbitFile) -> Result<(OrbitModel, Option<HarmonicField>), FileError> {
+    /// The Earth's field from `model` and `gravity`: the model, and the harmonic field and
+    /// its lattice's spacing (degrees) when `gravity` asks for one.
+    fn gravity(
+        &self,
+        f: &OrbitFile,
+    ) -> Result<(OrbitModel, Option<HarmonicField>, f64), FileError> {
         let model = match f.model.as_ref().map(|m| (m.get_ref().as_str(), m.span())) {
             None => None,
             Some(("kepler", _)) => Some(OrbitModel::Kepler),
@@ -211,19 +222,19 @@ impl Parser<'_> {
             }
         };
         let Some(g) = &f.gravity else {
-            return Ok((model.unwrap_or_default(), None));
+            return Ok((model.unwrap_or_default(), None, LATTICE_DEG));
         };
         let at = |m: String| self.error(Some(g.span()), m);
         // The name, and the degree and order when given.
-        let (name, degree, order) = match g.get_ref() {
-            toml::Value::String(s) => (s.clone(), None, None),
+        let (name, degree, order, lattice) = match g.get_ref() {
+            toml::Value::String(s) => (s.clone(), None, None, None),
             toml::Value::Table(t) => {
                 if let Some(k) = t
                     .keys()
-                    .find(|k| !["model", "degree", "order"].contains(&k.as_str()))
+                    .find(|k| !["model", "degree", "order", "lattice_deg"].contains(&k.as_str()))
                 {
                     return Err(at(format!(
-                        "`orbit.gravity.{k}`: unknown key, expected `model`, `degree` or `order`"
+                        "`orbit.gravity.{k}`: unknown key, expected `model`, `degree`, `order` or `lattice_deg`"
                     )));
                 }
                 let name = match t.get("model") {
@@ -242,7 +253,17 @@ impl Parser<'_> {
                         "`orbit.gravity.{key}` must be a whole number (e.g. `{key} = 20`)"
                     ))),
                 };
-                (name, int("degree")?, int("order")?)
+                let lattice = match t.get("lattice_deg") {
+                    None => None,
+                    Some(toml::Value::Float(x)) => Some(*x),
+                    Some(toml::Value::Integer(n)) => Some(*n as f64),
+                    Some(_) => {
+                        return Err(at(
+                            "`orbit.gravity.lattice_deg` must be a number of degrees (e.g. `lattice_deg = 1.0`)".into(),
+                        ));
+                    }
+                };
+                (name, int("degree")?, int("order")?, lattice)
             }
             _ => {
                 return Err(at(
@@ -261,9 +282,9 @@ impl Parser<'_> {
             }
         };
         if let Some(chosen) = chosen {
-            if degree.is_some() || order.is_some() {
+            if degree.is_some() || order.is_some() || lattice.is_some() {
                 return Err(at(format!(
-                    "`orbit.gravity`: `degree` and `order` belong to \"egm2008\", not to \"{name}\""
+                    "`orbit.gravity`: `degree`, `order` and `lattice_deg` belong to \"egm2008\", not to \"{name}\""
                 )));
             }
             if let Some(m) = model
@@ -279,7 +300,7 @@ impl Parser<'_> {
                     "`orbit.j2` is given but `orbit.gravity = \"point\"` has no J2 term".into(),
                 ));
             }
-            return Ok((chosen, None));
+            return Ok((chosen, None, LATTICE_DEG));
         }
         if model.is_some() {
             return Err(at(
@@ -310,10 +331,17 @@ impl Parser<'_> {
                 "`orbit.gravity.order` is {order}: the order lies from 0 to the degree ({degree})"
             )));
         }
+        let lattice = lattice.unwrap_or(LATTICE_DEG);
+        if !(0.0..=MAX_LATTICE_DEG).contains(&lattice) {
+            return Err(at(format!(
+                "`orbit.gravity.lattice_deg` is {}: the lattice's spacing lies from 0 (the series at every call) to {MAX_LATTICE_DEG} degrees",
+                Num(lattice)
+            )));
+        }
         let field = egm2008()
             .and_then(|c| HarmonicField::new(c, degree as usize, order as usize))
             .map_err(|e| at(format!("`orbit.gravity`: {e}")))?;
-        Ok((OrbitModel::Kepler, Some(field)))
+        Ok((OrbitModel::Kepler, Some(field), lattice))
     }
 
     /// `third_body = ["sun", "moon"]`.
