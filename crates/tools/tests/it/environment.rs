@@ -218,6 +218,21 @@ fn effects_that_need_a_date_or_an_orbit_say_what_to_add() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("epoch"), "{e}");
+    // The field's lattice: a spacing from 0 to 10 degrees, refused outside at its key.
+    for bad in ["-1.0", "11.0"] {
+        let text = cube(&format!("[effects.magnetic]\nlattice_deg = {bad}\n"), ID);
+        let e = Scene::parse(&text, Path::new("env.toml"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("env.toml:") && e.contains("effects.magnetic.lattice_deg"),
+            "{bad}: {e}"
+        );
+    }
+    for good in ["0.0", "2.0"] {
+        let text = cube(&format!("[effects.magnetic]\nlattice_deg = {good}\n"), ID);
+        Scene::parse(&text, Path::new("env.toml")).unwrap_or_else(|e| panic!("{good}: {e}"));
+    }
 }
 
 #[test]

@@ -155,6 +155,30 @@ fn bad_gravity_and_third_bodies_are_refused_at_their_line() {
     );
     refused(
         true,
+        "gravity = { model = \"egm2008\", lattice_deg = 11.0 }",
+        11,
+        "orbit.gravity.lattice_deg",
+    );
+    refused(
+        true,
+        "gravity = { model = \"egm2008\", lattice_deg = -0.5 }",
+        11,
+        "orbit.gravity.lattice_deg",
+    );
+    refused(
+        true,
+        "gravity = { model = \"egm2008\", lattice_deg = \"fine\" }",
+        11,
+        "must be a number of degrees",
+    );
+    refused(
+        true,
+        "gravity = { model = \"point\", lattice_deg = 1.0 }",
+        11,
+        "belong to \"egm2008\"",
+    );
+    refused(
+        true,
         "gravity = { model = \"j2\", degree = 4 }",
         11,
         "belong to \"egm2008\"",
