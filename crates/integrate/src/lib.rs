@@ -42,6 +42,7 @@ mod driver;
 mod error;
 mod events;
 pub mod lanes;
+mod lu;
 mod options;
 mod radau5;
 mod rk4;

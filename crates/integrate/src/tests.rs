@@ -57,3 +57,28 @@ fn radau5_coefficients() {
         + m(0, 2) * (m(1, 0) * m(2, 1) - m(1, 1) * m(2, 0));
     assert_close(det, 0.0, 1e-14, "det(A - γ0 I)");
 }
+
+#[test]
+fn radau5_eigenbasis_diagonalises_the_inverse_butcher_matrix() {
+    let (t, ti, a) = (radau5::T, radau5::TI, radau5::A);
+    // T T⁻¹ = I.
+    for i in 0..3 {
+        for j in 0..3 {
+            let p: f64 = (0..3).map(|k| t[i][k] * ti[k][j]).sum();
+            let id = if i == j { 1.0 } else { 0.0 };
+            assert_close(p, id, 1e-14, &format!("(T T⁻¹)[{i}][{j}]"));
+        }
+    }
+    // A⁻¹ T = T Λ, i.e. A T Λ = T, with Λ = [[γ, 0, 0], [0, α, -β], [0, β, α]].
+    let (al, be) = radau5::alpha_beta();
+    let lam = [[radau5::u1(), 0.0, 0.0], [0.0, al, -be], [0.0, be, al]];
+    for i in 0..3 {
+        for j in 0..3 {
+            let atl: f64 = (0..3)
+                .flat_map(|k| (0..3).map(move |l| (k, l)))
+                .map(|(k, l)| a[i][k] * t[k][l] * lam[l][j])
+                .sum();
+            assert_close(atl, t[i][j], 1e-14, &format!("(A T Λ)[{i}][{j}]"));
+        }
+    }
+}

@@ -443,11 +443,19 @@ fn summary(scene_path: &Path, scene: &Scene, sim: &Simulation, done: &Done) -> O
     );
     let _ = writeln!(
         s,
-        "ran        t = {t0} .. {} s: {} steps ({} rejected), {} rhs evaluations, {} events, {:.3} s wall",
+        "ran        t = {t0} .. {} s: {} steps ({} rejected), {} rhs evaluations{}, {} events, {:.3} s wall",
         stats.t_final,
         stats.steps_accepted,
         stats.steps_rejected,
         stats.rhs_evals,
+        if stats.jacobian_evals > 0 {
+            format!(
+                " ({} Jacobians, {} LU factorisations)",
+                stats.jacobian_evals, stats.lu_decompositions
+            )
+        } else {
+            String::new()
+        },
         stats.events.len(),
         done.elapsed
     );
