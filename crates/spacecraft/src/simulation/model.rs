@@ -50,6 +50,9 @@ pub struct SimModel {
     /// The energy budget's states in `x`: `[actuator work, dissipated energy]` (J), or
     /// empty when not tracked.
     pub(super) work: Range<usize>,
+    /// Whether `η`, `η̇` count in the error norm
+    /// ([`SimulationBuilder::elastic_error`](super::SimulationBuilder::elastic_error)).
+    pub(super) elastic_error: bool,
     /// The forward dynamics, chosen once: ABA, with the preprint layout's unrolled kernel
     /// ([`satsim_satellite::kernel::UnrolledAba`]) where the tree has that layout (it takes
     /// every lock mask it accepts).

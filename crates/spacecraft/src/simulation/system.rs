@@ -16,10 +16,15 @@ impl System for Simulation {
     }
 
     /// The energy budget's work states are bookkeeping: they stay out of the error control,
-    /// so that tracking them leaves the steps (and every other state) as they were.
+    /// so that tracking them leaves the steps (and every other state) as they were. So do the
+    /// elastic coordinates where the builder says (`elastic_error(false)`).
     fn error_weights(&self, w: &mut [f64]) {
         w.fill(1.0);
         w[self.model.work.clone()].fill(0.0);
+        if !self.model.elastic_error {
+            w[self.model.layout.eta.clone()].fill(0.0);
+            w[self.model.layout.etadot.clone()].fill(0.0);
+        }
     }
 
     fn project(&mut self, x: &mut [f64]) {

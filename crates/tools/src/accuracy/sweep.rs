@@ -19,11 +19,17 @@ pub fn sweep(
         .map_err(|e| e.to_string())?
         .layout()
         .clone();
+    // The references count every state in their error, the elastic coordinates too, whatever
+    // the runs measured against them do (`integrator.elastic_error`).
+    let full = Scene {
+        elastic_error: true,
+        ..scene.clone()
+    };
     let reference_run = |(method, tol): (Method, f64), progress: &mut dyn FnMut(&str)| {
         progress(&format!("reference {method} tol={tol:e}"));
-        let opts = sweep.options(scene, method, Setting::Tolerance(tol));
+        let opts = sweep.options(&full, method, Setting::Tolerance(tol));
         let tr =
-            run(scene, &opts).map_err(|e| format!("reference run {method} at {tol:e}: {e}"))?;
+            run(&full, &opts).map_err(|e| format!("reference run {method} at {tol:e}: {e}"))?;
         let info = ReferenceRun {
             method,
             tol,

@@ -167,6 +167,10 @@ pub struct IntegratorFile {
     /// Largest number of steps (default 10 000 000).
     #[serde(default)]
     pub max_steps: Option<Spanned<i64>>,
+    /// Whether the flexible bodies' elastic coordinates count in the adaptive methods' error
+    /// (default true).
+    #[serde(default)]
+    pub elastic_error: Option<Spanned<bool>>,
 }
 
 /// `[output]`.

@@ -83,6 +83,10 @@ pub struct Scene {
     pub epoch: Option<satsim_environment::Epoch>,
     /// Integrator options.
     pub options: Options,
+    /// Whether the elastic coordinates count in the adaptive methods' error
+    /// (`integrator.elastic_error`, default true; see
+    /// [`SimulationBuilder::elastic_error`](satsim_spacecraft::simulation::SimulationBuilder::elastic_error)).
+    pub elastic_error: bool,
     /// Seconds between output rows.
     pub every: f64,
     /// Draw SVG plots.
@@ -186,6 +190,7 @@ impl Scene {
             duration,
             epoch: None,
             options: integrator::default_options(),
+            elastic_error: true,
             every: duration / 100.0,
             plots: true,
             view: true,
@@ -207,6 +212,7 @@ impl Scene {
         }
         b.initial(self.initial.clone())
             .energy_budget(self.energy_budget)
+            .elastic_error(self.elastic_error)
             .effects(&self.effects)
             .build()
     }

@@ -153,6 +153,20 @@ impl<'a> Parser<'a> {
             None => None,
         };
         let options = self.integrator(file.integrator.as_ref())?;
+        let elastic_error = match file
+            .integrator
+            .as_ref()
+            .and_then(|i| i.get_ref().elastic_error.as_ref())
+        {
+            Some(e) if flex.is_none() => {
+                return Err(self.error(
+                    Some(e.span()),
+                    "`integrator.elastic_error`: the model has no flexible bodies",
+                ));
+            }
+            Some(e) => *e.get_ref(),
+            None => true,
+        };
         if let (Some(f), Some(h)) = (flex.as_ref(), options.fixed_step) {
             self.check_modal_step(&file, f, &initial, &elastic, h)?;
         }
@@ -204,6 +218,7 @@ impl<'a> Parser<'a> {
             duration,
             epoch,
             options,
+            elastic_error,
             every,
             plots,
             view,
@@ -255,7 +270,7 @@ impl<'a> Parser<'a> {
         Err(self.error(
             span,
             format!(
-                "`integrator.step` = {h} s is too long for rk4 with the flexible modes: the structure's highest mode (mostly body `{body}`'s mode {mode}) is at {:.4} Hz (ω = {:.4} rad/s) and rk4 is stable only for ω × step <= 2√2 = 2.83 (here {:.3}): set `step` at most {} s (the largest stable step is {stable:.4e} s), or use an adaptive method (`method = \"dop853\"`)",
+                "`integrator.step` = {h} s is too long for rk4 with the flexible modes: the structure's highest mode (mostly body `{body}`'s mode {mode}) is at {:.4} Hz (ω = {:.4} rad/s) and rk4 is stable only for ω × step <= 2√2 = 2.83 (here {:.3}): set `step` at most {} s (the largest stable step is {stable:.4e} s), or use an adaptive method (`method = \"radau5\"`, implicit, steps over the mode)",
                 w / std::f64::consts::TAU,
                 w,
                 w * h,

@@ -110,6 +110,9 @@ pub struct FlexModel {
     pub(crate) nodes: Vec<Option<Node>>,
     /// Per body: its beam, if its modes are a beam's (for the tip deflection).
     pub(crate) beams: Vec<Option<Beam>>,
+    /// Per beam body: its modes' deflection at the tip, `φₖ(L)` (an output's column, so made
+    /// once: each mode's shape is a root of the frequency equation).
+    pub(crate) tips: Vec<Vec<f64>>,
     /// Per body: its children.
     pub(crate) children: Vec<Vec<usize>>,
     /// Per body: its beam's second-order inertia (centrifugal stiffening), when on.
@@ -330,9 +333,21 @@ impl FlexModel {
             }
             nodes[i] = Some(Node::new(*joint.at(), &shape));
         }
+        let tips = beams
+            .iter()
+            .map(|b| {
+                b.as_ref().map_or_else(Vec::new, |beam| {
+                    beam.cantilever_modes()
+                        .iter()
+                        .map(|m| m.shape(beam.length)[0])
+                        .collect()
+                })
+            })
+            .collect();
         Ok(FlexModel {
             rigid,
             modes,
+            tips,
             offset,
             n_elastic: total,
             momentum,
@@ -436,15 +451,9 @@ impl FlexModel {
     /// The deflection of body `i`'s beam tip along `bend` (m) in `q`; `None` unless its
     /// modes are a beam's.
     pub fn tip_deflection(&self, i: usize, q: &[f64]) -> Option<f64> {
-        let beam = self.beams[i].as_ref()?;
+        self.beams[i].as_ref()?;
         let eta = &q[self.rigid.nq() + self.offset[i]..][..self.modes[i]];
-        Some(
-            beam.cantilever_modes()
-                .iter()
-                .zip(eta)
-                .map(|(m, e)| m.shape(beam.length)[0] * e)
-                .sum(),
-        )
+        Some(self.tips[i].iter().zip(eta).map(|(p, e)| p * e).sum())
     }
     /// Body `i`'s rigid inertia at the deformation in `q`: with stiffening, plus the
     /// deflection's first-order inertia `Σ ηₖ Iₖ`, the angular block less `G(η)` (the
