@@ -157,6 +157,10 @@ pub(crate) struct Radau5 {
     theta: f64,
     /// [`THET`] or [`THET_DIFFERENCES`], once the Jacobian's kind is known.
     thet: f64,
+    /// The eigenvalues of `A⁻¹`: `γ` ([`u1`]) and `α ± iβ` ([`alpha_beta`]), made once.
+    gamma: f64,
+    alpha: f64,
+    beta: f64,
     faccon: f64,
     hacc: f64,
     erracc: f64,
@@ -202,6 +206,9 @@ impl Radau5 {
             h_lu: f64::NAN,
             theta: THET,
             thet: THET,
+            gamma: u1(),
+            alpha: alpha_beta().0,
+            beta: alpha_beta().1,
             faccon: 1.0,
             hacc: 0.0,
             erracc: 0.0,
@@ -255,9 +262,8 @@ impl Radau5 {
     /// Builds and factors `γ/h - J` and `(α + iβ)/h - J`. False if singular.
     fn factor(&mut self, ctx: &mut Ctx, h: f64) -> bool {
         let n = self.n;
-        let fac1 = u1() / h;
-        let (alph, beta) = alpha_beta();
-        let (alphn, betan) = (alph / h, beta / h);
+        let fac1 = self.gamma / h;
+        let (alphn, betan) = (self.alpha / h, self.beta / h);
         for c in 0..n {
             for r in 0..n {
                 let j = self.jac[(r, c)];
@@ -327,9 +333,8 @@ impl Radau5 {
                 self.w[s * n + i] = ti[0] * z1 + ti[1] * z2 + ti[2] * z3;
             }
         }
-        let fac1 = u1() / h;
-        let (alph, beta) = alpha_beta();
-        let (alphn, betan) = (alph / h, beta / h);
+        let fac1 = self.gamma / h;
+        let (alphn, betan) = (self.alpha / h, self.beta / h);
         self.faccon = self.faccon.max(f64::EPSILON).powf(0.8);
         self.theta = THET;
         let mut dyno_old = 0.0;
