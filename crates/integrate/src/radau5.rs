@@ -10,14 +10,15 @@
 //! one real `n × n` system `(γ/h - J)` and one complex `((α + iβ)/h - J)` instead
 //! of one real `3n × 3n`. On the 49 states of a flexible deployment that is 5
 //! times fewer flops a factorisation (which the step-size changes make often),
-//! and the real factor is the error estimate's filter as it stands.
-
-use faer::Mat;
+//! and the real factor is the error estimate's filter as it stands. Both are factored
+//! through the Jacobian's Hessenberg form, made once per Jacobian (`hessenberg.rs`), so
+//! that a new step size costs `O(n²)`.
 
 use crate::{
     common::{Ctx, STAGE_RETRY_FACTOR, Stepper, all_finite, check_step_size, clamp_to_limit},
     error::IntegrateError,
-    lu::{ComplexLu, RealLu},
+    hessenberg::StageMatrices,
+    jacobian::Jacobian,
     system::System,
 };
 
@@ -137,11 +138,10 @@ pub(crate) struct Radau5 {
     scal: Vec<f64>,
     /// Collocation polynomial of the last step: `x + s (c0 + (s - c2 + 1)(c1 + (s - c1 + 1) c2))`.
     cont: [Vec<f64>; 3],
-    jac: Mat<f64>,
-    jac_user: Vec<f64>,
-    /// `γ/h - J` (the real block, also the error estimate's filter) and `(α + iβ)/h - J`.
-    e1: RealLu,
-    e2: ComplexLu,
+    jac: Jacobian,
+    /// `γ/h - J` (the real block, also the error estimate's filter) and `(α + iβ)/h - J`:
+    /// the Jacobian reduced once (`hessenberg.rs`), factored at each new step size.
+    e: StageMatrices,
     /// Tolerances transformed as in RADAU5 (the method's error estimate is
     /// of lower order than the solution).
     rtol: f64,
@@ -192,10 +192,8 @@ impl Radau5 {
             err: z(),
             scal: z(),
             cont: [z(), z(), z()],
-            jac: Mat::zeros(n, n),
-            jac_user: vec![0.0; n * n],
-            e1: RealLu::new(n),
-            e2: ComplexLu::new(n),
+            jac: Jacobian::new(n),
+            e: StageMatrices::new(n),
             rtol: rt,
             atol: at,
             fnewt,
@@ -221,63 +219,22 @@ impl Radau5 {
         sys: &mut S,
         ctx: &mut Ctx,
     ) -> Result<(), IntegrateError> {
-        let (n, t) = (self.n, self.t);
-        ctx.jacobian_evals += 1;
-        let analytic = sys
-            .jacobian(t, &self.x, &mut self.jac_user)
-            .map_err(|source| IntegrateError::System { t, source })?;
+        let analytic = self.jac.evaluate(sys, ctx, self.t, &mut self.x, &self.f0)?;
         self.thet = if analytic { THET } else { THET_DIFFERENCES };
-        if analytic {
-            if !all_finite(&self.jac_user) {
-                return Err(IntegrateError::NonFinite {
-                    t,
-                    entry: None,
-                    what: ": in the system's Jacobian".into(),
-                });
-            }
-            for i in 0..n {
-                for j in 0..n {
-                    self.jac[(i, j)] = self.jac_user[i * n + j];
-                }
-            }
-        } else {
-            // Forward differences with RADAU5's increment sqrt(eps * max(1e-5, |x_j|)).
-            for j in 0..n {
-                let xj = self.x[j];
-                let delta = (f64::EPSILON * xj.abs().max(1e-5)).sqrt();
-                self.x[j] = xj + delta;
-                let r = ctx.eval(sys, t, &self.x, &mut self.tmp);
-                self.x[j] = xj;
-                r?;
-                for i in 0..n {
-                    self.jac[(i, j)] = (self.tmp[i] - self.f0[i]) / delta;
-                }
-            }
-        }
+        let jac = &self.jac;
+        self.e.reduce(|r, c| jac.get(r, c));
         self.jac_current = true;
         self.h_lu = f64::NAN;
         Ok(())
     }
 
-    /// Builds and factors `γ/h - J` and `(α + iβ)/h - J`. False if singular.
+    /// Factors `γ/h - J` and `(α + iβ)/h - J` through the Jacobian's Hessenberg form
+    /// (`O(n²)` each). False if singular.
     fn factor(&mut self, ctx: &mut Ctx, h: f64) -> bool {
-        let n = self.n;
         let fac1 = self.gamma / h;
         let (alphn, betan) = (self.alpha / h, self.beta / h);
-        for c in 0..n {
-            for r in 0..n {
-                let j = self.jac[(r, c)];
-                if r == c {
-                    self.e1.set(r, c, fac1 - j);
-                    self.e2.set(r, c, alphn - j, betan);
-                } else {
-                    self.e1.set(r, c, -j);
-                    self.e2.set(r, c, -j, 0.0);
-                }
-            }
-        }
         ctx.lu_decompositions += 1;
-        if !self.e1.factor() || !self.e2.factor() {
+        if !self.e.factor(fac1, (alphn, betan)) {
             return false;
         }
         self.h_lu = h;
@@ -370,8 +327,7 @@ impl Radau5 {
                 self.dc[i] = g(2) - alphn * w3 - betan * w2;
             }
             let (d1, rest) = self.dz.split_at_mut(n);
-            self.e1.solve(d1);
-            self.e2.solve(&mut rest[..n], &mut self.dc);
+            self.e.solve_stages(d1, &mut rest[..n], &mut self.dc);
             self.dz[2 * n..].copy_from_slice(&self.dc);
             newt += 1;
             let mut sum = 0.0;
@@ -437,7 +393,7 @@ impl Radau5 {
                 (DD[0] * self.z[i] + DD[1] * self.z[n + i] + DD[2] * self.z[2 * n + i]) / h;
             self.err[i] = self.tmp[i] + self.f0[i];
         }
-        self.e1.solve(&mut self.err);
+        self.e.solve_real(&mut self.err);
         let mut err = self.err_norm(ctx, &self.err);
         if err >= 1.0 && (self.first || self.reject) {
             // One more filtering pass through f, which tames the estimate for
@@ -451,7 +407,7 @@ impl Radau5 {
             for i in 0..n {
                 self.err[i] = fe[i] + self.tmp[i];
             }
-            self.e1.solve(&mut self.err);
+            self.e.solve_real(&mut self.err);
             err = self.err_norm(ctx, &self.err);
         }
         Ok(err)

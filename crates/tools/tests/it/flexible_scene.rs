@@ -230,10 +230,13 @@ fn the_elastic_coordinates_left_out_of_the_error_take_fewer_steps_for_the_same_r
             .fold(0.0, f64::max)
     };
     assert_eq!(rigid.len(), reference.len());
-    // Both within the tolerance of the reference in the hinge angle and the quaternion, the
-    // rigid-only error control in about two thirds of the steps (1 323 against 2 015).
-    assert!(largest(&all) < 2e-6, "{:e}", largest(&all));
-    assert!(largest(&rigid) < 2e-6, "{:e}", largest(&rigid));
+    // Both within a few tolerances of the reference in the hinge angle and the quaternion,
+    // the rigid-only error control in about two thirds of the steps (1 324 against 2 013).
+    // With every state in the error the result rides on where the steps fall around the
+    // ringing: tolerances 0.9e-6 to 1.1e-6 give 2.2e-7 to 3.4e-6 (measured; the rigid-only
+    // control 1.8e-7 at 1e-6).
+    assert!(largest(&all) < 4e-6, "{:e}", largest(&all));
+    assert!(largest(&rigid) < 1e-6, "{:e}", largest(&rigid));
     assert!(
         (steps_rigid as f64) < 0.8 * steps_all as f64,
         "{steps_rigid} against {steps_all}"
