@@ -47,6 +47,7 @@ pub mod lanes;
 mod options;
 mod radau5;
 mod rk4;
+mod stage_matrices;
 mod system;
 
 #[cfg(test)]

@@ -17,8 +17,8 @@
 use crate::{
     common::{Ctx, STAGE_RETRY_FACTOR, Stepper, all_finite, check_step_size, clamp_to_limit},
     error::IntegrateError,
-    hessenberg::StageMatrices,
     jacobian::Jacobian,
+    stage_matrices::StageMatrices,
     system::System,
 };
 
@@ -140,7 +140,7 @@ pub(crate) struct Radau5 {
     cont: [Vec<f64>; 3],
     jac: Jacobian,
     /// `γ/h - J` (the real block, also the error estimate's filter) and `(α + iβ)/h - J`:
-    /// the Jacobian reduced once (`hessenberg.rs`), factored at each new step size.
+    /// the Jacobian reduced once (`stage_matrices.rs`), factored at each new step size.
     e: StageMatrices,
     /// Tolerances transformed as in RADAU5 (the method's error estimate is
     /// of lower order than the solution).
