@@ -75,11 +75,13 @@ impl Simulation {
             (Some(f), Some(w)) => {
                 // The accelerations go to `a`, which RNEA then reads beside `w`'s buffers.
                 let mut a = std::mem::take(&mut w.a);
-                let solved =
-                    flexible_dynamics(f, w, &d.tau, &d.forces.elastic, fext, Some(&d.hold_mask))
-                        .map(|ddq| a.copy_from_slice(ddq));
+                let hold = Some(d.hold_mask.as_slice());
+                let (elastic, tau) = (&d.forces.elastic, &d.tau);
+                let solved = flexible_dynamics(f, w, tau, elastic, fext, hold, xup_ready)
+                    .map(|ddq| a.copy_from_slice(ddq));
+                // The solve left this state's first pass in `w.data`.
                 let need = solved.and_then(|()| {
-                    flexible::rnea(f, &mut w.data, &w.q, &w.v, &a, fext).map(|_| ())
+                    flexible::rnea_with_kinematics(f, &mut w.data, &w.q, &w.v, &a, fext).map(|_| ())
                 });
                 w.a = a;
                 need.map_err(err)?;

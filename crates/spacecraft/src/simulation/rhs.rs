@@ -137,7 +137,8 @@ impl Simulation {
                 let nv = d.v.len();
                 w.a[..nv].copy_from_slice(&d.hold_ddq);
                 w.a[nv..].copy_from_slice(&dx[m.layout.etadot.clone()]);
-                flexible::rnea(f, &mut w.data, &w.q, &w.v, &w.a, fext)
+                // After the dynamics on this state: its first pass is current.
+                flexible::rnea_with_kinematics(f, &mut w.data, &w.q, &w.v, &w.a, fext)
                     .map_err(SystemError::from_error)?
                     .as_slice()
             }
@@ -382,7 +383,7 @@ impl Simulation {
             (Some(f), Some(w)) => {
                 let locked = (d.n_locked > 0).then_some(d.locked.as_slice());
                 let fext = fext.then_some(d.forces.body_wrench.as_slice());
-                let ddq = flexible_dynamics(f, w, &d.tau, &d.forces.elastic, fext, locked)
+                let ddq = flexible_dynamics(f, w, &d.tau, &d.forces.elastic, fext, locked, kin)
                     .map_err(err)?;
                 let nv = d.ddq.len();
                 d.ddq.copy_from_slice(&ddq[..nv]);

@@ -9,7 +9,9 @@ use satsim_tree::spatial::Force;
 use satsim_tree::{Data, DynamicsError, Input};
 
 /// The flexible tree's accelerations `[q̈; η̈]` for the rigid generalised forces `tau` (the
-/// modes take none from the effects), hybrid with `locked`.
+/// modes take none from the effects), hybrid with `locked`. `current`: the work's first
+/// pass is this state's (the flexible kinematics or an earlier solve ran on it), so the ABA
+/// reuses it (bit for bit the same result).
 pub(super) fn flexible_dynamics<'w>(
     model: &FlexModel,
     work: &'w mut FlexWork,
@@ -17,6 +19,7 @@ pub(super) fn flexible_dynamics<'w>(
     elastic: &[f64],
     fext: Option<&[Force]>,
     locked: Option<&[bool]>,
+    current: bool,
 ) -> Result<&'w [f64], DynamicsError> {
     work.tau[..tau.len()].copy_from_slice(tau);
     // The loads' generalised forces on the modes (empty: none).
@@ -26,9 +29,11 @@ pub(super) fn flexible_dynamics<'w>(
     let FlexWork {
         data, q, v, tau, ..
     } = work;
-    let ddq = match locked {
-        Some(l) => flexible::aba_hybrid(model, data, q, v, tau, fext, l)?,
-        None => flexible::aba(model, data, q, v, tau, fext)?,
+    let ddq = match (locked, current) {
+        (Some(l), false) => flexible::aba_hybrid(model, data, q, v, tau, fext, l)?,
+        (Some(l), true) => flexible::aba_hybrid_with_kinematics(model, data, q, v, tau, fext, l)?,
+        (None, false) => flexible::aba(model, data, q, v, tau, fext)?,
+        (None, true) => flexible::aba_with_kinematics(model, data, q, v, tau, fext)?,
     };
     Ok(ddq.as_slice())
 }

@@ -55,7 +55,7 @@ pub mod model;
 mod node;
 pub mod rnea;
 
-pub use aba::{aba, aba_hybrid};
+pub use aba::{aba, aba_hybrid, aba_hybrid_with_kinematics, aba_with_kinematics};
 pub use beam::{Beam, Stiffening, StiffeningIntegrals};
 pub use crba::crba;
 pub use data::FlexData;
@@ -63,7 +63,7 @@ pub use field::FieldLoad;
 pub use kinematics::{forward_kinematics, momentum};
 pub use modal::{ModalData, NodeShape};
 pub use model::{FlexError, FlexModel, Flexible, Modes};
-pub use rnea::{bias, rnea};
+pub use rnea::{bias, rnea, rnea_with_kinematics};
 
 use crate::error::DynamicsError;
 

@@ -23,13 +23,41 @@ pub fn rnea<'d>(
     a: &[f64],
     fext: Option<&[Force]>,
 ) -> Result<&'d DVector<f64>, DynamicsError> {
+    inverse(model, data, q, v, a, fext, false)
+}
+
+/// As [`rnea()`], reusing the first pass in `data`, which must be that of this `q` and `v`
+/// (see [`super::aba_with_kinematics`]): the torques that hold locked hinges, after the
+/// forward dynamics on the same state.
+pub fn rnea_with_kinematics<'d>(
+    model: &FlexModel,
+    data: &'d mut FlexData,
+    q: &[f64],
+    v: &[f64],
+    a: &[f64],
+    fext: Option<&[Force]>,
+) -> Result<&'d DVector<f64>, DynamicsError> {
+    inverse(model, data, q, v, a, fext, true)
+}
+
+fn inverse<'d>(
+    model: &FlexModel,
+    data: &'d mut FlexData,
+    q: &[f64],
+    v: &[f64],
+    a: &[f64],
+    fext: Option<&[Force]>,
+    first_pass_current: bool,
+) -> Result<&'d DVector<f64>, DynamicsError> {
     check_state(model, q, v)?;
     check_len("a", a.len(), model.nv())?;
     let rigid = &model.rigid;
     if let Some(f) = fext {
         check_len("fext", f.len(), rigid.n_bodies())?;
     }
-    velocities(model, data, q, v);
+    if !first_pass_current {
+        velocities(model, data, q, v);
+    }
     let (nq, nv) = (rigid.nq(), rigid.nv());
     let n = rigid.n_bodies();
     data.a[0] = base_motion(rigid, a);
