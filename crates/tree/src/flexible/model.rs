@@ -204,6 +204,17 @@ impl FlexModel {
     /// Attaches flexible bodies to a built rigid model whose inertias already include them
     /// (as [`FlexModel::build`] makes it). With no flexible body, the rigid model itself.
     pub fn attach(rigid: Model, flexible: &[Flexible]) -> Result<FlexModel, FlexError> {
+        Self::attach_reusing(rigid, flexible, None)
+    }
+
+    /// [`FlexModel::attach`], taking a beam's integrals (its momentum coefficients and
+    /// second-order inertia: Gauss-Legendre over its length, most of a flexible model's
+    /// making) from `known` where it has the same beam on the same body.
+    fn attach_reusing(
+        rigid: Model,
+        flexible: &[Flexible],
+        known: Option<&FlexModel>,
+    ) -> Result<FlexModel, FlexError> {
         let n = rigid.n_bodies();
         let mut data: Vec<Option<(ModalData, f64)>> = vec![None; n];
         let mut beams: Vec<Option<Beam>> = vec![None; n];
@@ -219,11 +230,19 @@ impl FlexModel {
                 Modes::Beam(beam) => {
                     check_beam(&f.body, beam)?;
                     beams[b] = Some(beam.clone());
+                    let same =
+                        known.filter(|k| k.beams.get(b).and_then(Option::as_ref) == Some(beam));
                     if f.stiffening {
-                        stiffening[b] = Some(beam.stiffening());
+                        stiffening[b] = Some(
+                            same.and_then(|k| k.stiffening[b].clone())
+                                .unwrap_or_else(|| beam.stiffening()),
+                        );
                     }
                     ModalData {
-                        momentum: beam.momentum_coefficients(),
+                        momentum: same.map_or_else(
+                            || beam.momentum_coefficients(),
+                            |k| k.momentum[k.offset[b]..][..k.modes[b]].to_vec(),
+                        ),
                         omega: (1..=beam.modes).map(|k| beam.omega(k)).collect(),
                     }
                 }
@@ -378,7 +397,8 @@ impl FlexModel {
         if !same {
             return Err(FlexError::Grown);
         }
-        let mut grown = FlexModel::attach(rigid, &self.spec)?;
+        // The beams are this model's: their integrals are taken, not made again.
+        let mut grown = FlexModel::attach_reusing(rigid, &self.spec, Some(self))?;
         grown.damping.copy_from_slice(&self.damping);
         Ok(grown)
     }

@@ -610,3 +610,27 @@ fn in_plane_stiffening_is_southwell_less_the_spin() {
         assert!((coefficient - expected).abs() < 1e-3, "{coefficient}");
     }
 }
+
+/// `with_rigid` takes the beams' integrals from the model it grows instead of making them
+/// again: the grown model (a rotor added on a flexible body, one on the bus) is exactly the
+/// one `attach` makes from nothing.
+#[test]
+fn a_grown_model_is_the_one_attached_from_nothing() {
+    let model = modal_panels(3);
+    let rotor = Mat3::identity() * 0.02;
+    let grown = model
+        .rigid()
+        .to_builder()
+        .body(Body::new("wheel1", 0.5, rotor))
+        .body(Body::new("wheel2", 0.5, rotor))
+        .hinge(Hinge::revolute("r1", "panel2", "wheel1", Vec3::z()).at(Vec3::new(0.0, -1.2, 0.0)))
+        .hinge(Hinge::revolute("r2", "bus", "wheel2", Vec3::x()))
+        .build()
+        .unwrap();
+    let reused = model.with_rigid(grown.clone()).unwrap();
+    let fresh = FlexModel::attach(grown, model.flexible()).unwrap();
+    assert_eq!(reused, fresh);
+    assert!(reused.stiffened(2) && reused.modes(3) == 0);
+    // The wheel on the beam: its node, made from the beam's shapes, compared above.
+    assert_eq!(reused.rigid().parent()[3], Some(2));
+}
