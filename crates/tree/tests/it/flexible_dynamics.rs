@@ -634,3 +634,67 @@ fn a_grown_model_is_the_one_attached_from_nothing() {
     // The wheel on the beam: its node, made from the beam's shapes, compared above.
     assert_eq!(reused.rigid().parent()[3], Some(2));
 }
+
+/// The algorithms that reuse the kinematics' first pass give exactly what the plain ones
+/// give, hinges locked or not, with wrenches on the bodies; and after a pass on another state
+/// the plain ones do not (so the reuse is what is compared).
+#[test]
+fn the_first_pass_reused_is_bit_for_bit_the_plain_algorithms() {
+    let model = modal_panels(3);
+    let n = model.rigid().n_bodies();
+    let (mut flex, mut poses) = (FlexData::new(&model), Data::new(model.rigid()));
+    let mut q = model.neutral();
+    q[7] = 0.4;
+    q[8] = -0.3;
+    let nq = model.rigid().nq();
+    for (k, x) in q[nq..].iter_mut().enumerate() {
+        *x = 1e-3 * (k as f64 + 1.0);
+    }
+    let v: Vec<f64> = (0..model.nv())
+        .map(|k| 0.2 * (k as f64 + 0.5).sin())
+        .collect();
+    let tau: Vec<f64> = (0..model.nv()).map(|k| 0.3 * (k as f64).cos()).collect();
+    let fext: Vec<_> = (0..n)
+        .map(|i| {
+            satsim_tree::spatial::Force::new(
+                Vec3::new(0.1, -0.2, 0.05 * i as f64),
+                Vec3::new(0.3, 0.0, -0.1),
+            )
+        })
+        .collect();
+    let locked = [true, false];
+    let plain_aba = flexible::aba(&model, &mut flex, &q, &v, &tau, Some(&fext))
+        .unwrap()
+        .clone();
+    let plain_hybrid = flexible::aba_hybrid(&model, &mut flex, &q, &v, &tau, Some(&fext), &locked)
+        .unwrap()
+        .clone();
+    let plain_rnea = flexible::rnea(
+        &model,
+        &mut flex,
+        &q,
+        &v,
+        plain_hybrid.as_slice(),
+        Some(&fext),
+    )
+    .unwrap()
+    .clone();
+    // Another state's first pass, then this state's kinematics.
+    let other: Vec<f64> = v.iter().map(|x| -2.0 * x).collect();
+    flexible::forward_kinematics(&model, &mut flex, &mut poses, &q, &other).unwrap();
+    let stale = flexible::aba_with_kinematics(&model, &mut flex, &q, &v, &tau, Some(&fext))
+        .unwrap()
+        .clone();
+    assert_ne!(stale, plain_aba, "a stale first pass must show");
+    flexible::forward_kinematics(&model, &mut flex, &mut poses, &q, &v).unwrap();
+    let a = flexible::aba_with_kinematics(&model, &mut flex, &q, &v, &tau, Some(&fext)).unwrap();
+    assert_eq!(a, &plain_aba);
+    let h =
+        flexible::aba_hybrid_with_kinematics(&model, &mut flex, &q, &v, &tau, Some(&fext), &locked)
+            .unwrap()
+            .clone();
+    assert_eq!(h, plain_hybrid);
+    let r = flexible::rnea_with_kinematics(&model, &mut flex, &q, &v, h.as_slice(), Some(&fext))
+        .unwrap();
+    assert_eq!(r, &plain_rnea);
+}
