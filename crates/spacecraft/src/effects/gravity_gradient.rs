@@ -46,10 +46,10 @@
 
 use super::{Context, Effect, Forces, Links, Needs, OrbitState, Power, SceneEffect, Section};
 use satsim_integrate::SystemError;
-use satsim_tree::flexible::FlexModel;
+use satsim_tree::flexible::{FlexModel, field::potential};
 use satsim_tree::io::FileError;
 use satsim_tree::kernel_parts;
-use satsim_tree::spatial::{Force, Mat3, Vec3, skew};
+use satsim_tree::spatial::{Force, Mat3, RigidInertia, Vec3, skew};
 use satsim_tree::{Model, center_of_mass};
 use serde::Deserialize;
 use toml::Spanned;
@@ -81,6 +81,10 @@ pub struct GravityGradient {
     /// For `full`, each loaded body's centre of mass in inertial axes from the system's
     /// origin, by `apply` (room made once, by `connect`).
     at: Vec<Vec3>,
+    /// For `full`, each deformable loaded body's inertia at the deformation
+    /// ([`FlexModel::deformed_inertia`]), by `apply`: its centre of mass for `at`, then its
+    /// load (one evaluation a body where there were two). Unused for a rigid body.
+    deformed: Vec<RigidInertia>,
     /// For `full` on a tree with a stiffened flexible body: the flexible model, whose
     /// [`FlexModel::linear_field`] spreads the tidal field over such a body's deformed mass
     /// and onto its modes (see the module's documentation).
@@ -188,10 +192,13 @@ fn field(k: f64, eb: &Vec3, k_dot: f64, eb_dot: &Vec3) -> (Mat3, Mat3) {
 impl GravityGradient {
     /// Each loaded body's centre of mass (`at`, inertial axes) from the poses; for `full`.
     fn place(&mut self, ctx: &Context) {
-        for (p, l) in self.at.iter_mut().zip(&self.loaded) {
+        for ((p, l), d) in self.at.iter_mut().zip(&self.loaded).zip(&mut self.deformed) {
             let i = l.body;
             let com = match &self.flex {
-                Some(flex) if l.deformable => flex.deformed_inertia(i, ctx.eta).h / l.mass,
+                Some(flex) if l.deformable => {
+                    *d = flex.deformed_inertia(i, ctx.eta);
+                    d.h / l.mass
+                }
                 _ => l.com,
             };
             *p = ctx.data.position[i] + ctx.data.rotation[i] * com;
@@ -249,6 +256,7 @@ impl GravityGradient {
             loaded: Vec::new(),
             n_bodies: 0,
             at: Vec::new(),
+            deformed: Vec::new(),
             flex: None,
         }
     }
@@ -280,13 +288,15 @@ impl GravityGradient {
             let rot = &ctx.data.rotation[i];
             let eb = rot.tr_mul(&e);
             if let Some(flex) = self.flex.as_ref().filter(|_| l.deformable) {
-                // The field over the deformed mass, its origin at `ρ` from the centre of mass.
+                // The field over the deformed mass (its inertia from `place`: `full` only has
+                // deformable bodies), its origin at `ρ` from the centre of mass.
+                let inertia = &self.deformed[n];
                 let rho = rot.tr_mul(&(ctx.data.position[i] - com));
                 let (t, t_dot) = field(k, &eb, k_dot, &rot.tr_mul(&e_dot));
-                let load = flex.linear_field(i, ctx.eta, &t, &rho, &mut forces.elastic);
+                let load = flex.linear_field_on(i, inertia, ctx.eta, &t, &rho, &mut forces.elastic);
                 forces.add_wrench(i, load.wrench);
                 if POWER {
-                    field_power += flex.field_potential(i, ctx.eta, &t_dot, &rho);
+                    field_power += potential(inertia, &t_dot, &rho);
                 }
                 continue;
             }
@@ -337,6 +347,11 @@ impl Effect for GravityGradient {
             .collect();
         self.n_bodies = model.n_bodies();
         self.at = vec![Vec3::zeros(); self.loaded.len()];
+        self.deformed = self
+            .loaded
+            .iter()
+            .map(|l| *model.bodies()[l.body].inertia())
+            .collect();
         self.flex = None;
         if let Some(flex) = links.flex.filter(|_| self.model == GravityModel::Full) {
             for l in &mut self.loaded {

@@ -46,8 +46,11 @@ fn vec(m: &Mat3) -> Vec3 {
     )
 }
 
-/// `V = −½ m ρᵀTρ − ρᵀT h − ½ tr(T J)`, `tr(T J) = ½ tr T tr I − tr(T I)`.
-fn potential(inertia: &RigidInertia, t: &Mat3, rho: &Vec3) -> f64 {
+/// The potential `V = −½ m ρᵀTρ − ρᵀT h − ½ tr(T J)` (`tr(T J) = ½ tr T tr I − tr(T I)`) of
+/// the linear field `f(x) = T x` over a body of inertia `inertia` (about its frame's origin,
+/// body axes), that origin at `rho` from the field's centre: [`FlexModel::field_potential`]
+/// for a caller that has the body's [`FlexModel::deformed_inertia`] already.
+pub fn potential(inertia: &RigidInertia, t: &Mat3, rho: &Vec3) -> f64 {
     let tj = 0.5 * t.trace() * inertia.inertia.trace() - t.component_mul(&inertia.inertia).sum();
     -0.5 * inertia.mass * rho.dot(&(t * rho)) - rho.dot(&(t * inertia.h)) - 0.5 * tj
 }
@@ -74,13 +77,27 @@ impl FlexModel {
         rho: &Vec3,
         elastic: &mut [f64],
     ) -> FieldLoad {
-        let inertia = self.deformed_inertia(i, eta);
+        self.linear_field_on(i, &self.deformed_inertia(i, eta), eta, t, rho, elastic)
+    }
+
+    /// [`FlexModel::linear_field`] with body `i`'s inertia at `eta` given: what
+    /// [`FlexModel::deformed_inertia`] returns, for a caller that has it already (the
+    /// gravity gradient, which needs it first for the system's centre of mass).
+    pub fn linear_field_on(
+        &self,
+        i: usize,
+        inertia: &RigidInertia,
+        eta: &[f64],
+        t: &Mat3,
+        rho: &Vec3,
+        elastic: &mut [f64],
+    ) -> FieldLoad {
         let t_rho = t * rho;
         let wrench = Force::new(
             inertia.h.cross(&t_rho) - vec(&(inertia.inertia * t)),
             t * (rho * inertia.mass + inertia.h),
         );
-        let potential = potential(&inertia, t, rho);
+        let potential = potential(inertia, t, rho);
         if let Some(s) = &self.stiffening[i] {
             // ½ tr(T ∂J) for an inertia change `a` (`∂J = ½ tr(a) 1 − a`).
             let tr = t.trace();
