@@ -456,7 +456,9 @@ fn summary(scene_path: &Path, scene: &Scene, sim: &Simulation, done: &Done) -> O
         } else {
             String::new()
         },
-        stats.events.len(),
+        // Every event of the log (`events.csv`): the integrator's crossings and the effects'
+        // own, a fault at its time among them.
+        sim.event_log().len(),
         done.elapsed
     );
     for (t, what) in sim.event_log().iter().take(10) {

@@ -131,3 +131,21 @@ fn no_arguments_runs_the_default_scene() {
     let (_, rows) = csv(&dir.join("out/deploy/trajectory.csv"));
     assert_eq!(rows.len(), 301);
 }
+
+#[test]
+fn the_summary_counts_every_event_a_fault_too() {
+    // The faults scene's wheel fails at 60 s: an event of the log with no crossing for the
+    // integrator to find. The run line counts what the listing and events.csv hold.
+    let dir = satsim_testkit::temp_dir_with("run-fault-count", &["examples/scenes/faults.toml"]);
+    let o = satsim_in(&dir, &["run", "faults.toml", "--set", "duration=100"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let out = String::from_utf8_lossy(&o.stdout);
+    let ran = out
+        .lines()
+        .find(|l| l.starts_with("ran "))
+        .expect("a ran line");
+    assert!(ran.contains(", 1 events,"), "{ran}");
+    assert!(out.contains("fault: wheel `y` off"), "{out}");
+    let events = std::fs::read_to_string(dir.join("out/faults/events.csv")).unwrap();
+    assert_eq!(events.lines().count(), 2, "{events}");
+}
