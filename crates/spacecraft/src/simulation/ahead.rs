@@ -9,10 +9,12 @@
 //! from its accelerations; the next `rhs` at the same `(t, x)` (bit for bit) returns the
 //! kept slope instead of computing it again: one evaluation of the kinematics, the effects
 //! and the dynamics where there were two. The slope is bit for bit what the two passes gave
-//! apart: the same solve (`forward_dynamics` with the same inputs and lock mask) feeds both.
-//! The hold torques are RNEA's on those accelerations, bit for bit; a stuck wheel's alone
-//! (every reader reads only the rotors') comes from the gyrostat rotor's closed form
-//! ([`satsim_tree::gyrostat_torques`]), RNEA's to round-off, without the rotor's pass.
+//! apart: the same solve (`forward_dynamics`, or the flexible tree's `flexible_dynamics`,
+//! with the same inputs and lock mask) feeds both.
+//! The hold torques are RNEA's on those accelerations (the flexible tree's on `[q̈; η̈]`), bit
+//! for bit; in the rigid tree a stuck wheel's alone (every reader reads only the rotors')
+//! comes from the gyrostat rotor's closed form ([`satsim_tree::gyrostat_torques`]), RNEA's
+//! to round-off, without the rotor's pass.
 //!
 //! The kept slope is used once, and only while nothing but the continuous state could
 //! change `f`: every change of the discrete state (locks, an effect's event or sample, the
@@ -22,6 +24,7 @@
 use super::Simulation;
 use crate::effects::HoldReads;
 use satsim_integrate::SystemError;
+use satsim_tree::flexible;
 use satsim_tree::{gyrostat_torques, rnea_for};
 
 /// The slope kept by [`Simulation::evaluate_ahead`]: `dx = f(t, x)`, while `valid`.
@@ -54,12 +57,11 @@ impl Ahead {
 
 impl Simulation {
     /// Whether the event functions' hold torques can come from the right-hand side itself:
-    /// the rigid tree (the flexible one solves its hold torques apart) and the hold torques
-    /// asked for those of the hinges locked now. `kinematics`: the event functions read the
-    /// poses, which the right-hand side computes only when an effect needs them.
+    /// the hold torques asked for are those of the hinges locked now. `kinematics`: the event
+    /// functions read the poses, which the right-hand side computes only when an effect needs
+    /// them.
     pub(super) fn can_evaluate_ahead(&self, kinematics: bool) -> bool {
-        self.model.flex.is_none()
-            && self.model.needs_hold
+        self.model.needs_hold
             && self.data.n_locked > 0
             && (!kinematics || self.data.needs_kinematics)
     }
@@ -112,14 +114,26 @@ impl Simulation {
             .forces
             .has_wrench
             .then_some(d.forces.body_wrench.as_slice());
-        // A gyrostat rotor's (a reaction wheel's) in closed form; RNEA where any other is
-        // asked for.
-        let (tree, data, q, v, ddq, mask) =
-            (&m.tree, &mut d.tree, &d.q, &d.v, &d.hold_ddq, &d.hold_mask);
-        let need = match gyrostat_torques(tree, data, q, v, ddq, fext, mask) {
-            Ok(Some(_)) => Ok(&data.tau),
-            Ok(None) => rnea_for(tree, data, q, v, ddq, fext, mask),
-            Err(e) => Err(e),
+        let need = match (&m.flex, &mut d.flex) {
+            // The flexible tree's: RNEA over `[q̈; η̈]`, on the first pass the right-hand
+            // side's dynamics left for this state (as `hold.rs` gives them after its solve).
+            (Some(f), Some(w)) => {
+                let nv = d.v.len();
+                w.a[..nv].copy_from_slice(&d.hold_ddq);
+                w.a[nv..].copy_from_slice(&d.ahead.dx[m.layout.etadot.clone()]);
+                flexible::rnea_with_kinematics(f, &mut w.data, &w.q, &w.v, &w.a, fext)
+            }
+            // A gyrostat rotor's (a reaction wheel's) in closed form; RNEA where any other is
+            // asked for.
+            _ => {
+                let (tree, data, q, v, ddq, mask) =
+                    (&m.tree, &mut d.tree, &d.q, &d.v, &d.hold_ddq, &d.hold_mask);
+                match gyrostat_torques(tree, data, q, v, ddq, fext, mask) {
+                    Ok(Some(_)) => Ok(&data.tau),
+                    Ok(None) => rnea_for(tree, data, q, v, ddq, fext, mask),
+                    Err(e) => Err(e),
+                }
+            }
         }
         .map_err(SystemError::from_error)?;
         let nb = m.tree.base_nv();
