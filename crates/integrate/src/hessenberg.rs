@@ -185,6 +185,28 @@ pub(crate) struct RealLu {
     swap: Vec<bool>,
 }
 
+/// Row `r`'s entries that a Hessenberg elimination reads: from the subdiagonal rightwards
+/// (about half the matrix; the rest is neither written nor read).
+fn band(n: usize, r: usize) -> std::ops::Range<usize> {
+    r * n + r.saturating_sub(1)..(r + 1) * n
+}
+
+/// `a = c - H` on the band; false when an entry is not finite.
+fn shifted_band(a: &mut [f64], c: f64, hess: &Hessenberg) -> bool {
+    let n = hess.n;
+    for r in 0..n {
+        let band = band(n, r);
+        for (a, h) in a[band.clone()].iter_mut().zip(&hess.h[band.clone()]) {
+            *a = -h;
+        }
+        a[r * n + r] += c;
+        if !a[band].iter().all(|x| x.is_finite()) {
+            return false;
+        }
+    }
+    true
+}
+
 impl RealLu {
     pub fn new(n: usize) -> Self {
         Self {
@@ -201,16 +223,8 @@ impl RealLu {
         if n == 0 {
             return c.is_finite();
         }
-        // Only the band the elimination reads, from the subdiagonal right: half the matrix.
-        for r in 0..n {
-            let band = r * n + r.saturating_sub(1)..(r + 1) * n;
-            for (a, h) in self.a[band.clone()].iter_mut().zip(&hess.h[band.clone()]) {
-                *a = -h;
-            }
-            self.a[r * n + r] += c;
-            if !self.a[band].iter().all(|x| x.is_finite()) {
-                return false;
-            }
+        if !shifted_band(&mut self.a, c, hess) {
+            return false;
         }
         for k in 0..n {
             if k + 1 == n {
@@ -291,18 +305,12 @@ impl ComplexLu {
         if n == 0 {
             return true;
         }
-        // Only the band the elimination reads, from the subdiagonal right: half the matrix.
+        if !shifted_band(&mut self.re, cr, hess) {
+            return false;
+        }
         for r in 0..n {
-            let band = r * n + r.saturating_sub(1)..(r + 1) * n;
-            for (a, h) in self.re[band.clone()].iter_mut().zip(&hess.h[band.clone()]) {
-                *a = -h;
-            }
-            self.im[band.clone()].fill(0.0);
-            self.re[r * n + r] += cr;
+            self.im[band(n, r)].fill(0.0);
             self.im[r * n + r] = ci;
-            if !self.re[band].iter().all(|x| x.is_finite()) {
-                return false;
-            }
         }
         for k in 0..n {
             if k + 1 == n {

@@ -22,9 +22,9 @@
 //! ([`Simulation::forget_ahead`]).
 
 use super::Simulation;
+use super::solve::flexible_forces;
 use crate::effects::HoldReads;
 use satsim_integrate::SystemError;
-use satsim_tree::flexible;
 use satsim_tree::{gyrostat_torques, rnea_for};
 
 /// The slope kept by [`Simulation::evaluate_ahead`]: `dx = f(t, x)`, while `valid`.
@@ -118,10 +118,8 @@ impl Simulation {
             // The flexible tree's: RNEA over `[q̈; η̈]`, on the first pass the right-hand
             // side's dynamics left for this state (as `hold.rs` gives them after its solve).
             (Some(f), Some(w)) => {
-                let nv = d.v.len();
-                w.a[..nv].copy_from_slice(&d.hold_ddq);
-                w.a[nv..].copy_from_slice(&d.ahead.dx[m.layout.etadot.clone()]);
-                flexible::rnea_with_kinematics(f, &mut w.data, &w.q, &w.v, &w.a, fext)
+                let eta_ddot = &d.ahead.dx[m.layout.etadot.clone()];
+                flexible_forces(f, w, &d.hold_ddq, eta_ddot, fext)
             }
             // A gyrostat rotor's (a reaction wheel's) in closed form; RNEA where any other is
             // asked for.
@@ -129,20 +127,15 @@ impl Simulation {
                 let (tree, data, q, v, ddq, mask) =
                     (&m.tree, &mut d.tree, &d.q, &d.v, &d.hold_ddq, &d.hold_mask);
                 match gyrostat_torques(tree, data, q, v, ddq, fext, mask) {
-                    Ok(Some(_)) => Ok(&data.tau),
-                    Ok(None) => rnea_for(tree, data, q, v, ddq, fext, mask),
+                    Ok(Some(_)) => Ok(data.tau.as_slice()),
+                    Ok(None) => rnea_for(tree, data, q, v, ddq, fext, mask).map(|t| t.as_slice()),
                     Err(e) => Err(e),
                 }
             }
         }
         .map_err(SystemError::from_error)?;
         let nb = m.tree.base_nv();
-        for ((h, &w), n) in d
-            .hold
-            .iter_mut()
-            .zip(&d.hold_mask)
-            .zip(&need.as_slice()[nb..])
-        {
+        for ((h, &w), n) in d.hold.iter_mut().zip(&d.hold_mask).zip(&need[nb..]) {
             *h = if w { *n } else { f64::NAN };
         }
         Ok(())

@@ -17,7 +17,7 @@
 
 use super::Simulation;
 use super::hold::Hold;
-use super::solve::{flexible_dynamics, forward_dynamics};
+use super::solve::{flexible_dynamics, flexible_forces, forward_dynamics};
 use crate::effects::{Context, Forces, Power};
 use satsim_integrate::SystemError;
 use satsim_tree::flexible;
@@ -133,14 +133,10 @@ impl Simulation {
             .has_wrench
             .then_some(d.forces.body_wrench.as_slice());
         let need = match (&m.flex, &mut d.flex) {
+            // After the dynamics on this state: its first pass is current.
             (Some(f), Some(w)) => {
-                let nv = d.v.len();
-                w.a[..nv].copy_from_slice(&d.hold_ddq);
-                w.a[nv..].copy_from_slice(&dx[m.layout.etadot.clone()]);
-                // After the dynamics on this state: its first pass is current.
-                flexible::rnea_with_kinematics(f, &mut w.data, &w.q, &w.v, &w.a, fext)
+                flexible_forces(f, w, &d.hold_ddq, &dx[m.layout.etadot.clone()], fext)
                     .map_err(SystemError::from_error)?
-                    .as_slice()
             }
             _ => rnea(&m.tree, &mut d.tree, &d.q, &d.v, &d.hold_ddq, fext)
                 .map_err(SystemError::from_error)?

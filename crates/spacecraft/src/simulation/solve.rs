@@ -38,6 +38,23 @@ pub(super) fn flexible_dynamics<'w>(
     Ok(ddq.as_slice())
 }
 
+/// The generalised forces that give the flexible tree the rigid accelerations `ddq` and the
+/// elastic `eta_ddot`: RNEA on the first pass that the dynamics just solved on this state left
+/// in `work` (the hold torques, and the locked hinges' power).
+pub(super) fn flexible_forces<'w>(
+    model: &FlexModel,
+    work: &'w mut FlexWork,
+    ddq: &[f64],
+    eta_ddot: &[f64],
+    fext: Option<&[Force]>,
+) -> Result<&'w [f64], DynamicsError> {
+    let nv = ddq.len();
+    work.a[..nv].copy_from_slice(ddq);
+    work.a[nv..].copy_from_slice(eta_ddot);
+    let FlexWork { data, q, v, a, .. } = work;
+    Ok(flexible::rnea_with_kinematics(model, data, q, v, a, fext)?.as_slice())
+}
+
 /// `q̈` into `ddq`: the one place the dynamics are solved, through the model's
 /// [`ForwardDynamics`](satsim_tree::ForwardDynamics) (chosen once: the layout's unrolled
 /// kernel where it takes the lock mask, else the generic ABA, hybrid when hinges are locked,
