@@ -36,6 +36,7 @@
 #![allow(clippy::needless_range_loop)]
 
 mod common;
+mod dense_lu;
 mod dop853;
 mod dp54;
 mod driver;
