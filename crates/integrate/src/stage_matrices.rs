@@ -298,28 +298,12 @@ impl StageMatrices {
             yr[q] = (xr * cr + xi * ci) / d;
             yi[q] = (xi * cr - xr * ci) / d;
         }
-        let (nz, ne) = (self.inert.len(), self.elim.len());
-        for (r, &a) in self.active.iter().enumerate() {
-            let row = &self.j_ai[r * nz..(r + 1) * nz];
-            let mut sr = re[a];
-            for (jz, &z) in row.iter().zip(&self.inert) {
-                sr += jz * re[z];
-            }
-            let erow = if ne > 0 {
-                &self.j_ae[r * ne..(r + 1) * ne]
-            } else {
-                &[][..]
-            };
-            sr += dot(erow, &yr[..ne]);
-            self.s[k][r] = sr;
-            if let Some(i) = im.as_ref() {
-                let mut si = i[a];
-                for (jz, &z) in row.iter().zip(&self.inert) {
-                    si += jz * i[z];
-                }
-                si += dot(erow, &yi[..ne]);
-                self.s[k + 1][r] = si;
-            }
+        let (m, ne) = (self.active.len(), self.elim.len());
+        let (a, z) = (&self.active, &self.inert);
+        let (j_ai, j_ae) = (&self.j_ai, &self.j_ae);
+        coupled_right_side(&mut self.s[k][..m], re, a, z, j_ai, j_ae, &yr[..ne]);
+        if let Some(i) = im {
+            coupled_right_side(&mut self.s[k + 1][..m], i, a, z, j_ai, j_ae, &yi[..ne]);
         }
     }
 
@@ -358,6 +342,32 @@ impl StageMatrices {
                 i[f] = (xi * cr - xr * ci) / d;
             }
         }
+    }
+}
+
+/// `out[r] = b[active[r]] + J[active[r], inert] b[inert] + J[active[r], elim] y`, the
+/// coupled states' right side (`b[inert]` already solved, `y` the eliminated states' `b / c`).
+fn coupled_right_side(
+    out: &mut [f64],
+    b: &[f64],
+    active: &[usize],
+    inert: &[usize],
+    j_ai: &[f64],
+    j_ae: &[f64],
+    y: &[f64],
+) {
+    let (nz, ne) = (inert.len(), y.len());
+    for (r, (o, &a)) in out.iter_mut().zip(active).enumerate() {
+        let mut s = b[a];
+        if nz > 0 {
+            for (jz, &z) in j_ai[r * nz..(r + 1) * nz].iter().zip(inert) {
+                s += jz * b[z];
+            }
+        }
+        if ne > 0 {
+            s += dot(&j_ae[r * ne..(r + 1) * ne], y);
+        }
+        *o = s;
     }
 }
 
