@@ -151,6 +151,9 @@ pub(crate) struct Radau5 {
     reject: bool,
     /// The Jacobian was evaluated at the current step start.
     jac_current: bool,
+    /// A Jacobian has been evaluated in this integration (a restart may keep it: see
+    /// [`System::jacobian_survives_restart`]).
+    has_jacobian: bool,
     need_jac: bool,
     /// Step size the current LU factors were built for (NaN: invalid).
     h_lu: f64,
@@ -200,6 +203,7 @@ impl Radau5 {
             first: true,
             reject: false,
             jac_current: false,
+            has_jacobian: false,
             need_jac: true,
             h_lu: f64::NAN,
             theta: THET,
@@ -220,6 +224,7 @@ impl Radau5 {
         ctx: &mut Ctx,
     ) -> Result<(), IntegrateError> {
         let analytic = self.jac.evaluate(sys, ctx, self.t, &mut self.x, &self.f0)?;
+        self.has_jacobian = true;
         self.thet = if analytic { THET } else { THET_DIFFERENCES };
         let jac = &self.jac;
         self.e.reduce(|r, c| jac.get(r, c));
@@ -448,7 +453,9 @@ impl Stepper for Radau5 {
         self.x.copy_from_slice(x);
         self.first = true;
         self.reject = false;
-        self.need_jac = true;
+        // Asked at every restart, so that each answer covers the handling since the last.
+        let survives = sys.jacobian_survives_restart();
+        self.need_jac = !(self.has_jacobian && survives);
         self.jac_current = false;
         self.h_lu = f64::NAN;
         self.theta = THET;

@@ -320,6 +320,19 @@ pub trait System {
     fn on_stop(&mut self, _t: f64, _x: &mut [f64]) -> Result<bool, SystemError> {
         Ok(false)
     }
+
+    /// Whether the Jacobian taken before the events (or time stop) handled since the last
+    /// restart still serves after them: asked once by the implicit methods at each restart
+    /// that follows such handling. `false` (the default) has them take a new one there.
+    ///
+    /// A system answers `true` where the handling changed nothing the stage system must see
+    /// exactly: the derivative may have jumped (a friction torque changing sign), the state
+    /// may have jumped, but no state became one whose derivative is identically zero (a hinge
+    /// newly locked, whose rate the stage system keeps exactly zero only through a zero row).
+    /// Newton's convergence check renews a kept Jacobian that no longer serves.
+    fn jacobian_survives_restart(&mut self) -> bool {
+        false
+    }
 }
 
 /// Whether a time stop at `stop` is due at time `t`: `t` has reached it, or lies within
@@ -394,5 +407,8 @@ impl<S: System + ?Sized> System for &mut S {
     }
     fn on_stop(&mut self, t: f64, x: &mut [f64]) -> Result<bool, SystemError> {
         (**self).on_stop(t, x)
+    }
+    fn jacobian_survives_restart(&mut self) -> bool {
+        (**self).jacobian_survives_restart()
     }
 }

@@ -488,3 +488,72 @@ fn a_system_that_keeps_refusing_ends_the_run_with_its_own_error() {
         );
     }
 }
+
+/// A stiff spring-damper with Coulomb friction, `x'' = -k x - c x' - f s`, whose sign `s`
+/// flips at each reversal (an event that resets): the derivative jumps, the Jacobian does
+/// not. `survives` is its answer to [`System::jacobian_survives_restart`].
+struct Coulomb {
+    survives: bool,
+    sign: f64,
+    asked: usize,
+}
+impl System for Coulomb {
+    fn dim(&self) -> usize {
+        2
+    }
+    fn rhs(&mut self, _t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), SystemError> {
+        dx[0] = x[1];
+        dx[1] = -1e4 * x[0] - 20.0 * x[1] - 5.0 * self.sign;
+        Ok(())
+    }
+    fn n_events(&self) -> usize {
+        1
+    }
+    fn events(&mut self, _t: f64, x: &[f64], g: &mut [f64]) -> Result<(), SystemError> {
+        g[0] = self.sign * x[1];
+        Ok(())
+    }
+    fn event_direction(&self, _k: usize) -> satsim_integrate::EventDirection {
+        satsim_integrate::EventDirection::Falling
+    }
+    fn on_event(&mut self, _k: usize, _t: f64, _x: &mut [f64]) -> satsim_integrate::EventAction {
+        self.sign = -self.sign;
+        satsim_integrate::EventAction::Reset
+    }
+    fn jacobian_survives_restart(&mut self) -> bool {
+        self.asked += 1;
+        self.survives
+    }
+}
+
+#[test]
+fn radau5_keeps_its_jacobian_through_a_restart_the_system_says_it_survives() {
+    let opts = Options::new(Method::Radau5).with_tolerances(1e-8, 1e-10);
+    let mut runs = [true, false].map(|survives| {
+        let mut sys = Coulomb {
+            survives,
+            sign: -1.0,
+            asked: 0,
+        };
+        let stats = run(&mut sys, &opts, &[0.01, 0.0], 0.0, 0.25).unwrap();
+        (stats, sys.asked)
+    });
+    let [(kept, asked_kept), (renewed, asked_renewed)] = &mut runs;
+    // Several reversals, each a restart that asked (the start asks too, and is not kept).
+    assert!(kept.events.len() >= 5, "{} events", kept.events.len());
+    assert_eq!(kept.events.len(), renewed.events.len());
+    assert_eq!(
+        (*asked_kept, *asked_renewed),
+        (kept.events.len() + 1, renewed.events.len() + 1)
+    );
+    // Renewed at every restart; kept, the linear system's one Jacobian serves throughout.
+    assert_eq!(renewed.jacobian_evals, renewed.events.len() + 1);
+    assert_eq!(kept.jacobian_evals, 1, "{kept:?}");
+    // The same trajectory to the tolerance.
+    for (a, b) in kept.x_final.iter().zip(&renewed.x_final) {
+        assert!((a - b).abs() < 1e-8, "{a} against {b}");
+    }
+    for ((ta, _), (tb, _)) in kept.events.iter().zip(&renewed.events) {
+        assert!((ta - tb).abs() < 1e-8, "event at {ta} against {tb}");
+    }
+}

@@ -481,6 +481,7 @@ impl Simulation {
         let d = &mut self.data;
         d.locked.fill(false);
         d.n_locked = 0;
+        d.newly_locked = true;
         d.hold.fill(f64::NAN);
         d.requests.clear();
         (d.needs_kinematics, d.needs_velocities) = self.model.needs_at_start;

@@ -77,6 +77,9 @@ pub struct SimData {
     /// Which hinges (the scene's, then the rotors) are locked now, and how many.
     pub(super) locked: Vec<bool>,
     pub(super) n_locked: usize,
+    /// A hinge was locked since the integrator last asked
+    /// ([`satsim_integrate::System::jacobian_survives_restart`]).
+    pub(super) newly_locked: bool,
     /// The constant hinge torques every pass starts from (N m, tree hinge order: the
     /// initial state's `torque`, zero on the rotors).
     pub(super) base_tau: Vec<f64>,
@@ -149,6 +152,7 @@ impl SimData {
             pose_bodies: tree.n_bodies(),
             locked: vec![false; nh],
             n_locked: 0,
+            newly_locked: true,
             base_tau: vec![0.0; nh],
             ahead: Ahead::new(n_states),
         }

@@ -103,6 +103,7 @@ impl Simulation {
                 if !self.data.locked[h] {
                     self.data.locked[h] = true;
                     self.data.n_locked += 1;
+                    self.data.newly_locked = true;
                 }
             }
         }

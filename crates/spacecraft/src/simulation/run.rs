@@ -284,4 +284,7 @@ impl<C: SimCell> System for Shared<C> {
     fn on_stop(&mut self, t: f64, x: &mut [f64]) -> Result<bool, SystemError> {
         self.0.sim_mut().on_stop(t, x)
     }
+    fn jacobian_survives_restart(&mut self) -> bool {
+        self.0.sim_mut().jacobian_survives_restart()
+    }
 }

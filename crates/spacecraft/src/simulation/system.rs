@@ -80,6 +80,14 @@ impl System for Simulation {
         self.sample_effects(t, x)
     }
 
+    /// The Jacobian survives events and stops that locked no hinge: a locked hinge's rate
+    /// must see a zero row (the stage system then keeps it exactly zero); a friction torque
+    /// changing sign, a hinge released, an impulse or a sampled law's new output leave a
+    /// Jacobian Newton still converges with (and renews where it does not).
+    fn jacobian_survives_restart(&mut self) -> bool {
+        !std::mem::take(&mut self.data.newly_locked)
+    }
+
     fn event_direction(&self, k: usize) -> EventDirection {
         let i = self.event_owner(k);
         self.effects[i].event_direction(k - self.model.event_start[i])

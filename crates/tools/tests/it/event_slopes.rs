@@ -4,10 +4,13 @@
 //! rows, outcome and events bit for bit with the reuse on and off, and reuse it at most steps.
 
 use crate::common::example;
-use satsim_integrate::{Output, Stats};
+use satsim_integrate::{
+    EventAction, EventDirection, Output, Stats, System, SystemError, integrate,
+};
 use satsim_spacecraft::simulation::{RunError, Simulation};
 use satsim_tools::campaign::Campaign;
 use satsim_tools::scene::Scene;
+use std::ops::ControlFlow;
 
 /// A run's outcome (as text), rows (as bits) and events.
 type Outcome = (String, Vec<u64>, Vec<(u64, String)>);
@@ -138,4 +141,97 @@ fn the_flexible_tree_reuses_the_event_functions_slope_too() {
         "{} of {steps} steps reused the slope",
         log_on.reused_rhs()
     );
+}
+
+/// The simulation as the integrator sees it, recording each answer to
+/// `jacobian_survives_restart` with the number of events handled by then.
+struct Watched<'a> {
+    sim: &'a mut Simulation,
+    answers: Vec<(usize, bool)>,
+}
+
+impl System for Watched<'_> {
+    fn dim(&self) -> usize {
+        self.sim.dim()
+    }
+    fn rhs(&mut self, t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), SystemError> {
+        self.sim.rhs(t, x, dx)
+    }
+    fn project(&mut self, x: &mut [f64]) {
+        self.sim.project(x)
+    }
+    fn error_weights(&self, w: &mut [f64]) {
+        self.sim.error_weights(w)
+    }
+    fn n_events(&self) -> usize {
+        self.sim.n_events()
+    }
+    fn events(&mut self, t: f64, x: &[f64], g: &mut [f64]) -> Result<(), SystemError> {
+        self.sim.events(t, x, g)
+    }
+    fn event_direction(&self, k: usize) -> EventDirection {
+        self.sim.event_direction(k)
+    }
+    fn on_event(&mut self, k: usize, t: f64, x: &mut [f64]) -> EventAction {
+        self.sim.on_event(k, t, x)
+    }
+    fn on_events(
+        &mut self,
+        ks: &[usize],
+        t: f64,
+        x: &mut [f64],
+    ) -> Result<EventAction, SystemError> {
+        self.sim.on_events(ks, t, x)
+    }
+    fn next_stop(&self) -> f64 {
+        self.sim.next_stop()
+    }
+    fn on_stop(&mut self, t: f64, x: &mut [f64]) -> Result<bool, SystemError> {
+        self.sim.on_stop(t, x)
+    }
+    fn jacobian_survives_restart(&mut self) -> bool {
+        let answer = self.sim.jacobian_survives_restart();
+        self.answers.push((self.sim.event_log().len(), answer));
+        answer
+    }
+}
+
+#[test]
+fn the_jacobian_survives_every_event_but_those_that_lock_a_hinge() {
+    // The flexible deployment's first 12 s under its Radau IIA: wheel `x` breaks free,
+    // sticks and reverses, both panels latch.
+    let scene = Scene::read(example("flexible_array.toml")).unwrap();
+    let mut sim = scene.simulation().unwrap();
+    let (t0, x0) = (sim.t0(), sim.x0().to_vec());
+    let mut watched = Watched {
+        sim: &mut sim,
+        answers: Vec::new(),
+    };
+    let stats = integrate(
+        &mut watched,
+        &scene.options,
+        t0,
+        &x0,
+        t0 + 12.0,
+        &Output::Times(vec![]),
+        |_, _| ControlFlow::Continue(()),
+    )
+    .unwrap();
+    let answers = watched.answers;
+    let log = sim.event_log();
+    // Asked at the start (nothing kept there) and after each event handled.
+    assert_eq!(answers.len(), log.len() + 1, "{answers:?}");
+    assert!(!answers[0].1);
+    let mut seen = 0;
+    for &(upto, answer) in &answers[1..] {
+        let handled = &log[seen..upto];
+        let locks = handled
+            .iter()
+            .any(|(_, what)| what.contains("stuck") || what.contains("latched"));
+        assert_eq!(answer, !locks, "after {handled:?}");
+        seen = upto;
+    }
+    let kept = answers.iter().filter(|a| a.1).count();
+    assert!(kept >= 2 && kept < answers.len() - 2, "{answers:?}");
+    assert!(stats.jacobian_evals > 0);
 }
