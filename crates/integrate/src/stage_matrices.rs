@@ -68,6 +68,10 @@ pub(crate) struct StageMatrices {
     /// Scratch of the sorting: each state's place in `active`, its row's single entry.
     place: Vec<usize>,
     tie: Vec<Option<usize>>,
+    /// Scratch of the sorting: each row's entries (0, 1, 2 for more) and single column,
+    /// each column's emptiness.
+    row: Vec<(usize, usize)>,
+    zero_column: Vec<bool>,
 }
 
 impl StageMatrices {
@@ -98,6 +102,8 @@ impl StageMatrices {
             y: [vec![0.0; n], vec![0.0; n]],
             place: vec![usize::MAX; n],
             tie: vec![None; n],
+            row: vec![(0, 0); n],
+            zero_column: vec![false; n],
         }
     }
 
@@ -111,27 +117,29 @@ impl StageMatrices {
         self.elim.clear();
         self.target.clear();
         self.elim_a.clear();
-        // Each row's number of entries (0, 1 or more), and its column where it has one.
-        let single = |r: usize| {
-            let mut found = None;
+        // Each row's number of entries (0, 1 or 2 for more) with its column where it has
+        // one, and each column's emptiness: made once, read by both passes below.
+        for r in 0..n {
+            let mut row = (0, 0);
             for c in 0..n {
                 if j(r, c) != 0.0 {
-                    if found.is_some() {
-                        return (2, 0);
+                    row = if row.0 == 0 { (1, c) } else { (2, 0) };
+                    if row.0 == 2 {
+                        break;
                     }
-                    found = Some(c);
                 }
             }
-            found.map_or((0, 0), |c| (1, c))
-        };
-        let zero_column = |c: usize| (0..n).all(|r| j(r, c) == 0.0);
+            self.row[r] = row;
+            self.zero_column[r] = (0..n).all(|q| j(q, r) == 0.0);
+        }
+        let (row, zero_column) = (&self.row, &self.zero_column);
         // The candidates: a single entry in another state's column whose row is coupled.
         let tie = &mut self.tie;
         let mut coupled = 0;
         for r in 0..n {
-            let (count, c) = single(r);
-            tie[r] = (count == 1 && c != r && single(c).0 == 2).then_some(c);
-            if count > 0 && tie[r].is_none() && !zero_column(r) {
+            let (count, c) = row[r];
+            tie[r] = (count == 1 && c != r && row[c].0 == 2).then_some(c);
+            if count > 0 && tie[r].is_none() && !zero_column[r] {
                 coupled += 1;
             }
         }
@@ -148,9 +156,9 @@ impl StageMatrices {
             if tie[r].is_some() {
                 continue;
             }
-            if single(r).0 == 0 {
+            if row[r].0 == 0 {
                 self.inert.push(r);
-            } else if zero_column(r) {
+            } else if zero_column[r] {
                 self.last.push(r);
             } else {
                 self.place[r] = self.active.len();
