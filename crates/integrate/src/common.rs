@@ -19,6 +19,9 @@ pub(crate) struct Ctx {
     /// Error-norm weights and their sum (the norm is a weighted RMS).
     pub weights: Vec<f64>,
     pub wsum: f64,
+    /// The quadrature states ([`System::quadratures`]) and how many there are.
+    pub quadrature: Vec<bool>,
+    pub n_quadrature: usize,
     pub rhs_evals: usize,
     pub steps_accepted: usize,
     pub steps_rejected: usize,
@@ -48,6 +51,9 @@ impl Ctx {
             ));
         }
         let wsum = weights.iter().sum();
+        let mut quadrature = vec![false; sys.dim()];
+        sys.quadratures(&mut quadrature);
+        let n_quadrature = quadrature.iter().filter(|q| **q).count();
         Ok(Self {
             rtol: opts.rtol,
             atol: opts.atol,
@@ -57,6 +63,8 @@ impl Ctx {
             max_steps: opts.max_steps,
             weights,
             wsum,
+            quadrature,
+            n_quadrature,
             rhs_evals: 0,
             steps_accepted: 0,
             steps_rejected: 0,

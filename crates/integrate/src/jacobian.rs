@@ -13,6 +13,9 @@ pub(crate) struct Jacobian {
     n: usize,
     j: Vec<f64>,
     tmp: Vec<f64>,
+    /// Whether the quadrature states' columns have been checked to be zero (once, at the
+    /// first finite-difference Jacobian; skipped after it).
+    quadratures_checked: bool,
 }
 
 impl Jacobian {
@@ -21,6 +24,7 @@ impl Jacobian {
             n,
             j: vec![0.0; n * n],
             tmp: vec![0.0; n],
+            quadratures_checked: false,
         }
     }
 
@@ -55,8 +59,17 @@ impl Jacobian {
             }
             return Ok(true);
         }
-        // Forward differences with RADAU5's increment sqrt(eps * max(1e-5, |x_j|)).
+        // Forward differences with RADAU5's increment sqrt(eps * max(1e-5, |x_j|)). A
+        // quadrature state's column is zero: differenced once, to check that it is.
+        let skip = self.quadratures_checked;
+        self.quadratures_checked = true;
         for c in 0..n {
+            if skip && ctx.quadrature[c] {
+                for r in 0..n {
+                    self.j[r * n + c] = 0.0;
+                }
+                continue;
+            }
             let xc = x[c];
             let delta = (f64::EPSILON * xc.abs().max(1e-5)).sqrt();
             x[c] = xc + delta;
@@ -65,6 +78,15 @@ impl Jacobian {
             r?;
             for (r, (fr, f0r)) in self.tmp.iter().zip(f0).enumerate() {
                 self.j[r * n + c] = (fr - f0r) / delta;
+            }
+            let read_by = ctx.quadrature[c]
+                .then(|| (0..n).find(|r| self.j[r * n + c] != 0.0))
+                .flatten();
+            if let Some(r) = read_by {
+                return Err(IntegrateError::InvalidOptions(format!(
+                    "state {c} is declared a quadrature (System::quadratures), but the \
+                     derivative of state {r} depends on it"
+                )));
             }
         }
         Ok(false)

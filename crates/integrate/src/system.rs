@@ -239,6 +239,21 @@ pub trait System {
         w.fill(1.0);
     }
 
+    /// Marks the quadrature states in `q` (`q.len() == dim()`, all `false` on entry):
+    /// states no right-hand side reads, each an integral of the others (an accumulated
+    /// work, a cost). The implicit methods leave them out of the Newton iteration's
+    /// convergence test, where a kink in their integrand (a friction power changing sign)
+    /// would otherwise slow the test's contraction and cost Jacobians, and out of the
+    /// finite-difference Jacobian, whose columns for them are zero: CVODES's treatment of
+    /// quadratures. Their values come out of the same stage equations as before, within
+    /// the Newton tolerance of the states they integrate. The error estimate still counts
+    /// them as [`System::error_weights`] says. The first finite-difference Jacobian checks
+    /// that their columns are zero ([`IntegrateError::InvalidOptions`] if not). Queried
+    /// once at the start of an integration; the default marks none.
+    ///
+    /// [`IntegrateError::InvalidOptions`]: crate::IntegrateError::InvalidOptions
+    fn quadratures(&self, _q: &mut [bool]) {}
+
     /// Analytic Jacobian `jac[i * n + j] = ∂f_i/∂x_j` (row-major), used by
     /// implicit methods. Return `Ok(false)` (the default) to let the
     /// integrator use finite differences.
@@ -378,6 +393,9 @@ impl<S: System + ?Sized> System for &mut S {
     }
     fn error_weights(&self, w: &mut [f64]) {
         (**self).error_weights(w)
+    }
+    fn quadratures(&self, q: &mut [bool]) {
+        (**self).quadratures(q)
     }
     fn jacobian(&mut self, t: f64, x: &[f64], jac: &mut [f64]) -> Result<bool, SystemError> {
         (**self).jacobian(t, x, jac)

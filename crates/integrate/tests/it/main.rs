@@ -5,6 +5,7 @@ mod convergence;
 mod dense_events;
 mod hairer_reference;
 mod properties;
+mod quadratures;
 mod short_rebounds;
 mod simultaneous_events;
 mod stiff_errors;

@@ -258,6 +258,9 @@ impl<C: SimCell> System for Shared<C> {
     fn error_weights(&self, w: &mut [f64]) {
         self.0.sim().error_weights(w)
     }
+    fn quadratures(&self, q: &mut [bool]) {
+        self.0.sim().quadratures(q)
+    }
     fn n_events(&self) -> usize {
         self.0.sim().model.n_events
     }

@@ -27,6 +27,12 @@ impl System for Simulation {
         }
     }
 
+    /// The energy budget's works are integrals of the effects' powers that no derivative
+    /// reads: quadratures, left out of the implicit methods' Newton test and Jacobian.
+    fn quadratures(&self, q: &mut [bool]) {
+        q[self.model.work.clone()].fill(true);
+    }
+
     fn project(&mut self, x: &mut [f64]) {
         if self.model.layout.free {
             let a = self.model.layout.attitude.clone();

@@ -163,6 +163,9 @@ impl System for Watched<'_> {
     fn error_weights(&self, w: &mut [f64]) {
         self.sim.error_weights(w)
     }
+    fn quadratures(&self, q: &mut [bool]) {
+        self.sim.quadratures(q)
+    }
     fn n_events(&self) -> usize {
         self.sim.n_events()
     }
