@@ -242,11 +242,12 @@ pub trait System {
     /// Marks the quadrature states in `q` (`q.len() == dim()`, all `false` on entry):
     /// states no right-hand side reads, each an integral of the others (an accumulated
     /// work, a cost). The implicit methods leave them out of the Newton iteration's
-    /// convergence test, where a kink in their integrand (a friction power changing sign)
-    /// would otherwise slow the test's contraction and cost Jacobians, and out of the
-    /// finite-difference Jacobian, whose columns for them are zero: CVODES's treatment of
-    /// quadratures. Their values come out of the same stage equations as before, within
-    /// the Newton tolerance of the states they integrate. The error estimate still counts
+    /// convergence test, where their own scale (`atol + rtol |x|`) would hold the iteration
+    /// far tighter than the states they integrate need, and cost iterations and Jacobians;
+    /// and out of the finite-difference Jacobian, whose columns for them are zero: CVODES's
+    /// treatment of quadratures. The other states' steps are then those of the system
+    /// without them. Their values come out of the same stage equations, as accurate as the
+    /// Newton iteration leaves the states they integrate. The error estimate still counts
     /// them as [`System::error_weights`] says. The first finite-difference Jacobian checks
     /// that their columns are zero ([`IntegrateError::InvalidOptions`] if not). Queried
     /// once at the start of an integration; the default marks none.
