@@ -1,6 +1,7 @@
 //! [`FlexData`]: the reusable workspace of the flexible algorithms, and their shared first
 //! pass (transforms, velocities, the node subspaces `G`, velocity-product accelerations).
 
+use super::aba::apply_motion;
 use super::model::FlexModel;
 use crate::error::DynamicsError;
 use crate::kinematics::{base_motion, check_len};
@@ -141,7 +142,7 @@ pub(crate) fn velocities(model: &FlexModel, data: &mut FlexData, q: &[f64], v: &
         match &model.nodes[i] {
             None => {
                 data.xup[i] = x;
-                data.v[i] = x.apply_motion(&data.v[p]) + vj;
+                data.v[i] = apply_motion(model.frame_axis(i), &x, &data.v[p]) + vj;
                 data.c[i] = data.v[i].cross_motion(&vj);
             }
             Some(node) => {

@@ -119,6 +119,9 @@ pub struct FlexModel {
     pub(crate) stiffening: Vec<Option<Stiffening>>,
     /// The flexible bodies as given (to attach them again to a grown tree).
     pub(crate) spec: Vec<Flexible>,
+    /// Every balanced rotor of the rigid model ([`crate::Gyrostat`]) rides on a rigid
+    /// carrier: the flexible ABA folds them into their carriers as the rigid ABA does.
+    pub(crate) fold_rotors: bool,
 }
 
 fn invalid(body: &str, what: impl Into<String>) -> FlexError {
@@ -363,7 +366,14 @@ impl FlexModel {
                 })
             })
             .collect();
+        // A rotor on a flexible carrier stays a body (its carrier's inertia is the deformed
+        // one, which the folded form does not carry), and then every rotor does.
+        let fold_rotors = rigid
+            .gyrostats
+            .iter()
+            .all(|g| modes[g.parent] == 0 && modes[g.body] == 0 && nodes[g.body].is_none());
         Ok(FlexModel {
+            fold_rotors,
             rigid,
             modes,
             tips,
@@ -474,6 +484,16 @@ impl FlexModel {
         self.beams[i].as_ref()?;
         let eta = &q[self.rigid.nq() + self.offset[i]..][..self.modes[i]];
         Some(self.tips[i].iter().zip(eta).map(|(p, e)| p * e).sum())
+    }
+    /// The coordinate axis of body `i`'s hinge where its `Xup` is the rigid hinge's (the body
+    /// on its parent's frame, not on a node) and the hinge has one: the fast path of the
+    /// transforms ([`crate::axis::CoordAxis`]), as the rigid algorithms take it.
+    #[inline(always)]
+    pub(crate) fn frame_axis(&self, i: usize) -> Option<&crate::axis::CoordAxis> {
+        match self.nodes[i] {
+            None => self.rigid.coord_axis[i].as_ref(),
+            Some(_) => None,
+        }
     }
     /// Body `i`'s rigid inertia at the deformation in `q`: with stiffening, plus the
     /// deflection's first-order inertia `Σ ηₖ Iₖ`, the angular block less `G(η)` (the

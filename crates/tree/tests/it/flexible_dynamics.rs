@@ -698,3 +698,131 @@ fn the_first_pass_reused_is_bit_for_bit_the_plain_algorithms() {
         .unwrap();
     assert_eq!(r, &plain_rnea);
 }
+
+/// The flexible ABA folds balanced rotors on rigid carriers into them as gyrostats, as the
+/// rigid ABA does (wheels on the bus), and with a rotor locked too (a stuck wheel): the
+/// accelerations and the rotors' spatial accelerations are those of the rotors kept as
+/// bodies, with wrenches on every body, panel hinges locked or not. A rotor on a flexible
+/// body stays a body, and then so do all.
+#[test]
+fn rotors_folded_into_rigid_carriers_are_the_rotors_as_bodies() {
+    let model = modal_panels(3);
+    // Axisymmetric about each wheel's axis: J along it, the transverse inertia across.
+    let wheel = |axis: Vec3, j: f64| {
+        let aat = axis * axis.transpose();
+        aat * j + (Mat3::identity() - aat) * 0.6 * j
+    };
+    let builder = model
+        .rigid()
+        .to_builder()
+        .body(Body::new("wx", 1.5, wheel(Vec3::x(), 0.04)))
+        .body(Body::new("wy", 1.5, wheel(Vec3::y(), 0.05)))
+        .body(Body::new("wz", 1.5, wheel(Vec3::z(), 0.03)))
+        .hinge(Hinge::revolute("rx", "bus", "wx", Vec3::x()).at(Vec3::new(0.3, 0.1, -0.2)))
+        .hinge(Hinge::revolute("ry", "bus", "wy", Vec3::y()).at(Vec3::new(-0.2, 0.3, 0.1)))
+        .hinge(Hinge::revolute("rz", "bus", "wz", Vec3::z()).at(Vec3::new(0.1, -0.3, 0.25)));
+    let grown = builder.clone().build().unwrap();
+    assert_eq!(grown.gyrostats().len(), 3);
+    let folded = model.with_rigid(grown.clone()).unwrap();
+    let bodies = model.with_rigid(grown.without_gyrostats()).unwrap();
+    let n = grown.n_bodies();
+    let nq = grown.nq();
+    let mut q = folded.neutral();
+    q[7] = 0.4;
+    q[8] = -0.3;
+    for (k, x) in q[nq..].iter_mut().enumerate() {
+        *x = 2e-2 * (k as f64 + 1.0).sin();
+    }
+    // The wheels at up to 300 rad/s: their gyroscopic couples dominate the bus's motion.
+    let nv = folded.nv();
+    let rotor_dofs = grown.nv() - 3..grown.nv();
+    let v: Vec<f64> = (0..nv)
+        .map(|k| {
+            let fast = if rotor_dofs.contains(&k) { 300.0 } else { 1.0 };
+            fast * 0.3 * (k as f64 + 0.5).sin()
+        })
+        .collect();
+    let tau: Vec<f64> = (0..nv).map(|k| 0.3 * (k as f64).cos()).collect();
+    let fext: Vec<_> = (0..n)
+        .map(|i| {
+            satsim_tree::spatial::Force::new(
+                Vec3::new(0.1, -0.2, 0.05 * i as f64),
+                Vec3::new(0.3, 0.02 * i as f64, -0.1),
+            )
+        })
+        .collect();
+    let (mut a, mut b) = (FlexData::new(&folded), FlexData::new(&bodies));
+    let scale = |x: &nalgebra::DVector<f64>| x.amax().max(1.0);
+    let mut compared = 0;
+    for f in [None, Some(fext.as_slice())] {
+        // Hinges h1, h2 (panels), rx, ry, rz (wheels): none, a panel, a wheel, all locked.
+        for locked in [
+            None,
+            Some([true, false, false, false, false]),
+            Some([false, false, true, false, false]),
+            Some([false, true, false, true, true]),
+            Some([true, true, true, true, true]),
+        ] {
+            let (x, y) = match locked {
+                None => (
+                    flexible::aba(&folded, &mut a, &q, &v, &tau, f)
+                        .unwrap()
+                        .clone(),
+                    flexible::aba(&bodies, &mut b, &q, &v, &tau, f)
+                        .unwrap()
+                        .clone(),
+                ),
+                Some(l) => (
+                    flexible::aba_hybrid(&folded, &mut a, &q, &v, &tau, f, &l)
+                        .unwrap()
+                        .clone(),
+                    flexible::aba_hybrid(&bodies, &mut b, &q, &v, &tau, f, &l)
+                        .unwrap()
+                        .clone(),
+                ),
+            };
+            let e = (&x - &y).amax() / scale(&y);
+            assert!(
+                e < 1e-12,
+                "locked {locked:?}, wrenches {}: {e:e}",
+                f.is_some()
+            );
+            // A locked wheel's spin acceleration is zero exactly, a free one's is not.
+            for (w, dof) in rotor_dofs.clone().enumerate() {
+                let held = locked.is_some_and(|l| l[2 + w]);
+                assert_eq!(x[dof] == 0.0, held, "wheel {w}, locked {locked:?}");
+            }
+            for i in n - 3..n {
+                let d = (a.a[i] - b.a[i]).to_array();
+                let s = b.a[i].to_array().iter().fold(1.0f64, |m, x| m.max(x.abs()));
+                let e = d.iter().fold(0.0f64, |m, x| m.max(x.abs())) / s;
+                assert!(
+                    e < 1e-12,
+                    "rotor {i}'s acceleration, locked {locked:?}: {e:e}"
+                );
+            }
+            compared += 1;
+        }
+    }
+    assert_eq!(compared, 10);
+    // The folded form is what ran: a rotor on a flexible panel keeps every rotor a body,
+    // and gives the same accelerations.
+    let on_panel = builder
+        .body(Body::new("wp", 0.5, wheel(Vec3::z(), 0.01)))
+        .hinge(Hinge::revolute("rp", "panel2", "wp", Vec3::z()).at(Vec3::new(0.0, -1.0, 0.0)))
+        .build()
+        .unwrap();
+    let mixed = model.with_rigid(on_panel.clone()).unwrap();
+    let mixed_bodies = model.with_rigid(on_panel.without_gyrostats()).unwrap();
+    let mut qm = mixed.neutral();
+    qm[..q.len() - folded.n_elastic()].copy_from_slice(&q[..nq]);
+    let vm: Vec<f64> = (0..mixed.nv()).map(|k| 0.2 * (k as f64).sin()).collect();
+    let tm: Vec<f64> = (0..mixed.nv()).map(|k| 0.1 * (k as f64).cos()).collect();
+    let (mut c, mut d) = (FlexData::new(&mixed), FlexData::new(&mixed_bodies));
+    let x = flexible::aba(&mixed, &mut c, &qm, &vm, &tm, None).unwrap();
+    let y = flexible::aba(&mixed_bodies, &mut d, &qm, &vm, &tm, None).unwrap();
+    assert_eq!(
+        x, y,
+        "a rotor on a flexible body: every rotor a body, bit for bit"
+    );
+}
