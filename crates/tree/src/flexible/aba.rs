@@ -173,83 +173,28 @@ fn articulated<'d>(
     if fold {
         fold_gyrostats(model, data, v, tau, fext, locked);
     }
-    // Pass 2, inward.
+    // Pass 2, inward. Each body's elimination and its parent's update are instances for
+    // the common mode counts, the loops unrolled (same operations, same bits).
     for i in (1..n).rev() {
         if fold && rigid.is_gyrostat[i] {
             continue;
         }
-        let joint = rigid.joints[i].as_ref().expect("joint");
-        let (o, m) = (model.offset[i], model.modes[i]);
-        // The hinge's column, unless locked: then only the modes are eliminated.
-        let h = usize::from(h_free(locked, joint.hinge()));
-        let d = h + m;
-        let (uo, dof, co) = (data.u_offset[i], data.d_offset[i], data.c_offset[i]);
-        let s = joint.s;
-        let dm = &mut data.d[dof..dof + d * d];
-        if h == 1 {
-            let u0 = data.ia[i].mul_motion(&s);
-            data.u_col[uo] = u0;
-            data.u[uo] = tau[joint.dof] - s.dot(&data.pa[i]);
-            dm[0] = s.dot(&u0) + joint.armature();
-        }
-        for k in 0..m {
-            let bk = data.b[o + k];
-            data.u_col[uo + h + k] = bk;
-            data.u[uo + h + k] = tau[nv + o + k] - data.pe[o + k];
-            if h == 1 {
-                let sb = s.dot(&bk);
-                dm[(1 + k) * d] = sb;
-                dm[1 + k] = sb;
-            }
-            for l in 0..m {
-                dm[(h + k) * d + h + l] = data.cm[co + k * m + l];
-            }
-        }
-        let pivot = if d > 0 { dm[0] } else { 0.0 };
-        if d > 0 && !dense::cholesky(dm, d) {
-            return Err(DynamicsError::NotPositiveDefinite {
-                index: if h == 1 { joint.dof } else { nv + o },
-                pivot,
-            });
-        }
-        // IA − U D⁻¹ Uᵀ = IA − W Wᵀ with W Lᵀ = U (forward substitution on the columns).
-        let l = &data.d[dof..dof + d * d];
-        let mut ia = data.ia[i];
-        for j in 0..d {
-            let mut w = data.u_col[uo + j];
-            for k in 0..j {
-                w -= data.cols[k] * l[j * d + k];
-            }
-            w = w * (1.0 / l[j * d + j]);
-            data.cols[j] = w;
-            ia.sub_outer(&w, 1.0);
-        }
-        // pa = pA + IAᵃ c + U D⁻¹ u.
-        let y = &mut data.tmp[..d];
-        y.copy_from_slice(&data.u[uo..uo + d]);
-        if d > 0 {
-            dense::solve(l, d, y);
-        }
-        let mut pa = data.pa[i] + ia.mul_motion(&data.c[i]);
-        for j in 0..d {
-            pa += data.u_col[uo + j] * data.tmp[j];
-        }
+        let (ia, pa) = match model.modes[i] {
+            0 => eliminate(model, data, i, 0, tau, locked)?,
+            1 => eliminate(model, data, i, 1, tau, locked)?,
+            2 => eliminate(model, data, i, 2, tau, locked)?,
+            3 => eliminate(model, data, i, 3, tau, locked)?,
+            4 => eliminate(model, data, i, 4, tau, locked)?,
+            m => eliminate(model, data, i, m, tau, locked)?,
+        };
         let p = rigid.parent[i].expect("parent");
-        let x = data.xup[i];
-        // A body on its parent's frame (not on a node) moves by the rigid hinge's `Xup`: the
-        // coordinate-axis fast path where the hinge has one, as the rigid ABA's.
-        let axis = model.frame_axis(i);
-        accumulate_inv_transform(axis, &ia, &x, &mut data.ia[p]);
-        data.pa[p] += inv_apply_force(axis, &x, &pa);
-        let (op, mp, cp) = (model.offset[p], model.modes[p], data.c_offset[p]);
-        let go = data.g_offset[i];
-        for k in 0..mp {
-            let h = ia.mul_motion(&data.g[go + k]);
-            data.b[op + k] += inv_apply_force(axis, &x, &h);
-            data.pe[op + k] += data.g[go + k].dot(&pa);
-            for l in 0..mp {
-                data.cm[cp + l * mp + k] += data.g[go + l].dot(&h);
-            }
+        match model.modes[p] {
+            0 => to_parent(model, data, i, 0, &ia, &pa),
+            1 => to_parent(model, data, i, 1, &ia, &pa),
+            2 => to_parent(model, data, i, 2, &ia, &pa),
+            3 => to_parent(model, data, i, 3, &ia, &pa),
+            4 => to_parent(model, data, i, 4, &ia, &pa),
+            mp => to_parent(model, data, i, mp, &ia, &pa),
         }
     }
     // The root.
@@ -313,17 +258,12 @@ fn articulated<'d>(
             }
         }
     }
-    // Pass 3, outward.
+    // Pass 3, outward (instances as pass 2's).
     for i in 1..n {
-        let joint = rigid.joints[i].as_ref().expect("joint");
         let p = rigid.parent[i].expect("parent");
-        let (o, m) = (model.offset[i], model.modes[i]);
-        let h = usize::from(h_free(locked, joint.hinge()));
-        let d = h + m;
-        let (uo, dof) = (data.u_offset[i], data.d_offset[i]);
-        let (op, mp, go) = (model.offset[p], model.modes[p], data.g_offset[i]);
-        let mut a = apply_motion(model.frame_axis(i), &data.xup[i], &data.a[p]) + data.c[i];
         if fold && rigid.is_gyrostat[i] {
+            let joint = rigid.joints[i].as_ref().expect("joint");
+            let a = apply_motion(model.frame_axis(i), &data.xup[i], &data.a[p]) + data.c[i];
             // The rotor's axial equation, `Ω̇ = τ / J − a · α_carrier` (zero when locked).
             let qdd = if h_free(locked, joint.hinge()) {
                 data.u[data.u_offset[i]] / data.d[data.d_offset[i]] - joint.axis.dot(&data.a[p].ang)
@@ -334,28 +274,166 @@ fn articulated<'d>(
             data.a[i] = a + joint.s * qdd;
             continue;
         }
-        for k in 0..mp {
-            a += data.g[go + k] * data.ddq[nv + op + k];
-        }
-        let y = &mut data.tmp[..d];
-        for j in 0..d {
-            y[j] = data.u[uo + j] - a.dot(&data.u_col[uo + j]);
-        }
-        if d > 0 {
-            dense::solve(&data.d[dof..dof + d * d], d, y);
-        }
-        if h == 1 {
-            data.ddq[joint.dof] = y[0];
-            data.a[i] = a + joint.s * y[0];
-        } else {
-            data.ddq[joint.dof] = 0.0;
-            data.a[i] = a;
-        }
-        for k in 0..m {
-            data.ddq[nv + o + k] = y[h + k];
+        match (model.modes[i], model.modes[p]) {
+            (0, 0) => outward(model, data, i, 0, 0, locked),
+            (3, 0) => outward(model, data, i, 3, 0, locked),
+            (0, 3) => outward(model, data, i, 0, 3, locked),
+            (3, 3) => outward(model, data, i, 3, 3, locked),
+            (m, mp) => outward(model, data, i, m, mp, locked),
         }
     }
     Ok(&data.ddq)
+}
+
+/// Pass 2 for body `i` with `m` modes: its hinge (unless locked) and modes eliminated
+/// together, `IA − U D⁻¹ Uᵀ` and `pA + IAᵃ c + U D⁻¹ u` returned (what the parent receives,
+/// in `i`'s coordinates). Inlined with `m` known where the caller dispatches on it.
+#[inline(always)]
+#[allow(clippy::needless_range_loop)]
+fn eliminate(
+    model: &FlexModel,
+    data: &mut FlexData,
+    i: usize,
+    m: usize,
+    tau: &[f64],
+    locked: Option<&[bool]>,
+) -> Result<(ArticulatedInertia, Force), DynamicsError> {
+    let rigid = &model.rigid;
+    let nv = rigid.nv();
+    let joint = rigid.joints[i].as_ref().expect("joint");
+    let o = model.offset[i];
+    // The hinge's column, unless locked: then only the modes are eliminated.
+    let h = usize::from(h_free(locked, joint.hinge()));
+    let d = h + m;
+    let (uo, dof, co) = (data.u_offset[i], data.d_offset[i], data.c_offset[i]);
+    let s = joint.s;
+    let dm = &mut data.d[dof..dof + d * d];
+    if h == 1 {
+        let u0 = data.ia[i].mul_motion(&s);
+        data.u_col[uo] = u0;
+        data.u[uo] = tau[joint.dof] - s.dot(&data.pa[i]);
+        dm[0] = s.dot(&u0) + joint.armature();
+    }
+    for k in 0..m {
+        let bk = data.b[o + k];
+        data.u_col[uo + h + k] = bk;
+        data.u[uo + h + k] = tau[nv + o + k] - data.pe[o + k];
+        if h == 1 {
+            let sb = s.dot(&bk);
+            dm[(1 + k) * d] = sb;
+            dm[1 + k] = sb;
+        }
+        for l in 0..m {
+            dm[(h + k) * d + h + l] = data.cm[co + k * m + l];
+        }
+    }
+    let pivot = if d > 0 { dm[0] } else { 0.0 };
+    if d > 0 && !dense::cholesky(dm, d) {
+        return Err(DynamicsError::NotPositiveDefinite {
+            index: if h == 1 { joint.dof } else { nv + o },
+            pivot,
+        });
+    }
+    // IA − U D⁻¹ Uᵀ = IA − W Wᵀ with W Lᵀ = U (forward substitution on the columns).
+    let l = &data.d[dof..dof + d * d];
+    let mut ia = data.ia[i];
+    for j in 0..d {
+        let mut w = data.u_col[uo + j];
+        for k in 0..j {
+            w -= data.cols[k] * l[j * d + k];
+        }
+        w = w * (1.0 / l[j * d + j]);
+        data.cols[j] = w;
+        ia.sub_outer(&w, 1.0);
+    }
+    // pa = pA + IAᵃ c + U D⁻¹ u.
+    let y = &mut data.tmp[..d];
+    y.copy_from_slice(&data.u[uo..uo + d]);
+    if d > 0 {
+        dense::solve(l, d, y);
+    }
+    let mut pa = data.pa[i] + ia.mul_motion(&data.c[i]);
+    for j in 0..d {
+        pa += data.u_col[uo + j] * data.tmp[j];
+    }
+    Ok((ia, pa))
+}
+
+/// Pass 2's update of body `i`'s parent (with `mp` modes) from what `i` passes on: the
+/// frame block through `Xupᵢ`, the parent's coupling columns, modal block and bias through
+/// `Gᵢ`. Inlined with `mp` known where the caller dispatches on it.
+#[inline(always)]
+#[allow(clippy::needless_range_loop)]
+fn to_parent(
+    model: &FlexModel,
+    data: &mut FlexData,
+    i: usize,
+    mp: usize,
+    ia: &ArticulatedInertia,
+    pa: &Force,
+) {
+    let p = model.rigid.parent[i].expect("parent");
+    let x = data.xup[i];
+    // A body on its parent's frame (not on a node) moves by the rigid hinge's `Xup`: the
+    // coordinate-axis fast path where the hinge has one, as the rigid ABA's.
+    let axis = model.frame_axis(i);
+    accumulate_inv_transform(axis, ia, &x, &mut data.ia[p]);
+    data.pa[p] += inv_apply_force(axis, &x, pa);
+    let (op, cp) = (model.offset[p], data.c_offset[p]);
+    let go = data.g_offset[i];
+    for k in 0..mp {
+        let h = ia.mul_motion(&data.g[go + k]);
+        data.b[op + k] += inv_apply_force(axis, &x, &h);
+        data.pe[op + k] += data.g[go + k].dot(pa);
+        for l in 0..mp {
+            data.cm[cp + l * mp + k] += data.g[go + l].dot(&h);
+        }
+    }
+}
+
+/// Pass 3 for body `i` (`m` modes, its parent `mp`): its frame's acceleration from the
+/// parent's and the parent's modes, then its hinge's and modes' accelerations. Inlined with
+/// the counts known where the caller dispatches on them.
+#[inline(always)]
+#[allow(clippy::needless_range_loop)]
+fn outward(
+    model: &FlexModel,
+    data: &mut FlexData,
+    i: usize,
+    m: usize,
+    mp: usize,
+    locked: Option<&[bool]>,
+) {
+    let rigid = &model.rigid;
+    let nv = rigid.nv();
+    let joint = rigid.joints[i].as_ref().expect("joint");
+    let p = rigid.parent[i].expect("parent");
+    let o = model.offset[i];
+    let h = usize::from(h_free(locked, joint.hinge()));
+    let d = h + m;
+    let (uo, dof) = (data.u_offset[i], data.d_offset[i]);
+    let (op, go) = (model.offset[p], data.g_offset[i]);
+    let mut a = apply_motion(model.frame_axis(i), &data.xup[i], &data.a[p]) + data.c[i];
+    for k in 0..mp {
+        a += data.g[go + k] * data.ddq[nv + op + k];
+    }
+    let y = &mut data.tmp[..d];
+    for j in 0..d {
+        y[j] = data.u[uo + j] - a.dot(&data.u_col[uo + j]);
+    }
+    if d > 0 {
+        dense::solve(&data.d[dof..dof + d * d], d, y);
+    }
+    if h == 1 {
+        data.ddq[joint.dof] = y[0];
+        data.a[i] = a + joint.s * y[0];
+    } else {
+        data.ddq[joint.dof] = 0.0;
+        data.a[i] = a;
+    }
+    for k in 0..m {
+        data.ddq[nv + o + k] = y[h + k];
+    }
 }
 
 /// Whether `hinge` moves (not locked).
