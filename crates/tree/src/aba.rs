@@ -425,7 +425,7 @@ fn articulated<'d, const GYRO: bool, const CHAINS: bool>(
 
 /// `X m`, by the coordinate-axis fast path where the hinge has one.
 #[inline]
-fn apply_motion(axis: &Option<CoordAxis>, x: &Transform, m: &Motion) -> Motion {
+pub(crate) fn apply_motion(axis: &Option<CoordAxis>, x: &Transform, m: &Motion) -> Motion {
     match axis {
         Some(a) => a.apply_motion(x, m),
         None => x.apply_motion(m),
@@ -434,7 +434,7 @@ fn apply_motion(axis: &Option<CoordAxis>, x: &Transform, m: &Motion) -> Motion {
 
 /// `Xᵀ f`, by the coordinate-axis fast path where the hinge has one.
 #[inline]
-fn inv_apply_force(axis: &Option<CoordAxis>, x: &Transform, f: &Force) -> Force {
+pub(crate) fn inv_apply_force(axis: &Option<CoordAxis>, x: &Transform, f: &Force) -> Force {
     match axis {
         Some(a) => a.inv_apply_force(x, f),
         None => x.inv_apply_force(f),

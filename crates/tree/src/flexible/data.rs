@@ -1,8 +1,8 @@
 //! [`FlexData`]: the reusable workspace of the flexible algorithms, and their shared first
 //! pass (transforms, velocities, the node subspaces `G`, velocity-product accelerations).
 
-use super::aba::apply_motion;
 use super::model::FlexModel;
+use crate::aba::apply_motion;
 use crate::error::DynamicsError;
 use crate::kinematics::{base_motion, check_len};
 use crate::spatial::{ArticulatedInertia, Force, Motion, RigidInertia, Transform};

@@ -489,10 +489,10 @@ impl FlexModel {
     /// on its parent's frame, not on a node) and the hinge has one: the fast path of the
     /// transforms ([`crate::axis::CoordAxis`]), as the rigid algorithms take it.
     #[inline(always)]
-    pub(crate) fn frame_axis(&self, i: usize) -> Option<&crate::axis::CoordAxis> {
+    pub(crate) fn frame_axis(&self, i: usize) -> &Option<crate::axis::CoordAxis> {
         match self.nodes[i] {
-            None => self.rigid.coord_axis[i].as_ref(),
-            Some(_) => None,
+            None => &self.rigid.coord_axis[i],
+            Some(_) => &None,
         }
     }
     /// Body `i`'s rigid inertia at the deformation in `q`: with stiffening, plus the
