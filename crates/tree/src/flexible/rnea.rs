@@ -116,6 +116,46 @@ fn inverse<'d>(
     Ok(&data.tau)
 }
 
+/// The torques that hold locked gyrostat rotors, in closed form: for each hinge `k` asked
+/// for in `which` (one entry per hinge, as [`crate::gyrostat_torques`]), `τₖ = J (a · α_λ +
+/// q̈ₖ) + armature q̈ₖ − a · n_ext`, `α_λ` the carrier's angular acceleration that the forward
+/// dynamics on this state (its accelerations `a`, `[q̈; η̈]`) just left in `data.a`
+/// ([`super::aba_with_kinematics`], [`super::aba_hybrid_with_kinematics`]), `n_ext` the
+/// couple of `fext` on the rotor. RNEA's to round-off (a balanced rotor's velocity products
+/// have no part along its axis), without its passes over the tree. `Ok(None)` where a hinge
+/// asked for is not a rotor that the model folds into its rigid carrier: RNEA then
+/// ([`rnea_with_kinematics`]).
+pub fn gyrostat_torques<'d>(
+    model: &FlexModel,
+    data: &'d mut FlexData,
+    a: &[f64],
+    fext: Option<&[Force]>,
+    which: &[bool],
+) -> Result<Option<&'d DVector<f64>>, DynamicsError> {
+    let rigid = &model.rigid;
+    let nb = rigid.base_nv();
+    check_len("a", a.len(), model.nv())?;
+    check_len("which", which.len(), rigid.nv() - nb)?;
+    if let Some(f) = fext {
+        check_len("fext", f.len(), rigid.n_bodies())?;
+    }
+    let asked = |i: usize| rigid.joints[i].as_ref().is_some_and(|j| which[j.dof - nb]);
+    if (1..rigid.n_bodies()).any(|i| asked(i) && !(model.fold_rotors && rigid.is_gyrostat[i])) {
+        return Ok(None);
+    }
+    for g in &rigid.gyrostats {
+        let joint = rigid.joints[g.body].as_ref().expect("joint");
+        if which[joint.dof - nb] {
+            let n_ext = fext.map_or(0.0, |f| joint.s.dot(&f[g.body]));
+            let qdd = a[joint.dof];
+            data.tau[joint.dof] = g.axial * (g.axis.dot(&data.a[g.parent].ang) + qdd)
+                + joint.armature() * qdd
+                - n_ext;
+        }
+    }
+    Ok(Some(&data.tau))
+}
+
 /// The bias forces `b(q, v)` (RNEA at zero acceleration) into `data.bias`.
 pub fn bias<'d>(
     model: &FlexModel,

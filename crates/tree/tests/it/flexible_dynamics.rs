@@ -826,3 +826,100 @@ fn rotors_folded_into_rigid_carriers_are_the_rotors_as_bodies() {
         "a rotor on a flexible body: every rotor a body, bit for bit"
     );
 }
+
+/// The torques holding locked wheels in closed form, from the carriers' accelerations the
+/// flexible ABA just left (`flexible::gyrostat_torques`), are RNEA's on the same state and
+/// accelerations, with and without wrenches; a panel's hinge asked for, or rotors the model
+/// keeps as bodies, leave them to RNEA.
+#[test]
+fn locked_wheels_hold_torques_in_closed_form_are_rneas() {
+    let model = modal_panels(3);
+    let wheel = |axis: Vec3, j: f64| {
+        let aat = axis * axis.transpose();
+        aat * j + (Mat3::identity() - aat) * 0.6 * j
+    };
+    let grown = model
+        .rigid()
+        .to_builder()
+        .body(Body::new("wx", 1.5, wheel(Vec3::x(), 0.04)))
+        .body(Body::new("wy", 1.5, wheel(Vec3::y(), 0.05)))
+        .body(Body::new("wz", 1.5, wheel(Vec3::z(), 0.03)))
+        .hinge(Hinge::revolute("rx", "bus", "wx", Vec3::x()).at(Vec3::new(0.3, 0.1, -0.2)))
+        .hinge(Hinge::revolute("ry", "bus", "wy", Vec3::y()).at(Vec3::new(-0.2, 0.3, 0.1)))
+        .hinge(Hinge::revolute("rz", "bus", "wz", Vec3::z()).at(Vec3::new(0.1, -0.3, 0.25)))
+        .build()
+        .unwrap();
+    let folded = model.with_rigid(grown.clone()).unwrap();
+    let bodies = model.with_rigid(grown.without_gyrostats()).unwrap();
+    let (n, nq, nv) = (grown.n_bodies(), grown.nq(), folded.nv());
+    let nb = grown.base_nv();
+    let mut q = folded.neutral();
+    q[7] = 0.4;
+    q[8] = -0.3;
+    for (k, x) in q[nq..].iter_mut().enumerate() {
+        *x = 2e-2 * (k as f64 + 1.0).sin();
+    }
+    let v: Vec<f64> = (0..nv).map(|k| 0.3 * (k as f64 + 0.5).sin()).collect();
+    let tau: Vec<f64> = (0..nv).map(|k| 0.3 * (k as f64).cos()).collect();
+    let fext: Vec<_> = (0..n)
+        .map(|i| {
+            satsim_tree::spatial::Force::new(
+                Vec3::new(0.1, -0.2, 0.05 * i as f64),
+                Vec3::new(0.3, 0.02 * i as f64, -0.1),
+            )
+        })
+        .collect();
+    let mut data = FlexData::new(&folded);
+    let mut checked = 0;
+    for f in [None, Some(fext.as_slice())] {
+        // Hinges h1, h2 (panels), rx, ry, rz (wheels).
+        for locked in [
+            [false, false, true, false, false],
+            [false, true, false, true, true],
+            [true, true, true, true, true],
+        ] {
+            let acc = flexible::aba_hybrid(&folded, &mut data, &q, &v, &tau, f, &locked)
+                .unwrap()
+                .clone();
+            let wheels: Vec<bool> = (0..locked.len()).map(|k| locked[k] && k >= 2).collect();
+            let closed = flexible::gyrostat_torques(&folded, &mut data, acc.as_slice(), f, &wheels)
+                .unwrap()
+                .expect("wheels folded into the bus")
+                .clone();
+            // The panel hinge asked for too: RNEA's business.
+            assert!(
+                flexible::gyrostat_torques(&folded, &mut data, acc.as_slice(), f, &locked)
+                    .unwrap()
+                    .is_none()
+                    || !locked[..2].contains(&true)
+            );
+            let rnea =
+                flexible::rnea_with_kinematics(&folded, &mut data, &q, &v, acc.as_slice(), f)
+                    .unwrap()
+                    .clone();
+            for (k, &w) in wheels.iter().enumerate() {
+                if w {
+                    let (x, y) = (closed[nb + k], rnea[nb + k]);
+                    assert!(
+                        (x - y).abs() < 1e-12 * y.abs().max(1.0) && y.abs() > 1e-4,
+                        "wheel hinge {k}, locked {locked:?}, wrenches {}: {x} against RNEA's {y}",
+                        f.is_some()
+                    );
+                    checked += 1;
+                }
+            }
+        }
+    }
+    assert_eq!(checked, 12);
+    // Rotors kept as bodies: not folded, so not in closed form.
+    let mut other = FlexData::new(&bodies);
+    let locked = [false, false, true, false, false];
+    let acc = flexible::aba_hybrid(&bodies, &mut other, &q, &v, &tau, None, &locked)
+        .unwrap()
+        .clone();
+    assert!(
+        flexible::gyrostat_torques(&bodies, &mut other, acc.as_slice(), None, &locked)
+            .unwrap()
+            .is_none()
+    );
+}
