@@ -220,7 +220,7 @@ fn articulated<'d>(
                     root[(6 + k) * r + 6 + l] = data.cm[c0 + k * m0 + l];
                 }
             }
-            if !dense::cholesky(root, r) {
+            if !dense::factor(root, r) {
                 return Err(DynamicsError::SingularBase);
             }
             let pa = data.pa[0].to_array();
@@ -245,7 +245,7 @@ fn articulated<'d>(
             if m0 > 0 {
                 let root = &mut data.root[..m0 * m0];
                 root.copy_from_slice(&data.cm[c0..c0 + m0 * m0]);
-                if !dense::cholesky(root, m0) {
+                if !dense::factor(root, m0) {
                     return Err(DynamicsError::SingularBase);
                 }
                 let rhs = &mut data.tmp[..m0];
@@ -330,13 +330,14 @@ fn eliminate(
         }
     }
     let pivot = if d > 0 { dm[0] } else { 0.0 };
-    if d > 0 && !dense::cholesky(dm, d) {
+    if d > 0 && !dense::factor(dm, d) {
         return Err(DynamicsError::NotPositiveDefinite {
             index: if h == 1 { joint.dof } else { nv + o },
             pivot,
         });
     }
-    // IA − U D⁻¹ Uᵀ = IA − W Wᵀ with W Lᵀ = U (forward substitution on the columns).
+    // IA − U D⁻¹ Uᵀ = IA − Σⱼ wⱼ wⱼᵀ / dⱼ with W Lᵀ = U (forward substitution on the
+    // columns, `D = L diag(d) Lᵀ`).
     let l = &data.d[dof..dof + d * d];
     let mut ia = data.ia[i];
     for j in 0..d {
@@ -344,9 +345,8 @@ fn eliminate(
         for k in 0..j {
             w -= data.cols[k] * l[j * d + k];
         }
-        w = w * (1.0 / l[j * d + j]);
         data.cols[j] = w;
-        ia.sub_outer(&w, 1.0);
+        ia.sub_outer(&w, l[j * d + j]);
     }
     // pa = pA + IAᵃ c + U D⁻¹ u.
     let y = &mut data.tmp[..d];

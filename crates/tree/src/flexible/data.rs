@@ -40,7 +40,8 @@ pub struct FlexData {
     pub(crate) c_offset: Vec<usize>,
     /// Articulated modal bias `pₑ`, at the model's `offset`.
     pub(crate) pe: Vec<f64>,
-    /// Per body: Cholesky factor of its `(1 + m)` pivot `D`, at `d_offset`.
+    /// Per body: the `L D Lᵀ` factor of its `(1 + m)` pivot `D` (`flexible/dense.rs`), at
+    /// `d_offset`.
     pub(crate) d: Vec<f64>,
     pub(crate) d_offset: Vec<usize>,
     /// Per body: the frame rows of `U` (`1 + m` columns) and `u`, at `u_offset`.
