@@ -196,8 +196,9 @@ impl GravityGradient {
             let i = l.body;
             let com = match &self.flex {
                 Some(flex) if l.deformable => {
-                    *d = flex.deformed_inertia(i, ctx.eta);
-                    d.h / l.mass
+                    let deformed = flex.deformed_inertia(i, ctx.eta);
+                    *d = deformed;
+                    deformed.h / l.mass
                 }
                 _ => l.com,
             };

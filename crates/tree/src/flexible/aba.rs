@@ -147,8 +147,10 @@ fn articulated<'d>(
             model.inertia_at(i, q)
         };
         let (o, m) = (model.offset[i], model.modes[i]);
-        let vi = data.v[i];
-        let mut h = inertia.mul_motion(&vi);
+        // Read in place: a copy on the stack was read back across its stores' halves, a
+        // stalled store forwarding at every body (`perf`).
+        let vi = &data.v[i];
+        let mut h = inertia.mul_motion(vi);
         let co = data.c_offset[i];
         for k in 0..m {
             let pk = model.momentum_at(i, q, k);
@@ -166,7 +168,7 @@ fn articulated<'d>(
             ArticulatedInertia::from(*inertia)
         };
         data.pa[i] = vi.cross_force(&h);
-        model.add_stiffening(i, q, v, &vi, &mut data.pa[i], &mut data.pe[o..o + m]);
+        model.add_stiffening(i, q, v, vi, &mut data.pa[i], &mut data.pe[o..o + m]);
         if let Some(fe) = fext {
             data.pa[i] -= fe[i];
         }

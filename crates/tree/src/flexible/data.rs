@@ -141,10 +141,13 @@ pub(crate) fn velocities(model: &FlexModel, data: &mut FlexData, q: &[f64], v: &
         let x = rigid.xup(i, q);
         let vj = joint.s * v[joint.dof];
         match &model.nodes[i] {
+            // The velocity kept in registers for `c`: read back from `data.v`, it waited on
+            // its own stores (a stalled store forwarding, `perf`).
             None => {
                 data.xup[i] = x;
-                data.v[i] = apply_motion(model.frame_axis(i), &x, &data.v[p]) + vj;
-                data.c[i] = data.v[i].cross_motion(&vj);
+                let vi = apply_motion(model.frame_axis(i), &x, &data.v[p]) + vj;
+                data.v[i] = vi;
+                data.c[i] = vi.cross_motion(&vj);
             }
             Some(node) => {
                 let (o, m) = (model.offset[p], model.modes[p]);
@@ -156,8 +159,9 @@ pub(crate) fn velocities(model: &FlexModel, data: &mut FlexData, q: &[f64], v: &
                     *gk = xc.apply_motion(gk);
                 }
                 data.xup[i] = xc.compose(&st.x);
-                data.v[i] = xc.apply_motion(&st.w) + vj;
-                data.c[i] = xc.apply_motion(&st.c) + data.v[i].cross_motion(&vj);
+                let vi = xc.apply_motion(&st.w) + vj;
+                data.v[i] = vi;
+                data.c[i] = xc.apply_motion(&st.c) + vi.cross_motion(&vj);
             }
         }
     }

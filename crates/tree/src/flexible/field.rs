@@ -82,7 +82,10 @@ impl FlexModel {
 
     /// [`FlexModel::linear_field`] with body `i`'s inertia at `eta` given: what
     /// [`FlexModel::deformed_inertia`] returns, for a caller that has it already (the
-    /// gravity gradient, which needs it first for the system's centre of mass).
+    /// gravity gradient, which needs it first for the system's centre of mass). Inlined:
+    /// its wrench, returned through the stack, was read back across its stores' halves (a
+    /// stalled store forwarding, `perf`).
+    #[inline]
     pub fn linear_field_on(
         &self,
         i: usize,

@@ -526,8 +526,9 @@ impl FlexModel {
     }
     /// Body `i`'s modal momentum column `k` at the deformation in `q`: with stiffening,
     /// `Pₖ − (J₀ η)ₖ [r₀ × a; a]` (the foreshortening's rate moves the beam along its axis);
-    /// else `Pₖ`.
-    #[inline]
+    /// else `Pₖ`. Always inlined: returned through the stack, its result was read back
+    /// across its stores' halves (a stalled store forwarding per mode, `perf`).
+    #[inline(always)]
     pub(crate) fn momentum_at(&self, i: usize, q: &[f64], k: usize) -> Force {
         let pk = self.momentum[self.offset[i] + k];
         match &self.stiffening[i] {

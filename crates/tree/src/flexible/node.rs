@@ -97,7 +97,10 @@ impl Node {
         for (k, p) in self.phi.iter().enumerate() {
             disp += p * eta[k];
             rate += p * etad[k];
-            g[k] = Motion::new(Vec3::zeros(), *p);
+            // Written field by field: a `Motion` built on the stack and copied was read
+            // back across its stores' halves (a stalled store forwarding, `perf`).
+            g[k].ang = Vec3::new(0.0, 0.0, 0.0);
+            g[k].lin = *p;
         }
         let mut x = Transform::new(Mat3::identity(), disp);
         let vj = Motion::new(Vec3::zeros(), rate);
