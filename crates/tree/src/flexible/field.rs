@@ -85,7 +85,7 @@ impl FlexModel {
     /// gravity gradient, which needs it first for the system's centre of mass). Inlined:
     /// its wrench, returned through the stack, was read back across its stores' halves (a
     /// stalled store forwarding, `perf`).
-    #[inline]
+    #[inline(always)]
     pub fn linear_field_on(
         &self,
         i: usize,
