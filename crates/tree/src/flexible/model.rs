@@ -500,9 +500,11 @@ impl FlexModel {
     /// foreshortening's kinetic energy `−½ ωᵀ (A₀ s₀ + A₁ s₁) ω` and the deflection's own
     /// `½ ωᵀ A₂ ω ηᵀη`) and the first moment less `½ s₀ a` (the foreshortening's shift of
     /// the beam's mass towards its root); else the rigid model's.
-    #[inline]
+    /// Always inlined, as [`Self::add_stiffening`]: returned through the stack, its result
+    /// was read back across its stores' halves (a stalled store forwarding, `perf`).
+    #[inline(always)]
     pub(crate) fn inertia_at(&self, i: usize, q: &[f64]) -> RigidInertia {
-        self.deformed_inertia(i, &q[self.rigid.nq()..])
+        self.deformed(i, &q[self.rigid.nq()..])
     }
     /// Body `i`'s inertia (mass, first moment and rotational inertia about its frame's
     /// origin, body axes) at the elastic coordinates `eta` (all of them, coordinate order):
@@ -511,6 +513,10 @@ impl FlexModel {
     /// a field acting on the mass distribution ([`FlexModel::linear_field`]) must use.
     #[inline]
     pub fn deformed_inertia(&self, i: usize, eta: &[f64]) -> RigidInertia {
+        self.deformed(i, eta)
+    }
+    #[inline(always)]
+    fn deformed(&self, i: usize, eta: &[f64]) -> RigidInertia {
         let mut inertia = self.rigid.bodies[i].inertia;
         if let Some(s) = &self.stiffening[i] {
             let eta = &eta[self.offset[i]..][..self.modes[i]];
@@ -544,8 +550,10 @@ impl FlexModel {
     /// moment `Σ η̇ₖ b S₁ₖ − (η̇ᵀ J₀ η) a`, rotational `Σ η̇ₖ Dₖ − Ġ`;
     /// `Ṗ η̇ = −c (η̇ᵀ J₀ η̇)`) and the modal forces `−∂T/∂η`: `−½ vᵀ Iₖ v` (the centrifugal
     /// load of the first-order inertia) and `K_g(v) η − (ωᵀ A₂ ω) η` (the `η`-derivative of
-    /// `vᵀ P(η) η̇` cancels against `Ṗᵀ v`), added to `frame` and `modal`.
-    #[inline]
+    /// `vᵀ P(η) η̇` cancels against `Ṗᵀ v`), added to `frame` and `modal`. Always inlined:
+    /// out of line, the frame force it added to was read back across its stores' halves (a
+    /// stalled store forwarding, `perf`).
+    #[inline(always)]
     pub(crate) fn add_stiffening(
         &self,
         i: usize,
