@@ -699,6 +699,37 @@ fn the_first_pass_reused_is_bit_for_bit_the_plain_algorithms() {
     assert_eq!(r, &plain_rnea);
 }
 
+/// A wheel's inertia, axisymmetric about `axis`: `j` along it, `0.6 j` across.
+fn wheel(axis: Vec3, j: f64) -> Mat3 {
+    let aat = axis * axis.transpose();
+    aat * j + (Mat3::identity() - aat) * 0.6 * j
+}
+
+/// `model`'s rigid tree with three wheels on the bus (hinges `rx`, `ry`, `rz`), to build.
+fn with_bus_wheels(model: &FlexModel) -> ModelBuilder {
+    model
+        .rigid()
+        .to_builder()
+        .body(Body::new("wx", 1.5, wheel(Vec3::x(), 0.04)))
+        .body(Body::new("wy", 1.5, wheel(Vec3::y(), 0.05)))
+        .body(Body::new("wz", 1.5, wheel(Vec3::z(), 0.03)))
+        .hinge(Hinge::revolute("rx", "bus", "wx", Vec3::x()).at(Vec3::new(0.3, 0.1, -0.2)))
+        .hinge(Hinge::revolute("ry", "bus", "wy", Vec3::y()).at(Vec3::new(-0.2, 0.3, 0.1)))
+        .hinge(Hinge::revolute("rz", "bus", "wz", Vec3::z()).at(Vec3::new(0.1, -0.3, 0.25)))
+}
+
+/// A wrench on each of `n` bodies, different for each.
+fn wrenches(n: usize) -> Vec<satsim_tree::spatial::Force> {
+    (0..n)
+        .map(|i| {
+            satsim_tree::spatial::Force::new(
+                Vec3::new(0.1, -0.2, 0.05 * i as f64),
+                Vec3::new(0.3, 0.02 * i as f64, -0.1),
+            )
+        })
+        .collect()
+}
+
 /// The flexible ABA folds balanced rotors on rigid carriers into them as gyrostats, as the
 /// rigid ABA does (wheels on the bus), and with a rotor locked too (a stuck wheel): the
 /// accelerations and the rotors' spatial accelerations are those of the rotors kept as
@@ -707,20 +738,7 @@ fn the_first_pass_reused_is_bit_for_bit_the_plain_algorithms() {
 #[test]
 fn rotors_folded_into_rigid_carriers_are_the_rotors_as_bodies() {
     let model = modal_panels(3);
-    // Axisymmetric about each wheel's axis: J along it, the transverse inertia across.
-    let wheel = |axis: Vec3, j: f64| {
-        let aat = axis * axis.transpose();
-        aat * j + (Mat3::identity() - aat) * 0.6 * j
-    };
-    let builder = model
-        .rigid()
-        .to_builder()
-        .body(Body::new("wx", 1.5, wheel(Vec3::x(), 0.04)))
-        .body(Body::new("wy", 1.5, wheel(Vec3::y(), 0.05)))
-        .body(Body::new("wz", 1.5, wheel(Vec3::z(), 0.03)))
-        .hinge(Hinge::revolute("rx", "bus", "wx", Vec3::x()).at(Vec3::new(0.3, 0.1, -0.2)))
-        .hinge(Hinge::revolute("ry", "bus", "wy", Vec3::y()).at(Vec3::new(-0.2, 0.3, 0.1)))
-        .hinge(Hinge::revolute("rz", "bus", "wz", Vec3::z()).at(Vec3::new(0.1, -0.3, 0.25)));
+    let builder = with_bus_wheels(&model);
     let grown = builder.clone().build().unwrap();
     assert_eq!(grown.gyrostats().len(), 3);
     let folded = model.with_rigid(grown.clone()).unwrap();
@@ -743,14 +761,7 @@ fn rotors_folded_into_rigid_carriers_are_the_rotors_as_bodies() {
         })
         .collect();
     let tau: Vec<f64> = (0..nv).map(|k| 0.3 * (k as f64).cos()).collect();
-    let fext: Vec<_> = (0..n)
-        .map(|i| {
-            satsim_tree::spatial::Force::new(
-                Vec3::new(0.1, -0.2, 0.05 * i as f64),
-                Vec3::new(0.3, 0.02 * i as f64, -0.1),
-            )
-        })
-        .collect();
+    let fext = wrenches(n);
     let (mut a, mut b) = (FlexData::new(&folded), FlexData::new(&bodies));
     let scale = |x: &nalgebra::DVector<f64>| x.amax().max(1.0);
     let mut compared = 0;
@@ -834,21 +845,7 @@ fn rotors_folded_into_rigid_carriers_are_the_rotors_as_bodies() {
 #[test]
 fn locked_wheels_hold_torques_in_closed_form_are_rneas() {
     let model = modal_panels(3);
-    let wheel = |axis: Vec3, j: f64| {
-        let aat = axis * axis.transpose();
-        aat * j + (Mat3::identity() - aat) * 0.6 * j
-    };
-    let grown = model
-        .rigid()
-        .to_builder()
-        .body(Body::new("wx", 1.5, wheel(Vec3::x(), 0.04)))
-        .body(Body::new("wy", 1.5, wheel(Vec3::y(), 0.05)))
-        .body(Body::new("wz", 1.5, wheel(Vec3::z(), 0.03)))
-        .hinge(Hinge::revolute("rx", "bus", "wx", Vec3::x()).at(Vec3::new(0.3, 0.1, -0.2)))
-        .hinge(Hinge::revolute("ry", "bus", "wy", Vec3::y()).at(Vec3::new(-0.2, 0.3, 0.1)))
-        .hinge(Hinge::revolute("rz", "bus", "wz", Vec3::z()).at(Vec3::new(0.1, -0.3, 0.25)))
-        .build()
-        .unwrap();
+    let grown = with_bus_wheels(&model).build().unwrap();
     let folded = model.with_rigid(grown.clone()).unwrap();
     let bodies = model.with_rigid(grown.without_gyrostats()).unwrap();
     let (n, nq, nv) = (grown.n_bodies(), grown.nq(), folded.nv());
@@ -861,14 +858,7 @@ fn locked_wheels_hold_torques_in_closed_form_are_rneas() {
     }
     let v: Vec<f64> = (0..nv).map(|k| 0.3 * (k as f64 + 0.5).sin()).collect();
     let tau: Vec<f64> = (0..nv).map(|k| 0.3 * (k as f64).cos()).collect();
-    let fext: Vec<_> = (0..n)
-        .map(|i| {
-            satsim_tree::spatial::Force::new(
-                Vec3::new(0.1, -0.2, 0.05 * i as f64),
-                Vec3::new(0.3, 0.02 * i as f64, -0.1),
-            )
-        })
-        .collect();
+    let fext = wrenches(n);
     let mut data = FlexData::new(&folded);
     let mut checked = 0;
     for f in [None, Some(fext.as_slice())] {
