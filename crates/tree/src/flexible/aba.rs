@@ -167,11 +167,14 @@ fn articulated<'d>(
         } else {
             ArticulatedInertia::from(*inertia)
         };
-        data.pa[i] = vi.cross_force(&h);
-        model.add_stiffening(i, q, v, vi, &mut data.pa[i], &mut data.pe[o..o + m]);
+        // Built in a local, stored once: the wrench's subtraction read `data.pa[i]` back
+        // from the stiffening's fresh stores (a stalled store forwarding, `perf`).
+        let mut pa = vi.cross_force(&h);
+        model.add_stiffening(i, q, v, vi, &mut pa, &mut data.pe[o..o + m]);
         if let Some(fe) = fext {
-            data.pa[i] -= fe[i];
+            pa -= fe[i];
         }
+        data.pa[i] = pa;
     }
     if fold {
         fold_gyrostats(model, data, v, tau, fext, locked);
