@@ -41,7 +41,8 @@ pub struct FlexData {
     /// Articulated modal bias `pₑ`, at the model's `offset`.
     pub(crate) pe: Vec<f64>,
     /// Per body: the `L D Lᵀ` factor of its `(1 + m)` pivot `D` (`flexible/dense.rs`), at
-    /// `d_offset`.
+    /// `d_offset`; a rotor folded into its carrier keeps its axial moment `J` there instead
+    /// (`fold_gyrostats`), which pass 3 divides by.
     pub(crate) d: Vec<f64>,
     pub(crate) d_offset: Vec<usize>,
     /// Per body: the frame rows of `U` (`1 + m` columns) and `u`, at `u_offset`.

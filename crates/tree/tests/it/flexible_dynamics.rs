@@ -901,6 +901,14 @@ fn locked_wheels_hold_torques_in_closed_form_are_rneas() {
         }
     }
     assert_eq!(checked, 12);
+    // Wrong lengths are errors, not panics.
+    let acc = vec![0.0; nv];
+    assert!(flexible::gyrostat_torques(&folded, &mut data, &acc, None, &[true]).is_err());
+    assert!(flexible::gyrostat_torques(&folded, &mut data, &acc[1..], None, &[false; 5]).is_err());
+    let short = wrenches(n - 1);
+    assert!(
+        flexible::gyrostat_torques(&folded, &mut data, &acc, Some(&short), &[false; 5]).is_err()
+    );
     // Rotors kept as bodies: not folded, so not in closed form.
     let mut other = FlexData::new(&bodies);
     let locked = [false, false, true, false, false];
