@@ -54,6 +54,27 @@ impl CoordAxis {
         })
     }
 
+    /// The axis's index: 0, 1, 2 for x, y, z.
+    pub(crate) fn index(&self) -> usize {
+        self.k
+    }
+
+    /// `a ∘ b` (first `b`, then `a`, as [`Transform::compose`]) for two transforms whose
+    /// rotations are both about this axis (row and column `k` exactly `e_k`): the product
+    /// of their 2x2 blocks, the same sums as the general product's.
+    #[inline(always)]
+    pub(crate) fn compose<T: Real>(&self, a: &Transform<T>, b: &Transform<T>) -> Transform<T> {
+        let (i, j) = (self.i, self.j);
+        let (ea, eb) = (&a.rot, &b.rot);
+        let mut rot = Matrix3::zeros();
+        rot[(self.k, self.k)] = T::one();
+        rot[(i, i)] = ea[(i, i)] * eb[(i, i)] + ea[(i, j)] * eb[(j, i)];
+        rot[(i, j)] = ea[(i, i)] * eb[(i, j)] + ea[(i, j)] * eb[(j, j)];
+        rot[(j, i)] = ea[(j, i)] * eb[(i, i)] + ea[(j, j)] * eb[(j, i)];
+        rot[(j, j)] = ea[(j, i)] * eb[(i, j)] + ea[(j, j)] * eb[(j, j)];
+        Transform::new(rot, b.trans + self.rotate_back(eb, &a.trans))
+    }
+
     /// `Xup` at hinge angle `phi`: `E = Rot(sign e_k, φ)ᵀ`, `r = at − Eᵀ child_at`.
     #[cfg_attr(not(debug_assertions), inline(always))]
     #[cfg_attr(debug_assertions, inline)]

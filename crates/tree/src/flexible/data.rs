@@ -154,15 +154,20 @@ pub(crate) fn velocities(model: &FlexModel, data: &mut FlexData, q: &[f64], v: &
                 let (o, m) = (model.offset[p], model.modes[p]);
                 let g = &mut data.g[data.g_offset[i]..][..m];
                 let st = node.state(&eta[o..o + m], &etad[o..o + m], &data.v[p], g);
-                // The hinge from the node frame (its origin the hinge point) to the child.
+                // The hinge from the node frame (its origin the hinge point) to the child,
+                // by its coordinate-axis fast path where it has one.
                 let xc = Transform::new(x.rot, x.trans - node.at);
+                let hinge_axis = &rigid.coord_axis[i];
                 for gk in g.iter_mut() {
-                    *gk = xc.apply_motion(gk);
+                    *gk = apply_motion(hinge_axis, &xc, gk);
                 }
-                data.xup[i] = xc.compose(&st.x);
-                let vi = xc.apply_motion(&st.w) + vj;
+                data.xup[i] = match &model.node_axis[i] {
+                    Some(a) => a.compose(&xc, &st.x),
+                    None => xc.compose(&st.x),
+                };
+                let vi = apply_motion(hinge_axis, &xc, &st.w) + vj;
                 data.v[i] = vi;
-                data.c[i] = xc.apply_motion(&st.c) + vi.cross_motion(&vj);
+                data.c[i] = apply_motion(hinge_axis, &xc, &st.c) + vi.cross_motion(&vj);
             }
         }
     }

@@ -108,6 +108,10 @@ pub struct FlexModel {
     pub(crate) damping: Vec<f64>,
     /// Per body: the node carrying its hinge when its parent is flexible.
     pub(crate) nodes: Vec<Option<Node>>,
+    /// Per body on a node: the hinge's coordinate axis where the node turns only about that
+    /// axis too (a beam bending about the hinge's axis), so that `Xup` is a rotation about
+    /// it and takes the hinges' fast path ([`FlexModel::frame_axis`]).
+    pub(crate) node_axis: Vec<Option<crate::axis::CoordAxis>>,
     /// Per body: its beam, if its modes are a beam's (for the tip deflection).
     pub(crate) beams: Vec<Option<Beam>>,
     /// Per beam body: its modes' deflection at the tip, `φₖ(L)` (an output's column, so made
@@ -355,6 +359,14 @@ impl FlexModel {
             }
             nodes[i] = Some(Node::new(*joint.at(), &shape));
         }
+        let node_axis = (0..n)
+            .map(|i| {
+                let (node, axis) = (nodes[i].as_ref()?, rigid.coord_axis[i]?);
+                let turns_about = |c: &crate::axis::CoordAxis| c.index() == axis.index();
+                (node.rotations.is_empty() || node.coord.as_ref().is_some_and(turns_about))
+                    .then_some(axis)
+            })
+            .collect();
         let tips = beams
             .iter()
             .map(|b| {
@@ -383,6 +395,7 @@ impl FlexModel {
             stiffness,
             damping,
             nodes,
+            node_axis,
             beams,
             children,
             stiffening,
@@ -492,7 +505,7 @@ impl FlexModel {
     pub(crate) fn frame_axis(&self, i: usize) -> &Option<crate::axis::CoordAxis> {
         match self.nodes[i] {
             None => &self.rigid.coord_axis[i],
-            Some(_) => &None,
+            Some(_) => &self.node_axis[i],
         }
     }
     /// Body `i`'s rigid inertia at the deformation in `q`: with stiffening, plus the

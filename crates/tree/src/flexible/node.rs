@@ -10,6 +10,7 @@
 //! in `η` the node frame is displaced by `Φ η` and turned by `Ψ η`.
 
 use super::modal::NodeShape;
+use crate::axis::CoordAxis;
 use crate::spatial::{Mat3, Motion, Transform, Vec3, rotation_about};
 
 /// One rotation stage: about the unit `axis` by `Σₖ coef[k] ηₖ`.
@@ -28,6 +29,10 @@ pub(crate) struct Node {
     pub(crate) phi: Vec<Vec3>,
     /// The rotation stages (none when `Ψ = 0`).
     pub(crate) rotations: Vec<RotationStage>,
+    /// The coordinate axis of a single rotation stage about `±x`, `±y` or `±z` (a beam
+    /// bending about a body axis): its rotation then made and applied by the fast path of
+    /// [`CoordAxis`], row and column `k` exactly `e_k`.
+    pub(crate) coord: Option<CoordAxis>,
 }
 
 /// The node frame from the parent's coordinates, its velocity and velocity-product
@@ -75,10 +80,15 @@ impl Node {
             }
         }
         debug_assert!(rotations.iter().all(|r| r.coef.len() == m));
+        let coord = match rotations.as_slice() {
+            [r] => CoordAxis::of(&r.axis, &Mat3::identity()),
+            _ => None,
+        };
         Self {
             at,
             phi: shape.phi.clone(),
             rotations,
+            coord,
         }
     }
 
@@ -106,6 +116,28 @@ impl Node {
         let vj = Motion::new(Vec3::zeros(), rate);
         let mut w = x.apply_motion(vp) + vj;
         let mut c = w.cross_motion(&vj);
+        if let (Some(ca), [r]) = (&self.coord, self.rotations.as_slice()) {
+            // One rotation about a coordinate axis: the rigid hinges' fast path, and the
+            // node frame `(E, disp)` made at once (the translation stage has `E = 1`).
+            let (mut angle, mut speed) = (0.0, 0.0);
+            for (k, &s) in r.coef.iter().enumerate() {
+                angle += s * eta[k];
+                speed += s * etad[k];
+            }
+            let zero = Vec3::zeros();
+            let xr = ca.transform(angle, &zero, &zero);
+            let vj = Motion::new(r.axis * speed, zero);
+            w = ca.apply_motion(&xr, &w) + vj;
+            c = ca.apply_motion(&xr, &c) + w.cross_motion(&vj);
+            for (k, gk) in g.iter_mut().enumerate() {
+                *gk = ca.apply_motion(&xr, gk) + Motion::new(r.axis * r.coef[k], zero);
+            }
+            return NodeState {
+                x: Transform::new(xr.rot, disp),
+                w,
+                c,
+            };
+        }
         for r in &self.rotations {
             let (mut angle, mut speed) = (0.0, 0.0);
             for (k, &s) in r.coef.iter().enumerate() {
@@ -122,5 +154,167 @@ impl Node {
             x = xr.compose(&x);
         }
         NodeState { x, w, c }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    //! A node turning about a coordinate axis takes the hinges' fast path: its rotation in
+    //! [`Node::state`], and, where the child's hinge turns about the same axis, the child's
+    //! `Xup` in the first pass and the ABA. Both against the general path (the same model
+    //! with the fast paths taken away), to round-off.
+    use super::super::{Beam, FlexData, FlexModel, Flexible, Modes, aba, crba, rnea};
+    use crate::samples::SplitMix;
+    use crate::spatial::{Force, Mat3, Vec3};
+    use crate::{BaseKind, Body, Hinge, ModelBuilder};
+
+    /// A bus with a panel on a hinge about x whose beam (along y, bending along z) turns its
+    /// tip about x; at the tip a second panel on a hinge about x (both fast paths) and a third
+    /// on a hinge about z (the node's only), with the signs of the axes flipped by `sign`.
+    fn model(sign: f64) -> FlexModel {
+        let builder = ModelBuilder::new(BaseKind::Free)
+            .body(Body::new(
+                "bus",
+                20.0,
+                Mat3::from_diagonal(&Vec3::new(3.0, 2.0, 3.5)),
+            ))
+            .body(Body::new(
+                "panel1",
+                1.0,
+                Mat3::from_diagonal(&Vec3::new(0.3, 0.02, 0.31)),
+            ))
+            .body(Body::new(
+                "panel2",
+                2.0,
+                Mat3::from_diagonal(&Vec3::new(0.6, 0.05, 0.62)),
+            ))
+            .body(Body::new(
+                "panel3",
+                1.5,
+                Mat3::from_diagonal(&Vec3::new(0.4, 0.13, 0.5)),
+            ))
+            .hinge(
+                Hinge::revolute("h1", "bus", "panel1", Vec3::x() * sign)
+                    .at(Vec3::new(0.0, 0.5, 0.0)),
+            )
+            .hinge(
+                Hinge::revolute("h2", "panel1", "panel2", Vec3::x() * sign)
+                    .at(Vec3::new(0.0, 2.0, 0.0))
+                    .child_at(Vec3::new(0.0, -0.5, 0.1)),
+            )
+            .hinge(
+                Hinge::revolute("h3", "panel1", "panel3", Vec3::z())
+                    .at(Vec3::new(0.0, 2.0, 0.0))
+                    .child_at(Vec3::new(0.2, -0.4, 0.0)),
+            );
+        let beam = Beam {
+            root: Vec3::zeros(),
+            axis: Vec3::y(),
+            bend: Vec3::z() * sign,
+            length: 2.0,
+            ei: 500.0,
+            rho_a: 5.0,
+            modes: 3,
+        };
+        let flex = [Flexible {
+            body: "panel1".into(),
+            modes: Modes::Beam(beam),
+            damping: 0.01,
+            stiffening: true,
+        }];
+        FlexModel::build(builder, &flex).unwrap()
+    }
+
+    fn close_to(a: &[f64], b: &[f64], tol: f64, what: &str) {
+        let scale = b.iter().fold(1.0_f64, |m, x| m.max(x.abs()));
+        for (x, y) in a.iter().zip(b) {
+            assert!((x - y).abs() <= tol * scale, "{what}: {a:?} vs {b:?}");
+        }
+    }
+
+    fn close(a: &[f64], b: &[f64], what: &str) {
+        close_to(a, b, 1e-13, what);
+    }
+
+    #[test]
+    fn coordinate_axis_nodes_are_the_general_path() {
+        for sign in [1.0, -1.0] {
+            let fast = model(sign);
+            assert!(
+                fast.nodes[2].as_ref().unwrap().coord.is_some(),
+                "node fast path"
+            );
+            assert!(
+                fast.node_axis[2].is_some(),
+                "the x hinge on the node: fast path"
+            );
+            assert!(
+                fast.node_axis[3].is_none(),
+                "the z hinge on the node: general"
+            );
+            let mut general = fast.clone();
+            general.node_axis.iter_mut().for_each(|a| *a = None);
+            for node in general.nodes.iter_mut().flatten() {
+                node.coord = None;
+            }
+            let mut rng = SplitMix(7);
+            let (mut df, mut dg) = (FlexData::new(&fast), FlexData::new(&general));
+            for _ in 0..10 {
+                let mut q = fast.neutral();
+                let nq = fast.rigid().nq();
+                for x in &mut q[7..nq] {
+                    *x = rng.range(-3.0, 3.0);
+                }
+                for x in &mut q[nq..] {
+                    *x = rng.range(-0.05, 0.05);
+                }
+                let v: Vec<f64> = (0..fast.nv()).map(|_| rng.range(-2.0, 2.0)).collect();
+                let a: Vec<f64> = (0..fast.nv()).map(|_| rng.range(-2.0, 2.0)).collect();
+                let f: Vec<Force> = (0..4)
+                    .map(|_| Force::new(rng.vec3(1.0), rng.vec3(1.0)))
+                    .collect();
+                let tf = rnea(&fast, &mut df, &q, &v, &a, Some(&f)).unwrap().clone();
+                let tg = rnea(&general, &mut dg, &q, &v, &a, Some(&f))
+                    .unwrap()
+                    .clone();
+                close(tf.as_slice(), tg.as_slice(), "rnea");
+                for i in 1..4 {
+                    let (xf, xg) = (df.xup[i], dg.xup[i]);
+                    close(xf.rot.as_slice(), xg.rot.as_slice(), "Xup rotation");
+                    close(xf.trans.as_slice(), xg.trans.as_slice(), "Xup translation");
+                    close(&df.v[i].to_array(), &dg.v[i].to_array(), "velocity");
+                    close(
+                        &df.c[i].to_array(),
+                        &dg.c[i].to_array(),
+                        "bias acceleration",
+                    );
+                }
+                close(
+                    df.g[..3]
+                        .iter()
+                        .flat_map(|g| g.to_array())
+                        .collect::<Vec<_>>()
+                        .as_slice(),
+                    dg.g[..3]
+                        .iter()
+                        .flat_map(|g| g.to_array())
+                        .collect::<Vec<_>>()
+                        .as_slice(),
+                    "G",
+                );
+                let mf = crba(&fast, &mut df, &q).unwrap().clone();
+                let mg = crba(&general, &mut dg, &q).unwrap().clone();
+                close(mf.as_slice(), mg.as_slice(), "crba");
+                let af = aba(&fast, &mut df, &q, &v, tf.as_slice(), Some(&f))
+                    .unwrap()
+                    .clone();
+                let ag = aba(&general, &mut dg, &q, &v, tf.as_slice(), Some(&f))
+                    .unwrap()
+                    .clone();
+                close(af.as_slice(), ag.as_slice(), "aba");
+                // The solve's forward error: round-off times the mass matrix's condition.
+                close_to(af.as_slice(), &a, 1e-11, "aba inverts rnea");
+            }
+        }
     }
 }
