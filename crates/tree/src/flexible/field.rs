@@ -49,7 +49,10 @@ fn vec(m: &Mat3) -> Vec3 {
 /// The potential `V = −½ m ρᵀTρ − ρᵀT h − ½ tr(T J)` (`tr(T J) = ½ tr T tr I − tr(T I)`) of
 /// the linear field `f(x) = T x` over a body of inertia `inertia` (about its frame's origin,
 /// body axes), that origin at `rho` from the field's centre: [`FlexModel::field_potential`]
-/// for a caller that has the body's [`FlexModel::deformed_inertia`] already.
+/// for a caller that has the body's [`FlexModel::deformed_inertia`] already. Always inlined:
+/// out of line, the one [`FlexModel::linear_field_on`] makes was computed even where its
+/// caller reads only the wrench (the gravity gradient, twice a flexible body a right-hand side).
+#[inline(always)]
 pub fn potential(inertia: &RigidInertia, t: &Mat3, rho: &Vec3) -> f64 {
     let tj = 0.5 * t.trace() * inertia.inertia.trace() - t.component_mul(&inertia.inertia).sum();
     -0.5 * inertia.mass * rho.dot(&(t * rho)) - rho.dot(&(t * inertia.h)) - 0.5 * tj
