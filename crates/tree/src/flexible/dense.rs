@@ -14,7 +14,10 @@
 ///
 /// The sizes of a body with up to five modes and of a free root without modes are
 /// instances with `n` known (the loops unrolled, no index checks): the same operations in
-/// the same order, so the same bits.
+/// the same order, so the same bits. Always inlined, as [`solve`]: the ABA's instances for a
+/// mode count then pick their sizes with no call (0.3 % of the flexible deployment's
+/// instructions, 0.7 % of its time).
+#[inline(always)]
 pub(crate) fn factor(a: &mut [f64], n: usize) -> bool {
     match n {
         1 => {
@@ -92,6 +95,7 @@ pub(crate) fn backward(l: &[f64], n: usize, b: &mut [f64]) {
 }
 
 /// `b ← A⁻¹ b` with the factor of [`factor`] (the same sizes unrolled).
+#[inline(always)]
 pub(crate) fn solve(l: &[f64], n: usize, b: &mut [f64]) {
     match n {
         1 => b[0] *= l[0],
