@@ -196,7 +196,10 @@ impl GravityGradient {
             let i = l.body;
             let com = match &self.flex {
                 Some(flex) if l.deformable => {
-                    let deformed = flex.deformed_inertia(i, ctx.eta);
+                    // The dynamics' own, made once by the kinematics, where it is current.
+                    let deformed = ctx
+                        .deformed
+                        .map_or_else(|| flex.deformed_inertia(i, ctx.eta), |d| d[i]);
                     *d = deformed;
                     deformed.h / l.mass
                 }

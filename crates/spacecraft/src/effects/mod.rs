@@ -65,7 +65,7 @@ pub use thrusters::{ThrustMode, Thruster, Thrusters};
 use nalgebra::UnitQuaternion;
 use satsim_integrate::{EventAction, EventDirection, SystemError};
 use satsim_tree::flexible::FlexModel;
-use satsim_tree::spatial::{Force, Mat3, Motion, Vec3};
+use satsim_tree::spatial::{Force, Mat3, Motion, RigidInertia, Vec3};
 use satsim_tree::{Data, Model};
 
 /// What an effect requires of the rest of the scene. Unmet needs are scene errors that say
@@ -234,6 +234,11 @@ pub struct Context<'a> {
     pub eta: &'a [f64],
     /// Their rates `η̇`.
     pub etadot: &'a [f64],
+    /// Each body's inertia at its deformation (body axes, about its origin: a stiffened
+    /// beam's [`FlexModel::deformed_inertia`] of `eta`, the rigid model's otherwise), as the
+    /// flexible kinematics made it for the dynamics: `Some` when the poses are current in a
+    /// tree with flexible bodies, `None` otherwise.
+    pub deformed: Option<&'a [RigidInertia]>,
     /// Per hinge (model hinges then rotors): the total torque the hinge must receive to have
     /// zero acceleration, everything else as now (the locked hinges locked): `(M q̈ + C −
     /// Jᵀfext)_k` with `q̈` from hybrid dynamics. A hinge held by friction sticks while the

@@ -84,6 +84,7 @@ impl Simulation {
             v,
             locked,
             hold,
+            flex,
             ..
         } = data;
         let calls = &mut log.calls;
@@ -113,6 +114,7 @@ impl Simulation {
             rotor_rates: &v[nb + *n_user..],
             eta: &x[layout.eta.clone()],
             etadot: &x[layout.etadot.clone()],
+            deformed: flex.as_ref().filter(|_| kin).map(|w| w.data.inertias()),
             hold_torque: hold,
             power,
         };

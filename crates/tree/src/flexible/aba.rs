@@ -144,7 +144,7 @@ fn articulated<'d>(
         let inertia = &if carrier {
             rigid.carrier_inertia[i]
         } else {
-            model.inertia_at(i, q)
+            data.inertia[i]
         };
         let (o, m) = (model.offset[i], model.modes[i]);
         // Read in place: a copy on the stack was read back across its stores' halves, a

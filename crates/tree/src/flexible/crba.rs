@@ -74,7 +74,7 @@ fn mass_matrix(model: &FlexModel, data: &mut FlexData, q: &[f64]) {
     let n = rigid.n_bodies();
     let nv = rigid.nv();
     for i in 0..n {
-        data.ic[i] = model.inertia_at(i, q);
+        data.ic[i] = data.inertia[i];
     }
     for i in (1..n).rev() {
         let p = rigid.parent[i].expect("parent");

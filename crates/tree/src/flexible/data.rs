@@ -27,6 +27,10 @@ pub struct FlexData {
     /// (body coordinates), at `g_offset[i]`.
     pub(crate) g: Vec<Motion>,
     pub(crate) g_offset: Vec<usize>,
+    /// Each body's rigid inertia at the deformation of the last first pass: a stiffened
+    /// beam's [`FlexModel::deformed_inertia`], made once a pass for every algorithm and
+    /// effect that reads it ([`FlexData::inertias`]); the rigid model's otherwise.
+    pub(crate) inertia: Vec<RigidInertia>,
     /// Composite rigid inertias (CRBA).
     pub(crate) ic: Vec<RigidInertia>,
     /// Articulated inertias' frame block `IA` (ABA).
@@ -98,6 +102,7 @@ impl FlexData {
             f: vec![Force::zero(); n],
             g: vec![Motion::zero(); ng],
             g_offset,
+            inertia: model.rigid.bodies.iter().map(|b| b.inertia).collect(),
             ic: vec![RigidInertia::default(); n],
             ia: vec![ArticulatedInertia::default(); n],
             pa: vec![Force::zero(); n],
@@ -121,19 +126,35 @@ impl FlexData {
     }
 }
 
+impl FlexData {
+    /// Each body's inertia (mass, first moment and rotational inertia about its frame's
+    /// origin, body axes) at the elastic coordinates of the last call of a flexible
+    /// algorithm or [`super::forward_kinematics`]: [`FlexModel::deformed_inertia`] of
+    /// those coordinates, made once by their first pass (a simulation's effects read it
+    /// after the kinematics, as the dynamics do).
+    pub fn inertias(&self) -> &[RigidInertia] {
+        &self.inertia
+    }
+}
+
 /// Checks the lengths of `q` and `v`.
 pub(crate) fn check_state(model: &FlexModel, q: &[f64], v: &[f64]) -> Result<(), DynamicsError> {
     check_len("q", q.len(), model.nq())?;
     check_len("v", v.len(), model.nv())
 }
 
-/// Pass 1 of every flexible algorithm: `Xup`, `G`, body velocities `v` and velocity-product
-/// accelerations `c` (`aᵢ = Xupᵢ a_λ + Gᵢ η̈_λ + Sᵢ φ̈ᵢ + cᵢ`). A body on a rigid parent gets
+/// Pass 1 of every flexible algorithm: the stiffened bodies' inertias at `η`, `Xup`, `G`,
+/// body velocities `v` and velocity-product accelerations `c` (`aᵢ = Xupᵢ a_λ + Gᵢ η̈_λ + Sᵢ φ̈ᵢ + cᵢ`). A body on a rigid parent gets
 /// exactly the rigid algorithms' `Xup`, `v` and `c`.
 pub(crate) fn velocities(model: &FlexModel, data: &mut FlexData, q: &[f64], v: &[f64]) {
     let rigid = &model.rigid;
     let (nq, nv) = (rigid.nq(), rigid.nv());
     let (eta, etad) = (&q[nq..], &v[nv..]);
+    for (i, s) in model.stiffening.iter().enumerate() {
+        if s.is_some() {
+            data.inertia[i] = model.inertia_at(i, q);
+        }
+    }
     data.v[0] = base_motion(rigid, v);
     data.c[0] = Motion::zero();
     for i in 1..rigid.n_bodies() {

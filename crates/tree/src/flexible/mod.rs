@@ -83,7 +83,7 @@ pub fn energy(
     let mut t = 0.0;
     for i in 0..rigid.n_bodies() {
         let vi = data.v[i];
-        let mut h = model.inertia_at(i, q).mul_motion(&vi);
+        let mut h = data.inertia[i].mul_motion(&vi);
         for k in 0..model.modes[i] {
             let e = model.offset[i] + k;
             // ½ (vᵀ P η̇ + η̇ᵀ Pᵀ v) adds vᵀ P η̇ once: half of it through h.

@@ -71,7 +71,7 @@ fn inverse<'d>(
             }
             data.a[i] = ai;
         }
-        let inertia = &model.inertia_at(i, q);
+        let inertia = &data.inertia[i];
         let (o, m) = (model.offset[i], model.modes[i]);
         let vi = data.v[i];
         let mut h = inertia.mul_motion(&vi);

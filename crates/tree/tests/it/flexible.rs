@@ -821,3 +821,33 @@ fn centrifugal_stiffening_gives_southwell_coefficient() {
         -a / 0.01
     );
 }
+
+// The first pass makes each body's inertia at the deformation once, for the algorithms
+// and for the effects that read it after the kinematics (`FlexData::inertias`).
+#[test]
+fn the_first_pass_leaves_the_deformed_inertias() {
+    for seed in 0..12u64 {
+        let model = random_flexible(3 + (seed % 6) as usize, BaseKind::Free, seed);
+        let mut rng = SplitMix(seed ^ 0x1e);
+        let mut data = FlexData::new(&model);
+        let mut poses = Data::new(model.rigid());
+        let nq = model.rigid().nq();
+        let same = |data: &FlexData, q: &[f64]| {
+            (0..model.rigid().n_bodies())
+                .all(|i| data.inertias()[i] == model.deformed_inertia(i, &q[nq..]))
+        };
+        let (q, v, a, _) = random_state(&model, &mut rng);
+        flexible::forward_kinematics(&model, &mut data, &mut poses, &q, &v).unwrap();
+        assert!(same(&data, &q), "seed {seed}: forward kinematics");
+        // Each algorithm's own first pass, at another deformation.
+        for pass in 0..3 {
+            let (q, v, _, _) = random_state(&model, &mut rng);
+            match pass {
+                0 => drop(flexible::aba(&model, &mut data, &q, &v, &a, None).unwrap()),
+                1 => drop(flexible::rnea(&model, &mut data, &q, &v, &a, None).unwrap()),
+                _ => drop(flexible::crba(&model, &mut data, &q).unwrap()),
+            }
+            assert!(same(&data, &q), "seed {seed}: pass {pass}");
+        }
+    }
+}
