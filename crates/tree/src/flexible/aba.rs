@@ -131,50 +131,24 @@ fn articulated<'d>(
     if !first_pass_current {
         velocities(model, data, q, v);
     }
-    let (nq, nv) = (rigid.nq(), rigid.nv());
+    let nv = rigid.nv();
     // Balanced rotors ride on their rigid carriers as gyrostats (see `crate::aba::aba`):
     // not bodies here, their carriers start from the inertias with the rotors locked.
     let fold = model.fold_rotors;
-    // Pass 1 (after the velocities): each body's own extended inertia and bias.
+    // Pass 1 (after the velocities): each body's own extended inertia and bias, an instance
+    // for the body's mode count as pass 2's.
     for i in 0..n {
         if fold && rigid.is_gyrostat[i] {
             continue;
         }
-        let carrier = fold && model.modes[i] == 0;
-        let inertia = &if carrier {
-            rigid.carrier_inertia[i]
-        } else {
-            data.inertia[i]
-        };
-        let (o, m) = (model.offset[i], model.modes[i]);
-        // Read in place: a copy on the stack was read back across its stores' halves, a
-        // stalled store forwarding at every body (`perf`).
-        let vi = &data.v[i];
-        let mut h = inertia.mul_motion(vi);
-        let co = data.c_offset[i];
-        for k in 0..m {
-            let pk = model.momentum_at(i, q, k);
-            h += pk * v[nv + o + k];
-            data.b[o + k] = pk;
-            data.pe[o + k] =
-                model.damping[o + k] * v[nv + o + k] + model.stiffness[o + k] * q[nq + o + k];
-            for l in 0..m {
-                data.cm[co + k * m + l] = if k == l { 1.0 } else { 0.0 };
-            }
+        match model.modes[i] {
+            0 => own_terms(model, data, i, 0, q, v, fext),
+            1 => own_terms(model, data, i, 1, q, v, fext),
+            2 => own_terms(model, data, i, 2, q, v, fext),
+            3 => own_terms(model, data, i, 3, q, v, fext),
+            4 => own_terms(model, data, i, 4, q, v, fext),
+            m => own_terms(model, data, i, m, q, v, fext),
         }
-        data.ia[i] = if carrier {
-            rigid.carrier_ia[i]
-        } else {
-            ArticulatedInertia::from(*inertia)
-        };
-        // Built in a local, stored once: the wrench's subtraction read `data.pa[i]` back
-        // from the stiffening's fresh stores (a stalled store forwarding, `perf`).
-        let mut pa = vi.cross_force(&h);
-        model.add_stiffening(i, q, v, vi, &mut pa, &mut data.pe[o..o + m]);
-        if let Some(fe) = fext {
-            pa -= fe[i];
-        }
-        data.pa[i] = pa;
     }
     if fold {
         fold_gyrostats(model, data, v, tau, fext, locked);
@@ -290,6 +264,59 @@ fn articulated<'d>(
         }
     }
     Ok(&data.ddq)
+}
+
+/// Pass 1 for body `i` with `m` modes: its extended inertia `[[I, P], [Pᵀ, 1]]` at its
+/// deformation and its bias `[pA; pₑ]` (velocity products, stiffening, springs, dampers,
+/// the external wrench). Inlined with `m` known where the caller dispatches on it.
+#[inline(always)]
+#[allow(clippy::needless_range_loop)]
+fn own_terms(
+    model: &FlexModel,
+    data: &mut FlexData,
+    i: usize,
+    m: usize,
+    q: &[f64],
+    v: &[f64],
+    fext: Option<&[Force]>,
+) {
+    let rigid = &model.rigid;
+    let (nq, nv) = (rigid.nq(), rigid.nv());
+    let carrier = model.fold_rotors && m == 0;
+    let inertia = &if carrier {
+        rigid.carrier_inertia[i]
+    } else {
+        data.inertia[i]
+    };
+    let o = model.offset[i];
+    let (eta, etad) = (&q[nq + o..][..m], &v[nv + o..][..m]);
+    // Read in place: a copy on the stack was read back across its stores' halves, a
+    // stalled store forwarding at every body (`perf`).
+    let vi = &data.v[i];
+    let mut h = inertia.mul_motion(vi);
+    let co = data.c_offset[i];
+    for k in 0..m {
+        let pk = model.momentum_of(i, eta, k);
+        h += pk * etad[k];
+        data.b[o + k] = pk;
+        data.pe[o + k] = model.damping[o + k] * etad[k] + model.stiffness[o + k] * eta[k];
+        for l in 0..m {
+            data.cm[co + k * m + l] = if k == l { 1.0 } else { 0.0 };
+        }
+    }
+    data.ia[i] = if carrier {
+        rigid.carrier_ia[i]
+    } else {
+        ArticulatedInertia::from(*inertia)
+    };
+    // Built in a local, stored once: the wrench's subtraction read `data.pa[i]` back from
+    // the stiffening's fresh stores (a stalled store forwarding, `perf`).
+    let mut pa = vi.cross_force(&h);
+    model.add_stiffening_of(i, eta, etad, vi, &mut pa, &mut data.pe[o..o + m]);
+    if let Some(fe) = fext {
+        pa -= fe[i];
+    }
+    data.pa[i] = pa;
 }
 
 /// Pass 2 for body `i` with `m` modes: its hinge (unless locked) and modes eliminated

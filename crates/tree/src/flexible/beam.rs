@@ -353,11 +353,12 @@ impl Stiffening {
     }
 }
 
-// Row-major m x m matrices against m-vectors: index loops read best.
+// Row-major m x m matrices against m-vectors: index loops read best. Always inlined: the
+// flexible algorithms' instances for a body's mode count unroll them (the same sums).
 #[allow(clippy::needless_range_loop)]
 impl Stiffening {
     /// `[ηᵀ J₀ η, ηᵀ J₁ η, ηᵀ η]` and their rates `[2 η̇ᵀ J₀ η, 2 η̇ᵀ J₁ η, 2 η̇ᵀ η]`.
-    #[inline]
+    #[inline(always)]
     pub(crate) fn forms(&self, eta: &[f64], etad: &[f64]) -> ([f64; 3], [f64; 3]) {
         let m = eta.len();
         let (mut out, mut rate) = ([0.0; 3], [0.0; 3]);
@@ -379,12 +380,12 @@ impl Stiffening {
     /// `G = A₀ s₀ + A₁ s₁ − A₂ s₂` (`s` from `forms`): the body's inertia is
     /// `I − G`, the foreshortening taking `½ ωᵀ (A₀ s₀ + A₁ s₁) ω` of kinetic energy and the
     /// deflection adding `½ ωᵀ A₂ ω s₂`.
-    #[inline]
+    #[inline(always)]
     pub(crate) fn g(&self, s: &[f64; 3]) -> crate::spatial::Mat3 {
         self.a0 * s[0] + self.a1 * s[1] - self.a2 * s[2]
     }
     /// `(J₀ x)ₖ`.
-    #[inline]
+    #[inline(always)]
     pub(crate) fn j0_row(&self, k: usize, x: &[f64]) -> f64 {
         let m = x.len();
         let mut s = 0.0;
@@ -394,7 +395,7 @@ impl Stiffening {
         s
     }
     /// `(J₁ x)ₖ`.
-    #[inline]
+    #[inline(always)]
     pub(crate) fn j1_row(&self, k: usize, x: &[f64]) -> f64 {
         let m = x.len();
         let mut s = 0.0;
@@ -404,7 +405,7 @@ impl Stiffening {
         s
     }
     /// `xᵀ J₀ y`.
-    #[inline]
+    #[inline(always)]
     pub(crate) fn j0_form(&self, x: &[f64], y: &[f64]) -> f64 {
         (0..x.len()).map(|k| x[k] * self.j0_row(k, y)).sum()
     }
@@ -412,7 +413,7 @@ impl Stiffening {
     /// frame moving at `v = [ω; v_O]`: `K_g(v) = (ωᵀ A₀ ω + (ω × a) · v_O) J₀ + (ωᵀ A₁ ω) J₁`,
     /// the axial load of the centripetal acceleration of the sections (about the frame
     /// origin, `A₀` and `A₁`) and of the frame origin's own velocity product `ω × v_O`.
-    #[inline]
+    #[inline(always)]
     pub(crate) fn add_force(&self, v: &crate::spatial::Motion, eta: &[f64], out: &mut [f64]) {
         let m = eta.len();
         let omega = &v.ang;

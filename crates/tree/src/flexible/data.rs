@@ -150,9 +150,17 @@ pub(crate) fn velocities(model: &FlexModel, data: &mut FlexData, q: &[f64], v: &
     let rigid = &model.rigid;
     let (nq, nv) = (rigid.nq(), rigid.nv());
     let (eta, etad) = (&q[nq..], &v[nv..]);
+    // Instances for the common mode counts (the loops unrolled, the same sums).
     for (i, s) in model.stiffening.iter().enumerate() {
         if s.is_some() {
-            data.inertia[i] = model.inertia_at(i, q);
+            let (o, m) = (model.offset[i], model.modes[i]);
+            data.inertia[i] = match m {
+                1 => model.deformed_of(i, &eta[o..][..1]),
+                2 => model.deformed_of(i, &eta[o..][..2]),
+                3 => model.deformed_of(i, &eta[o..][..3]),
+                4 => model.deformed_of(i, &eta[o..][..4]),
+                _ => model.deformed_of(i, &eta[o..][..m]),
+            };
         }
     }
     data.v[0] = base_motion(rigid, v);

@@ -530,9 +530,14 @@ impl FlexModel {
     }
     #[inline(always)]
     fn deformed(&self, i: usize, eta: &[f64]) -> RigidInertia {
+        self.deformed_of(i, &eta[self.offset[i]..][..self.modes[i]])
+    }
+    /// [`Self::deformed_inertia`] from body `i`'s own elastic coordinates `eta` (its `mᵢ`):
+    /// inlined where the caller knows `mᵢ`, its loops unrolled (the same sums).
+    #[inline(always)]
+    pub(crate) fn deformed_of(&self, i: usize, eta: &[f64]) -> RigidInertia {
         let mut inertia = self.rigid.bodies[i].inertia;
         if let Some(s) = &self.stiffening[i] {
-            let eta = &eta[self.offset[i]..][..self.modes[i]];
             let (f, _) = s.forms(eta, eta);
             inertia.inertia -= s.g(&f);
             inertia.h -= s.axis * (0.5 * f[0]);
@@ -549,12 +554,16 @@ impl FlexModel {
     /// across its stores' halves (a stalled store forwarding per mode, `perf`).
     #[inline(always)]
     pub(crate) fn momentum_at(&self, i: usize, q: &[f64], k: usize) -> Force {
+        let eta = &q[self.rigid.nq() + self.offset[i]..][..self.modes[i]];
+        self.momentum_of(i, eta, k)
+    }
+    /// [`Self::momentum_at`] from body `i`'s own elastic coordinates `eta` (its `mᵢ`, as
+    /// [`Self::deformed_of`]).
+    #[inline(always)]
+    pub(crate) fn momentum_of(&self, i: usize, eta: &[f64], k: usize) -> Force {
         let pk = self.momentum[self.offset[i] + k];
         match &self.stiffening[i] {
-            Some(s) => {
-                let eta = &q[self.rigid.nq() + self.offset[i]..][..self.modes[i]];
-                pk - s.shortening * s.j0_row(k, eta)
-            }
+            Some(s) => pk - s.shortening * s.j0_row(k, eta),
             None => pk,
         }
     }
@@ -576,10 +585,24 @@ impl FlexModel {
         frame: &mut Force,
         modal: &mut [f64],
     ) {
+        let (o, m) = (self.offset[i], self.modes[i]);
+        let eta = &q[self.rigid.nq() + o..][..m];
+        let etad = &v[self.rigid.nv() + o..][..m];
+        self.add_stiffening_of(i, eta, etad, vi, frame, modal);
+    }
+    /// [`Self::add_stiffening`] from body `i`'s own elastic coordinates and rates (its `mᵢ`,
+    /// as [`Self::deformed_of`]).
+    #[inline(always)]
+    pub(crate) fn add_stiffening_of(
+        &self,
+        i: usize,
+        eta: &[f64],
+        etad: &[f64],
+        vi: &Motion,
+        frame: &mut Force,
+        modal: &mut [f64],
+    ) {
         if let Some(s) = &self.stiffening[i] {
-            let (o, m) = (self.offset[i], self.modes[i]);
-            let eta = &q[self.rigid.nq() + o..][..m];
-            let etad = &v[self.rigid.nv() + o..][..m];
             let (_, rate) = s.forms(eta, etad);
             let mut idot = RigidInertia {
                 mass: 0.0,
