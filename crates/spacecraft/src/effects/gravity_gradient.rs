@@ -265,6 +265,34 @@ impl GravityGradient {
         }
     }
 
+    /// [`Self::load`] for deformable body `n` of `loaded`: the field over its deformed mass
+    /// (its inertia from `place`: `full` only has deformable bodies), its origin at `ρ` from
+    /// the centre of mass; returns `∂V/∂t` with `POWER`. Out of line, so that the rigid
+    /// bodies' loop keeps its code: inlined, the rigid deployment's gravity gradient took
+    /// 1.2 % more instructions (callgrind), the flexible one's no fewer.
+    #[inline(never)]
+    #[allow(clippy::too_many_arguments)]
+    fn load_deformable<const POWER: bool>(
+        &self,
+        ctx: &Context,
+        forces: &mut Forces,
+        flex: &FlexModel,
+        n: usize,
+        rho: &Vec3,
+        t: &Mat3,
+        t_dot: &Mat3,
+    ) -> f64 {
+        let i = self.loaded[n].body;
+        let inertia = &self.deformed[n];
+        let load = flex.linear_field_on(i, inertia, ctx.eta, t, rho, &mut forces.elastic);
+        forces.add_wrench(i, load.wrench);
+        if POWER {
+            potential(inertia, t_dot, rho)
+        } else {
+            0.0
+        }
+    }
+
     /// Adds every loaded body's couple (and, for `full`, tidal force) to `forces`; with
     /// `POWER`, returns `∂V/∂t` from the same terms (else 0: nothing reads it this pass, and
     /// its terms cost about as much as the couples). `k = μ/r³`, `e` the local vertical.
@@ -292,16 +320,10 @@ impl GravityGradient {
             let rot = &ctx.data.rotation[i];
             let eb = rot.tr_mul(&e);
             if let Some(flex) = self.flex.as_ref().filter(|_| l.deformable) {
-                // The field over the deformed mass (its inertia from `place`: `full` only has
-                // deformable bodies), its origin at `ρ` from the centre of mass.
-                let inertia = &self.deformed[n];
                 let rho = rot.tr_mul(&(ctx.data.position[i] - com));
                 let (t, t_dot) = field(k, &eb, k_dot, &rot.tr_mul(&e_dot));
-                let load = flex.linear_field_on(i, inertia, ctx.eta, &t, &rho, &mut forces.elastic);
-                forces.add_wrench(i, load.wrench);
-                if POWER {
-                    field_power += potential(inertia, &t_dot, &rho);
-                }
+                field_power +=
+                    self.load_deformable::<POWER>(ctx, forces, flex, n, &rho, &t, &t_dot);
                 continue;
             }
             let ie = l.inertia * eb;
