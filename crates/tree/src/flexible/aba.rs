@@ -41,11 +41,11 @@ pub fn aba<'d>(
     articulated(model, data, q, v, tau, fext, None, false)
 }
 
-/// As [`aba`], reusing the first pass (`Xup`, `G`, velocities, velocity products) that
-/// [`super::forward_kinematics`] (or another flexible algorithm) left in `data`, which must
-/// be that of this `q` and `v`: the simulation's right-hand side computes the poses for its
-/// effects first, and this spares it a second pass (about 6 % of the flexible deployment's
-/// instructions). The result is bit for bit [`aba`]'s.
+/// As [`aba`], reusing the first pass (deformed inertias, `Xup`, `G`, velocities, velocity
+/// products) that [`super::forward_kinematics`] (or another flexible algorithm) left in
+/// `data`, which must be that of this `q` and `v`: the simulation's right-hand side
+/// computes the poses for its effects first, and this spares it a second pass (about 6 % of
+/// the flexible deployment's instructions). The result is bit for bit [`aba`]'s.
 ///
 /// ```
 /// use satsim_tree::flexible::{aba, aba_with_kinematics, forward_kinematics, Beam, FlexData, FlexModel, Flexible, Modes};

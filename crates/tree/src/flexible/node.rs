@@ -20,6 +20,19 @@ pub(crate) struct RotationStage {
     pub(crate) coef: Vec<f64>,
 }
 
+impl RotationStage {
+    /// The stage's angle `Σₖ coef[k] ηₖ` and its rate `Σₖ coef[k] η̇ₖ`.
+    #[inline(always)]
+    fn turn(&self, eta: &[f64], etad: &[f64]) -> (f64, f64) {
+        let (mut angle, mut speed) = (0.0, 0.0);
+        for (k, &s) in self.coef.iter().enumerate() {
+            angle += s * eta[k];
+            speed += s * etad[k];
+        }
+        (angle, speed)
+    }
+}
+
 /// A child hinge's node on its flexible parent (parent body frame).
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct Node {
@@ -119,11 +132,7 @@ impl Node {
         if let (Some(ca), [r]) = (&self.coord, self.rotations.as_slice()) {
             // One rotation about a coordinate axis: the rigid hinges' fast path, and the
             // node frame `(E, disp)` made at once (the translation stage has `E = 1`).
-            let (mut angle, mut speed) = (0.0, 0.0);
-            for (k, &s) in r.coef.iter().enumerate() {
-                angle += s * eta[k];
-                speed += s * etad[k];
-            }
+            let (angle, speed) = r.turn(eta, etad);
             let zero = Vec3::zeros();
             let xr = ca.transform(angle, &zero, &zero);
             let vj = Motion::new(r.axis * speed, zero);
@@ -139,11 +148,7 @@ impl Node {
             };
         }
         for r in &self.rotations {
-            let (mut angle, mut speed) = (0.0, 0.0);
-            for (k, &s) in r.coef.iter().enumerate() {
-                angle += s * eta[k];
-                speed += s * etad[k];
-            }
+            let (angle, speed) = r.turn(eta, etad);
             let xr = Transform::new(rotation_about(&r.axis, angle).transpose(), Vec3::zeros());
             let vj = Motion::new(r.axis * speed, Vec3::zeros());
             w = xr.apply_motion(&w) + vj;
