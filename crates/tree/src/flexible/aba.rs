@@ -295,13 +295,18 @@ fn own_terms(
     let vi = &data.v[i];
     let mut h = inertia.mul_motion(vi);
     let co = data.c_offset[i];
+    // The body's entries as slices of their length (`m` known in the instances): indexed
+    // without bounds checks, here and in the passes below.
+    let (b, pe) = (&mut data.b[o..][..m], &mut data.pe[o..][..m]);
+    let cm = &mut data.cm[co..][..m * m];
+    let (damping, stiffness) = (&model.damping[o..][..m], &model.stiffness[o..][..m]);
     for k in 0..m {
         let pk = model.momentum_of(i, eta, k);
         h += pk * etad[k];
-        data.b[o + k] = pk;
-        data.pe[o + k] = model.damping[o + k] * etad[k] + model.stiffness[o + k] * eta[k];
+        b[k] = pk;
+        pe[k] = damping[k] * etad[k] + stiffness[k] * eta[k];
         for l in 0..m {
-            data.cm[co + k * m + l] = if k == l { 1.0 } else { 0.0 };
+            cm[k * m + l] = if k == l { 1.0 } else { 0.0 };
         }
     }
     data.ia[i] = if carrier {
@@ -312,7 +317,7 @@ fn own_terms(
     // Built in a local, stored once: the wrench's subtraction read `data.pa[i]` back from
     // the stiffening's fresh stores (a stalled store forwarding, `perf`).
     let mut pa = vi.cross_force(&h);
-    model.add_stiffening_of(i, eta, etad, vi, &mut pa, &mut data.pe[o..o + m]);
+    model.add_stiffening_of(i, eta, etad, vi, &mut pa, pe);
     if let Some(fe) = fext {
         pa -= fe[i];
     }
@@ -341,24 +346,27 @@ fn eliminate(
     let d = h + m;
     let (uo, dof, co) = (data.u_offset[i], data.d_offset[i], data.c_offset[i]);
     let s = joint.s;
-    let dm = &mut data.d[dof..dof + d * d];
+    let dm = &mut data.d[dof..][..d * d];
+    let (u_col, u) = (&mut data.u_col[uo..][..d], &mut data.u[uo..][..d]);
     if h == 1 {
         let u0 = data.ia[i].mul_motion(&s);
-        data.u_col[uo] = u0;
-        data.u[uo] = tau[joint.dof] - s.dot(&data.pa[i]);
+        u_col[0] = u0;
+        u[0] = tau[joint.dof] - s.dot(&data.pa[i]);
         dm[0] = s.dot(&u0) + joint.armature();
     }
+    let (b, pe) = (&data.b[o..][..m], &data.pe[o..][..m]);
+    let (cm, tau_e) = (&data.cm[co..][..m * m], &tau[nv + o..][..m]);
     for k in 0..m {
-        let bk = data.b[o + k];
-        data.u_col[uo + h + k] = bk;
-        data.u[uo + h + k] = tau[nv + o + k] - data.pe[o + k];
+        let bk = b[k];
+        u_col[h + k] = bk;
+        u[h + k] = tau_e[k] - pe[k];
         if h == 1 {
             let sb = s.dot(&bk);
             dm[(1 + k) * d] = sb;
             dm[1 + k] = sb;
         }
         for l in 0..m {
-            dm[(h + k) * d + h + l] = data.cm[co + k * m + l];
+            dm[(h + k) * d + h + l] = cm[k * m + l];
         }
     }
     let pivot = if d > 0 { dm[0] } else { 0.0 };
@@ -370,25 +378,26 @@ fn eliminate(
     }
     // IA − U D⁻¹ Uᵀ = IA − Σⱼ wⱼ wⱼᵀ / dⱼ with W Lᵀ = U (forward substitution on the
     // columns, `D = L diag(d) Lᵀ`).
-    let l = &data.d[dof..dof + d * d];
+    let l = &data.d[dof..][..d * d];
+    let (u_col, cols) = (&data.u_col[uo..][..d], &mut data.cols[..d]);
     let mut ia = data.ia[i];
     for j in 0..d {
-        let mut w = data.u_col[uo + j];
+        let mut w = u_col[j];
         for k in 0..j {
-            w -= data.cols[k] * l[j * d + k];
+            w -= cols[k] * l[j * d + k];
         }
-        data.cols[j] = w;
+        cols[j] = w;
         ia.sub_outer(&w, l[j * d + j]);
     }
     // pa = pA + IAᵃ c + U D⁻¹ u.
     let y = &mut data.tmp[..d];
-    y.copy_from_slice(&data.u[uo..uo + d]);
+    y.copy_from_slice(&data.u[uo..][..d]);
     if d > 0 {
         dense::solve(l, d, y);
     }
     let mut pa = data.pa[i] + ia.mul_motion(&data.c[i]);
     for j in 0..d {
-        pa += data.u_col[uo + j] * data.tmp[j];
+        pa += u_col[j] * y[j];
     }
     Ok((ia, pa))
 }
@@ -414,13 +423,15 @@ fn to_parent(
     accumulate_inv_transform(axis, ia, &x, &mut data.ia[p]);
     data.pa[p] += inv_apply_force(axis, &x, pa);
     let (op, cp) = (model.offset[p], data.c_offset[p]);
-    let go = data.g_offset[i];
+    let g = &data.g[data.g_offset[i]..][..mp];
+    let (b, pe) = (&mut data.b[op..][..mp], &mut data.pe[op..][..mp]);
+    let cm = &mut data.cm[cp..][..mp * mp];
     for k in 0..mp {
-        let h = ia.mul_motion(&data.g[go + k]);
-        data.b[op + k] += inv_apply_force(axis, &x, &h);
-        data.pe[op + k] += data.g[go + k].dot(pa);
+        let h = ia.mul_motion(&g[k]);
+        b[k] += inv_apply_force(axis, &x, &h);
+        pe[k] += g[k].dot(pa);
         for l in 0..mp {
-            data.cm[cp + l * mp + k] += data.g[go + l].dot(&h);
+            cm[l * mp + k] += g[l].dot(&h);
         }
     }
 }
@@ -441,15 +452,17 @@ fn outward(model: &FlexModel, data: &mut FlexData, i: usize, m: usize, locked: O
     let (uo, dof) = (data.u_offset[i], data.d_offset[i]);
     let (op, mp, go) = (model.offset[p], model.modes[p], data.g_offset[i]);
     let mut a = apply_motion(model.frame_axis(i), &data.xup[i], &data.a[p]) + data.c[i];
+    let (g, ddq_p) = (&data.g[go..][..mp], &data.ddq.as_slice()[nv + op..][..mp]);
     for k in 0..mp {
-        a += data.g[go + k] * data.ddq[nv + op + k];
+        a += g[k] * ddq_p[k];
     }
     let y = &mut data.tmp[..d];
+    let (u, u_col) = (&data.u[uo..][..d], &data.u_col[uo..][..d]);
     for j in 0..d {
-        y[j] = data.u[uo + j] - a.dot(&data.u_col[uo + j]);
+        y[j] = u[j] - a.dot(&u_col[j]);
     }
     if d > 0 {
-        dense::solve(&data.d[dof..dof + d * d], d, y);
+        dense::solve(&data.d[dof..][..d * d], d, y);
     }
     if h == 1 {
         data.ddq[joint.dof] = y[0];
