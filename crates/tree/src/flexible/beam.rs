@@ -361,12 +361,15 @@ impl Stiffening {
     #[inline(always)]
     pub(crate) fn forms(&self, eta: &[f64], etad: &[f64]) -> ([f64; 3], [f64; 3]) {
         let m = eta.len();
+        // Sliced to `m × m` first: with `m` known where this is inlined, the loops index
+        // without bounds checks (as `j0_row`, `j1_row` and `add_force` below).
+        let (j0, j1, etad) = (&self.j0[..m * m], &self.j1[..m * m], &etad[..m]);
         let (mut out, mut rate) = ([0.0; 3], [0.0; 3]);
         for k in 0..m {
             let (mut a, mut b) = (0.0, 0.0);
             for l in 0..m {
-                a += self.j0[k * m + l] * eta[l];
-                b += self.j1[k * m + l] * eta[l];
+                a += j0[k * m + l] * eta[l];
+                b += j1[k * m + l] * eta[l];
             }
             out[0] += eta[k] * a;
             out[1] += eta[k] * b;
@@ -388,9 +391,10 @@ impl Stiffening {
     #[inline(always)]
     pub(crate) fn j0_row(&self, k: usize, x: &[f64]) -> f64 {
         let m = x.len();
+        let row = &self.j0[k * m..][..m];
         let mut s = 0.0;
         for l in 0..m {
-            s += self.j0[k * m + l] * x[l];
+            s += row[l] * x[l];
         }
         s
     }
@@ -398,9 +402,10 @@ impl Stiffening {
     #[inline(always)]
     pub(crate) fn j1_row(&self, k: usize, x: &[f64]) -> f64 {
         let m = x.len();
+        let row = &self.j1[k * m..][..m];
         let mut s = 0.0;
         for l in 0..m {
-            s += self.j1[k * m + l] * x[l];
+            s += row[l] * x[l];
         }
         s
     }
@@ -420,10 +425,11 @@ impl Stiffening {
         let w0 = omega.dot(&(self.a0 * omega)) + omega.cross(&self.axis).dot(&v.lin);
         let w1 = omega.dot(&(self.a1 * omega));
         let w2 = omega.dot(&(self.a2 * omega));
+        let (j0, j1, out) = (&self.j0[..m * m], &self.j1[..m * m], &mut out[..m]);
         for k in 0..m {
             let mut s = -w2 * eta[k];
             for l in 0..m {
-                s += (w0 * self.j0[k * m + l] + w1 * self.j1[k * m + l]) * eta[l];
+                s += (w0 * j0[k * m + l] + w1 * j1[k * m + l]) * eta[l];
             }
             out[k] += s;
         }
