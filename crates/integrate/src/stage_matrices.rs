@@ -464,7 +464,8 @@ impl Tarjan {
         }
     }
 
-    /// Depth-first from `v`; the depth is at most the number of nodes (under 100 states).
+    /// Depth-first from `v`; the recursion is at most as deep as the coupled states are many,
+    /// which the dense route's cost rule keeps to a few hundred.
     fn visit(&mut self, v: usize, m: usize, reads: &[bool], bounds: &mut Vec<usize>) {
         self.index[v] = self.next;
         self.low[v] = self.next;
