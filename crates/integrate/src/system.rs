@@ -229,7 +229,9 @@ pub trait System {
     ///
     /// The modification should be of the size of the local error: it is not
     /// seen by the error control. If it changes `x`, FSAL methods re-evaluate
-    /// the derivative at the start of the next step (one extra `rhs` call).
+    /// the derivative at the start of the next step (one extra `rhs` call); Radau IIA's
+    /// error estimate keeps the collocation polynomial's slope there, which is already an
+    /// approximation of that size.
     fn project(&mut self, _x: &mut [f64]) {}
 
     /// Per-component weights of the error norm, written into `w`
@@ -254,6 +256,14 @@ pub trait System {
     ///
     /// [`IntegrateError::InvalidOptions`]: crate::IntegrateError::InvalidOptions
     fn quadratures(&self, _q: &mut [bool]) {}
+
+    /// Whether [`System::rhs`] at `(t, x)` would return a slope the system holds already,
+    /// evaluated for its own ends (its event functions at a step's end, say), at no cost.
+    /// Radau IIA's error estimate then takes `f` there, where it otherwise takes its
+    /// collocation polynomial's slope. Default: false.
+    fn holds_rhs(&self, _t: f64, _x: &[f64]) -> bool {
+        false
+    }
 
     /// Analytic Jacobian `jac[i * n + j] = ∂f_i/∂x_j` (row-major), used by
     /// implicit methods. Return `Ok(false)` (the default) to let the
@@ -397,6 +407,9 @@ impl<S: System + ?Sized> System for &mut S {
     }
     fn quadratures(&self, q: &mut [bool]) {
         (**self).quadratures(q)
+    }
+    fn holds_rhs(&self, t: f64, x: &[f64]) -> bool {
+        (**self).holds_rhs(t, x)
     }
     fn jacobian(&mut self, t: f64, x: &[f64], jac: &mut [f64]) -> Result<bool, SystemError> {
         (**self).jacobian(t, x, jac)

@@ -173,6 +173,14 @@ impl Simulation {
         same
     }
 
+    /// Whether the event functions evaluated the right-hand side at this very `(t, x)`,
+    /// reused or not ([`Self::reuse_event_slopes`]): the integrator asks for `f` there
+    /// alike either way, so that the switch moves no bits.
+    pub(super) fn holds_ahead(&self, t: f64, x: &[f64]) -> bool {
+        let a = &self.data.ahead;
+        a.valid && a.same_state(t, x)
+    }
+
     /// Whether a right-hand side at the state where the event functions just evaluated it
     /// reuses it (the default), or computes it again: the results are the same bit for bit
     /// either way (tested), so this serves only to check that or to time the gain.

@@ -255,6 +255,9 @@ impl<C: SimCell> System for Shared<C> {
     fn project(&mut self, x: &mut [f64]) {
         self.0.sim_mut().project(x)
     }
+    fn holds_rhs(&self, t: f64, x: &[f64]) -> bool {
+        self.0.sim().holds_rhs(t, x)
+    }
     fn error_weights(&self, w: &mut [f64]) {
         self.0.sim().error_weights(w)
     }

@@ -15,6 +15,11 @@ impl System for Simulation {
         self.right_hand_side(t, x, dx)
     }
 
+    /// The slope the event functions kept at this very state (`ahead.rs`).
+    fn holds_rhs(&self, t: f64, x: &[f64]) -> bool {
+        self.holds_ahead(t, x)
+    }
+
     /// The energy budget's work states are bookkeeping: they stay out of the error control,
     /// so that tracking them leaves the steps (and every other state) as they were. So do the
     /// elastic coordinates where the builder says (`elastic_error(false)`).
