@@ -64,6 +64,29 @@ impl RealLu {
 
     /// Factors the matrix set; false when a pivot is zero or anything is not finite.
     pub fn factor(&mut self) -> bool {
+        self.factor_on(crate::wide::avx2())
+    }
+
+    /// [`Self::factor`] on the instance compiled for AVX2 where `wide` and the CPU has it:
+    /// the same bits (`crate::wide`).
+    #[allow(unsafe_code)]
+    pub fn factor_on(&mut self, wide: bool) -> bool {
+        #[cfg(target_arch = "x86_64")]
+        if wide && crate::wide::cpu_avx2() {
+            // SAFETY: `factor_avx2` requires only a CPU with AVX2, which `cpu_avx2` found.
+            return unsafe { self.factor_avx2() };
+        }
+        self.factor_in()
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn factor_avx2(&mut self) -> bool {
+        self.factor_in()
+    }
+
+    #[inline(always)]
+    fn factor_in(&mut self) -> bool {
         let n = self.n;
         if !self.a[..n * n].iter().all(|v| v.is_finite()) {
             return false;
@@ -111,6 +134,30 @@ impl RealLu {
 
     /// Overwrites `b` with `A⁻¹ b`.
     pub fn solve(&self, b: &mut [f64]) {
+        self.solve_on(crate::wide::avx2(), b);
+    }
+
+    /// [`Self::solve`] on the instance compiled for AVX2 where `wide` and the CPU has it: the
+    /// same bits.
+    #[allow(unsafe_code)]
+    pub fn solve_on(&self, wide: bool, b: &mut [f64]) {
+        #[cfg(target_arch = "x86_64")]
+        if wide && crate::wide::cpu_avx2() {
+            // SAFETY: `solve_avx2` requires only a CPU with AVX2, which `cpu_avx2` found.
+            unsafe { self.solve_avx2(b) };
+            return;
+        }
+        self.solve_in(b);
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn solve_avx2(&self, b: &mut [f64]) {
+        self.solve_in(b);
+    }
+
+    #[inline(always)]
+    fn solve_in(&self, b: &mut [f64]) {
         let n = self.n;
         for w in self.bounds.windows(2) {
             let (s, e) = (w[0], w[1]);
@@ -198,6 +245,29 @@ impl ComplexLu {
 
     /// Factors the matrix set; false when a pivot is zero or anything is not finite.
     pub fn factor(&mut self) -> bool {
+        self.factor_on(crate::wide::avx2())
+    }
+
+    /// [`Self::factor`] on the instance compiled for AVX2 where `wide` and the CPU has it:
+    /// the same bits.
+    #[allow(unsafe_code)]
+    pub fn factor_on(&mut self, wide: bool) -> bool {
+        #[cfg(target_arch = "x86_64")]
+        if wide && crate::wide::cpu_avx2() {
+            // SAFETY: `factor_avx2` requires only a CPU with AVX2, which `cpu_avx2` found.
+            return unsafe { self.factor_avx2() };
+        }
+        self.factor_in()
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn factor_avx2(&mut self) -> bool {
+        self.factor_in()
+    }
+
+    #[inline(always)]
+    fn factor_in(&mut self) -> bool {
         let n = self.n;
         if !self.re[..n * n]
             .iter()
@@ -260,6 +330,30 @@ impl ComplexLu {
 
     /// Overwrites `(br, bi)` with `A⁻¹ (br + i bi)`.
     pub fn solve(&self, br: &mut [f64], bi: &mut [f64]) {
+        self.solve_on(crate::wide::avx2(), br, bi);
+    }
+
+    /// [`Self::solve`] on the instance compiled for AVX2 where `wide` and the CPU has it: the
+    /// same bits.
+    #[allow(unsafe_code)]
+    pub fn solve_on(&self, wide: bool, br: &mut [f64], bi: &mut [f64]) {
+        #[cfg(target_arch = "x86_64")]
+        if wide && crate::wide::cpu_avx2() {
+            // SAFETY: `solve_avx2` requires only a CPU with AVX2, which `cpu_avx2` found.
+            unsafe { self.solve_avx2(br, bi) };
+            return;
+        }
+        self.solve_in(br, bi);
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn solve_avx2(&self, br: &mut [f64], bi: &mut [f64]) {
+        self.solve_in(br, bi);
+    }
+
+    #[inline(always)]
+    fn solve_in(&self, br: &mut [f64], bi: &mut [f64]) {
         let n = self.n;
         // `b -= x · column` over `rows`, the slices zipped so that the loop has no index
         // checks (the same operations as indexed, so the same bits).
@@ -450,5 +544,51 @@ mod tests {
         lu.set(1, 0, 1.0, 0.0);
         lu.set(1, 1, 2.0, 0.0);
         assert!(!lu.factor());
+    }
+
+    /// The instances compiled for AVX2 give the baseline's bits, in blocks too (where the
+    /// CPU has AVX2; elsewhere both calls are the baseline's).
+    #[test]
+    fn the_avx2_instances_give_the_baselines_bits() {
+        let (n, bounds) = (31, [0, 3, 31]);
+        let mut next = entries(2024);
+        let mut real = [RealLu::new(n), RealLu::new(n)];
+        let mut complex = [ComplexLu::new(n), ComplexLu::new(n)];
+        for (lu, c) in real.iter_mut().zip(&mut complex) {
+            lu.start_blocks(&bounds);
+            c.start_blocks(&bounds);
+        }
+        for col in 0..n {
+            for row in 0..n {
+                // Zero above the diagonal blocks.
+                let (a, b, c) = (next(), next(), next());
+                let above = row < 3 && col >= 3;
+                for k in 0..2 {
+                    real[k].set(row, col, if above { 0.0 } else { a });
+                    complex[k].set(
+                        row,
+                        col,
+                        if above { 0.0 } else { b },
+                        if above { 0.0 } else { c },
+                    );
+                }
+            }
+        }
+        let rhs: Vec<f64> = (0..3 * n).map(|_| next()).collect();
+        let mut x = [rhs.clone(), rhs.clone()];
+        for (k, wide) in [false, true].into_iter().enumerate() {
+            assert!(real[k].factor_on(wide) && complex[k].factor_on(wide));
+            real[k].solve_on(wide, &mut x[k][..n]);
+            let (br, bi) = x[k][n..].split_at_mut(n);
+            complex[k].solve_on(wide, br, bi);
+        }
+        assert_eq!(real[0].a, real[1].a);
+        assert_eq!(
+            (&complex[0].re, &complex[0].im),
+            (&complex[1].re, &complex[1].im)
+        );
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&x[0]), bits(&x[1]));
+        assert_ne!(x[0], rhs, "the solves ran");
     }
 }

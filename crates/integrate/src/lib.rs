@@ -30,7 +30,9 @@
 //! assert!((stats.x_final[0] - 1f64.cos()).abs() < 1e-8);
 //! # Ok::<(), satsim_integrate::IntegrateError>(())
 //! ```
-#![forbid(unsafe_code)]
+// `unsafe` only to call the instances compiled for AVX2 where the CPU has it (`wide.rs`),
+// each call with its safety comment.
+#![deny(unsafe_code)]
 #![warn(missing_docs)]
 // Index loops over stage/component arrays read like the published formulas.
 #![allow(clippy::needless_range_loop)]
@@ -50,6 +52,7 @@ mod radau5;
 mod rk4;
 mod stage_matrices;
 mod system;
+mod wide;
 
 #[cfg(test)]
 mod tests;

@@ -46,7 +46,9 @@
 //! assert!(ddq.iter().all(|&a| a == 0.0));
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
-#![forbid(unsafe_code)]
+// `unsafe` only to call the instances compiled for AVX2 where the CPU has it (`wide.rs`),
+// each call with its safety comment.
+#![deny(unsafe_code)]
 #![warn(missing_docs)]
 
 pub mod aba;
@@ -71,6 +73,7 @@ pub mod rnea;
 pub mod samples;
 mod shape;
 pub mod spatial;
+mod wide;
 
 pub use crba::crba;
 pub use data::Data;

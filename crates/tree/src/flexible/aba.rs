@@ -1,7 +1,7 @@
 //! Forward dynamics of a tree with flexible bodies: the articulated-body algorithm with each
 //! body's hinge and modes eliminated together as one `(1 + m)`-DOF joint. O(n) in bodies.
 
-use super::data::{FlexData, check_state, velocities};
+use super::data::{FlexData, check_state, velocities_on};
 use super::dense;
 use super::model::FlexModel;
 use crate::aba::{apply_motion, inv_apply_force};
@@ -108,10 +108,100 @@ pub fn aba_hybrid_with_kinematics<'d>(
     articulated(model, data, q, v, tau, fext, Some(locked), true)
 }
 
-// The index loops run over several arrays at once (coordinates, buffers, offsets); the
-// arguments are the public functions' and the two switches between them.
-#[allow(clippy::needless_range_loop, clippy::too_many_arguments)]
+// The arguments are the public functions' and the two switches between them.
+#[allow(clippy::too_many_arguments)]
 fn articulated<'d>(
+    model: &FlexModel,
+    data: &'d mut FlexData,
+    q: &[f64],
+    v: &[f64],
+    tau: &[f64],
+    fext: Option<&[Force]>,
+    locked: Option<&[bool]>,
+    first_pass_current: bool,
+) -> Result<&'d DVector<f64>, DynamicsError> {
+    let wide = crate::wide::avx2();
+    articulated_on(
+        wide,
+        model,
+        data,
+        q,
+        v,
+        tau,
+        fext,
+        locked,
+        first_pass_current,
+    )
+}
+
+/// [`articulated`] on the instance compiled for AVX2 where `wide` and the CPU has it, else
+/// on the baseline's: the same operations, so the same bits (`crate::wide`). On the
+/// flexible deployment the AVX2 instances of this and the first pass take 5 % off the
+/// run's time (8 % of its instructions).
+#[allow(clippy::too_many_arguments, unsafe_code)]
+pub(super) fn articulated_on<'d>(
+    wide: bool,
+    model: &FlexModel,
+    data: &'d mut FlexData,
+    q: &[f64],
+    v: &[f64],
+    tau: &[f64],
+    fext: Option<&[Force]>,
+    locked: Option<&[bool]>,
+    first_pass_current: bool,
+) -> Result<&'d DVector<f64>, DynamicsError> {
+    #[cfg(target_arch = "x86_64")]
+    if wide && crate::wide::cpu_avx2() {
+        // SAFETY: `articulated_avx2` requires only a CPU with AVX2, which `cpu_avx2` found.
+        return unsafe {
+            articulated_avx2(model, data, q, v, tau, fext, locked, first_pass_current)
+        };
+    }
+    articulated_in(
+        false,
+        model,
+        data,
+        q,
+        v,
+        tau,
+        fext,
+        locked,
+        first_pass_current,
+    )
+}
+
+/// [`articulated_in`] compiled for AVX2, everything it inlines with it.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[allow(clippy::too_many_arguments)]
+fn articulated_avx2<'d>(
+    model: &FlexModel,
+    data: &'d mut FlexData,
+    q: &[f64],
+    v: &[f64],
+    tau: &[f64],
+    fext: Option<&[Force]>,
+    locked: Option<&[bool]>,
+    first_pass_current: bool,
+) -> Result<&'d DVector<f64>, DynamicsError> {
+    articulated_in(
+        true,
+        model,
+        data,
+        q,
+        v,
+        tau,
+        fext,
+        locked,
+        first_pass_current,
+    )
+}
+
+// The index loops run over several arrays at once (coordinates, buffers, offsets).
+#[inline(always)]
+#[allow(clippy::needless_range_loop, clippy::too_many_arguments)]
+fn articulated_in<'d>(
+    wide: bool,
     model: &FlexModel,
     data: &'d mut FlexData,
     q: &[f64],
@@ -129,7 +219,7 @@ fn articulated<'d>(
         check_len("fext", f.len(), n)?;
     }
     if !first_pass_current {
-        velocities(model, data, q, v);
+        velocities_on(wide, model, data, q, v);
     }
     let nv = rigid.nv();
     // Balanced rotors ride on their rigid carriers as gyrostats (see `crate::aba::aba`):
@@ -537,5 +627,76 @@ fn accumulate_inv_transform(
     match axis {
         Some(a) => a.add_inv_transform(ia, x, out, None),
         None => ia.add_inv_transform_to(x, out, None),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::{Beam, FlexData, FlexModel, Flexible, Modes};
+    use super::articulated_on;
+    use crate::BaseKind;
+    use crate::samples::{SplitMix, chain};
+    use crate::spatial::{Force, Vec3};
+
+    /// The instance compiled for AVX2 (the ABA and its first pass) gives the baseline's bits:
+    /// free and hybrid, with and without external wrenches, three beams of 1, 3 and 4 modes
+    /// on a free chain (where the CPU has AVX2; elsewhere both calls are the baseline's).
+    #[test]
+    fn the_avx2_instance_gives_the_baselines_bits() {
+        let beam = |modes| Beam {
+            root: Vec3::zeros(),
+            axis: Vec3::x(),
+            bend: Vec3::z(),
+            length: 1.0,
+            ei: 50.0,
+            rho_a: 2.0,
+            modes,
+        };
+        let flex: Vec<Flexible> = [("b0", 1), ("b1", 3), ("b3", 4)]
+            .into_iter()
+            .map(|(body, m)| Flexible {
+                body: body.into(),
+                modes: Modes::Beam(beam(m)),
+                damping: 0.01,
+                stiffening: true,
+            })
+            .collect();
+        let model = FlexModel::build(chain(5, BaseKind::Free).to_builder(), &flex).expect("model");
+        let mut rng = SplitMix(7);
+        let mut r = |s: f64| s * (2.0 * rng.next_f64() - 1.0);
+        let mut data = [FlexData::new(&model), FlexData::new(&model)];
+        for case in 0..8 {
+            let mut q = model.neutral();
+            let nq = model.rigid().nq();
+            for (k, x) in q.iter_mut().enumerate().skip(3) {
+                if k >= 7 {
+                    *x = r(if k >= nq { 0.05 } else { 1.0 });
+                }
+            }
+            let v: Vec<f64> = (0..model.nv()).map(|_| r(1.0)).collect();
+            let tau: Vec<f64> = (0..model.nv()).map(|_| r(2.0)).collect();
+            let fext: Vec<Force> = (0..model.rigid().n_bodies())
+                .map(|_| {
+                    Force::new(
+                        Vec3::new(r(1.0), r(1.0), r(1.0)),
+                        Vec3::new(r(1.0), r(1.0), r(1.0)),
+                    )
+                })
+                .collect();
+            let locked: Vec<bool> = (0..model.rigid().n_hinges())
+                .map(|h| (h + case) % 3 == 0)
+                .collect();
+            let fext = (case % 2 == 1).then_some(&fext[..]);
+            let locked = (case >= 4).then_some(&locked[..]);
+            let [d0, d1] = &mut data;
+            let base = articulated_on(false, &model, d0, &q, &v, &tau, fext, locked, false)
+                .expect("baseline")
+                .clone();
+            let wide =
+                articulated_on(true, &model, d1, &q, &v, &tau, fext, locked, false).expect("avx2");
+            let bits = |x: &[f64]| x.iter().map(|a| a.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(base.as_slice()), bits(wide.as_slice()), "case {case}");
+            assert!(base.iter().all(|a| a.is_finite()) && base.iter().any(|a| *a != 0.0));
+        }
     }
 }

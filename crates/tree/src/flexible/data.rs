@@ -147,6 +147,37 @@ pub(crate) fn check_state(model: &FlexModel, q: &[f64], v: &[f64]) -> Result<(),
 /// body velocities `v` and velocity-product accelerations `c` (`aᵢ = Xupᵢ a_λ + Gᵢ η̈_λ + Sᵢ φ̈ᵢ + cᵢ`). A body on a rigid parent gets
 /// exactly the rigid algorithms' `Xup`, `v` and `c`.
 pub(crate) fn velocities(model: &FlexModel, data: &mut FlexData, q: &[f64], v: &[f64]) {
+    velocities_on(crate::wide::avx2(), model, data, q, v);
+}
+
+/// [`velocities`] on the instance compiled for AVX2 where `wide` and the CPU has it, else on
+/// the baseline's: the same bits (`crate::wide`).
+#[allow(unsafe_code)]
+pub(crate) fn velocities_on(
+    wide: bool,
+    model: &FlexModel,
+    data: &mut FlexData,
+    q: &[f64],
+    v: &[f64],
+) {
+    #[cfg(target_arch = "x86_64")]
+    if wide && crate::wide::cpu_avx2() {
+        // SAFETY: `velocities_avx2` requires only a CPU with AVX2, which `cpu_avx2` found.
+        unsafe { velocities_avx2(model, data, q, v) };
+        return;
+    }
+    velocities_in(model, data, q, v);
+}
+
+/// [`velocities_in`] compiled for AVX2, everything it inlines with it.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn velocities_avx2(model: &FlexModel, data: &mut FlexData, q: &[f64], v: &[f64]) {
+    velocities_in(model, data, q, v);
+}
+
+#[inline(always)]
+fn velocities_in(model: &FlexModel, data: &mut FlexData, q: &[f64], v: &[f64]) {
     let rigid = &model.rigid;
     let (nq, nv) = (rigid.nq(), rigid.nv());
     let (eta, etad) = (&q[nq..], &v[nv..]);
