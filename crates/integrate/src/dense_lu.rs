@@ -16,6 +16,36 @@
 //! callgrind; faer's are AVX2, these the baseline's) and took the whole Radau IIA run from
 //! 0.080 s to 0.071 s: less dispatch and recursion around small blocks.
 
+/// A factorisation's `factor` (the instance the process runs on), `factor_on` (the one
+/// asked for) and its AVX2 instance, around the type's `factor_in`: the same operations, so
+/// the same bits (`crate::wide`).
+macro_rules! factor_instances {
+    () => {
+        /// Factors the matrix set; false when a pivot is zero or anything is not finite.
+        pub fn factor(&mut self) -> bool {
+            self.factor_on(crate::wide::avx2())
+        }
+
+        /// [`Self::factor`] on the instance compiled for AVX2 where `wide` and the CPU has
+        /// it, else on the baseline's.
+        #[allow(unsafe_code)]
+        pub fn factor_on(&mut self, wide: bool) -> bool {
+            #[cfg(target_arch = "x86_64")]
+            if wide && crate::wide::cpu_avx2() {
+                // SAFETY: `factor_avx2` requires only a CPU with AVX2, which `cpu_avx2` found.
+                return unsafe { self.factor_avx2() };
+            }
+            self.factor_in()
+        }
+
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = "avx2")]
+        fn factor_avx2(&mut self) -> bool {
+            self.factor_in()
+        }
+    };
+}
+
 /// `A = P L U` of a real `n × n` matrix, column-major, in place; `piv[k]` is the row swapped
 /// with row `k` at step `k` (LAPACK's `getrf` convention). `U`'s diagonal is kept as its
 /// reciprocals, so that the back substitution multiplies: a division's latency is several
@@ -62,28 +92,7 @@ impl RealLu {
         &mut self.a[..self.n * self.n]
     }
 
-    /// Factors the matrix set; false when a pivot is zero or anything is not finite.
-    pub fn factor(&mut self) -> bool {
-        self.factor_on(crate::wide::avx2())
-    }
-
-    /// [`Self::factor`] on the instance compiled for AVX2 where `wide` and the CPU has it:
-    /// the same bits (`crate::wide`).
-    #[allow(unsafe_code)]
-    pub fn factor_on(&mut self, wide: bool) -> bool {
-        #[cfg(target_arch = "x86_64")]
-        if wide && crate::wide::cpu_avx2() {
-            // SAFETY: `factor_avx2` requires only a CPU with AVX2, which `cpu_avx2` found.
-            return unsafe { self.factor_avx2() };
-        }
-        self.factor_in()
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    fn factor_avx2(&mut self) -> bool {
-        self.factor_in()
-    }
+    factor_instances!();
 
     #[inline(always)]
     fn factor_in(&mut self) -> bool {
@@ -243,28 +252,7 @@ impl ComplexLu {
         (&mut self.re[..nn], &mut self.im[..nn])
     }
 
-    /// Factors the matrix set; false when a pivot is zero or anything is not finite.
-    pub fn factor(&mut self) -> bool {
-        self.factor_on(crate::wide::avx2())
-    }
-
-    /// [`Self::factor`] on the instance compiled for AVX2 where `wide` and the CPU has it:
-    /// the same bits.
-    #[allow(unsafe_code)]
-    pub fn factor_on(&mut self, wide: bool) -> bool {
-        #[cfg(target_arch = "x86_64")]
-        if wide && crate::wide::cpu_avx2() {
-            // SAFETY: `factor_avx2` requires only a CPU with AVX2, which `cpu_avx2` found.
-            return unsafe { self.factor_avx2() };
-        }
-        self.factor_in()
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    fn factor_avx2(&mut self) -> bool {
-        self.factor_in()
-    }
+    factor_instances!();
 
     #[inline(always)]
     fn factor_in(&mut self) -> bool {

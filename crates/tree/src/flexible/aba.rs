@@ -38,7 +38,7 @@ pub fn aba<'d>(
     tau: &[f64],
     fext: Option<&[Force]>,
 ) -> Result<&'d DVector<f64>, DynamicsError> {
-    articulated(model, data, q, v, tau, fext, None, false)
+    articulated(model, data, Call::new(q, v, tau, fext, None, false))
 }
 
 /// As [`aba`], reusing the first pass (deformed inertias, `Xup`, `G`, velocities, velocity
@@ -72,7 +72,7 @@ pub fn aba_with_kinematics<'d>(
     tau: &[f64],
     fext: Option<&[Force]>,
 ) -> Result<&'d DVector<f64>, DynamicsError> {
-    articulated(model, data, q, v, tau, fext, None, true)
+    articulated(model, data, Call::new(q, v, tau, fext, None, true))
 }
 
 /// Hybrid dynamics with locked hinges (as the rigid [`crate::aba::aba_hybrid`]): a hinge
@@ -90,7 +90,7 @@ pub fn aba_hybrid<'d>(
     locked: &[bool],
 ) -> Result<&'d DVector<f64>, DynamicsError> {
     check_len("locked", locked.len(), model.rigid.n_hinges())?;
-    articulated(model, data, q, v, tau, fext, Some(locked), false)
+    articulated(model, data, Call::new(q, v, tau, fext, Some(locked), false))
 }
 
 /// As [`aba_hybrid`], reusing the first pass in `data`, which must be that of this `q` and
@@ -105,112 +105,95 @@ pub fn aba_hybrid_with_kinematics<'d>(
     locked: &[bool],
 ) -> Result<&'d DVector<f64>, DynamicsError> {
     check_len("locked", locked.len(), model.rigid.n_hinges())?;
-    articulated(model, data, q, v, tau, fext, Some(locked), true)
+    articulated(model, data, Call::new(q, v, tau, fext, Some(locked), true))
 }
 
-// The arguments are the public functions' and the two switches between them.
-#[allow(clippy::too_many_arguments)]
+/// The inputs of one call: the public functions' and the two switches between them.
+#[derive(Clone, Copy)]
+pub(super) struct Call<'a> {
+    pub q: &'a [f64],
+    pub v: &'a [f64],
+    pub tau: &'a [f64],
+    pub fext: Option<&'a [Force]>,
+    pub locked: Option<&'a [bool]>,
+    pub first_pass_current: bool,
+}
+
+impl<'a> Call<'a> {
+    fn new(
+        q: &'a [f64],
+        v: &'a [f64],
+        tau: &'a [f64],
+        fext: Option<&'a [Force]>,
+        locked: Option<&'a [bool]>,
+        first_pass_current: bool,
+    ) -> Self {
+        Self {
+            q,
+            v,
+            tau,
+            fext,
+            locked,
+            first_pass_current,
+        }
+    }
+}
+
 fn articulated<'d>(
     model: &FlexModel,
     data: &'d mut FlexData,
-    q: &[f64],
-    v: &[f64],
-    tau: &[f64],
-    fext: Option<&[Force]>,
-    locked: Option<&[bool]>,
-    first_pass_current: bool,
+    call: Call,
 ) -> Result<&'d DVector<f64>, DynamicsError> {
-    let wide = crate::wide::avx2();
-    articulated_on(
-        wide,
-        model,
-        data,
-        q,
-        v,
-        tau,
-        fext,
-        locked,
-        first_pass_current,
-    )
+    articulated_on(crate::wide::avx2(), model, data, call)
 }
 
 /// [`articulated`] on the instance compiled for AVX2 where `wide` and the CPU has it, else
 /// on the baseline's: the same operations, so the same bits (`crate::wide`). On the
 /// flexible deployment the AVX2 instances of this and the first pass take 5 % off the
 /// run's time (8 % of its instructions).
-#[allow(clippy::too_many_arguments, unsafe_code)]
+#[allow(unsafe_code)]
 pub(super) fn articulated_on<'d>(
     wide: bool,
     model: &FlexModel,
     data: &'d mut FlexData,
-    q: &[f64],
-    v: &[f64],
-    tau: &[f64],
-    fext: Option<&[Force]>,
-    locked: Option<&[bool]>,
-    first_pass_current: bool,
+    call: Call,
 ) -> Result<&'d DVector<f64>, DynamicsError> {
     #[cfg(target_arch = "x86_64")]
     if wide && crate::wide::cpu_avx2() {
         // SAFETY: `articulated_avx2` requires only a CPU with AVX2, which `cpu_avx2` found.
-        return unsafe {
-            articulated_avx2(model, data, q, v, tau, fext, locked, first_pass_current)
-        };
+        return unsafe { articulated_avx2(model, data, call) };
     }
-    articulated_in(
-        false,
-        model,
-        data,
-        q,
-        v,
-        tau,
-        fext,
-        locked,
-        first_pass_current,
-    )
+    articulated_in(false, model, data, call)
 }
 
 /// [`articulated_in`] compiled for AVX2, everything it inlines with it.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-#[allow(clippy::too_many_arguments)]
 fn articulated_avx2<'d>(
     model: &FlexModel,
     data: &'d mut FlexData,
-    q: &[f64],
-    v: &[f64],
-    tau: &[f64],
-    fext: Option<&[Force]>,
-    locked: Option<&[bool]>,
-    first_pass_current: bool,
+    call: Call,
 ) -> Result<&'d DVector<f64>, DynamicsError> {
-    articulated_in(
-        true,
-        model,
-        data,
+    articulated_in(true, model, data, call)
+}
+
+// The index loops run over several arrays at once (coordinates, buffers, offsets).
+#[inline(always)]
+#[allow(clippy::needless_range_loop)]
+fn articulated_in<'d>(
+    wide: bool,
+    model: &FlexModel,
+    data: &'d mut FlexData,
+    call: Call,
+) -> Result<&'d DVector<f64>, DynamicsError> {
+    let Call {
         q,
         v,
         tau,
         fext,
         locked,
         first_pass_current,
-    )
-}
-
-// The index loops run over several arrays at once (coordinates, buffers, offsets).
-#[inline(always)]
-#[allow(clippy::needless_range_loop, clippy::too_many_arguments)]
-fn articulated_in<'d>(
-    wide: bool,
-    model: &FlexModel,
-    data: &'d mut FlexData,
-    q: &[f64],
-    v: &[f64],
-    tau: &[f64],
-    fext: Option<&[Force]>,
-    locked: Option<&[bool]>,
-    first_pass_current: bool,
-) -> Result<&'d DVector<f64>, DynamicsError> {
+    } = call;
     check_state(model, q, v)?;
     check_len("tau", tau.len(), model.nv())?;
     let rigid = &model.rigid;
@@ -633,7 +616,7 @@ fn accumulate_inv_transform(
 #[cfg(test)]
 mod tests {
     use super::super::{Beam, FlexData, FlexModel, Flexible, Modes};
-    use super::articulated_on;
+    use super::{Call, articulated_on};
     use crate::BaseKind;
     use crate::samples::{SplitMix, chain};
     use crate::spatial::{Force, Vec3};
@@ -689,11 +672,11 @@ mod tests {
             let fext = (case % 2 == 1).then_some(&fext[..]);
             let locked = (case >= 4).then_some(&locked[..]);
             let [d0, d1] = &mut data;
-            let base = articulated_on(false, &model, d0, &q, &v, &tau, fext, locked, false)
+            let call = Call::new(&q, &v, &tau, fext, locked, false);
+            let base = articulated_on(false, &model, d0, call)
                 .expect("baseline")
                 .clone();
-            let wide =
-                articulated_on(true, &model, d1, &q, &v, &tau, fext, locked, false).expect("avx2");
+            let wide = articulated_on(true, &model, d1, call).expect("avx2");
             let bits = |x: &[f64]| x.iter().map(|a| a.to_bits()).collect::<Vec<_>>();
             assert_eq!(bits(base.as_slice()), bits(wide.as_slice()), "case {case}");
             assert!(base.iter().all(|a| a.is_finite()) && base.iter().any(|a| *a != 0.0));
