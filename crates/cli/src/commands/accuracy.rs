@@ -1,5 +1,5 @@
-//! `satsim accuracy SCENE.toml [--out DIR] [--repeats N] [--methods LIST] [--quick]`: the
-//! work-precision sweep of [`satsim_tools::accuracy`] on a scene. Writes
+//! `satsim accuracy SCENE.toml [--out DIR] [--repeats N] [--methods LIST] [--tolerances LIST]
+//! [--quick]`: the work-precision sweep of [`satsim_tools::accuracy`] on a scene. Writes
 //! `DIR/accuracy.csv`, `DIR/accuracy.svg` (final error against wall time, log-log),
 //! `DIR/accuracy_rhs.svg` (against right-hand-side evaluations) and `DIR/accuracy.md`, and
 //! prints a short summary. `DIR` defaults to `out/<scene stem>-accuracy`.
@@ -30,6 +30,10 @@ pub struct Args {
     /// A short sweep (fewer settings): a quick look rather than the full figure
     #[arg(long)]
     pub quick: bool,
+    /// The adaptive methods' tolerances, comma-separated, in place of the sweep's (`rtol`;
+    /// `atol` the same), e.g. `--tolerances 1e-5,1.5e-5` to compare two settings
+    #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = parse_tolerance)]
+    pub tolerances: Vec<f64>,
     /// Override a scene value by its dotted path, e.g. `--set duration=60` (repeatable)
     #[arg(long = "set", value_name = "KEY=VALUE", value_parser = super::run::parse_override)]
     pub set: Vec<satsim_tools::scene_keys::Override>,
@@ -37,6 +41,15 @@ pub struct Args {
 
 fn parse_method(s: &str) -> Result<Method, String> {
     s.parse::<Method>().map_err(|e| e.to_string())
+}
+
+/// A tolerance of `--tolerances`: finite and positive.
+fn parse_tolerance(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(t) if t.is_finite() && t > 0.0 => Ok(t),
+        Ok(t) => Err(format!("a tolerance must be finite and > 0, got {t}")),
+        Err(e) => Err(format!("`{s}` is not a number: {e}")),
+    }
 }
 
 /// Runs `satsim accuracy`.
@@ -51,6 +64,9 @@ pub fn run(args: &Args) -> Result<Output, CliError> {
     };
     if let Some(n) = args.repeats {
         plan.repeats = n;
+    }
+    if !args.tolerances.is_empty() {
+        plan.tolerances = args.tolerances.clone();
     }
     if !args.methods.is_empty() {
         let mut methods = Vec::new();

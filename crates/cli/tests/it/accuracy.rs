@@ -96,6 +96,43 @@ fn quick_sweep_writes_csv_svg_and_markdown() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let csv = std::fs::read_to_string(dir.join("only/accuracy.csv")).unwrap();
     assert_eq!(csv.lines().count(), 3, "{csv}");
+
+    // --tolerances in place of the sweep's: those runs, at those tolerances.
+    let o = satsim_in(
+        &dir,
+        &[
+            "accuracy",
+            "short.toml",
+            "--quick",
+            "--methods",
+            "dp54,radau5",
+            "--tolerances",
+            "1e-5,1.5e-5,2e-6",
+            "--out",
+            "chosen",
+        ],
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let csv = std::fs::read_to_string(dir.join("chosen/accuracy.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let runs: Vec<(String, f64)> = lines
+        .map(|l| {
+            let r: Vec<&str> = l.split(',').collect();
+            (
+                r[col("method")].to_string(),
+                r[col("tolerance")].parse().unwrap(),
+            )
+        })
+        .collect();
+    let mut expected = Vec::new();
+    for m in ["dp54", "radau5"] {
+        for t in [1e-5, 1.5e-5, 2e-6] {
+            expected.push((m.to_string(), t));
+        }
+    }
+    assert_eq!(runs, expected, "{csv}");
 }
 
 /// Exit status 2, nothing on stdout, the needles on stderr.
@@ -129,6 +166,13 @@ fn bad_input_exits_with_status_2() {
         &satsim_in(&dir, &["accuracy", "short.toml", "--methods", "euler"]),
         &["unknown integration method `euler`"],
     );
+    for bad in ["0", "-1e-5", "1e-5,abc", "inf"] {
+        let flag = format!("--tolerances={bad}");
+        fails(
+            &satsim_in(&dir, &["accuracy", "short.toml", &flag]),
+            &["--tolerances"],
+        );
+    }
     fails(
         &satsim_in(&dir, &["accuracy"]),
         &["required arguments were not provided", "<SCENE.toml>"],
