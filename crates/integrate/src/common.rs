@@ -382,6 +382,12 @@ pub(crate) trait Stepper {
     /// The state was modified outside the stepper (projection): cached
     /// derivatives at the current point are stale.
     fn state_modified(&mut self);
+
+    /// The method's own approximation of `f(t, x)` at the end of its last accepted step,
+    /// where it holds one that it did not evaluate (for [`System::events_at_step_end`]).
+    fn end_slope(&self) -> Option<&[f64]> {
+        None
+    }
 }
 
 /// `out = h * Σ_j coeffs[j] * ks[j]`; zero coefficients are skipped.

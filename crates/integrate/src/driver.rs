@@ -473,7 +473,10 @@ where
     /// Handled events restart from `g = 0`, so they do not fire twice for one crossing.
     fn handle_events(&mut self) -> Result<Next, IntegrateError> {
         let (mut t_left, t_right) = (self.st.t_old(), self.st.t());
-        Self::eval_events(&mut self.sys, t_right, self.st.x(), &mut self.g_right)?;
+        let slope = self.st.end_slope();
+        self.sys
+            .events_at_step_end(t_right, self.st.x(), slope, &mut self.g_right)
+            .map_err(|source| IntegrateError::System { t: t_right, source })?;
         let ne = self.g_left.len();
         loop {
             // Locate every candidate; t_loc[k] is NaN where event k does not cross.

@@ -682,6 +682,12 @@ impl Stepper for Radau5 {
     fn state_modified(&mut self) {
         self.f0_exact = false;
     }
+
+    /// The collocation polynomial's slope at the step's end ([`Self::accept`]), where `f`
+    /// was not evaluated there.
+    fn end_slope(&self) -> Option<&[f64]> {
+        (!self.f0_exact).then_some(self.f0.as_slice())
+    }
 }
 
 #[cfg(test)]

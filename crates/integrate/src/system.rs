@@ -286,6 +286,22 @@ pub trait System {
         Ok(())
     }
 
+    /// The event functions at the end of an accepted step, where the method holds `slope`,
+    /// its own approximation of `f(t, x)` (Radau IIA's: its collocation polynomial's slope,
+    /// `f` at its last stage to within the Newton iteration's convergence), or `None`. Event
+    /// functions that read `f` (a stuck wheel's hold torque is `J α` of the carrier's
+    /// acceleration) may take it there instead of evaluating `f`; the crossings between step
+    /// ends are located on [`System::events`]. Default: [`System::events`], the slope unread.
+    fn events_at_step_end(
+        &mut self,
+        t: f64,
+        x: &[f64],
+        _slope: Option<&[f64]>,
+        g: &mut [f64],
+    ) -> Result<(), SystemError> {
+        self.events(t, x, g)
+    }
+
     /// Direction of sign change that triggers event `k`. Default: both.
     fn event_direction(&self, _k: usize) -> EventDirection {
         EventDirection::Both
@@ -419,6 +435,15 @@ impl<S: System + ?Sized> System for &mut S {
     }
     fn events(&mut self, t: f64, x: &[f64], g: &mut [f64]) -> Result<(), SystemError> {
         (**self).events(t, x, g)
+    }
+    fn events_at_step_end(
+        &mut self,
+        t: f64,
+        x: &[f64],
+        slope: Option<&[f64]>,
+        g: &mut [f64],
+    ) -> Result<(), SystemError> {
+        (**self).events_at_step_end(t, x, slope, g)
     }
     fn event_direction(&self, k: usize) -> EventDirection {
         (**self).event_direction(k)

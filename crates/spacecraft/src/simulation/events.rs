@@ -34,10 +34,22 @@ impl Simulation {
         Ok(reads.kinematics)
     }
 
+    /// The effects' event functions into `g`, on the context of `(t, x)` that
+    /// [`Self::prepare_events`] (or the slope's preparation) made; `kin`: the poses are
+    /// current.
+    pub(super) fn effects_events(&mut self, t: f64, x: &[f64], kin: bool, g: &mut [f64]) {
+        self.with_context(t, x, kin, |ctx, h| {
+            for (i, (e, r)) in h.effects.iter().zip(h.own).enumerate() {
+                let s = h.event_start[i];
+                e.events(ctx, h.forces, &x[r.clone()], &mut g[s..s + e.n_events()]);
+            }
+        });
+    }
+
     /// What the event functions read (the union of the effects' [`Effect::event_reads`]).
     ///
     /// [`Effect::event_reads`]: crate::effects::Effect::event_reads
-    fn event_reads(&self) -> EventReads {
+    pub(super) fn event_reads(&self) -> EventReads {
         self.effects
             .iter()
             .filter(|e| e.n_events() > 0)

@@ -270,6 +270,15 @@ impl<C: SimCell> System for Shared<C> {
     fn events(&mut self, t: f64, x: &[f64], g: &mut [f64]) -> Result<(), SystemError> {
         self.0.sim_mut().events(t, x, g)
     }
+    fn events_at_step_end(
+        &mut self,
+        t: f64,
+        x: &[f64],
+        slope: Option<&[f64]>,
+        g: &mut [f64],
+    ) -> Result<(), SystemError> {
+        self.0.sim_mut().events_at_step_end(t, x, slope, g)
+    }
     fn event_direction(&self, k: usize) -> EventDirection {
         self.0.sim().event_direction(k)
     }

@@ -71,12 +71,31 @@ impl System for Simulation {
             )));
         }
         let kin = self.prepare_events(t, x)?;
-        self.with_context(t, x, kin, |ctx, h| {
-            for (i, (e, r)) in h.effects.iter().zip(h.own).enumerate() {
-                let s = h.event_start[i];
-                e.events(ctx, h.forces, &x[r.clone()], &mut g[s..s + e.n_events()]);
-            }
-        });
+        self.effects_events(t, x, kin, g);
+        Ok(())
+    }
+
+    /// At a step's end where the integrator holds its slope (Radau IIA's), the locked
+    /// rotors' hold torques are `J α` of the carrier's acceleration in that slope, where the
+    /// event functions would otherwise evaluate the right-hand side for it (`ahead.rs`):
+    /// the effects are applied, the forward dynamics is not. The crossings inside the step
+    /// are located on [`Self::events`], the right-hand side's own.
+    fn events_at_step_end(
+        &mut self,
+        t: f64,
+        x: &[f64],
+        slope: Option<&[f64]>,
+        g: &mut [f64],
+    ) -> Result<(), SystemError> {
+        let Some(dx) = slope.filter(|dx| self.can_hold_from_slope(dx)) else {
+            return self.events(t, x, g);
+        };
+        self.check_len(x.len(), "events")?;
+        if g.len() != self.model.n_events {
+            return self.events(t, x, g);
+        }
+        let kin = self.prepare_events_from_slope(t, x, dx)?;
+        self.effects_events(t, x, kin, g);
         Ok(())
     }
 

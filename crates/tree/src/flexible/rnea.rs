@@ -156,6 +156,35 @@ pub fn gyrostat_torques<'d>(
     Ok(Some(&data.tau))
 }
 
+/// As [`gyrostat_torques`], with no forward dynamics run on this state: the accelerations
+/// `a` (`[q̈; η̈]`) come from elsewhere (an integrator's slope), and the carriers'
+/// accelerations from them where every rotor asked for rides the base, body 0, whose
+/// acceleration is `a`'s first six entries (zero on a fixed base). `Ok(None)`, with nothing
+/// written, where a rotor asked for rides another body or a hinge asked for is not a folded
+/// rotor: RNEA then ([`rnea()`]).
+pub fn gyrostat_torques_on_base<'d>(
+    model: &FlexModel,
+    data: &'d mut FlexData,
+    a: &[f64],
+    fext: Option<&[Force]>,
+    which: &[bool],
+) -> Result<Option<&'d DVector<f64>>, DynamicsError> {
+    let rigid = &model.rigid;
+    let nb = rigid.base_nv();
+    check_len("a", a.len(), model.nv())?;
+    check_len("which", which.len(), rigid.nv() - nb)?;
+    let asked = |i: usize| rigid.joints[i].as_ref().is_some_and(|j| which[j.dof - nb]);
+    if rigid
+        .gyrostats
+        .iter()
+        .any(|g| asked(g.body) && g.parent != 0)
+    {
+        return Ok(None);
+    }
+    data.a[0] = base_motion(rigid, a);
+    gyrostat_torques(model, data, a, fext, which)
+}
+
 /// The bias forces `b(q, v)` (RNEA at zero acceleration) into `data.bias`.
 pub fn bias<'d>(
     model: &FlexModel,

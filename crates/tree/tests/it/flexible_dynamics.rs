@@ -836,6 +836,17 @@ fn rotors_folded_into_rigid_carriers_are_the_rotors_as_bodies() {
         x, y,
         "a rotor on a flexible body: every rotor a body, bit for bit"
     );
+    // Its hold torque from accelerations alone needs the panel's, which only RNEA makes.
+    let nh = on_panel.nv() - on_panel.base_nv();
+    let mut rp = vec![false; nh];
+    rp[nh - 1] = true;
+    let acc = vec![0.1; mixed.nv()];
+    let mut e = FlexData::new(&mixed);
+    assert!(
+        flexible::gyrostat_torques_on_base(&mixed, &mut e, &acc, None, &rp)
+            .unwrap()
+            .is_none()
+    );
 }
 
 /// The torques holding locked wheels in closed form, from the carriers' accelerations the
@@ -887,6 +898,23 @@ fn locked_wheels_hold_torques_in_closed_form_are_rneas() {
                 flexible::rnea_with_kinematics(&folded, &mut data, &q, &v, acc.as_slice(), f)
                     .unwrap()
                     .clone();
+            // With no solve on this state (the accelerations an integrator's slope), the
+            // carrier's from `acc` itself: the wheels ride the base, so the same bits.
+            let mut fresh = FlexData::new(&folded);
+            let slope =
+                flexible::gyrostat_torques_on_base(&folded, &mut fresh, acc.as_slice(), f, &wheels)
+                    .unwrap()
+                    .expect("wheels on the base")
+                    .clone();
+            for (k, &w) in wheels.iter().enumerate() {
+                if w {
+                    assert_eq!(
+                        slope[nb + k],
+                        closed[nb + k],
+                        "wheel hinge {k}, from the slope"
+                    );
+                }
+            }
             for (k, &w) in wheels.iter().enumerate() {
                 if w {
                     let (x, y) = (closed[nb + k], rnea[nb + k]);
