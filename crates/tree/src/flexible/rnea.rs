@@ -132,28 +132,7 @@ pub fn gyrostat_torques<'d>(
     fext: Option<&[Force]>,
     which: &[bool],
 ) -> Result<Option<&'d DVector<f64>>, DynamicsError> {
-    let rigid = &model.rigid;
-    let nb = rigid.base_nv();
-    check_len("a", a.len(), model.nv())?;
-    check_len("which", which.len(), rigid.nv() - nb)?;
-    if let Some(f) = fext {
-        check_len("fext", f.len(), rigid.n_bodies())?;
-    }
-    let asked = |i: usize| rigid.joints[i].as_ref().is_some_and(|j| which[j.dof - nb]);
-    if (1..rigid.n_bodies()).any(|i| asked(i) && !(model.fold_rotors && rigid.is_gyrostat[i])) {
-        return Ok(None);
-    }
-    for g in &rigid.gyrostats {
-        let joint = rigid.joints[g.body].as_ref().expect("joint");
-        if which[joint.dof - nb] {
-            let n_ext = fext.map_or(0.0, |f| joint.s.dot(&f[g.body]));
-            let qdd = a[joint.dof];
-            data.tau[joint.dof] = g.axial * (g.axis.dot(&data.a[g.parent].ang) + qdd)
-                + joint.armature() * qdd
-                - n_ext;
-        }
-    }
-    Ok(Some(&data.tau))
+    closed_form(model, data, a, fext, which, false)
 }
 
 /// As [`gyrostat_torques`], with no forward dynamics run on this state: the accelerations
@@ -169,20 +148,52 @@ pub fn gyrostat_torques_on_base<'d>(
     fext: Option<&[Force]>,
     which: &[bool],
 ) -> Result<Option<&'d DVector<f64>>, DynamicsError> {
+    closed_form(model, data, a, fext, which, true)
+}
+
+/// The two above: the carriers' angular accelerations from the solve's `data.a`, or
+/// (`on_base`) the base's from `a`.
+fn closed_form<'d>(
+    model: &FlexModel,
+    data: &'d mut FlexData,
+    a: &[f64],
+    fext: Option<&[Force]>,
+    which: &[bool],
+    on_base: bool,
+) -> Result<Option<&'d DVector<f64>>, DynamicsError> {
     let rigid = &model.rigid;
     let nb = rigid.base_nv();
     check_len("a", a.len(), model.nv())?;
     check_len("which", which.len(), rigid.nv() - nb)?;
+    if let Some(f) = fext {
+        check_len("fext", f.len(), rigid.n_bodies())?;
+    }
     let asked = |i: usize| rigid.joints[i].as_ref().is_some_and(|j| which[j.dof - nb]);
-    if rigid
-        .gyrostats
-        .iter()
-        .any(|g| asked(g.body) && g.parent != 0)
+    if (1..rigid.n_bodies()).any(|i| asked(i) && !(model.fold_rotors && rigid.is_gyrostat[i]))
+        || on_base
+            && rigid
+                .gyrostats
+                .iter()
+                .any(|g| asked(g.body) && g.parent != 0)
     {
         return Ok(None);
     }
-    data.a[0] = base_motion(rigid, a);
-    gyrostat_torques(model, data, a, fext, which)
+    let base = base_motion(rigid, a).ang;
+    for g in &rigid.gyrostats {
+        let joint = rigid.joints[g.body].as_ref().expect("joint");
+        if which[joint.dof - nb] {
+            let n_ext = fext.map_or(0.0, |f| joint.s.dot(&f[g.body]));
+            let qdd = a[joint.dof];
+            let alpha = if on_base {
+                &base
+            } else {
+                &data.a[g.parent].ang
+            };
+            data.tau[joint.dof] =
+                g.axial * (g.axis.dot(alpha) + qdd) + joint.armature() * qdd - n_ext;
+        }
+    }
+    Ok(Some(&data.tau))
 }
 
 /// The bias forces `b(q, v)` (RNEA at zero acceleration) into `data.bias`.
