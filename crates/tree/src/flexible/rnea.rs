@@ -178,17 +178,14 @@ fn closed_form<'d>(
     {
         return Ok(None);
     }
-    let base = base_motion(rigid, a).ang;
+    // The base's angular acceleration, made once, where the slope gives it.
+    let base = on_base.then(|| base_motion(rigid, a).ang);
     for g in &rigid.gyrostats {
         let joint = rigid.joints[g.body].as_ref().expect("joint");
         if which[joint.dof - nb] {
             let n_ext = fext.map_or(0.0, |f| joint.s.dot(&f[g.body]));
             let qdd = a[joint.dof];
-            let alpha = if on_base {
-                &base
-            } else {
-                &data.a[g.parent].ang
-            };
+            let alpha = base.as_ref().unwrap_or(&data.a[g.parent].ang);
             data.tau[joint.dof] =
                 g.axial * (g.axis.dot(alpha) + qdd) + joint.armature() * qdd - n_ext;
         }
