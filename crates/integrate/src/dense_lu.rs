@@ -16,6 +16,8 @@
 //! callgrind; faer's are AVX2, these the baseline's) and took the whole Radau IIA run from
 //! 0.080 s to 0.071 s: less dispatch and recursion around small blocks.
 
+use crate::common::all_finite;
+
 /// A factorisation's `factor` (the instance the process runs on), `factor_on` (the one
 /// asked for) and its AVX2 instance, around the type's `factor_in`: the same operations, so
 /// the same bits (`crate::wide`).
@@ -47,7 +49,8 @@ macro_rules! factor_instances {
 }
 
 /// `A = P L U` of a real `n × n` matrix, column-major, in place; `piv[k]` is the row swapped
-/// with row `k` at step `k` (LAPACK's `getrf` convention). `U`'s diagonal is kept as its
+/// with row `k` at step `k`, and `L`'s multipliers keep the rows of their own step
+/// (LINPACK's `dgefa`, where LAPACK's `getrf` swaps them too). `U`'s diagonal is kept as its
 /// reciprocals, so that the back substitution multiplies: a division's latency is several
 /// multiplications' on its chain of dependent steps.
 #[derive(Clone, Debug)]
@@ -97,7 +100,7 @@ impl RealLu {
     #[inline(always)]
     fn factor_in(&mut self) -> bool {
         let n = self.n;
-        if !self.a[..n * n].iter().all(|v| v.is_finite()) {
+        if !all_finite(&self.a[..n * n]) {
             return false;
         }
         for b in 0..self.bounds.len() - 1 {
@@ -114,10 +117,14 @@ impl RealLu {
                 if col[p] == 0.0 {
                     return false;
                 }
-                // The rows swap within the block: the blocks to its left keep their order
-                // for the solve, which applies them before the block's pivots.
+                // The rows swap in the columns from `k` on only (LINPACK's `dgefa`): the
+                // multipliers of the earlier steps keep their rows, and the solve swaps the
+                // right side just before each step's elimination (`dgesl`), which gives
+                // every entry the operations and the bits of swapping whole rows first
+                // (tested). The blocks to the left keep their order too: the solve applies
+                // them before the block's pivots.
                 if p != k {
-                    for j in s..e {
+                    for j in k..e {
                         self.a.swap(j * n + k, j * n + p);
                     }
                 }
@@ -182,8 +189,6 @@ impl RealLu {
             }
             for k in s..e {
                 b.swap(k, self.piv[k]);
-            }
-            for k in s..e {
                 let bk = b[k];
                 if bk != 0.0 {
                     let col = &self.a[k * n..k * n + e];
@@ -257,11 +262,7 @@ impl ComplexLu {
     #[inline(always)]
     fn factor_in(&mut self) -> bool {
         let n = self.n;
-        if !self.re[..n * n]
-            .iter()
-            .chain(&self.im[..n * n])
-            .all(|v| v.is_finite())
-        {
+        if !(all_finite(&self.re[..n * n]) && all_finite(&self.im[..n * n])) {
             return false;
         }
         for b in 0..self.bounds.len() - 1 {
@@ -280,8 +281,9 @@ impl ComplexLu {
                 if best == 0.0 {
                     return false;
                 }
+                // The rows swap in the columns from `k` on, as the real one's.
                 if p != k {
-                    for j in s..e {
+                    for j in k..e {
                         self.re.swap(j * n + k, j * n + p);
                         self.im.swap(j * n + k, j * n + p);
                     }
@@ -370,8 +372,6 @@ impl ComplexLu {
             for k in s..e {
                 br.swap(k, self.piv[k]);
                 bi.swap(k, self.piv[k]);
-            }
-            for k in s..e {
                 let x = (br[k], bi[k]);
                 if x != (0.0, 0.0) {
                     sub(br, bi, k, k + 1..e, x);
@@ -532,6 +532,218 @@ mod tests {
         lu.set(1, 0, 1.0, 0.0);
         lu.set(1, 1, 2.0, 0.0);
         assert!(!lu.factor());
+    }
+
+    /// The factorisation and solve with the rows swapped across the whole block (LAPACK's
+    /// order, as `getrf` and `getrs`), operation for operation otherwise.
+    /// `(re, im)` column-major `n × n`; `im` `None` for a real matrix.
+    /// Returns the factors (`U`'s diagonal as reciprocals) and the pivots, `None` where
+    /// singular, after solving `(br, bi)` with them.
+    #[allow(clippy::type_complexity)]
+    fn plain_solve(
+        n: usize,
+        bounds: &[usize],
+        (mut re, mut im): (Vec<f64>, Option<Vec<f64>>),
+        (br, bi): (&mut [f64], &mut [f64]),
+    ) -> Option<(Vec<f64>, Vec<f64>, Vec<usize>)> {
+        let cplx = im.is_some();
+        let mut imv = im.take().unwrap_or_else(|| vec![0.0; n * n]);
+        let mut piv = vec![0; n];
+        for w in bounds.windows(2) {
+            let (s, e) = (w[0], w[1]);
+            for k in s..e {
+                let mut p = k;
+                let mut best = re[k * n + k].abs() + imv[k * n + k].abs();
+                for i in k + 1..e {
+                    let m = re[k * n + i].abs() + imv[k * n + i].abs();
+                    if m > best {
+                        (p, best) = (i, m);
+                    }
+                }
+                piv[k] = p;
+                if best == 0.0 {
+                    return None;
+                }
+                for j in s..e {
+                    re.swap(j * n + k, j * n + p);
+                    imv.swap(j * n + k, j * n + p);
+                }
+                let (pr, pi) = (re[k * n + k], imv[k * n + k]);
+                let (ir, ii) = if cplx {
+                    let d = pr * pr + pi * pi;
+                    (pr / d, -pi / d)
+                } else {
+                    (1.0 / pr, 0.0)
+                };
+                (re[k * n + k], imv[k * n + k]) = (ir, ii);
+                for i in k + 1..e {
+                    let (r, m) = (re[k * n + i], imv[k * n + i]);
+                    if cplx {
+                        re[k * n + i] = r * ir - m * ii;
+                        imv[k * n + i] = r * ii + m * ir;
+                    } else {
+                        re[k * n + i] = r * ir;
+                    }
+                }
+                for j in k + 1..e {
+                    let (ar, ai) = (re[j * n + k], imv[j * n + k]);
+                    if ar != 0.0 || ai != 0.0 {
+                        for i in k + 1..e {
+                            let (lr, li) = (re[k * n + i], imv[k * n + i]);
+                            if cplx {
+                                re[j * n + i] -= lr * ar - li * ai;
+                                imv[j * n + i] -= lr * ai + li * ar;
+                            } else {
+                                re[j * n + i] -= lr * ar;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        let sub = |br: &mut [f64], bi: &mut [f64], j: usize, i: usize, (xr, xi): (f64, f64)| {
+            let (cr, ci) = (re[j * n + i], imv[j * n + i]);
+            if cplx {
+                br[i] -= cr * xr - ci * xi;
+                bi[i] -= cr * xi + ci * xr;
+            } else {
+                br[i] -= cr * xr;
+            }
+        };
+        for w in bounds.windows(2) {
+            let (s, e) = (w[0], w[1]);
+            for j in 0..s {
+                let x = (br[j], bi[j]);
+                if x != (0.0, 0.0) {
+                    (s..e).for_each(|i| sub(br, bi, j, i, x));
+                }
+            }
+            for k in s..e {
+                br.swap(k, piv[k]);
+                bi.swap(k, piv[k]);
+            }
+            for k in s..e {
+                let x = (br[k], bi[k]);
+                if x != (0.0, 0.0) {
+                    (k + 1..e).for_each(|i| sub(br, bi, k, i, x));
+                }
+            }
+            for k in (s..e).rev() {
+                let (cr, ci) = (re[k * n + k], imv[k * n + k]);
+                let (xr, xi) = (br[k], bi[k]);
+                let y = if cplx {
+                    (xr * cr - xi * ci, xr * ci + xi * cr)
+                } else {
+                    (xr * cr, 0.0)
+                };
+                (br[k], bi[k]) = y;
+                (s..k).for_each(|i| sub(br, bi, k, i, y));
+            }
+        }
+        Some((re, imv, piv))
+    }
+
+    /// Whether factors stored `ld` apart (LINPACK's row order for `L`) are the plain
+    /// factors `plain` (`n` apart, LAPACK's order) bit for bit: `U` and the blocks below as
+    /// they are, each column of `L` once the later steps' swaps are applied to it.
+    fn same_factors(ld: usize, ours: &[f64], plain: &[f64], piv: &[usize], bounds: &[usize]) {
+        let n = piv.len();
+        for w in bounds.windows(2) {
+            let (s, e) = (w[0], w[1]);
+            for c in s..e {
+                let col = &ours[c * ld..][..n];
+                let mut l = col[c + 1..e].to_vec();
+                for t in c + 1..e {
+                    l.swap(t - c - 1, piv[t] - c - 1);
+                }
+                let lower: Vec<f64> = col[..=c]
+                    .iter()
+                    .chain(&l)
+                    .chain(&col[e..])
+                    .copied()
+                    .collect();
+                let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                assert_eq!(bits(&lower), bits(&plain[c * n..][..n]), "column {c}");
+            }
+        }
+    }
+
+    /// The factorisations and solves, in both instances, give the plain loops' bits: the
+    /// factors (`L`'s rows in LINPACK's order, the rest as they are) and the solutions, in
+    /// blocks, with zeros and negative zeros among the entries.
+    #[test]
+    fn the_solves_are_the_plain_loops_bit_for_bit() {
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        let mut next = entries(4242);
+        for (n, bounds) in [
+            (1, vec![0, 1]),
+            (4, vec![0, 4]),
+            (5, vec![0, 2, 5]),
+            (9, vec![0, 9]),
+            (13, vec![0, 3, 13]),
+            (27, vec![0, 3, 27]),
+            (31, vec![0, 1, 6, 20, 31]),
+        ] {
+            let block = |i: usize| bounds.iter().rposition(|&b| b <= i).expect("block");
+            let mut entry = |r: usize, c: usize| {
+                let v = next();
+                if block(c) > block(r) {
+                    0.0
+                } else if v.abs() < 0.3 {
+                    if v < 0.0 { -0.0 } else { 0.0 }
+                } else {
+                    v
+                }
+            };
+            let (mut a, mut ai) = (vec![0.0; n * n], vec![0.0; n * n]);
+            for c in 0..n {
+                for r in 0..n {
+                    a[c * n + r] = entry(r, c);
+                    ai[c * n + r] = entry(r, c);
+                }
+                // A dominant entry off the diagonal, a cyclic shift within the block: every
+                // block regular, and every step of the elimination pivots.
+                let (bs, be) = (bounds[block(c)], bounds[block(c) + 1]);
+                a[c * n + bs + (c - bs + 1) % (be - bs)] += 4.0;
+            }
+            let rhs: Vec<f64> = (0..2 * n)
+                .map(|i| if i % 5 == 3 { -0.0 } else { next() })
+                .collect();
+            let (mut wr, mut wi) = (rhs[..n].to_vec(), vec![0.0; n]);
+            let (real_lu, _, real_piv) =
+                plain_solve(n, &bounds, (a.clone(), None), (&mut wr, &mut wi)).expect("regular");
+            let (mut zr, mut zi) = (rhs[..n].to_vec(), rhs[n..].to_vec());
+            let cplx = (a.clone(), Some(ai.clone()));
+            let (lu_re, lu_im, complex_piv) =
+                plain_solve(n, &bounds, cplx, (&mut zr, &mut zi)).expect("regular");
+            for wide in [false, true] {
+                let mut real = RealLu::new(n + 3);
+                let mut complex = ComplexLu::new(n + 3);
+                real.start_blocks(&bounds);
+                complex.start_blocks(&bounds);
+                for c in 0..n {
+                    for r in 0..n {
+                        real.set(r, c, a[c * n + r]);
+                        complex.set(r, c, a[c * n + r], ai[c * n + r]);
+                    }
+                }
+                assert!(real.factor_on(wide) && complex.factor_on(wide));
+                assert_eq!(
+                    (&real.piv[..n], &complex.piv[..n]),
+                    (&real_piv[..], &complex_piv[..])
+                );
+                same_factors(n, &real.a, &real_lu, &real_piv, &bounds);
+                same_factors(n, &complex.re, &lu_re, &complex_piv, &bounds);
+                same_factors(n, &complex.im, &lu_im, &complex_piv, &bounds);
+                let mut x = rhs[..n].to_vec();
+                real.solve_on(wide, &mut x);
+                assert_eq!(bits(&x), bits(&wr), "real, n = {n}, wide {wide}");
+                let (mut yr, mut yi) = (rhs[..n].to_vec(), rhs[n..].to_vec());
+                complex.solve_on(wide, &mut yr, &mut yi);
+                assert_eq!(bits(&yr), bits(&zr), "complex re, n = {n}, wide {wide}");
+                assert_eq!(bits(&yi), bits(&zi), "complex im, n = {n}, wide {wide}");
+            }
+        }
     }
 
     /// The instances compiled for AVX2 give the baseline's bits, in blocks too (where the
