@@ -16,6 +16,8 @@
 //! they stay two pairs of neighbours in two vector registers: added `(0 + 1) + (2 + 3)`, the
 //! compiler interleaves them with a shuffle on every load (a third more instructions).
 
+use crate::common::all_finite;
+
 /// `Σ aᵢ bᵢ` over the shorter of the two, in four interleaved partial sums.
 #[inline]
 pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
@@ -92,7 +94,7 @@ impl Hessenberg {
                 self.h[r * n + c] = j(r, c);
             }
         }
-        if !self.h[..n * n].iter().all(|x| x.is_finite()) {
+        if !all_finite(&self.h[..n * n]) {
             return;
         }
         for k in 0..n.saturating_sub(2) {
@@ -200,7 +202,7 @@ fn shifted_band(a: &mut [f64], c: f64, hess: &Hessenberg) -> bool {
             *a = -h;
         }
         a[r * n + r] += c;
-        if !a[band].iter().all(|x| x.is_finite()) {
+        if !all_finite(&a[band]) {
             return false;
         }
     }
