@@ -478,36 +478,17 @@ fn chain_inward<const K: usize>(
     let (b, p) = (&chain.order, chain.parent);
     let tip = b[0];
     let r = chain.tip_at; // the hinge point in the tip's frame
-    // The hinge axes in the tip's axes, and the rotation from the parent's axes to the tip's;
-    // `off[t]`: link `b[t]`'s origin from the hinge point (tip's axes), for its pivot scale.
-    let mut e = [Vec3::zeros(); K];
-    let mut off = [Vec3::zeros(); K];
-    e[0] = chain.axis[0];
-    let mut rot = data.xup[tip].rot;
-    for t in 1..K {
-        let i = b[t];
-        if chain.offset_links {
-            off[t] = -(rot * chain.link_at[t]);
-        }
-        // Links about coordinate axes: a signed column, and two columns mixed.
-        (e[t], rot) = match &model.coord_axis[i] {
-            Some(a) => (a.times_axis(&rot), a.post_rotate(&rot, &data.xup[i].rot)),
-            None => (rot * chain.axis[t], rot * data.xup[i].rot),
-        };
-    }
-    // The chain's velocity-product term: c = X_C (X_L2 c_L1 + c_L2) + c_C, then at the point.
-    let mut c = data.c[b[K - 1]];
-    for t in (0..K - 1).rev() {
-        let i = b[t];
-        c = apply_motion(&model.coord_axis[i], &data.xup[i], &c) + data.c[i];
-    }
-    let c = Motion::new(c.ang, c.lin - r.cross(&c.ang));
+    let ChainFrame { e, off, rot, c } = chain_frame::<K>(model, &data.xup, &data.c, chain);
     let mut u = [0.0; K];
     for t in 0..K {
         u[t] = tau[chain.dof[t]];
     }
     if loaded && (1..K).any(|t| data.pa[b[t]] != Force::zero()) {
-        links_bias(model, data, chain, &mut u);
+        let (du, g) = links_bias::<K>(model, &data.xup, &data.pa, chain);
+        for t in 1..K {
+            u[t] += du[t];
+        }
+        data.pa[p] += g;
     }
     let (head, tail) = data.ia.split_at_mut(tip);
     let ia: &ArticulatedInertia = if data.ia_started[tip] {
@@ -595,25 +576,81 @@ fn chain_inward<const K: usize>(
     Ok(())
 }
 
-/// The links' own bias (external forces only: they have no inertia) reaches the chain's
-/// parent rigidly and loads the hinges between them and the parent (`u`, elimination order),
-/// as in the tree form. Out of line: only calls with external forces on links come here.
-#[inline(never)]
-fn links_bias<const K: usize>(model: &Model, data: &mut Data, chain: &Chain, u: &mut [f64; K]) {
+/// A chain's geometry at its hinge point, in the tip's axes: what [`chain_frame`] returns.
+pub(crate) struct ChainFrame<const K: usize> {
+    /// The hinge axes, elimination order (the tip's hinge first).
+    pub e: [Vec3; K],
+    /// Link `order[t]`'s origin from the hinge point (zero unless the chain has offset
+    /// links), for its pivot scale.
+    pub off: [Vec3; K],
+    /// The rotation from the chain parent's axes to the tip's.
+    pub rot: Mat3,
+    /// The chain's velocity-product acceleration at the hinge point:
+    /// `c = X_C (X_L2 c_L1 + c_L2) + c_C`, moved to the point.
+    pub c: Motion,
+}
+
+/// The geometry of `chain` from the bodies' `Xup` and velocity-product terms `c` (the rigid
+/// ABA's and the flexible one's first passes both leave them).
+#[inline(always)]
+pub(crate) fn chain_frame<const K: usize>(
+    model: &Model,
+    xup: &[Transform],
+    c: &[Motion],
+    chain: &Chain,
+) -> ChainFrame<K> {
     let b = &chain.order;
+    let mut e = [Vec3::zeros(); K];
+    let mut off = [Vec3::zeros(); K];
+    e[0] = chain.axis[0];
+    let mut rot = xup[b[0]].rot;
+    for t in 1..K {
+        let i = b[t];
+        if chain.offset_links {
+            off[t] = -(rot * chain.link_at[t]);
+        }
+        // Links about coordinate axes: a signed column, and two columns mixed.
+        (e[t], rot) = match &model.coord_axis[i] {
+            Some(a) => (a.times_axis(&rot), a.post_rotate(&rot, &xup[i].rot)),
+            None => (rot * chain.axis[t], rot * xup[i].rot),
+        };
+    }
+    let mut cc = c[b[K - 1]];
+    for t in (0..K - 1).rev() {
+        let i = b[t];
+        cc = apply_motion(&model.coord_axis[i], &xup[i], &cc) + c[i];
+    }
+    let r = chain.tip_at;
+    let c = Motion::new(cc.ang, cc.lin - r.cross(&cc.ang));
+    ChainFrame { e, off, rot, c }
+}
+
+/// The links' own bias `pa` (external forces only: they have no inertia) reaches the chain's
+/// parent rigidly and loads the hinges between them and the parent: returns what to add to
+/// each hinge's `u` (elimination order; entry 0, the tip's, is zero) and to the parent's
+/// bias, as in the tree form. Out of line: only calls with external forces on links come
+/// here.
+#[inline(never)]
+pub(crate) fn links_bias<const K: usize>(
+    model: &Model,
+    xup: &[Transform],
+    pa: &[Force],
+    chain: &Chain,
+) -> ([f64; K], Force) {
+    let b = &chain.order;
+    let mut du = [0.0; K];
     let mut g = Force::zero();
     for t in 1..K {
         if t > 1 {
             let i = b[t - 1];
-            g = inv_apply_force(&model.coord_axis[i], &data.xup[i], &g);
+            g = inv_apply_force(&model.coord_axis[i], &xup[i], &g);
         }
-        g += data.pa[b[t]];
+        g += pa[b[t]];
         let j = model.joints[b[t]].as_ref().expect("joint");
-        u[t] -= j.s.dot(&g);
+        du[t] = -j.s.dot(&g);
     }
     let i = b[K - 1];
-    let g = inv_apply_force(&model.coord_axis[i], &data.xup[i], &g);
-    data.pa[chain.parent] += g;
+    (du, inv_apply_force(&model.coord_axis[i], &xup[i], &g))
 }
 
 /// The singular-hinge error of body `i`'s hinge (the tree form's, see [`aba`]).
@@ -653,7 +690,7 @@ fn project<const K: usize>(
 /// body's frame, same axes: `B_h = B − [r]×C`, `A_h = A − [r]×Bᵀ + B_h [r]×` (`C` is
 /// unchanged).
 #[inline(never)]
-fn to_point(ia: &ArticulatedInertia, r: &Vec3) -> (Mat3, Mat3) {
+pub(crate) fn to_point(ia: &ArticulatedInertia, r: &Vec3) -> (Mat3, Mat3) {
     let bh = ia.b - cross_columns(r, &ia.c);
     let ah =
         ia.a - cross_columns(r, &ia.b.transpose()) - cross_columns(r, &bh.transpose()).transpose();

@@ -1,6 +1,7 @@
 //! Forward dynamics of a tree with flexible bodies: the articulated-body algorithm with each
 //! body's hinge and modes eliminated together as one `(1 + m)`-DOF joint. O(n) in bodies.
 
+use super::chain;
 use super::data::{FlexData, check_state, velocities_on};
 use super::dense;
 use super::model::FlexModel;
@@ -29,7 +30,10 @@ use nalgebra::DVector;
 /// instructions a call on the flexible deployment's bus with three wheels (31.7 k to
 /// 28.0 k, with the fast path below). Where a rotor rides on a flexible body every rotor
 /// stays a body. Bodies on their parent's frame move by the coordinate-axis fast path of their
-/// hinge's transform where it has one.
+/// hinge's transform where it has one. A spherical gimbal of massless links
+/// ([`FlexModel::folded_chains`]) is eliminated at its tip as one joint with the tip's modes
+/// (`chain.rs`), as the rigid ABA eliminates it: 2.2 % fewer instructions a right-hand side
+/// on the flexible deployment.
 pub fn aba<'d>(
     model: &FlexModel,
     data: &'d mut FlexData,
@@ -214,6 +218,14 @@ fn articulated_in<'d>(
         if fold && rigid.is_gyrostat[i] {
             continue;
         }
+        if let Some(k) = model.chain_of[i].filter(|&k| folds(model, k, locked)) {
+            // A folded chain's link has no inertia: only its external wrench, which the
+            // chain's elimination takes from its bias.
+            if rigid.chains[k].order[0] != i {
+                data.pa[i] = fext.map_or(Force::zero(), |f| Force::zero() - f[i]);
+                continue;
+            }
+        }
         match model.modes[i] {
             0 => own_terms(model, data, i, 0, q, v, fext),
             1 => own_terms(model, data, i, 1, q, v, fext),
@@ -230,6 +242,17 @@ fn articulated_in<'d>(
     // the common mode counts, the loops unrolled (same operations, same bits).
     for i in (1..n).rev() {
         if fold && rigid.is_gyrostat[i] {
+            continue;
+        }
+        if let Some(k) = model.chain_of[i].filter(|&k| folds(model, k, locked)) {
+            // A spherical chain: eliminated at its tip, its links with it.
+            if rigid.chains[k].order[0] == i {
+                match model.modes[i] {
+                    0 => chain::inward(model, data, k, 0, tau, fext.is_some())?,
+                    3 => chain::inward(model, data, k, 3, tau, fext.is_some())?,
+                    m => chain::inward(model, data, k, m, tau, fext.is_some())?,
+                }
+            }
             continue;
         }
         let (ia, pa) = match model.modes[i] {
@@ -325,6 +348,18 @@ fn articulated_in<'d>(
             };
             data.ddq[joint.dof] = qdd;
             data.a[i] = a + joint.s * qdd;
+            continue;
+        }
+        if let Some(k) = model.chain_of[i].filter(|&k| folds(model, k, locked)) {
+            // Its links come first in this order and are set with it.
+            let chain = &rigid.chains[k];
+            if chain.order[0] == i {
+                match model.modes[i] {
+                    0 => chain::outward(model, data, k, 0),
+                    3 => chain::outward(model, data, k, 3),
+                    m => chain::outward(model, data, k, m),
+                }
+            }
             continue;
         }
         match model.modes[i] {
@@ -547,6 +582,17 @@ fn outward(model: &FlexModel, data: &mut FlexData, i: usize, m: usize, locked: O
     for k in 0..m {
         data.ddq[nv + o + k] = y[h + k];
     }
+}
+
+/// Whether chain `k` is eliminated as one spherical joint in this call: it folds
+/// ([`FlexModel`]'s `fold_chain`) and none of its hinges is locked.
+#[inline(always)]
+fn folds(model: &FlexModel, k: usize, locked: Option<&[bool]>) -> bool {
+    let chain = &model.rigid.chains[k];
+    let hinge = |b: usize| model.rigid.joints[b].as_ref().expect("joint").hinge();
+    chain.order[..chain.k]
+        .iter()
+        .all(|&b| h_free(locked, hinge(b)))
 }
 
 /// Whether `hinge` moves (not locked).

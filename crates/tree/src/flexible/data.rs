@@ -1,6 +1,7 @@
 //! [`FlexData`]: the reusable workspace of the flexible algorithms, and their shared first
 //! pass (transforms, velocities, the node subspaces `G`, velocity-product accelerations).
 
+use super::chain::ChainWork;
 use super::model::FlexModel;
 use crate::aba::apply_motion;
 use crate::error::DynamicsError;
@@ -53,11 +54,14 @@ pub struct FlexData {
     pub(crate) u_col: Vec<Force>,
     pub(crate) u: Vec<f64>,
     pub(crate) u_offset: Vec<usize>,
+    /// Per chain of the rigid model: its elimination at the tip where the ABA folds it
+    /// (`flexible/chain.rs`).
+    pub(crate) chains: Vec<ChainWork>,
     /// The root's `(6 + m₀)` system (ABA, free base).
     pub(crate) root: Vec<f64>,
     /// Scratch of `6 + max modes` entries.
     pub(crate) tmp: Vec<f64>,
-    /// Scratch columns, `1 + max modes` (CRBA, ABA).
+    /// Scratch columns, `3 + max modes` (CRBA, ABA, a folded chain's three hinges).
     pub(crate) cols: Vec<Force>,
     /// Mass matrix `M`, `nv x nv` (CRBA).
     pub mass_matrix: DMatrix<f64>,
@@ -115,9 +119,19 @@ impl FlexData {
             u_col: vec![Force::zero(); nu],
             u: vec![0.0; nu],
             u_offset,
+            chains: (0..model.rigid.chains.len())
+                .map(|k| {
+                    let tip = model.rigid.chains[k].order[0];
+                    ChainWork::new(if model.fold_chain[k] {
+                        3 + model.modes[tip]
+                    } else {
+                        0
+                    })
+                })
+                .collect(),
             root: vec![0.0; r * r],
             tmp: vec![0.0; 6 + mm],
-            cols: vec![Force::zero(); 1 + mm],
+            cols: vec![Force::zero(); 3 + mm],
             mass_matrix: DMatrix::zeros(nv, nv),
             tau: DVector::zeros(nv),
             ddq: DVector::zeros(nv),

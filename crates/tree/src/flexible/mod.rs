@@ -45,6 +45,7 @@
 
 pub mod aba;
 pub mod beam;
+mod chain;
 pub mod crba;
 pub mod data;
 mod dense;

@@ -126,6 +126,12 @@ pub struct FlexModel {
     /// Every balanced rotor of the rigid model ([`crate::Gyrostat`]) rides on a rigid
     /// carrier: the flexible ABA folds them into their carriers as the rigid ABA does.
     pub(crate) fold_rotors: bool,
+    /// Per chain of the rigid model ([`crate::Chain`]): whether the flexible ABA eliminates
+    /// it at its tip as one spherical joint (`flexible/chain.rs`): three hinges without
+    /// armature, rigid links and a rigid parent (the tip may be flexible).
+    pub(crate) fold_chain: Vec<bool>,
+    /// Per body: the chain it is the tip or a link of, where that chain folds.
+    pub(crate) chain_of: Vec<Option<usize>>,
 }
 
 fn invalid(body: &str, what: impl Into<String>) -> FlexError {
@@ -384,8 +390,26 @@ impl FlexModel {
             .gyrostats
             .iter()
             .all(|g| modes[g.parent] == 0 && modes[g.body] == 0 && nodes[g.body].is_none());
+        let fold_chain = rigid
+            .chains
+            .iter()
+            .map(|c| {
+                let rigid_links = c.order[1..c.k].iter().all(|&l| modes[l] == 0);
+                c.spherical && rigid_links && modes[c.parent] == 0
+            })
+            .collect::<Vec<_>>();
+        let mut chain_of = vec![None; n];
+        for (k, c) in rigid.chains.iter().enumerate() {
+            if fold_chain[k] {
+                for &b in &c.order[..c.k] {
+                    chain_of[b] = Some(k);
+                }
+            }
+        }
         Ok(FlexModel {
             fold_rotors,
+            fold_chain,
+            chain_of,
             rigid,
             modes,
             tips,
@@ -619,6 +643,25 @@ impl FlexModel {
             *frame -= s.shortening * s.j0_form(etad, etad);
             s.add_force(vi, eta, modal);
         }
+    }
+    /// The rigid model's [`crate::Chain`]s that the flexible ABA eliminates at their tips as
+    /// one spherical joint with the tip's modes: three hinges without armature, links
+    /// without modes and a parent without modes. The others' links are bodies there.
+    pub fn folded_chains(&self) -> impl Iterator<Item = &crate::Chain> {
+        self.rigid
+            .chains
+            .iter()
+            .zip(&self.fold_chain)
+            .filter_map(|(c, &f)| f.then_some(c))
+    }
+    /// The same model with every [`crate::Chain`]'s links kept as plain bodies in the
+    /// flexible ABA: the reference form against which the folded chains are checked (as
+    /// [`Model::without_chains`] for the rigid ABA).
+    pub fn without_chains(&self) -> FlexModel {
+        let mut m = self.clone();
+        m.fold_chain.fill(false);
+        m.chain_of.fill(None);
+        m
     }
     /// Largest number of modes of one body.
     pub(crate) fn max_modes(&self) -> usize {

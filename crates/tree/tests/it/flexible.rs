@@ -13,7 +13,7 @@ use satsim_tree::flexible::{
 };
 use satsim_tree::samples::{SplitMix, random_tree};
 use satsim_tree::spatial::{Force, Mat3, Vec3};
-use satsim_tree::{BaseKind, Body, Data, Hinge, ModelBuilder};
+use satsim_tree::{BaseKind, Body, Data, Hinge, Model, ModelBuilder};
 
 /// The contract's example beam along `axis`, bending along `bend`, rooted at the origin.
 fn beam(axis: Vec3, bend: Vec3, modes: usize) -> Beam {
@@ -125,13 +125,28 @@ fn modes_are_mass_normalised_and_orthogonal() {
 
 /// A random flexible tree: `random_tree`'s bodies and hinges, some bodies (the root among
 /// them for odd seeds) flexible: beams of random placement, or given modal data with
-/// general node shapes (three rotation stages).
-fn random_flexible(n: usize, base: BaseKind, seed: u64) -> FlexModel {
-    let rigid = random_tree(n, base, false, seed);
+/// general node shapes (three rotation stages). With `massless_links`, some bodies are
+/// massless links of 2- and 3-hinge chains (`random_tree`'s).
+pub(crate) fn random_flexible(
+    n: usize,
+    base: BaseKind,
+    massless_links: bool,
+    seed: u64,
+) -> FlexModel {
+    with_random_modes(random_tree(n, base, massless_links, seed), seed)
+}
+
+/// `rigid` with random bodies made flexible, as [`random_flexible`] makes them (for odd
+/// seeds the root among them; never a massless body).
+pub(crate) fn with_random_modes(rigid: Model, seed: u64) -> FlexModel {
     let mut rng = SplitMix(seed ^ 0xf1e8);
     let builder = rigid.to_builder();
     let mut flex = Vec::new();
     for (i, b) in rigid.bodies().iter().enumerate() {
+        // Massless links stay rigid (the chains' links: `flexible_chains.rs`).
+        if b.mass() == 0.0 && *b.inertia_com() == Mat3::zeros() {
+            continue;
+        }
         let pick = if i == 0 {
             seed % 2 == 1
         } else {
@@ -198,7 +213,7 @@ fn random_flexible(n: usize, base: BaseKind, seed: u64) -> FlexModel {
 /// A random state: attitude, hinge angles, deformations,
 /// rates, accelerations, external forces.
 #[allow(clippy::type_complexity)]
-fn random_state(
+pub(crate) fn random_state(
     model: &FlexModel,
     rng: &mut SplitMix,
 ) -> (Vec<f64>, Vec<f64>, Vec<f64>, Vec<Force>) {
@@ -230,7 +245,7 @@ fn random_state(
     (q, v, a, f)
 }
 
-fn max_abs(x: &[f64]) -> f64 {
+pub(crate) fn max_abs(x: &[f64]) -> f64 {
     x.iter().fold(0.0, |m, y| m.max(y.abs()))
 }
 
@@ -246,7 +261,7 @@ fn rnea_crba_aba_agree_on_random_flexible_trees() {
         } else {
             BaseKind::Free
         };
-        let model = random_flexible(3 + (seed % 8) as usize, base, seed);
+        let model = random_flexible(3 + (seed % 8) as usize, base, false, seed);
         let n = model.rigid().n_bodies();
         flexible_bodies += (0..n).filter(|&i| model.modes(i) > 0).count();
         carried += (1..n)
@@ -321,7 +336,7 @@ fn hybrid_aba_equals_the_reduced_crba_solve() {
         } else {
             BaseKind::Free
         };
-        let model = random_flexible(3 + (seed % 8) as usize, base, seed);
+        let model = random_flexible(3 + (seed % 8) as usize, base, false, seed);
         let r = model.rigid();
         let mut rng = SplitMix(seed ^ 0x10c4);
         let locked: Vec<bool> = (0..r.n_hinges())
@@ -687,8 +702,8 @@ fn frequencies_match_rigid_chain_discretisations() {
 fn per_call_algorithms_do_not_allocate() {
     for (model, seed) in [
         (bus_with_two_beams(4, 0.01), 1u64),
-        (random_flexible(9, BaseKind::Free, 3), 3),
-        (random_flexible(7, BaseKind::Fixed, 5), 5),
+        (random_flexible(9, BaseKind::Free, false, 3), 3),
+        (random_flexible(7, BaseKind::Fixed, false, 5), 5),
     ] {
         let mut rng = SplitMix(seed);
         let (q, v, a, fext) = random_state(&model, &mut rng);
@@ -827,7 +842,7 @@ fn centrifugal_stiffening_gives_southwell_coefficient() {
 #[test]
 fn the_first_pass_leaves_the_deformed_inertias() {
     for seed in 0..12u64 {
-        let model = random_flexible(3 + (seed % 6) as usize, BaseKind::Free, seed);
+        let model = random_flexible(3 + (seed % 6) as usize, BaseKind::Free, false, seed);
         let mut rng = SplitMix(seed ^ 0x1e);
         let mut data = FlexData::new(&model);
         let mut poses = Data::new(model.rigid());

@@ -5,6 +5,7 @@
 mod chains;
 mod common;
 mod flexible;
+mod flexible_chains;
 mod flexible_dynamics;
 mod flexible_field;
 #[cfg(feature = "files")]
