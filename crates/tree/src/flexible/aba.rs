@@ -209,6 +209,7 @@ fn articulated_in<'d>(
         velocities_on(wide, model, data, q, v);
     }
     let nv = rigid.nv();
+    set_chain_folds(model, data, locked);
     // Balanced rotors ride on their rigid carriers as gyrostats (see `crate::aba::aba`):
     // not bodies here, their carriers start from the inertias with the rotors locked.
     let fold = model.fold_rotors;
@@ -218,7 +219,7 @@ fn articulated_in<'d>(
         if fold && rigid.is_gyrostat[i] {
             continue;
         }
-        if let Some(k) = model.chain_of[i].filter(|&k| folds(model, k, locked)) {
+        if let Some(k) = model.chain_of[i].filter(|&k| data.chain_folds[k]) {
             // A folded chain's link has no inertia: only its external wrench, which the
             // chain's elimination takes from its bias.
             if rigid.chains[k].order[0] != i {
@@ -244,7 +245,7 @@ fn articulated_in<'d>(
         if fold && rigid.is_gyrostat[i] {
             continue;
         }
-        if let Some(k) = model.chain_of[i].filter(|&k| folds(model, k, locked)) {
+        if let Some(k) = model.chain_of[i].filter(|&k| data.chain_folds[k]) {
             // A spherical chain: eliminated at its tip, its links with it.
             if rigid.chains[k].order[0] == i {
                 match model.modes[i] {
@@ -350,7 +351,7 @@ fn articulated_in<'d>(
             data.a[i] = a + joint.s * qdd;
             continue;
         }
-        if let Some(k) = model.chain_of[i].filter(|&k| folds(model, k, locked)) {
+        if let Some(k) = model.chain_of[i].filter(|&k| data.chain_folds[k]) {
             // Its links come first in this order and are set with it.
             let chain = &rigid.chains[k];
             if chain.order[0] == i {
@@ -584,15 +585,17 @@ fn outward(model: &FlexModel, data: &mut FlexData, i: usize, m: usize, locked: O
     }
 }
 
-/// Whether chain `k` is eliminated as one spherical joint in this call: it folds
-/// ([`FlexModel`]'s `fold_chain`) and none of its hinges is locked.
-#[inline(always)]
-fn folds(model: &FlexModel, k: usize, locked: Option<&[bool]>) -> bool {
-    let chain = &model.rigid.chains[k];
-    let hinge = |b: usize| model.rigid.joints[b].as_ref().expect("joint").hinge();
-    chain.order[..chain.k]
-        .iter()
-        .all(|&b| h_free(locked, hinge(b)))
+/// Which chains are eliminated as one spherical joint in this call, into `data.chain_folds`:
+/// those that fold ([`FlexModel`]'s `fold_chain`) with none of their hinges locked.
+fn set_chain_folds(model: &FlexModel, data: &mut FlexData, locked: Option<&[bool]>) {
+    let rigid = &model.rigid;
+    for (k, chain) in rigid.chains.iter().enumerate() {
+        let hinge = |b: usize| rigid.joints[b].as_ref().expect("joint").hinge();
+        data.chain_folds[k] = model.fold_chain[k]
+            && chain.order[..chain.k]
+                .iter()
+                .all(|&b| h_free(locked, hinge(b)));
+    }
 }
 
 /// Whether `hinge` moves (not locked).

@@ -57,6 +57,9 @@ pub struct FlexData {
     /// Per chain of the rigid model: its elimination at the tip where the ABA folds it
     /// (`flexible/chain.rs`).
     pub(crate) chains: Vec<ChainWork>,
+    /// Per chain: whether the ABA's current call eliminates it at its tip (none of its hinges
+    /// locked).
+    pub(crate) chain_folds: Vec<bool>,
     /// The root's `(6 + m₀)` system (ABA, free base).
     pub(crate) root: Vec<f64>,
     /// Scratch of `6 + max modes` entries.
@@ -129,6 +132,7 @@ impl FlexData {
                     })
                 })
                 .collect(),
+            chain_folds: vec![false; model.rigid.chains.len()],
             root: vec![0.0; r * r],
             tmp: vec![0.0; 6 + mm],
             cols: vec![Force::zero(); 3 + mm],
