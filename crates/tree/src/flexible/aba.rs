@@ -32,8 +32,8 @@ use nalgebra::DVector;
 /// stays a body. Bodies on their parent's frame move by the coordinate-axis fast path of their
 /// hinge's transform where it has one. A spherical gimbal of massless links
 /// ([`FlexModel::folded_chains`]) is eliminated at its tip as one joint with the tip's modes
-/// (`chain.rs`), as the rigid ABA eliminates it: 2.2 % fewer instructions a right-hand side
-/// on the flexible deployment.
+/// (`chain.rs`), as the rigid ABA eliminates it: 15.9 k instructions a call on the flexible
+/// deployment where the links as bodies took 17.0 k.
 pub fn aba<'d>(
     model: &FlexModel,
     data: &'d mut FlexData,
