@@ -35,8 +35,6 @@ pub(crate) struct ChainWork {
     u_col: Vec<Force>,
     /// `u = τ − Sᵀ pA` (and the links' external forces).
     u: Vec<f64>,
-    /// Scratch, `3 + m`.
-    y: Vec<f64>,
 }
 
 impl ChainWork {
@@ -48,7 +46,6 @@ impl ChainWork {
             d: vec![0.0; n * n],
             u_col: vec![Force::zero(); n],
             u: vec![0.0; n],
-            y: vec![0.0; n],
         }
     }
 }
@@ -141,7 +138,7 @@ pub(super) fn inward(
         cols[j] = wj;
         cc -= (wj.lin * d[j * n + j]) * wj.lin.transpose();
     }
-    let y = &mut w.y[..n];
+    let y = &mut data.tmp[..n];
     y.copy_from_slice(u);
     dense::solve(d, n, y);
     let mut pa = pa;
@@ -166,9 +163,9 @@ pub(super) fn outward(model: &FlexModel, data: &mut FlexData, k: usize, m: usize
     let chain = &rigid.chains[k];
     let (b, p, nv) = (&chain.order, chain.parent, rigid.nv());
     let n = 3 + m;
-    let w = &mut data.chains[k];
+    let w = &data.chains[k];
     let a = w.x.apply_motion(&data.a[p]) + w.c;
-    let y = &mut w.y[..n];
+    let y = &mut data.tmp[..n];
     for (j, yj) in y.iter_mut().enumerate() {
         *yj = w.u[j] - a.dot(&w.u_col[j]);
     }
