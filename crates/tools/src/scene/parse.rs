@@ -237,13 +237,10 @@ impl<'a> Parser<'a> {
         Ok(scene)
     }
 
-    /// A fixed step longer than the duration or the output interval is silently cut to it
-    /// (steps land on output times), so the run is not at the step the user chose: say so,
-    /// naming the keys, at `integrator.step`'s line.
-    /// A fixed RK4 step must resolve the structure's highest frequency at the initial state
-    /// ([`super::flexible::highest_frequency`]): beyond RK4's stability limit
-    /// ([`super::flexible::RK4_LIMIT`]) the modes grow without bound, so it is an error at
-    /// `integrator.step` naming the mode, its frequency and the largest stable step.
+    /// A fixed RK4 step must keep the structure's modes at the initial state within RK4's
+    /// stability region, their damping included ([`super::flexible::rk4_limit`]): beyond
+    /// it the modes grow without bound, so it is an error at `integrator.step` naming the
+    /// mode, its frequency and damping, and the largest stable step.
     fn check_modal_step(
         &self,
         file: &SceneFile,
@@ -252,33 +249,42 @@ impl<'a> Parser<'a> {
         elastic: &Elastic,
         h: f64,
     ) -> Result<(), FileError> {
-        use super::flexible::{RK4_LIMIT, highest_frequency, mode_of};
+        use super::flexible::{mode_of, rk4_limit};
         let q: Vec<f64> = initial.q.iter().chain(&elastic.eta).copied().collect();
-        let Some((w, e)) = highest_frequency(flex, &q) else {
+        let Some(limit) = rk4_limit(flex, &q) else {
             return Ok(());
         };
-        if w * h <= RK4_LIMIT {
+        if h <= limit.step {
             return Ok(());
         }
-        let (body, mode) = mode_of(flex, e);
+        let (body, mode) = mode_of(flex, limit.elastic);
         let span = file
             .integrator
             .as_ref()
             .and_then(|i| i.get_ref().step.as_ref())
             .map(|s| s.span());
-        let stable = RK4_LIMIT / w;
+        let (w, l) = (limit.omega, limit.lambda);
+        let eigenvalue = if l.im > 0.0 {
+            format!("{:.4} ± {:.4}i 1/s", l.re, l.im)
+        } else {
+            format!("{:.4} 1/s", l.re)
+        };
         Err(self.error(
             span,
             format!(
-                "`integrator.step` = {h} s is too long for rk4 with the flexible modes: the structure's highest mode (mostly body `{body}`'s mode {mode}) is at {:.4} Hz (ω = {:.4} rad/s) and rk4 is stable only for ω × step <= 2√2 = 2.83 (here {:.3}): set `step` at most {} s (the largest stable step is {stable:.4e} s), or use an adaptive method (`method = \"radau5\"`, implicit, steps over the mode)",
+                "`integrator.step` = {h} s is too long for rk4 with the flexible modes: the mode that limits it (mostly body `{body}`'s mode {mode}) is at {:.4} Hz (ω = {w:.4} rad/s) with damping ratio {:.3}, eigenvalue {eigenvalue}, and rk4 is stable on it only for steps up to {:.4e} s (ω × step <= 2√2 = 2.83 undamped; here ω × step = {:.3}): set `step` at most {} s, or use an adaptive method (`method = \"radau5\"`, implicit, steps over the mode)",
                 w / std::f64::consts::TAU,
-                w,
+                limit.zeta,
+                limit.step,
                 w * h,
-                Num(0.9 * stable)
+                Num(0.9 * limit.step)
             ),
         ))
     }
 
+    /// A fixed step longer than the duration or the output interval is silently cut to it
+    /// (steps land on output times), so the run is not at the step the user chose: say so,
+    /// naming the keys, at `integrator.step`'s line.
     fn step_warning(
         &self,
         file: &SceneFile,

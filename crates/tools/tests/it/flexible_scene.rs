@@ -13,7 +13,12 @@ use std::path::Path;
 /// hub's own antenna, three modes, its highest at 276 rad/s: within RK4's reach at 5 ms) to
 /// check the order of the elastic coordinates.
 fn scene(extra: &str) -> Scene {
-    let text = format!(
+    Scene::parse(&scene_text(extra), Path::new("flex.toml")).expect("a valid scene")
+}
+
+/// [`scene`]'s text.
+fn scene_text(extra: &str) -> String {
+    format!(
         r#"duration = 2.0
 {extra}
 [model]
@@ -52,8 +57,7 @@ view = false
 [effects.hinge_springs]
 stiffness = [10.0]
 "#
-    );
-    Scene::parse(&text, Path::new("flex.toml")).expect("a valid scene")
+    )
 }
 
 #[test]
@@ -181,6 +185,61 @@ fn an_rk4_step_beyond_the_highest_modes_stability_limit_is_refused_and_the_limit
         "{err}"
     );
     Scene::parse(&text(0.005), Path::new("flex.toml")).expect("a stable step");
+}
+
+/// With heavy damping the mode that limits RK4 is overdamped: its fast eigenvalue is real,
+/// about `2ζω` in size, and the step limit falls far below the undamped `2√2/ω`. The check
+/// takes the damping in, and its limit is as sharp as the undamped one.
+#[test]
+fn an_rk4_step_limit_takes_the_modes_damping_in() {
+    use satsim_tools::scene::flexible::{RK4_LIMIT, highest_frequency, rk4_limit};
+    // The hub's antenna (its highest mode about 280 rad/s) with damping ratio 5.
+    let damped = |step: f64| {
+        scene_text("")
+            .replace(
+                "length = 1.0, EI = 20.0, rho_A = 1.0, modes = 3 }",
+                "length = 1.0, EI = 20.0, rho_A = 1.0, modes = 3 }\ndamping = 5.0",
+            )
+            .replace("step = 0.005", &format!("step = {step}"))
+    };
+    let s = Scene::parse(&damped(0.0002), Path::new("flex.toml")).expect("a stable step");
+    let flex = s.flexible.as_ref().unwrap();
+    let q: Vec<f64> = s.initial.q.iter().chain(&s.elastic.eta).copied().collect();
+    let (w, _) = highest_frequency(flex, &q).unwrap();
+    let limit = rk4_limit(flex, &q).unwrap();
+    assert!(limit.lambda.im == 0.0 && limit.zeta > 4.5, "{limit:?}");
+    // The real eigenvalue ω (ζ + √(ζ² − 1)) of the highest mode: RK4's real-axis limit 2.785.
+    assert!(
+        limit.step < 0.15 * RK4_LIMIT / w,
+        "{} against {}",
+        limit.step,
+        RK4_LIMIT / w
+    );
+    let with_step = |h: f64| {
+        let mut s = s.clone();
+        s.options = s.options.clone().with_fixed_step(h);
+        s.duration = 0.5;
+        let third = s.flexible.as_ref().unwrap().elastic_offset(0) + 2;
+        s.elastic.eta[third] = 0.01;
+        s
+    };
+    let at_rest = largest_eta(&with_step(0.0002)).unwrap();
+    let under = largest_eta(&with_step(0.98 * limit.step)).unwrap();
+    assert!(under < 2.0 * at_rest, "{under} against {at_rest}");
+    let over = largest_eta(&with_step(1.02 * limit.step));
+    assert!(over.is_none_or(|m| m > 1e3 * at_rest), "{over:?}");
+    // Read from the file, a step within the undamped limit but over the damped one is an
+    // error at its line, naming the mode and its damping.
+    let Err(err) = Scene::parse(&damped(2.0 * limit.step), Path::new("flex.toml")) else {
+        panic!("a step beyond the damped limit was accepted")
+    };
+    let err = err.to_string();
+    assert!(
+        err.contains("flex.toml:")
+            && err.contains("body `hub`'s mode 3")
+            && err.contains("damping ratio"),
+        "{err}"
+    );
 }
 
 /// The hinge angles, the attitude quaternion and the step count of a run of `scene` with
