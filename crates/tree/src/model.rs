@@ -556,7 +556,7 @@ fn finite3(v: &Vec3, what: impl FnOnce() -> String) -> Result<(), ModelError> {
     }
 }
 
-fn check_body(b: &Body) -> Result<(), ModelError> {
+pub(crate) fn check_body(b: &Body) -> Result<(), ModelError> {
     if !b.mass.is_finite() {
         return Err(ModelError::NonFinite(format!("body `{}`: mass", b.name)));
     }

@@ -189,6 +189,9 @@ impl FlexModel {
                 .iter_mut()
                 .find(|b| b.name == f.body)
                 .ok_or_else(|| FlexError::UnknownBody(f.body.clone()))?;
+            // The rigid part as written, before the beam's mass hides a negative mass or
+            // inertia in the sum.
+            crate::model::check_body(body)?;
             if let Modes::Beam(beam) = &f.modes {
                 check_beam(&f.body, beam)?;
                 // A uniform thin rod of the beam's mass along its axis.

@@ -606,6 +606,15 @@ pub fn flex_model_of(file: &ModelFile, text: &str, origin: &Path) -> Result<Flex
                     .iter_mut()
                     .find(|e| &e.name == name)
                     .expect("the reader pushed every body");
+                // The rigid part as written, before the modes' mass hides a negative mass or
+                // inertia in the sum.
+                crate::model::check_body(entry).map_err(|error| {
+                    SpannedError::Model {
+                        span: file.locate(&error),
+                        error,
+                    }
+                    .in_file(text, origin)
+                })?;
                 add_inertia(entry, modes.inertia());
                 let mut nodes = Vec::new();
                 for h in file.hinge.iter().map(|h| h.get_ref()) {

@@ -180,6 +180,49 @@ fn bad_flexible_values_name_file_and_line() {
     );
 }
 
+/// The rigid part of a flexible body is checked as written: the beam's or the modes' mass,
+/// added to it, would hide a negative mass or inertia in the sum (the panel's beam is 10 kg).
+#[test]
+fn a_flexible_bodys_rigid_part_is_checked_before_its_modes_add_to_it() {
+    let negative = MODEL.replacen(
+        "mass = 0.0",
+        "mass = -1.0\ninertia = [[0.1, 0, 0], [0, 0.1, 0], [0, 0, 0.1]]",
+        1,
+    );
+    assert_eq!(
+        error_of(&negative),
+        "flex.toml:8: body `panel`: mass -1 is negative"
+    );
+    let inertia = MODEL.replacen(
+        "mass = 0.0",
+        "mass = 1.0\ninertia = [[-0.5, 0, 0], [0, 1, 0], [0, 0, 1]]",
+        1,
+    );
+    let err = error_of(&inertia);
+    assert!(
+        err.starts_with("flex.toml:9: body `panel`: ") && err.contains("-0.5"),
+        "{err}"
+    );
+    // The same through a modes file.
+    let dir = scratch("rigid_part");
+    std::fs::write(
+        dir.join("m.toml"),
+        write_modes_file(&contract_beam(), None, &example_nodes()),
+    )
+    .unwrap();
+    let beam_line = MODEL.lines().nth(9).unwrap();
+    let with_file = negative
+        .replace(beam_line, "modes_file = \"m.toml\"")
+        .replace("damping = 0.005\n", "");
+    let err = parse_flex_model(&with_file, &dir.join("flex.toml"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.ends_with("flex.toml:8: body `panel`: mass -1 is negative"),
+        "{err}"
+    );
+}
+
 /// A scratch folder of this test process.
 fn scratch(tag: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("satsim_flex_io_{}_{tag}", std::process::id()));
