@@ -59,13 +59,15 @@ pub struct Lattice<const N: usize> {
 
 impl<const N: usize> Lattice<N> {
     /// A lattice of spacing `cell_deg` degrees, rounded to divide 90 degrees (`90/cell_deg`
-    /// rounded to the nearest whole number of cells, at least 1: the poles are nodes); `None`
-    /// when `cell_deg` is not a finite number in (0, 90].
+    /// rounded to the nearest whole number of cells, at least 1: the poles are nodes, and at
+    /// most `1e12`, beyond which every position's indices are out of range and the field is
+    /// evaluated where asked); `None` when `cell_deg` is not a finite number in (0, 90].
     pub fn new(cell_deg: f64) -> Option<Self> {
         if !(cell_deg > 0.0 && cell_deg <= 90.0) {
             return None;
         }
-        let half_turn = 2 * (90.0 / cell_deg).round().max(1.0) as i64;
+        // Bounded before the integer conversion: 90 / 1e-300 would saturate and overflow.
+        let half_turn = 2 * (90.0 / cell_deg).round().clamp(1.0, MAX_INDEX) as i64;
         let step = PI / half_turn as f64;
         Some(Self {
             half_turn,
@@ -228,6 +230,10 @@ mod tests {
         assert!(v[0].is_nan());
         assert!(Lattice::<2>::new(0.0).is_none() && Lattice::<2>::new(f64::NAN).is_none());
         assert_eq!(Lattice::<1>::new(0.7).unwrap().cell_deg(), 90.0 / 129.0);
+        // A vanishing spacing is a lattice too fine to index: the function where asked.
+        let mut fine = Lattice::<2>::new(1e-300).unwrap();
+        let r = Vec3::new(6.9e6, 1.0e5, -2.0e5);
+        assert_eq!(fine.value(0, &r, f), f(&r));
     }
 
     #[test]
