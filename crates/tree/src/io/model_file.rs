@@ -414,8 +414,8 @@ impl ModelFile {
                 span: Some(f.get_ref().key_span().unwrap_or_else(|| f.span())),
                 message: format!(
                     "body `{name}`: flexible bodies are read only by the flexible reader \
-                     (`read_flex_model`); the rigid algorithms (`Model`, `satsim dynamics`) do \
-                     not take them: run the model in a scene"
+                     (`read_flex_model`); the rigid algorithms (`Model`) do not take them: run \
+                     the model in a scene or with `satsim dynamics`"
                 ),
             });
         }
