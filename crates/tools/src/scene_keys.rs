@@ -11,7 +11,8 @@
 //! An override replaces a value that the scene (or its model or state file) already gives by
 //! one of the same kind: a number by a number (an integer by an integer), a string by a
 //! string, a boolean by a boolean, an array by an array, a table by an inline table; where
-//! the scene accepts either of two forms (`initial.base.attitude`, `armature`), by either. A value
+//! the scene accepts either of two forms (`initial.base.attitude`, `armature`,
+//! `fsw.estimator.star_tracker`), by either. A value
 //! that is not valid TOML replaces a string as that string (so `--set
 //! integrator.method=rk4` needs no quotes). A key the file leaves out (at its default) is
 //! added, with the tables on its way (`--set integrator.step=0.01`, `--set
@@ -312,11 +313,13 @@ impl Override {
 
 /// Whether the scene accepts `value` at `key` in place of a value of another kind: the keys
 /// a scene may write in either of two forms, `initial.base.attitude` (a quaternion array or
-/// an Euler or axis-angle table) and `armature` (one number or one per hinge).
+/// an Euler or axis-angle table), `armature` (one number or one per hinge) and
+/// `fsw.estimator.star_tracker` (a sensor's name or a list of them).
 fn other_form(key: &str, value: &Value) -> bool {
     match key {
         "initial.base.attitude" => matches!(value, Value::Array(_) | Value::Table(_)),
         "armature" => matches!(value, Value::Array(_) | Value::Float(_)),
+        "fsw.estimator.star_tracker" => matches!(value, Value::Array(_) | Value::String(_)),
         _ => false,
     }
 }
@@ -759,6 +762,13 @@ mod tests {
         assert_eq!(r["armature"].as_array().map(Vec::len), Some(2));
         set_one(&mut r, "armature=0").unwrap();
         assert_eq!(r["armature"].as_float(), Some(0.0));
+        // The estimator's star trackers: one name or a list of them.
+        let mut f: Table = toml::from_str("[fsw.estimator]\nstar_tracker = \"st\"\n").unwrap();
+        let trackers = |f: &Table| f["fsw"]["estimator"]["star_tracker"].clone();
+        set_one(&mut f, "fsw.estimator.star_tracker=[\"st\", \"st2\"]").unwrap();
+        assert_eq!(trackers(&f).as_array().map(Vec::len), Some(2));
+        set_one(&mut f, "fsw.estimator.star_tracker=\"st2\"").unwrap();
+        assert_eq!(trackers(&f).as_str(), Some("st2"));
         // Elsewhere the kinds still must match.
         let e = set_one(&mut r, "initial.base.attitude=\"identity\"").unwrap_err();
         assert!(e.0.contains("wrong type"), "{e}");
