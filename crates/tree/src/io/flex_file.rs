@@ -222,6 +222,22 @@ impl ModesFile {
                     ));
                 }
             }
+            // Products of the modes' slopes under a weight that is not negative: a Gram
+            // matrix. An indefinite one would soften the structure under the load that
+            // stiffens it, and fail only when the run starts.
+            let lowest =
+                nalgebra::SymmetricEigen::new(nalgebra::DMatrix::from_fn(m, m, |i, j| r[i][j]))
+                    .eigenvalues
+                    .min();
+            if lowest < -1e-9 * scale {
+                return Err((
+                    rows.span(),
+                    format!(
+                        "`stiffening.{key}` must be positive semi-definite (the weighted products of the modes' slopes): its lowest eigenvalue is {}",
+                        Num(lowest)
+                    ),
+                ));
+            }
         }
         for (key, v) in [("s1", &s.s1), ("s2", &s.s2)] {
             if v.get_ref().len() != m {

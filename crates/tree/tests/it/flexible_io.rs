@@ -452,6 +452,11 @@ fn bad_modes_files_name_their_file_and_line() {
             "j0",
             "`stiffening.j0`: 3 rows of 3 expected",
         ),
+        (
+            good.replacen("j1 = [\n  [", "j1 = [\n  [-", 1),
+            "j1",
+            "`stiffening.j1` must be positive semi-definite",
+        ),
     ] {
         let err = read(&text);
         let line = line_of(&text, key);
