@@ -272,7 +272,8 @@ impl<'a> Parser<'a> {
         Err(self.error(
             span,
             format!(
-                "`integrator.step` = {h} s is too long for rk4 with the flexible modes: the mode that limits it (mostly body `{body}`'s mode {mode}) is at {:.4} Hz (ω = {w:.4} rad/s) with damping ratio {:.3}, eigenvalue {eigenvalue}, and rk4 is stable on it only for steps up to {:.4e} s (ω × step <= 2√2 = 2.83 undamped; here ω × step = {:.3}): set `step` at most {} s, or use an adaptive method (`method = \"radau5\"`, implicit, steps over the mode)",
+                "`integrator.step` = {} s is too long for rk4 with the flexible modes: the mode that limits it (mostly body `{body}`'s mode {mode}) is at {:.4} Hz (ω = {w:.4} rad/s) with damping ratio {:.3}, eigenvalue {eigenvalue}, and rk4 is stable on it only for steps up to {:.4e} s (ω × step <= 2√2 = 2.83 undamped; here ω × step = {:.3}): set `step` at most {} s, or use an adaptive method (`method = \"radau5\"`, implicit, steps over the mode)",
+                Num(h),
                 w / std::f64::consts::TAU,
                 limit.zeta,
                 limit.step,
