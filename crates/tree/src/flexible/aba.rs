@@ -296,7 +296,7 @@ fn articulated_in<'d>(
                     root[(6 + k) * r + 6 + l] = data.cm[c0 + k * m0 + l];
                 }
             }
-            if !dense::factor(root, r) {
+            if dense::factor(root, r).is_err() {
                 return Err(DynamicsError::SingularBase);
             }
             let pa = data.pa[0].to_array();
@@ -321,7 +321,7 @@ fn articulated_in<'d>(
             if m0 > 0 {
                 let root = &mut data.root[..m0 * m0];
                 root.copy_from_slice(&data.cm[c0..c0 + m0 * m0]);
-                if !dense::factor(root, m0) {
+                if dense::factor(root, m0).is_err() {
                     return Err(DynamicsError::SingularBase);
                 }
                 let rhs = &mut data.tmp[..m0];
@@ -478,10 +478,12 @@ fn eliminate(
             dm[(h + k) * d + h + l] = cm[k * m + l];
         }
     }
-    let pivot = if d > 0 { dm[0] } else { 0.0 };
-    if d > 0 && !dense::factor(dm, d) {
+    if d > 0
+        && let Err((j, pivot)) = dense::factor(dm, d)
+    {
+        // Column `j`: the hinge's (first, unless locked), else mode `j − h`.
         return Err(DynamicsError::NotPositiveDefinite {
-            index: if h == 1 { joint.dof } else { nv + o },
+            index: if j < h { joint.dof } else { nv + o + j - h },
             pivot,
         });
     }

@@ -119,10 +119,12 @@ pub(super) fn inward(
             };
         }
     }
-    let pivot = d[0];
-    if !dense::factor(d, n) {
+    if let Err((j, pivot)) = dense::factor(d, n) {
         return Err(DynamicsError::NotPositiveDefinite {
-            index: chain.dof[0],
+            index: match column(j, m) {
+                Ok(t) => chain.dof[t],
+                Err(q) => nv + o + q,
+            },
             pivot,
         });
     }

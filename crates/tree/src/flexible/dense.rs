@@ -9,8 +9,8 @@
 //! the Cholesky factors and solves of its pivots (`perf`), for 2.5 % of its instructions.
 
 /// Factors the symmetric `n x n` matrix in `a` (row-major, lower triangle read) into
-/// `A = L D Lᵀ`: `L` (unit diagonal) below the diagonal, `1 / dⱼ` on it. `false` unless
-/// positive definite (every `dⱼ > 0`, finite).
+/// `A = L D Lᵀ`: `L` (unit diagonal) below the diagonal, `1 / dⱼ` on it. Unless positive
+/// definite (every `dⱼ > 0`, finite), the first pivot that is not: `Err((j, dⱼ))`.
 ///
 /// The sizes of a body with up to five modes and of a free root without modes are
 /// instances with `n` known (the loops unrolled, no index checks): the same operations in
@@ -18,13 +18,17 @@
 /// mode count then pick their sizes with no call (0.3 % of the flexible deployment's
 /// instructions, 0.7 % of its time).
 #[inline(always)]
-pub(crate) fn factor(a: &mut [f64], n: usize) -> bool {
+pub(crate) fn factor(a: &mut [f64], n: usize) -> Result<(), (usize, f64)> {
     match n {
         1 => {
             // A rigid hinge's pivot, most of a tree's: no loops.
             let d = a[0];
             a[0] = 1.0 / d;
-            d > 0.0 && d.is_finite()
+            if d > 0.0 && d.is_finite() {
+                Ok(())
+            } else {
+                Err((0, d))
+            }
         }
         2 => factor_in(&mut a[..4], 2),
         3 => factor_in(&mut a[..9], 3),
@@ -38,7 +42,7 @@ pub(crate) fn factor(a: &mut [f64], n: usize) -> bool {
 /// Row by row: `tᵢⱼ = Lᵢⱼ dⱼ = aᵢⱼ − Σₖ₍ₖ<ⱼ₎ tᵢₖ Lⱼₖ` kept in row `i` until `dᵢ = aᵢᵢ −
 /// Σₖ tᵢₖ Lᵢₖ` is known, each `Lᵢₖ = tᵢₖ / dₖ` taken on the way.
 #[inline(always)]
-fn factor_in(a: &mut [f64], n: usize) -> bool {
+fn factor_in(a: &mut [f64], n: usize) -> Result<(), (usize, f64)> {
     for i in 0..n {
         for j in 0..i {
             let mut t = a[i * n + j];
@@ -55,11 +59,11 @@ fn factor_in(a: &mut [f64], n: usize) -> bool {
             a[i * n + k] = l;
         }
         if !(d > 0.0 && d.is_finite()) {
-            return false;
+            return Err((i, d));
         }
         a[i * n + i] = 1.0 / d;
     }
-    true
+    Ok(())
 }
 
 /// `b ← L⁻¹ b` (forward substitution, `L` of unit diagonal) with the factor of [`factor`].
@@ -124,9 +128,9 @@ mod tests {
         // The shortcut for n = 1 against the loops it skips.
         for (a, b) in [(2.5, 7.0), (1e-9, -3.0), (4.0, 1.0)] {
             let mut l = [a];
-            assert!(factor(&mut l, 1));
+            assert!(factor(&mut l, 1).is_ok());
             let mut g = [a];
-            assert!(factor_in(&mut g, std::hint::black_box(1)));
+            assert!(factor_in(&mut g, std::hint::black_box(1)).is_ok());
             assert_eq!(l, g);
             let mut x = [b];
             solve(&l, 1, &mut x);
@@ -136,7 +140,8 @@ mod tests {
             assert!((x[0] * a - b).abs() <= 1e-15 * b.abs());
         }
         for bad in [0.0, -1.0, f64::NAN, f64::INFINITY] {
-            assert!(!factor(&mut [bad], 1), "{bad}");
+            let e = factor(&mut [bad], 1).unwrap_err();
+            assert!(e.0 == 0 && e.1.total_cmp(&bad).is_eq(), "{bad}");
         }
     }
 
@@ -144,7 +149,7 @@ mod tests {
     fn the_factor_solves_a_small_system_and_is_l_d_lt() {
         let a = [4.0, 2.0, 0.4, 2.0, 5.0, 1.0, 0.4, 1.0, 3.0];
         let mut l = a;
-        assert!(factor(&mut l, 3));
+        assert!(factor(&mut l, 3).is_ok());
         // L D Lᵀ from the factor: unit L below the diagonal, 1/d on it.
         let lij = |i: usize, j: usize| match i.cmp(&j) {
             std::cmp::Ordering::Greater => l[i * 3 + j],
@@ -164,10 +169,11 @@ mod tests {
             let r: f64 = (0..3).map(|j| a[i * 3 + j] * x[j]).sum();
             assert!((r - b[i]).abs() < 1e-14, "{r} {}", b[i]);
         }
+        // The first pivot that is not positive, and where: the second, 1 − 2²/1.
         let mut indefinite = [1.0, 2.0, 2.0, 1.0];
-        assert!(!factor(&mut indefinite, 2));
+        assert_eq!(factor(&mut indefinite, 2), Err((1, -3.0)));
         let mut singular = [1.0, 1.0, 1.0, 1.0];
-        assert!(!factor(&mut singular, 2));
+        assert_eq!(factor(&mut singular, 2), Err((1, 0.0)));
     }
 
     #[test]
@@ -184,8 +190,8 @@ mod tests {
                 }
             }
             let (mut fixed, mut general) = (a.clone(), a.clone());
-            assert!(factor(&mut fixed, n));
-            assert!(factor_in(&mut general, std::hint::black_box(n)));
+            assert!(factor(&mut fixed, n).is_ok());
+            assert!(factor_in(&mut general, std::hint::black_box(n)).is_ok());
             assert_eq!(fixed, general, "n = {n}");
             let rhs: Vec<f64> = (0..n).map(|k| (k as f64).cos()).collect();
             let (mut x, mut y) = (rhs.clone(), rhs.clone());

@@ -13,7 +13,7 @@ use satsim_tree::flexible::{
 };
 use satsim_tree::samples::{SplitMix, random_tree};
 use satsim_tree::spatial::{Force, Mat3, Vec3};
-use satsim_tree::{BaseKind, Body, Data, Hinge, Model, ModelBuilder};
+use satsim_tree::{BaseKind, Body, Data, DynamicsError, Hinge, Model, ModelBuilder};
 
 /// The contract's example beam along `axis`, bending along `bend`, rooted at the origin.
 fn beam(axis: Vec3, bend: Vec3, modes: usize) -> Beam {
@@ -326,6 +326,38 @@ fn rnea_crba_aba_agree_on_random_flexible_trees() {
 
 // Hybrid dynamics: locked hinges have zero acceleration, the rest is the CRBA's system with
 // the locked rows and columns removed.
+/// A state whose deformation makes the mass matrix indefinite (a large `η` through the
+/// inertia's first-order terms) is refused by the ABA naming the pivot that failed, not a
+/// positive one, and a coordinate of the system. The two trees and states are of the
+/// random family above (its seeds 903 and 1261, drawn the same way) where `M` has a negative
+/// eigenvalue.
+#[test]
+fn an_indefinite_state_is_refused_with_the_failing_pivot() {
+    for seed in [903u64, 1261] {
+        let base = if seed % 3 == 0 {
+            BaseKind::Fixed
+        } else {
+            BaseKind::Free
+        };
+        let model = random_flexible(3 + (seed % 8) as usize, base, false, seed);
+        let mut rng = SplitMix(seed ^ 0xabc);
+        let (q, v, a, _) = random_state(&model, &mut rng);
+        let mut data = FlexData::new(&model);
+        let m = flexible::crba(&model, &mut data, &q).unwrap().clone();
+        assert!(
+            SymmetricEigen::new(m).eigenvalues.min() < -0.1,
+            "seed {seed}: M is indefinite here"
+        );
+        match flexible::aba(&model, &mut data, &q, &v, &a, None) {
+            Err(DynamicsError::NotPositiveDefinite { index, pivot }) => {
+                assert!(index < model.nv(), "seed {seed}: coordinate {index}");
+                assert!(pivot <= 0.0 || pivot.is_nan(), "seed {seed}: pivot {pivot}");
+            }
+            other => panic!("seed {seed}: {other:?}"),
+        }
+    }
+}
+
 #[test]
 fn hybrid_aba_equals_the_reduced_crba_solve() {
     let mut locked_total = 0;
