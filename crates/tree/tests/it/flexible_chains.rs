@@ -96,7 +96,8 @@ fn check(model: &FlexModel, seed: u64, locked: Option<&[bool]>, wrenches: bool) 
     }
     let scale = max_abs(&tau) + mff.amax() * xf.amax() + b.amax();
     let residual = (&mff * &xf - &rhs).amax() / scale;
-    let apart = (&ddq - &ddq_tree).amax() / ddq_tree.amax();
+    // Over the accelerations' size (zero where every hinge is locked and nothing else moves).
+    let apart = (&ddq - &ddq_tree).amax() / ddq_tree.amax().max(f64::MIN_POSITIVE);
     (residual, apart)
 }
 
