@@ -264,6 +264,9 @@ impl<'a> Parser<'a> {
             .and_then(|i| i.get_ref().step.as_ref())
             .map(|s| s.span());
         let (w, l) = (limit.omega, limit.lambda);
+        // A step to suggest: nine tenths of the limit, two significant digits, rounded down.
+        let digits = 10f64.powf((0.9 * limit.step).log10().floor() - 1.0);
+        let suggested = (0.9 * limit.step / digits).floor() * digits;
         let eigenvalue = if l.im > 0.0 {
             format!("{:.4} ± {:.4}i 1/s", l.re, l.im)
         } else {
@@ -272,13 +275,12 @@ impl<'a> Parser<'a> {
         Err(self.error(
             span,
             format!(
-                "`integrator.step` = {} s is too long for rk4 with the flexible modes: the mode that limits it (mostly body `{body}`'s mode {mode}) is at {:.4} Hz (ω = {w:.4} rad/s) with damping ratio {:.3}, eigenvalue {eigenvalue}, and rk4 is stable on it only for steps up to {:.4e} s (ω × step <= 2√2 = 2.83 undamped; here ω × step = {:.3}): set `step` at most {} s, or use an adaptive method (`method = \"radau5\"`, implicit, steps over the mode)",
+                "`integrator.step` = {} s is too long for rk4 with the flexible modes: the mode that limits it (mostly body `{body}`'s mode {mode}) is at {:.4} Hz (ω = {w:.4} rad/s) with damping ratio {:.3}, eigenvalue {eigenvalue}, and rk4 is stable on it only for steps up to {:.4e} s (|λ| × step within rk4's stability region: <= 2√2 = 2.83 undamped, <= 2.785 for a real λ; here |λ| × step = {:.3}): set `step` at most {suggested:.1e} s, or use an adaptive method (`method = \"radau5\"`, implicit, steps over the mode)",
                 Num(h),
                 w / std::f64::consts::TAU,
                 limit.zeta,
                 limit.step,
-                w * h,
-                Num(0.9 * limit.step)
+                l.norm() * h,
             ),
         ))
     }
