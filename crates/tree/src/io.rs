@@ -16,6 +16,9 @@
 //! Every [`FileError`] displays as `PATH:LINE: message` (or `PATH: field: message` where
 //! only the field is known, as for JSON arrays of the wrong length).
 //!
+//! A fixed-length array is read through [`exact`], which refuses too many entries as serde
+//! refuses too few (`invalid length 4, expected an array of length 3`, at its line).
+//!
 //! ```
 //! use satsim_tree::io::{parse_model, parse_state};
 //! use std::path::Path;
@@ -50,12 +53,14 @@
 
 mod attitude;
 mod error;
+mod exact;
 mod flex_file;
 mod model_file;
 mod state_file;
 
 pub use attitude::{Attitude, EULER_SEQUENCES, EulerSequence};
 pub use error::{FileError, SpannedError, line_of};
+pub use exact::{Exact, exact};
 pub use flex_file::{
     MAX_FILE_MODES, MODES_FILE_NODE_TOLERANCE, ModesFile, NodeFile, flex_model_of,
     parse_flex_model, parse_modes_file, read_flex_model, write_modes_file,

@@ -28,7 +28,7 @@ use super::{
 };
 use nalgebra::{DMatrix, Matrix3, Quaternion, Rotation3, UnitQuaternion};
 use satsim_integrate::SystemError;
-use satsim_tree::io::FileError;
+use satsim_tree::io::{FileError, exact};
 use satsim_tree::spatial::Vec3;
 use serde::Deserialize;
 use toml::Spanned;
@@ -209,7 +209,7 @@ pub struct AttitudeFile {
     #[serde(default)]
     pub target: Option<Spanned<String>>,
     /// Target attitude (inertial) or offset from the orbital frame, `[w, x, y, z]`.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exact")]
     pub attitude: Option<Spanned<[f64; 4]>>,
     /// Proportional gain (N m/rad).
     pub kp: f64,

@@ -26,7 +26,7 @@ use super::{Bound, Context, Effect, Forces, Links, Needs, SceneEffect, Section, 
 use satsim_environment::Epoch;
 use satsim_environment::magnetic::{FieldModel, GeoField, LATTICE_DEG};
 use satsim_integrate::SystemError;
-use satsim_tree::io::FileError;
+use satsim_tree::io::{FileError, exact};
 use satsim_tree::spatial::{Force, Vec3};
 use serde::Deserialize;
 use toml::Spanned;
@@ -190,6 +190,7 @@ pub struct TorquerFile {
     #[serde(default)]
     pub body: Option<Spanned<String>>,
     /// Its axis, the body's axes (normalised).
+    #[serde(deserialize_with = "exact")]
     pub axis: Spanned<[f64; 3]>,
     /// The largest dipole (A m², > 0); commands beyond it are clamped.
     pub max_dipole: Spanned<f64>,
@@ -206,7 +207,7 @@ pub struct MagneticFile {
     #[serde(default)]
     pub field: Option<Spanned<String>>,
     /// The spacecraft's residual dipole, root axes (A m², default 0).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exact")]
     pub residual_dipole: Option<Spanned<[f64; 3]>>,
     /// The spacing (degrees) of the Earth-fixed lattice IGRF-14 is read through (default
     /// [`LATTICE_DEG`]; 0: the model at every call; at most [`MAX_LATTICE_DEG`]).

@@ -65,7 +65,7 @@ use super::{
     Rotor, SceneEffect, Section, set_text,
 };
 use satsim_integrate::{EventAction, EventDirection, SystemError};
-use satsim_tree::io::FileError;
+use satsim_tree::io::{FileError, exact};
 use satsim_tree::spatial::Vec3;
 use serde::Deserialize;
 use toml::Spanned;
@@ -777,6 +777,7 @@ pub struct WheelFile {
     /// Unique name.
     pub name: Spanned<String>,
     /// Spin axis, bus axes (normalised).
+    #[serde(deserialize_with = "exact")]
     pub axis: Spanned<[f64; 3]>,
     /// Axial inertia (kg m², > 0).
     pub inertia: Spanned<f64>,
@@ -787,13 +788,13 @@ pub struct WheelFile {
     #[serde(default)]
     pub mass: Option<f64>,
     /// Rotor centre, bus frame (m, default origin).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exact")]
     pub at: Option<[f64; 3]>,
     /// The carrier body's name (default the root).
     #[serde(default)]
     pub body: Option<Spanned<String>>,
     /// Mounting error, a rotation vector (rad, the carrier's axes; default none).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exact")]
     pub misalignment: Option<[f64; 3]>,
     /// Torque limit (N m, default unlimited).
     #[serde(default)]
@@ -934,9 +935,55 @@ impl SceneEffect for ReactionWheels {
 
 #[cfg(test)]
 mod tests {
-    use super::{Effect, Links, ReactionWheels, Wheel};
+    use super::{Effect, Links, ReactionWheels, Wheel, WheelsFile};
+    use crate::effects::section::SceneText;
     use satsim_tree::spatial::Vec3;
     use satsim_tree::{BaseKind, samples};
+    use std::path::Path;
+
+    /// A wheel's `axis`, `at` or `misalignment` with too many entries is refused at its line,
+    /// as one with too few: `[0, 0, 1, "junk"]` is not read as `[0, 0, 1]`.
+    #[test]
+    fn wheel_vectors_of_the_wrong_length_are_refused_at_their_line() {
+        let read = |line: &str| {
+            let text = format!(
+                "[effects.reaction_wheels]\n[[effects.reaction_wheels.wheel]]\nname = \"w\"\ninertia = 0.1\naxis = [0, 0, 1]\n{line}\n"
+            );
+            let scene = SceneText::new(&text, Path::new("s.toml"));
+            match scene.effect_section::<WheelsFile>("reaction_wheels") {
+                Ok(_) => "accepted".to_owned(),
+                Err(e) => e.to_string(),
+            }
+        };
+        assert_eq!(read(""), "accepted");
+        let key = "s.toml:6: `effects.reaction_wheels.wheel";
+        let three = "expected an array of length 3";
+        for (line, expected) in [
+            (
+                "at = [0, 0, 1, 2]",
+                format!("{key}.at`: invalid length 4, {three}"),
+            ),
+            (
+                "at = [0, 0]",
+                format!("{key}.at`: invalid length 2, {three}"),
+            ),
+            (
+                "misalignment = [0, 0, 0, 0, 0]",
+                format!("{key}.misalignment`: invalid length 5, {three}"),
+            ),
+        ] {
+            assert_eq!(read(line), expected);
+        }
+        let text = "[effects.reaction_wheels]\n[[effects.reaction_wheels.wheel]]\nname = \"w\"\n\
+                    axis = [0, 0, 1, \"junk\"]\ninertia = 0.1\n";
+        let err = SceneText::new(text, Path::new("s.toml"))
+            .effect_section::<WheelsFile>("reaction_wheels")
+            .unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            format!("s.toml:4: `effects.reaction_wheels.wheel.axis`: invalid length 4, {three}")
+        );
+    }
 
     /// Only wheels that add no torque at all, uncommanded, take `apply`'s idle path.
     #[test]

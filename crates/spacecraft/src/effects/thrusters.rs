@@ -47,7 +47,7 @@ use super::faults::{FaultKind, Schedule};
 use super::{Bound, Context, Effect, Forces, Needs, Sampling, SceneEffect, Section};
 use nalgebra::UnitQuaternion;
 use satsim_integrate::{SystemError, stop_due};
-use satsim_tree::io::FileError;
+use satsim_tree::io::{FileError, exact};
 use satsim_tree::spatial::{Force, Vec3};
 use serde::Deserialize;
 use std::f64::consts::PI;
@@ -358,12 +358,14 @@ pub struct ThrusterFile {
     #[serde(default)]
     pub body: Option<Spanned<String>>,
     /// Point of application, body frame (m).
+    #[serde(deserialize_with = "exact")]
     pub at: Spanned<[f64; 3]>,
     /// Direction of the force on the spacecraft, body axes (normalised; not zero).
+    #[serde(deserialize_with = "exact")]
     pub direction: Spanned<[f64; 3]>,
     /// Mounting error, a rotation vector (rad, body axes; default none): the true direction
     /// is `exp([r]×) direction`.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exact")]
     pub misalignment: Option<Spanned<[f64; 3]>>,
     /// The force while on (N, > 0).
     pub thrust: Spanned<f64>,

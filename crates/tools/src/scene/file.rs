@@ -3,7 +3,7 @@
 //! sections (read by the effects themselves, see [`satsim_spacecraft::effects::registry`]).
 
 use super::flexible::ElasticFile;
-use satsim_tree::io::{BaseStateFile, HingesStateFile, ModelFile, StateFile};
+use satsim_tree::io::{BaseStateFile, HingesStateFile, ModelFile, StateFile, exact};
 use serde::de::{self, MapAccess, Visitor};
 use serde::{Deserialize, Deserializer};
 use std::collections::BTreeMap;
@@ -229,10 +229,10 @@ pub struct OrbitFile {
     #[serde(default)]
     pub true_anomaly_deg: Option<f64>,
     /// Initial position (m, inertial): with `velocity`, instead of elements.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exact")]
     pub position: Option<[f64; 3]>,
     /// Initial velocity (m/s, inertial).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exact")]
     pub velocity: Option<[f64; 3]>,
     /// Gravitational parameter (m³/s², default 3.986004418e14).
     #[serde(default)]

@@ -74,7 +74,7 @@ use satsim_spacecraft::fsw::{
 };
 use satsim_spacecraft::sensors::{Kind, Sensors};
 use satsim_tree::error::Num;
-use satsim_tree::io::{FileError, line_of};
+use satsim_tree::io::{FileError, exact, line_of};
 use satsim_tree::{BaseKind, Model};
 use serde::Deserialize;
 use std::ops::Range;
@@ -175,7 +175,7 @@ pub struct GuidanceFile {
     pub mode: Spanned<String>,
     /// Inertial: the attitude `[w, x, y, z]` (body to inertial); nadir: an offset from the
     /// orbital frame (body to orbital, default none).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exact")]
     pub attitude: Option<Spanned<[f64; 4]>>,
     /// The largest rate of the reference relative to the law's (rad/s, default none).
     #[serde(default)]
@@ -185,10 +185,10 @@ pub struct GuidanceFile {
     #[serde(default)]
     pub max_acceleration: Option<Spanned<f64>>,
     /// Sun and target: the body axis pointed (at the Sun, at the target).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exact")]
     pub axis: Option<Spanned<[f64; 3]>>,
     /// Sun and target: the body axis kept nearest the orbit normal.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exact")]
     pub secondary: Option<Spanned<[f64; 3]>>,
     /// Target: geodetic latitude (deg).
     #[serde(default)]
@@ -212,11 +212,13 @@ pub struct ControlFile {
     #[serde(default)]
     pub kind: Option<Spanned<String>>,
     /// Proportional gains (N m/rad), body axes.
+    #[serde(deserialize_with = "exact")]
     pub kp: Spanned<[f64; 3]>,
     /// Integral gains (N m/(rad s), default 0).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exact")]
     pub ki: Option<Spanned<[f64; 3]>>,
     /// Derivative gains (N m s/rad).
+    #[serde(deserialize_with = "exact")]
     pub kd: Spanned<[f64; 3]>,
     /// Sample period (s, default the estimator's).
     #[serde(default)]
@@ -228,7 +230,7 @@ pub struct ControlFile {
     #[serde(default)]
     pub magnetometer: Option<Spanned<String>>,
     /// Inertia for the gyroscopic feed-forward `ω × (J ω)` (kg m², body axes; default none).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exact")]
     pub inertia: Option<Spanned<[[f64; 3]; 3]>>,
     /// Off without removing the table (default true).
     #[serde(default)]

@@ -13,7 +13,7 @@ use satsim_spacecraft::sensors::{
 };
 use satsim_tree::Model;
 use satsim_tree::error::Num;
-use satsim_tree::io::{FileError, line_of};
+use satsim_tree::io::{FileError, exact, line_of};
 use satsim_tree::spatial::Vec3;
 use serde::Deserialize;
 use std::ops::Range;
@@ -88,13 +88,13 @@ pub struct GyroFile {
     #[serde(default)]
     pub bias_walk: Option<Spanned<f64>>,
     /// Initial bias, sensor axes (rad/s, default 0).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exact")]
     pub bias: Option<Spanned<[f64; 3]>>,
     /// Scale factor error (relative; a number or one per axis, default none).
     #[serde(default)]
     pub scale_factor: Option<Spanned<ScaleFactorFile>>,
     /// Misalignment, a rotation vector (rad, default none).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exact")]
     pub misalignment: Option<Spanned<[f64; 3]>>,
     /// Quantisation step (rad/s, default none).
     #[serde(default)]
@@ -112,10 +112,10 @@ pub struct StarTrackerFile {
     /// Sample period (s, > 0).
     pub period: Spanned<f64>,
     /// Standard deviation about the sensor's x, y, z axes (arc seconds, default 0).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exact")]
     pub noise_arcsec: Option<Spanned<[f64; 3]>>,
     /// Misalignment, a rotation vector (rad, default none).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exact")]
     pub misalignment: Option<Spanned<[f64; 3]>>,
     /// Quantisation step of the quaternion's components (default none).
     #[serde(default)]
@@ -139,7 +139,7 @@ pub struct SunSensorFile {
     #[serde(default)]
     pub noise: Option<Spanned<f64>>,
     /// Misalignment, a rotation vector (rad, default none).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exact")]
     pub misalignment: Option<Spanned<[f64; 3]>>,
     /// Quantisation step of the unit vector's components (default none).
     #[serde(default)]
@@ -160,7 +160,7 @@ pub struct MagnetometerFile {
     #[serde(default)]
     pub noise: Option<Spanned<f64>>,
     /// Misalignment, a rotation vector (rad, default none).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exact")]
     pub misalignment: Option<Spanned<[f64; 3]>>,
     /// Quantisation step (T, default none).
     #[serde(default)]
@@ -178,6 +178,7 @@ pub struct CoarseSunFile {
     /// Sample period (s, > 0).
     pub period: Spanned<f64>,
     /// The photodiode's normal, body axes (non-zero; normalised).
+    #[serde(deserialize_with = "exact")]
     pub normal: Spanned<[f64; 3]>,
     /// The field of view's half-angle (degrees, in (0, 90], default 90).
     #[serde(default)]
@@ -192,7 +193,7 @@ pub struct CoarseSunFile {
     #[serde(default)]
     pub albedo: Option<bool>,
     /// Misalignment, a rotation vector (rad, default none).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exact")]
     pub misalignment: Option<Spanned<[f64; 3]>>,
     /// Quantisation step (default none).
     #[serde(default)]

@@ -256,6 +256,33 @@ fn scene_errors_name_the_file_and_line() {
     );
 }
 
+/// A fixed-length array with too many entries is refused at its line, as one with too few,
+/// wherever the scene holds it: an effect's table, `[orbit]`, an inline model.
+#[test]
+fn scene_arrays_with_too_many_entries_are_refused_at_their_line() {
+    let four = "invalid length 4, expected an array of length 3";
+    let wheels = WHEELS.replacen("[1.0, 0.0, 0.0]", "[1.0, 0.0, 0.0, \"junk\"]", 1);
+    let orbit = "[orbit]\nposition = [7e6, 0, 0, 1]\nvelocity = [0, 7.5e3, 0]\n";
+    let inline = "duration = 1.0\n[[model.body]]\nname = \"bus\"\nmass = 1.0\n\
+                  inertia = [[1.0, 0.0, 0.0, 99.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]\n";
+    for (text, line) in [
+        (format!("{BASE}{wheels}"), 11),
+        (format!("{BASE}{orbit}"), 9),
+        (inline.to_owned(), 5),
+    ] {
+        let e = error(&text);
+        assert!(
+            e.contains(&format!("test.toml:{line}: ")) && e.contains(four),
+            "{e}"
+        );
+    }
+    let e = error(&format!("{BASE}{}", orbit.replace("0, 0, 1]", "0]")));
+    assert!(
+        e.contains("test.toml:9: ") && e.contains("invalid length 2, expected an array"),
+        "{e}"
+    );
+}
+
 #[test]
 fn unmet_needs_say_what_to_add() {
     let e = error(&format!("{BASE}{GG}"));

@@ -454,6 +454,9 @@ fn bad_sensor_input_is_an_error_naming_the_file_and_line() {
         ("[sensors]\nseed = -1\n".into(), "seed", ">= 0"),
         ("[sensors]\n[[sensors.magnetometer]]\nname = \"omega\"\nbody = \"bus\"\nperiod = 1.0\nnoise = -1.0\n".into(), "noise", ">= 0"),
         ("[sensors]\n[[sensors.gyro]]\nname = \"omega\"\nbody = \"bus\"\nperiod = 1.0\n".into(), "\"omega\"", "already has"),
+        (format!("{gyro}bias = [0.0, 0.0, 0.0, 1.0]\n"), "bias", "`sensors.gyro.bias`: invalid length 4, expected an array of length 3"),
+        (format!("{gyro}bias = [0.0, 0.0]\n"), "bias", "`sensors.gyro.bias`: invalid length 2, expected an array of length 3"),
+        ("[sensors]\n[[sensors.coarse_sun]]\nname = \"c\"\nbody = \"bus\"\nperiod = 1.0\nnormal = [1.0, 0.0, 0.0, \"junk\"]\n".into(), "normal", "`sensors.coarse_sun.normal`: invalid length 4, expected an array of length 3"),
     ];
     for (sensors, at, needle) in cases {
         let text = orbit_scene_text(1.0, 0.1, &sensors);

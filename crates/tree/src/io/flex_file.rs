@@ -19,6 +19,7 @@
 //! on; without it `stiffening = true` is refused (nothing would compute the terms).
 
 use super::error::{FileError, SpannedError, line_of};
+use super::exact::exact;
 use super::model_file::{BeamFile, ModelFile, parse_model_file, schema_message, with_key};
 use super::read_text;
 use crate::error::Num;
@@ -56,11 +57,13 @@ pub struct ModesFile {
     /// Mass of the structure (kg), positive.
     pub mass: Spanned<f64>,
     /// Its centre of mass, body frame (m), default zero.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exact")]
     pub com: Option<Spanned<[f64; 3]>>,
     /// Its inertia about its centre of mass, body axes (kg m²), rows.
+    #[serde(deserialize_with = "exact")]
     pub inertia: Spanned<[[f64; 3]; 3]>,
     /// Per mode, `[n_x, n_y, n_z, p_x, p_y, p_z]`: the column of `P` (kg^½ m, kg^½).
+    #[serde(deserialize_with = "exact")]
     pub momentum: Spanned<Vec<[f64; 6]>>,
     /// The nodes where hinges may sit.
     #[serde(default)]
@@ -78,10 +81,13 @@ pub struct ModesFile {
 #[serde(deny_unknown_fields)]
 pub struct StiffeningFile {
     /// The root of the structure's axis, body frame (m).
+    #[serde(deserialize_with = "exact")]
     pub root: Spanned<[f64; 3]>,
     /// The axis (unit), body axes.
+    #[serde(deserialize_with = "exact")]
     pub axis: Spanned<[f64; 3]>,
     /// The bending direction (unit, normal to `axis`), body axes.
+    #[serde(deserialize_with = "exact")]
     pub bend: Spanned<[f64; 3]>,
     /// `J₀ = ρA ∫ (L − x) φᵢ' φⱼ' dx` (1/m), `m` rows of `m`, symmetric.
     pub j0: Spanned<Vec<Vec<f64>>>,
@@ -100,10 +106,13 @@ pub struct NodeFile {
     /// Unique name.
     pub name: Spanned<String>,
     /// The point, body frame (m).
+    #[serde(deserialize_with = "exact")]
     pub at: Spanned<[f64; 3]>,
     /// Per mode, the point's translation (m/√kg).
+    #[serde(deserialize_with = "exact")]
     pub translation: Spanned<Vec<[f64; 3]>>,
     /// Per mode, the small rotation of the structure there (rad/√kg).
+    #[serde(deserialize_with = "exact")]
     pub rotation: Spanned<Vec<[f64; 3]>>,
 }
 

@@ -2,6 +2,7 @@
 //! a validated [`Model`].
 
 use super::error::{FileError, SpannedError, line_of};
+use super::exact::exact;
 use super::read_text;
 use crate::error::ModelError;
 use crate::facet::{DEFAULT_DRAG, Facet, facets_of_box};
@@ -69,11 +70,11 @@ pub struct BodyFile {
     /// Mass (kg).
     pub mass: Spanned<f64>,
     /// Centre of mass in the body frame (m), default zero.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exact")]
     pub com: Option<Spanned<[f64; 3]>>,
     /// Inertia about the centre of mass, body axes (kg m²), rows; required unless the mass
     /// is 0 (then zero by default).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exact")]
     pub inertia: Option<Spanned<[[f64; 3]; 3]>>,
     /// `shape = { box = [lx, ly, lz], at = [x, y, z] }`: how to draw the body (optional;
     /// no algorithm reads it).
@@ -104,8 +105,10 @@ pub struct FacetFile {
     #[serde(default)]
     pub area: Option<Spanned<f64>>,
     /// Outward unit normal (normalised if within 1e-6 of unit).
+    #[serde(deserialize_with = "exact")]
     pub normal: Spanned<[f64; 3]>,
     /// Centroid (m).
+    #[serde(deserialize_with = "exact")]
     pub at: Spanned<[f64; 3]>,
     /// Fraction of the light reflected specularly, default 0.
     #[serde(default)]
@@ -117,10 +120,10 @@ pub struct FacetFile {
     #[serde(default)]
     pub drag: Option<Spanned<f64>>,
     /// `[a, b]` (m): the rectangle's sides (an extension of the contract).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exact")]
     pub size: Option<Spanned<[f64; 2]>>,
     /// The direction of side `a` (an extension of the contract).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exact")]
     pub edge: Option<Spanned<[f64; 3]>>,
 }
 
@@ -145,10 +148,10 @@ pub struct CoefficientsFile {
 #[serde(deny_unknown_fields)]
 pub struct ShapeFile {
     /// Edge lengths along the body's x, y, z axes (m).
-    #[serde(rename = "box")]
+    #[serde(rename = "box", deserialize_with = "exact")]
     pub size: Spanned<[f64; 3]>,
     /// The box's centre in the body frame (m), default the centre of mass.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exact")]
     pub at: Option<Spanned<[f64; 3]>>,
 }
 
@@ -187,10 +190,13 @@ impl FlexibleFile {
 #[serde(deny_unknown_fields)]
 pub struct BeamFile {
     /// The clamped end, body frame (m).
+    #[serde(deserialize_with = "exact")]
     pub root: Spanned<[f64; 3]>,
     /// Unit direction root to tip (normalised if within 1e-6 of unit).
+    #[serde(deserialize_with = "exact")]
     pub axis: Spanned<[f64; 3]>,
     /// Unit direction of the deflection, perpendicular to `axis` within 1e-6.
+    #[serde(deserialize_with = "exact")]
     pub bend: Spanned<[f64; 3]>,
     /// Length (m), positive.
     pub length: Spanned<f64>,
@@ -216,15 +222,16 @@ pub struct HingeFile {
     /// Child body.
     pub child: Spanned<String>,
     /// Axis in the parent frame.
+    #[serde(deserialize_with = "exact")]
     pub axis: Spanned<[f64; 3]>,
     /// Hinge point in the parent frame (m), default zero.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exact")]
     pub at: Option<Spanned<[f64; 3]>>,
     /// Hinge point in the child frame (m), default zero.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exact")]
     pub child_at: Option<Spanned<[f64; 3]>>,
     /// Child frame relative to the parent at zero angle, `[w, x, y, z]`, default identity.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exact")]
     pub rotation: Option<Spanned<[f64; 4]>>,
     /// Armature (kg m²), default zero: rotor inertia about the axis (an extension of the
     /// contract, used to regularise a gimbal lock).

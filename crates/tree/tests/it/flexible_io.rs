@@ -3,7 +3,7 @@
 //! flexible bodies, and the beam's modes written as a modes file giving the same dynamics.
 
 use satsim_tree::flexible::{self, Beam, FlexData, FlexModel, Flexible, Modes};
-use satsim_tree::io::{parse_flex_model, parse_model, write_modes_file};
+use satsim_tree::io::{parse_flex_model, parse_model, parse_modes_file, write_modes_file};
 use satsim_tree::spatial::{Mat3, Vec3};
 use satsim_tree::{BaseKind, Body, Hinge, ModelBuilder};
 use std::path::{Path, PathBuf};
@@ -385,6 +385,74 @@ fn the_beam_as_a_modes_file_gives_the_same_dynamics() {
         "{err}"
     );
     std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// A modes file's fixed-length arrays with too many entries are refused at their line, as
+/// those with too few are: a `momentum` row of 7 is not read as its first 6.
+#[test]
+fn modes_file_arrays_of_the_wrong_length_name_their_line() {
+    let good = write_modes_file(&contract_beam(), None, &example_nodes());
+    parse_modes_file(&good, Path::new("m.toml")).unwrap();
+    let line_of =
+        |text: &str, key: &str| text.lines().position(|l| l.starts_with(key)).unwrap() + 1;
+    let com = good.lines().find(|l| l.starts_with("com = ")).unwrap();
+    let three = "invalid length 4, expected an array of length 3";
+    for (text, key, below, expected) in [
+        (
+            good.replacen("com = [", "com = [0.0, ", 1),
+            "com",
+            0,
+            format!("`com`: {three}"),
+        ),
+        (
+            good.replacen(com, "com = [0.0, 1.0, 0.0, \"junk\"]", 1),
+            "com",
+            0,
+            format!("`com`: {three}"),
+        ),
+        (
+            good.replacen(com, "com = [0.0, 1.0]", 1),
+            "com",
+            0,
+            "`com`: invalid length 2, expected an array of length 3".to_owned(),
+        ),
+        (
+            good.replacen("momentum = [\n  [", "momentum = [\n  [0.0, ", 1),
+            "momentum",
+            1,
+            "`momentum`: invalid length 7, expected an array of length 6".to_owned(),
+        ),
+        (
+            good.replacen("inertia = [[", "inertia = [[0.0, ", 1),
+            "inertia",
+            0,
+            format!("`inertia`: {three}"),
+        ),
+        (
+            good.replacen("axis = [", "axis = [0.0, ", 1),
+            "axis",
+            0,
+            format!("`stiffening.axis`: {three}"),
+        ),
+        (
+            good.replacen("at = [", "at = [0.0, ", 1),
+            "at",
+            0,
+            format!("`node.at`: {three}"),
+        ),
+        (
+            good.replacen("translation = [[", "translation = [[0.0, ", 1),
+            "translation",
+            0,
+            format!("`node.translation`: {three}"),
+        ),
+    ] {
+        let err = parse_modes_file(&text, Path::new("m.toml"))
+            .unwrap_err()
+            .to_string();
+        let line = line_of(&text, key) + below;
+        assert_eq!(err, format!("m.toml:{line}: {expected}"));
+    }
 }
 
 #[test]
