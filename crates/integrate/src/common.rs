@@ -183,6 +183,11 @@ impl Ctx {
     /// Hairer's starting step (HINIT in DOPRI5) for a method of order `order`;
     /// `f0 = f(t, x)`, `x1` and `f1` are scratch. Respects `h0`, `h_max` and
     /// the distance to `t_end`.
+    ///
+    /// The result is always finite and > 0: where the scaled norms overflow (a derivative
+    /// vast against its error scale) the estimate falls back to Hairer's `1e-6` for the
+    /// trial and to the trial step for the result, and the error control takes it from
+    /// there (a step it cannot shorten enough ends in a step size underflow at `t`).
     #[allow(clippy::too_many_arguments)]
     pub fn initial_step<S: System + ?Sized>(
         &mut self,
@@ -204,6 +209,9 @@ impl Ctx {
         } else {
             0.01 * dny / dnf
         };
+        if !(h > 0.0 && h.is_finite()) {
+            h = 1e-6;
+        }
         h = h.min(self.h_max);
         for i in 0..x.len() {
             x1[i] = x[i] + h * f0[i];
@@ -219,7 +227,12 @@ impl Ctx {
         } else {
             (0.01 / der12).powf(1.0 / (order as f64 + 1.0))
         };
-        Ok((100.0 * h).min(h1).min(self.h_max))
+        let h_new = (100.0 * h).min(h1).min(self.h_max);
+        Ok(if h_new > 0.0 && h_new.is_finite() {
+            h_new
+        } else {
+            h
+        })
     }
 }
 
@@ -418,7 +431,58 @@ pub(crate) fn combine(out: &mut [f64], x: &[f64], h: f64, coeffs: &[f64], ks: &[
 
 #[cfg(test)]
 mod tests {
-    use super::all_finite;
+    use super::{Ctx, all_finite};
+    use crate::{
+        options::{Method, Options},
+        system::{System, SystemError},
+    };
+
+    /// `x0'' = -x0` from rest at the top (`x1 = 0`), remembering the times it is evaluated at.
+    struct Swing {
+        times: Vec<f64>,
+    }
+
+    impl System for Swing {
+        fn dim(&self) -> usize {
+            2
+        }
+        fn rhs(&mut self, t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), SystemError> {
+            self.times.push(t);
+            dx[0] = x[1];
+            dx[1] = -x[0];
+            Ok(())
+        }
+    }
+
+    /// The first step from `x = [1, 0]` under `opts` (not validated), and the times the
+    /// right-hand side was evaluated at.
+    fn first_step(opts: &Options) -> (f64, Vec<f64>) {
+        let mut sys = Swing { times: Vec::new() };
+        let mut ctx = Ctx::new(&sys, opts).unwrap();
+        let x = [1.0, 0.0];
+        let mut k = vec![vec![0.0; 2]; 3];
+        let h = ctx.start_explicit(&mut sys, 5, 0.0, &x, &mut k).unwrap();
+        (h, sys.times)
+    }
+
+    #[test]
+    fn the_first_step_is_finite_where_a_zero_state_has_no_error_scale() {
+        // atol = 0 (refused by the options' validation) gives the state at zero an infinite
+        // scaled norm; a vanishing atol overflows it. Neither may become h = inf or NaN,
+        // nor a right-hand side evaluated at t = inf.
+        for atol in [0.0, 1e-320] {
+            let opts = Options {
+                atol,
+                ..Options::new(Method::Dp54)
+            };
+            let (h, times) = first_step(&opts);
+            assert!(h > 0.0 && h.is_finite(), "atol {atol}: h = {h}");
+            assert!(
+                times.iter().all(|t| t.is_finite()),
+                "atol {atol}: {times:?}"
+            );
+        }
+    }
 
     #[test]
     fn all_finite_refuses_every_infinity_and_nan_and_nothing_else() {

@@ -81,7 +81,10 @@ pub struct Options {
     pub method: Method,
     /// Relative tolerance (>= 0).
     pub rtol: f64,
-    /// Absolute tolerance (>= 0; `rtol + atol > 0`).
+    /// Absolute tolerance (> 0). It cannot be 0: a state component that is zero, or passes
+    /// through zero, would have no error scale under a relative tolerance alone (its error
+    /// norm infinite), and no step would pass the error test. `rtol = 0` (a pure absolute
+    /// tolerance) is allowed.
     pub atol: f64,
     /// First step of an adaptive run; chosen automatically (Hairer's
     /// algorithm) when `None`.
@@ -171,11 +174,13 @@ impl Options {
         if !(self.rtol >= 0.0 && self.rtol.is_finite()) {
             return bad(format!("rtol must be finite and >= 0, got {}", self.rtol));
         }
-        if !(self.atol >= 0.0 && self.atol.is_finite()) {
-            return bad(format!("atol must be finite and >= 0, got {}", self.atol));
-        }
-        if self.rtol == 0.0 && self.atol == 0.0 {
-            return bad("rtol and atol cannot both be zero".into());
+        if !(self.atol > 0.0 && self.atol.is_finite()) {
+            return bad(format!(
+                "atol must be finite and > 0, got {}: under a relative tolerance alone a state \
+                 component that is or passes through zero has no error scale; set atol to the \
+                 absolute error acceptable in the smallest components",
+                self.atol
+            ));
         }
         if let Some(h0) = self.h0.filter(|h0| !(*h0 > 0.0 && h0.is_finite())) {
             return bad(format!("h0 must be finite and > 0, got {h0}"));
@@ -306,6 +311,36 @@ mod tests {
             it.advance();
         }
         out
+    }
+
+    #[test]
+    fn atol_must_be_finite_and_positive_while_rtol_may_be_zero() {
+        let dp54 = || Options::new(Method::Dp54);
+        for (rtol, atol) in [
+            (1e-6, 0.0),
+            (0.0, 0.0),
+            (1e-6, -1e-9),
+            (1e-6, f64::INFINITY),
+            (1e-6, f64::NAN),
+            (f64::INFINITY, 1e-9),
+            (f64::NAN, 1e-9),
+            (-1e-6, 1e-9),
+        ] {
+            let e = dp54().with_tolerances(rtol, atol).validate().unwrap_err();
+            let IntegrateError::InvalidOptions(m) = e else {
+                panic!("{e:?}")
+            };
+            let key = if rtol >= 0.0 && rtol.is_finite() {
+                "atol"
+            } else {
+                "rtol"
+            };
+            assert!(m.starts_with(key), "rtol {rtol}, atol {atol}: {m}");
+        }
+        let m = dp54().with_tolerances(1e-6, 0.0).validate().unwrap_err();
+        assert!(m.to_string().contains("passes through zero"), "{m}");
+        // A pure absolute tolerance is legitimate.
+        assert!(dp54().with_tolerances(0.0, 1e-10).validate().is_ok());
     }
 
     #[test]

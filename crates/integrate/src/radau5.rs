@@ -280,8 +280,13 @@ impl Radau5 {
                 s += w * r * r;
             }
         }
-        let e = (s / ctx.wsum).sqrt().max(1e-10);
-        if e.is_finite() { e } else { f64::INFINITY }
+        // A NaN (a non-finite error or scale) is a rejection, not the floor's acceptance.
+        let e = (s / ctx.wsum).sqrt();
+        if e.is_finite() {
+            e.max(1e-10)
+        } else {
+            f64::INFINITY
+        }
     }
 
     /// Simplified Newton iteration for the stage increments at step `h`.

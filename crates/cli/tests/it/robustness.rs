@@ -290,7 +290,19 @@ fn cases() -> Vec<Case> {
             "zero tolerances",
             s("step = 0.01", "step = 0.01\nrtol = 0.0\natol = 0.0"),
             no_file(),
-            vec!["bad.toml:4", "cannot both be 0"],
+            vec!["bad.toml:8", "`integrator.atol` must be > 0"],
+        ),
+        (
+            "zero atol",
+            s("step = 0.01", "step = 0.01\nrtol = 1e-9\natol = 0.0"),
+            no_file(),
+            vec!["bad.toml:8", "`integrator.atol` must be > 0", "passes through zero"],
+        ),
+        (
+            "nan rtol",
+            s("step = 0.01", "step = 0.01\nrtol = nan"),
+            no_file(),
+            vec!["bad.toml:7", "`integrator.rtol`", "finite"],
         ),
         (
             "negative max_step",

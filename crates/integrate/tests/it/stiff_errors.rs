@@ -132,6 +132,9 @@ fn invalid_options_are_rejected() {
     let bad = [
         Options::new(Method::Dp54).with_tolerances(-1e-6, 1e-9),
         Options::new(Method::Dp54).with_tolerances(0.0, 0.0),
+        Options::new(Method::Dp54).with_tolerances(1e-6, 0.0),
+        Options::new(Method::Radau5).with_tolerances(1e-6, 0.0),
+        Options::new(Method::Dp54).with_tolerances(f64::NAN, 1e-9),
         Options::new(Method::Dp54).with_fixed_step(0.0),
         Options::new(Method::Dp54).with_h0(-1.0),
         Options::new(Method::Dp54).with_max_steps(0),

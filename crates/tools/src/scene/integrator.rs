@@ -37,15 +37,21 @@ impl Parser<'_> {
             None => 1e-9,
         };
         let atol = match &i.atol {
-            Some(a) => self.non_negative(a, "integrator.atol")?,
+            Some(a) => {
+                let atol = self.non_negative(a, "integrator.atol")?;
+                if atol == 0.0 {
+                    return Err(self.error(
+                        Some(a.span()),
+                        "`integrator.atol` must be > 0: with a relative tolerance alone a state \
+                         that is or passes through zero (a rate at rest, a quaternion component) \
+                         has no error scale and no step passes the error test; set `atol` to the \
+                         absolute error acceptable in the smallest states (the default is 1e-12)",
+                    ));
+                }
+                atol
+            }
             None => 1e-12,
         };
-        if rtol == 0.0 && atol == 0.0 {
-            return Err(self.error(
-                Some(f.span()),
-                "`integrator.rtol` and `integrator.atol` cannot both be 0",
-            ));
-        }
         o = o.with_tolerances(rtol, atol);
         match (&i.step, method) {
             (Some(s), Method::Rk4) => o = o.with_fixed_step(self.positive(s, "integrator.step")?),
