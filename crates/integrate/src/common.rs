@@ -14,6 +14,8 @@ pub(crate) struct Ctx {
     pub atol: f64,
     pub h0: Option<f64>,
     pub h_max: f64,
+    /// The run's end: no first step looks past it.
+    pub t_end: f64,
     pub fixed: Option<f64>,
     pub max_steps: usize,
     /// Error-norm weights and their sum (the norm is a weighted RMS).
@@ -41,8 +43,17 @@ pub(crate) const STAGE_RETRIES: u32 = 12;
 /// The factor a step is cut by when the system refuses one of its trial stages.
 pub(crate) const STAGE_RETRY_FACTOR: f64 = 0.25;
 
+/// How many times [`Ctx::initial_step`] shortens its trial step tenfold when the system
+/// refuses the trial state, before the system's error ends the run.
+pub(crate) const TRIAL_RETRIES: u32 = 4;
+
 impl Ctx {
-    pub fn new<S: System + ?Sized>(sys: &S, opts: &Options) -> Result<Self, IntegrateError> {
+    /// The context of a run of `sys` under `opts` that ends at `t_end`.
+    pub fn new<S: System + ?Sized>(
+        sys: &S,
+        opts: &Options,
+        t_end: f64,
+    ) -> Result<Self, IntegrateError> {
         let mut weights = vec![1.0; sys.dim()];
         sys.error_weights(&mut weights);
         if weights.iter().any(|w| !(*w >= 0.0 && w.is_finite())) {
@@ -59,6 +70,7 @@ impl Ctx {
             atol: opts.atol,
             h0: opts.h0,
             h_max: opts.h_max,
+            t_end,
             fixed: opts.fixed_step,
             max_steps: opts.max_steps,
             weights,
@@ -182,7 +194,14 @@ impl Ctx {
 
     /// Hairer's starting step (HINIT in DOPRI5) for a method of order `order`;
     /// `f0 = f(t, x)`, `x1` and `f1` are scratch. Respects `h0`, `h_max` and
-    /// the distance to `t_end`.
+    /// the distance to `t_end`: as HINIT's `hmax` (the span by default), the distance caps
+    /// both the trial step, an Euler step whose right-hand side estimates the second
+    /// derivative, and the result, so the trial never evaluates the system past the run.
+    ///
+    /// The trial is a heuristic, not part of the solution: where the system refuses the trial
+    /// state (a flexible body's mass matrix indefinite at a deformation the Euler step
+    /// overshot to, a derivative that is not finite), the trial is retried ten times shorter,
+    /// [`TRIAL_RETRIES`] times, before the system's error ends the run.
     ///
     /// The result is always finite and > 0: where the scaled norms overflow (a derivative
     /// vast against its error scale) the estimate falls back to Hairer's `1e-6` for the
@@ -202,6 +221,13 @@ impl Ctx {
         if let Some(h0) = self.h0 {
             return Ok(h0.min(self.h_max));
         }
+        // At the end already (a restart there), the distance is no bound: the step is unused.
+        let to_end = self.t_end - t;
+        let h_max = if to_end > 0.0 {
+            self.h_max.min(to_end)
+        } else {
+            self.h_max
+        };
         let dnf = self.norm(f0, x, x);
         let dny = self.norm(x, x, x);
         let mut h = if dnf <= 1e-5 || dny <= 1e-5 {
@@ -212,11 +238,23 @@ impl Ctx {
         if !(h > 0.0 && h.is_finite()) {
             h = 1e-6;
         }
-        h = h.min(self.h_max);
-        for i in 0..x.len() {
-            x1[i] = x[i] + h * f0[i];
+        h = h.min(h_max);
+        let mut retries = 0;
+        loop {
+            for i in 0..x.len() {
+                x1[i] = x[i] + h * f0[i];
+            }
+            match self.eval(sys, t + h, x1, f1) {
+                Ok(()) => break,
+                Err(IntegrateError::System { .. } | IntegrateError::NonFinite { .. })
+                    if retries < TRIAL_RETRIES =>
+                {
+                    retries += 1;
+                    h *= 0.1;
+                }
+                Err(e) => return Err(e),
+            }
         }
-        self.eval(sys, t + h, x1, f1)?;
         for i in 0..x.len() {
             x1[i] = f1[i] - f0[i];
         }
@@ -227,7 +265,7 @@ impl Ctx {
         } else {
             (0.01 / der12).powf(1.0 / (order as f64 + 1.0))
         };
-        let h_new = (100.0 * h).min(h1).min(self.h_max);
+        let h_new = (100.0 * h).min(h1).min(h_max);
         Ok(if h_new > 0.0 && h_new.is_finite() {
             h_new
         } else {
@@ -433,13 +471,29 @@ pub(crate) fn combine(out: &mut [f64], x: &[f64], h: f64, coeffs: &[f64], ks: &[
 mod tests {
     use super::{Ctx, all_finite};
     use crate::{
+        error::IntegrateError,
         options::{Method, Options},
         system::{System, SystemError},
     };
 
-    /// `x0'' = -x0` from rest at the top (`x1 = 0`), remembering the times it is evaluated at.
+    /// `x0' = ω x1, x1' = -ω x0` (a circle of radius 1 from `[1, 0]`), refusing states
+    /// outside `radius` and times past `until`, remembering the times it is evaluated at.
     struct Swing {
+        omega: f64,
+        radius: f64,
+        until: f64,
         times: Vec<f64>,
+    }
+
+    impl Swing {
+        fn new(omega: f64) -> Self {
+            Self {
+                omega,
+                radius: f64::INFINITY,
+                until: f64::INFINITY,
+                times: Vec::new(),
+            }
+        }
     }
 
     impl System for Swing {
@@ -448,21 +502,22 @@ mod tests {
         }
         fn rhs(&mut self, t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), SystemError> {
             self.times.push(t);
-            dx[0] = x[1];
-            dx[1] = -x[0];
+            if t > self.until || x[0].hypot(x[1]) > self.radius {
+                return Err(SystemError::new("outside the domain"));
+            }
+            dx[0] = self.omega * x[1];
+            dx[1] = -self.omega * x[0];
             Ok(())
         }
     }
 
-    /// The first step from `x = [1, 0]` under `opts` (not validated), and the times the
-    /// right-hand side was evaluated at.
-    fn first_step(opts: &Options) -> (f64, Vec<f64>) {
-        let mut sys = Swing { times: Vec::new() };
-        let mut ctx = Ctx::new(&sys, opts).unwrap();
+    /// The first step of `sys` from `x = [1, 0]` at t = 0 under `opts` (not validated) for
+    /// a run ending at `t_end`.
+    fn first_step(sys: &mut Swing, opts: &Options, t_end: f64) -> Result<f64, IntegrateError> {
+        let mut ctx = Ctx::new(&*sys, opts, t_end).unwrap();
         let x = [1.0, 0.0];
         let mut k = vec![vec![0.0; 2]; 3];
-        let h = ctx.start_explicit(&mut sys, 5, 0.0, &x, &mut k).unwrap();
-        (h, sys.times)
+        ctx.start_explicit(sys, 5, 0.0, &x, &mut k)
     }
 
     #[test]
@@ -475,13 +530,65 @@ mod tests {
                 atol,
                 ..Options::new(Method::Dp54)
             };
-            let (h, times) = first_step(&opts);
+            let mut sys = Swing::new(1.0);
+            let h = first_step(&mut sys, &opts, f64::INFINITY).unwrap();
             assert!(h > 0.0 && h.is_finite(), "atol {atol}: h = {h}");
             assert!(
-                times.iter().all(|t| t.is_finite()),
-                "atol {atol}: {times:?}"
+                sys.times.iter().all(|t| t.is_finite()),
+                "atol {atol}: {:?}",
+                sys.times
             );
         }
+    }
+
+    #[test]
+    fn the_first_step_never_looks_past_the_end_of_the_run() {
+        // A slow motion at a pure absolute tolerance: the trial step 0.01 ‖x‖ / ‖f‖ is 10 s,
+        // past the end of a 2 s run and into times the system refuses.
+        let opts = Options::new(Method::Dp54).with_tolerances(0.0, 1e-10);
+        for t_end in [2.0, 1e-3] {
+            let mut sys = Swing {
+                until: 3.0,
+                ..Swing::new(1e-3)
+            };
+            let h = first_step(&mut sys, &opts, t_end).unwrap();
+            assert!(h > 0.0 && h <= t_end, "t_end {t_end}: h = {h}");
+            assert!(
+                sys.times.iter().all(|t| *t <= t_end),
+                "t_end {t_end}: {:?}",
+                sys.times
+            );
+        }
+        // h_max caps it too.
+        let mut sys = Swing::new(1e-3);
+        let h = first_step(&mut sys, &opts.clone().with_h_max(0.5), 2.0).unwrap();
+        assert!(h <= 0.5 && sys.times.iter().all(|t| *t <= 0.5), "{h}");
+    }
+
+    #[test]
+    fn a_refused_trial_state_is_retried_shorter_before_it_ends_the_run() {
+        // The trial's Euler step leaves the circle by h² ω² / 2 of its radius: the 10 s
+        // trial (5e-5 out) and the 1 s one (5e-7) are refused, the 0.1 s one (5e-9) is not.
+        let opts = Options::new(Method::Dp54).with_tolerances(0.0, 1e-10);
+        let mut sys = Swing {
+            radius: 1.0 + 1e-7,
+            ..Swing::new(1e-3)
+        };
+        let h = first_step(&mut sys, &opts, 1e6).unwrap();
+        assert!(h > 0.0 && h.is_finite(), "{h}");
+        assert_eq!(sys.times.len(), 4, "{:?}", sys.times);
+        for (t, want) in sys.times[1..].iter().zip([10.0, 1.0, 0.1]) {
+            assert!((t / want - 1.0).abs() < 1e-12, "{:?}", sys.times);
+        }
+        // A system that refuses every trial still ends the run with its own error, after
+        // the retries.
+        let mut sys = Swing {
+            until: 0.0,
+            ..Swing::new(1e-3)
+        };
+        let e = first_step(&mut sys, &opts, 1e6).unwrap_err();
+        assert!(matches!(e, IntegrateError::System { .. }), "{e:?}");
+        assert_eq!(sys.times.len(), 2 + super::TRIAL_RETRIES as usize);
     }
 
     #[test]

@@ -170,7 +170,7 @@ pub(crate) fn checked<'o, S: System + ?Sized>(
         return Err(IntegrateError::non_finite_state(t0, x0));
     }
     let outputs = OutputTimes::new(output, t0, t_end)?;
-    let ctx = Ctx::new(system, options)?;
+    let ctx = Ctx::new(system, options, t_end)?;
     Ok((outputs, ctx))
 }
 

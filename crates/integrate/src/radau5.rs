@@ -731,7 +731,7 @@ mod tests {
             hits: 0,
         };
         let opts = Options::new(Method::Radau5).with_tolerances(1e-6, 1e-6);
-        let mut ctx = Ctx::new(&sys, &opts).unwrap();
+        let mut ctx = Ctx::new(&sys, &opts, f64::INFINITY).unwrap();
         let mut st = super::Radau5::new(3, 1e-6, 1e-6);
         st.restart(&mut sys, &mut ctx, 0.0, &[1e-3, 0.0, 1.0])
             .unwrap();

@@ -314,7 +314,7 @@ mod tests {
         use crate::common::{Ctx, Stepper};
         let mut sys = Spin { evals: 0 };
         let opts = Options::new(Method::Rk4).with_fixed_step(0.1);
-        let mut ctx = Ctx::new(&sys, &opts).unwrap();
+        let mut ctx = Ctx::new(&sys, &opts, f64::INFINITY).unwrap();
         let mut st = super::Rk4::new(2);
         st.restart(&mut sys, &mut ctx, 0.0, &[1.0, 0.0]).unwrap();
         st.step(&mut sys, &mut ctx, 1.0).unwrap();

@@ -3,6 +3,7 @@
 mod common;
 mod convergence;
 mod dense_events;
+mod first_step;
 mod hairer_reference;
 mod properties;
 mod quadratures;
