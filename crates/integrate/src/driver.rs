@@ -8,7 +8,7 @@ use crate::{
     common::{Ctx, Stepper, all_finite},
     dop853::Dop853,
     dp54::Dp54,
-    error::IntegrateError,
+    error::{IntegrateError, Num},
     events::locate,
     options::{Method, Options, Output, OutputTimes},
     radau5::Radau5,
@@ -165,6 +165,25 @@ pub(crate) fn checked<'o, S: System + ?Sized>(
     }
     if t_end < t0 {
         return invalid(format!("t_end ({t_end}) must not precede t0 ({t0})"));
+    }
+    if let Some(h) = options.fixed_step {
+        // A fixed step that cannot cover the span within the step budget fails for certain:
+        // refused now, not after `max_steps` steps.
+        let steps = (t_end - t0) / h;
+        // The slack: the step suggested, `span / max_steps`, may round to a hair more.
+        if steps > options.max_steps as f64 * (1.0 + 1e-9) {
+            return invalid(format!(
+                "fixed_step = {} over the span {} (t0 = {}, t_end = {}) takes {} steps, more \
+                 than max_steps = {}: the step must be at least {}, or max_steps larger",
+                Num(h),
+                Num(t_end - t0),
+                Num(t0),
+                Num(t_end),
+                count(steps),
+                options.max_steps,
+                Num((t_end - t0) / options.max_steps as f64),
+            ));
+        }
     }
     if !all_finite(x0) {
         return Err(IntegrateError::non_finite_state(t0, x0));
@@ -626,6 +645,16 @@ where
             t_left = t_ev;
             std::mem::swap(&mut self.g_left, &mut self.g_mid);
         }
+    }
+}
+
+/// A count of steps as a message writes it: whole below 1e15, three significant digits in
+/// exponent form above (not the 300 digits of `1e300`).
+fn count(n: f64) -> String {
+    if n < 1e15 {
+        format!("{}", n.ceil())
+    } else {
+        format!("{n:.3e}")
     }
 }
 

@@ -1,6 +1,25 @@
 //! Integration errors.
 
+use std::fmt;
+
 use crate::system::SystemError;
+
+/// A number as a message shows it: `{}` for zero and magnitudes in `[1e-9, 1e9)` (the times
+/// of ordinary runs, to the last digit), `{:e}` beyond, so that a time of `1e-293` is not
+/// written out as hundreds of digits.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Num(pub f64);
+
+impl fmt::Display for Num {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let a = self.0.abs();
+        if a.is_finite() && a != 0.0 && !(1e-9..1e9).contains(&a) {
+            write!(f, "{:e}", self.0)
+        } else {
+            write!(f, "{}", self.0)
+        }
+    }
+}
 
 /// Why an integration failed. Every output before the failure has already
 /// been passed to the observer.
@@ -11,7 +30,7 @@ pub enum IntegrateError {
     InvalidOptions(String),
     /// The step size became negligible relative to `t` (e.g. a finite-time
     /// blow-up or a discontinuity the error control cannot pass).
-    #[error("step size underflow at t = {t} (h = {h:e})")]
+    #[error("step size underflow at t = {} (h = {h:e})", Num(*.t))]
     StepSizeUnderflow {
         /// Time reached.
         t: f64,
@@ -20,7 +39,7 @@ pub enum IntegrateError {
     },
     /// More step attempts than `Options::max_steps` (typically: a stiff
     /// problem given to an explicit method).
-    #[error("maximum number of steps exceeded at t = {t}{stepping}")]
+    #[error("maximum number of steps exceeded at t = {}{stepping}", Num(*.t))]
     MaxSteps {
         /// Time reached.
         t: f64,
@@ -30,7 +49,7 @@ pub enum IntegrateError {
     },
     /// The system returned a non-finite derivative for a finite state, or a
     /// fixed-step run produced a non-finite state.
-    #[error("non-finite value at t = {t}{what}")]
+    #[error("non-finite value at t = {}{what}", Num(*.t))]
     NonFinite {
         /// Time of the offending evaluation.
         t: f64,
@@ -42,7 +61,7 @@ pub enum IntegrateError {
     },
     /// The Newton iteration of an implicit method did not converge in
     /// fixed-step mode, or its iteration matrix stayed singular.
-    #[error("implicit solver failed to converge at t = {t} (h = {h:e})")]
+    #[error("implicit solver failed to converge at t = {} (h = {h:e})", Num(*.t))]
     ConvergenceFailure {
         /// Time reached.
         t: f64,
@@ -50,7 +69,7 @@ pub enum IntegrateError {
         h: f64,
     },
     /// The system reported a failure.
-    #[error("system error at t = {t}: {source}")]
+    #[error("system error at t = {}: {source}", Num(*.t))]
     System {
         /// Time of the failing evaluation.
         t: f64,

@@ -91,7 +91,8 @@ pub struct Options {
     pub h0: Option<f64>,
     /// Largest step an adaptive method may take.
     pub h_max: f64,
-    /// Maximum number of step attempts (accepted + rejected).
+    /// Maximum number of step attempts (accepted + rejected). A fixed-step run whose span
+    /// takes more than this many steps of [`Options::fixed_step`] is refused before it starts.
     pub max_steps: usize,
     /// Run at this constant step without error control. Required by
     /// [`Method::Rk4`]; optional for the others (used to measure their order).

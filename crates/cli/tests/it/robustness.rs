@@ -275,6 +275,17 @@ fn cases() -> Vec<Case> {
             vec!["bad.toml:6", "`integrator.step`"],
         ),
         (
+            "rk4 step too short for max_steps",
+            s("step = 0.01", "step = 1e-300"),
+            no_file(),
+            vec![
+                "bad.toml:6",
+                "`integrator.step` = 1e-300 s over `duration` = 2 s makes 2.000e300 steps",
+                "`integrator.max_steps` = 10000000",
+                "at least 0.0000002 s",
+            ],
+        ),
+        (
             "negative rtol",
             s("step = 0.01", "step = 0.01\nrtol = -1e-9"),
             no_file(),
@@ -765,6 +776,8 @@ fn ctrl_c_stops_cleanly_and_keeps_the_csv() {
         dir.join("long.toml"),
         SCENE
             .replace("duration = 2.0", "duration = 1e7")
+            // 10⁹ steps: a budget that holds them, or the run is refused before it starts.
+            .replace("step = 0.01", "step = 0.01\nmax_steps = 2000000000")
             .replace("every = 1.0", "every = 0.05"),
     )
     .unwrap();
@@ -820,6 +833,8 @@ fn two_ctrl_c_in_a_row_still_stop_cleanly() {
         dir.join("long.toml"),
         SCENE
             .replace("duration = 2.0", "duration = 1e7")
+            // 10⁹ steps: a budget that holds them, or the run is refused before it starts.
+            .replace("step = 0.01", "step = 0.01\nmax_steps = 2000000000")
             .replace("every = 1.0", "every = 500.0"),
     )
     .unwrap();

@@ -128,6 +128,60 @@ fn radau5_van_der_pol_with_analytic_jacobian() {
 }
 
 #[test]
+fn a_fixed_step_run_whose_steps_exceed_the_budget_is_refused_before_it_starts() {
+    for method in [Method::Rk4, Method::Dp54, Method::Radau5] {
+        let mut sys = Smooth;
+        let opts = Options::new(method).with_fixed_step(1e-300);
+        let e = run(&mut sys, &opts, &Smooth::X0, 0.0, 2.0).unwrap_err();
+        let IntegrateError::InvalidOptions(m) = &e else {
+            panic!("{method}: {e:?}")
+        };
+        for part in [
+            "fixed_step = 1e-300",
+            "takes 2.000e300 steps",
+            "max_steps = 1000000",
+            "at least 0.000002",
+        ] {
+            assert!(m.contains(part), "{method}: {m}");
+        }
+        // 200 steps of 0.01 fit a budget of 200, not of 199.
+        let opts = Options::new(method).with_fixed_step(0.01);
+        let stats = run(
+            &mut sys,
+            &opts.clone().with_max_steps(200),
+            &Smooth::X0,
+            0.0,
+            2.0,
+        );
+        assert_eq!(stats.unwrap().steps_accepted, 200, "{method}");
+        let e = run(&mut sys, &opts.with_max_steps(199), &Smooth::X0, 0.0, 2.0);
+        assert!(
+            matches!(e, Err(IntegrateError::InvalidOptions(_))),
+            "{method}: {e:?}"
+        );
+    }
+}
+
+#[test]
+fn error_messages_write_extreme_times_in_exponent_form() {
+    let e = IntegrateError::MaxSteps {
+        t: 1.5e-293,
+        stepping: String::new(),
+    };
+    assert_eq!(
+        e.to_string(),
+        "maximum number of steps exceeded at t = 1.5e-293"
+    );
+    let e = IntegrateError::StepSizeUnderflow { t: 0.25, h: 1e-17 };
+    assert_eq!(e.to_string(), "step size underflow at t = 0.25 (h = 1e-17)");
+    let e = IntegrateError::System {
+        t: f64::INFINITY,
+        source: SystemError::new("no"),
+    };
+    assert_eq!(e.to_string(), "system error at t = inf: no");
+}
+
+#[test]
 fn invalid_options_are_rejected() {
     let bad = [
         Options::new(Method::Dp54).with_tolerances(-1e-6, 1e-9),

@@ -93,7 +93,10 @@ impl Simulation {
     /// [`Simulation::run_lanes`] with `width` runs per batch (2, 4 or 8; 1 runs them one
     /// after the other).
     pub fn run_lanes_with<J: LaneJobs>(options: &Options, width: usize, jobs: &mut J) {
-        let mut runs = Adapter { jobs };
+        let mut runs = Adapter {
+            jobs,
+            fixed: options.fixed_step,
+        };
         match width {
             0 | 1 => integrate_lanes(options, 1, &mut Lanes::<2>::default(), &mut runs),
             2 | 3 => integrate_lanes(options, 2, &mut Lanes::<2>::default(), &mut runs),
@@ -127,6 +130,8 @@ impl<K: RowSink> SimCell for Cell<K> {
 /// [`LaneJobs`] as the integrator's [`Runs`].
 struct Adapter<'j, J> {
     jobs: &'j mut J,
+    /// The runs' fixed step, if they have one (for the message of a run out of steps).
+    fixed: Option<f64>,
 }
 
 impl<'j, J: LaneJobs> Runs<Shared<Cell<J::Sink>>, Observer<'j>> for Adapter<'j, J>
@@ -185,7 +190,7 @@ where
             unreachable!("the observer, the cell's only other owner, is dropped")
         };
         let run = run.into_inner();
-        let result = outcome(result, run.failure, &run.sim);
+        let result = outcome(result, run.failure, &run.sim, self.fixed);
         self.jobs.done(run.sim, run.sink, result);
     }
 }

@@ -5,6 +5,7 @@ use satsim_integrate::{
     EventAction, EventDirection, IntegrateError, NonFiniteEntry, Options, Output, Stats, System,
     SystemError,
 };
+use satsim_tree::error::Num;
 use std::cell::{Ref, RefCell, RefMut};
 use std::ops::ControlFlow;
 use thiserror::Error;
@@ -52,21 +53,32 @@ impl Simulation {
                     }
                 }
             });
-        outcome(result, failure, &cell.borrow())
+        outcome(result, failure, &cell.borrow(), options.fixed_step)
     }
 
     /// What a run that ran out of steps was stepping through, for its message: the effects
     /// whose events fired among the last [`STALL_EVENTS`] handled, with their counts and
     /// the time they span (events crowding a short span are a switching the steps could
-    /// not get past), or that no event fired.
-    fn stepping_through(&self) -> String {
+    /// not get past), or that no event fired. A run at the fixed step `fixed` did not choose
+    /// its steps: the message says what they were (the dynamics are not to blame).
+    fn stepping_through(&self, fixed: Option<f64>) -> String {
         let events = &self.log.events;
         let owners = &self.log.event_effects;
         let n = events.len().min(owners.len());
+        let fixed = fixed.map(|h| {
+            format!(
+                "; the step is fixed ({} s): the steps are those of its grid and those cut where an \
+                 output time, a sample instant or an event falls inside one; raise the step or \
+                 the maximum number of steps",
+                Num(h)
+            )
+        });
         if n == 0 {
-            return "; no event fired: the steps went into the dynamics themselves (a stiff \
-                    spring or damper, or a discontinuity no effect makes an event of)"
-                .into();
+            return fixed.unwrap_or_else(|| {
+                "; no event fired: the steps went into the dynamics themselves (a stiff \
+                 spring or damper, or a discontinuity no effect makes an event of)"
+                    .into()
+            });
         }
         let from = n - n.min(STALL_EVENTS);
         let mut counts: Vec<(usize, usize)> = Vec::new();
@@ -85,10 +97,11 @@ impl Simulation {
             })
             .collect();
         format!(
-            "; the last {} events (t = {} to {}) were {}; the last: {}",
+            "{}; the last {} events (t = {} to {}) were {}; the last: {}",
+            fixed.unwrap_or_default(),
             n - from,
-            events[from].0,
-            events[n - 1].0,
+            Num(events[from].0),
+            Num(events[n - 1].0),
             names.join(", "),
             events[n - 1].1
         )
@@ -116,10 +129,12 @@ pub(super) fn deliver<E>(
 }
 
 /// A run's outcome from the integrator's result and the failure its observer kept.
+/// `fixed`: the run's fixed step, if it has one.
 pub(super) fn outcome<E>(
     result: Result<Stats, IntegrateError>,
     failure: Option<RunError<E>>,
     sim: &Simulation,
+    fixed: Option<f64>,
 ) -> Result<Stats, RunError<E>> {
     match (result, failure) {
         (_, Some(f)) => Err(f),
@@ -127,7 +142,7 @@ pub(super) fn outcome<E>(
         (Err(IntegrateError::MaxSteps { t, .. }), None) => {
             Err(RunError::Integrate(IntegrateError::MaxSteps {
                 t,
-                stepping: sim.stepping_through(),
+                stepping: sim.stepping_through(fixed),
             }))
         }
         (Err(e), None) => Err(RunError::Integrate(sim.named(e))),

@@ -153,6 +153,7 @@ impl<'a> Parser<'a> {
             None => None,
         };
         let options = self.integrator(file.integrator.as_ref())?;
+        self.check_step_count(&file, &options, duration)?;
         let elastic_error = match file
             .integrator
             .as_ref()
@@ -281,6 +282,45 @@ impl<'a> Parser<'a> {
                 limit.zeta,
                 limit.step,
                 l.norm() * h,
+            ),
+        ))
+    }
+
+    /// A fixed step that takes more than `integrator.max_steps` steps over the duration fails
+    /// for certain: an error at `integrator.step` naming both numbers and the shortest step
+    /// that fits, before the run rather than after `max_steps` steps.
+    fn check_step_count(
+        &self,
+        file: &SceneFile,
+        options: &Options,
+        duration: f64,
+    ) -> Result<(), FileError> {
+        let Some(h) = options.fixed_step else {
+            return Ok(());
+        };
+        let steps = duration / h;
+        let max = options.max_steps;
+        // The slack: the step suggested below, `duration / max`, may round to a hair more.
+        if steps <= max as f64 * (1.0 + 1e-9) {
+            return Ok(());
+        }
+        let span = file
+            .integrator
+            .as_ref()
+            .and_then(|i| i.get_ref().step.as_ref())
+            .map(|s| s.span());
+        Err(self.error(
+            span,
+            format!(
+                "`integrator.step` = {} s over `duration` = {} s makes {} steps, more than `integrator.max_steps` = {max}: set `step` at least {} s, or raise `max_steps`",
+                Num(h),
+                Num(duration),
+                if steps < 1e15 {
+                    format!("{}", steps.ceil())
+                } else {
+                    format!("{steps:.3e}")
+                },
+                Num(duration / max as f64)
             ),
         ))
     }

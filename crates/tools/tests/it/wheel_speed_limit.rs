@@ -114,3 +114,35 @@ fn a_run_out_of_steps_names_the_effect_whose_events_it_was_stepping_through() {
         .to_string();
     assert!(e.contains("no event fired"), "{e}");
 }
+
+#[test]
+fn a_fixed_step_run_out_of_steps_does_not_blame_the_dynamics() {
+    // 1/64 s steps with a row every 0.01 s: every row cuts a step, so the run takes more
+    // steps than its grid's (which fit the budget, so the run is not refused before it
+    // starts).
+    let scene = limited_deploy(20.0);
+    let rk4 = Options::new(Method::Rk4)
+        .with_fixed_step(1.0 / 64.0)
+        .with_max_steps(2000);
+    let run = |t_end: f64, every: f64, options: &Options| {
+        let mut sim = scene.simulation().unwrap();
+        sim.run(options, t_end, &Output::Interval(every), |_, _| {
+            Ok::<(), String>(())
+        })
+        .unwrap_err()
+        .to_string()
+    };
+    let e = run(20.0, 0.01, &rk4);
+    assert!(
+        e.starts_with("maximum number of steps exceeded at t = "),
+        "{e}"
+    );
+    assert!(e.contains("; the step is fixed (0.015625 s)"), "{e}");
+    assert!(e.contains("events (t = "), "{e}");
+    assert!(!e.contains("dynamics themselves"), "{e}");
+    // Before any event (one step of the grid cut by 40 rows): the fixed step alone, no word
+    // of the dynamics.
+    let e = run(0.004, 1e-4, &rk4.clone().with_max_steps(2));
+    assert!(e.contains("; the step is fixed (0.015625 s)"), "{e}");
+    assert!(!e.contains("no event fired"), "{e}");
+}
