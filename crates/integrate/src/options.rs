@@ -183,6 +183,17 @@ impl Options {
                 self.atol
             ));
         }
+        // RADAU5 holds its order-3 error estimate to `0.1 rtol^(2/3)` with `atol` scaled by the
+        // same factor over `rtol`: below ten rounding units that factor is out of scale (1e89
+        // at rtol 1e-300) and every step passes. Hairer's code refuses such an rtol too.
+        if self.method == Method::Radau5 && self.rtol > 0.0 && self.rtol < 10.0 * f64::EPSILON {
+            return bad(format!(
+                "rtol = {:e} is below ten rounding units ({:e}) for radau5: set it to 0 (atol alone) \
+                 or at least that",
+                self.rtol,
+                10.0 * f64::EPSILON
+            ));
+        }
         if let Some(h0) = self.h0.filter(|h0| !(*h0 > 0.0 && h0.is_finite())) {
             return bad(format!("h0 must be finite and > 0, got {h0}"));
         }
@@ -342,6 +353,19 @@ mod tests {
         assert!(m.to_string().contains("passes through zero"), "{m}");
         // A pure absolute tolerance is legitimate.
         assert!(dp54().with_tolerances(0.0, 1e-10).validate().is_ok());
+        // RADAU5's tolerance transform needs rtol = 0 or at least ten rounding units.
+        let radau5 = |rtol| {
+            Options::new(Method::Radau5)
+                .with_tolerances(rtol, 1e-10)
+                .validate()
+        };
+        let m = radau5(1e-300).unwrap_err().to_string();
+        assert!(
+            m.contains("rtol = 1e-300 is below ten rounding units"),
+            "{m}"
+        );
+        assert!(radau5(0.0).is_ok() && radau5(1e-14).is_ok());
+        assert!(dp54().with_tolerances(1e-300, 1e-10).validate().is_ok());
     }
 
     #[test]

@@ -316,6 +316,15 @@ fn cases() -> Vec<Case> {
             vec!["bad.toml:7", "`integrator.rtol`", "finite"],
         ),
         (
+            "radau5 rtol below ten rounding units",
+            s(
+                "method = \"rk4\"\nstep = 0.01",
+                "method = \"radau5\"\nrtol = 1e-300",
+            ),
+            no_file(),
+            vec!["bad.toml:6", "`integrator.rtol` = 1e-300", "radau5"],
+        ),
+        (
             "negative max_step",
             s("step = 0.01", "step = 0.01\nmax_step = -1.0"),
             no_file(),

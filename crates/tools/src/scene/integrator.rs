@@ -33,7 +33,22 @@ impl Parser<'_> {
         };
         let mut o = Options::new(method).with_max_steps(10_000_000);
         let rtol = match &i.rtol {
-            Some(r) => self.non_negative(r, "integrator.rtol")?,
+            Some(r) => {
+                let rtol = self.non_negative(r, "integrator.rtol")?;
+                // RADAU5's tolerance transform (`satsim_integrate::Options`).
+                if method == Method::Radau5 && rtol > 0.0 && rtol < 10.0 * f64::EPSILON {
+                    return Err(self.error(
+                        Some(r.span()),
+                        format!(
+                            "`integrator.rtol` = {rtol:e} is below ten rounding units ({:e}) for \
+                             radau5, whose error estimate scales `atol` by rtol^(-1/3): set it to \
+                             0 (atol alone) or at least that",
+                            10.0 * f64::EPSILON
+                        ),
+                    ));
+                }
+                rtol
+            }
             None => 1e-9,
         };
         let atol = match &i.atol {
