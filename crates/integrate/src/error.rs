@@ -6,7 +6,8 @@ use crate::system::SystemError;
 
 /// A number as a message shows it: `{}` for zero and magnitudes in `[1e-9, 1e9)` (the times
 /// of ordinary runs, to the last digit), `{:e}` beyond, so that a time of `1e-293` is not
-/// written out as hundreds of digits.
+/// written out as hundreds of digits. The same rule as `satsim_tree::error::Num`: the
+/// integrator depends on no other crate of the workspace, so it keeps its own copy.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct Num(pub f64);
 
