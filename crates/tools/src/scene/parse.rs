@@ -168,6 +168,9 @@ impl<'a> Parser<'a> {
             Some(e) => *e.get_ref(),
             None => true,
         };
+        if let Some(f) = flex.as_ref() {
+            self.check_initial_deformation(&file, f, &initial, &elastic)?;
+        }
         if let (Some(f), Some(h)) = (flex.as_ref(), options.fixed_step) {
             self.check_modal_step(&file, f, &initial, &elastic, h)?;
         }
@@ -236,6 +239,52 @@ impl<'a> Parser<'a> {
             super::sensors::check_columns(self, s, &sim.columns())?;
         }
         Ok(scene)
+    }
+
+    /// The initial deformation must leave the mass matrix positive definite: the deformed
+    /// inertia depends on `η` (to first and second order), and an `eta` large enough makes it
+    /// no body's. The run would end at its first step in "mass matrix is not positive
+    /// definite"; it is an error at the scene's `initial` line instead, naming the mode whose
+    /// pivot failed where the flexible ABA says.
+    fn check_initial_deformation(
+        &self,
+        file: &SceneFile,
+        flex: &FlexModel,
+        initial: &State,
+        elastic: &Elastic,
+    ) -> Result<(), FileError> {
+        use satsim_tree::DynamicsError;
+        use satsim_tree::flexible::{FlexData, aba, crba};
+        if elastic.eta.iter().all(|e| *e == 0.0) {
+            // At rest the model's own checks hold.
+            return Ok(());
+        }
+        let q: Vec<f64> = initial.q.iter().chain(&elastic.eta).copied().collect();
+        let mut data = FlexData::new(flex);
+        // Other failures (a non-finite value) are the run's to report.
+        let Ok(m) = crba(flex, &mut data, &q) else {
+            return Ok(());
+        };
+        if m.clone().cholesky().is_some() {
+            return Ok(());
+        }
+        let rigid = flex.rigid().nv();
+        let zero = vec![0.0; flex.nv()];
+        let which = match aba(flex, &mut data, &q, &zero, &zero, None) {
+            Err(DynamicsError::NotPositiveDefinite { index, pivot }) if index >= rigid => {
+                let (body, mode) = super::flexible::mode_of(flex, index - rigid);
+                format!(" (at body `{body}`'s mode {mode}, pivot {})", Num(pivot))
+            }
+            _ => String::new(),
+        };
+        Err(self.error(
+            file.initial.as_ref().map(|s| s.span()),
+            format!(
+                "`initial` flexible: the initial deformation makes the mass matrix not positive \
+                 definite{which}: an `eta` this large takes the deformed inertia out of a body's; \
+                 start closer to rest"
+            ),
+        ))
     }
 
     /// A fixed RK4 step must keep the structure's modes at the initial state within RK4's

@@ -329,3 +329,24 @@ fn elastic_error_is_refused_on_a_rigid_model_and_must_be_a_bool() {
         "{err}"
     );
 }
+
+/// An initial deformation large enough to make the mass matrix indefinite (the deformed
+/// inertia no body's) is refused when the scene is read, at its `initial` table, naming the
+/// mode whose pivot failed: the run would fail at its first step.
+#[test]
+fn an_initial_deformation_that_makes_the_mass_matrix_indefinite_is_refused() {
+    let with_eta = |eta: f64| {
+        let text = scene_text("").replace("eta = [0.02, -0.01]", &format!("eta = [{eta}, 0.0]"));
+        Scene::parse(&text, Path::new("flex.toml"))
+    };
+    with_eta(1.0).expect("a deformation the panel can take");
+    let Err(err) = with_eta(3.0) else {
+        panic!("an indefinite initial mass matrix was accepted")
+    };
+    let err = err.to_string();
+    assert!(
+        err.starts_with("flex.toml:25: `initial` flexible: the initial deformation makes the mass matrix not positive definite (at body `panel`'s mode 1, pivot -")
+            && err.contains("start closer to rest"),
+        "{err}"
+    );
+}
