@@ -382,13 +382,31 @@ fn stiff_hinge_springs() {
     let e = r.result.as_ref().expect_err("budget exceeded");
     println!("dp54 with 500 steps: {e}");
     assert!(e.contains("maximum number of steps exceeded at t ="), "{e}");
-    // RK4 at h ω ≈ 22 (stability limit 2.8): a clear error at the first non-finite state.
-    let r = run(&scene(&stiff_scene(
+    // RK4 at h = 1e-3 s, cut to the 2.5e-4 s output interval: h ω ≈ 5.6 (stability limit
+    // 2.8). Refused when the scene is read, with the oscillator's numbers (ω = √(k/I) =
+    // 22 394 rad/s, the largest stable step 2√2/ω).
+    let text = stiff_scene(1e6, 0.0, "method = \"rk4\"\nstep = 1e-3", 0.05);
+    let e = Scene::parse(&text, &examples().join("scenes/hard_case.toml"))
+        .expect_err("rk4 beyond its stability limit")
+        .to_string();
+    println!("rk4 at h = 1e-3, read: {e}");
+    assert!(
+        e.contains("hard_case.toml:23: `integrator.step` = 0.001 s (cut to `output.every` = 0.00025 s) is too long for rk4")
+            && e.contains("mostly hinge `h`")
+            && e.contains("ω = 22393.5791 rad/s")
+            && e.contains("up to 1.2631e-4 s"),
+        "{e}"
+    );
+    // Past the reader (the step set on a scene read with a stable one), the run stops with a
+    // clear error at the first non-finite state.
+    let mut stiff = scene(&stiff_scene(
         1e6,
         0.0,
-        "method = \"rk4\"\nstep = 1e-3",
+        "method = \"rk4\"\nstep = 1e-4",
         0.05,
-    )));
+    ));
+    stiff.options = stiff.options.clone().with_fixed_step(1e-3);
+    let r = run(&stiff);
     let e = r
         .result
         .as_ref()

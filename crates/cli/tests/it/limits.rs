@@ -804,6 +804,16 @@ fn a_run_that_overflows_names_the_state_that_went_non_finite_first() {
             ],
         );
         let err = stderr(&o);
+        if method == "rk4" {
+            // RK4's fixed step is checked against the spring when the scene is read.
+            assert_eq!(o.status.code(), Some(2), "{err}");
+            assert!(
+                err.contains("too long for rk4 with the hinges' springs")
+                    && err.contains("mostly hinge `h4`"),
+                "{err}"
+            );
+            continue;
+        }
         assert_eq!(o.status.code(), Some(1), "{err}");
         assert!(err.contains("non-finite value at t = "), "{err}");
         // A column's name, not an index into the state.

@@ -5,7 +5,7 @@ use super::report::{Measured, Point, ReferenceRun, Report};
 use super::spec::{Setting, Sweep};
 use super::trajectory::{Trajectory, run};
 use crate::scene::Scene;
-use crate::scene::flexible::rk4_stable_step;
+use crate::scene::step_limit::rk4_stable_step;
 use satsim_integrate::Method;
 
 /// Runs the sweep on `scene`. `progress` is told what is being run.
@@ -53,9 +53,10 @@ pub fn sweep(
         let opts = sweep.options(scene, method, setting);
         let mut best: Option<Trajectory> = None;
         let mut failure = None;
-        // A fixed step beyond RK4's stability limit for the flexible modes is not run: the
-        // modes would grow without bound (the scene reader refuses such a step likewise).
-        if let (Some(h), Some((stable, hz))) = (opts.fixed_step, rk4_stable_step(scene))
+        // A fixed step beyond RK4's stability limit for the scene's modes and hinge gains is
+        // not run: they would grow without bound (the scene reader refuses such a step
+        // likewise).
+        if let (Some(h), Some((stable, what))) = (opts.fixed_step, rk4_stable_step(scene))
             && method == Method::Rk4
             && h > stable
         {
@@ -63,7 +64,7 @@ pub fn sweep(
                 method,
                 setting,
                 result: Err(format!(
-                    "not run: h = {h} s is beyond rk4's stability limit for the {hz:.3} Hz mode (largest stable step {stable:.3e} s)"
+                    "not run: h = {h} s is beyond rk4's stability limit for {what} (largest stable step {stable:.3e} s)"
                 )),
             });
             continue;

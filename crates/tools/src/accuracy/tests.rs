@@ -171,7 +171,20 @@ plots = false
 view = false
 "#;
     let scene = crate::scene::Scene::parse(text, std::path::Path::new("beam.toml")).unwrap();
-    let (stable, hz) = crate::scene::flexible::rk4_stable_step(&scene).unwrap();
+    use crate::scene::step_limit::{HingeGains, rk4_limit, rk4_stable_step};
+    let (stable, what) = rk4_stable_step(&scene).unwrap();
+    assert!(what.starts_with("body `beam`'s mode 2 ("), "{what}");
+    let flex = scene.flexible.as_ref().unwrap();
+    let q: Vec<f64> = scene
+        .initial
+        .q
+        .iter()
+        .chain(&scene.elastic.eta)
+        .copied()
+        .collect();
+    let limit = rk4_limit(flex, &q, &HingeGains::none(0)).unwrap();
+    assert_eq!(limit.step, stable);
+    let hz = limit.omega / std::f64::consts::TAU;
     // The second clamped mode: (4.694)² √(EI / ρA L⁴) / 2π.
     let expected = 4.694091f64.powi(2) * (500.0f64 / (5.0 * 16.0)).sqrt() / std::f64::consts::TAU;
     assert!(
@@ -190,7 +203,8 @@ view = false
     let report = sweep::sweep(&scene, &sweep, |_| {}).unwrap();
     let beyond = report.points[0].result.as_ref().unwrap_err();
     assert!(
-        beyond.starts_with("not run: h = ") && beyond.contains("beyond rk4's stability limit"),
+        beyond.starts_with("not run: h = ")
+            && beyond.contains("beyond rk4's stability limit for body `beam`'s mode 2"),
         "{beyond}"
     );
     assert!(

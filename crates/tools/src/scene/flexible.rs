@@ -12,7 +12,7 @@
 //! one value per mode, each default zeros. The result is in [`FlexModel`]'s coordinate order:
 //! bodies in the model's depth-first order, modes from 1.
 
-use nalgebra::{Complex, DMatrix, DVector};
+use nalgebra::{DMatrix, DVector};
 use satsim_spacecraft::effects::section::reword;
 use satsim_tree::Model;
 use satsim_tree::flexible::FlexModel;
@@ -182,21 +182,30 @@ pub struct CoupledModes {
     pub shapes: DMatrix<f64>,
 }
 
-/// The eigenvalues `ω²` of `M⁻¹ K` at `q` (unsorted) and the matrix whose columns are their
-/// shapes (`xᵀ M x = 1`). `None` when `M` is not positive definite at `q`.
-fn eigen(flex: &FlexModel, q: &[f64]) -> Option<(DVector<f64>, DMatrix<f64>)> {
+/// The modes' stiffness as the diagonal of `K` over the generalised velocity's coordinates:
+/// `ωₖ²` on each elastic coordinate, zero on the rigid ones.
+pub(super) fn modal_stiffness(flex: &FlexModel) -> Vec<f64> {
+    let first = flex.rigid().nv();
+    let mut k = vec![0.0; flex.nv()];
+    k[first..].copy_from_slice(flex.stiffness());
+    k
+}
+
+/// The eigenvalues `ω²` of `M⁻¹ K` at `q` (unsorted), `K` the diagonal `k` over the
+/// generalised velocity's coordinates, and the matrix whose columns are their shapes
+/// (`xᵀ M x = 1`). `None` when `M` is not positive definite at `q`.
+pub(super) fn eigen(
+    flex: &FlexModel,
+    q: &[f64],
+    k: &[f64],
+) -> Option<(DVector<f64>, DMatrix<f64>)> {
     use nalgebra::SymmetricEigen;
     use satsim_tree::flexible::{FlexData, crba};
     let mut data = FlexData::new(flex);
     let m = crba(flex, &mut data, q).ok()?.clone();
-    let n = m.nrows();
     let l = m.cholesky()?.l();
     let l_inv = l.clone().try_inverse()?;
-    let first = flex.rigid().nv();
-    let mut k = DMatrix::zeros(n, n);
-    for (e, w2) in flex.stiffness().iter().enumerate() {
-        k[(first + e, first + e)] = *w2;
-    }
+    let k = DMatrix::from_diagonal(&DVector::from_column_slice(k));
     // L⁻¹ K L⁻ᵀ: symmetric, with the eigenvalues of M⁻¹ K.
     let a = &l_inv * k * l_inv.transpose();
     let eig = SymmetricEigen::new((&a + a.transpose()) * 0.5);
@@ -215,7 +224,7 @@ pub fn coupled_modes(flex: &FlexModel, q: &[f64]) -> Option<CoupledModes> {
             shapes: DMatrix::zeros(flex.nv(), 0),
         });
     }
-    let (w2, x) = eigen(flex, q)?;
+    let (w2, x) = eigen(flex, q, &modal_stiffness(flex))?;
     let mut order: Vec<usize> = (0..w2.len()).collect();
     order.sort_by(|a, b| w2[*a].total_cmp(&w2[*b]));
     // `K` has rank n_elastic at most: the rigid coordinates' eigenvalues are the lowest.
@@ -236,11 +245,6 @@ pub fn coupled_modes(flex: &FlexModel, q: &[f64]) -> Option<CoupledModes> {
     finite.then_some(CoupledModes { omega, shapes })
 }
 
-/// RK4's stability limit on the imaginary axis: an undamped oscillation of angular frequency
-/// `ω` stays bounded for `ω h <= 2√2` (the largest `|λ h|` on the imaginary axis where
-/// `|1 + z + z²/2 + z³/6 + z⁴/24| <= 1`).
-pub const RK4_LIMIT: f64 = 2.0 * std::f64::consts::SQRT_2;
-
 /// The highest angular frequency (rad/s) of the structure at `q` (the highest of
 /// [`coupled_modes`]) and the elastic coordinate (index among them) that moves most in it.
 /// `None` without elastic coordinates or when `M` is not positive definite at `q`.
@@ -248,145 +252,13 @@ pub fn highest_frequency(flex: &FlexModel, q: &[f64]) -> Option<(f64, usize)> {
     if flex.n_elastic() == 0 {
         return None;
     }
-    let (w2, x) = eigen(flex, q)?;
+    let (w2, x) = eigen(flex, q, &modal_stiffness(flex))?;
     let (top, &w2) = w2.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1))?;
     let first = flex.rigid().nv();
     let (e, _) = (0..flex.n_elastic())
         .map(|e| (e, x[(first + e, top)].abs()))
         .max_by(|a, b| a.1.total_cmp(&b.1))?;
     (w2 > 0.0 && w2.is_finite()).then(|| (w2.sqrt(), e))
-}
-
-/// `|R(z)|`, RK4's gain on `ẋ = λ x` over one step, `z = λ h`:
-/// `R(z) = 1 + z + z²/2 + z³/6 + z⁴/24`.
-fn rk4_gain(z: Complex<f64>) -> f64 {
-    let one = Complex::new(1.0, 0.0);
-    (one + z * (one + z * (0.5 + z * (1.0 / 6.0 + z / 24.0)))).norm()
-}
-
-/// The largest step `h` for which RK4 keeps `ẋ = λ x` bounded (`|R(λ h')| <= 1` for every
-/// `h' <= h`): `2√2 / |λ|` on the imaginary axis, `2.785 / |λ|` on the negative real axis,
-/// infinite for `λ = 0`, zero for a growing mode (`Re λ > 0`). Along the ray of `λ` from the
-/// origin RK4's region is an interval within `|z| < 3`: its end is found by a scan, then
-/// bisection to round-off.
-pub fn rk4_step_limit(lambda: Complex<f64>) -> f64 {
-    let r = lambda.norm();
-    if r == 0.0 {
-        return f64::INFINITY;
-    }
-    let u = lambda / r;
-    // Round-off's allowance: on the imaginary axis `|R| = 1` at the origin and at the end.
-    let stable = |s: f64| rk4_gain(u * s) <= 1.0 + 1e-12;
-    let (mut lo, mut hi) = (0.0, 3.0);
-    for k in 1..=300 {
-        let s = 3.0 * k as f64 / 300.0;
-        if !stable(s) {
-            hi = s;
-            break;
-        }
-        lo = s;
-    }
-    for _ in 0..60 {
-        let mid = 0.5 * (lo + hi);
-        if stable(mid) {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    lo / r
-}
-
-/// What limits RK4's step on the flexible modes ([`rk4_limit`]).
-#[derive(Clone, Debug, PartialEq)]
-pub struct Rk4Limit {
-    /// The largest stable step (s).
-    pub step: f64,
-    /// The eigenvalue that sets it (1/s; its conjugate too where complex).
-    pub lambda: Complex<f64>,
-    /// The undamped coupled mode it belongs to (mostly): its angular frequency (rad/s) ...
-    pub omega: f64,
-    /// ... its damping ratio (its share of the modal damping, `xᵀ D x / 2ω`) ...
-    pub zeta: f64,
-    /// ... and the elastic coordinate (index among them) that moves most in it.
-    pub elastic: usize,
-}
-
-/// The largest step RK4 is stable at on the structure's modes at `q`, damping included: the
-/// eigenvalues `λ` of `ẋ = [[0, I], [−M⁻¹K, −M⁻¹D]] x` (`M` the flexible tree's mass matrix,
-/// `K` the modes' stiffness, `D` their damping `2ζω` on each elastic coordinate; hinge springs,
-/// geometric stiffening and control left out), the smallest [`rk4_step_limit`]. Undamped it is
-/// `2√2 / ω` of the highest mode; a heavily damped mode (`ζ > 1`) has a real eigenvalue up to
-/// `2ζω` in size and limits the step below that. The mode named is the undamped coupled mode
-/// whose own damped eigenvalue (`λ² + 2ζωλ + ω² = 0` with its share of `D`) limits the step
-/// most. `None` without elastic coordinates or when `M` is not positive definite at `q`.
-pub fn rk4_limit(flex: &FlexModel, q: &[f64]) -> Option<Rk4Limit> {
-    use nalgebra::Schur;
-    use satsim_tree::flexible::{FlexData, crba};
-    let n_elastic = flex.n_elastic();
-    if n_elastic == 0 {
-        return None;
-    }
-    let (w2, x) = eigen(flex, q)?;
-    let first = flex.rigid().nv();
-    let n = flex.nv();
-    let mut d = DMatrix::zeros(n, n);
-    for (e, c) in flex.damping().iter().enumerate() {
-        d[(first + e, first + e)] = *c;
-    }
-    // Each undamped mode with its share of the damping: which one limits the step.
-    let roots = |w2: f64, c: f64| {
-        let disc = Complex::new(0.25 * c * c - w2, 0.0).sqrt();
-        [-0.5 * c + disc, -0.5 * c - disc]
-    };
-    let mut order: Vec<usize> = (0..w2.len()).collect();
-    order.sort_by(|a, b| w2[*a].total_cmp(&w2[*b]));
-    let (mode, lambda, step) = order[order.len() - n_elastic..]
-        .iter()
-        .map(|&j| {
-            let xj = x.column(j);
-            let c = xj.dot(&(&d * xj));
-            roots(w2[j].max(0.0), c)
-                .into_iter()
-                .map(|l| (j, l, rk4_step_limit(l)))
-                .min_by(|a, b| a.2.total_cmp(&b.2))
-                .expect("two roots")
-        })
-        .min_by(|a, b| a.2.total_cmp(&b.2))?;
-    // The step itself from the coupled system's eigenvalues (the modes' damping need not be
-    // proportional to their stiffness), where the Schur decomposition converges.
-    let mut data = FlexData::new(flex);
-    let m = crba(flex, &mut data, q).ok()?.clone();
-    let m_inv = m.cholesky()?.inverse();
-    let mut k = DMatrix::zeros(n, n);
-    for (e, w2) in flex.stiffness().iter().enumerate() {
-        k[(first + e, first + e)] = *w2;
-    }
-    let mut a = DMatrix::zeros(2 * n, 2 * n);
-    a.view_mut((0, n), (n, n)).fill_with_identity();
-    a.view_mut((n, 0), (n, n)).copy_from(&(-&m_inv * k));
-    a.view_mut((n, n), (n, n)).copy_from(&(-&m_inv * &d));
-    let (lambda, step) = Schur::try_new(a, f64::EPSILON, 10_000)
-        .map(|s| s.complex_eigenvalues())
-        .and_then(|ev| {
-            ev.iter()
-                .map(|&l| (l, rk4_step_limit(l)))
-                .min_by(|a, b| a.1.total_cmp(&b.1))
-        })
-        .unwrap_or((lambda, step));
-    let omega = w2[mode].max(0.0).sqrt();
-    let xm = x.column(mode);
-    let (elastic, _) = (0..n_elastic)
-        .map(|e| (e, xm[first + e].abs()))
-        .max_by(|a, b| a.1.total_cmp(&b.1))?;
-    let zeta = xm.dot(&(&d * xm)) / (2.0 * omega);
-    (step.is_finite() && step > 0.0 && omega > 0.0).then_some(Rk4Limit {
-        step,
-        lambda: Complex::new(lambda.re, lambda.im.abs()),
-        omega,
-        zeta,
-        elastic,
-    })
 }
 
 /// The body (name) and mode number (from 1) of elastic coordinate `e`.
@@ -404,22 +276,4 @@ pub fn mode_of(flex: &FlexModel, e: usize) -> (String, usize) {
             )
         })
         .unwrap_or_default()
-}
-
-/// The largest step RK4 is stable at for `scene`'s flexible modes, damping included (s,
-/// [`rk4_limit`]), with the (undamped) frequency of the mode that limits it (Hz); `None` for
-/// a rigid scene. What the scene reader checks a given
-/// `integrator.step` against, for the callers that choose steps themselves (the accuracy
-/// sweep).
-pub fn rk4_stable_step(scene: &super::Scene) -> Option<(f64, f64)> {
-    let flex = scene.flexible.as_ref()?;
-    let q: Vec<f64> = scene
-        .initial
-        .q
-        .iter()
-        .chain(&scene.elastic.eta)
-        .copied()
-        .collect();
-    let limit = rk4_limit(flex, &q)?;
-    Some((limit.step, limit.omega / std::f64::consts::TAU))
 }

@@ -46,6 +46,7 @@ pub mod integrator;
 pub mod orbit;
 pub mod parse;
 pub mod sensors;
+pub mod step_limit;
 
 pub use file::OrbitFile;
 pub use file::{ArmatureFile, IntegratorFile, ModelSource, OutputFile, SceneFile, StateSource};

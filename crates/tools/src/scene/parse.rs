@@ -171,9 +171,6 @@ impl<'a> Parser<'a> {
         if let Some(f) = flex.as_ref() {
             self.check_initial_deformation(&file, f, &initial, &elastic)?;
         }
-        if let (Some(f), Some(h)) = (flex.as_ref(), options.fixed_step) {
-            self.check_modal_step(&file, f, &initial, &elastic, h)?;
-        }
         let (every, plots, view, energy_budget) = match &file.output {
             None => (duration / 100.0, true, true, true),
             Some(o) => {
@@ -213,6 +210,31 @@ impl<'a> Parser<'a> {
             super::fsw::read(self, f, &model, epoch, &mut effects, &mut clocks)?;
         }
         super::faults::read(self, &file.faults, &mut effects)?;
+        if let Some(h) = options.fixed_step {
+            let attached;
+            let tree = match flex.as_ref() {
+                Some(f) => f,
+                None => {
+                    attached = FlexModel::attach(model.clone(), &[])
+                        .map_err(|e| self.error(None, e.to_string()))?;
+                    &attached
+                }
+            };
+            let q: Vec<f64> = initial.q.iter().chain(&elastic.eta).copied().collect();
+            let gains = super::step_limit::HingeGains::of(&effects, model.n_hinges());
+            // The steps are cut to the output interval and the duration (`step_warning`): the
+            // longest step taken is what must be stable.
+            let cut = if h > duration.min(every) {
+                Some(if every <= duration {
+                    ("output.every", every)
+                } else {
+                    ("duration", duration)
+                })
+            } else {
+                None
+            };
+            self.check_rk4_step(&file, tree, &q, &gains, h, cut)?;
+        }
         let scene = Scene {
             path,
             model,
@@ -287,27 +309,33 @@ impl<'a> Parser<'a> {
         ))
     }
 
-    /// A fixed RK4 step must keep the structure's modes at the initial state within RK4's
-    /// stability region, their damping included ([`super::flexible::rk4_limit`]): beyond
-    /// it the modes grow without bound, so it is an error at `integrator.step` naming the
-    /// mode, its frequency and damping, and the largest stable step.
-    fn check_modal_step(
+    /// A fixed RK4 step must keep the scene's linear motions at the initial state (the
+    /// flexible bodies' modes, the hinges on their springs, dampers and continuous
+    /// controllers) within RK4's stability region, damping included
+    /// ([`super::step_limit::rk4_limit`]): beyond it they grow without bound, so it is an
+    /// error at `integrator.step` naming what limits the step, its frequency and damping, and
+    /// the largest stable step. `cut` is what the steps are cut to, where they are (the output
+    /// interval or the duration, and its value): the longest step taken is what must be stable.
+    fn check_rk4_step(
         &self,
         file: &SceneFile,
-        flex: &satsim_tree::flexible::FlexModel,
-        initial: &State,
-        elastic: &Elastic,
+        flex: &FlexModel,
+        q: &[f64],
+        gains: &super::step_limit::HingeGains,
         h: f64,
+        cut: Option<(&str, f64)>,
     ) -> Result<(), FileError> {
-        use super::flexible::{mode_of, rk4_limit};
-        let q: Vec<f64> = initial.q.iter().chain(&elastic.eta).copied().collect();
-        let Some(limit) = rk4_limit(flex, &q) else {
+        use super::step_limit::{Limiting, rk4_limit};
+        let Some(limit) = rk4_limit(flex, q, gains) else {
             return Ok(());
         };
-        if h <= limit.step {
+        let taken = cut.map_or(h, |(_, to)| to);
+        if taken <= limit.step {
             return Ok(());
         }
-        let (body, mode) = mode_of(flex, limit.elastic);
+        let cut = cut
+            .map(|(by, to)| format!(" (cut to `{by}` = {} s)", Num(to)))
+            .unwrap_or_default();
         let span = file
             .integrator
             .as_ref()
@@ -322,15 +350,27 @@ impl<'a> Parser<'a> {
         } else {
             format!("{:.4} 1/s", l.re)
         };
+        let what = limit.what(flex);
+        let (with, motion) = match limit.by {
+            Limiting::Mode(_) => ("the flexible modes", "mode"),
+            Limiting::Hinge(_) => ("the hinges' springs, dampers and controllers", "motion"),
+        };
+        let character = if w > 0.0 {
+            format!(
+                "is at {:.4} Hz (ω = {w:.4} rad/s) with damping ratio {:.3}",
+                w / std::f64::consts::TAU,
+                limit.zeta
+            )
+        } else {
+            "has no stiffness, only damping".to_owned()
+        };
         Err(self.error(
             span,
             format!(
-                "`integrator.step` = {} s is too long for rk4 with the flexible modes: the mode that limits it (mostly body `{body}`'s mode {mode}) is at {:.4} Hz (ω = {w:.4} rad/s) with damping ratio {:.3}, eigenvalue {eigenvalue}, and rk4 is stable on it only for steps up to {:.4e} s (|λ| × step within rk4's stability region: <= 2√2 = 2.83 undamped, <= 2.785 for a real λ; here |λ| × step = {:.3}): set `step` at most {suggested:.1e} s, or use an adaptive method (`method = \"radau5\"`, implicit, steps over the mode)",
+                "`integrator.step` = {} s{cut} is too long for rk4 with {with}: the {motion} that limits it (mostly {what}) {character}, eigenvalue {eigenvalue}, and rk4 is stable on it only for steps up to {:.4e} s (|λ| × step within rk4's stability region: <= 2√2 = 2.83 undamped, <= 2.785 for a real λ; here |λ| × step = {:.3}): set `step` at most {suggested:.1e} s, or use an adaptive method (`method = \"radau5\"`, implicit, steps over the {motion})",
                 Num(h),
-                w / std::f64::consts::TAU,
-                limit.zeta,
                 limit.step,
-                l.norm() * h,
+                l.norm() * taken,
             ),
         ))
     }

@@ -142,7 +142,8 @@ fn largest_eta(scene: &Scene) -> Option<f64> {
 
 #[test]
 fn an_rk4_step_beyond_the_highest_modes_stability_limit_is_refused_and_the_limit_is_sharp() {
-    use satsim_tools::scene::flexible::{RK4_LIMIT, highest_frequency, mode_of};
+    use satsim_tools::scene::flexible::{highest_frequency, mode_of};
+    use satsim_tools::scene::step_limit::RK4_LIMIT;
     let s = scene("");
     let flex = s.flexible.as_ref().unwrap();
     let q: Vec<f64> = s.initial.q.iter().chain(&s.elastic.eta).copied().collect();
@@ -171,7 +172,7 @@ fn an_rk4_step_beyond_the_highest_modes_stability_limit_is_refused_and_the_limit
     // Read from the file, a step over the limit is an error at its line naming the mode.
     let text = |h: f64| {
         format!(
-            "duration = 1.0\n[model]\n[[model.body]]\nname = \"hub\"\nmass = 50.0\ninertia = [[5.0, 0.0, 0.0], [0.0, 5.0, 0.0], [0.0, 0.0, 5.0]]\n[model.body.flexible]\nbeam = {{ root = [0.0, 0.0, 0.5], axis = [0.0, 0.0, 1.0], bend = [1.0, 0.0, 0.0], length = 1.0, EI = 20.0, rho_A = 1.0, modes = 3 }}\n[integrator]\nmethod = \"rk4\"\nstep = {h}\n"
+            "duration = 1.0\n[model]\n[[model.body]]\nname = \"hub\"\nmass = 50.0\ninertia = [[5.0, 0.0, 0.0], [0.0, 5.0, 0.0], [0.0, 0.0, 5.0]]\n[model.body.flexible]\nbeam = {{ root = [0.0, 0.0, 0.5], axis = [0.0, 0.0, 1.0], bend = [1.0, 0.0, 0.0], length = 1.0, EI = 20.0, rho_A = 1.0, modes = 3 }}\n[integrator]\nmethod = \"rk4\"\nstep = {h}\n[output]\nevery = 0.5\n"
         )
     };
     let Err(err) = Scene::parse(&text(0.02), Path::new("flex.toml")) else {
@@ -192,7 +193,8 @@ fn an_rk4_step_beyond_the_highest_modes_stability_limit_is_refused_and_the_limit
 /// takes the damping in, and its limit is as sharp as the undamped one.
 #[test]
 fn an_rk4_step_limit_takes_the_modes_damping_in() {
-    use satsim_tools::scene::flexible::{RK4_LIMIT, highest_frequency, rk4_limit};
+    use satsim_tools::scene::flexible::highest_frequency;
+    use satsim_tools::scene::step_limit::{HingeGains, RK4_LIMIT, rk4_limit};
     // The hub's antenna (its highest mode about 280 rad/s) with damping ratio 5.
     let damped = |step: f64| {
         scene_text("")
@@ -206,7 +208,8 @@ fn an_rk4_step_limit_takes_the_modes_damping_in() {
     let flex = s.flexible.as_ref().unwrap();
     let q: Vec<f64> = s.initial.q.iter().chain(&s.elastic.eta).copied().collect();
     let (w, _) = highest_frequency(flex, &q).unwrap();
-    let limit = rk4_limit(flex, &q).unwrap();
+    let gains = HingeGains::of(&s.effects, flex.rigid().n_hinges());
+    let limit = rk4_limit(flex, &q, &gains).unwrap();
     assert!(limit.lambda.im == 0.0 && limit.zeta > 4.5, "{limit:?}");
     // The real eigenvalue ω (ζ + √(ζ² − 1)) of the highest mode: RK4's real-axis limit 2.785.
     assert!(

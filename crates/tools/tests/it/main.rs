@@ -22,6 +22,7 @@ mod scene;
 mod sensors;
 mod simulation_passes;
 mod simultaneous_stops;
+mod step_limit;
 mod stepping;
 mod thrusters;
 mod wheel_release;

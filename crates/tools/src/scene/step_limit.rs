@@ -1,0 +1,274 @@
+//! The longest fixed RK4 step a scene's linear stiffness and damping allow, at its initial
+//! state: the flexible bodies' modes, the hinge springs and dampers
+//! (`[effects.hinge_springs]`) and the continuous hinge controllers' gains
+//! (`[effects.hinge_control]` without a `period`). Beyond it a motion grows without bound, so
+//! the scene reader refuses such a step at its line and the accuracy sweep does not run it.
+//!
+//! The linearisation is `ẋ = [[0, I], [−M⁻¹K, −M⁻¹D]] x` over the generalised velocity's
+//! coordinates, `M` the (flexible) tree's mass matrix at the initial state, `K` and `D`
+//! diagonal: `ωₖ²` and `2ζₖωₖ` on each elastic coordinate, a hinge's spring stiffness plus its
+//! controller's `kp` and its damping plus `kd` on its coordinate. Left out: geometric
+//! stiffening, the attitude controller, sampled controllers, stops and wheel friction.
+
+use nalgebra::{Complex, DMatrix};
+use satsim_spacecraft::effects::{EffectSet, HingeControl, HingeSprings};
+use satsim_tree::flexible::FlexModel;
+
+use super::flexible::{eigen, mode_of};
+
+/// RK4's stability limit on the imaginary axis: an undamped oscillation of angular frequency
+/// `ω` stays bounded for `ω h <= 2√2` (the largest `|λ h|` on the imaginary axis where
+/// `|1 + z + z²/2 + z³/6 + z⁴/24| <= 1`).
+pub const RK4_LIMIT: f64 = 2.0 * std::f64::consts::SQRT_2;
+
+/// `|R(z)|`, RK4's gain on `ẋ = λ x` over one step, `z = λ h`:
+/// `R(z) = 1 + z + z²/2 + z³/6 + z⁴/24`.
+fn rk4_gain(z: Complex<f64>) -> f64 {
+    let one = Complex::new(1.0, 0.0);
+    (one + z * (one + z * (0.5 + z * (1.0 / 6.0 + z / 24.0)))).norm()
+}
+
+/// The largest step `h` for which RK4 keeps `ẋ = λ x` bounded (`|R(λ h')| <= 1` for every
+/// `h' <= h`): `2√2 / |λ|` on the imaginary axis, `2.785 / |λ|` on the negative real axis,
+/// infinite for `λ = 0`, zero for a growing mode (`Re λ > 0`). Along the ray of `λ` from the
+/// origin RK4's region is an interval within `|z| < 3`: its end is found by a scan, then
+/// bisection to round-off.
+pub fn rk4_step_limit(lambda: Complex<f64>) -> f64 {
+    let r = lambda.norm();
+    if r == 0.0 {
+        return f64::INFINITY;
+    }
+    let u = lambda / r;
+    // Round-off's allowance: on the imaginary axis `|R| = 1` at the origin and at the end.
+    let stable = |s: f64| rk4_gain(u * s) <= 1.0 + 1e-12;
+    let (mut lo, mut hi) = (0.0, 3.0);
+    for k in 1..=300 {
+        let s = 3.0 * k as f64 / 300.0;
+        if !stable(s) {
+            hi = s;
+            break;
+        }
+        lo = s;
+    }
+    for _ in 0..60 {
+        let mid = 0.5 * (lo + hi);
+        if stable(mid) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    lo / r
+}
+
+/// The linear stiffness and damping a scene puts on its hinges, one entry per hinge (model
+/// file order): the springs' and dampers' plus the continuous controllers' `kp` and `kd`.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct HingeGains {
+    /// N m/rad.
+    pub stiffness: Vec<f64>,
+    /// N m s/rad.
+    pub damping: Vec<f64>,
+}
+
+impl HingeGains {
+    /// None on any of `n_hinges` hinges.
+    pub fn none(n_hinges: usize) -> Self {
+        Self {
+            stiffness: vec![0.0; n_hinges],
+            damping: vec![0.0; n_hinges],
+        }
+    }
+
+    /// The gains `effects` put on `n_hinges` hinges: `hinge_springs`, and `hinge_control`
+    /// where it is continuous (a sampled law's stability depends on its period, not on RK4).
+    pub fn of(effects: &EffectSet, n_hinges: usize) -> Self {
+        let mut g = Self::none(n_hinges);
+        if let Some(s) = effects.get::<HingeSprings>() {
+            for (i, (k, c)) in s
+                .stiffness
+                .iter()
+                .zip(&s.damping)
+                .enumerate()
+                .take(n_hinges)
+            {
+                g.stiffness[i] += k;
+                g.damping[i] += c;
+            }
+        }
+        if let Some(c) = effects.get::<HingeControl>().filter(|c| c.period.is_none()) {
+            for p in c.hinges.iter().filter(|p| p.hinge < n_hinges) {
+                g.stiffness[p.hinge] += p.kp;
+                g.damping[p.hinge] += p.kd;
+            }
+        }
+        g
+    }
+}
+
+/// What mostly moves in the motion that limits RK4's step ([`Rk4Limit`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Limiting {
+    /// An elastic coordinate (index among them): a flexible body's mode.
+    Mode(usize),
+    /// A hinge (model file order), on its spring, damper or controller.
+    Hinge(usize),
+}
+
+/// What limits RK4's step ([`rk4_limit`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Rk4Limit {
+    /// The largest stable step (s).
+    pub step: f64,
+    /// The eigenvalue that sets it (1/s; its conjugate too where complex).
+    pub lambda: Complex<f64>,
+    /// The undamped coupled motion it belongs to (mostly): its angular frequency (rad/s; zero
+    /// for a motion that only a damper holds) ...
+    pub omega: f64,
+    /// ... its damping ratio (its share of the damping, `xᵀ D x / 2ω`; infinite at `ω = 0`) ...
+    pub zeta: f64,
+    /// ... and the coordinate whose stiffness and damping take the largest share of it.
+    pub by: Limiting,
+}
+
+impl Rk4Limit {
+    /// What limits the step, in words: "body `hub`'s mode 3" or "hinge `h1`".
+    pub fn what(&self, flex: &FlexModel) -> String {
+        match self.by {
+            Limiting::Mode(e) => {
+                let (body, mode) = mode_of(flex, e);
+                format!("body `{body}`'s mode {mode}")
+            }
+            Limiting::Hinge(h) => format!("hinge `{}`", flex.rigid().hinge_names()[h]),
+        }
+    }
+}
+
+/// The diagonals of `K` and `D` over the generalised velocity's coordinates (rigid `v…`, then
+/// `η̇…`), and each coordinate's hinge (`None` for the base's and the elastic ones).
+fn diagonals(flex: &FlexModel, hinges: &HingeGains) -> (Vec<f64>, Vec<f64>, Vec<Option<usize>>) {
+    let rigid = flex.rigid();
+    let first = rigid.nv();
+    let n = flex.nv();
+    let (mut k, mut d) = (vec![0.0; n], vec![0.0; n]);
+    k[first..].copy_from_slice(flex.stiffness());
+    d[first..].copy_from_slice(flex.damping());
+    let mut hinge_of = vec![None; n];
+    for b in 0..rigid.n_bodies() {
+        if let Some(j) = rigid.joint(b) {
+            let (h, v) = (j.hinge(), j.dof());
+            if let (Some(kh), Some(ch)) = (hinges.stiffness.get(h), hinges.damping.get(h)) {
+                k[v] += kh;
+                d[v] += ch;
+            }
+            hinge_of[v] = Some(h);
+        }
+    }
+    (k, d, hinge_of)
+}
+
+/// The largest step RK4 is stable at on the scene's linear motions at `q` (the flexible
+/// bodies' modes and the `hinges`' gains, damping included): the eigenvalues `λ` of
+/// `ẋ = [[0, I], [−M⁻¹K, −M⁻¹D]] x`, the smallest [`rk4_step_limit`]. Undamped it is `2√2 / ω`
+/// of the highest mode; a heavily damped motion (`ζ > 1`) has a real eigenvalue up to `2ζω`
+/// in size and limits the step below that (a damper alone, `−c` over the inertia it moves).
+/// The motion named is the undamped coupled one whose own damped eigenvalue
+/// (`λ² + 2ζωλ + ω² = 0` with its share of `D`) limits the step most, and in it the
+/// coordinate with the largest share of `K + |λ| D`. `None` when nothing is stiff or damped,
+/// or when `M` is not positive definite at `q`.
+///
+/// A rigid model is passed as a [`FlexModel`] without flexible bodies
+/// (`FlexModel::attach(model, &[])`).
+pub fn rk4_limit(flex: &FlexModel, q: &[f64], hinges: &HingeGains) -> Option<Rk4Limit> {
+    use nalgebra::Schur;
+    use satsim_tree::flexible::{FlexData, crba};
+    let (k, d, hinge_of) = diagonals(flex, hinges);
+    if k.iter().chain(&d).all(|v| *v == 0.0) {
+        return None;
+    }
+    let (w2, x) = eigen(flex, q, &k)?;
+    let n = flex.nv();
+    let dm = DMatrix::from_diagonal(&nalgebra::DVector::from_column_slice(&d));
+    // Each undamped motion with its share of the damping: which one limits the step.
+    let roots = |w2: f64, c: f64| {
+        let disc = Complex::new(0.25 * c * c - w2, 0.0).sqrt();
+        [-0.5 * c + disc, -0.5 * c - disc]
+    };
+    let (mode, lambda, step) = (0..w2.len())
+        .map(|j| {
+            let xj = x.column(j);
+            let c = xj.dot(&(&dm * xj));
+            roots(w2[j].max(0.0), c)
+                .into_iter()
+                .map(|l| (j, l, rk4_step_limit(l)))
+                .min_by(|a, b| a.2.total_cmp(&b.2))
+                .expect("two roots")
+        })
+        .min_by(|a, b| a.2.total_cmp(&b.2))?;
+    // The step itself from the coupled system's eigenvalues (the damping need not be
+    // proportional to the stiffness), where the Schur decomposition converges.
+    let mut data = FlexData::new(flex);
+    let m = crba(flex, &mut data, q).ok()?.clone();
+    let m_inv = m.cholesky()?.inverse();
+    let km = DMatrix::from_diagonal(&nalgebra::DVector::from_column_slice(&k));
+    let mut a = DMatrix::zeros(2 * n, 2 * n);
+    a.view_mut((0, n), (n, n)).fill_with_identity();
+    a.view_mut((n, 0), (n, n)).copy_from(&(-&m_inv * km));
+    a.view_mut((n, n), (n, n)).copy_from(&(-&m_inv * &dm));
+    let (lambda, step) = Schur::try_new(a, f64::EPSILON, 10_000)
+        .map(|s| s.complex_eigenvalues())
+        .and_then(|ev| {
+            ev.iter()
+                .map(|&l| (l, rk4_step_limit(l)))
+                .min_by(|a, b| a.1.total_cmp(&b.1))
+        })
+        .unwrap_or((lambda, step));
+    let omega = w2[mode].max(0.0).sqrt();
+    let xm = x.column(mode);
+    let share = |i: usize| (k[i] + lambda.norm() * d[i]) * xm[i] * xm[i];
+    let top = (0..n).max_by(|a, b| share(*a).total_cmp(&share(*b)))?;
+    let first = flex.rigid().nv();
+    let by = match hinge_of[top] {
+        Some(h) => Limiting::Hinge(h),
+        None if top >= first => Limiting::Mode(top - first),
+        None => return None,
+    };
+    let zeta = xm.dot(&(&dm * xm)) / (2.0 * omega);
+    (step.is_finite() && step > 0.0).then_some(Rk4Limit {
+        step,
+        lambda: Complex::new(lambda.re, lambda.im.abs()),
+        omega,
+        zeta,
+        by,
+    })
+}
+
+/// The largest step RK4 is stable at for `scene` ([`rk4_limit`] at its initial state, with
+/// its hinge gains), and what limits it in words ([`Rk4Limit::what`], with the frequency);
+/// `None` where nothing limits it. What the scene reader checks a given `integrator.step`
+/// against, for the callers that choose steps themselves (the accuracy sweep).
+pub fn rk4_stable_step(scene: &super::Scene) -> Option<(f64, String)> {
+    let attached;
+    let flex = match scene.flexible.as_ref() {
+        Some(f) => f,
+        None => {
+            attached = FlexModel::attach(scene.model.clone(), &[]).ok()?;
+            &attached
+        }
+    };
+    let q: Vec<f64> = scene
+        .initial
+        .q
+        .iter()
+        .chain(&scene.elastic.eta)
+        .copied()
+        .collect();
+    let gains = HingeGains::of(&scene.effects, flex.rigid().n_hinges());
+    let limit = rk4_limit(flex, &q, &gains)?;
+    let what = format!(
+        "{} ({:.3} Hz)",
+        limit.what(flex),
+        limit.omega / std::f64::consts::TAU
+    );
+    Some((limit.step, what))
+}
