@@ -20,6 +20,7 @@ use crate::view::PoseRecorder;
 use satsim_integrate::Options;
 use satsim_spacecraft::sensors::Sensors;
 use satsim_spacecraft::simulation::{EventRecord, OutputGrid, SimError, StepError, Stepping};
+use satsim_tree::error::{Count, Num};
 use std::fmt;
 use std::path::{Path, PathBuf};
 
@@ -284,10 +285,12 @@ impl SceneStepper {
         if self.stepping.rows_in(&self.options, dt, cap) as u64 > room {
             let every = self.stepping.output_grid().every;
             return Err(StepFailure::Input(format!(
-                "advancing by dt = {dt} s would record about {:.0} rows (`output.every` = {every} s), \
+                "advancing by dt = {} s would record about {} rows (`output.every` = {} s), \
                  more than the {room} left of the limit of {} rows kept: advance by less, or \
                  raise `output.every` or the limit (`max_rows`)",
-                (dt / every).floor().max(1.0),
+                Num(dt),
+                Count((dt / every).floor().max(1.0)),
+                Num(every),
                 self.max_rows
             )));
         }

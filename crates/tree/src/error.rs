@@ -32,6 +32,27 @@ impl fmt::Display for Num {
     }
 }
 
+/// A count (rows, samples, steps) as a message writes it: whole below 1e15, three
+/// significant digits in exponent form above (not the 300 digits of `1e300`).
+///
+/// ```
+/// use satsim_tree::error::Count;
+/// assert_eq!(Count(2000000001.0).to_string(), "2000000001");
+/// assert_eq!(Count(3e302).to_string(), "3.000e302");
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Count(pub f64);
+
+impl fmt::Display for Count {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.0 < 1e15 {
+            write!(f, "{:.0}", self.0)
+        } else {
+            write!(f, "{:.3e}", self.0)
+        }
+    }
+}
+
 /// Why a model could not be built. Each variant names the body or hinge concerned.
 #[derive(Debug, Error, Clone, PartialEq)]
 pub enum ModelError {

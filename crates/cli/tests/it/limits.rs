@@ -128,6 +128,22 @@ fn a_run_whose_rows_exceed_the_limit_is_refused_before_it_starts() {
         !dir.join("o/trajectory.csv").exists(),
         "refused before writing"
     );
+    // An absurd interval: the count in exponent form, not its 300 digits.
+    let err = refused(&satsim(
+        &dir,
+        &[
+            "run",
+            "short.toml",
+            "--out",
+            "o",
+            "--set",
+            "output.every=1e-300",
+        ],
+    ));
+    assert!(
+        err.contains("`output.every` = 1e-300 s over `duration` = 2 s makes 2.000e300 rows"),
+        "{err}"
+    );
     // Refused at once, not after writing gigabytes.
     assert!(started.elapsed() < Duration::from_secs(30));
     // The limit is a flag: 2 s at 1e-3 s is 2001 rows.

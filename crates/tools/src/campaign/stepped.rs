@@ -18,6 +18,7 @@
 use super::{Campaign, Collect, RunRecord, catch_panic};
 use crate::api::Trajectory;
 use crate::stepping::SceneStepper;
+use satsim_tree::error::{Count, Num};
 
 /// Why a control instant did not go on.
 #[derive(Debug)]
@@ -62,8 +63,10 @@ impl Campaign {
         let instants = (self.nominal.duration / period).ceil();
         if instants > self.max_rows() as f64 {
             return Err(format!(
-                "a period of {period} s makes {instants:.0} control instants in the scene's {} s, more than the limit of {} (`max_rows`): the smallest period allowed is {} s",
-                self.nominal.duration,
+                "a period of {} s makes {} control instants in the scene's {} s, more than the limit of {} (`max_rows`): the smallest period allowed is {} s",
+                Num(period),
+                Count(instants),
+                Num(self.nominal.duration),
                 self.max_rows(),
                 self.nominal.duration / self.max_rows() as f64
             ));

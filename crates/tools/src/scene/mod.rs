@@ -58,7 +58,7 @@ use crate::scene_keys::{self, Override};
 use satsim_integrate::Options;
 use satsim_spacecraft::effects::{EffectSet, Registry};
 use satsim_spacecraft::simulation::{SimError, Simulation};
-use satsim_tree::error::Num;
+use satsim_tree::error::{Count, Num};
 use satsim_tree::flexible::FlexModel;
 use satsim_tree::io::FileError;
 use satsim_tree::{Model, State};
@@ -149,9 +149,10 @@ impl Scene {
             path: self.path.clone(),
             line: None,
             message: format!(
-                "`output.every` = {} s over `duration` = {} s makes {rows:.0} rows, more than the limit of {max_rows}: raise `output.every` (at least {:.3e} s) or the limit (`--max-rows`)",
-                self.every,
-                self.duration,
+                "`output.every` = {} s over `duration` = {} s makes {} rows, more than the limit of {max_rows}: raise `output.every` (at least {:.3e} s) or the limit (`--max-rows`)",
+                Num(self.every),
+                Num(self.duration),
+                Count(rows),
                 self.duration / (max_rows.max(2) - 1) as f64
             ),
         })
@@ -167,10 +168,11 @@ impl Scene {
                     path: self.path.clone(),
                     line: c.line,
                     message: format!(
-                        "{}: `period` = {} s over `duration` = {} s makes {samples:.0} samples, more than the limit of {max}: each sample is a stop of the integrator; raise the period (at least {:.3e} s) or the limit (`--max-rows`)",
+                        "{}: `period` = {} s over `duration` = {} s makes {} samples, more than the limit of {max}: each sample is a stop of the integrator; raise the period (at least {:.3e} s) or the limit (`--max-rows`)",
                         c.what,
                         Num(c.period),
                         Num(self.duration),
+                        Count(samples),
                         self.duration / (max.max(2) - 1) as f64
                     ),
                 });
