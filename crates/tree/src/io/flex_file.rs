@@ -301,6 +301,26 @@ impl ModesFile {
         if !finite(self.inertia.get_ref().as_flattened()) {
             return Err((self.inertia.span(), "`inertia` is not finite".into()));
         }
+        // The structure's inertia must be a mass distribution's, as a body's must (symmetric,
+        // semi-definite, its principal moments a triangle's): checked here, at the file's own
+        // line, rather than in the sum with the body's rigid part.
+        let r = self.inertia.get_ref();
+        let structure = Body::new(
+            "the modes file's structure",
+            mass,
+            Mat3::from_fn(|i, j| r[i][j]),
+        );
+        if let Err(e) = crate::model::check_body(&structure) {
+            let why = e.to_string();
+            let why = why
+                .strip_prefix("body `the modes file's structure`: ")
+                .unwrap_or(&why);
+            let message = match why.strip_prefix("inertia ") {
+                Some(rest) => format!("`inertia` {rest}"),
+                None => format!("`inertia`: {why}"),
+            };
+            return Err((self.inertia.span(), message));
+        }
         let p = &self.momentum;
         if p.get_ref().len() != m {
             return Err((

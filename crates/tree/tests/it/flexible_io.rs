@@ -495,6 +495,32 @@ fn bad_modes_files_name_their_file_and_line() {
             "`frequencies_hz`: each must be positive",
         ),
         (set("mass", "0.0"), "mass", "`mass` must be positive"),
+        // The structure's inertia is checked as a body's, at its own line, not in the sum
+        // with the body's rigid part (where a negative moment hides).
+        (
+            set(
+                "inertia",
+                "[[-3.3333333333333335, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 3.3333333333333335]]",
+            ),
+            "inertia",
+            "`inertia` is not positive semi-definite (principal moment -3.3333333333333335)",
+        ),
+        (
+            set(
+                "inertia",
+                "[[3.3333333333333335, 0.0, 0.0], [0.0, 9.0, 0.0], [0.0, 0.0, 3.3333333333333335]]",
+            ),
+            "inertia",
+            "`inertia`: principal moments [3.3333333333333335, 3.3333333333333335, 9.0] break the triangle inequality",
+        ),
+        (
+            set(
+                "inertia",
+                "[[3.3333333333333335, 1.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 3.3333333333333335]]",
+            ),
+            "inertia",
+            "`inertia` is not symmetric",
+        ),
         (
             good.replacen("mass = ", "damping = [0.1]\nmass = ", 1),
             "damping",
