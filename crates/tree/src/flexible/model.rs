@@ -7,7 +7,7 @@
 use super::beam::{Beam, Stiffening};
 use super::modal::{ModalData, NodeShape};
 use super::node::Node;
-use crate::error::ModelError;
+use crate::error::{ModelError, Num};
 use crate::model::{Model, ModelBuilder, UNIT_NORM_TOLERANCE};
 use crate::spatial::{Force, Mat3, Motion, RigidInertia};
 use thiserror::Error;
@@ -166,6 +166,26 @@ fn check_beam(body: &str, b: &Beam) -> Result<(), FlexError> {
         return Err(invalid(
             body,
             format!("beam: modes must be 1 to {MAX_BEAM_MODES}, got {}", b.modes),
+        ));
+    }
+    // Each value in range, together they can still take the beam's mass, its inertia or its
+    // modes' stiffness out of f64 (a length of 1e-300 m: frequencies of 1e600 rad/s), which
+    // the dynamics would meet as a NaN pivot at their first step.
+    let (m, w1, wn) = (b.mass(), b.omega(1), b.omega(b.modes));
+    let moment = m * b.length * b.length / 12.0;
+    if !(m.is_normal() && moment.is_finite() && w1 > 0.0 && (wn * wn).is_finite()) {
+        return Err(invalid(
+            body,
+            format!(
+                "beam: length {}, EI {} and rho_A {} make a mass of {} kg, a moment of inertia of {} kg m² and modes from {} to {} rad/s: out of the range the dynamics computes in (f64)",
+                Num(b.length),
+                Num(b.ei),
+                Num(b.rho_a),
+                Num(m),
+                Num(moment),
+                Num(w1),
+                Num(wn)
+            ),
         ));
     }
     Ok(())

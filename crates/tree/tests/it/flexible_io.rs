@@ -116,7 +116,18 @@ fn error_of(text: &str) -> String {
 
 #[test]
 fn bad_flexible_values_name_file_and_line() {
-    let cases: [(&str, &str, &str); 11] = [
+    let cases: [(&str, &str, &str); 13] = [
+        // Each value in range, but not together: at the beam's line, with what they make.
+        (
+            "length = 2.0",
+            "length = 1e-300",
+            "flex.toml:10: flexible body `panel`: beam: length 1e-300, EI 500 and rho_A 5 make a mass of 5e-300 kg, a moment of inertia of 0 kg m² and modes from inf to inf rad/s: out of the range",
+        ),
+        (
+            "length = 2.0",
+            "length = 1e300",
+            "flex.toml:10: flexible body `panel`: beam: length 1e300, EI 500 and rho_A 5 make a mass of 5e300 kg, a moment of inertia of inf kg m²",
+        ),
         (
             "EI = 500.0",
             "EI = -500.0",
