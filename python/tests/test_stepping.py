@@ -185,7 +185,7 @@ def test_rows_kept_are_bounded_by_max_rows_and_a_long_dt_is_refused_at_once():
     text = THRUSTER_SCENE.replace("DUTY", "0.0")
     with satsim.Simulation(text) as sim:
         assert sim.max_rows == satsim.Simulation.MAX_ROWS == 1_000_000
-        with pytest.raises(satsim.SatsimError, match=r"dt = 1000000000(\.0)? s would record about 10000000000 rows .*`max_rows`"):
+        with pytest.raises(satsim.SatsimError, match=r"dt = 1e9 s would record about 10000000000 rows .*`max_rows`"):
             sim.advance(1e9)
         assert sim.t == 0.0 and len(sim.trajectory().data) == 1
         sim.advance(0.5)
