@@ -128,6 +128,17 @@ pub struct Clock {
 pub const DEFAULT_MAX_ROWS: u64 = 1_000_000;
 
 impl Scene {
+    /// The initial positions in the flexible tree's order: the rigid tree's `q`, then the
+    /// elastic coordinates `η` (none for a rigid scene).
+    pub fn initial_q(&self) -> Vec<f64> {
+        self.initial
+            .q
+            .iter()
+            .chain(&self.elastic.eta)
+            .copied()
+            .collect()
+    }
+
     /// How many rows a run writes: `t = 0, every, 2 every, …` and the end (counted as a
     /// float, since `duration / every` may exceed every integer type).
     pub fn output_rows(&self) -> f64 {

@@ -256,15 +256,8 @@ pub fn rk4_stable_step(scene: &super::Scene) -> Option<(f64, String)> {
             &attached
         }
     };
-    let q: Vec<f64> = scene
-        .initial
-        .q
-        .iter()
-        .chain(&scene.elastic.eta)
-        .copied()
-        .collect();
     let gains = HingeGains::of(&scene.effects, flex.rigid().n_hinges());
-    let limit = rk4_limit(flex, &q, &gains)?;
+    let limit = rk4_limit(flex, &scene.initial_q(), &gains)?;
     let what = format!(
         "{} ({:.3} Hz)",
         limit.what(flex),

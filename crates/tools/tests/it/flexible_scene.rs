@@ -146,7 +146,7 @@ fn an_rk4_step_beyond_the_highest_modes_stability_limit_is_refused_and_the_limit
     use satsim_tools::scene::step_limit::RK4_LIMIT;
     let s = scene("");
     let flex = s.flexible.as_ref().unwrap();
-    let q: Vec<f64> = s.initial.q.iter().chain(&s.elastic.eta).copied().collect();
+    let q = s.initial_q();
     let (w, e) = highest_frequency(flex, &q).unwrap();
     // The hub's antenna (EI 20, ρA 1, 1 m): its third clamped mode is 61.70 rad/s × 4.47 =
     // 275.9 rad/s; on the free hub its coupled frequency is a little higher.
@@ -206,7 +206,7 @@ fn an_rk4_step_limit_takes_the_modes_damping_in() {
     };
     let s = Scene::parse(&damped(0.0002), Path::new("flex.toml")).expect("a stable step");
     let flex = s.flexible.as_ref().unwrap();
-    let q: Vec<f64> = s.initial.q.iter().chain(&s.elastic.eta).copied().collect();
+    let q = s.initial_q();
     let (w, _) = highest_frequency(flex, &q).unwrap();
     let gains = HingeGains::of(&s.effects, flex.rigid().n_hinges());
     let limit = rk4_limit(flex, &q, &gains).unwrap();
