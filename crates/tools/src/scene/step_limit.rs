@@ -61,6 +61,19 @@ pub fn rk4_step_limit(lambda: Complex<f64>) -> f64 {
     lo / r
 }
 
+/// The eigenvalue that limits RK4's step most among `ev` and that step. The free motions'
+/// zero eigenvalues come out of the Schur decomposition as round-off, `±1e-17` on the
+/// deployment scene, some with a positive real part, where RK4's region has no room (a
+/// spurious limit of `1e-12/|λ|`): eigenvalues below `1e-6` of the largest in size are taken
+/// for zero. A real one that small would limit the step a million times less than the largest.
+fn fastest(ev: &[Complex<f64>]) -> Option<(Complex<f64>, f64)> {
+    let largest = ev.iter().map(|l| l.norm()).fold(0.0, f64::max);
+    ev.iter()
+        .filter(|l| l.norm() > 1e-6 * largest)
+        .map(|&l| (l, rk4_step_limit(l)))
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+}
+
 /// The linear stiffness and damping a scene puts on its hinges, one entry per hinge (model
 /// file order): the springs' and dampers' plus the continuous controllers' `kp` and `kd`.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -216,12 +229,7 @@ pub fn rk4_limit(flex: &FlexModel, q: &[f64], hinges: &HingeGains) -> Option<Rk4
     a.view_mut((n, 0), (n, n)).copy_from(&(-&m_inv * km));
     a.view_mut((n, n), (n, n)).copy_from(&(-&m_inv * &dm));
     let (lambda, step) = Schur::try_new(a, f64::EPSILON, 10_000)
-        .map(|s| s.complex_eigenvalues())
-        .and_then(|ev| {
-            ev.iter()
-                .map(|&l| (l, rk4_step_limit(l)))
-                .min_by(|a, b| a.1.total_cmp(&b.1))
-        })
+        .and_then(|s| fastest(s.complex_eigenvalues().as_slice()))
         .unwrap_or((lambda, step));
     let omega = w2[mode].max(0.0).sqrt();
     let xm = x.column(mode);
@@ -264,4 +272,34 @@ pub fn rk4_stable_step(scene: &super::Scene) -> Option<(f64, String)> {
         limit.omega / std::f64::consts::TAU
     );
     Some((limit.step, what))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Round-off's eigenvalues of the free motions (as the deployment scene's Schur
+    /// decomposition gives them, scaled up a million times) do not limit the step; the
+    /// oscillator does.
+    #[test]
+    fn round_off_eigenvalues_of_free_motions_do_not_limit_the_step() {
+        let oscillator = Complex::new(-8.3333, 128.8302);
+        let spurious = [Complex::new(4.5e-11, 5.1e-11), Complex::new(-2.4e-11, 0.0)];
+        // Alone, a round-off eigenvalue in the right half-plane limits the step to nothing.
+        assert!(
+            rk4_step_limit(spurious[0]) < 0.1,
+            "{}",
+            rk4_step_limit(spurious[0])
+        );
+        let ev = [
+            spurious[0],
+            spurious[1],
+            oscillator,
+            oscillator.conj(),
+            Complex::new(0.0, 0.0),
+        ];
+        let (l, step) = fastest(&ev).unwrap();
+        assert_eq!(l.norm(), oscillator.norm());
+        assert_eq!(step, rk4_step_limit(oscillator));
+    }
 }
