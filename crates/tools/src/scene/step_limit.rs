@@ -14,7 +14,7 @@ use nalgebra::{Complex, DMatrix};
 use satsim_spacecraft::effects::{EffectSet, HingeControl, HingeSprings};
 use satsim_tree::flexible::FlexModel;
 
-use super::flexible::{eigen, mode_of};
+use super::flexible::{eigen, modal_stiffness, mode_of};
 
 /// RK4's stability limit on the imaginary axis: an undamped oscillation of angular frequency
 /// `ω` stays bounded for `ω h <= 2√2` (the largest `|λ h|` on the imaginary axis where
@@ -163,8 +163,8 @@ fn diagonals(flex: &FlexModel, hinges: &HingeGains) -> (Vec<f64>, Vec<f64>, Vec<
     let rigid = flex.rigid();
     let first = rigid.nv();
     let n = flex.nv();
-    let (mut k, mut d) = (vec![0.0; n], vec![0.0; n]);
-    k[first..].copy_from_slice(flex.stiffness());
+    let mut k = modal_stiffness(flex);
+    let mut d = vec![0.0; n];
     d[first..].copy_from_slice(flex.damping());
     let mut hinge_of = vec![None; n];
     for b in 0..rigid.n_bodies() {
