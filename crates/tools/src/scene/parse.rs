@@ -169,7 +169,7 @@ impl<'a> Parser<'a> {
             None => true,
         };
         if let Some(f) = flex.as_ref() {
-            self.check_initial_deformation(&file, f, &initial, &elastic)?;
+            self.check_initial_modes(&file, f, &initial, &elastic)?;
         }
         let (every, plots, view, energy_budget) = match &file.output {
             None => (duration / 100.0, true, true, true),
@@ -263,12 +263,15 @@ impl<'a> Parser<'a> {
         Ok(scene)
     }
 
-    /// The initial deformation must leave the mass matrix positive definite: the deformed
-    /// inertia depends on `η` (to first and second order), and an `eta` large enough makes it
-    /// no body's. The run would end at its first step in "mass matrix is not positive
-    /// definite"; it is an error at the scene's `initial` line instead, naming the mode whose
-    /// pivot failed where the flexible ABA says.
-    fn check_initial_deformation(
+    /// The dynamics must resolve every mode at the initial state. Undeformed, a flexible
+    /// body far lighter than the bodies it carries fails there (the model's own check is at
+    /// its neutral configuration, and round-off's sign depends on the configuration): an
+    /// error at the scene's `model` line, naming the mode. Deformed, the deformed inertia
+    /// depends on `η` (to first and second order), and an `eta` large enough makes it no
+    /// body's: an error at the scene's `initial` line, naming the mode whose pivot failed
+    /// where the flexible ABA says. Either way the run would end at its first step in "mass
+    /// matrix is not positive definite".
+    fn check_initial_modes(
         &self,
         file: &SceneFile,
         flex: &FlexModel,
@@ -276,9 +279,32 @@ impl<'a> Parser<'a> {
         elastic: &Elastic,
     ) -> Result<(), FileError> {
         use satsim_tree::DynamicsError;
-        use satsim_tree::flexible::{FlexData, aba, crba};
+        use satsim_tree::flexible::{FlexData, UNRESOLVED, aba, crba};
+        let rigid = flex.rigid().nv();
+        let zero = vec![0.0; flex.nv()];
+        let mut data = FlexData::new(flex);
+        let rest: Vec<f64> = initial
+            .q
+            .iter()
+            .copied()
+            .chain(elastic.eta.iter().map(|_| 0.0))
+            .collect();
+        if let Err(DynamicsError::NotPositiveDefinite { index, pivot }) =
+            aba(flex, &mut data, &rest, &zero, &zero, None)
+            && index >= rigid
+        {
+            let (body, mode) = super::flexible::mode_of(flex, index - rigid);
+            return Err(self.error(
+                Some(file.model.span()),
+                format!(
+                    "`model`: at the initial state the dynamics cannot resolve body `{body}`'s \
+                     mode {mode} (its articulated pivot is {}, where the mass matrix makes it \
+                     positive): {UNRESOLVED}",
+                    Num(pivot)
+                ),
+            ));
+        }
         if elastic.eta.iter().all(|e| *e == 0.0) {
-            // At rest the model's own checks hold.
             return Ok(());
         }
         let q: Vec<f64> = initial.q.iter().chain(&elastic.eta).copied().collect();
@@ -290,8 +316,6 @@ impl<'a> Parser<'a> {
         if m.clone().cholesky().is_some() {
             return Ok(());
         }
-        let rigid = flex.rigid().nv();
-        let zero = vec![0.0; flex.nv()];
         let which = match aba(flex, &mut data, &q, &zero, &zero, None) {
             Err(DynamicsError::NotPositiveDefinite { index, pivot }) if index >= rigid => {
                 let (body, mode) = super::flexible::mode_of(flex, index - rigid);

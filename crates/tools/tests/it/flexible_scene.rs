@@ -353,3 +353,39 @@ fn an_initial_deformation_that_makes_the_mass_matrix_indefinite_is_refused() {
         "{err}"
     );
 }
+
+/// The flexible deployment with its first strip made 1e16 times lighter than the panels it
+/// carries: the model passes its own check at its neutral configuration (panels flat), but at
+/// the scene's initial state (stowed) round-off leaves a mode's articulated pivot negative, so
+/// every run would end at its first step in "mass matrix is not positive definite". The scene
+/// is refused at its `model` line, naming the body; as shipped it reads.
+#[test]
+fn a_strip_too_light_for_the_panels_it_carries_is_refused_at_the_model_line() {
+    let dir = satsim_testkit::temp_dir_with(
+        "light-strip",
+        &["examples/flexible_array.toml", "examples/satellite_flexible.toml"],
+    );
+    Scene::read(dir.join("flexible_array.toml")).expect("the scene as shipped");
+    let model = std::fs::read_to_string(dir.join("satellite_flexible.toml")).unwrap();
+    let light = model.replacen("rho_A = 10.0", "rho_A = 1e-15", 1);
+    assert_ne!(light, model);
+    std::fs::write(dir.join("light.toml"), light).unwrap();
+    satsim_tree::io::parse_flex_model(
+        &std::fs::read_to_string(dir.join("light.toml")).unwrap(),
+        &dir.join("light.toml"),
+    )
+    .expect("resolved at the neutral configuration");
+    let scene = std::fs::read_to_string(dir.join("flexible_array.toml"))
+        .unwrap()
+        .replace("\"satellite_flexible.toml\"", "\"light.toml\"");
+    std::fs::write(dir.join("scene.toml"), scene).unwrap();
+    let err = Scene::read(dir.join("scene.toml")).unwrap_err().to_string();
+    assert!(
+        err.contains(
+            "scene.toml:13: `model`: at the initial state the dynamics cannot resolve body \
+             `panel1`'s mode "
+        ) && err.contains(satsim_tree::flexible::UNRESOLVED),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

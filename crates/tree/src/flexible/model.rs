@@ -12,6 +12,13 @@ use crate::model::{Model, ModelBuilder, UNIT_NORM_TOLERANCE};
 use crate::spatial::{Force, Mat3, Motion, RigidInertia};
 use thiserror::Error;
 
+/// Why the dynamics cannot resolve a mode whose articulated pivot comes out not positive
+/// ([`FlexError::Unresolved`], and the scene reader's check at the initial state).
+pub const UNRESOLVED: &str = "each mode has unit modal mass, so the shapes of a body far \
+     lighter than the bodies it carries move them by huge amounts per unit coordinate, and \
+     their inertia drowns its own in round-off; give the body its real mass, or model it as a \
+     hinge spring";
+
 /// Largest number of beam modes (the beam integrals' quadrature is sized for it).
 pub const MAX_BEAM_MODES: usize = 12;
 
@@ -86,6 +93,21 @@ pub enum FlexError {
     /// `[[I, P], [Pᵀ, 1]]` is not positive semidefinite.
     #[error("flexible body `{0}`: its mass matrix [[I, P], [Pᵀ, 1]] is not positive semidefinite")]
     NotPositiveDefinite(String),
+    /// At rest, the dynamics' pivot of a mode is not positive: round-off, where a body's modes
+    /// (each of unit modal mass) carry bodies far heavier than itself.
+    #[error(
+        "flexible body `{body}`: at rest the dynamics cannot resolve its mode {mode} (its \
+         articulated pivot is {pivot}, where the mass matrix makes it positive): {}",
+        UNRESOLVED
+    )]
+    Unresolved {
+        /// The body.
+        body: String,
+        /// Its mode (from 1).
+        mode: usize,
+        /// The pivot the articulated-body algorithm found.
+        pivot: Num,
+    },
 }
 
 /// A rigid [`Model`] plus, per body, optional modal data, and per hinge whose parent is
@@ -429,7 +451,7 @@ impl FlexModel {
                 }
             }
         }
-        Ok(FlexModel {
+        let model = FlexModel {
             fold_rotors,
             fold_chain,
             chain_of,
@@ -447,7 +469,39 @@ impl FlexModel {
             children,
             stiffening,
             spec: flexible.to_vec(),
-        })
+        };
+        model.check_resolved()?;
+        Ok(model)
+    }
+
+    /// The dynamics at rest (the neutral configuration, no motion) must resolve every mode.
+    /// Each body passes its own test above, but a flexible body far lighter than what it
+    /// carries (`rho_A = 1e-30` on a panel of the flexible deployment) has unit-modal-mass
+    /// shapes of `1/√m` and sees its children's inertia magnified by `1/m`: the articulated
+    /// pivot of its modes is then round-off of that (`-5.9e16`), and every run would end at
+    /// its first step in "mass matrix is not positive definite". A hinge's pivot failing is
+    /// left to the run: it is the rigid tree's to report.
+    fn check_resolved(&self) -> Result<(), FlexError> {
+        if self.n_elastic == 0 {
+            return Ok(());
+        }
+        let (q, zero) = (self.neutral(), vec![0.0; self.nv()]);
+        let mut data = super::FlexData::new(self);
+        let nv = self.rigid.nv();
+        match super::aba(self, &mut data, &q, &zero, &zero, None) {
+            Err(crate::DynamicsError::NotPositiveDefinite { index, pivot }) if index >= nv => {
+                let e = index - nv;
+                let i = (0..self.rigid.n_bodies())
+                    .find(|&i| e >= self.offset[i] && e < self.offset[i] + self.modes[i])
+                    .expect("an elastic coordinate belongs to a body");
+                Err(FlexError::Unresolved {
+                    body: self.rigid.bodies()[i].name.clone(),
+                    mode: e - self.offset[i] + 1,
+                    pivot: Num(pivot),
+                })
+            }
+            _ => Ok(()),
+        }
     }
 
     /// The same flexible bodies attached to `rigid`, a tree grown from this one by bodies

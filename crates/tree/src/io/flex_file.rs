@@ -557,7 +557,9 @@ fn body_of(e: &FlexError) -> Option<&str> {
         FlexError::UnknownBody(b) | FlexError::Duplicate(b) | FlexError::NotPositiveDefinite(b) => {
             Some(b)
         }
-        FlexError::Invalid { body, .. } | FlexError::MissingNode { body, .. } => Some(body),
+        FlexError::Invalid { body, .. }
+        | FlexError::MissingNode { body, .. }
+        | FlexError::Unresolved { body, .. } => Some(body),
     }
 }
 

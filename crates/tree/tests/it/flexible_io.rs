@@ -626,3 +626,31 @@ fn bad_modes_files_name_their_file_and_line() {
     );
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+/// A beam far lighter than the body it carries: its shapes, each of unit modal mass, move the
+/// tip by `1/√m` per unit coordinate, the tip's inertia drowns the beam's in round-off, and
+/// the dynamics cannot resolve its modes (every run would fail at its first step in "mass
+/// matrix is not positive definite"). Refused at the beam's line, naming the mode.
+#[test]
+fn a_beam_far_lighter_than_what_it_carries_is_refused_at_its_line() {
+    let light = MODEL.replace("rho_A = 5.0", "rho_A = 1e-17");
+    let err = error_of(&light);
+    assert!(
+        err.starts_with(
+            "flex.toml:10: flexible body `panel`: at rest the dynamics cannot resolve its mode 1 \
+             (its articulated pivot is 0, where the mass matrix makes it positive): each mode \
+             has unit modal mass, so the shapes of a body far lighter than the bodies it carries"
+        ),
+        "{err}"
+    );
+    // Light (a beam of 2 mg under a 1 kg tip) but resolved: built, and its dynamics run.
+    let model = parse_flex_model(
+        &MODEL.replace("rho_A = 5.0", "rho_A = 1e-6"),
+        Path::new("flex.toml"),
+    )
+    .expect("a light beam the dynamics resolve");
+    let mut data = FlexData::new(&model);
+    let (q, zero) = (model.neutral(), vec![0.0; model.nv()]);
+    let ddq = flexible::aba(&model, &mut data, &q, &zero, &zero, None).expect("resolved");
+    assert!(ddq.iter().all(|a| a.is_finite()));
+}
