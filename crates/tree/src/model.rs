@@ -870,6 +870,27 @@ impl Model {
     pub fn nv(&self) -> usize {
         self.base_nv + self.n_hinges()
     }
+    /// Velocity coordinate `index` of `v` in words, for messages: `the base's angular
+    /// velocity x` (a free base's 0 to 2, root axes), `the base's velocity x` (3 to 5), or
+    /// ``hinge `h1` ``.
+    ///
+    /// ```
+    /// use satsim_tree::{samples::chain, BaseKind};
+    /// let model = chain(2, BaseKind::Free);
+    /// assert_eq!(model.coordinate(1), "the base's angular velocity y");
+    /// assert_eq!(model.coordinate(6), format!("hinge `{}`", model.hinge_names()[0]));
+    /// ```
+    pub fn coordinate(&self, index: usize) -> String {
+        const AXES: [&str; 3] = ["x", "y", "z"];
+        match (self.base, index) {
+            (BaseKind::Free, 0..3) => format!("the base's angular velocity {}", AXES[index]),
+            (BaseKind::Free, 3..6) => format!("the base's velocity {}", AXES[index - 3]),
+            _ => index
+                .checked_sub(self.base_nv)
+                .and_then(|k| self.hinge_names.get(k))
+                .map_or_else(|| format!("coordinate {index}"), |h| format!("hinge `{h}`")),
+        }
+    }
     /// Number of position coordinates.
     pub fn nq(&self) -> usize {
         self.base_nq() + self.n_hinges()

@@ -64,7 +64,7 @@ impl Simulation {
         xup_ready: bool,
     ) -> Result<(), SystemError> {
         let nb = self.model.tree.base_nv();
-        let err = |e: satsim_tree::DynamicsError| SystemError::from_error(e);
+        let err = |e: satsim_tree::DynamicsError| self.model.dynamics_error(e);
         let d = &mut self.data;
         let fext = d
             .forces

@@ -96,7 +96,7 @@ pub use lanes::{LaneJob, LaneJobs, RowSink};
 pub use layout::StateLayout;
 pub use loads::{EffectLoads, moment_about};
 pub use log::RunLog;
-pub use model::SimModel;
+pub use model::{NamedDynamicsError, SimModel};
 pub use rows::Diagnostics;
 pub use run::RunError;
 pub use stepping::{EventRecord, OutputGrid, StepError, Stepping};

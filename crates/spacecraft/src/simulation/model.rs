@@ -1,9 +1,24 @@
 //! [`SimModel`]: what a simulation makes once and never writes during a run.
 
 use super::StateLayout;
+use satsim_integrate::SystemError;
 use satsim_tree::flexible::FlexModel;
-use satsim_tree::{ForwardDynamics, Model};
+use satsim_tree::{DynamicsError, ForwardDynamics, Model};
 use std::ops::Range;
+
+/// A dynamics error that names a coordinate by its index (a pivot that failed), with the
+/// coordinate in words: ``… at coordinate 15 (pivot -56); coordinate 15 is body `panel1`'s
+/// mode 2``.
+#[derive(Debug, thiserror::Error)]
+#[error("{error}; coordinate {index} is {what}")]
+pub struct NamedDynamicsError {
+    /// The error.
+    pub error: DynamicsError,
+    /// The index it names (of the tree's `v`: the scene's model, its rotors, then the modes).
+    pub index: usize,
+    /// That coordinate in words ([`FlexModel::coordinate`], [`Model::coordinate`]).
+    pub what: String,
+}
 
 /// The immutable part of a [`Simulation`](super::Simulation): the tree (the scene's model
 /// plus the effects' rotor bodies), the state layout, where each effect's states and event
@@ -61,6 +76,27 @@ pub struct SimModel {
     /// (`lanes.rs`) knows by it that a run is the one it gathered (an address could be
     /// reused by the next run's model).
     pub(super) serial: u64,
+}
+
+impl SimModel {
+    /// A dynamics error as the right-hand side reports it, the coordinate it names put in
+    /// words ([`NamedDynamicsError`]).
+    pub(super) fn dynamics_error(&self, e: DynamicsError) -> SystemError {
+        match e {
+            DynamicsError::NotPositiveDefinite { index, .. } => {
+                let what = match &self.flex {
+                    Some(f) => f.coordinate(index),
+                    None => self.tree.coordinate(index),
+                };
+                SystemError::from_error(NamedDynamicsError {
+                    error: e,
+                    index,
+                    what,
+                })
+            }
+            e => SystemError::from_error(e),
+        }
+    }
 }
 
 impl SimModel {

@@ -370,7 +370,7 @@ impl Simulation {
             .fext(fext.then_some(d.forces.body_wrench.as_slice()))
             .locked((d.n_locked > 0).then_some(d.locked.as_slice()))
             .xup_current(kin);
-        let err = |e: DynamicsError| SystemError::from_error(e);
+        let err = |e: DynamicsError| m.dynamics_error(e);
         if let Some(s) = m.velocity_at {
             let nv = d.v.len();
             return forward_dynamics(m, &mut d.tree, solve, &mut dx[s..s + nv]).map_err(err);

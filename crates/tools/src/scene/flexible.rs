@@ -263,17 +263,7 @@ pub fn highest_frequency(flex: &FlexModel, q: &[f64]) -> Option<(f64, usize)> {
 
 /// The body (name) and mode number (from 1) of elastic coordinate `e`.
 pub fn mode_of(flex: &FlexModel, e: usize) -> (String, usize) {
-    let rigid = flex.rigid();
-    (0..rigid.n_bodies())
-        .find(|&i| {
-            let (o, m) = (flex.elastic_offset(i), flex.modes(i));
-            m > 0 && e >= o && e < o + m
-        })
-        .map(|i| {
-            (
-                rigid.bodies()[i].name().to_owned(),
-                e - flex.elastic_offset(i) + 1,
-            )
-        })
+    flex.mode_of(e)
+        .map(|(i, k)| (flex.rigid().bodies()[i].name().to_owned(), k))
         .unwrap_or_default()
 }

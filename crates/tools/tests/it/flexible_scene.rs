@@ -363,7 +363,10 @@ fn an_initial_deformation_that_makes_the_mass_matrix_indefinite_is_refused() {
 fn a_strip_too_light_for_the_panels_it_carries_is_refused_at_the_model_line() {
     let dir = satsim_testkit::temp_dir_with(
         "light-strip",
-        &["examples/flexible_array.toml", "examples/satellite_flexible.toml"],
+        &[
+            "examples/flexible_array.toml",
+            "examples/satellite_flexible.toml",
+        ],
     );
     Scene::read(dir.join("flexible_array.toml")).expect("the scene as shipped");
     let model = std::fs::read_to_string(dir.join("satellite_flexible.toml")).unwrap();
@@ -388,4 +391,25 @@ fn a_strip_too_light_for_the_panels_it_carries_is_refused_at_the_model_line() {
         "{err}"
     );
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A pivot that fails during a run (here a state deformed past what the panel's inertia
+/// takes, which the reader refuses at the initial state) is named by its coordinate in words,
+/// not by its index alone.
+#[test]
+fn a_pivot_that_fails_in_a_run_names_its_coordinate() {
+    use satsim_integrate::System;
+    let mut sim = scene("").simulation().expect("a simulation");
+    let mut x = sim.x0().to_vec();
+    // The hub's three modes, then the panel's two.
+    x[sim.layout().eta.start + 3] = 3.0;
+    let mut dx = vec![0.0; x.len()];
+    let err = sim.rhs(0.0, &x, &mut dx).unwrap_err().to_string();
+    let index = sim.model().nv() + 3;
+    assert!(
+        err.starts_with(&format!(
+            "mass matrix is not positive definite at coordinate {index} (pivot -"
+        )) && err.ends_with(&format!("; coordinate {index} is body `panel`'s mode 1")),
+        "{err}"
+    );
 }

@@ -490,13 +490,12 @@ impl FlexModel {
         let nv = self.rigid.nv();
         match super::aba(self, &mut data, &q, &zero, &zero, None) {
             Err(crate::DynamicsError::NotPositiveDefinite { index, pivot }) if index >= nv => {
-                let e = index - nv;
-                let i = (0..self.rigid.n_bodies())
-                    .find(|&i| e >= self.offset[i] && e < self.offset[i] + self.modes[i])
+                let (i, mode) = self
+                    .mode_of(index - nv)
                     .expect("an elastic coordinate belongs to a body");
                 Err(FlexError::Unresolved {
                     body: self.rigid.bodies()[i].name.clone(),
-                    mode: e - self.offset[i] + 1,
+                    mode,
                     pivot: Num(pivot),
                 })
             }
@@ -525,6 +524,25 @@ impl FlexModel {
         let mut grown = FlexModel::attach_reusing(rigid, &self.spec, Some(self))?;
         grown.damping.copy_from_slice(&self.damping);
         Ok(grown)
+    }
+
+    /// Velocity coordinate `index` of `v` in words, for messages: the rigid model's
+    /// ([`Model::coordinate`]), or ``body `panel`'s mode 2`` (modes from 1).
+    pub fn coordinate(&self, index: usize) -> String {
+        let nv = self.rigid.nv();
+        match index.checked_sub(nv).and_then(|e| self.mode_of(e)) {
+            Some((i, k)) => format!("body `{}`'s mode {k}", self.rigid.bodies()[i].name),
+            None if index < nv => self.rigid.coordinate(index),
+            None => format!("coordinate {index}"),
+        }
+    }
+
+    /// The body and its mode (from 1) of elastic coordinate `e` (from 0, all the elastic
+    /// coordinates in order).
+    pub fn mode_of(&self, e: usize) -> Option<(usize, usize)> {
+        (0..self.rigid.n_bodies())
+            .find(|&i| e >= self.offset[i] && e < self.offset[i] + self.modes[i])
+            .map(|i| (i, e - self.offset[i] + 1))
     }
 
     /// The rigid model (the flexible bodies' undeformed inertias).

@@ -653,4 +653,21 @@ fn a_beam_far_lighter_than_what_it_carries_is_refused_at_its_line() {
     let (q, zero) = (model.neutral(), vec![0.0; model.nv()]);
     let ddq = flexible::aba(&model, &mut data, &q, &zero, &zero, None).expect("resolved");
     assert!(ddq.iter().all(|a| a.is_finite()));
+    // Its coordinates in words, as a run's errors name them.
+    let names: Vec<String> = [0, 5, 6, 7, 8, 9, 10, 11]
+        .map(|k| model.coordinate(k))
+        .into();
+    assert_eq!(
+        names,
+        [
+            "the base's angular velocity x",
+            "the base's velocity z",
+            "hinge `h1`",
+            "hinge `h2`",
+            "body `panel`'s mode 1",
+            "body `panel`'s mode 2",
+            "body `panel`'s mode 3",
+            "coordinate 11",
+        ]
+    );
 }
