@@ -476,11 +476,11 @@ impl FlexModel {
 
     /// The dynamics at rest (the neutral configuration, no motion) must resolve every mode.
     /// Each body passes its own test above, but a flexible body far lighter than what it
-    /// carries (`rho_A = 1e-30` on a panel of the flexible deployment) has unit-modal-mass
+    /// carries (`rho_A = 1e-30` on the flexible deployment's first strip) has unit-modal-mass
     /// shapes of `1/√m` and sees its children's inertia magnified by `1/m`: the articulated
-    /// pivot of its modes is then round-off of that (`-5.9e16`), and every run would end at
-    /// its first step in "mass matrix is not positive definite". A hinge's pivot failing is
-    /// left to the run: it is the rigid tree's to report.
+    /// pivot of its modes is then round-off of that (`-4.5e15` at that strip's mode 3), and
+    /// every run would end at its first step in "mass matrix is not positive definite". A
+    /// hinge's pivot failing is left to the run: it is the rigid tree's to report.
     fn check_resolved(&self) -> Result<(), FlexError> {
         if self.n_elastic == 0 {
             return Ok(());
