@@ -317,7 +317,12 @@ impl ModelBuilder {
         }
         for (b, kids) in children.iter().enumerate() {
             let body = &self.bodies[b];
-            if kids.is_empty() && body.mass == 0.0 && body.inertia.norm() == 0.0 && b != 0 {
+            // Entry by entry: the norm of a tiny inertia (1e-200 on the diagonal) underflows.
+            if kids.is_empty()
+                && body.mass == 0.0
+                && body.inertia.iter().all(|x| *x == 0.0)
+                && b != 0
+            {
                 return Err(ModelError::MasslessLeaf(body.name.clone()));
             }
         }

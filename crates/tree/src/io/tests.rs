@@ -703,6 +703,19 @@ fn model_error_table() {
     }
 }
 
+/// A leaf whose inertia is tiny but not zero (1e-200 on the diagonal, whose norm underflows)
+/// is not a massless leaf: the model is built, and a reaction-wheel rotor this light fails in
+/// the run naming its speed, not as "zero inertia".
+#[test]
+fn a_tiny_inertia_is_not_a_zero_one() {
+    let text = GOOD.replace("mass = 20.0", "mass = 0").replace(
+        "inertia = [[1.7, 0, 0], [0, 6.7, 0], [0, 0, 8.3]]",
+        "inertia = [[1e-200, 0, 0], [0, 1e-200, 0], [0, 0, 1e-200]]",
+    );
+    let (m, _) = parse_model(&text, Path::new("ok.toml")).expect("a tiny inertia");
+    assert!(m.bodies().iter().any(|b| b.inertia_com[(0, 0)] == 1e-200));
+}
+
 #[test]
 fn lenient_inputs() {
     // Integers where numbers are expected, axis and rotation normalised within 1e-6,
