@@ -278,28 +278,22 @@ impl<'a> Parser<'a> {
         initial: &State,
         elastic: &Elastic,
     ) -> Result<(), FileError> {
-        use satsim_tree::DynamicsError;
-        use satsim_tree::flexible::{FlexData, UNRESOLVED, aba, crba};
-        let rigid = flex.rigid().nv();
-        let zero = vec![0.0; flex.nv()];
-        let mut data = FlexData::new(flex);
+        use satsim_tree::flexible::{FlexData, UNRESOLVED, crba};
+        let name = |i: usize| flex.rigid().bodies()[i].name().to_owned();
         let rest: Vec<f64> = initial
             .q
             .iter()
             .copied()
             .chain(elastic.eta.iter().map(|_| 0.0))
             .collect();
-        if let Err(DynamicsError::NotPositiveDefinite { index, pivot }) =
-            aba(flex, &mut data, &rest, &zero, &zero, None)
-            && index >= rigid
-        {
-            let (body, mode) = super::flexible::mode_of(flex, index - rigid);
+        if let Some((i, mode, pivot)) = flex.unresolved_mode(&rest) {
             return Err(self.error(
                 Some(file.model.span()),
                 format!(
-                    "`model`: at the initial state the dynamics cannot resolve body `{body}`'s \
+                    "`model`: at the initial state the dynamics cannot resolve body `{}`'s \
                      mode {mode} (its articulated pivot is {}, where the mass matrix makes it \
                      positive): {UNRESOLVED}",
+                    name(i),
                     Num(pivot)
                 ),
             ));
@@ -308,21 +302,24 @@ impl<'a> Parser<'a> {
             return Ok(());
         }
         let q: Vec<f64> = initial.q.iter().chain(&elastic.eta).copied().collect();
-        let mut data = FlexData::new(flex);
         // Other failures (a non-finite value) are the run's to report.
+        let mut data = FlexData::new(flex);
         let Ok(m) = crba(flex, &mut data, &q) else {
             return Ok(());
         };
         if m.clone().cholesky().is_some() {
             return Ok(());
         }
-        let which = match aba(flex, &mut data, &q, &zero, &zero, None) {
-            Err(DynamicsError::NotPositiveDefinite { index, pivot }) if index >= rigid => {
-                let (body, mode) = super::flexible::mode_of(flex, index - rigid);
-                format!(" (at body `{body}`'s mode {mode}, pivot {})", Num(pivot))
-            }
-            _ => String::new(),
-        };
+        let which = flex
+            .unresolved_mode(&q)
+            .map(|(i, mode, pivot)| {
+                format!(
+                    " (at body `{}`'s mode {mode}, pivot {})",
+                    name(i),
+                    Num(pivot)
+                )
+            })
+            .unwrap_or_default();
         Err(self.error(
             file.initial.as_ref().map(|s| s.span()),
             format!(

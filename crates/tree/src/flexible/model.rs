@@ -485,21 +485,28 @@ impl FlexModel {
         if self.n_elastic == 0 {
             return Ok(());
         }
-        let (q, zero) = (self.neutral(), vec![0.0; self.nv()]);
+        match self.unresolved_mode(&self.neutral()) {
+            Some((i, mode, pivot)) => Err(FlexError::Unresolved {
+                body: self.rigid.bodies()[i].name.clone(),
+                mode,
+                pivot: Num(pivot),
+            }),
+            None => Ok(()),
+        }
+    }
+
+    /// The mode whose articulated pivot the dynamics at positions `q` (at rest, no force)
+    /// find not positive, if any: its body, the mode (from 1) and the pivot. A hinge's pivot
+    /// failing, or any other error, is not a mode's and gives `None`.
+    pub fn unresolved_mode(&self, q: &[f64]) -> Option<(usize, usize, f64)> {
+        let zero = vec![0.0; self.nv()];
         let mut data = super::FlexData::new(self);
-        let nv = self.rigid.nv();
-        match super::aba(self, &mut data, &q, &zero, &zero, None) {
-            Err(crate::DynamicsError::NotPositiveDefinite { index, pivot }) if index >= nv => {
-                let (i, mode) = self
-                    .mode_of(index - nv)
-                    .expect("an elastic coordinate belongs to a body");
-                Err(FlexError::Unresolved {
-                    body: self.rigid.bodies()[i].name.clone(),
-                    mode,
-                    pivot: Num(pivot),
-                })
+        match super::aba(self, &mut data, q, &zero, &zero, None) {
+            Err(crate::DynamicsError::NotPositiveDefinite { index, pivot }) => {
+                let (i, mode) = self.mode_of(index.checked_sub(self.rigid.nv())?)?;
+                Some((i, mode, pivot))
             }
-            _ => Ok(()),
+            _ => None,
         }
     }
 
