@@ -24,7 +24,8 @@
 //! rate `ω_t = r × v / r²`.
 
 use super::{
-    Context, Effect, EffectSet, Forces, Links, Needs, Sampling, SceneEffect, Section, needs_met,
+    Context, Effect, EffectSet, Forces, Links, Needs, Rotor, Sampling, SceneEffect, Section,
+    needs_met,
 };
 use nalgebra::{DMatrix, Matrix3, Quaternion, Rotation3, UnitQuaternion};
 use satsim_integrate::SystemError;
@@ -91,6 +92,25 @@ impl AttitudeControl {
             a.pseudo_inverse(1e-12)
                 .unwrap_or_else(|_| DMatrix::zeros(axes.len(), 3))
         };
+    }
+    /// The allocation `A⁺` (a row per rotor, bus axes) that the controller takes when built
+    /// into a simulation with these rotors: the bus's wheels as designed (their nominal
+    /// axes); a rotor on another body (a control-moment gyro's) gets no command (a zero
+    /// row). Its motor commands are `τ = −A⁺ u`.
+    pub fn allocation_for(rotors: &[Rotor]) -> DMatrix<f64> {
+        let axes: Vec<Vec3> = rotors
+            .iter()
+            .map(|r| {
+                if r.on_root() {
+                    r.nominal
+                } else {
+                    Vec3::zeros()
+                }
+            })
+            .collect();
+        let mut c = Self::new(Target::Inertial(UnitQuaternion::identity()), 0.0, 0.0);
+        c.allocate(&axes);
+        c.allocation
     }
     /// The target attitude (bus to inertial) and rate (inertial axes) at this context.
     pub fn target_state(&self, ctx: &Context) -> Result<(UnitQuaternion<f64>, Vec3), SystemError> {
@@ -174,20 +194,7 @@ impl Effect for AttitudeControl {
         &["reaction_wheels"]
     }
     fn connect(&mut self, links: &Links) {
-        // The bus's wheels as designed; a rotor on another body (a control-moment gyro's)
-        // gets no command (a zero column of the allocation).
-        let axes: Vec<Vec3> = links
-            .rotors
-            .iter()
-            .map(|r| {
-                if r.on_root() {
-                    r.nominal
-                } else {
-                    Vec3::zeros()
-                }
-            })
-            .collect();
-        self.allocate(&axes);
+        self.allocation = Self::allocation_for(links.rotors);
     }
     fn output_columns(&self) -> Vec<String> {
         vec!["pointing_error_deg".into()]

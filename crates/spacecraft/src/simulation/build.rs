@@ -140,8 +140,10 @@ impl SimulationBuilder {
 }
 
 /// The model plus rotor bodies hinged to their carriers (the root unless a rotor names
-/// another body; appended after the model's hinges).
-pub(super) fn with_rotors(model: &Model, rotors: &[Rotor]) -> Result<Model, SimError> {
+/// another body; appended after the model's hinges, in `rotors`' order): the tree a
+/// simulation integrates, which a check of its linear motions (the scene reader's RK4 step
+/// limit) needs as well.
+pub fn with_rotors(model: &Model, rotors: &[Rotor]) -> Result<Model, SimError> {
     let mut b = model.to_builder();
     let root = model.bodies()[0].name().to_owned();
     for r in rotors {

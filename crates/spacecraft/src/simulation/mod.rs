@@ -90,7 +90,7 @@ mod solve;
 mod stepping;
 mod system;
 
-pub use build::SimulationBuilder;
+pub use build::{SimulationBuilder, with_rotors};
 pub use data::SimData;
 pub use lanes::{LaneJob, LaneJobs, RowSink};
 pub use layout::StateLayout;

@@ -211,16 +211,11 @@ impl<'a> Parser<'a> {
         }
         super::faults::read(self, &file.faults, &mut effects)?;
         if let Some(h) = options.fixed_step {
-            let attached;
-            let tree = match flex.as_ref() {
-                Some(f) => f,
-                None => {
-                    attached = FlexModel::attach(model.clone(), &[])
-                        .map_err(|e| self.error(None, e.to_string()))?;
-                    &attached
-                }
-            };
-            let q: Vec<f64> = initial.q.iter().chain(&elastic.eta).copied().collect();
+            let (tree, n_rotors) =
+                super::step_limit::integrated_tree(&model, flex.as_ref(), &effects)
+                    .map_err(|e| self.error(None, e.to_string()))?;
+            let q = super::step_limit::integrated_q(&initial.q, n_rotors, &elastic.eta);
+            let tree = &tree;
             let gains = super::step_limit::HingeGains::of(&effects, model.n_hinges());
             // The steps are cut to the output interval and the duration (`step_warning`): the
             // longest step taken is what must be stable.
@@ -366,17 +361,47 @@ impl<'a> Parser<'a> {
         // A step to suggest: nine tenths of the limit, two significant digits, rounded down.
         let digits = 10f64.powf((0.9 * limit.step).log10().floor() - 1.0);
         let suggested = (0.9 * limit.step / digits).floor() * digits;
+        // Fixed-point below a million, in exponent form above (a rate of 1e15 /s is not
+        // written with sixteen digits).
+        let fixed = |x: f64| {
+            if x.abs() < 1e6 {
+                format!("{x:.4}")
+            } else {
+                format!("{x:.4e}")
+            }
+        };
         let eigenvalue = if l.im > 0.0 {
-            format!("{:.4} ± {:.4}i 1/s", l.re, l.im)
+            format!("{} ± {}i 1/s", fixed(l.re), fixed(l.im))
         } else {
-            format!("{:.4} 1/s", l.re)
+            format!("{} 1/s", fixed(l.re))
         };
         let what = limit.what(flex);
         let (with, motion) = match limit.by {
             Limiting::Mode(_) => ("the flexible modes", "mode"),
+            Limiting::Hinge(_) if what.starts_with("rotor ") => {
+                ("the wheels' viscous friction", "motion")
+            }
             Limiting::Hinge(_) => ("the hinges' springs, dampers and controllers", "motion"),
+            Limiting::Attitude => ("the attitude controller's gains", "motion"),
         };
-        let character = if w > 0.0 {
+        let character = if limit.by == Limiting::Attitude {
+            let g = gains.attitude.as_ref().map_or_else(String::new, |a| {
+                format!(
+                    " (kp = {} N m/rad, kd = {} N m s/rad)",
+                    Num(a.kp),
+                    Num(a.kd)
+                )
+            });
+            if l.im > 0.0 {
+                format!(
+                    "is an oscillation on the controller's gains{g} at {:.4} Hz (ω = {w:.4} rad/s) with damping ratio {:.3}",
+                    w / std::f64::consts::TAU,
+                    limit.zeta
+                )
+            } else {
+                format!("is a decay on the controller's gains{g}, overdamped")
+            }
+        } else if w > 0.0 {
             format!(
                 "is at {:.4} Hz (ω = {w:.4} rad/s) with damping ratio {:.3}",
                 w / std::f64::consts::TAU,
@@ -388,10 +413,13 @@ impl<'a> Parser<'a> {
         Err(self.error(
             span,
             format!(
-                "`integrator.step` = {} s{cut} is too long for rk4 with {with}: the {motion} that limits it (mostly {what}) {character}, eigenvalue {eigenvalue}, and rk4 is stable on it only for steps up to {:.4e} s (|λ| × step within rk4's stability region: <= 2√2 = 2.83 undamped, <= 2.785 for a real λ; here |λ| × step = {:.3}): set `step` at most {suggested:.1e} s, or use an adaptive method (`method = \"radau5\"`, implicit, steps over the {motion})",
+                "`integrator.step` = {} s{cut} is too long for rk4 with {with}: the {motion} that limits it (mostly {what}) {character}, eigenvalue {eigenvalue}, and rk4 is stable on it only for steps up to {:.4e} s (|λ| × step within rk4's stability region: <= 2√2 = 2.83 undamped, <= 2.785 for a real λ; here |λ| × step = {}): set `step` at most {suggested:.1e} s, or use an adaptive method (`method = \"radau5\"`, implicit, steps over the {motion})",
                 Num(h),
                 limit.step,
-                l.norm() * taken,
+                {
+                    let x = l.norm() * taken;
+                    if x < 1e6 { format!("{x:.3}") } else { format!("{x:.3e}") }
+                },
             ),
         ))
     }

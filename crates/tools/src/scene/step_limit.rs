@@ -1,18 +1,29 @@
 //! The longest fixed RK4 step a scene's linear stiffness and damping allow, at its initial
 //! state: the flexible bodies' modes, the hinge springs and dampers
-//! (`[effects.hinge_springs]`) and the continuous hinge controllers' gains
-//! (`[effects.hinge_control]` without a `period`). Beyond it a motion grows without bound, so
-//! the scene reader refuses such a step at its line and the accuracy sweep does not run it.
+//! (`[effects.hinge_springs]`), the continuous hinge controllers' gains
+//! (`[effects.hinge_control]` without a `period`), the reaction wheels' viscous friction and a
+//! continuous attitude controller's gains (`[effects.attitude_control]` without a `period`,
+//! acting through the wheels). Beyond it a motion grows without bound, so the scene reader
+//! refuses such a step at its line and the accuracy sweep does not run it.
 //!
 //! The linearisation is `ẋ = [[0, I], [−M⁻¹K, −M⁻¹D]] x` over the generalised velocity's
-//! coordinates, `M` the (flexible) tree's mass matrix at the initial state, `K` and `D`
-//! diagonal: `ωₖ²` and `2ζₖωₖ` on each elastic coordinate, a hinge's spring stiffness plus its
-//! controller's `kp` and its damping plus `kd` on its coordinate. Left out: geometric
-//! stiffening, the attitude controller, sampled controllers, stops and wheel friction.
+//! coordinates of the tree the simulation integrates (the model's, then its wheels' rotors,
+//! [`with_rotors`](satsim_spacecraft::simulation::with_rotors)), `M` the (flexible) tree's mass
+//! matrix at the initial state. `K` and `D` are diagonal but for the attitude controller:
+//! `ωₖ²` and `2ζₖωₖ` on each elastic coordinate, a hinge's spring stiffness plus its
+//! controller's `kp` and its damping plus `kd` on its coordinate, a wheel's viscous friction
+//! on its rotor's; the attitude controller's motor commands `τ = −A⁺ u` with
+//! `u = −kp θ − kd ω` (its small-error law, `θ` the bus's rotation) put `−kp A⁺` and
+//! `−kd A⁺` in the rotors' rows and the bus's rotation columns. Left out: geometric
+//! stiffening, sampled controllers, stops, the wheels' torque limits (the linear motion is
+//! the one inside them) and their Coulomb and Stribeck friction (not linear at a slip).
 
 use nalgebra::{Complex, DMatrix};
-use satsim_spacecraft::effects::{EffectSet, HingeControl, HingeSprings};
-use satsim_tree::flexible::FlexModel;
+use satsim_spacecraft::effects::{
+    AttitudeControl, EffectSet, HingeControl, HingeSprings, ReactionWheels,
+};
+use satsim_tree::Model;
+use satsim_tree::flexible::{FlexError, FlexModel};
 
 use super::flexible::{eigen, modal_stiffness, mode_of};
 
@@ -74,14 +85,34 @@ fn fastest(ev: &[Complex<f64>]) -> Option<(Complex<f64>, f64)> {
         .min_by(|a, b| a.1.total_cmp(&b.1))
 }
 
-/// The linear stiffness and damping a scene puts on its hinges, one entry per hinge (model
-/// file order): the springs' and dampers' plus the continuous controllers' `kp` and `kd`.
+/// The linear stiffness and damping a scene puts on its hinges, one entry per hinge of the
+/// tree the simulation integrates (the model file's order, then the wheels' rotors): the
+/// springs' and dampers' plus the continuous controllers' `kp` and `kd`, and each wheel's
+/// viscous friction on its rotor; and a continuous attitude controller's gains, which act on
+/// the bus's rotation through the rotors.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct HingeGains {
     /// N m/rad.
     pub stiffness: Vec<f64>,
     /// N m s/rad.
     pub damping: Vec<f64>,
+    /// The continuous attitude controller, where the scene has one.
+    pub attitude: Option<AttitudeGains>,
+    /// The model's own hinges, before the rotors'.
+    model_hinges: usize,
+}
+
+/// A continuous attitude controller's linear law ([`AttitudeControl`]): the bus torque
+/// `u = −kp θ − kd ω` for a small rotation `θ` of the bus from its target and its rate `ω`
+/// (bus axes), commanded to the rotors as `τ = −A⁺ u`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AttitudeGains {
+    /// N m/rad.
+    pub kp: f64,
+    /// N m s/rad.
+    pub kd: f64,
+    /// `A⁺`: a row per rotor, in the rotors' order ([`AttitudeControl::allocation_for`]).
+    pub allocation: DMatrix<f64>,
 }
 
 impl HingeGains {
@@ -90,13 +121,36 @@ impl HingeGains {
         Self {
             stiffness: vec![0.0; n_hinges],
             damping: vec![0.0; n_hinges],
+            attitude: None,
+            model_hinges: n_hinges,
         }
     }
 
-    /// The gains `effects` put on `n_hinges` hinges: `hinge_springs`, and `hinge_control`
-    /// where it is continuous (a sampled law's stability depends on its period, not on RK4).
+    /// The gains `effects` put on the model's `n_hinges` hinges and on the rotors after them:
+    /// `hinge_springs`, `hinge_control` where it is continuous (a sampled law's stability
+    /// depends on its period, not on RK4), the wheels' viscous friction, and
+    /// `attitude_control` where it is continuous. A tree without the rotors
+    /// ([`with_rotors`](satsim_spacecraft::simulation::with_rotors)) reads only the first
+    /// `n_hinges` entries and no attitude controller.
     pub fn of(effects: &EffectSet, n_hinges: usize) -> Self {
-        let mut g = Self::none(n_hinges);
+        let rotors: Vec<_> = effects.iter().flat_map(|e| e.rotors()).collect();
+        let mut g = Self::none(n_hinges + rotors.len());
+        g.model_hinges = n_hinges;
+        if let Some(w) = effects.get::<ReactionWheels>()
+            && w.wheels.len() == rotors.len()
+        {
+            for (j, wheel) in w.wheels.iter().enumerate() {
+                g.damping[n_hinges + j] += wheel.viscous;
+            }
+        }
+        g.attitude = effects
+            .get::<AttitudeControl>()
+            .filter(|c| c.period().is_none() && !rotors.is_empty())
+            .map(|c| AttitudeGains {
+                kp: c.kp,
+                kd: c.kd,
+                allocation: AttitudeControl::allocation_for(&rotors),
+            });
         if let Some(s) = effects.get::<HingeSprings>() {
             for (i, (k, c)) in s
                 .stiffness
@@ -124,8 +178,11 @@ impl HingeGains {
 pub enum Limiting {
     /// An elastic coordinate (index among them): a flexible body's mode.
     Mode(usize),
-    /// A hinge (model file order), on its spring, damper or controller.
+    /// A hinge (model file order, then the wheels' rotors), on its spring, damper or
+    /// controller, or a rotor on its viscous friction.
     Hinge(usize),
+    /// The bus on the attitude controller: the step is shorter with it than without.
+    Attitude,
 }
 
 /// What limits RK4's step ([`rk4_limit`]).
@@ -152,7 +209,20 @@ impl Rk4Limit {
                 let (body, mode) = mode_of(flex, e);
                 format!("body `{body}`'s mode {mode}")
             }
-            Limiting::Hinge(h) => format!("hinge `{}`", flex.rigid().hinge_names()[h]),
+            Limiting::Hinge(h) => {
+                let rigid = flex.rigid();
+                let name = &rigid.hinge_names()[h];
+                let rotor = rigid
+                    .gyrostats()
+                    .iter()
+                    .any(|g| rigid.joint(g.body()).is_some_and(|j| j.hinge() == h));
+                if rotor {
+                    format!("rotor `{name}` on its viscous friction")
+                } else {
+                    format!("hinge `{name}`")
+                }
+            }
+            Limiting::Attitude => "the bus".to_owned(),
         }
     }
 }
@@ -192,9 +262,82 @@ fn diagonals(flex: &FlexModel, hinges: &HingeGains) -> (Vec<f64>, Vec<f64>, Vec<
 ///
 /// A rigid model is passed as a [`FlexModel`] without flexible bodies
 /// (`FlexModel::attach(model, &[])`).
+///
+/// A continuous attitude controller (`hinges.attitude`, on a tree with the rotors it
+/// commands) adds its gains from the bus's rotation to the rotors, which are not diagonal:
+/// where the coupled system's eigenvalues with them limit the step more than those without,
+/// the limit is theirs ([`Limiting::Attitude`], `ω = |λ|` and `ζ = −Re λ / |λ|` of the
+/// limiting eigenvalue: a second-order motion's own for a complex pair, `ζ = 1` for a real
+/// one).
 pub fn rk4_limit(flex: &FlexModel, q: &[f64], hinges: &HingeGains) -> Option<Rk4Limit> {
+    let diagonal = diagonal_limit(flex, q, hinges);
+    let Some(att) = &hinges.attitude else {
+        return diagonal;
+    };
+    let rigid = flex.rigid();
+    // The rotors are the tree's last hinges, in the allocation's order; a tree without them
+    // (the model alone) has no controller to check.
+    let n_rotors = att.allocation.nrows();
+    let first_rotor = hinges.model_hinges;
+    if rigid.base_nv() != 6 || n_rotors == 0 || rigid.n_hinges() != first_rotor + n_rotors {
+        return diagonal;
+    }
+    let (k, d, _) = diagonals(flex, hinges);
+    let mut km = DMatrix::from_diagonal(&nalgebra::DVector::from_column_slice(&k));
+    let mut dm = DMatrix::from_diagonal(&nalgebra::DVector::from_column_slice(&d));
+    for b in 0..rigid.n_bodies() {
+        let Some(j) = rigid.joint(b) else { continue };
+        let Some(r) = j.hinge().checked_sub(first_rotor) else {
+            continue;
+        };
+        // Q_r = τ_r = −(A⁺ u)_r = (A⁺ (kp θ + kd ω))_r, written Q = −K x − D ẋ.
+        for a in 0..3 {
+            km[(j.dof(), a)] -= att.kp * att.allocation[(r, a)];
+            dm[(j.dof(), a)] -= att.kd * att.allocation[(r, a)];
+        }
+    }
+    let (lambda, step) = coupled_limit(flex, q, &km, &dm)?;
+    if diagonal
+        .as_ref()
+        .is_some_and(|l| l.step <= step * (1.0 + 1e-9))
+        || lambda.norm() == 0.0
+    {
+        return diagonal;
+    }
+    Some(Rk4Limit {
+        step,
+        lambda: Complex::new(lambda.re, lambda.im.abs()),
+        omega: lambda.norm(),
+        zeta: -lambda.re / lambda.norm(),
+        by: Limiting::Attitude,
+    })
+}
+
+/// The limiting eigenvalue of `ẋ = [[0, I], [−M⁻¹K, −M⁻¹D]] x` at `q` and its step
+/// ([`fastest`]); `None` when `M` is not positive definite or the Schur decomposition does
+/// not converge.
+fn coupled_limit(
+    flex: &FlexModel,
+    q: &[f64],
+    km: &DMatrix<f64>,
+    dm: &DMatrix<f64>,
+) -> Option<(Complex<f64>, f64)> {
     use nalgebra::Schur;
     use satsim_tree::flexible::{FlexData, crba};
+    let n = flex.nv();
+    let mut data = FlexData::new(flex);
+    let m = crba(flex, &mut data, q).ok()?.clone();
+    let m_inv = m.cholesky()?.inverse();
+    let mut a = DMatrix::zeros(2 * n, 2 * n);
+    a.view_mut((0, n), (n, n)).fill_with_identity();
+    a.view_mut((n, 0), (n, n)).copy_from(&(-&m_inv * km));
+    a.view_mut((n, n), (n, n)).copy_from(&(-&m_inv * dm));
+    Schur::try_new(a, f64::EPSILON, 10_000)
+        .and_then(|s| fastest(s.complex_eigenvalues().as_slice()))
+}
+
+/// [`rk4_limit`] on the diagonal `K` and `D` (everything but the attitude controller).
+fn diagonal_limit(flex: &FlexModel, q: &[f64], hinges: &HingeGains) -> Option<Rk4Limit> {
     let (k, d, hinge_of) = diagonals(flex, hinges);
     if k.iter().chain(&d).all(|v| *v == 0.0) {
         return None;
@@ -220,17 +363,8 @@ pub fn rk4_limit(flex: &FlexModel, q: &[f64], hinges: &HingeGains) -> Option<Rk4
         .min_by(|a, b| a.2.total_cmp(&b.2))?;
     // The step itself from the coupled system's eigenvalues (the damping need not be
     // proportional to the stiffness), where the Schur decomposition converges.
-    let mut data = FlexData::new(flex);
-    let m = crba(flex, &mut data, q).ok()?.clone();
-    let m_inv = m.cholesky()?.inverse();
     let km = DMatrix::from_diagonal(&nalgebra::DVector::from_column_slice(&k));
-    let mut a = DMatrix::zeros(2 * n, 2 * n);
-    a.view_mut((0, n), (n, n)).fill_with_identity();
-    a.view_mut((n, 0), (n, n)).copy_from(&(-&m_inv * km));
-    a.view_mut((n, n), (n, n)).copy_from(&(-&m_inv * &dm));
-    let (lambda, step) = Schur::try_new(a, f64::EPSILON, 10_000)
-        .and_then(|s| fastest(s.complex_eigenvalues().as_slice()))
-        .unwrap_or((lambda, step));
+    let (lambda, step) = coupled_limit(flex, q, &km, &dm).unwrap_or((lambda, step));
     let omega = w2[mode].max(0.0).sqrt();
     let xm = x.column(mode);
     let share = |i: usize| (k[i] + lambda.norm() * d[i]) * xm[i] * xm[i];
@@ -251,21 +385,54 @@ pub fn rk4_limit(flex: &FlexModel, q: &[f64], hinges: &HingeGains) -> Option<Rk4
     })
 }
 
+/// The tree a simulation of a scene integrates, as the step limit checks it: `model` with its
+/// flexible bodies `flex` and the effects' rotors hinged on after its hinges
+/// ([`with_rotors`](satsim_spacecraft::simulation::with_rotors)), and the number of rotors;
+/// the model alone (no rotors) where they do not fit it (the simulation's set-up then says
+/// why).
+pub fn integrated_tree(
+    model: &Model,
+    flex: Option<&FlexModel>,
+    effects: &EffectSet,
+) -> Result<(FlexModel, usize), FlexError> {
+    let rotors: Vec<_> = effects.iter().flat_map(|e| e.rotors()).collect();
+    let with = (!rotors.is_empty())
+        .then(|| satsim_spacecraft::simulation::with_rotors(model, &rotors).ok())
+        .flatten();
+    let rotor_tree = with.and_then(|m| match flex {
+        Some(f) => f.with_rigid(m).ok(),
+        None => FlexModel::attach(m, &[]).ok(),
+    });
+    Ok(match rotor_tree {
+        Some(t) => (t, rotors.len()),
+        None => match flex {
+            Some(f) => (f.clone(), 0),
+            None => (FlexModel::attach(model.clone(), &[])?, 0),
+        },
+    })
+}
+
+/// The positions of [`integrated_tree`]'s tree: the model's `q`, the rotors' angles (zero),
+/// then the elastic coordinates `eta`.
+pub fn integrated_q(q: &[f64], n_rotors: usize, eta: &[f64]) -> Vec<f64> {
+    q.iter()
+        .copied()
+        .chain(std::iter::repeat_n(0.0, n_rotors))
+        .chain(eta.iter().copied())
+        .collect()
+}
+
 /// The largest step RK4 is stable at for `scene` ([`rk4_limit`] at its initial state, with
 /// its hinge gains), and what limits it in words ([`Rk4Limit::what`], with the frequency);
 /// `None` where nothing limits it. What the scene reader checks a given `integrator.step`
 /// against, for the callers that choose steps themselves (the accuracy sweep).
 pub fn rk4_stable_step(scene: &super::Scene) -> Option<(f64, String)> {
-    let attached;
-    let flex = match scene.flexible.as_ref() {
-        Some(f) => f,
-        None => {
-            attached = FlexModel::attach(scene.model.clone(), &[]).ok()?;
-            &attached
-        }
-    };
-    let gains = HingeGains::of(&scene.effects, flex.rigid().n_hinges());
-    let limit = rk4_limit(flex, &scene.initial_q(), &gains)?;
+    let (tree, n_rotors) =
+        integrated_tree(&scene.model, scene.flexible.as_ref(), &scene.effects).ok()?;
+    let flex = &tree;
+    let q = integrated_q(&scene.initial.q, n_rotors, &scene.elastic.eta);
+    let gains = HingeGains::of(&scene.effects, scene.model.n_hinges());
+    let limit = rk4_limit(flex, &q, &gains)?;
     let what = format!(
         "{} ({:.3} Hz)",
         limit.what(flex),

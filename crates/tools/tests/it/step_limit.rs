@@ -4,7 +4,7 @@
 
 use satsim_tools::scene::Scene;
 use satsim_tools::scene::step_limit::{
-    HingeGains, Limiting, rk4_limit, rk4_stable_step, rk4_step_limit,
+    HingeGains, Limiting, integrated_q, integrated_tree, rk4_limit, rk4_stable_step, rk4_step_limit,
 };
 use satsim_tree::flexible::FlexModel;
 use std::path::Path;
@@ -136,13 +136,8 @@ fn a_continuous_hinge_controllers_gains_count_and_a_sampled_ones_do_not() {
         )
     };
     let s = Scene::parse(&arm(1e4, 10.0, &control(""), 0.001), Path::new("arm.toml")).unwrap();
-    assert_eq!(
-        HingeGains::of(&s.effects, 1),
-        HingeGains {
-            stiffness: vec![4e4],
-            damping: vec![15.0]
-        }
-    );
+    let g = HingeGains::of(&s.effects, 1);
+    assert_eq!((g.stiffness, g.damping), (vec![4e4], vec![15.0]));
     let limit = limit_of(&s);
     assert!(
         (limit.omega - (4e4 / I).sqrt()).abs() < 1e-9 * limit.omega,
@@ -153,13 +148,8 @@ fn a_continuous_hinge_controllers_gains_count_and_a_sampled_ones_do_not() {
         Path::new("arm.toml"),
     )
     .unwrap();
-    assert_eq!(
-        HingeGains::of(&sampled.effects, 1),
-        HingeGains {
-            stiffness: vec![1e4],
-            damping: vec![10.0]
-        }
-    );
+    let g = HingeGains::of(&sampled.effects, 1);
+    assert_eq!((g.stiffness, g.damping), (vec![1e4], vec![10.0]));
 }
 
 /// A step longer than the output interval is cut to it (the reader warns): the interval is
@@ -183,6 +173,143 @@ fn a_step_cut_to_the_output_interval_is_checked_at_the_interval() {
     assert!(
         err.contains("`integrator.step` = 0.05 s (cut to `output.every` = 0.04 s) is too long")
             && err.contains("|λ| × step = 5.164"),
+        "{err}"
+    );
+}
+
+/// A free bus (principal moments 10, 20, 30 kg m²) with three wheels of 0.1 kg m² on its
+/// axes (transverse 0.05), `viscous` friction on wheel x, and a continuous attitude
+/// controller with `kp`, `kd` (`period` line optional), rotated 0.04 rad about x.
+fn wheeled_bus(viscous: f64, kp: f64, kd: f64, period: &str, step: f64) -> String {
+    let wheel = |name: &str, axis: &str, c: f64| {
+        format!(
+            "[[effects.reaction_wheels.wheel]]\nname = \"{name}\"\naxis = {axis}\ninertia = 0.1\nviscous = {c}\n"
+        )
+    };
+    format!(
+        "duration = 200.0
+[model]
+[model.base]
+kind = \"free\"
+[[model.body]]
+name = \"bus\"
+mass = 100.0
+inertia = [[10.0, 0.0, 0.0], [0.0, 20.0, 0.0], [0.0, 0.0, 30.0]]
+[initial]
+base = {{ attitude = [0.9998, 0.02, 0.0, 0.0], angular_velocity = [0.0, 0.0, 0.0] }}
+[effects.reaction_wheels]
+{}{}{}[effects.attitude_control]
+target = \"inertial\"
+attitude = [1.0, 0.0, 0.0, 0.0]
+kp = {kp}
+kd = {kd}
+{period}
+[integrator]
+method = \"rk4\"
+step = {step}
+[output]
+every = 200.0
+plots = false
+view = false
+",
+        wheel("x", "[1.0, 0.0, 0.0]", viscous),
+        wheel("y", "[0.0, 1.0, 0.0]", 0.0),
+        wheel("z", "[0.0, 0.0, 1.0]", 0.0),
+    )
+}
+
+/// The limit of a scene on the tree it integrates (the wheels' rotors included).
+fn tree_limit_of(s: &Scene) -> Option<satsim_tools::scene::step_limit::Rk4Limit> {
+    let (tree, n) = integrated_tree(&s.model, s.flexible.as_ref(), &s.effects).unwrap();
+    let q = integrated_q(&s.initial.q, n, &s.elastic.eta);
+    rk4_limit(&tree, &q, &HingeGains::of(&s.effects, s.model.n_hinges()))
+}
+
+/// The largest |ω_x| of the bus over a run at step `h` (the reader's check bypassed).
+fn largest_rate(scene: &Scene, h: f64) -> Option<f64> {
+    let mut s = scene.clone();
+    s.options = s.options.clone().with_fixed_step(h);
+    let t = satsim_tools::api::run_scene(&s, || false).ok()?;
+    let c = t.columns.iter().position(|c| c == "omega_x").unwrap();
+    Some(t.rows().map(|r| r[c].abs()).fold(0.0, f64::max)).filter(|m| m.is_finite())
+}
+
+/// A continuous attitude controller through the wheels: about x the bus, its wheel x free
+/// to spin, is an oscillator of inertia `10 + 0.05 + 0.05` (the bus and the other wheels'
+/// transverse moments) on `kp` and `kd`. The check's frequency, damping ratio and limit are
+/// that oscillator's; runs are bounded just inside the limit and grow just outside; the
+/// step line is refused naming the controller; a sampled controller is left out.
+#[test]
+fn a_continuous_attitude_controller_limits_the_step_as_the_bus_on_its_gains() {
+    let (kp, kd) = (1e4, 1.0);
+    let text = wheeled_bus(0.0, kp, kd, "", 0.01);
+    let s = Scene::parse(&text, Path::new("bus.toml")).unwrap();
+    let limit = tree_limit_of(&s).unwrap();
+    let i = 10.1;
+    let (w, z) = ((kp / i).sqrt(), kd / (2.0 * (kp * i).sqrt()));
+    assert_eq!(limit.by, Limiting::Attitude);
+    assert!((limit.omega - w).abs() < 1e-9 * w, "{limit:?}");
+    assert!((limit.zeta - z).abs() < 1e-9, "{limit:?}");
+    let lambda = nalgebra::Complex::new(-z * w, w * (1.0 - z * z).sqrt());
+    let analytic = rk4_step_limit(lambda);
+    assert!((limit.step - analytic).abs() < 1e-9 * analytic, "{limit:?}");
+    // The reader's own check and the accuracy sweep's agree.
+    assert_eq!(rk4_stable_step(&s).unwrap().0, limit.step);
+    // The model alone (no rotors) has nothing to check.
+    let alone = FlexModel::attach(s.model.clone(), &[]).unwrap();
+    assert!(rk4_limit(&alone, &s.initial.q, &HingeGains::of(&s.effects, 0)).is_none());
+    // Sharp against runs: bounded at 0.98 of the limit, growing at 1.02.
+    let start = largest_rate(&s, 0.001).unwrap();
+    let inside = largest_rate(&s, 0.98 * limit.step).unwrap();
+    assert!(inside < 2.0 * start, "{inside} against {start}");
+    let outside = largest_rate(&s, 1.02 * limit.step);
+    assert!(
+        outside.is_none_or(|m| m > 10.0 * start),
+        "{outside:?} against {start}"
+    );
+    let err = Scene::parse(&wheeled_bus(0.0, kp, kd, "", 0.1), Path::new("bus.toml"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("bus.toml:35")
+            && err.contains("too long for rk4 with the attitude controller's gains")
+            && err.contains("(mostly the bus) is an oscillation on the controller's gains (kp = 10000 N m/rad, kd = 1 N m s/rad) at 5.0079 Hz"),
+        "{err}"
+    );
+    // Sampled, its stability is its period's: nothing limits the step.
+    let sampled = Scene::parse(
+        &wheeled_bus(0.0, kp, kd, "period = 0.5", 0.1),
+        Path::new("bus.toml"),
+    )
+    .unwrap();
+    assert!(tree_limit_of(&sampled).is_none());
+}
+
+/// A wheel's viscous friction `c` relaxes its speed at `c / J_eff`, `J_eff = J (1 − J / I)`
+/// the wheel's inertia less what the bus takes back (`I = 10.2` about x with every rotor's
+/// share): a damper on the rotor's coordinate, named as the wheel's. A wheel far lighter
+/// than any real one (1e-20 kg m², 1e-5 N m s/rad: 1e15 /s) is refused at the step's line.
+#[test]
+fn a_wheels_viscous_friction_limits_the_step_by_its_rotors_decay() {
+    let c = 50.0;
+    let s = Scene::parse(&wheeled_bus(c, 0.0, 0.0, "", 0.001), Path::new("bus.toml")).unwrap();
+    let limit = tree_limit_of(&s).unwrap();
+    let j_eff = 0.1 * (1.0 - 0.1 / 10.2);
+    assert!(
+        (limit.lambda.re + c / j_eff).abs() < 1e-9 * c / j_eff && limit.lambda.im == 0.0,
+        "{limit:?}"
+    );
+    let (tree, _) = integrated_tree(&s.model, None, &s.effects).unwrap();
+    assert_eq!(limit.what(&tree), "rotor `wheel_x` on its viscous friction");
+    let light =
+        wheeled_bus(1e-5, 0.0, 0.0, "", 0.01).replacen("inertia = 0.1", "inertia = 1e-20", 1);
+    let err = Scene::parse(&light, Path::new("bus.toml"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("bus.toml:35")
+            && err.contains("too long for rk4 with the wheels' viscous friction")
+            && err.contains("(mostly rotor `wheel_x` on its viscous friction) has no stiffness, only damping, eigenvalue -1.0000e15 1/s"),
         "{err}"
     );
 }
