@@ -57,14 +57,20 @@ fn limit_of(s: &Scene) -> satsim_tools::scene::step_limit::Rk4Limit {
     rk4_limit(&tree, &s.initial.q, &gains).unwrap()
 }
 
-/// The largest |angle| of a run of `scene` at step `h` (`None` when it failed); its rows are
-/// at the start and the end, so that the fixed steps are `h` between them.
-fn largest_angle(scene: &Scene, h: f64) -> Option<f64> {
+/// The largest |value| of `column` over a run of `scene` at step `h`, the reader's check
+/// bypassed (`None` when it failed); its rows are at the start and the end, so that the fixed
+/// steps are `h` between them.
+fn largest(scene: &Scene, h: f64, column: &str) -> Option<f64> {
     let mut s = scene.clone();
     s.options = s.options.clone().with_fixed_step(h);
     let t = satsim_tools::api::run_scene(&s, || false).ok()?;
-    let c = t.columns.iter().position(|c| c == "angle_h").unwrap();
+    let c = t.columns.iter().position(|c| c == column).unwrap();
     Some(t.rows().map(|r| r[c].abs()).fold(0.0, f64::max)).filter(|m| m.is_finite())
+}
+
+/// The largest |angle| of the arm's hinge over a run at step `h`.
+fn largest_angle(scene: &Scene, h: f64) -> Option<f64> {
+    largest(scene, h, "angle_h")
 }
 
 #[test]
@@ -225,13 +231,9 @@ fn tree_limit_of(s: &Scene) -> Option<satsim_tools::scene::step_limit::Rk4Limit>
     rk4_limit(&tree, &q, &HingeGains::of(&s.effects, s.model.n_hinges()))
 }
 
-/// The largest |ω_x| of the bus over a run at step `h` (the reader's check bypassed).
+/// The largest |ω_x| of the bus over a run at step `h`.
 fn largest_rate(scene: &Scene, h: f64) -> Option<f64> {
-    let mut s = scene.clone();
-    s.options = s.options.clone().with_fixed_step(h);
-    let t = satsim_tools::api::run_scene(&s, || false).ok()?;
-    let c = t.columns.iter().position(|c| c == "omega_x").unwrap();
-    Some(t.rows().map(|r| r[c].abs()).fold(0.0, f64::max)).filter(|m| m.is_finite())
+    largest(scene, h, "omega_x")
 }
 
 /// A continuous attitude controller through the wheels: about x the bus, its wheel x free
