@@ -210,25 +210,30 @@ impl<'a> Parser<'a> {
             super::fsw::read(self, f, &model, epoch, &mut effects, &mut clocks)?;
         }
         super::faults::read(self, &file.faults, &mut effects)?;
-        if let Some(h) = options.fixed_step {
+        let sampled = effects
+            .get::<satsim_spacecraft::effects::AttitudeControl>()
+            .and_then(|c| c.period().map(|p| (c, p)));
+        if options.fixed_step.is_some() || sampled.is_some() {
             let (tree, n_rotors) =
                 super::step_limit::integrated_tree(&model, flex.as_ref(), &effects)
                     .map_err(|e| self.error(None, e.to_string()))?;
             let q = super::step_limit::integrated_q(&initial.q, n_rotors, &elastic.eta);
-            let tree = &tree;
             let gains = super::step_limit::HingeGains::of(&effects, model.n_hinges());
-            // The steps are cut to the output interval and the duration (`step_warning`): the
-            // longest step taken is what must be stable.
-            let cut = if h > duration.min(every) {
-                Some(if every <= duration {
-                    ("output.every", every)
-                } else {
-                    ("duration", duration)
-                })
-            } else {
-                None
-            };
-            self.check_rk4_step(&file, tree, &q, &gains, h, cut)?;
+            if let Some((control, period)) = sampled {
+                let rotors: Vec<_> = effects.iter().flat_map(|e| e.rotors()).collect();
+                if let Some(w) = super::step_limit::AttitudeGains::of(control, &rotors)
+                    .and_then(|law| {
+                        super::step_limit::sampled_attitude(&tree, &q, &gains, &law, period)
+                            .map(|l| (law, l))
+                    })
+                    .and_then(|(law, l)| self.sampled_warning(&file, &law, period, &l))
+                {
+                    warnings.push(w);
+                }
+            }
+            if let Some(h) = options.fixed_step {
+                self.fixed_step_checked(&file, &tree, &q, &gains, h, duration, every)?;
+            }
         }
         let scene = Scene {
             path,
@@ -322,6 +327,60 @@ impl<'a> Parser<'a> {
                  definite{which}: an `eta` this large takes the deformed inertia out of a body's; \
                  start closer to rest"
             ),
+        ))
+    }
+
+    /// [`Self::check_rk4_step`] for a fixed step `h`, cut to the output interval and the
+    /// duration as the run cuts it (`step_warning`): the longest step taken is what must be
+    /// stable.
+    #[allow(clippy::too_many_arguments)]
+    fn fixed_step_checked(
+        &self,
+        file: &SceneFile,
+        tree: &FlexModel,
+        q: &[f64],
+        gains: &super::step_limit::HingeGains,
+        h: f64,
+        duration: f64,
+        every: f64,
+    ) -> Result<(), FileError> {
+        let cut = if h > duration.min(every) {
+            Some(if every <= duration {
+                ("output.every", every)
+            } else {
+                ("duration", duration)
+            })
+        } else {
+            None
+        };
+        self.check_rk4_step(file, tree, q, gains, h, cut)
+    }
+
+    /// A sampled attitude law unstable at its period ([`super::step_limit::sampled_attitude`])
+    /// is the design's, not the integrator's, so it is a warning at the section's line, with
+    /// the growth a sample and the longest stable period below it; `None` where it is stable.
+    fn sampled_warning(
+        &self,
+        file: &SceneFile,
+        law: &super::step_limit::AttitudeGains,
+        period: f64,
+        l: &super::step_limit::SampledLoop,
+    ) -> Option<String> {
+        let below = l.stable_below?;
+        let line = file
+            .effects
+            .as_ref()
+            .and_then(|e| e.get_ref().get("attitude_control"))
+            .map(|v| format!(":{}", line_of(self.text(), v.span().start)))
+            .unwrap_or_default();
+        Some(format!(
+            "{}{line}: [effects.attitude_control]: the sampled law is unstable at `period` = {} s: on the bus's linear motion at the initial state (kp = {} N m/rad, kd = {} N m s/rad, the torque held between samples) a motion grows by a factor {:.4} a sample; it is stable at periods up to {:.4e} s. A run shows the attitude diverge, or chatter within the wheels' torque limits (a real flight software at this rate would do the same)",
+            self.path().display(),
+            Num(period),
+            Num(law.kp),
+            Num(law.kd),
+            l.growth,
+            below,
         ))
     }
 

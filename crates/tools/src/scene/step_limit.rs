@@ -115,6 +115,20 @@ pub struct AttitudeGains {
     pub allocation: DMatrix<f64>,
 }
 
+impl AttitudeGains {
+    /// The law of `control` on `rotors`; `None` without rotors.
+    pub fn of(
+        control: &AttitudeControl,
+        rotors: &[satsim_spacecraft::effects::Rotor],
+    ) -> Option<Self> {
+        (!rotors.is_empty()).then(|| Self {
+            kp: control.kp,
+            kd: control.kd,
+            allocation: AttitudeControl::allocation_for(rotors),
+        })
+    }
+}
+
 impl HingeGains {
     /// None on any of `n_hinges` hinges.
     pub fn none(n_hinges: usize) -> Self {
@@ -145,12 +159,8 @@ impl HingeGains {
         }
         g.attitude = effects
             .get::<AttitudeControl>()
-            .filter(|c| c.period().is_none() && !rotors.is_empty())
-            .map(|c| AttitudeGains {
-                kp: c.kp,
-                kd: c.kd,
-                allocation: AttitudeControl::allocation_for(&rotors),
-            });
+            .filter(|c| c.period().is_none())
+            .and_then(|c| AttitudeGains::of(c, &rotors));
         if let Some(s) = effects.get::<HingeSprings>() {
             for (i, (k, c)) in s
                 .stiffness
@@ -322,7 +332,132 @@ fn coupled_limit(
     km: &DMatrix<f64>,
     dm: &DMatrix<f64>,
 ) -> Option<(Complex<f64>, f64)> {
-    use nalgebra::Schur;
+    let (a, _) = plant(flex, q, km, dm)?;
+    nalgebra::Schur::try_new(a, f64::EPSILON, 10_000)
+        .and_then(|s| fastest(s.complex_eigenvalues().as_slice()))
+}
+
+/// How a sampled attitude law fares at its period ([`sampled_attitude`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SampledLoop {
+    /// The largest `|z|` of the closed loop's eigenvalues over one period: above 1 a motion
+    /// grows by that factor a sample.
+    pub growth: f64,
+    /// Where the loop is unstable at its period: the longest period below it at which it is
+    /// stable (the stable periods found from zero up, to round-off), `None` where it is
+    /// stable at its own.
+    pub stable_below: Option<f64>,
+}
+
+/// `|z|` above `1 + this` is growth: the free motions' eigenvalues `z = 1` (a free base's
+/// translation, a wheel, a hinge without a spring: Jordan blocks, which round-off splits by
+/// about `√ε`; 1.3e-7 on the test's bus) and the undamped modes' `|z| = 1` are not. A loop
+/// growing by less than this a sample takes over 70 000 samples to double.
+const GROWTH_TOLERANCE: f64 = 1e-5;
+
+/// A sampled attitude law (`[effects.attitude_control]` with a `period`) on the scene's linear
+/// motions at the initial state (as [`rk4_limit`]'s: `M` of the tree with the rotors, `K` and
+/// `D` of `hinges`' continuous gains, friction and modes): the bus torque
+/// `u = −kp θ − kd ω` taken at each sample and held to the next (zero-order hold), through
+/// the rotors' commands `τ = −A⁺ u`. Over one period the plant `ẋ = A x + B u` gives
+/// `x⁺ = Φ x + Γ u` (`[[Φ, Γ], [0, 1]] = exp([[A, B], [0, 0]] T)`), so the loop is
+/// `x⁺ = (Φ − Γ G) x` with `u = −G x`; it is stable where every eigenvalue has `|z| <= 1`.
+/// A property of the design (the flight software would do the same), not of the
+/// integrator. `None` where `M` is not positive definite, the base is not free or the tree
+/// has not the law's rotors.
+pub fn sampled_attitude(
+    flex: &FlexModel,
+    q: &[f64],
+    hinges: &HingeGains,
+    law: &AttitudeGains,
+    period: f64,
+) -> Option<SampledLoop> {
+    let rigid = flex.rigid();
+    let n_rotors = law.allocation.nrows();
+    let first_rotor = hinges.model_hinges;
+    if rigid.base_nv() != 6 || n_rotors == 0 || rigid.n_hinges() != first_rotor + n_rotors {
+        return None;
+    }
+    let n = flex.nv();
+    let (k, d, _) = diagonals(flex, hinges);
+    let km = DMatrix::from_diagonal(&nalgebra::DVector::from_column_slice(&k));
+    let dm = DMatrix::from_diagonal(&nalgebra::DVector::from_column_slice(&d));
+    let (a, m_inv) = plant(flex, q, &km, &dm)?;
+    // B = [0; M⁻¹ Q_u]: the rotors' generalised forces −A⁺ u.
+    let mut qu = DMatrix::zeros(n, 3);
+    for b in 0..rigid.n_bodies() {
+        let Some(j) = rigid.joint(b) else { continue };
+        if let Some(r) = j.hinge().checked_sub(first_rotor) {
+            for c in 0..3 {
+                qu[(j.dof(), c)] = -law.allocation[(r, c)];
+            }
+        }
+    }
+    let mut bm = DMatrix::zeros(2 * n, 3);
+    bm.view_mut((n, 0), (n, 3)).copy_from(&(&m_inv * qu));
+    let mut g = DMatrix::zeros(3, 2 * n);
+    for c in 0..3 {
+        g[(c, c)] = law.kp;
+        g[(c, n + c)] = law.kd;
+    }
+    let growth = |t: f64| -> Option<f64> {
+        let mut aug = DMatrix::zeros(2 * n + 3, 2 * n + 3);
+        aug.view_mut((0, 0), (2 * n, 2 * n)).copy_from(&(&a * t));
+        aug.view_mut((0, 2 * n), (2 * n, 3)).copy_from(&(&bm * t));
+        let e = aug.exp();
+        let phi = e.view((0, 0), (2 * n, 2 * n)).into_owned();
+        let gamma = e.view((0, 2 * n), (2 * n, 3)).into_owned();
+        // z = 1 + t μ, μ the eigenvalues of (Φ − Γ G − 1)/t: a short period puts every z
+        // near 1, where the Schur iteration on Φ − Γ G itself does not converge, while
+        // (Φ − Γ G − 1)/t tends to the continuous loop's matrix.
+        let mut closed = phi - gamma * &g;
+        for i in 0..2 * n {
+            closed[(i, i)] -= 1.0;
+        }
+        let mu = nalgebra::Schur::try_new(closed / t, f64::EPSILON, 10_000)?.complex_eigenvalues();
+        let one = Complex::new(1.0, 0.0);
+        let largest = mu.iter().map(|m| (one + m * t).norm()).fold(0.0, f64::max);
+        largest.is_finite().then_some(largest)
+    };
+    let at = growth(period)?;
+    // A period whose loop the decomposition cannot resolve is taken for stable: the warning
+    // names only the growth it measured.
+    let stable = |t: f64| growth(t).is_none_or(|z| z <= 1.0 + GROWTH_TOLERANCE);
+    let stable_below = (at > 1.0 + GROWTH_TOLERANCE).then(|| {
+        // The first unstable period of a scan from zero, then bisection below it.
+        let (mut lo, mut hi) = (0.0, period);
+        for i in 1..=40 {
+            let t = period * i as f64 / 40.0;
+            if !stable(t) {
+                hi = t;
+                break;
+            }
+            lo = t;
+        }
+        for _ in 0..40 {
+            let mid = 0.5 * (lo + hi);
+            if stable(mid) {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        lo
+    });
+    Some(SampledLoop {
+        growth: at,
+        stable_below,
+    })
+}
+
+/// `A = [[0, I], [−M⁻¹K, −M⁻¹D]]` at `q`, and `M⁻¹`; `None` where `M` is not positive
+/// definite.
+fn plant(
+    flex: &FlexModel,
+    q: &[f64],
+    km: &DMatrix<f64>,
+    dm: &DMatrix<f64>,
+) -> Option<(DMatrix<f64>, DMatrix<f64>)> {
     use satsim_tree::flexible::{FlexData, crba};
     let n = flex.nv();
     let mut data = FlexData::new(flex);
@@ -332,8 +467,7 @@ fn coupled_limit(
     a.view_mut((0, n), (n, n)).fill_with_identity();
     a.view_mut((n, 0), (n, n)).copy_from(&(-&m_inv * km));
     a.view_mut((n, n), (n, n)).copy_from(&(-&m_inv * dm));
-    Schur::try_new(a, f64::EPSILON, 10_000)
-        .and_then(|s| fastest(s.complex_eigenvalues().as_slice()))
+    Some((a, m_inv))
 }
 
 /// [`rk4_limit`] on the diagonal `K` and `D` (everything but the attitude controller).

@@ -315,3 +315,85 @@ fn a_wheels_viscous_friction_limits_the_step_by_its_rotors_decay() {
         "{err}"
     );
 }
+
+/// The ZOH PD loop of a double integrator of inertia `i` over a period `t`:
+/// `θ⁺ = θ + t ω + t²/(2i) u`, `ω⁺ = ω + t/i u`, `u = −kp θ − kd ω`; its largest `|z|`.
+fn zoh_growth(i: f64, kp: f64, kd: f64, t: f64) -> f64 {
+    let m = nalgebra::Matrix2::new(
+        1.0 - kp * t * t / (2.0 * i),
+        t - kd * t * t / (2.0 * i),
+        -kp * t / i,
+        1.0 - kd * t / i,
+    );
+    m.complex_eigenvalues()
+        .iter()
+        .map(|z| z.norm())
+        .fold(0.0, f64::max)
+}
+
+/// A sampled attitude law on the bus with its wheels: each axis is a double integrator of
+/// inertia 10.1, 20.1 or 30.1 kg m² (its wheel free) under a zero-order-hold PD, whose loop
+/// is known in closed form. The check's growth a sample and its longest stable period agree
+/// with it; stable, the scene reads without a warning, unstable with one at the section's
+/// line; the RK4 check leaves the sampled law out.
+#[test]
+fn a_sampled_attitude_law_unstable_at_its_period_is_a_warning_with_the_stable_period() {
+    use satsim_tools::scene::step_limit::{AttitudeGains, sampled_attitude};
+    let (kp, kd) = (100.0, 50.0);
+    let axes = [10.1, 20.1, 30.1];
+    let closed_form = |t: f64| {
+        axes.iter()
+            .map(|&i| zoh_growth(i, kp, kd, t))
+            .fold(1.0, f64::max)
+    };
+    // The longest stable period of the closed form, by bisection (stable from zero up).
+    let (mut lo, mut hi) = (0.01, 1.0);
+    assert!(closed_form(lo) <= 1.0 && closed_form(hi) > 1.0);
+    for _ in 0..60 {
+        let mid = 0.5 * (lo + hi);
+        if closed_form(mid) <= 1.0 {
+            lo = mid
+        } else {
+            hi = mid
+        }
+    }
+    for (period, unstable) in [(0.2, false), (0.6, true)] {
+        let text = wheeled_bus(0.0, kp, kd, &format!("period = {period}"), 0.01);
+        let s = Scene::parse(&text, Path::new("bus.toml")).unwrap();
+        let (tree, n) = integrated_tree(&s.model, None, &s.effects).unwrap();
+        let q = integrated_q(&s.initial.q, n, &[]);
+        let gains = HingeGains::of(&s.effects, 0);
+        assert!(gains.attitude.is_none(), "a sampled law is not RK4's");
+        let control = s
+            .effects
+            .get::<satsim_spacecraft::effects::AttitudeControl>()
+            .unwrap();
+        let rotors: Vec<_> = s.effects.iter().flat_map(|e| e.rotors()).collect();
+        let law = AttitudeGains::of(control, &rotors).unwrap();
+        let l = sampled_attitude(&tree, &q, &gains, &law, period).unwrap();
+        // Stable, the largest |z| is the free motions' 1 (Jordan blocks: within √ε).
+        let expected = closed_form(period);
+        let tolerance = if unstable { 1e-9 * expected } else { 1e-6 };
+        assert!(
+            (l.growth - expected).abs() < tolerance,
+            "{l:?} against {expected}"
+        );
+        let warned = s
+            .warnings
+            .iter()
+            .find(|w| w.contains("the sampled law is unstable"));
+        if unstable {
+            let below = l.stable_below.unwrap();
+            assert!((below - lo).abs() < 1e-4 * lo, "{below} against {lo}");
+            let w = warned.expect("a warning");
+            assert!(
+                w.starts_with("bus.toml:27: [effects.attitude_control]")
+                    && w.contains(&format!("grows by a factor {expected:.4} a sample")),
+                "{w}"
+            );
+        } else {
+            assert_eq!(l.stable_below, None);
+            assert!(warned.is_none(), "{warned:?}");
+        }
+    }
+}
