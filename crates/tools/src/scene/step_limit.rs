@@ -52,16 +52,23 @@ pub fn rk4_step_limit(lambda: Complex<f64>) -> f64 {
     let u = lambda / r;
     // Round-off's allowance: on the imaginary axis `|R| = 1` at the origin and at the end.
     let stable = |s: f64| rk4_gain(u * s) <= 1.0 + 1e-12;
-    let (mut lo, mut hi) = (0.0, 3.0);
-    for k in 1..=300 {
-        let s = 3.0 * k as f64 / 300.0;
+    last_stable(stable, 3.0, 300, 60) / r
+}
+
+/// The end of the interval `[0, s*]` on which `stable` holds, within `[0, end]`: a scan of
+/// `scan` equal steps finds the first point where it fails (`end` where none does), then
+/// `bisections` halvings close in on the boundary below it.
+fn last_stable(stable: impl Fn(f64) -> bool, end: f64, scan: usize, bisections: usize) -> f64 {
+    let (mut lo, mut hi) = (0.0, end);
+    for k in 1..=scan {
+        let s = end * k as f64 / scan as f64;
         if !stable(s) {
             hi = s;
             break;
         }
         lo = s;
     }
-    for _ in 0..60 {
+    for _ in 0..bisections {
         let mid = 0.5 * (lo + hi);
         if stable(mid) {
             lo = mid;
@@ -69,7 +76,7 @@ pub fn rk4_step_limit(lambda: Complex<f64>) -> f64 {
             hi = mid;
         }
     }
-    lo / r
+    lo
 }
 
 /// The eigenvalue that limits RK4's step most among `ev` and that step. The free motions'
@@ -423,27 +430,8 @@ pub fn sampled_attitude(
     // A period whose loop the decomposition cannot resolve is taken for stable: the warning
     // names only the growth it measured.
     let stable = |t: f64| growth(t).is_none_or(|z| z <= 1.0 + GROWTH_TOLERANCE);
-    let stable_below = (at > 1.0 + GROWTH_TOLERANCE).then(|| {
-        // The first unstable period of a scan from zero, then bisection below it.
-        let (mut lo, mut hi) = (0.0, period);
-        for i in 1..=40 {
-            let t = period * i as f64 / 40.0;
-            if !stable(t) {
-                hi = t;
-                break;
-            }
-            lo = t;
-        }
-        for _ in 0..40 {
-            let mid = 0.5 * (lo + hi);
-            if stable(mid) {
-                lo = mid;
-            } else {
-                hi = mid;
-            }
-        }
-        lo
-    });
+    // The first unstable period of a scan from zero, then bisection below it.
+    let stable_below = (at > 1.0 + GROWTH_TOLERANCE).then(|| last_stable(stable, period, 40, 40));
     Some(SampledLoop {
         growth: at,
         stable_below,
