@@ -213,10 +213,17 @@ impl<'a> Parser<'a> {
         let sampled = effects
             .get::<satsim_spacecraft::effects::AttitudeControl>()
             .and_then(|c| c.period().map(|p| (c, p)));
-        if options.fixed_step.is_some() || sampled.is_some() {
-            let (tree, n_rotors) =
-                super::step_limit::integrated_tree(&model, flex.as_ref(), &effects)
-                    .map_err(|e| self.error(None, e.to_string()))?;
+        // The tree for the checks of the linear motions. Where it cannot be made, a fixed
+        // step's check is an error, as before; the sampled law's warning is left out, and
+        // the simulation's set-up says what is wrong.
+        let tree = (options.fixed_step.is_some() || sampled.is_some())
+            .then(|| super::step_limit::integrated_tree(&model, flex.as_ref(), &effects))
+            .transpose()
+            .or_else(|e| match options.fixed_step {
+                Some(_) => Err(self.error(None, e.to_string())),
+                None => Ok(None),
+            })?;
+        if let Some((tree, n_rotors)) = tree {
             let q = super::step_limit::integrated_q(&initial.q, n_rotors, &elastic.eta);
             let gains = super::step_limit::HingeGains::of(&effects, model.n_hinges());
             if let Some((control, period)) = sampled {
