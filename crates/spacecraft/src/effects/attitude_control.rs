@@ -85,13 +85,7 @@ impl AttitudeControl {
     }
     /// Sets the allocation `A⁺` for rotors with these axes (bus frame), in their order.
     pub fn allocate(&mut self, axes: &[Vec3]) {
-        let a = DMatrix::from_fn(3, axes.len(), |r, c| axes[c][r]);
-        self.allocation = if axes.is_empty() {
-            DMatrix::zeros(0, 3)
-        } else {
-            a.pseudo_inverse(1e-12)
-                .unwrap_or_else(|_| DMatrix::zeros(axes.len(), 3))
-        };
+        self.allocation = pseudo_inverse(axes);
     }
     /// The allocation `A⁺` (a row per rotor, bus axes) that the controller takes when built
     /// into a simulation with these rotors: the bus's wheels as designed (their nominal
@@ -108,9 +102,7 @@ impl AttitudeControl {
                 }
             })
             .collect();
-        let mut c = Self::new(Target::Inertial(UnitQuaternion::identity()), 0.0, 0.0);
-        c.allocate(&axes);
-        c.allocation
+        pseudo_inverse(&axes)
     }
     /// The target attitude (bus to inertial) and rate (inertial axes) at this context.
     pub fn target_state(&self, ctx: &Context) -> Result<(UnitQuaternion<f64>, Vec3), SystemError> {
@@ -136,6 +128,17 @@ impl AttitudeControl {
         let wt_bus = ctx.attitude.inverse_transform_vector(&wt);
         Ok(-self.kp * 2.0 * s * qe.imag() - self.kd * (ctx.omega - wt_bus))
     }
+}
+
+/// `A⁺` for the axes `A = [a_1 … a_k]` (bus frame): a row per axis, least squares with fewer
+/// than three.
+fn pseudo_inverse(axes: &[Vec3]) -> DMatrix<f64> {
+    if axes.is_empty() {
+        return DMatrix::zeros(0, 3);
+    }
+    DMatrix::from_fn(3, axes.len(), |r, c| axes[c][r])
+        .pseudo_inverse(1e-12)
+        .unwrap_or_else(|_| DMatrix::zeros(axes.len(), 3))
 }
 
 impl Effect for AttitudeControl {

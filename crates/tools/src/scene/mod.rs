@@ -45,6 +45,7 @@ pub mod fsw;
 pub mod integrator;
 pub mod orbit;
 pub mod parse;
+pub mod sampled_loop;
 pub mod sensors;
 pub mod step_limit;
 

@@ -210,9 +210,8 @@ impl<'a> Parser<'a> {
             super::fsw::read(self, f, &model, epoch, &mut effects, &mut clocks)?;
         }
         super::faults::read(self, &file.faults, &mut effects)?;
-        let sampled = effects
-            .get::<satsim_spacecraft::effects::AttitudeControl>()
-            .and_then(|c| c.period().map(|p| (c, p)));
+        let sampled = super::step_limit::AttitudeGains::in_scene(&effects)
+            .and_then(|(law, period)| period.map(|p| (law, p)));
         // The tree for the checks of the linear motions. Where it cannot be made, a fixed
         // step's check is an error, as before; the sampled law's warning is left out, and
         // the simulation's set-up says what is wrong.
@@ -226,17 +225,12 @@ impl<'a> Parser<'a> {
         if let Some((tree, n_rotors)) = tree {
             let q = super::step_limit::integrated_q(&initial.q, n_rotors, &elastic.eta);
             let gains = super::step_limit::HingeGains::of(&effects, model.n_hinges());
-            if let Some((control, period)) = sampled {
-                let rotors: Vec<_> = effects.iter().flat_map(|e| e.rotors()).collect();
-                if let Some(w) = super::step_limit::AttitudeGains::of(control, &rotors)
-                    .and_then(|law| {
-                        super::step_limit::sampled_attitude(&tree, &q, &gains, &law, period)
-                            .map(|l| (law, l))
-                    })
-                    .and_then(|(law, l)| self.sampled_warning(&file, &law, period, &l))
-                {
-                    warnings.push(w);
-                }
+            if let Some((law, period)) = &sampled
+                && let Some(w) =
+                    super::sampled_loop::sampled_attitude(&tree, &q, &gains, law, *period)
+                        .and_then(|l| self.sampled_warning(&file, law, *period, &l))
+            {
+                warnings.push(w);
             }
             if let Some(h) = options.fixed_step {
                 self.fixed_step_checked(&file, &tree, &q, &gains, h, duration, every)?;
@@ -363,7 +357,7 @@ impl<'a> Parser<'a> {
         self.check_rk4_step(file, tree, q, gains, h, cut)
     }
 
-    /// A sampled attitude law unstable at its period ([`super::step_limit::sampled_attitude`])
+    /// A sampled attitude law unstable at its period ([`super::sampled_loop::sampled_attitude`])
     /// is the design's, not the integrator's, so it is a warning at the section's line, with
     /// the growth a sample and the longest stable period below it; `None` where it is stable.
     fn sampled_warning(
@@ -371,7 +365,7 @@ impl<'a> Parser<'a> {
         file: &SceneFile,
         law: &super::step_limit::AttitudeGains,
         period: f64,
-        l: &super::step_limit::SampledLoop,
+        l: &super::sampled_loop::SampledLoop,
     ) -> Option<String> {
         let below = l.stable_below?;
         let line = file

@@ -58,7 +58,12 @@ pub fn rk4_step_limit(lambda: Complex<f64>) -> f64 {
 /// The end of the interval `[0, s*]` on which `stable` holds, within `[0, end]`: a scan of
 /// `scan` equal steps finds the first point where it fails (`end` where none does), then
 /// `bisections` halvings close in on the boundary below it.
-fn last_stable(stable: impl Fn(f64) -> bool, end: f64, scan: usize, bisections: usize) -> f64 {
+pub(super) fn last_stable(
+    stable: impl Fn(f64) -> bool,
+    end: f64,
+    scan: usize,
+    bisections: usize,
+) -> f64 {
     let (mut lo, mut hi) = (0.0, end);
     for k in 1..=scan {
         let s = end * k as f64 / scan as f64;
@@ -123,16 +128,39 @@ pub struct AttitudeGains {
 }
 
 impl AttitudeGains {
-    /// The law of `control` on `rotors`; `None` without rotors.
-    pub fn of(
-        control: &AttitudeControl,
-        rotors: &[satsim_spacecraft::effects::Rotor],
-    ) -> Option<Self> {
-        (!rotors.is_empty()).then(|| Self {
-            kp: control.kp,
-            kd: control.kd,
-            allocation: AttitudeControl::allocation_for(rotors),
+    /// The scene's attitude law on the rotors of its effects, and its `period` (`None`:
+    /// continuous); `None` without a controller or rotors.
+    pub fn in_scene(effects: &EffectSet) -> Option<(Self, Option<f64>)> {
+        let control = effects.get::<AttitudeControl>()?;
+        let rotors: Vec<_> = effects.iter().flat_map(|e| e.rotors()).collect();
+        (!rotors.is_empty()).then(|| {
+            let law = Self {
+                kp: control.kp,
+                kd: control.kd,
+                allocation: AttitudeControl::allocation_for(&rotors),
+            };
+            (law, control.period())
         })
+    }
+
+    /// The velocity coordinate of each rotor the law commands, in the allocation's order,
+    /// on `flex`, whose last hinges they are after the model's `hinges.model_hinges`; `None`
+    /// where the base is not free or the tree has not those rotors (the model alone).
+    pub(super) fn rotor_dofs(&self, flex: &FlexModel, hinges: &HingeGains) -> Option<Vec<usize>> {
+        let rigid = flex.rigid();
+        let (first, n) = (hinges.model_hinges, self.allocation.nrows());
+        if rigid.base_nv() != 6 || n == 0 || rigid.n_hinges() != first + n {
+            return None;
+        }
+        let mut dofs = vec![0; n];
+        for b in 0..rigid.n_bodies() {
+            if let Some(j) = rigid.joint(b)
+                && let Some(r) = j.hinge().checked_sub(first)
+            {
+                dofs[r] = j.dof();
+            }
+        }
+        Some(dofs)
     }
 }
 
@@ -164,10 +192,9 @@ impl HingeGains {
                 g.damping[n_hinges + j] += wheel.viscous;
             }
         }
-        g.attitude = effects
-            .get::<AttitudeControl>()
-            .filter(|c| c.period().is_none())
-            .and_then(|c| AttitudeGains::of(c, &rotors));
+        g.attitude = AttitudeGains::in_scene(effects)
+            .filter(|(_, period)| period.is_none())
+            .map(|(law, _)| law);
         if let Some(s) = effects.get::<HingeSprings>() {
             for (i, (k, c)) in s
                 .stiffness
@@ -267,6 +294,16 @@ fn diagonals(flex: &FlexModel, hinges: &HingeGains) -> (Vec<f64>, Vec<f64>, Vec<
     (k, d, hinge_of)
 }
 
+/// [`diagonals`]' `K` and `D` as matrices.
+pub(super) fn diagonal_matrices(
+    flex: &FlexModel,
+    hinges: &HingeGains,
+) -> (DMatrix<f64>, DMatrix<f64>) {
+    let (k, d, _) = diagonals(flex, hinges);
+    let diagonal = |v: Vec<f64>| DMatrix::from_diagonal(&nalgebra::DVector::from_vec(v));
+    (diagonal(k), diagonal(d))
+}
+
 /// The largest step RK4 is stable at on the scene's linear motions at `q` (the flexible
 /// bodies' modes and the `hinges`' gains, damping included): the eigenvalues `λ` of
 /// `ẋ = [[0, I], [−M⁻¹K, −M⁻¹D]] x`, the smallest [`rk4_step_limit`]. Undamped it is `2√2 / ω`
@@ -291,26 +328,16 @@ pub fn rk4_limit(flex: &FlexModel, q: &[f64], hinges: &HingeGains) -> Option<Rk4
     let Some(att) = &hinges.attitude else {
         return diagonal;
     };
-    let rigid = flex.rigid();
-    // The rotors are the tree's last hinges, in the allocation's order; a tree without them
-    // (the model alone) has no controller to check.
-    let n_rotors = att.allocation.nrows();
-    let first_rotor = hinges.model_hinges;
-    if rigid.base_nv() != 6 || n_rotors == 0 || rigid.n_hinges() != first_rotor + n_rotors {
+    // A tree without the rotors (the model alone) has no controller to check.
+    let Some(dofs) = att.rotor_dofs(flex, hinges) else {
         return diagonal;
-    }
-    let (k, d, _) = diagonals(flex, hinges);
-    let mut km = DMatrix::from_diagonal(&nalgebra::DVector::from_column_slice(&k));
-    let mut dm = DMatrix::from_diagonal(&nalgebra::DVector::from_column_slice(&d));
-    for b in 0..rigid.n_bodies() {
-        let Some(j) = rigid.joint(b) else { continue };
-        let Some(r) = j.hinge().checked_sub(first_rotor) else {
-            continue;
-        };
+    };
+    let (mut km, mut dm) = diagonal_matrices(flex, hinges);
+    for (r, &dof) in dofs.iter().enumerate() {
         // Q_r = τ_r = −(A⁺ u)_r = (A⁺ (kp θ + kd ω))_r, written Q = −K x − D ẋ.
         for a in 0..3 {
-            km[(j.dof(), a)] -= att.kp * att.allocation[(r, a)];
-            dm[(j.dof(), a)] -= att.kd * att.allocation[(r, a)];
+            km[(dof, a)] -= att.kp * att.allocation[(r, a)];
+            dm[(dof, a)] -= att.kd * att.allocation[(r, a)];
         }
     }
     let (lambda, step) = coupled_limit(flex, q, &km, &dm)?;
@@ -344,103 +371,9 @@ fn coupled_limit(
         .and_then(|s| fastest(s.complex_eigenvalues().as_slice()))
 }
 
-/// How a sampled attitude law fares at its period ([`sampled_attitude`]).
-#[derive(Clone, Debug, PartialEq)]
-pub struct SampledLoop {
-    /// The largest `|z|` of the closed loop's eigenvalues over one period: above 1 a motion
-    /// grows by that factor a sample.
-    pub growth: f64,
-    /// Where the loop is unstable at its period: the longest period below it at which it is
-    /// stable (the stable periods found from zero up, to round-off), `None` where it is
-    /// stable at its own.
-    pub stable_below: Option<f64>,
-}
-
-/// `|z|` above `1 + this` is growth: the free motions' eigenvalues `z = 1` (a free base's
-/// translation, a wheel, a hinge without a spring: Jordan blocks, which round-off splits by
-/// about `√ε`; 1.3e-7 on the test's bus) and the undamped modes' `|z| = 1` are not. A loop
-/// growing by less than this a sample takes over 70 000 samples to double.
-const GROWTH_TOLERANCE: f64 = 1e-5;
-
-/// A sampled attitude law (`[effects.attitude_control]` with a `period`) on the scene's linear
-/// motions at the initial state (as [`rk4_limit`]'s: `M` of the tree with the rotors, `K` and
-/// `D` of `hinges`' continuous gains, friction and modes): the bus torque
-/// `u = −kp θ − kd ω` taken at each sample and held to the next (zero-order hold), through
-/// the rotors' commands `τ = −A⁺ u`. Over one period the plant `ẋ = A x + B u` gives
-/// `x⁺ = Φ x + Γ u` (`[[Φ, Γ], [0, 1]] = exp([[A, B], [0, 0]] T)`), so the loop is
-/// `x⁺ = (Φ − Γ G) x` with `u = −G x`; it is stable where every eigenvalue has `|z| <= 1`.
-/// A property of the design (the flight software would do the same), not of the
-/// integrator. `None` where `M` is not positive definite, the base is not free or the tree
-/// has not the law's rotors.
-pub fn sampled_attitude(
-    flex: &FlexModel,
-    q: &[f64],
-    hinges: &HingeGains,
-    law: &AttitudeGains,
-    period: f64,
-) -> Option<SampledLoop> {
-    let rigid = flex.rigid();
-    let n_rotors = law.allocation.nrows();
-    let first_rotor = hinges.model_hinges;
-    if rigid.base_nv() != 6 || n_rotors == 0 || rigid.n_hinges() != first_rotor + n_rotors {
-        return None;
-    }
-    let n = flex.nv();
-    let (k, d, _) = diagonals(flex, hinges);
-    let km = DMatrix::from_diagonal(&nalgebra::DVector::from_column_slice(&k));
-    let dm = DMatrix::from_diagonal(&nalgebra::DVector::from_column_slice(&d));
-    let (a, m_inv) = plant(flex, q, &km, &dm)?;
-    // B = [0; M⁻¹ Q_u]: the rotors' generalised forces −A⁺ u.
-    let mut qu = DMatrix::zeros(n, 3);
-    for b in 0..rigid.n_bodies() {
-        let Some(j) = rigid.joint(b) else { continue };
-        if let Some(r) = j.hinge().checked_sub(first_rotor) {
-            for c in 0..3 {
-                qu[(j.dof(), c)] = -law.allocation[(r, c)];
-            }
-        }
-    }
-    let mut bm = DMatrix::zeros(2 * n, 3);
-    bm.view_mut((n, 0), (n, 3)).copy_from(&(&m_inv * qu));
-    let mut g = DMatrix::zeros(3, 2 * n);
-    for c in 0..3 {
-        g[(c, c)] = law.kp;
-        g[(c, n + c)] = law.kd;
-    }
-    let growth = |t: f64| -> Option<f64> {
-        let mut aug = DMatrix::zeros(2 * n + 3, 2 * n + 3);
-        aug.view_mut((0, 0), (2 * n, 2 * n)).copy_from(&(&a * t));
-        aug.view_mut((0, 2 * n), (2 * n, 3)).copy_from(&(&bm * t));
-        let e = aug.exp();
-        let phi = e.view((0, 0), (2 * n, 2 * n)).into_owned();
-        let gamma = e.view((0, 2 * n), (2 * n, 3)).into_owned();
-        // z = 1 + t μ, μ the eigenvalues of (Φ − Γ G − 1)/t: a short period puts every z
-        // near 1, where the Schur iteration on Φ − Γ G itself does not converge, while
-        // (Φ − Γ G − 1)/t tends to the continuous loop's matrix.
-        let mut closed = phi - gamma * &g;
-        for i in 0..2 * n {
-            closed[(i, i)] -= 1.0;
-        }
-        let mu = nalgebra::Schur::try_new(closed / t, f64::EPSILON, 10_000)?.complex_eigenvalues();
-        let one = Complex::new(1.0, 0.0);
-        let largest = mu.iter().map(|m| (one + m * t).norm()).fold(0.0, f64::max);
-        largest.is_finite().then_some(largest)
-    };
-    let at = growth(period)?;
-    // A period whose loop the decomposition cannot resolve is taken for stable: the warning
-    // names only the growth it measured.
-    let stable = |t: f64| growth(t).is_none_or(|z| z <= 1.0 + GROWTH_TOLERANCE);
-    // The first unstable period of a scan from zero, then bisection below it.
-    let stable_below = (at > 1.0 + GROWTH_TOLERANCE).then(|| last_stable(stable, period, 40, 40));
-    Some(SampledLoop {
-        growth: at,
-        stable_below,
-    })
-}
-
 /// `A = [[0, I], [−M⁻¹K, −M⁻¹D]]` at `q`, and `M⁻¹`; `None` where `M` is not positive
 /// definite.
-fn plant(
+pub(super) fn plant(
     flex: &FlexModel,
     q: &[f64],
     km: &DMatrix<f64>,

@@ -338,7 +338,8 @@ fn zoh_growth(i: f64, kp: f64, kd: f64, t: f64) -> f64 {
 /// line; the RK4 check leaves the sampled law out.
 #[test]
 fn a_sampled_attitude_law_unstable_at_its_period_is_a_warning_with_the_stable_period() {
-    use satsim_tools::scene::step_limit::{AttitudeGains, sampled_attitude};
+    use satsim_tools::scene::sampled_loop::sampled_attitude;
+    use satsim_tools::scene::step_limit::AttitudeGains;
     let (kp, kd) = (100.0, 50.0);
     let axes = [10.1, 20.1, 30.1];
     let closed_form = |t: f64| {
@@ -364,12 +365,8 @@ fn a_sampled_attitude_law_unstable_at_its_period_is_a_warning_with_the_stable_pe
         let q = integrated_q(&s.initial.q, n, &[]);
         let gains = HingeGains::of(&s.effects, 0);
         assert!(gains.attitude.is_none(), "a sampled law is not RK4's");
-        let control = s
-            .effects
-            .get::<satsim_spacecraft::effects::AttitudeControl>()
-            .unwrap();
-        let rotors: Vec<_> = s.effects.iter().flat_map(|e| e.rotors()).collect();
-        let law = AttitudeGains::of(control, &rotors).unwrap();
+        let (law, sampled) = AttitudeGains::in_scene(&s.effects).unwrap();
+        assert_eq!(sampled, Some(period));
         let l = sampled_attitude(&tree, &q, &gains, &law, period).unwrap();
         // Stable, the largest |z| is the free motions' 1 (Jordan blocks: within √ε).
         let expected = closed_form(period);
