@@ -212,10 +212,12 @@ impl<'a> Parser<'a> {
         super::faults::read(self, &file.faults, &mut effects)?;
         let sampled = super::step_limit::AttitudeGains::in_scene(&effects)
             .and_then(|(law, period)| period.map(|p| (law, p)));
+        let sampled_hinges = super::sampled_loop::HingeLaw::in_scene(&effects);
         // The tree for the checks of the linear motions. Where it cannot be made, a fixed
-        // step's check is an error, as before; the sampled law's warning is left out, and
+        // step's check is an error, as before; the sampled laws' warnings are left out, and
         // the simulation's set-up says what is wrong.
-        let tree = (options.fixed_step.is_some() || sampled.is_some())
+        let checked = sampled.is_some() || sampled_hinges.is_some();
+        let tree = (options.fixed_step.is_some() || checked)
             .then(|| super::step_limit::integrated_tree(&model, flex.as_ref(), &effects))
             .transpose()
             .or_else(|e| match options.fixed_step {
@@ -229,6 +231,12 @@ impl<'a> Parser<'a> {
                 && let Some(w) =
                     super::sampled_loop::sampled_attitude(&tree, &q, &gains, law, *period)
                         .and_then(|l| self.sampled_warning(&file, law, *period, &l))
+            {
+                warnings.push(w);
+            }
+            if let Some(law) = &sampled_hinges
+                && let Some(w) = super::sampled_loop::sampled_hinges(&tree, &q, &gains, law)
+                    .and_then(|l| self.sampled_hinges_warning(&file, &model, law, &l))
             {
                 warnings.push(w);
             }
@@ -380,6 +388,45 @@ impl<'a> Parser<'a> {
             Num(period),
             Num(law.kp),
             Num(law.kd),
+            l.growth,
+            below,
+        ))
+    }
+
+    /// A sampled hinge law unstable at its period ([`super::sampled_loop::sampled_hinges`]),
+    /// as [`Self::sampled_warning`]: a warning at the section's line naming the hinges and
+    /// their gains; `None` where it is stable.
+    fn sampled_hinges_warning(
+        &self,
+        file: &SceneFile,
+        model: &Model,
+        law: &super::sampled_loop::HingeLaw,
+        l: &super::sampled_loop::SampledLoop,
+    ) -> Option<String> {
+        let below = l.stable_below?;
+        let line = file
+            .effects
+            .as_ref()
+            .and_then(|e| e.get_ref().get("hinge_control"))
+            .map(|v| format!(":{}", line_of(self.text(), v.span().start)))
+            .unwrap_or_default();
+        let gains: Vec<String> = law
+            .hinges
+            .iter()
+            .map(|&(h, kp, kd)| {
+                format!(
+                    "`{}` kp = {} N m/rad, kd = {} N m s/rad",
+                    model.hinge_names()[h],
+                    Num(kp),
+                    Num(kd)
+                )
+            })
+            .collect();
+        Some(format!(
+            "{}{line}: [effects.hinge_control]: the sampled law is unstable at `period` = {} s: on the hinges' linear motion at the initial state ({}; the torques held between samples) a motion grows by a factor {:.4} a sample; it is stable at periods up to {:.4e} s. A run shows the hinges diverge, or chatter within their torque limits (a real controller at this rate would do the same)",
+            self.path().display(),
+            Num(law.period),
+            gains.join("; "),
             l.growth,
             below,
         ))

@@ -1,14 +1,17 @@
-//! Whether a sampled attitude law (`[effects.attitude_control]` with a `period`) is stable at
-//! its period: the zero-order-hold loop over one period, on the scene's linear motions at
-//! its initial state (the linearisation of [`super::step_limit`]). An unstable one is the
-//! design's, not the integrator's, so the scene reader warns of it and runs it.
+//! Whether a sampled law is stable at its period: the zero-order-hold loop over one period,
+//! on the scene's linear motions at its initial state (the linearisation of
+//! [`super::step_limit`]). Two laws are checked: an attitude law (`[effects.attitude_control]`
+//! with a `period`) and a hinge law (`[effects.hinge_control]` with a `period`), each with the
+//! other left out where both are sampled. An unstable one is the design's, not the
+//! integrator's, so the scene reader warns of it and runs it.
 
 use nalgebra::{Complex, DMatrix, Schur};
+use satsim_spacecraft::effects::{EffectSet, HingeControl};
 use satsim_tree::flexible::FlexModel;
 
-use super::step_limit::{AttitudeGains, HingeGains, diagonal_matrices, last_stable, plant};
+use super::step_limit::{AttitudeGains, HingeGains, last_stable, matrices, plant};
 
-/// How a sampled attitude law fares at its period ([`sampled_attitude`]).
+/// How a sampled law fares at its period ([`sampled_attitude`], [`sampled_hinges`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct SampledLoop {
     /// The largest `|z|` of the closed loop's eigenvalues over one period: above 1 a motion
@@ -27,15 +30,14 @@ pub struct SampledLoop {
 const GROWTH_TOLERANCE: f64 = 1e-5;
 
 /// A sampled attitude law (`[effects.attitude_control]` with a `period`) on the scene's linear
-/// motions at the initial state (as [`rk4_limit`](super::step_limit::rk4_limit)'s: `M` of the tree with the rotors, `K` and
-/// `D` of `hinges`' continuous gains, friction and modes): the bus torque
-/// `u = −kp θ − kd ω` taken at each sample and held to the next (zero-order hold), through
-/// the rotors' commands `τ = −A⁺ u`. Over one period the plant `ẋ = A x + B u` gives
-/// `x⁺ = Φ x + Γ u` (`[[Φ, Γ], [0, 1]] = exp([[A, B], [0, 0]] T)`), so the loop is
-/// `x⁺ = (Φ − Γ G) x` with `u = −G x`; it is stable where every eigenvalue has `|z| <= 1`.
-/// A property of the design (the flight software would do the same), not of the
-/// integrator. `None` where `M` is not positive definite, the base is not free or the tree
-/// has not the law's rotors.
+/// motions at the initial state (as [`rk4_limit`](super::step_limit::rk4_limit)'s: `M` of the
+/// tree with the rotors, `K` and `D` of `hinges`' continuous gains, friction and modes): the
+/// bus torque `u = −kp θ − kd ω` taken at each sample and held to the next (zero-order hold),
+/// through the rotors' commands `τ = −A⁺ u`: over one period `x⁺ = Φ x + Γ u`
+/// (`[[Φ, Γ], [0, 1]] = exp([[A, B], [0, 0]] T)`), so the loop is `x⁺ = (Φ − Γ G) x` with
+/// `u = −G x`, stable where every eigenvalue has `|z| <= 1`. A property of the design (the
+/// flight software would do the same), not of the integrator. `None` where `M` is not
+/// positive definite, the base is not free or the tree has not the law's rotors.
 pub fn sampled_attitude(
     flex: &FlexModel,
     q: &[f64],
@@ -45,33 +47,103 @@ pub fn sampled_attitude(
 ) -> Option<SampledLoop> {
     let dofs = law.rotor_dofs(flex, hinges)?;
     let n = flex.nv();
-    let (km, dm) = diagonal_matrices(flex, hinges);
-    let (a, m_inv) = plant(flex, q, &km, &dm)?;
-    // B = [0; M⁻¹ Q_u]: the rotors' generalised forces −A⁺ u.
+    // The rotors' generalised forces −A⁺ u.
     let mut qu = DMatrix::zeros(n, 3);
     for (r, &dof) in dofs.iter().enumerate() {
         for c in 0..3 {
             qu[(dof, c)] = -law.allocation[(r, c)];
         }
     }
-    let mut bm = DMatrix::zeros(2 * n, 3);
-    bm.view_mut((n, 0), (n, 3)).copy_from(&(&m_inv * qu));
     let mut g = DMatrix::zeros(3, 2 * n);
     for c in 0..3 {
         g[(c, c)] = law.kp;
         g[(c, n + c)] = law.kd;
     }
+    zoh_loop(flex, q, hinges, &qu, &g, period)
+}
+
+/// A sampled hinge law (`[effects.hinge_control]` with a `period`): its gains on each
+/// controlled hinge, in the section's order.
+#[derive(Clone, Debug, PartialEq)]
+pub struct HingeLaw {
+    /// The hinge (model file order), `kp` (N m/rad) and `kd` (N m s/rad).
+    pub hinges: Vec<(usize, f64, f64)>,
+    /// The sample period (s).
+    pub period: f64,
+}
+
+impl HingeLaw {
+    /// The scene's hinge law where it is sampled; `None` for a continuous one (the RK4
+    /// check's) or none.
+    pub fn in_scene(effects: &EffectSet) -> Option<Self> {
+        let c = effects.get::<HingeControl>()?;
+        let period = c.period.as_ref()?.period();
+        Some(Self {
+            hinges: c.hinges.iter().map(|p| (p.hinge, p.kp, p.kd)).collect(),
+            period,
+        })
+    }
+}
+
+/// A sampled hinge law on the scene's linear motions at the initial state (as
+/// [`sampled_attitude`]'s): each controlled hinge's torque `u = −kp θ − kd θ̇` (about the
+/// reference, which moves the operating point, not the loop) taken at each sample and held
+/// to the next (the loop of [`sampled_attitude`]). The torque limits are left out: the linear motion is the one
+/// inside them. `None` where `M` is not positive definite or a hinge is not in the tree.
+pub fn sampled_hinges(
+    flex: &FlexModel,
+    q: &[f64],
+    hinges: &HingeGains,
+    law: &HingeLaw,
+) -> Option<SampledLoop> {
+    let rigid = flex.rigid();
+    let n = flex.nv();
+    let k = law.hinges.len();
+    let mut qu = DMatrix::zeros(n, k);
+    let mut g = DMatrix::zeros(k, 2 * n);
+    for (c, &(h, kp, kd)) in law.hinges.iter().enumerate() {
+        let dof = (0..rigid.n_bodies())
+            .filter_map(|b| rigid.joint(b))
+            .find(|j| j.hinge() == h)?
+            .dof();
+        qu[(dof, c)] = 1.0;
+        g[(c, dof)] = kp;
+        g[(c, n + dof)] = kd;
+    }
+    zoh_loop(flex, q, hinges, &qu, &g, law.period)
+}
+
+/// The zero-order-hold loop of the inputs `u = −G x` (`k` of them, each a generalised force
+/// `Q_u`'s column), held over `period` on `ẋ = A x + B u`, `A` the linearisation of
+/// [`rk4_limit`](super::step_limit::rk4_limit) (a continuous attitude controller's gains
+/// included) and `B = [0; M⁻¹ Q_u]`: over one period
+/// `x⁺ = Φ x + Γ u` (`[[Φ, Γ], [0, 1]] = exp([[A, B], [0, 0]] T)`), so the loop is
+/// `x⁺ = (Φ − Γ G) x`, stable where every eigenvalue has `|z| <= 1`.
+fn zoh_loop(
+    flex: &FlexModel,
+    q: &[f64],
+    hinges: &HingeGains,
+    qu: &DMatrix<f64>,
+    g: &DMatrix<f64>,
+    period: f64,
+) -> Option<SampledLoop> {
+    let n = flex.nv();
+    let k = qu.ncols();
+    let (km, dm) = matrices(flex, hinges);
+    let (a, m_inv) = plant(flex, q, &km, &dm)?;
+    let mut bm = DMatrix::zeros(2 * n, k);
+    bm.view_mut((n, 0), (n, k)).copy_from(&(&m_inv * qu));
     let growth = |t: f64| -> Option<f64> {
-        let mut aug = DMatrix::zeros(2 * n + 3, 2 * n + 3);
+        let mut aug = DMatrix::zeros(2 * n + k, 2 * n + k);
         aug.view_mut((0, 0), (2 * n, 2 * n)).copy_from(&(&a * t));
-        aug.view_mut((0, 2 * n), (2 * n, 3)).copy_from(&(&bm * t));
+        aug.view_mut((0, 2 * n), (2 * n, k)).copy_from(&(&bm * t));
         let e = aug.exp();
         let phi = e.view((0, 0), (2 * n, 2 * n)).into_owned();
-        let gamma = e.view((0, 2 * n), (2 * n, 3)).into_owned();
+        let gamma = e.view((0, 2 * n), (2 * n, k)).into_owned();
         // z = 1 + t μ, μ the eigenvalues of (Φ − Γ G − 1)/t: a short period puts every z
         // near 1, where the Schur iteration on Φ − Γ G itself does not converge, while
         // (Φ − Γ G − 1)/t tends to the continuous loop's matrix.
-        let mut closed = phi - gamma * &g;
+        let mut closed = phi - gamma * g;
         for i in 0..2 * n {
             closed[(i, i)] -= 1.0;
         }

@@ -295,13 +295,28 @@ fn diagonals(flex: &FlexModel, hinges: &HingeGains) -> (Vec<f64>, Vec<f64>, Vec<
 }
 
 /// [`diagonals`]' `K` and `D` as matrices.
-pub(super) fn diagonal_matrices(
-    flex: &FlexModel,
-    hinges: &HingeGains,
-) -> (DMatrix<f64>, DMatrix<f64>) {
+fn diagonal_matrices(flex: &FlexModel, hinges: &HingeGains) -> (DMatrix<f64>, DMatrix<f64>) {
     let (k, d, _) = diagonals(flex, hinges);
     let diagonal = |v: Vec<f64>| DMatrix::from_diagonal(&nalgebra::DVector::from_vec(v));
     (diagonal(k), diagonal(d))
+}
+
+/// `K` and `D` as matrices, with a continuous attitude controller's gains from the bus's
+/// rotation to the rotors (`hinges.attitude`, where the tree has the rotors it commands):
+/// `Q_r = τ_r = −(A⁺ u)_r = (A⁺ (kp θ + kd ω))_r`, written `Q = −K x − D ẋ`.
+pub(super) fn matrices(flex: &FlexModel, hinges: &HingeGains) -> (DMatrix<f64>, DMatrix<f64>) {
+    let (mut km, mut dm) = diagonal_matrices(flex, hinges);
+    if let Some(att) = &hinges.attitude
+        && let Some(dofs) = att.rotor_dofs(flex, hinges)
+    {
+        for (r, &dof) in dofs.iter().enumerate() {
+            for a in 0..3 {
+                km[(dof, a)] -= att.kp * att.allocation[(r, a)];
+                dm[(dof, a)] -= att.kd * att.allocation[(r, a)];
+            }
+        }
+    }
+    (km, dm)
 }
 
 /// The largest step RK4 is stable at on the scene's linear motions at `q` (the flexible
@@ -329,17 +344,10 @@ pub fn rk4_limit(flex: &FlexModel, q: &[f64], hinges: &HingeGains) -> Option<Rk4
         return diagonal;
     };
     // A tree without the rotors (the model alone) has no controller to check.
-    let Some(dofs) = att.rotor_dofs(flex, hinges) else {
+    if att.rotor_dofs(flex, hinges).is_none() {
         return diagonal;
-    };
-    let (mut km, mut dm) = diagonal_matrices(flex, hinges);
-    for (r, &dof) in dofs.iter().enumerate() {
-        // Q_r = τ_r = −(A⁺ u)_r = (A⁺ (kp θ + kd ω))_r, written Q = −K x − D ẋ.
-        for a in 0..3 {
-            km[(dof, a)] -= att.kp * att.allocation[(r, a)];
-            dm[(dof, a)] -= att.kd * att.allocation[(r, a)];
-        }
     }
+    let (km, dm) = matrices(flex, hinges);
     let (lambda, step) = coupled_limit(flex, q, &km, &dm)?;
     if diagonal
         .as_ref()

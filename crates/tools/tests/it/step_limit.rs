@@ -394,3 +394,73 @@ fn a_sampled_attitude_law_unstable_at_its_period_is_a_warning_with_the_stable_pe
         }
     }
 }
+
+/// A sampled hinge law on the arm (a double integrator of inertia 0.6 kg m², no spring):
+/// its zero-order-hold loop is [`zoh_growth`]'s. The check's growth a sample and its longest
+/// stable period agree with the closed form; stable, the scene reads without a warning,
+/// unstable with one at the section's line naming the hinge and its gains.
+#[test]
+fn a_sampled_hinge_law_unstable_at_its_period_is_a_warning_with_the_stable_period() {
+    use satsim_tools::scene::sampled_loop::{HingeLaw, sampled_hinges};
+    let (kp, kd) = (10.0, 2.0);
+    let (mut lo, mut hi) = (0.01, 1.0);
+    assert!(zoh_growth(I, kp, kd, lo) <= 1.0 && zoh_growth(I, kp, kd, hi) > 1.0);
+    for _ in 0..60 {
+        let mid = 0.5 * (lo + hi);
+        if zoh_growth(I, kp, kd, mid) <= 1.0 {
+            lo = mid
+        } else {
+            hi = mid
+        }
+    }
+    let mut swings = Vec::new();
+    for (period, unstable) in [(0.2, false), (0.6, true)] {
+        let control = format!(
+            "[effects.hinge_control]\nperiod = {period}\n[[effects.hinge_control.hinge]]\nname = \"h\"\nstart = 0.1\nend = 0.0\nt_start = 0.0\nduration = 1.0\nkp = {kp}\nkd = {kd}\n"
+        );
+        let s = Scene::parse(&arm(0.0, 0.0, &control, 0.01), Path::new("arm.toml")).unwrap();
+        let law = HingeLaw::in_scene(&s.effects).unwrap();
+        assert_eq!(
+            law,
+            HingeLaw {
+                hinges: vec![(0, kp, kd)],
+                period
+            }
+        );
+        let tree = FlexModel::attach(s.model.clone(), &[]).unwrap();
+        let gains = HingeGains::of(&s.effects, 1);
+        let l = sampled_hinges(&tree, &s.initial.q, &gains, &law).unwrap();
+        let expected = zoh_growth(I, kp, kd, period);
+        assert!(
+            (l.growth - expected).abs() < 1e-9 * expected,
+            "{l:?} against {expected}"
+        );
+        let warned = s
+            .warnings
+            .iter()
+            .find(|w| w.contains("the sampled law is unstable"));
+        if unstable {
+            let below = l.stable_below.unwrap();
+            assert!((below - lo).abs() < 1e-4 * lo, "{below} against {lo}");
+            let w = warned.expect("a warning");
+            assert!(
+                w.starts_with("arm.toml:25: [effects.hinge_control]")
+                    && w.contains("`h` kp = 10 N m/rad, kd = 2 N m s/rad")
+                    && w.contains(&format!("grows by a factor {expected:.4} a sample")),
+                "{w}"
+            );
+        } else {
+            assert!(expected < 1.0, "{expected}");
+            assert_eq!(l.stable_below, None);
+            assert!(warned.is_none(), "{warned:?}");
+        }
+        swings.push(largest_angle(&s, 0.01).unwrap());
+    }
+    // The runs agree: the stable loop keeps the arm within its start, the unstable one
+    // throws it (the loop doubles a motion each 0.6 s sample).
+    assert!(swings[0] <= 0.1 + 1e-12 && swings[1] > 0.4, "{swings:?}");
+    // A continuous law is RK4's, not this check's.
+    let continuous = "[effects.hinge_control]\n[[effects.hinge_control.hinge]]\nname = \"h\"\nstart = 0.1\nend = 0.0\nduration = 1.0\nkp = 10.0\n";
+    let s = Scene::parse(&arm(0.0, 0.0, continuous, 0.01), Path::new("arm.toml")).unwrap();
+    assert_eq!(HingeLaw::in_scene(&s.effects), None);
+}
