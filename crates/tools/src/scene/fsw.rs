@@ -76,7 +76,10 @@ use satsim_spacecraft::sensors::{Kind, Sensors};
 use satsim_tree::error::Num;
 use satsim_tree::io::{FileError, exact, line_of};
 use satsim_tree::{BaseKind, Model};
+
+use super::sampled_loop::PidLaw;
 use serde::Deserialize;
+use std::cell::RefCell;
 use std::ops::Range;
 use toml::Spanned;
 
@@ -323,6 +326,17 @@ struct Within<'a> {
     model: &'a Model,
     effects: &'a EffectSet,
     epoch: Option<Epoch>,
+    /// The controls on the wheels read so far, for the check of their sampled loops.
+    wheel_laws: RefCell<Vec<WheelLaw>>,
+}
+
+/// A control table on the wheels: where it is (`[title]` and its line) and its law, whose
+/// sampled loop the reader checks ([`super::sampled_loop::sampled_pid`]).
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct WheelLaw {
+    pub(crate) title: String,
+    pub(crate) line: usize,
+    pub(crate) law: PidLaw,
 }
 
 impl Within<'_> {
@@ -877,6 +891,13 @@ impl Within<'_> {
                 ),
             ));
         }
+        if matches!(actuator, Actuator::Wheels(_)) {
+            self.wheel_laws.borrow_mut().push(WheelLaw {
+                title,
+                line: line_of(text.text(), span.start),
+                law: PidLaw { kp, ki, kd, period },
+            });
+        }
         Ok(ControlSpec {
             pid: Pid::new(kp, ki, kd, inertia),
             period,
@@ -1014,7 +1035,8 @@ struct TopBlocks {
 
 /// Reads `[fsw]` against the model, the epoch, the enabled effects and the sensors (in
 /// `effects`), and hands the blocks to the sensors ([`Sensors::set_fsw`]); the controls'
-/// clocks go to `clocks`.
+/// clocks go to `clocks`. Returns the controls on the wheels, for the check of their
+/// sampled loops.
 pub(crate) fn read(
     text: &SceneText,
     file: &Spanned<FswFile>,
@@ -1022,7 +1044,7 @@ pub(crate) fn read(
     epoch: Option<Epoch>,
     effects: &mut EffectSet,
     clocks: &mut Vec<super::Clock>,
-) -> Result<(), FileError> {
+) -> Result<Vec<WheelLaw>, FileError> {
     let f = file.get_ref();
     let on = |e: Option<bool>| e != Some(false);
     let w = Within {
@@ -1030,6 +1052,7 @@ pub(crate) fn read(
         model,
         effects,
         epoch,
+        wheel_laws: RefCell::new(Vec::new()),
     };
     // A magnetic block: read, and checked against the scene when it is enabled.
     let magnetic = |block: &str, file: &Spanned<MagneticFile>| {
@@ -1080,14 +1103,15 @@ pub(crate) fn read(
         None => without_modes(&w, &top, clocks)?,
         Some(modes) => with_modes(&w, &top, modes, clocks)?,
     };
+    let laws = w.wheel_laws.take();
     let Some(onboard) = onboard else {
-        return Ok(());
+        return Ok(laws);
     };
     effects
         .get_mut::<Sensors>()
         .expect("every block reads the sensors")
         .set_fsw(onboard);
-    Ok(())
+    Ok(laws)
 }
 
 /// Every enabled block from the start (`None` when none is).

@@ -206,8 +206,9 @@ impl<'a> Parser<'a> {
             effects.insert(set);
             clocks.extend(super::sensors::clocks(self, s));
         }
+        let mut wheel_laws = Vec::new();
         if let Some(f) = &file.fsw {
-            super::fsw::read(self, f, &model, epoch, &mut effects, &mut clocks)?;
+            wheel_laws = super::fsw::read(self, f, &model, epoch, &mut effects, &mut clocks)?;
         }
         super::faults::read(self, &file.faults, &mut effects)?;
         let sampled = super::step_limit::AttitudeGains::in_scene(&effects)
@@ -216,7 +217,7 @@ impl<'a> Parser<'a> {
         // The tree for the checks of the linear motions. Where it cannot be made, a fixed
         // step's check is an error, as before; the sampled laws' warnings are left out, and
         // the simulation's set-up says what is wrong.
-        let checked = sampled.is_some() || sampled_hinges.is_some();
+        let checked = sampled.is_some() || sampled_hinges.is_some() || !wheel_laws.is_empty();
         let tree = (options.fixed_step.is_some() || checked)
             .then(|| super::step_limit::integrated_tree(&model, flex.as_ref(), &effects))
             .transpose()
@@ -239,6 +240,16 @@ impl<'a> Parser<'a> {
                     .and_then(|l| self.sampled_hinges_warning(&file, &model, law, &l))
             {
                 warnings.push(w);
+            }
+            let allocation = super::step_limit::wheel_allocation(&effects);
+            for wl in wheel_laws.iter().filter(|_| allocation.is_some()) {
+                let allocation = allocation.as_ref().expect("filtered");
+                if let Some(w) =
+                    super::sampled_loop::sampled_pid(&tree, &q, &gains, allocation, &wl.law)
+                        .and_then(|l| self.sampled_pid_warning(wl, &l))
+                {
+                    warnings.push(w);
+                }
             }
             if let Some(h) = options.fixed_step {
                 self.fixed_step_checked(&file, &tree, &q, &gains, h, duration, every)?;
@@ -427,6 +438,31 @@ impl<'a> Parser<'a> {
             self.path().display(),
             Num(law.period),
             gains.join("; "),
+            l.growth,
+            below,
+        ))
+    }
+
+    /// A flight software's PID on the wheels unstable at its period
+    /// ([`super::sampled_loop::sampled_pid`]), as [`Self::sampled_warning`]: a warning at its
+    /// control table's line with its gains; `None` where it is stable.
+    fn sampled_pid_warning(
+        &self,
+        wl: &super::fsw::WheelLaw,
+        l: &super::sampled_loop::SampledLoop,
+    ) -> Option<String> {
+        let below = l.stable_below?;
+        let three = |v: &[f64; 3]| format!("[{}, {}, {}]", Num(v[0]), Num(v[1]), Num(v[2]));
+        let law = &wl.law;
+        Some(format!(
+            "{}:{}: {}: the sampled law is unstable at `period` = {} s: on the bus's linear motion at the initial state, with a perfect estimate (kp = {} N m/rad, ki = {} N m/(rad s), kd = {} N m s/rad, the torque held between samples), a motion grows by a factor {:.4} a sample; it is stable at periods up to {:.4e} s. A run shows the attitude diverge, or chatter within the wheels' torque limits (the flight software at this rate would do the same)",
+            self.path().display(),
+            wl.line,
+            wl.title,
+            Num(law.period),
+            three(&law.kp),
+            three(&law.ki),
+            three(&law.kd),
             l.growth,
             below,
         ))

@@ -1,15 +1,16 @@
 //! Whether a sampled law is stable at its period: the zero-order-hold loop over one period,
 //! on the scene's linear motions at its initial state (the linearisation of
-//! [`super::step_limit`]). Two laws are checked: an attitude law (`[effects.attitude_control]`
-//! with a `period`) and a hinge law (`[effects.hinge_control]` with a `period`), each with the
-//! other left out where both are sampled. An unstable one is the design's, not the
+//! [`super::step_limit`]). Three laws are checked: an attitude law (`[effects.attitude_control]`
+//! with a `period`), a hinge law (`[effects.hinge_control]` with a `period`) and the flight
+//! software's PID on the wheels (`[fsw.control]`, each mode's), each with the others left
+//! out where several are sampled. An unstable one is the design's, not the
 //! integrator's, so the scene reader warns of it and runs it.
 
 use nalgebra::{Complex, DMatrix, Schur};
 use satsim_spacecraft::effects::{EffectSet, HingeControl};
 use satsim_tree::flexible::FlexModel;
 
-use super::step_limit::{AttitudeGains, HingeGains, last_stable, matrices, plant};
+use super::step_limit::{AttitudeGains, HingeGains, last_stable, matrices, plant, rotor_dofs};
 
 /// How a sampled law fares at its period ([`sampled_attitude`], [`sampled_hinges`]).
 #[derive(Clone, Debug, PartialEq)]
@@ -59,7 +60,7 @@ pub fn sampled_attitude(
         g[(c, c)] = law.kp;
         g[(c, n + c)] = law.kd;
     }
-    zoh_loop(flex, q, hinges, &qu, &g, period)
+    zoh_loop(flex, q, hinges, &qu, &g, None, period)
 }
 
 /// A sampled hinge law (`[effects.hinge_control]` with a `period`): its gains on each
@@ -110,25 +111,93 @@ pub fn sampled_hinges(
         g[(c, dof)] = kp;
         g[(c, n + dof)] = kd;
     }
-    zoh_loop(flex, q, hinges, &qu, &g, law.period)
+    zoh_loop(flex, q, hinges, &qu, &g, None, law.period)
+}
+
+/// A sampled PID attitude law on the wheels (`[fsw.control]` with actuator `"wheels"`, its
+/// default): per-axis gains (body axes) and its period.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PidLaw {
+    /// N m/rad.
+    pub kp: [f64; 3],
+    /// N m/(rad s).
+    pub ki: [f64; 3],
+    /// N m s/rad.
+    pub kd: [f64; 3],
+    /// The control period (s).
+    pub period: f64,
+}
+
+/// A sampled PID law (`[fsw.control]` on the wheels) on the scene's linear motions at the
+/// initial state (as [`sampled_attitude`]'s), with a perfect estimate: at each sample the
+/// integral steps `I ← I + T θ`, then the bus torque `u = −kp∘θ − ki∘I − kd∘ω` is held to
+/// the next, through the rotors' commands `τ = −A⁺ u` (`allocation`,
+/// [`wheel_allocation`](super::step_limit::wheel_allocation)). The feed-forward `ω × J ω` is
+/// second order, the integral's clamp and the torque limits are outside the linear motion.
+/// An observer's estimate keeps the loop's eigenvalues and adds its own (the separation
+/// principle, for the linear motion), so a loop unstable here stays unstable with the
+/// estimator; one stable here may still not be (the estimate's age at a sample is left out). `None` where `M` is not
+/// positive definite, the base is not free or the tree has not the rotors.
+pub fn sampled_pid(
+    flex: &FlexModel,
+    q: &[f64],
+    hinges: &HingeGains,
+    allocation: &DMatrix<f64>,
+    law: &PidLaw,
+) -> Option<SampledLoop> {
+    let dofs = rotor_dofs(flex, hinges, allocation.nrows())?;
+    let n = flex.nv();
+    let mut qu = DMatrix::zeros(n, 3);
+    for (r, &dof) in dofs.iter().enumerate() {
+        for c in 0..3 {
+            qu[(dof, c)] = -allocation[(r, c)];
+        }
+    }
+    let mut g = DMatrix::zeros(3, 2 * n);
+    let mut ki = DMatrix::zeros(3, 3);
+    let mut theta = DMatrix::zeros(3, 2 * n);
+    for c in 0..3 {
+        g[(c, c)] = law.kp[c];
+        g[(c, n + c)] = law.kd[c];
+        ki[(c, c)] = law.ki[c];
+        theta[(c, c)] = 1.0;
+    }
+    let integral = law
+        .ki
+        .iter()
+        .any(|k| *k != 0.0)
+        .then_some(Integral { ki, theta });
+    zoh_loop(flex, q, hinges, &qu, &g, integral.as_ref(), law.period)
+}
+
+/// A sampled law's integral `I` of `θ = C x`, stepped `I ← I + T θ` at each sample before
+/// the output `u = −G x − Ki I`.
+struct Integral {
+    /// `Ki` (inputs × integrals).
+    ki: DMatrix<f64>,
+    /// `C` (integrals × states).
+    theta: DMatrix<f64>,
 }
 
 /// The zero-order-hold loop of the inputs `u = −G x` (`k` of them, each a generalised force
 /// `Q_u`'s column), held over `period` on `ẋ = A x + B u`, `A` the linearisation of
 /// [`rk4_limit`](super::step_limit::rk4_limit) (a continuous attitude controller's gains
-/// included) and `B = [0; M⁻¹ Q_u]`: over one period
-/// `x⁺ = Φ x + Γ u` (`[[Φ, Γ], [0, 1]] = exp([[A, B], [0, 0]] T)`), so the loop is
-/// `x⁺ = (Φ − Γ G) x`, stable where every eigenvalue has `|z| <= 1`.
+/// included) and `B = [0; M⁻¹ Q_u]`: over one period `x⁺ = Φ x + Γ u`
+/// (`[[Φ, Γ], [0, 1]] = exp([[A, B], [0, 0]] T)`), so the loop is `x⁺ = (Φ − Γ G) x`, stable
+/// where every eigenvalue has `|z| <= 1`. With an `integral`, `u = −G x − Ki I⁺` and
+/// `I⁺ = I + T C x`: the loop on `[x; I]` is `[[Φ − Γ (G + T Ki C), −Γ Ki], [T C, 1]]`.
 fn zoh_loop(
     flex: &FlexModel,
     q: &[f64],
     hinges: &HingeGains,
     qu: &DMatrix<f64>,
     g: &DMatrix<f64>,
+    integral: Option<&Integral>,
     period: f64,
 ) -> Option<SampledLoop> {
     let n = flex.nv();
     let k = qu.ncols();
+    let r = integral.map_or(0, |i| i.theta.nrows());
     let (km, dm) = matrices(flex, hinges);
     let (a, m_inv) = plant(flex, q, &km, &dm)?;
     let mut bm = DMatrix::zeros(2 * n, k);
@@ -140,14 +209,24 @@ fn zoh_loop(
         let e = aug.exp();
         let phi = e.view((0, 0), (2 * n, 2 * n)).into_owned();
         let gamma = e.view((0, 2 * n), (2 * n, k)).into_owned();
-        // z = 1 + t μ, μ the eigenvalues of (Φ − Γ G − 1)/t: a short period puts every z
-        // near 1, where the Schur iteration on Φ − Γ G itself does not converge, while
-        // (Φ − Γ G − 1)/t tends to the continuous loop's matrix.
-        let mut closed = phi - gamma * g;
-        for i in 0..2 * n {
-            closed[(i, i)] -= 1.0;
+        // z = 1 + t μ, μ the eigenvalues of (loop − 1)/t: a short period puts every z near
+        // 1, where the Schur iteration on the loop itself does not converge, while
+        // (loop − 1)/t tends to the continuous loop's matrix.
+        let mut closed = DMatrix::zeros(2 * n + r, 2 * n + r);
+        let mut gain = g.clone();
+        if let Some(i) = integral {
+            gain += &i.ki * &i.theta * t;
+            closed
+                .view_mut((0, 2 * n), (2 * n, r))
+                .copy_from(&(-(&gamma * &i.ki) / t));
+            closed.view_mut((2 * n, 0), (r, 2 * n)).copy_from(&i.theta);
         }
-        let mu = Schur::try_new(closed / t, f64::EPSILON, 10_000)?.complex_eigenvalues();
+        let mut x = phi - gamma * gain;
+        for i in 0..2 * n {
+            x[(i, i)] -= 1.0;
+        }
+        closed.view_mut((0, 0), (2 * n, 2 * n)).copy_from(&(x / t));
+        let mu = Schur::try_new(closed, f64::EPSILON, 10_000)?.complex_eigenvalues();
         let one = Complex::new(1.0, 0.0);
         let largest = mu.iter().map(|m| (one + m * t).norm()).fold(0.0, f64::max);
         largest.is_finite().then_some(largest)

@@ -132,36 +132,46 @@ impl AttitudeGains {
     /// continuous); `None` without a controller or rotors.
     pub fn in_scene(effects: &EffectSet) -> Option<(Self, Option<f64>)> {
         let control = effects.get::<AttitudeControl>()?;
-        let rotors: Vec<_> = effects.iter().flat_map(|e| e.rotors()).collect();
-        (!rotors.is_empty()).then(|| {
-            let law = Self {
-                kp: control.kp,
-                kd: control.kd,
-                allocation: AttitudeControl::allocation_for(&rotors),
-            };
-            (law, control.period())
-        })
+        let law = Self {
+            kp: control.kp,
+            kd: control.kd,
+            allocation: wheel_allocation(effects)?,
+        };
+        Some((law, control.period()))
     }
 
     /// The velocity coordinate of each rotor the law commands, in the allocation's order,
     /// on `flex`, whose last hinges they are after the model's `hinges.model_hinges`; `None`
     /// where the base is not free or the tree has not those rotors (the model alone).
     pub(super) fn rotor_dofs(&self, flex: &FlexModel, hinges: &HingeGains) -> Option<Vec<usize>> {
-        let rigid = flex.rigid();
-        let (first, n) = (hinges.model_hinges, self.allocation.nrows());
-        if rigid.base_nv() != 6 || n == 0 || rigid.n_hinges() != first + n {
-            return None;
-        }
-        let mut dofs = vec![0; n];
-        for b in 0..rigid.n_bodies() {
-            if let Some(j) = rigid.joint(b)
-                && let Some(r) = j.hinge().checked_sub(first)
-            {
-                dofs[r] = j.dof();
-            }
-        }
-        Some(dofs)
+        rotor_dofs(flex, hinges, self.allocation.nrows())
     }
+}
+
+/// The attitude controllers' allocation over the effects' rotors, `A⁺` a row per rotor
+/// ([`AttitudeControl::allocation_for`]: the root's wheels, as `[fsw.control]` allocates
+/// too); `None` without rotors.
+pub fn wheel_allocation(effects: &EffectSet) -> Option<DMatrix<f64>> {
+    let rotors: Vec<_> = effects.iter().flat_map(|e| e.rotors()).collect();
+    (!rotors.is_empty()).then(|| AttitudeControl::allocation_for(&rotors))
+}
+
+/// [`AttitudeGains::rotor_dofs`] for an allocation over `n` rotors.
+pub(super) fn rotor_dofs(flex: &FlexModel, hinges: &HingeGains, n: usize) -> Option<Vec<usize>> {
+    let rigid = flex.rigid();
+    let first = hinges.model_hinges;
+    if rigid.base_nv() != 6 || n == 0 || rigid.n_hinges() != first + n {
+        return None;
+    }
+    let mut dofs = vec![0; n];
+    for b in 0..rigid.n_bodies() {
+        if let Some(j) = rigid.joint(b)
+            && let Some(r) = j.hinge().checked_sub(first)
+        {
+            dofs[r] = j.dof();
+        }
+    }
+    Some(dofs)
 }
 
 impl HingeGains {

@@ -1542,3 +1542,27 @@ fn bad_thruster_controls_are_errors_at_their_line() {
     );
     assert_error_at(&disabled, "[fsw.control]", "needs [effects.thrusters]");
 }
+
+/// The closed-loop example's PID at a period its loop is unstable at is a warning at the
+/// `[fsw.control]` line, with its gains and the longest stable period; at its own period,
+/// none. (The runs agree: from the deployed state, with the stops off so that it stays,
+/// `--set fsw.control.period=3.3` holds the attitude within 2.6e-4 rad over 900 s, 3.8
+/// chatters at 3.2e-3 rad inside the wheels' torque limits, the check's boundary being
+/// 3.55 s.)
+#[test]
+fn a_pid_unstable_at_its_period_is_a_warning_at_its_table() {
+    let warned = |s: &Scene| {
+        s.warnings
+            .iter()
+            .find(|w| w.contains("the sampled law is unstable"))
+            .cloned()
+    };
+    assert_eq!(warned(&read(POINTING, &[])), None);
+    let w = warned(&read(POINTING, &["fsw.control.period=20"])).expect("a warning");
+    assert!(
+        w.contains("fsw_mekf_pointing.toml:121 (with --set): [fsw.control]: the sampled law is unstable at `period` = 20 s")
+            && w.contains("kp = [40, 40, 40] N m/rad, ki = [2, 2, 2] N m/(rad s), kd = [300, 300, 300] N m s/rad")
+            && w.contains("it is stable at periods up to 5.1147e0 s"),
+        "{w}"
+    );
+}

@@ -464,3 +464,97 @@ fn a_sampled_hinge_law_unstable_at_its_period_is_a_warning_with_the_stable_perio
     let s = Scene::parse(&arm(0.0, 0.0, continuous, 0.01), Path::new("arm.toml")).unwrap();
     assert_eq!(HingeLaw::in_scene(&s.effects), None);
 }
+
+/// `|z|` of a zero-order-hold PID on a double integrator of inertia `i`, its integral stepped
+/// `I ← I + T θ` before the output `u = −kp θ − ki I − kd ω`: the loop on `[θ, ω, I]`.
+fn zoh_pid_growth(i: f64, (kp, ki, kd): (f64, f64, f64), t: f64) -> f64 {
+    let (b, c, k) = (t * t / (2.0 * i), t / i, kp + t * ki);
+    let m = nalgebra::Matrix3::new(
+        1.0 - b * k,
+        t - b * kd,
+        -b * ki,
+        -c * k,
+        1.0 - c * kd,
+        -c * ki,
+        t,
+        0.0,
+        1.0,
+    );
+    m.complex_eigenvalues()
+        .iter()
+        .map(|z| z.norm())
+        .fold(0.0, f64::max)
+}
+
+/// The flight software's PID on the wheels (`[fsw.control]`), on the wheeled bus: each axis a
+/// double integrator under a zero-order-hold PID, whose loop is known in closed form. The
+/// check's growth a sample and its longest stable period agree with it, per-axis gains and
+/// the integral included; without `ki` it is the attitude law's loop.
+#[test]
+fn a_sampled_pid_on_the_wheels_is_checked_against_its_closed_form_loop() {
+    use satsim_tools::scene::sampled_loop::{PidLaw, sampled_attitude, sampled_pid};
+    use satsim_tools::scene::step_limit::{AttitudeGains, wheel_allocation};
+    // The attitude law sampled, so that the tree's K and D hold no controller.
+    let text = wheeled_bus(0.0, 1.0, 1.0, "period = 1.0", 0.01);
+    let s = Scene::parse(&text, Path::new("bus.toml")).unwrap();
+    let (tree, n) = integrated_tree(&s.model, None, &s.effects).unwrap();
+    let q = integrated_q(&s.initial.q, n, &[]);
+    let gains = HingeGains::of(&s.effects, 0);
+    let allocation = wheel_allocation(&s.effects).unwrap();
+    let axes = [10.1, 20.1, 30.1];
+    let law = |period: f64| PidLaw {
+        kp: [100.0, 150.0, 120.0],
+        ki: [20.0, 5.0, 30.0],
+        kd: [50.0, 80.0, 90.0],
+        period,
+    };
+    let closed_form = |l: &PidLaw, t: f64| {
+        (0..3)
+            .map(|a| zoh_pid_growth(axes[a], (l.kp[a], l.ki[a], l.kd[a]), t))
+            .fold(1.0, f64::max)
+    };
+    let l0 = law(1.0);
+    let (mut lo, mut hi) = (0.01, 1.0);
+    assert!(closed_form(&l0, lo) <= 1.0 && closed_form(&l0, hi) > 1.0);
+    for _ in 0..60 {
+        let mid = 0.5 * (lo + hi);
+        if closed_form(&l0, mid) <= 1.0 {
+            lo = mid
+        } else {
+            hi = mid
+        }
+    }
+    for (period, unstable) in [(0.1, false), (0.6, true), (1.0, true)] {
+        let l = sampled_pid(&tree, &q, &gains, &allocation, &law(period)).unwrap();
+        let expected = closed_form(&law(period), period);
+        let tolerance = if unstable { 1e-9 * expected } else { 1e-6 };
+        assert!(
+            (l.growth - expected).abs() < tolerance,
+            "{period}: {l:?} against {expected}"
+        );
+        if unstable {
+            let below = l.stable_below.unwrap();
+            assert!((below - lo).abs() < 1e-4 * lo, "{below} against {lo}");
+        } else {
+            assert_eq!(l.stable_below, None);
+        }
+    }
+    // Without `ki`, equal gains on the axes: the attitude law's loop.
+    let pd = PidLaw {
+        kp: [100.0; 3],
+        ki: [0.0; 3],
+        kd: [50.0; 3],
+        period: 0.6,
+    };
+    let attitude = AttitudeGains {
+        kp: 100.0,
+        kd: 50.0,
+        allocation: allocation.clone(),
+    };
+    let a = sampled_attitude(&tree, &q, &gains, &attitude, 0.6).unwrap();
+    let p = sampled_pid(&tree, &q, &gains, &allocation, &pd).unwrap();
+    assert!(
+        (a.growth - p.growth).abs() < 1e-12 * a.growth,
+        "{a:?} {p:?}"
+    );
+}
