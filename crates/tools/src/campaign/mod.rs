@@ -489,7 +489,7 @@ impl Campaign {
     pub(crate) fn drawn_scene(&self, k: u64, values: &[f64]) -> Result<Scene, String> {
         let text = self.run_text(k, values);
         // The drawn text is rewritten: its errors are placed where the value is written.
-        let scene = Scene::parse(&text, &self.path).map_err(|e| {
+        let scene = Scene::parse_drawn(&text, &self.path).map_err(|e| {
             let e = crate::scene_keys::relocate(e, &self.source, &self.path, &text, &[]);
             format!("the drawn scene is invalid: {e}")
         })?;
@@ -864,6 +864,26 @@ mod tests {
         assert_eq!(d, digest(&text.replace("seed = 2015", "seed = 7")));
         // Any change of what a run starts from: another digest.
         assert_ne!(d, digest(&text.replace("duration = ", "duration = 1")));
+    }
+
+    /// The sampled laws' loops are worked out for the nominal scene, whose warnings are
+    /// printed, and not for each drawn run, whose are not.
+    #[test]
+    fn a_drawn_run_leaves_out_the_sampled_laws_warnings() {
+        let sets = [
+            "effects.attitude_control.period=5.0",
+            "effects.attitude_control.kd=3000.0",
+        ]
+        .map(|s| Override::parse(s).unwrap());
+        let c = Campaign::read_with(example(), &sets).unwrap_or_else(|e| panic!("{e}"));
+        let unstable = |s: &Scene| {
+            s.warnings
+                .iter()
+                .any(|w| w.contains("the sampled law is unstable"))
+        };
+        assert!(unstable(&c.nominal), "{:?}", c.nominal.warnings);
+        let drawn = c.drawn_scene(0, &c.draw(0)).unwrap();
+        assert!(!unstable(&drawn), "{:?}", drawn.warnings);
     }
 
     #[test]

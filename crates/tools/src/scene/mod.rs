@@ -293,6 +293,15 @@ impl Scene {
         Scene::parse_with_registry(text, path, &Registry::with_builtins())
     }
 
+    /// A campaign's drawn run: [`Scene::parse`] without the warnings that take time to work
+    /// out (whether each sampled law is stable at its period), which a drawn run does not
+    /// print (the nominal scene's are). Its errors are [`Scene::parse`]'s.
+    pub(crate) fn parse_drawn(text: &str, path: &Path) -> Result<Scene, FileError> {
+        parse::Parser::new(SceneText::new(text, path), &Registry::with_builtins())
+            .without_advice()
+            .scene()
+    }
+
     /// [`Scene::parse`] with the effects of `registry`.
     pub fn parse_with_registry(
         text: &str,
