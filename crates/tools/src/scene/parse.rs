@@ -395,6 +395,15 @@ impl<'a> Parser<'a> {
         self.check_rk4_step(file, tree, q, gains, h, cut)
     }
 
+    /// `:line` of `[effects.<name>]` in the file (empty where it is not written there).
+    fn effect_line(&self, file: &SceneFile, name: &str) -> String {
+        file.effects
+            .as_ref()
+            .and_then(|e| e.get_ref().get(name))
+            .map(|v| format!(":{}", line_of(self.text(), v.span().start)))
+            .unwrap_or_default()
+    }
+
     /// A sampled attitude law unstable at its period ([`super::sampled_loop::sampled_attitude`])
     /// is the design's, not the integrator's, so it is a warning at the section's line, with
     /// the growth a sample and the longest stable period below it; `None` where it is stable.
@@ -406,12 +415,7 @@ impl<'a> Parser<'a> {
         l: &super::sampled_loop::SampledLoop,
     ) -> Option<String> {
         let below = l.stable_below?;
-        let line = file
-            .effects
-            .as_ref()
-            .and_then(|e| e.get_ref().get("attitude_control"))
-            .map(|v| format!(":{}", line_of(self.text(), v.span().start)))
-            .unwrap_or_default();
+        let line = self.effect_line(file, "attitude_control");
         Some(format!(
             "{}{line}: [effects.attitude_control]: the sampled law is unstable at `period` = {} s: on the bus's linear motion at the initial state (kp = {} N m/rad, kd = {} N m s/rad, the torque held between samples) a motion grows by a factor {:.4} a sample; it is stable at periods up to {:.4e} s. A run shows the attitude diverge, or chatter within the wheels' torque limits (a real flight software at this rate would do the same)",
             self.path().display(),
@@ -434,12 +438,7 @@ impl<'a> Parser<'a> {
         l: &super::sampled_loop::SampledLoop,
     ) -> Option<String> {
         let below = l.stable_below?;
-        let line = file
-            .effects
-            .as_ref()
-            .and_then(|e| e.get_ref().get("hinge_control"))
-            .map(|v| format!(":{}", line_of(self.text(), v.span().start)))
-            .unwrap_or_default();
+        let line = self.effect_line(file, "hinge_control");
         let gains: Vec<String> = law
             .hinges
             .iter()

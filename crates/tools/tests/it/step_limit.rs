@@ -331,6 +331,59 @@ fn zoh_growth(i: f64, kp: f64, kd: f64, t: f64) -> f64 {
         .fold(0.0, f64::max)
 }
 
+/// The longest stable period of a closed form's growth a sample, by bisection between 0.01 s
+/// (stable) and 1 s (not): the loops here are stable from zero up.
+fn longest_stable(growth: impl Fn(f64) -> f64) -> f64 {
+    let (mut lo, mut hi) = (0.01, 1.0);
+    assert!(growth(lo) <= 1.0 && growth(hi) > 1.0);
+    for _ in 0..60 {
+        let mid = 0.5 * (lo + hi);
+        if growth(mid) <= 1.0 {
+            lo = mid
+        } else {
+            hi = mid
+        }
+    }
+    lo
+}
+
+/// A sampled loop's check against its closed form: the growth a sample (to 1e-9, or within
+/// `√ε` of the free motions' 1 where stable), and where unstable the longest stable period
+/// (`lo`, to 1e-4) and the scene's warning, starting `at` and holding each of `holds`; where
+/// stable, none.
+fn check_loop(
+    l: &satsim_tools::scene::sampled_loop::SampledLoop,
+    expected: f64,
+    lo: f64,
+    s: &Scene,
+    at: &str,
+    holds: &[&str],
+) {
+    let unstable = expected > 1.0;
+    let tolerance = if unstable { 1e-9 * expected } else { 1e-6 };
+    assert!(
+        (l.growth - expected).abs() < tolerance,
+        "{l:?} against {expected}"
+    );
+    let warned = s
+        .warnings
+        .iter()
+        .find(|w| w.contains("the sampled law is unstable"));
+    if unstable {
+        let below = l.stable_below.unwrap();
+        assert!((below - lo).abs() < 1e-4 * lo, "{below} against {lo}");
+        let w = warned.expect("a warning");
+        let growth = format!("grows by a factor {expected:.4} a sample");
+        assert!(
+            w.starts_with(at) && w.contains(&growth) && holds.iter().all(|h| w.contains(h)),
+            "{w}"
+        );
+    } else {
+        assert_eq!(l.stable_below, None);
+        assert!(warned.is_none(), "{warned:?}");
+    }
+}
+
 /// A sampled attitude law on the bus with its wheels: each axis is a double integrator of
 /// inertia 10.1, 20.1 or 30.1 kg m² (its wheel free) under a zero-order-hold PD, whose loop
 /// is known in closed form. The check's growth a sample and its longest stable period agree
@@ -347,17 +400,7 @@ fn a_sampled_attitude_law_unstable_at_its_period_is_a_warning_with_the_stable_pe
             .map(|&i| zoh_growth(i, kp, kd, t))
             .fold(1.0, f64::max)
     };
-    // The longest stable period of the closed form, by bisection (stable from zero up).
-    let (mut lo, mut hi) = (0.01, 1.0);
-    assert!(closed_form(lo) <= 1.0 && closed_form(hi) > 1.0);
-    for _ in 0..60 {
-        let mid = 0.5 * (lo + hi);
-        if closed_form(mid) <= 1.0 {
-            lo = mid
-        } else {
-            hi = mid
-        }
-    }
+    let lo = longest_stable(closed_form);
     for (period, unstable) in [(0.2, false), (0.6, true)] {
         let text = wheeled_bus(0.0, kp, kd, &format!("period = {period}"), 0.01);
         let s = Scene::parse(&text, Path::new("bus.toml")).unwrap();
@@ -370,28 +413,15 @@ fn a_sampled_attitude_law_unstable_at_its_period_is_a_warning_with_the_stable_pe
         let l = sampled_attitude(&tree, &q, &gains, &law, period).unwrap();
         // Stable, the largest |z| is the free motions' 1 (Jordan blocks: within √ε).
         let expected = closed_form(period);
-        let tolerance = if unstable { 1e-9 * expected } else { 1e-6 };
-        assert!(
-            (l.growth - expected).abs() < tolerance,
-            "{l:?} against {expected}"
+        assert_eq!(expected > 1.0, unstable);
+        check_loop(
+            &l,
+            expected,
+            lo,
+            &s,
+            "bus.toml:27: [effects.attitude_control]",
+            &[],
         );
-        let warned = s
-            .warnings
-            .iter()
-            .find(|w| w.contains("the sampled law is unstable"));
-        if unstable {
-            let below = l.stable_below.unwrap();
-            assert!((below - lo).abs() < 1e-4 * lo, "{below} against {lo}");
-            let w = warned.expect("a warning");
-            assert!(
-                w.starts_with("bus.toml:27: [effects.attitude_control]")
-                    && w.contains(&format!("grows by a factor {expected:.4} a sample")),
-                "{w}"
-            );
-        } else {
-            assert_eq!(l.stable_below, None);
-            assert!(warned.is_none(), "{warned:?}");
-        }
     }
 }
 
@@ -403,16 +433,7 @@ fn a_sampled_attitude_law_unstable_at_its_period_is_a_warning_with_the_stable_pe
 fn a_sampled_hinge_law_unstable_at_its_period_is_a_warning_with_the_stable_period() {
     use satsim_tools::scene::sampled_loop::{HingeLaw, sampled_hinges};
     let (kp, kd) = (10.0, 2.0);
-    let (mut lo, mut hi) = (0.01, 1.0);
-    assert!(zoh_growth(I, kp, kd, lo) <= 1.0 && zoh_growth(I, kp, kd, hi) > 1.0);
-    for _ in 0..60 {
-        let mid = 0.5 * (lo + hi);
-        if zoh_growth(I, kp, kd, mid) <= 1.0 {
-            lo = mid
-        } else {
-            hi = mid
-        }
-    }
+    let lo = longest_stable(|t| zoh_growth(I, kp, kd, t));
     let mut swings = Vec::new();
     for (period, unstable) in [(0.2, false), (0.6, true)] {
         let control = format!(
@@ -431,29 +452,16 @@ fn a_sampled_hinge_law_unstable_at_its_period_is_a_warning_with_the_stable_perio
         let gains = HingeGains::of(&s.effects, 1);
         let l = sampled_hinges(&tree, &s.initial.q, &gains, &law).unwrap();
         let expected = zoh_growth(I, kp, kd, period);
-        assert!(
-            (l.growth - expected).abs() < 1e-9 * expected,
-            "{l:?} against {expected}"
+        assert_eq!(expected > 1.0, unstable);
+        let gains = "`h` kp = 10 N m/rad, kd = 2 N m s/rad";
+        check_loop(
+            &l,
+            expected,
+            lo,
+            &s,
+            "arm.toml:25: [effects.hinge_control]",
+            &[gains],
         );
-        let warned = s
-            .warnings
-            .iter()
-            .find(|w| w.contains("the sampled law is unstable"));
-        if unstable {
-            let below = l.stable_below.unwrap();
-            assert!((below - lo).abs() < 1e-4 * lo, "{below} against {lo}");
-            let w = warned.expect("a warning");
-            assert!(
-                w.starts_with("arm.toml:25: [effects.hinge_control]")
-                    && w.contains("`h` kp = 10 N m/rad, kd = 2 N m s/rad")
-                    && w.contains(&format!("grows by a factor {expected:.4} a sample")),
-                "{w}"
-            );
-        } else {
-            assert!(expected < 1.0, "{expected}");
-            assert_eq!(l.stable_below, None);
-            assert!(warned.is_none(), "{warned:?}");
-        }
         swings.push(largest_angle(&s, 0.01).unwrap());
     }
     // The runs agree: the stable loop keeps the arm within its start, the unstable one
@@ -514,16 +522,7 @@ fn a_sampled_pid_on_the_wheels_is_checked_against_its_closed_form_loop() {
             .fold(1.0, f64::max)
     };
     let l0 = law(1.0);
-    let (mut lo, mut hi) = (0.01, 1.0);
-    assert!(closed_form(&l0, lo) <= 1.0 && closed_form(&l0, hi) > 1.0);
-    for _ in 0..60 {
-        let mid = 0.5 * (lo + hi);
-        if closed_form(&l0, mid) <= 1.0 {
-            lo = mid
-        } else {
-            hi = mid
-        }
-    }
+    let lo = longest_stable(|t| closed_form(&l0, t));
     for (period, unstable) in [(0.1, false), (0.6, true), (1.0, true)] {
         let l = sampled_pid(&tree, &q, &gains, &allocation, &law(period)).unwrap();
         let expected = closed_form(&law(period), period);
