@@ -22,7 +22,7 @@
 use super::Section;
 use super::{
     AttitudeControl, Bdot, Drag, Effect, GravityGradient, HingeControl, HingeSprings, HingeStops,
-    Magnetic, ReactionWheels, SolarRadiation, Thrusters,
+    Magnetic, ReactionWheels, Rotor, SolarRadiation, Thrusters,
 };
 
 use satsim_tree::io::FileError;
@@ -165,6 +165,11 @@ impl EffectSet {
     /// The enabled effects' names, in order.
     pub fn names(&self) -> impl Iterator<Item = &str> {
         self.effects.iter().map(|e| e.name())
+    }
+    /// The rotors the enabled effects add, in order: those a simulation hinges on after the
+    /// model's hinges (one effect may add them; a simulation refuses more).
+    pub fn rotors(&self) -> Vec<Rotor> {
+        self.iter().flat_map(|e| e.rotors()).collect()
     }
     /// The enabled effects, in order.
     pub fn iter(&self) -> impl Iterator<Item = &dyn Effect> {

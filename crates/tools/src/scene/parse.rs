@@ -225,19 +225,15 @@ impl<'a> Parser<'a> {
             wheel_laws = super::fsw::read(self, f, &model, epoch, &mut effects, &mut clocks)?;
         }
         super::faults::read(self, &file.faults, &mut effects)?;
-        let sampled = super::step_limit::AttitudeGains::in_scene(&effects)
-            .and_then(|(law, period)| period.map(|p| (law, p)))
-            .filter(|_| self.advise);
-        let sampled_hinges =
-            super::sampled_loop::HingeLaw::in_scene(&effects).filter(|_| self.advise);
-        if !self.advise {
-            wheel_laws.clear();
-        }
+        let sampled = if self.advise {
+            super::sampled_loop::SampledLaws::in_scene(&effects, wheel_laws)
+        } else {
+            super::sampled_loop::SampledLaws::default()
+        };
         // The tree for the checks of the linear motions. Where it cannot be made, a fixed
         // step's check is an error, as before; the sampled laws' warnings are left out, and
         // the simulation's set-up says what is wrong.
-        let checked = sampled.is_some() || sampled_hinges.is_some() || !wheel_laws.is_empty();
-        let tree = (options.fixed_step.is_some() || checked)
+        let tree = (options.fixed_step.is_some() || !sampled.is_empty())
             .then(|| super::step_limit::integrated_tree(&model, flex.as_ref(), &effects))
             .transpose()
             .or_else(|e| match options.fixed_step {
@@ -247,29 +243,7 @@ impl<'a> Parser<'a> {
         if let Some((tree, n_rotors)) = tree {
             let q = super::step_limit::integrated_q(&initial.q, n_rotors, &elastic.eta);
             let gains = super::step_limit::HingeGains::of(&effects, model.n_hinges());
-            if let Some((law, period)) = &sampled
-                && let Some(w) =
-                    super::sampled_loop::sampled_attitude(&tree, &q, &gains, law, *period)
-                        .and_then(|l| self.sampled_warning(&file, law, *period, &l))
-            {
-                warnings.push(w);
-            }
-            if let Some(law) = &sampled_hinges
-                && let Some(w) = super::sampled_loop::sampled_hinges(&tree, &q, &gains, law)
-                    .and_then(|l| self.sampled_hinges_warning(&file, &model, law, &l))
-            {
-                warnings.push(w);
-            }
-            let allocation = super::step_limit::wheel_allocation(&effects);
-            for wl in wheel_laws.iter().filter(|_| allocation.is_some()) {
-                let allocation = allocation.as_ref().expect("filtered");
-                if let Some(w) =
-                    super::sampled_loop::sampled_pid(&tree, &q, &gains, allocation, &wl.law)
-                        .and_then(|l| self.sampled_pid_warning(wl, &l))
-                {
-                    warnings.push(w);
-                }
-            }
+            warnings.extend(sampled.warnings(self, &file, &model, &tree, &q, &gains));
             if let Some(h) = options.fixed_step {
                 self.fixed_step_checked(&file, &tree, &q, &gains, h, duration, every)?;
             }
@@ -395,97 +369,6 @@ impl<'a> Parser<'a> {
         self.check_rk4_step(file, tree, q, gains, h, cut)
     }
 
-    /// `:line` of `[effects.<name>]` in the file (empty where it is not written there).
-    fn effect_line(&self, file: &SceneFile, name: &str) -> String {
-        file.effects
-            .as_ref()
-            .and_then(|e| e.get_ref().get(name))
-            .map(|v| format!(":{}", line_of(self.text(), v.span().start)))
-            .unwrap_or_default()
-    }
-
-    /// A sampled attitude law unstable at its period ([`super::sampled_loop::sampled_attitude`])
-    /// is the design's, not the integrator's, so it is a warning at the section's line, with
-    /// the growth a sample and the longest stable period below it; `None` where it is stable.
-    fn sampled_warning(
-        &self,
-        file: &SceneFile,
-        law: &super::step_limit::AttitudeGains,
-        period: f64,
-        l: &super::sampled_loop::SampledLoop,
-    ) -> Option<String> {
-        let below = l.stable_below?;
-        let line = self.effect_line(file, "attitude_control");
-        Some(format!(
-            "{}{line}: [effects.attitude_control]: the sampled law is unstable at `period` = {} s: on the bus's linear motion at the initial state (kp = {} N m/rad, kd = {} N m s/rad, the torque held between samples) a motion grows by a factor {:.4} a sample; it is stable at periods up to {:.4e} s. A run shows the attitude diverge, or chatter within the wheels' torque limits (a real flight software at this rate would do the same)",
-            self.path().display(),
-            Num(period),
-            Num(law.kp),
-            Num(law.kd),
-            l.growth,
-            below,
-        ))
-    }
-
-    /// A sampled hinge law unstable at its period ([`super::sampled_loop::sampled_hinges`]),
-    /// as [`Self::sampled_warning`]: a warning at the section's line naming the hinges and
-    /// their gains; `None` where it is stable.
-    fn sampled_hinges_warning(
-        &self,
-        file: &SceneFile,
-        model: &Model,
-        law: &super::sampled_loop::HingeLaw,
-        l: &super::sampled_loop::SampledLoop,
-    ) -> Option<String> {
-        let below = l.stable_below?;
-        let line = self.effect_line(file, "hinge_control");
-        let gains: Vec<String> = law
-            .hinges
-            .iter()
-            .map(|&(h, kp, kd)| {
-                format!(
-                    "`{}` kp = {} N m/rad, kd = {} N m s/rad",
-                    model.hinge_names()[h],
-                    Num(kp),
-                    Num(kd)
-                )
-            })
-            .collect();
-        Some(format!(
-            "{}{line}: [effects.hinge_control]: the sampled law is unstable at `period` = {} s: on the hinges' linear motion at the initial state ({}; the torques held between samples) a motion grows by a factor {:.4} a sample; it is stable at periods up to {:.4e} s. A run shows the hinges diverge, or chatter within their torque limits (a real controller at this rate would do the same)",
-            self.path().display(),
-            Num(law.period),
-            gains.join("; "),
-            l.growth,
-            below,
-        ))
-    }
-
-    /// A flight software's PID on the wheels unstable at its period
-    /// ([`super::sampled_loop::sampled_pid`]), as [`Self::sampled_warning`]: a warning at its
-    /// control table's line with its gains; `None` where it is stable.
-    fn sampled_pid_warning(
-        &self,
-        wl: &super::fsw::WheelLaw,
-        l: &super::sampled_loop::SampledLoop,
-    ) -> Option<String> {
-        let below = l.stable_below?;
-        let three = |v: &[f64; 3]| format!("[{}, {}, {}]", Num(v[0]), Num(v[1]), Num(v[2]));
-        let law = &wl.law;
-        Some(format!(
-            "{}:{}: {}: the sampled law is unstable at `period` = {} s: on the bus's linear motion at the initial state, with a perfect estimate (kp = {} N m/rad, ki = {} N m/(rad s), kd = {} N m s/rad, the torque held between samples), a motion grows by a factor {:.4} a sample; it is stable at periods up to {:.4e} s. A run shows the attitude diverge, or chatter within the wheels' torque limits (the flight software at this rate would do the same)",
-            self.path().display(),
-            wl.line,
-            wl.title,
-            Num(law.period),
-            three(&law.kp),
-            three(&law.ki),
-            three(&law.kd),
-            l.growth,
-            below,
-        ))
-    }
-
     /// A fixed RK4 step must keep the scene's linear motions at the initial state (the
     /// flexible bodies' modes, the hinges on their springs, dampers and continuous
     /// controllers) within RK4's stability region, damping included
@@ -524,22 +407,22 @@ impl<'a> Parser<'a> {
         let suggested = (0.9 * limit.step / digits).floor() * digits;
         // Fixed-point below a million, in exponent form above (a rate of 1e15 /s is not
         // written with sixteen digits).
-        let fixed = |x: f64| {
+        let fixed = |x: f64, digits: usize| {
             if x.abs() < 1e6 {
-                format!("{x:.4}")
+                format!("{x:.digits$}")
             } else {
-                format!("{x:.4e}")
+                format!("{x:.digits$e}")
             }
         };
         let eigenvalue = if l.im > 0.0 {
-            format!("{} ± {}i 1/s", fixed(l.re), fixed(l.im))
+            format!("{} ± {}i 1/s", fixed(l.re, 4), fixed(l.im, 4))
         } else {
-            format!("{} 1/s", fixed(l.re))
+            format!("{} 1/s", fixed(l.re, 4))
         };
         let what = limit.what(flex);
         let (with, motion) = match limit.by {
             Limiting::Mode(_) => ("the flexible modes", "mode"),
-            Limiting::Hinge(_) if what.starts_with("rotor ") => {
+            Limiting::Hinge(_) if limit.on_rotor(flex) => {
                 ("the wheels' viscous friction", "motion")
             }
             Limiting::Hinge(_) => ("the hinges' springs, dampers and controllers", "motion"),
@@ -577,10 +460,7 @@ impl<'a> Parser<'a> {
                 "`integrator.step` = {} s{cut} is too long for rk4 with {with}: the {motion} that limits it (mostly {what}) {character}, eigenvalue {eigenvalue}, and rk4 is stable on it only for steps up to {:.4e} s (|λ| × step within rk4's stability region: <= 2√2 = 2.83 undamped, <= 2.785 for a real λ; here |λ| × step = {}): set `step` at most {suggested:.1e} s, or use an adaptive method (`method = \"radau5\"`, implicit, steps over the {motion})",
                 Num(h),
                 limit.step,
-                {
-                    let x = l.norm() * taken;
-                    if x < 1e6 { format!("{x:.3}") } else { format!("{x:.3e}") }
-                },
+                fixed(l.norm() * taken, 3),
             ),
         ))
     }

@@ -7,10 +7,123 @@
 //! integrator's, so the scene reader warns of it and runs it.
 
 use nalgebra::{Complex, DMatrix, Schur};
-use satsim_spacecraft::effects::{EffectSet, HingeControl};
+use satsim_spacecraft::effects::{EffectSet, HingeControl, SceneText};
+use satsim_tree::Model;
+use satsim_tree::error::Num;
 use satsim_tree::flexible::FlexModel;
+use satsim_tree::io::line_of;
 
-use super::step_limit::{AttitudeGains, HingeGains, last_stable, matrices, plant, rotor_dofs};
+use super::file::SceneFile;
+use super::fsw::WheelLaw;
+use super::step_limit::{
+    AttitudeGains, HingeGains, last_stable, matrices, plant, rotor_dofs, wheel_allocation,
+};
+
+/// A scene's sampled laws, as the reader checks them: the attitude law with its period, the
+/// hinge law, and the flight software's controls on the wheels with the wheels' allocation.
+#[derive(Debug, Default)]
+pub(super) struct SampledLaws {
+    attitude: Option<(AttitudeGains, f64)>,
+    hinges: Option<HingeLaw>,
+    wheels: Vec<WheelLaw>,
+    allocation: Option<DMatrix<f64>>,
+}
+
+impl SampledLaws {
+    /// The sampled laws of `effects` and the flight software's `wheels` controls.
+    pub(super) fn in_scene(effects: &EffectSet, wheels: Vec<WheelLaw>) -> Self {
+        Self {
+            attitude: AttitudeGains::in_scene(effects)
+                .and_then(|(law, period)| period.map(|p| (law, p))),
+            hinges: HingeLaw::in_scene(effects),
+            allocation: (!wheels.is_empty())
+                .then(|| wheel_allocation(effects))
+                .flatten(),
+            wheels,
+        }
+    }
+
+    /// Whether there is none to check.
+    pub(super) fn is_empty(&self) -> bool {
+        self.attitude.is_none() && self.hinges.is_none() && self.wheels.is_empty()
+    }
+
+    /// A warning for each law unstable at its period, at its table's line in `src`, on
+    /// `tree` (the tree the simulation integrates) at `q` with the continuous `gains`.
+    pub(super) fn warnings(
+        &self,
+        src: &SceneText,
+        file: &SceneFile,
+        model: &Model,
+        tree: &FlexModel,
+        q: &[f64],
+        gains: &HingeGains,
+    ) -> Vec<String> {
+        let section = |name: &str| {
+            let line = file
+                .effects
+                .as_ref()
+                .and_then(|e| e.get_ref().get(name))
+                .map(|v| format!(":{}", line_of(src.text(), v.span().start)))
+                .unwrap_or_default();
+            format!("{}{line}: [effects.{name}]", src.path().display())
+        };
+        let mut out = Vec::new();
+        if let Some((law, period)) = &self.attitude
+            && let Some(l) = sampled_attitude(tree, q, gains, law, *period)
+        {
+            let g = format!(
+                "kp = {} N m/rad, kd = {} N m s/rad",
+                Num(law.kp),
+                Num(law.kd)
+            );
+            out.extend(l.warning(&section("attitude_control"), *period, &g, Shows::Attitude));
+        }
+        if let Some(law) = &self.hinges
+            && let Some(l) = sampled_hinges(tree, q, gains, law)
+        {
+            let g: Vec<String> = law
+                .hinges
+                .iter()
+                .map(|&(h, kp, kd)| {
+                    let name = &model.hinge_names()[h];
+                    format!(
+                        "`{name}` kp = {} N m/rad, kd = {} N m s/rad",
+                        Num(kp),
+                        Num(kd)
+                    )
+                })
+                .collect();
+            let at = section("hinge_control");
+            out.extend(l.warning(&at, law.period, &g.join("; "), Shows::Hinges));
+        }
+        let allocation = self.allocation.as_ref();
+        for wl in &self.wheels {
+            let Some(l) = allocation.and_then(|a| sampled_pid(tree, q, gains, a, &wl.law)) else {
+                continue;
+            };
+            let three = |v: &[f64; 3]| format!("[{}, {}, {}]", Num(v[0]), Num(v[1]), Num(v[2]));
+            let law = &wl.law;
+            let g = format!(
+                "with a perfect estimate: kp = {} N m/rad, ki = {} N m/(rad s), kd = {} N m s/rad",
+                three(&law.kp),
+                three(&law.ki),
+                three(&law.kd)
+            );
+            let at = format!("{}:{}: {}", src.path().display(), wl.line, wl.title);
+            out.extend(l.warning(&at, law.period, &g, Shows::FlightSoftware));
+        }
+        out
+    }
+}
+
+/// What a run of an unstable sampled law shows, for its warning.
+#[derive(Clone, Copy)]
+enum Shows {
+    Attitude,
+    Hinges,
+    FlightSoftware,
+}
 
 /// How a sampled law fares at its period ([`sampled_attitude`], [`sampled_hinges`]).
 #[derive(Clone, Debug, PartialEq)]
@@ -22,6 +135,34 @@ pub struct SampledLoop {
     /// stable (the stable periods found from zero up, to round-off), `None` where it is
     /// stable at its own.
     pub stable_below: Option<f64>,
+}
+
+impl SampledLoop {
+    /// The warning for a law at `at` (`file:line: [table]`) with its `gains` in words, where
+    /// it is unstable at its `period`: the design's instability, not the integrator's, so the
+    /// run goes ahead. `None` where it is stable.
+    fn warning(&self, at: &str, period: f64, gains: &str, shows: Shows) -> Option<String> {
+        let below = self.stable_below?;
+        let (motion, run) = match shows {
+            Shows::Attitude => (
+                "the bus's",
+                "the attitude diverge, or chatter within the wheels' torque limits (a flight software at this rate would do the same)",
+            ),
+            Shows::Hinges => (
+                "the hinges'",
+                "the hinges diverge, or chatter within their torque limits (a real controller at this rate would do the same)",
+            ),
+            Shows::FlightSoftware => (
+                "the bus's",
+                "the attitude diverge, or chatter within the wheels' torque limits (the flight software at this rate would do the same)",
+            ),
+        };
+        Some(format!(
+            "{at}: the sampled law is unstable at `period` = {} s: on {motion} linear motion at the initial state ({gains}; the torques held between samples) a motion grows by a factor {:.4} a sample; it is stable at periods up to {below:.4e} s. A run shows {run}",
+            Num(period),
+            self.growth,
+        ))
+    }
 }
 
 /// `|z|` above `1 + this` is growth: the free motions' eigenvalues `z = 1` (a free base's
@@ -132,7 +273,7 @@ pub struct PidLaw {
 /// initial state (as [`sampled_attitude`]'s), with a perfect estimate: at each sample the
 /// integral steps `I ← I + T θ`, then the bus torque `u = −kp∘θ − ki∘I − kd∘ω` is held to
 /// the next, through the rotors' commands `τ = −A⁺ u` (`allocation`,
-/// [`wheel_allocation`](super::step_limit::wheel_allocation)). The feed-forward `ω × J ω` is
+/// [`wheel_allocation`]). The feed-forward `ω × J ω` is
 /// second order, the integral's clamp and the torque limits are outside the linear motion.
 /// An observer's estimate keeps the loop's eigenvalues and adds its own (the separation
 /// principle, for the linear motion), so a loop unstable here stays unstable with the

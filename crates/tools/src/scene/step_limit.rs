@@ -152,7 +152,7 @@ impl AttitudeGains {
 /// ([`AttitudeControl::allocation_for`]: the root's wheels, as `[fsw.control]` allocates
 /// too); `None` without rotors.
 pub fn wheel_allocation(effects: &EffectSet) -> Option<DMatrix<f64>> {
-    let rotors: Vec<_> = effects.iter().flat_map(|e| e.rotors()).collect();
+    let rotors = effects.rotors();
     (!rotors.is_empty()).then(|| AttitudeControl::allocation_for(&rotors))
 }
 
@@ -192,7 +192,7 @@ impl HingeGains {
     /// ([`with_rotors`](satsim_spacecraft::simulation::with_rotors)) reads only the first
     /// `n_hinges` entries and no attitude controller.
     pub fn of(effects: &EffectSet, n_hinges: usize) -> Self {
-        let rotors: Vec<_> = effects.iter().flat_map(|e| e.rotors()).collect();
+        let rotors = effects.rotors();
         let mut g = Self::none(n_hinges + rotors.len());
         g.model_hinges = n_hinges;
         if let Some(w) = effects.get::<ReactionWheels>()
@@ -256,6 +256,19 @@ pub struct Rk4Limit {
 }
 
 impl Rk4Limit {
+    /// Whether what limits the step is a wheel's rotor (a hinge of the tree that a gyrostat
+    /// turns on), on its viscous friction.
+    pub fn on_rotor(&self, flex: &FlexModel) -> bool {
+        let Limiting::Hinge(h) = self.by else {
+            return false;
+        };
+        let rigid = flex.rigid();
+        rigid
+            .gyrostats()
+            .iter()
+            .any(|g| rigid.joint(g.body()).is_some_and(|j| j.hinge() == h))
+    }
+
     /// What limits the step, in words: "body `hub`'s mode 3" or "hinge `h1`".
     pub fn what(&self, flex: &FlexModel) -> String {
         match self.by {
@@ -264,13 +277,8 @@ impl Rk4Limit {
                 format!("body `{body}`'s mode {mode}")
             }
             Limiting::Hinge(h) => {
-                let rigid = flex.rigid();
-                let name = &rigid.hinge_names()[h];
-                let rotor = rigid
-                    .gyrostats()
-                    .iter()
-                    .any(|g| rigid.joint(g.body()).is_some_and(|j| j.hinge() == h));
-                if rotor {
+                let name = &flex.rigid().hinge_names()[h];
+                if self.on_rotor(flex) {
                     format!("rotor `{name}` on its viscous friction")
                 } else {
                     format!("hinge `{name}`")
@@ -468,7 +476,7 @@ pub fn integrated_tree(
     flex: Option<&FlexModel>,
     effects: &EffectSet,
 ) -> Result<(FlexModel, usize), FlexError> {
-    let rotors: Vec<_> = effects.iter().flat_map(|e| e.rotors()).collect();
+    let rotors = effects.rotors();
     let with = (!rotors.is_empty())
         .then(|| satsim_spacecraft::simulation::with_rotors(model, &rotors).ok())
         .flatten();
