@@ -84,7 +84,9 @@ impl Simulation {
                     flexible::rnea_with_kinematics(f, &mut w.data, &w.q, &w.v, &a, fext).map(|_| ())
                 });
                 w.a = a;
-                need.map_err(err)?;
+                if let Err(e) = need {
+                    return Err(self.model.flexible_error(e, &w.q));
+                }
                 w.data.tau.as_slice()
             }
             _ => {

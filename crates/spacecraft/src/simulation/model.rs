@@ -97,6 +97,43 @@ impl SimModel {
             e => SystemError::from_error(e),
         }
     }
+
+    /// [`Self::dynamics_error`] for a solve of the flexible tree at `q` (its rigid and
+    /// elastic coordinates), with why where a flexible body is deflected beyond what its
+    /// modal model holds ([`FlexModel::large_deflections`]): a stiff spring deploying a
+    /// flexible panel can bend it by its own length, where the second-order terms of its
+    /// inertia no longer hold and the solve fails (at the base, on the flexible deployment).
+    pub(super) fn flexible_error(&self, e: DynamicsError, q: &[f64]) -> SystemError {
+        let error = self.dynamics_error(e);
+        let Some(f) = &self.flex else {
+            return error;
+        };
+        let large = f.large_deflections(q);
+        let Some(worst) = large.first() else {
+            return error;
+        };
+        let name = |i: usize| f.rigid().bodies()[i].name().to_owned();
+        let eta: Vec<String> = worst.eta.iter().map(|e| format!("{e:.4}")).collect();
+        let others: Vec<String> = large[1..]
+            .iter()
+            .map(|d| format!("`{}`", name(d.body)))
+            .collect();
+        let others = match others.len() {
+            0 => String::new(),
+            _ => format!(" (also {})", others.join(", ")),
+        };
+        let size = format!(
+            "body `{}`'s tip is {:.4} m off its axis, {:.0} % of its {} m length (modal coordinates [{}]){others}",
+            name(worst.body),
+            worst.tip.abs(),
+            100.0 * worst.tip.abs() / worst.length,
+            satsim_tree::error::Num(worst.length),
+            eta.join(", ")
+        );
+        SystemError::new(format!(
+            "{error}: the flexible bodies are deflected beyond what their modal model holds: {size}. A modal model is meant for deflections of a few per cent of a body's length: stiffen the body, or soften what drives it (a spring, a controller, a load)"
+        ))
+    }
 }
 
 impl SimModel {

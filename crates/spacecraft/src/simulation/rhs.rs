@@ -379,8 +379,11 @@ impl Simulation {
             (Some(f), Some(w)) => {
                 let locked = (d.n_locked > 0).then_some(d.locked.as_slice());
                 let fext = fext.then_some(d.forces.body_wrench.as_slice());
-                let ddq = flexible_dynamics(f, w, &d.tau, &d.forces.elastic, fext, locked, kin)
-                    .map_err(err)?;
+                let ddq =
+                    match flexible_dynamics(f, w, &d.tau, &d.forces.elastic, fext, locked, kin) {
+                        Ok(ddq) => ddq,
+                        Err(e) => return Err(m.flexible_error(e, &w.q)),
+                    };
                 let nv = d.ddq.len();
                 d.ddq.copy_from_slice(&ddq[..nv]);
                 dx[m.layout.etadot.clone()].copy_from_slice(&ddq[nv..]);

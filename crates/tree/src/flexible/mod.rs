@@ -63,7 +63,9 @@ pub use data::FlexData;
 pub use field::FieldLoad;
 pub use kinematics::{forward_kinematics, momentum};
 pub use modal::{ModalData, NodeShape};
-pub use model::{FlexError, FlexModel, Flexible, Modes, UNRESOLVED};
+pub use model::{
+    FlexError, FlexModel, Flexible, LargeDeflection, Modes, SMALL_DEFLECTION, UNRESOLVED,
+};
 pub use rnea::{bias, gyrostat_torques, gyrostat_torques_on_base, rnea, rnea_with_kinematics};
 
 use crate::error::DynamicsError;

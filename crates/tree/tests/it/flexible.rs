@@ -898,3 +898,34 @@ fn the_first_pass_leaves_the_deformed_inertias() {
         }
     }
 }
+
+/// The beams deflected beyond a tenth of their length are named, the largest first, with
+/// their tips and modes; a deflection within it is not.
+#[test]
+fn deflections_beyond_a_tenth_of_a_beams_length_are_large() {
+    use satsim_tree::flexible::SMALL_DEFLECTION;
+    let model = bus_with_two_beams(2, 0.01);
+    let (b1, b2) = (1, 2);
+    let at = |i: usize| model.rigid().nq() + 2 * (i - 1);
+    let length = model.beam(b1).unwrap().length;
+    // The tip per unit first-mode coordinate.
+    let mut q = model.neutral();
+    q[at(b1)] = 1.0;
+    let unit = model.tip_deflection(b1, &q).unwrap();
+    let set = |q: &mut Vec<f64>, i: usize, fraction: f64| q[at(i)] = fraction * length / unit;
+    let mut q = model.neutral();
+    set(&mut q, b1, 0.05);
+    set(&mut q, b2, -0.3);
+    let large = model.large_deflections(&q);
+    assert_eq!(large.len(), 1, "{large:?}");
+    let d = &large[0];
+    assert_eq!((d.body, d.length), (b2, length));
+    assert!((d.tip + 0.3 * length).abs() < 1e-12, "{d:?}");
+    assert_eq!(d.eta, q[at(b2)..at(b2) + 2].to_vec());
+    set(&mut q, b1, 0.5);
+    let order: Vec<usize> = model.large_deflections(&q).iter().map(|d| d.body).collect();
+    assert_eq!(order, [b1, b2]);
+    set(&mut q, b1, 0.99 * SMALL_DEFLECTION);
+    set(&mut q, b2, -0.99 * SMALL_DEFLECTION);
+    assert!(model.large_deflections(&q).is_empty());
+}
