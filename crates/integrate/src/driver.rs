@@ -378,6 +378,7 @@ where
         if self.buf != self.st.x() {
             self.st.state_modified();
         }
+        self.sys.step_accepted(self.st.t(), self.st.x());
     }
 
     /// The projected step's end, as the rest of [`Self::after_step`] reads it: the system,

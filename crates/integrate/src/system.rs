@@ -234,6 +234,11 @@ pub trait System {
     /// approximation of that size.
     fn project(&mut self, _x: &mut [f64]) {}
 
+    /// Called after every accepted step (after [`System::project`], before the step's
+    /// events and outputs) with the step's end time and state: a place to watch the
+    /// solution between output rows. The default does nothing.
+    fn step_accepted(&mut self, _t: f64, _x: &[f64]) {}
+
     /// Per-component weights of the error norm, written into `w`
     /// (`w.len() == dim()`); `0` excludes a component. Default: all 1.
     /// Queried once at the start of an integration.
@@ -417,6 +422,9 @@ impl<S: System + ?Sized> System for &mut S {
     }
     fn project(&mut self, x: &mut [f64]) {
         (**self).project(x)
+    }
+    fn step_accepted(&mut self, t: f64, x: &[f64]) {
+        (**self).step_accepted(t, x)
     }
     fn error_weights(&self, w: &mut [f64]) {
         (**self).error_weights(w)

@@ -1,7 +1,7 @@
 //! [`SimulationBuilder`] and the one-time set-up of a [`Simulation`]: rotors into the tree,
 //! effects in dependency order, the state layout, the initial state.
 
-use super::data::FlexWork;
+use super::data::{DeflectionPeak, FlexWork};
 use super::hold::Hold;
 use super::{RunLog, SimData, SimError, SimModel, Simulation, StateLayout};
 use crate::effects::{
@@ -389,6 +389,18 @@ impl Simulation {
         }
         data.base_tau = base_tau;
         data.flex = flex.as_ref().map(FlexWork::new);
+        data.deflection_peaks = flex.as_ref().map_or(Vec::new(), |f| {
+            (0..f.rigid().n_bodies())
+                .filter_map(|i| f.beam(i).map(|b| (i, b.length)))
+                .map(|(body, length)| DeflectionPeak {
+                    body,
+                    tip: 0.0,
+                    length,
+                    t: f64::NAN,
+                    passed: None,
+                })
+                .collect()
+        });
         let mut sim = Self {
             model: SimModel {
                 tree: model,

@@ -86,6 +86,26 @@ pub struct SimData {
     /// The right-hand side the event functions evaluated at the end of a step, for the next
     /// step's first stage (`ahead.rs`).
     pub(super) ahead: Ahead,
+    /// Each beam's largest tip deflection over the accepted steps so far.
+    pub(super) deflection_peaks: Vec<DeflectionPeak>,
+}
+
+/// A beam's largest tip deflection over a run's accepted steps
+/// ([`Simulation::deflection_peaks`](super::Simulation::deflection_peaks)).
+#[derive(Clone, Debug, PartialEq)]
+pub struct DeflectionPeak {
+    /// The body (of the scene's model).
+    pub body: usize,
+    /// The tip's deflection along the beam's `bend` there (m).
+    pub tip: f64,
+    /// The beam's length (m).
+    pub length: f64,
+    /// When (s).
+    pub t: f64,
+    /// The first accepted step's end at which the tip was off by more than
+    /// [`SMALL_DEFLECTION`](satsim_tree::flexible::SMALL_DEFLECTION) of the length (s);
+    /// `None` while it has not been.
+    pub passed: Option<f64>,
 }
 
 /// The buffers of [`Simulation::apply_requests`](super::Simulation) and its impulse solve:
@@ -155,6 +175,7 @@ impl SimData {
             newly_locked: true,
             base_tau: vec![0.0; nh],
             ahead: Ahead::new(n_states),
+            deflection_peaks: Vec::new(),
         }
     }
     /// The loads the effects applied in the last pass.

@@ -91,7 +91,7 @@ mod stepping;
 mod system;
 
 pub use build::{SimulationBuilder, with_rotors};
-pub use data::SimData;
+pub use data::{DeflectionPeak, SimData};
 pub use lanes::{LaneJob, LaneJobs, RowSink};
 pub use layout::StateLayout;
 pub use loads::{EffectLoads, moment_about};
@@ -234,6 +234,36 @@ impl Simulation {
             self.data.locked[h] = false;
             self.data.n_locked -= 1;
         }
+    }
+    /// Each beam's largest tip deflection over the accepted steps of the runs so far (the
+    /// initial state not among them), in the model's body order: where one passed
+    /// [`SMALL_DEFLECTION`](satsim_tree::flexible::SMALL_DEFLECTION) of its length, the run
+    /// went beyond what its modal model holds. Empty without beams.
+    pub fn deflection_peaks(&self) -> &[DeflectionPeak] {
+        &self.data.deflection_peaks
+    }
+    /// A warning for each beam whose tip went past
+    /// [`SMALL_DEFLECTION`](satsim_tree::flexible::SMALL_DEFLECTION) of its length in the
+    /// runs so far ([`Self::deflection_peaks`]): the results from then on are not the
+    /// structure's, though the linear model (without `stiffening`) goes on without a sign.
+    pub fn deflection_warnings(&self) -> Vec<String> {
+        let Some(f) = &self.model.flex else {
+            return Vec::new();
+        };
+        self.deflection_peaks()
+            .iter()
+            .filter_map(|p| {
+                let passed = p.passed?;
+                Some(format!(
+                    "body `{}`'s tip passed a tenth of its {} m length at t = {passed:.4} s and went {:.4} m off its axis ({:.0} % of the length) at t = {:.4} s: beyond what its modal model holds (a few per cent of the length), so the run's results from t = {passed:.4} s on are not the structure's: stiffen the body, or soften what drives it (a spring, a controller, a load)",
+                    f.rigid().bodies()[p.body].name(),
+                    satsim_tree::error::Num(p.length),
+                    p.tip.abs(),
+                    100.0 * p.tip.abs() / p.length,
+                    p.t,
+                ))
+            })
+            .collect()
     }
     /// What happened at each handled event: `(t, description)`.
     pub fn event_log(&self) -> &[(f64, String)] {

@@ -270,6 +270,9 @@ impl<C: SimCell> System for Shared<C> {
     fn project(&mut self, x: &mut [f64]) {
         self.0.sim_mut().project(x)
     }
+    fn step_accepted(&mut self, t: f64, x: &[f64]) {
+        self.0.sim_mut().step_accepted(t, x)
+    }
     fn holds_rhs(&self, t: f64, x: &[f64]) -> bool {
         self.0.sim().holds_rhs(t, x)
     }

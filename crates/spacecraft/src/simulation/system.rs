@@ -4,6 +4,7 @@
 use super::Simulation;
 use super::hold::Hold;
 use satsim_integrate::{EventAction, EventDirection, System, SystemError};
+use satsim_tree::flexible::SMALL_DEFLECTION;
 
 impl System for Simulation {
     fn dim(&self) -> usize {
@@ -36,6 +37,23 @@ impl System for Simulation {
     /// reads: quadratures, left out of the implicit methods' Newton test and Jacobian.
     fn quadratures(&self, q: &mut [bool]) {
         q[self.model.work.clone()].fill(true);
+    }
+
+    /// Each beam's largest tip deflection so far ([`Simulation::deflection_peaks`]).
+    fn step_accepted(&mut self, t: f64, x: &[f64]) {
+        let Some(f) = &self.model.flex else {
+            return;
+        };
+        let eta = &x[self.model.layout.eta.clone()];
+        for p in &mut self.data.deflection_peaks {
+            let tip = f.tip_of(p.body, eta).unwrap_or(0.0);
+            if tip.abs() > p.tip.abs() {
+                (p.tip, p.t) = (tip, t);
+            }
+            if p.passed.is_none() && tip.abs() > SMALL_DEFLECTION * p.length {
+                p.passed = Some(t);
+            }
+        }
     }
 
     fn project(&mut self, x: &mut [f64]) {

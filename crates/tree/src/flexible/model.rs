@@ -620,8 +620,13 @@ impl FlexModel {
     /// The deflection of body `i`'s beam tip along `bend` (m) in `q`; `None` unless its
     /// modes are a beam's.
     pub fn tip_deflection(&self, i: usize, q: &[f64]) -> Option<f64> {
+        self.tip_of(i, &q[self.rigid.nq()..])
+    }
+    /// [`Self::tip_deflection`] from the elastic coordinates `eta` alone (all of them, in
+    /// order).
+    pub fn tip_of(&self, i: usize, eta: &[f64]) -> Option<f64> {
         self.beams[i].as_ref()?;
-        let eta = &q[self.rigid.nq() + self.offset[i]..][..self.modes[i]];
+        let eta = &eta[self.offset[i]..][..self.modes[i]];
         Some(self.tips[i].iter().zip(eta).map(|(p, e)| p * e).sum())
     }
     /// The beams whose tip in `q` is off its axis by more than [`SMALL_DEFLECTION`] of the
