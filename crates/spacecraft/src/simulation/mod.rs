@@ -245,7 +245,8 @@ impl Simulation {
     /// A warning for each beam whose tip went past
     /// [`SMALL_DEFLECTION`](satsim_tree::flexible::SMALL_DEFLECTION) of its length in the
     /// runs so far ([`Self::deflection_peaks`]): the results from then on are not the
-    /// structure's, though the linear model (without `stiffening`) goes on without a sign.
+    /// structure's, though the model may go on without a sign (the linear model, without
+    /// `stiffening`, has no term that fails with the deflection).
     pub fn deflection_warnings(&self) -> Vec<String> {
         let Some(f) = &self.model.flex else {
             return Vec::new();
