@@ -448,9 +448,8 @@ fn deployment(
 /// Each beam's tip is watched at every accepted step. The deployment as shipped (springs of
 /// 2 N m/rad on the panels' hinges) keeps every tip within 4.2 cm of its 1 m strip's axis
 /// (the largest at the second latch's ringing, 10.39 s). At 80 N m/rad the panels slam open
-/// and bend their strips by most of their length within a second: the run goes on (the
-/// model's inertia stays definite) and warns of each strip from the step its tip passed a
-/// tenth of its length. At 200 N m/rad the solve fails at 0.33 s: the run's error says the
+/// and bend their strips by most of their length within a second: the run goes on, and
+/// warns of each strip from the step its tip passed a tenth of its length. At 200 N m/rad the solve fails at 0.33 s: the run's error says the
 /// deflection is beyond the modal model, naming the strip bent most, where the solve's own
 /// words were only "singular floating base".
 #[test]
