@@ -359,16 +359,22 @@ def run(
     Bad input raises :class:`SatsimError` with the command line's message. A run that fails
     part-way raises :class:`SatsimError` too; its ``partial`` attribute is the
     :class:`Trajectory` up to the failure. Ctrl-C stops a run (``KeyboardInterrupt``).
+
+    What ``satsim run`` warns of after a run (the scene reader's warnings; a flexible beam
+    bent past a tenth of its length, beyond what its modal model holds) comes as a
+    :class:`UserWarning` each.
     """
     out_path = None if out is None else os.fspath(out)
     origin, text = _scene_args(scene, base_dir)
     try:
         if text is not None:
-            columns, data = _satsim.run_text(text, origin, out_path)
+            columns, data, said = _satsim.run_text(text, origin, out_path)
         else:
-            columns, data = _satsim.run_file(origin, out_path)
+            columns, data, said = _satsim.run_file(origin, out_path)
     except SatsimError as e:
         raise _run_partial(e) from None
+    for w in said:
+        warnings.warn(w, UserWarning, stacklevel=2)
     return Trajectory(columns, data)
 
 

@@ -103,7 +103,7 @@ def run_one(
             items = _metrics_items(metrics(run, Trajectory(*rows)))
         except Exception as e:
             return c.failed(k, f"run {k}: the metrics raised {_last_line(e)}")
-        rec = rec[:7] + (items,)
+        rec = rec[:-1] + (items,)  # the metrics come last
     return rec
 
 

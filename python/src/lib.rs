@@ -273,9 +273,13 @@ fn to_python<'py>(py: Python<'py>, t: Trajectory) -> PyResult<RunOut<'py>> {
     Ok((t.columns, data))
 }
 
-/// What a run left: the trajectory, or the failure.
+/// A finished run handed to Python: [`RunOut`] and the warnings `satsim run` prints after
+/// it (the scene reader's, a beam bent beyond its modal model).
+type RanOut<'py> = (Vec<String>, Bound<'py, PyArray2<f64>>, Vec<String>);
+
+/// What a run left: the trajectory and its warnings, or the failure.
 enum Ran {
-    Done(Trajectory),
+    Done(Trajectory, Vec<String>),
     /// A message and the rows before the failure.
     Failed(String, Trajectory),
     /// Python raised (Ctrl-C) while the run was checking for signals.
@@ -283,12 +287,13 @@ enum Ran {
 }
 
 /// Reads (a path) or parses (a text) a scene, runs it with the GIL released, writes
-/// `out/trajectory.csv` and the plots when `out` is given, and returns `(columns, data)`.
+/// `out/trajectory.csv` and the plots when `out` is given, and returns `(columns, data,
+/// warnings)`.
 fn run_scene<'py>(
     py: Python<'py>,
     source: SceneSource,
     out: Option<PathBuf>,
-) -> PyResult<RunOut<'py>> {
+) -> PyResult<RanOut<'py>> {
     let ran = py.detach(|| -> Result<Ran, String> {
         let scene = match &source {
             SceneSource::File(path) => Scene::read(path),
@@ -301,7 +306,7 @@ fn run_scene<'py>(
             .map_err(|e| e.to_string())?;
         let mut interrupted: Option<PyErr> = None;
         let mut last_check = Instant::now();
-        let result = api::run_scene(&scene, || {
+        let result = api::run_scene_warned(&scene, || {
             if last_check.elapsed() < SIGNAL_CHECK {
                 return false;
             }
@@ -316,7 +321,7 @@ fn run_scene<'py>(
         });
         let path = source.origin().display().to_string();
         let ran = match result {
-            Ok(t) => Ran::Done(t),
+            Ok((t, warnings)) => Ran::Done(t, warnings),
             Err(RunFailure::Setup(e)) => return Err(format!("{path}: {e}")),
             Err(RunFailure::Stopped { partial }) => match interrupted {
                 Some(e) => Ran::Interrupted(e),
@@ -330,13 +335,16 @@ fn run_scene<'py>(
                 Ran::Failed(format!("{path}: the run failed: {why}; {kept}"), partial)
             }
         };
-        if let (Some(dir), Ran::Done(t) | Ran::Failed(_, t)) = (&out, &ran) {
+        if let (Some(dir), Ran::Done(t, _) | Ran::Failed(_, t)) = (&out, &ran) {
             write_output(dir, t, scene.plots)?;
         }
         Ok(ran)
     });
     match ran.map_err(err)? {
-        Ran::Done(t) => to_python(py, t),
+        Ran::Done(t, warnings) => {
+            let (columns, data) = to_python(py, t)?;
+            Ok((columns, data, warnings))
+        }
         Ran::Interrupted(e) => Err(e),
         Ran::Failed(message, partial) => {
             let e = err(message);
@@ -384,10 +392,10 @@ impl SceneSource {
 }
 
 /// Runs the scene file at `path`; writes `out/trajectory.csv` (and the plots) when `out` is
-/// given. Returns `(columns, data)`.
+/// given. Returns `(columns, data, warnings)`.
 #[pyfunction]
 #[pyo3(signature = (path, out=None))]
-fn run_file<'py>(py: Python<'py>, path: PathBuf, out: Option<PathBuf>) -> PyResult<RunOut<'py>> {
+fn run_file<'py>(py: Python<'py>, path: PathBuf, out: Option<PathBuf>) -> PyResult<RanOut<'py>> {
     run_scene(py, SceneSource::File(path), out)
 }
 
@@ -400,7 +408,7 @@ fn run_text<'py>(
     text: String,
     origin: PathBuf,
     out: Option<PathBuf>,
-) -> PyResult<RunOut<'py>> {
+) -> PyResult<RanOut<'py>> {
     run_scene(py, SceneSource::Text(text, origin), out)
 }
 

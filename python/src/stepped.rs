@@ -23,13 +23,15 @@ use satsim_tools::stepping::SceneStepper;
 use std::path::PathBuf;
 use std::sync::Mutex;
 
-/// A run's record as a tuple: `(k, values, failure, last, min, max, trace, metrics)`;
-/// `failure` is `None` for a finished run (then `last`, `min`, `max` are its statistics),
-/// else why it failed.
+/// A run's record as a tuple: `(k, values, failure, last, min, max, peaks, trace,
+/// metrics)`; `failure` is `None` for a finished run (then `last`, `min`, `max` and `peaks`
+/// are its statistics), else why it failed. The metrics come last: the Python side replaces
+/// them.
 type Rec = (
     u64,
     Vec<f64>,
     Option<String>,
+    Vec<f64>,
     Vec<f64>,
     Vec<f64>,
     Vec<f64>,
@@ -42,17 +44,25 @@ fn to_rec(r: RunRecord) -> Rec {
         Ok(s) => (None, Some(s)),
         Err(why) => (Some(why), None),
     };
-    let (last, min, max) = stats.map_or_else(Default::default, |s| (s.last, s.min, s.max));
-    (r.k, r.values, failure, last, min, max, r.trace, r.metrics)
+    let (last, min, max, peaks) =
+        stats.map_or_else(Default::default, |s| (s.last, s.min, s.max, s.peaks));
+    (
+        r.k, r.values, failure, last, min, max, peaks, r.trace, r.metrics,
+    )
 }
 
 fn from_rec(r: Rec) -> RunRecord {
-    let (k, values, failure, last, min, max, trace, metrics) = r;
+    let (k, values, failure, last, min, max, peaks, trace, metrics) = r;
     RunRecord {
         k,
         values,
         outcome: match failure {
-            None => Ok(RunStats { last, min, max }),
+            None => Ok(RunStats {
+                last,
+                min,
+                max,
+                peaks,
+            }),
             Some(why) => Err(why),
         },
         trace,

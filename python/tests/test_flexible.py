@@ -9,6 +9,7 @@ from __future__ import annotations
 import json
 import math
 import subprocess
+import warnings
 
 import numpy as np
 import pytest
@@ -87,6 +88,31 @@ def test_modes_and_linearize_list_the_elastic_states(tmp_path):
     ]
     m = satsim.modes(SCENE, base_dir=tmp_path)
     assert any("eta_panel_1" in mode["shape"] for mode in m["modes"])
+
+
+def test_a_beam_bent_beyond_its_modal_model_is_a_warning_and_a_campaign_column(tmp_path):
+    # As shipped, the tip starts at 2 cm of the 2 m beam: no warning.
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        satsim.run(SCENE, base_dir=tmp_path)
+    # Started at 0.3 m (15 % of the length), the tip is past a tenth from the first step.
+    bent = SCENE.replace("eta = [0.02, 0.0]", "eta = [0.3, 0.0]")
+    with pytest.warns(UserWarning, match="body `panel`'s tip passed a tenth of its 2 m length"):
+        run = satsim.run(bent, base_dir=tmp_path)
+    assert abs(run["tip_panel"][0]) > 0.2
+    # A campaign of it gives each run's peak over every step, as a fraction of the length.
+    text = bent + """
+[campaign]
+runs = 2
+seed = 1
+[[campaign.disperse]]
+key = "model.body.0.mass"
+uniform = { low = -1.0, high = 1.0 }
+"""
+    c = satsim.campaign(text, base_dir=tmp_path)
+    assert c.columns[-1] == "peak_deflection_panel"
+    peaks = c["peak_deflection_panel"]
+    assert (peaks > 0.1).all() and (peaks < 1.0).all(), peaks
 
 
 # --- satsim.Model of a model with flexible bodies: dynamics and modes ---------------------

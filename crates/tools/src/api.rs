@@ -350,7 +350,18 @@ impl fmt::Display for StopRequested {
 /// same [`Scene::simulation`], integrator options and output times) and keeps the rows in
 /// memory. `stop` is called after every row; returning `true` ends the run there
 /// ([`RunFailure::Stopped`]).
-pub fn run_scene(scene: &Scene, mut stop: impl FnMut() -> bool) -> Result<Trajectory, RunFailure> {
+pub fn run_scene(scene: &Scene, stop: impl FnMut() -> bool) -> Result<Trajectory, RunFailure> {
+    run_scene_warned(scene, stop).map(|(t, _)| t)
+}
+
+/// [`run_scene`], with the warnings `satsim run` prints after a run that finished: the
+/// scene reader's ([`Scene::warnings`]), then the simulation's
+/// ([`Simulation::deflection_warnings`](satsim_spacecraft::simulation::Simulation::deflection_warnings):
+/// a beam bent beyond what its modal model holds).
+pub fn run_scene_warned(
+    scene: &Scene,
+    mut stop: impl FnMut() -> bool,
+) -> Result<(Trajectory, Vec<String>), RunFailure> {
     let mut sim = scene.simulation().map_err(RunFailure::Setup)?;
     let mut out = Trajectory {
         columns: sim.columns(),
@@ -367,7 +378,11 @@ pub fn run_scene(scene: &Scene, mut stop: impl FnMut() -> bool) -> Result<Trajec
         },
     );
     match result {
-        Ok(_) => Ok(out),
+        Ok(_) => {
+            let mut warnings = scene.warnings.clone();
+            warnings.extend(sim.deflection_warnings());
+            Ok((out, warnings))
+        }
         Err(RunError::Sink { .. }) => Err(RunFailure::Stopped { partial: out }),
         Err(RunError::Integrate(e)) => Err(RunFailure::Failed {
             why: e.to_string(),
@@ -447,7 +462,7 @@ pub fn campaign_table_until(
     }
     let records: Vec<RunRecord> = records.into_iter().flatten().collect();
     let columns = campaign.header();
-    let n_stats = 3 * (campaign.columns.len() - 1);
+    let n_stats = 3 * (campaign.columns.len() - 1) + campaign.peak_columns.len();
     let mut out = CampaignTable {
         values: Vec::with_capacity(records.len() * columns.len()),
         columns,
@@ -463,6 +478,7 @@ pub fn campaign_table_until(
                     out.values
                         .extend_from_slice(&[st.last[c], st.min[c], st.max[c]]);
                 }
+                out.values.extend_from_slice(&st.peaks);
                 out.status.push("ok".into());
                 out.messages.push(String::new());
             }

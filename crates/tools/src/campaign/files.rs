@@ -8,8 +8,9 @@
 
 pub use super::meta::Meta;
 use super::stats::{ColumnStats, column_stats};
-use super::{CAMPAIGN_JSON, CampaignError, RUNS_CSV, SUMMARY_JSON, Shard, TRACES_CSV};
+use super::{CAMPAIGN_JSON, CampaignError, PEAK_PREFIX, RUNS_CSV, SUMMARY_JSON, Shard, TRACES_CSV};
 use crate::output::quote;
+use satsim_tree::flexible::SMALL_DEFLECTION;
 use std::collections::{BTreeMap, HashMap};
 use std::fmt::Write as _;
 use std::fs::{File, OpenOptions};
@@ -203,6 +204,11 @@ pub struct Finished {
     pub failed: u64,
     /// Runs of the campaign (or shard) that `runs.csv` does not hold.
     pub missing: u64,
+    /// Finished runs that bent a beam beyond what its modal model holds: a
+    /// `peak_deflection_<body>` past
+    /// [`SMALL_DEFLECTION`] (the run `ok`, its
+    /// results from then on not the structure's).
+    pub beyond: u64,
     /// The files written (names in the folder).
     pub files: Vec<String>,
 }
@@ -358,6 +364,13 @@ pub fn finish(dir: &Path, meta: &Meta) -> Result<Finished, CampaignError> {
 
     // Summary.
     let n_ok = ok_rows.len() as u64;
+    let peaks: Vec<usize> = (0..stat_names.len())
+        .filter(|&c| stat_names[c].starts_with(PEAK_PREFIX))
+        .collect();
+    let beyond = ok_rows
+        .iter()
+        .filter(|(_, v)| peaks.iter().any(|&c| v[c] > SMALL_DEFLECTION))
+        .count() as u64;
     let n_runs = runs.rows.len() as u64;
     let missing = meta.expected().saturating_sub(n_runs);
     let mut all_stats: Vec<Option<ColumnStats>> = Vec::with_capacity(stat_names.len());
@@ -399,6 +412,7 @@ pub fn finish(dir: &Path, meta: &Meta) -> Result<Finished, CampaignError> {
         ok: n_ok,
         failed,
         missing,
+        beyond,
         files,
     })
 }

@@ -129,6 +129,8 @@ impl<'c> LaneJobs for Jobs<'c, '_> {
         in_lanes.fetch_add(log.lane_rhs(), Ordering::Relaxed);
         let k = sink.collect.k;
         self.in_flight.retain(|&f| f != k);
+        let mut sink = sink;
+        sink.collect.take_peaks(&sim);
         if let Some(r) = sink.collect.record(sink.values, result) {
             self.going &= (self.emit)(r);
         }

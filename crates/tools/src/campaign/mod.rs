@@ -112,6 +112,9 @@ pub struct Campaign {
     pub histograms: Vec<String>,
     /// The trajectory columns (contract section 7) of the nominal scene, `t` first.
     pub columns: Vec<String>,
+    /// The columns after the statistics for the nominal scene's beams, in body order:
+    /// `peak_deflection_<body>` ([`RunStats::peaks`]); empty without beams.
+    pub peak_columns: Vec<String>,
     /// The nominal scene.
     pub nominal: Scene,
     /// The scene as written, `[campaign]` removed, `model` and `initial` read in as tables.
@@ -147,6 +150,12 @@ pub struct RunStats {
     pub min: Vec<f64>,
     /// The maximum over the output times.
     pub max: Vec<f64>,
+    /// Each beam's largest tip deflection over every accepted step of the run (not only
+    /// the output times), as a fraction of its length, in body order
+    /// ([`Simulation::deflection_peaks`]): past
+    /// [`SMALL_DEFLECTION`](satsim_tree::flexible::SMALL_DEFLECTION) the run went beyond
+    /// what its modal model holds. Empty without beams.
+    pub peaks: Vec<f64>,
 }
 
 /// The outcome of run `k`.
@@ -332,7 +341,9 @@ impl Campaign {
             .simulation()
             .map_err(|e| schema(None, e.to_string()))?;
         let columns = sim.columns();
-        let stat_names: Vec<String> = stat_columns(&columns);
+        let peak_columns = peak_columns(&sim);
+        let mut stat_names: Vec<String> = stat_columns(&columns);
+        stat_names.extend(peak_columns.iter().cloned());
         let histograms = match &file.histograms {
             Some(h) => {
                 for c in h.get_ref() {
@@ -340,8 +351,13 @@ impl Campaign {
                         return Err(schema(
                             Some(h.span()),
                             format!(
-                                "`campaign.histograms`: unknown column `{c}` (the columns are final_, min_ and max_ of: {})",
-                                columns[1..].join(", ")
+                                "`campaign.histograms`: unknown column `{c}` (the columns are final_, min_ and max_ of: {}{})",
+                                columns[1..].join(", "),
+                                if peak_columns.is_empty() {
+                                    String::new()
+                                } else {
+                                    format!("; and {}", peak_columns.join(", "))
+                                }
                             ),
                         ));
                     }
@@ -366,6 +382,7 @@ impl Campaign {
             dispersed,
             histograms,
             columns,
+            peak_columns,
             nominal,
             base,
             source: text.to_owned(),
@@ -393,6 +410,7 @@ impl Campaign {
         h.push("status".into());
         h.push("message".into());
         h.extend(stat_columns(&self.columns));
+        h.extend(self.peak_columns.iter().cloned());
         h
     }
 
@@ -461,6 +479,7 @@ impl Campaign {
                 &Times::Interval(scene.every),
                 |t, row| c.row(t, row),
             );
+            c.take_peaks(&sim);
             Ok(result)
         });
         match (outcome, collect) {
@@ -513,12 +532,18 @@ impl Campaign {
                 for c in 0..st.last.len() {
                     let _ = write!(s, ",{},{},{}", st.last[c], st.min[c], st.max[c]);
                 }
+                for p in &st.peaks {
+                    let _ = write!(s, ",{p}");
+                }
             }
             Err(m) => {
                 s.push_str(",failed,");
                 s.push_str(&crate::output::quote(m));
                 for _ in 1..self.columns.len() {
                     s.push_str(",,,");
+                }
+                for _ in &self.peak_columns {
+                    s.push(',');
                 }
             }
         }
@@ -569,6 +594,7 @@ impl<'c> Collect<'c> {
                 last: vec![f64::NAN; n],
                 min: vec![f64::INFINITY; n],
                 max: vec![f64::NEG_INFINITY; n],
+                peaks: Vec::new(),
             },
             rows: 0,
             trace,
@@ -593,6 +619,11 @@ impl<'c> Collect<'c> {
                 RunRecord::failed(self.k, values, format!("non-finite result: {error}"))
             }
         })
+    }
+
+    /// The beams' deflection peaks of the run `sim` made ([`RunStats::peaks`]).
+    pub(crate) fn take_peaks(&mut self, sim: &Simulation) {
+        self.stats.peaks = peaks(sim);
     }
 
     /// The record of a run that ended at its end time, from the rows collected.
@@ -665,6 +696,27 @@ pub(crate) fn catch_panic<T>(f: impl FnOnce() -> Result<T, String>) -> Result<T,
             .unwrap_or_else(|| "unknown panic".into());
         Err(format!("internal error (a bug in satsim): {what}"))
     })
+}
+
+/// The name of a beam's [`RunStats::peaks`] column, before the body's name.
+pub const PEAK_PREFIX: &str = "peak_deflection_";
+
+/// `peak_deflection_<body>` for each beam of `sim`'s model, in body order: the columns of
+/// [`RunStats::peaks`].
+fn peak_columns(sim: &Simulation) -> Vec<String> {
+    let bodies = sim.model().bodies();
+    sim.deflection_peaks()
+        .iter()
+        .map(|p| format!("{PEAK_PREFIX}{}", bodies[p.body].name()))
+        .collect()
+}
+
+/// [`RunStats::peaks`] of the runs `sim` made.
+pub(crate) fn peaks(sim: &Simulation) -> Vec<f64> {
+    sim.deflection_peaks()
+        .iter()
+        .map(|p| p.tip.abs() / p.length)
+        .collect()
 }
 
 /// `final_c, min_c, max_c` for every column but the first (`t`).

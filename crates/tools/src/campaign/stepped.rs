@@ -120,14 +120,18 @@ impl Campaign {
                 s.advance_to(next)
                     .map_err(|e| format!("at t = {t} s: {e}"))?;
             }
-            Ok(s.trajectory().clone())
+            Ok((
+                s.trajectory().clone(),
+                super::peaks(s.stepping().simulation()),
+            ))
         });
         if stopped {
             return None;
         }
         Some(match outcome {
-            Ok(trajectory) => {
+            Ok((trajectory, peaks)) => {
                 let mut c = Collect::new(self, k, &|| false);
+                c.stats.peaks = peaks;
                 let width = trajectory.columns.len();
                 for row in trajectory.values.chunks_exact(width) {
                     // Rows from the stepper are finite (it refuses any that is not).
