@@ -73,6 +73,10 @@ fn run_scene(scene: &Scene) -> Run {
             r[0]
         );
     }
+    // Every scene run here keeps its flexible beams within their modal model (each tip
+    // within a tenth of its length at every accepted step).
+    let warnings = sim.deflection_warnings();
+    assert!(warnings.is_empty(), "{warnings:?}");
     Run {
         columns,
         rows,
@@ -385,10 +389,16 @@ fn a_wheel_on_a_gimbal_gives_the_bus_h_cross_the_gimbal_rate() {
 /// booms' bending dissipates energy, and ends near the flat spin about its axis of greatest
 /// inertia, the least energy `H² / 2 I_max` at that momentum; without the damping, the same
 /// spin stays put. `I_max` from the scene's numbers: the bus's 8 kg m² about y and two
-/// uniform 0.5 kg booms from 0.4 m to 2.4 m, `ρA (2.4³ − 0.4³) / 3` each.
+/// uniform 0.5 kg booms from 0.4 m to 2.4 m, `ρA (2.4³ − 0.4³) / 3` each. The booms stay
+/// within a few per cent of their length (the scene's stiffness is chosen for it):
+/// no deflection warning.
 #[test]
 fn spinning_booms_sink_the_spins_energy_into_a_flat_spin() {
-    let i_max = 8.0 + 2.0 * 0.25 * (2.4f64.powi(3) - 0.4f64.powi(3)) / 3.0;
+    let boom = 2.0 * 0.25 * (2.4f64.powi(3) - 0.4f64.powi(3)) / 3.0;
+    let i_max = 8.0 + boom;
+    // The initial momentum's angle from z: `atan(I_x ω_x / (I_z ω_z))`, the booms adding
+    // nothing about their own axis x.
+    let tilt0 = (8.0 * 0.2 / ((5.0 + boom) * 2.0)).atan().to_degrees();
     let r = run("spinning_booms");
     let h0 = r.vec3(&r.rows[0], "h");
     let flat = norm(h0).powi(2) / (2.0 * i_max);
@@ -423,29 +433,33 @@ fn spinning_booms_sink_the_spins_energy_into_a_flat_spin() {
         let body = q.inverse_transform_vector(&h) / h.norm();
         body[axis].abs().acos().to_degrees()
     };
-    assert!(tilt(&r, &r.rows[0], 2) < 2.0);
+    assert!((tilt(&r, &r.rows[0], 2) - tilt0).abs() < 1e-6, "{tilt0}");
     assert!(
         tilt(&r, end, 1) < 18.0,
         "the spin ended {} deg from y",
         tilt(&r, end, 1)
     );
-    let at_1000 = r.rows.iter().find(|row| row[0] >= 1000.0).unwrap();
-    assert!(tilt(&r, at_1000, 2) > 30.0, "{}", tilt(&r, at_1000, 2));
+    let at_1500 = r.rows.iter().find(|row| row[0] >= 1500.0).unwrap();
+    assert!(tilt(&r, at_1500, 2) > 30.0, "{}", tilt(&r, at_1500, 2));
+    // The booms within their modal model: `run_scene` asserts that no tip passed a tenth of
+    // its length at any step (8.9 cm of 2 m measured at the output times).
     // Without the booms' damping: no sink, the spin stays about z.
     let path = scene_path("spinning_booms");
     let text = std::fs::read_to_string(&path)
         .unwrap()
-        .replace("damping = 0.3", "damping = 0.0")
-        .replace("duration = 4000.0", "duration = 1000.0");
+        .replace("damping = 0.6", "damping = 0.0")
+        .replace("duration = 10000.0", "duration = 1000.0");
+    assert!(!text.contains("damping = 0.6") && text.contains("duration = 1000.0"));
     let undamped = run_scene(&Scene::parse(&text, &path).unwrap());
     let worst = undamped
         .rows
         .iter()
         .map(|row| tilt(&undamped, row, 2))
         .fold(0.0, f64::max);
+    // 6.41 deg measured, from 6.26 at the start.
     assert!(
-        worst < 2.5,
-        "without damping the spin tilted by {worst} deg"
+        worst < tilt0 + 0.5,
+        "without damping the spin tilted by {worst} deg (from {tilt0})"
     );
     let e = |row: &[f64]| row[undamped.col("total_energy")];
     let e0 = e(&undamped.rows[0]);
