@@ -512,7 +512,10 @@ def campaign(
     anchors a text's relative paths). ``shard``: ``(i, n)`` or ``"i/n"`` makes only the runs
     ``k`` with ``k % n == i``; the shards' rows together are the whole campaign's (run ``k``
     depends on ``(seed, k)`` alone). A run that fails is a row with status ``failed``, not an
-    error; bad input raises :class:`SatsimError` with the command line's message.
+    error; bad input raises :class:`SatsimError` with the command line's message. With
+    flexible beams, each run's ``peak_deflection_<body>`` is its tip's largest deflection over
+    every step as a fraction of the length; where finished runs passed 0.1 (beyond what the
+    modal model holds) a :class:`UserWarning` says how many, as ``satsim campaign`` warns.
 
     **The built-in controllers** (no ``controller``): as ``satsim campaign`` runs it, on
     ``threads`` threads (default every core), in memory. Ctrl-C stops it (no run starts, the
@@ -571,17 +574,37 @@ def campaign(
                 "and shard (or use `satsim campaign` for its folder)")
         origin, text = _scene_args(scene, base_dir)
         columns, data, status, messages = _satsim.campaign(origin, text, threads, _shard(shard))
-        return CampaignResult(columns, data, status, messages)
+        return _warn_beyond(CampaignResult(columns, data, status, messages))
     if period is None:
         raise SatsimError("controller= needs period= (s): the control instants are "
                           "t0, t0 + period, t0 + 2 period, ...")
     if threads is not None:
         raise SatsimError("threads= is the built-in controllers' campaign's: with controller=, "
                           "give workers= (processes) or executor=")
-    return _stepped.campaign(
+    return _warn_beyond(_stepped.campaign(
         scene, controller=controller, period=period, metrics=metrics, out=out,
         workers=workers, executor=executor, resume=resume, shard=shard, base_dir=base_dir,
-        max_rows=max_rows, progress=progress)
+        max_rows=max_rows, progress=progress))
+
+
+def _warn_beyond(res: CampaignResult) -> CampaignResult:
+    """``res``, after a :class:`UserWarning` where finished runs bent a beam past a tenth of
+    its length (a ``peak_deflection_<body>`` column past 0.1), as ``satsim campaign`` warns."""
+    peaks = [c for c in res.columns if c.startswith("peak_deflection_")]
+    past = np.zeros(len(res), dtype=bool)
+    for c in peaks:
+        past |= np.nan_to_num(res[c]) > 0.1  # a failed run's NaN is not past
+    if past.any():
+        warnings.warn(
+            f"{int(past.sum())} of the {int(res.ok.sum())} finished runs bent a beam's tip past "
+            "a tenth of its length at some step: beyond what its modal model holds (a few per "
+            "cent of the length), so those runs' results from then on are not the structure's "
+            "(the peak_deflection_<body> columns, the largest over every step as a fraction of "
+            "the length)",
+            UserWarning,
+            stacklevel=3,
+        )
+    return res
 
 
 def modes(scene: PathLike, *, base_dir: Optional[PathLike] = None) -> Dict[str, Any]:
@@ -788,8 +811,13 @@ class Simulation:
     def close(self) -> None:
         """Ends the simulation and, with ``out=DIR``, writes the rest of the folder
         (``events.csv``, the plots, ``view.html``). Calling it again does nothing; after
-        it, :meth:`advance` and :meth:`set_inputs` raise :class:`SatsimError`."""
+        it, :meth:`advance` and :meth:`set_inputs` raise :class:`SatsimError`. A flexible
+        beam bent past a tenth of its length in the steps taken (beyond what its modal model
+        holds) is a :class:`UserWarning` here, as ``satsim run`` warns after a run."""
+        said = [] if self._native.closed else self._native.warnings()
         self._native.close()
+        for w in said:
+            warnings.warn(w, UserWarning, stacklevel=2)
 
     def __enter__(self) -> "Simulation":
         return self

@@ -707,6 +707,11 @@ impl NativeSimulation {
             .map_err(err)?;
         Ok(written.iter().map(|p| p.display().to_string()).collect())
     }
+    /// What `satsim run` warns of after a run, for the steps taken so far: a flexible beam
+    /// bent past a tenth of its length, beyond what its modal model holds.
+    fn warnings(&self) -> PyResult<Vec<String>> {
+        Ok(self.lock()?.stepping().simulation().deflection_warnings())
+    }
     /// Whether `close` was called.
     #[getter]
     fn closed(&self) -> PyResult<bool> {

@@ -100,6 +100,14 @@ def test_a_beam_bent_beyond_its_modal_model_is_a_warning_and_a_campaign_column(t
     with pytest.warns(UserWarning, match="body `panel`'s tip passed a tenth of its 2 m length"):
         run = satsim.run(bent, base_dir=tmp_path)
     assert abs(run["tip_panel"][0]) > 0.2
+    # Stepped, the warning comes when the simulation is closed (once).
+    sim = satsim.Simulation(bent, base_dir=tmp_path)
+    sim.advance(0.5)
+    with pytest.warns(UserWarning, match="body `panel`'s tip passed a tenth"):
+        sim.close()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        sim.close()
     # A campaign of it gives each run's peak over every step, as a fraction of the length.
     text = bent + """
 [campaign]
@@ -109,7 +117,8 @@ seed = 1
 key = "model.body.0.mass"
 uniform = { low = -1.0, high = 1.0 }
 """
-    c = satsim.campaign(text, base_dir=tmp_path)
+    with pytest.warns(UserWarning, match="2 of the 2 finished runs bent a beam's tip past"):
+        c = satsim.campaign(text, base_dir=tmp_path)
     assert c.columns[-1] == "peak_deflection_panel"
     peaks = c["peak_deflection_panel"]
     assert (peaks > 0.1).all() and (peaks < 1.0).all(), peaks
