@@ -431,4 +431,32 @@ fn a_campaign_disperses_ei_and_damping_and_each_row_is_satsim_run_of_its_scene()
     for (a, b) in frequencies.iter().zip(&frequencies[1..]) {
         assert!((a - b).abs() > 1e-3 * a, "{frequencies:?}");
     }
+    // The last column: each run's largest tip over every step as a fraction of the 2 m,
+    // about the 6.3 mm it starts at (0.3 %); no warning.
+    let p = header.len() - 1;
+    assert_eq!(header[p], "peak_deflection_beam");
+    for line in text.lines().skip(1) {
+        let peak: f64 = line.split(',').nth(p).unwrap().parse().unwrap();
+        assert!(peak > 0.002 && peak < 0.005, "{peak}");
+    }
+    assert!(!String::from_utf8_lossy(&o.stderr).contains("warning"));
+    // Started bent by 0.25 m (12.6 % of the length), every run is past a tenth, and the
+    // campaign says so after it.
+    let bent = base.replace("eta = [0.01, 0.0, 0.0]", "eta = [0.4, 0.0, 0.0]");
+    assert_ne!(bent, base);
+    scene(
+        &dir,
+        "bent.toml",
+        &format!("model = \"cantilever.toml\"\n{bent}{campaign}"),
+    );
+    let o = satsim_in(
+        &dir,
+        &["campaign", "bent.toml", "--out", "b", "--threads", "2"],
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("warning: 4 of the 4 finished runs bent a beam's tip past a tenth of its length at some step: beyond what its modal model holds"),
+        "{err}"
+    );
 }
