@@ -368,15 +368,18 @@ fn a_campaign_disperses_ei_and_damping_and_each_row_is_satsim_run_of_its_scene()
     let dir = setup("campaign");
     let base = "duration = 1.0\n[initial]\nflexible = { beam = { eta = [0.01, 0.0, 0.0] } }\n[integrator]\nmethod = \"rk4\"\nstep = 0.002\n[output]\nevery = 0.1\nplots = false\n";
     let campaign = "[campaign]\nruns = 4\nseed = 7\n[[campaign.disperse]]\nkey = \"model.body.0.flexible.beam.EI\"\nscale = { sigma = 0.2 }\n[[campaign.disperse]]\nkey = \"model.body.0.flexible.damping\"\nuniform = { low = 0.0, high = 0.05 }\n";
-    scene(
-        &dir,
-        "c.toml",
-        &format!("model = \"cantilever.toml\"\n{base}{campaign}"),
-    );
-    let o = satsim_in(
-        &dir,
-        &["campaign", "c.toml", "--out", "c", "--threads", "2"],
-    );
+    // `satsim campaign NAME.toml --out NAME` of the cantilever with `start` (the scene's
+    // settings and initial state) and the campaign above.
+    let run_campaign = |name: &str, start: &str| {
+        scene(
+            &dir,
+            &format!("{name}.toml"),
+            &format!("model = \"cantilever.toml\"\n{start}{campaign}"),
+        );
+        let file = format!("{name}.toml");
+        satsim_in(&dir, &["campaign", &file, "--out", name, "--threads", "2"])
+    };
+    let o = run_campaign("c", base);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let text = std::fs::read_to_string(dir.join("c/runs.csv")).unwrap();
     let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
@@ -444,15 +447,7 @@ fn a_campaign_disperses_ei_and_damping_and_each_row_is_satsim_run_of_its_scene()
     // campaign says so after it.
     let bent = base.replace("eta = [0.01, 0.0, 0.0]", "eta = [0.4, 0.0, 0.0]");
     assert_ne!(bent, base);
-    scene(
-        &dir,
-        "bent.toml",
-        &format!("model = \"cantilever.toml\"\n{bent}{campaign}"),
-    );
-    let o = satsim_in(
-        &dir,
-        &["campaign", "bent.toml", "--out", "b", "--threads", "2"],
-    );
+    let o = run_campaign("b", &bent);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{err}");
     assert!(
