@@ -589,20 +589,16 @@ def campaign(
 
 def _warn_beyond(res: CampaignResult) -> CampaignResult:
     """``res``, after a :class:`UserWarning` where finished runs bent a beam past a tenth of
-    its length (a ``peak_deflection_<body>`` column past 0.1), as ``satsim campaign`` warns."""
+    its length (a ``peak_deflection_<body>`` column past ``SMALL_DEFLECTION``), in ``satsim
+    campaign``'s words."""
     peaks = [c for c in res.columns if c.startswith("peak_deflection_")]
     past = np.zeros(len(res), dtype=bool)
     for c in peaks:
-        past |= np.nan_to_num(res[c]) > 0.1  # a failed run's NaN is not past
+        # A failed run's NaN is not past.
+        past |= np.nan_to_num(res[c]) > _satsim.SMALL_DEFLECTION
     if past.any():
         warnings.warn(
-            f"{int(past.sum())} of the {int(res.ok.sum())} finished runs bent a beam's tip past "
-            "a tenth of its length at some step: beyond what its modal model holds (a few per "
-            "cent of the length), so those runs' results from then on are not the structure's "
-            "(the peak_deflection_<body> columns, the largest over every step as a fraction of "
-            "the length)",
-            UserWarning,
-            stacklevel=3,
+            _satsim.beyond_warning(int(past.sum()), int(res.ok.sum())), UserWarning, stacklevel=3
         )
     return res
 

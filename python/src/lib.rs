@@ -393,6 +393,13 @@ impl SceneSource {
 
 /// Runs the scene file at `path`; writes `out/trajectory.csv` (and the plots) when `out` is
 /// given. Returns `(columns, data, warnings)`.
+/// `satsim campaign`'s warning where `beyond` of its `ok` finished runs bent a beam past
+/// `SMALL_DEFLECTION` of its length.
+#[pyfunction]
+fn beyond_warning(beyond: u64, ok: u64) -> String {
+    satsim_tools::campaign::beyond_warning(beyond, ok)
+}
+
 #[pyfunction]
 #[pyo3(signature = (path, out=None))]
 fn run_file<'py>(py: Python<'py>, path: PathBuf, out: Option<PathBuf>) -> PyResult<RanOut<'py>> {
@@ -741,6 +748,8 @@ fn _satsim(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(run_file, m)?)?;
     m.add_function(wrap_pyfunction!(run_text, m)?)?;
     m.add_function(wrap_pyfunction!(campaign, m)?)?;
+    m.add_function(wrap_pyfunction!(beyond_warning, m)?)?;
+    m.add("SMALL_DEFLECTION", satsim_tree::flexible::SMALL_DEFLECTION)?;
     m.add_function(wrap_pyfunction!(linearize, m)?)?;
     m.add_function(wrap_pyfunction!(modes, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;

@@ -180,10 +180,7 @@ pub fn run(args: &Args) -> Result<Output, CliError> {
 /// beyond its modal model (as `satsim run` warns of its one run).
 fn summary_lines(s: &mut String, dir: &Path, f: &Finished) {
     if f.beyond > 0 {
-        super::print_warnings(&[format!(
-            "{} of the {} finished runs bent a beam's tip past a tenth of its length at some step: beyond what its modal model holds (a few per cent of the length), so those runs' results from then on are not the structure's (`peak_deflection_<body>` in runs.csv, the largest over every step as a fraction of the length; `satsim run` of a run's scene says when)",
-            f.beyond, f.ok
-        )]);
+        super::print_warnings(&[campaign::beyond_warning(f.beyond, f.ok)]);
     }
     let _ = writeln!(
         s,

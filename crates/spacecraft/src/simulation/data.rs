@@ -108,6 +108,14 @@ pub struct DeflectionPeak {
     pub passed: Option<f64>,
 }
 
+impl DeflectionPeak {
+    /// The largest tip deflection as a fraction of the length (dimensionless): past
+    /// [`SMALL_DEFLECTION`](satsim_tree::flexible::SMALL_DEFLECTION), beyond the modal model.
+    pub fn fraction(&self) -> f64 {
+        self.tip.abs() / self.length
+    }
+}
+
 /// The buffers of [`Simulation::apply_requests`](super::Simulation) and its impulse solve:
 /// the matrices are lent to nalgebra as `DMatrix`es of the size at hand and taken back,
 /// their storage kept.

@@ -260,7 +260,7 @@ impl Simulation {
                     f.rigid().bodies()[p.body].name(),
                     satsim_tree::error::Num(p.length),
                     p.tip.abs(),
-                    100.0 * p.tip.abs() / p.length,
+                    100.0 * p.fraction(),
                     p.t,
                 ))
             })

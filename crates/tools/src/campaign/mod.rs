@@ -711,11 +711,20 @@ fn peak_columns(sim: &Simulation) -> Vec<String> {
         .collect()
 }
 
+/// The warning after a campaign whose `beyond` of its `ok` finished runs bent a beam past
+/// [`SMALL_DEFLECTION`](satsim_tree::flexible::SMALL_DEFLECTION) of its length
+/// ([`Finished::beyond`]): `satsim campaign`'s and Python's `satsim.campaign`'s.
+pub fn beyond_warning(beyond: u64, ok: u64) -> String {
+    format!(
+        "{beyond} of the {ok} finished runs bent a beam's tip past a tenth of its length at some step: beyond what its modal model holds (a few per cent of the length), so those runs' results from then on are not the structure's (`peak_deflection_<body>` in runs.csv, the largest over every step as a fraction of the length; `satsim run` of a run's scene says when)"
+    )
+}
+
 /// [`RunStats::peaks`] of the runs `sim` made.
 pub(crate) fn peaks(sim: &Simulation) -> Vec<f64> {
     sim.deflection_peaks()
         .iter()
-        .map(|p| p.tip.abs() / p.length)
+        .map(|p| p.fraction())
         .collect()
 }
 

@@ -513,7 +513,7 @@ fn a_campaign_counts_the_runs_beyond_the_modal_model() {
         ],
     );
     let shipped = std::fs::read_to_string(dir.join("flexible_array.toml")).unwrap();
-    let campaign_table = "duration = 2.0\n\n[campaign]\nruns = 3\nseed = 5\n[[campaign.disperse]]\nkey = \"model.body.0.mass\"\nnormal = { sigma = 0.5 }\n";
+    let campaign_table = "duration = 2.0\n\n[campaign]\nruns = 3\nseed = 5\nhistograms = [\"peak_deflection_panel1\"]\n[[campaign.disperse]]\nkey = \"model.body.0.mass\"\nnormal = { sigma = 0.5 }\n";
     for (k, beyond) in [(2.0, false), (80.0, true)] {
         let text = shipped
             .replace(
@@ -543,6 +543,8 @@ fn a_campaign_counts_the_runs_beyond_the_modal_model() {
         let report = run_campaign(&campaign, &out, &opts, &Quiet).expect("the campaign runs");
         assert_eq!(report.finished.ok, 3);
         assert_eq!(report.finished.beyond, if beyond { 3 } else { 0 });
+        // A peak can be drawn as a histogram.
+        assert!(out.join("histogram_peak_deflection_panel1.svg").is_file());
         let runs = std::fs::read_to_string(out.join("runs.csv")).unwrap();
         let header: Vec<&str> = runs.lines().next().unwrap().split(',').collect();
         for (k, line) in runs.lines().skip(1).enumerate() {
@@ -572,7 +574,11 @@ fn a_campaign_counts_the_runs_beyond_the_modal_model() {
                 .zip(["panel1", "panel2", "panel3"])
             {
                 let peak = value(&format!("peak_deflection_{body}"));
-                assert_eq!(peak, p.tip.abs() / p.length, "run {k}, {body}");
+                assert_eq!(
+                    peak.to_bits(),
+                    (p.tip.abs() / p.length).to_bits(),
+                    "run {k}, {body}"
+                );
                 assert_eq!(peak > 0.1, beyond, "run {k}, {body}: {peak}");
                 let sampled = value(&format!("max_tip_{body}"))
                     .abs()
@@ -584,5 +590,19 @@ fn a_campaign_counts_the_runs_beyond_the_modal_model() {
             }
         }
     }
+    // A histogram of a column there is not is refused, naming the peaks among the columns.
+    let path = dir.join("campaign_2.toml");
+    let text = std::fs::read_to_string(&path)
+        .unwrap()
+        .replace("peak_deflection_panel1\"]", "peak_deflection_bus\"]");
+    std::fs::write(&path, text).unwrap();
+    let err = Campaign::read(&path).unwrap_err().to_string();
+    assert!(
+        err.contains("`campaign.histograms`: unknown column `peak_deflection_bus`")
+            && err.ends_with(
+                "; and peak_deflection_panel1, peak_deflection_panel2, peak_deflection_panel3)"
+            ),
+        "{err}"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
