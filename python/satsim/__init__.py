@@ -513,8 +513,9 @@ def campaign(
     ``k`` with ``k % n == i``; the shards' rows together are the whole campaign's (run ``k``
     depends on ``(seed, k)`` alone). A run that fails is a row with status ``failed``, not an
     error; bad input raises :class:`SatsimError` with the command line's message. With
-    flexible beams, each run's ``peak_deflection_<body>`` is its tip's largest deflection over
-    every step as a fraction of the length; where finished runs passed 0.1 (beyond what the
+    flexible bodies, each run's ``peak_deflection_<body>`` is its largest deflection over every
+    step as a fraction of its length (a beam's tip; a modes file's node for its distance from
+    the body's frame); where finished runs passed 0.1 (beyond what the
     modal model holds) a :class:`UserWarning` says how many, as ``satsim campaign`` warns.
 
     **The built-in controllers** (no ``controller``): as ``satsim campaign`` runs it, on
@@ -588,8 +589,8 @@ def campaign(
 
 
 def _warn_beyond(res: CampaignResult) -> CampaignResult:
-    """``res``, after a :class:`UserWarning` where finished runs bent a beam past a tenth of
-    its length (a ``peak_deflection_<body>`` column past ``SMALL_DEFLECTION``), in ``satsim
+    """``res``, after a :class:`UserWarning` where finished runs bent a flexible body past a
+    tenth of its length (a ``peak_deflection_<body>`` column past ``SMALL_DEFLECTION``), in ``satsim
     campaign``'s words."""
     peaks = [c for c in res.columns if c.startswith("peak_deflection_")]
     past = np.zeros(len(res), dtype=bool)

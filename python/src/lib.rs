@@ -391,15 +391,15 @@ impl SceneSource {
     }
 }
 
-/// Runs the scene file at `path`; writes `out/trajectory.csv` (and the plots) when `out` is
-/// given. Returns `(columns, data, warnings)`.
-/// `satsim campaign`'s warning where `beyond` of its `ok` finished runs bent a beam past
+/// `satsim campaign`'s warning where `beyond` of its `ok` finished runs bent a body past
 /// `SMALL_DEFLECTION` of its length.
 #[pyfunction]
 fn beyond_warning(beyond: u64, ok: u64) -> String {
     satsim_tools::campaign::beyond_warning(beyond, ok)
 }
 
+/// Runs the scene file at `path`; writes `out/trajectory.csv` (and the plots) when `out` is
+/// given. Returns `(columns, data, warnings)`.
 #[pyfunction]
 #[pyo3(signature = (path, out=None))]
 fn run_file<'py>(py: Python<'py>, path: PathBuf, out: Option<PathBuf>) -> PyResult<RanOut<'py>> {

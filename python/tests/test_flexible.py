@@ -117,7 +117,7 @@ seed = 1
 key = "model.body.0.mass"
 uniform = { low = -1.0, high = 1.0 }
 """
-    with pytest.warns(UserWarning, match="2 of the 2 finished runs bent a beam's tip past"):
+    with pytest.warns(UserWarning, match="2 of the 2 finished runs bent a flexible body past"):
         c = satsim.campaign(text, base_dir=tmp_path)
     assert c.columns[-1] == "peak_deflection_panel"
     peaks = c["peak_deflection_panel"]

@@ -176,7 +176,7 @@ pub fn run(args: &Args) -> Result<Output, CliError> {
     Ok(s)
 }
 
-/// The summary's lines; a warning on standard error where finished runs bent a beam
+/// The summary's lines; a warning on standard error where finished runs bent a body
 /// beyond its modal model (as `satsim run` warns of its one run).
 fn summary_lines(s: &mut String, dir: &Path, f: &Finished) {
     if f.beyond > 0 {

@@ -390,14 +390,18 @@ impl Simulation {
         data.base_tau = base_tau;
         data.flex = flex.as_ref().map(FlexWork::new);
         data.deflection_peaks = flex.as_ref().map_or(Vec::new(), |f| {
+            let undeformed = vec![0.0; f.n_elastic()];
             (0..f.rigid().n_bodies())
-                .filter_map(|i| f.beam(i).map(|b| (i, b.length)))
-                .map(|(body, length)| DeflectionPeak {
-                    body,
-                    tip: 0.0,
-                    length,
-                    t: f64::NAN,
-                    passed: None,
+                .filter_map(|body| {
+                    let d = f.deflection_of(body, &undeformed)?;
+                    Some(DeflectionPeak {
+                        body,
+                        tip: 0.0,
+                        length: d.length,
+                        point: d.point,
+                        t: f64::NAN,
+                        passed: None,
+                    })
                 })
                 .collect()
         });

@@ -86,30 +86,36 @@ pub struct SimData {
     /// The right-hand side the event functions evaluated at the end of a step, for the next
     /// step's first stage (`ahead.rs`).
     pub(super) ahead: Ahead,
-    /// Each beam's largest tip deflection over the accepted steps so far.
+    /// Each watched flexible body's largest deflection over the accepted steps so far.
     pub(super) deflection_peaks: Vec<DeflectionPeak>,
 }
 
-/// A beam's largest tip deflection over a run's accepted steps
-/// ([`Simulation::deflection_peaks`](super::Simulation::deflection_peaks)).
+/// A flexible body's largest deflection over a run's accepted steps
+/// ([`Simulation::deflection_peaks`](super::Simulation::deflection_peaks)): a beam's tip,
+/// or for given modes the watched point bent most for its distance from the body's frame
+/// ([`FlexModel::deflection_of`](satsim_tree::flexible::FlexModel::deflection_of)).
 #[derive(Clone, Debug, PartialEq)]
 pub struct DeflectionPeak {
     /// The body (of the scene's model).
     pub body: usize,
-    /// The tip's deflection along the beam's `bend` there (m).
+    /// The tip's deflection along the beam's `bend`, or the size of the watched point's
+    /// displacement, there (m).
     pub tip: f64,
-    /// The beam's length (m).
+    /// The beam's length, or the watched point's distance from the body's frame (m).
     pub length: f64,
+    /// The watched point ([`FlexModel::watch_points`](satsim_tree::flexible::FlexModel::watch_points));
+    /// `None` for a beam's tip.
+    pub point: Option<usize>,
     /// When (s).
     pub t: f64,
-    /// The first accepted step's end at which the tip was off by more than
+    /// The first accepted step's end at which the deflection passed
     /// [`SMALL_DEFLECTION`](satsim_tree::flexible::SMALL_DEFLECTION) of the length (s);
-    /// `None` while it has not been.
+    /// `None` while it has not.
     pub passed: Option<f64>,
 }
 
 impl DeflectionPeak {
-    /// The largest tip deflection as a fraction of the length (dimensionless): past
+    /// The largest deflection as a fraction of the length (dimensionless): past
     /// [`SMALL_DEFLECTION`](satsim_tree::flexible::SMALL_DEFLECTION), beyond the modal model.
     pub fn fraction(&self) -> f64 {
         self.tip.abs() / self.length

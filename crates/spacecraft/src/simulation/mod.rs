@@ -235,14 +235,16 @@ impl Simulation {
             self.data.n_locked -= 1;
         }
     }
-    /// Each beam's largest tip deflection over the accepted steps of the runs so far (the
-    /// initial state not among them), in the model's body order: where one passed
-    /// [`SMALL_DEFLECTION`](satsim_tree::flexible::SMALL_DEFLECTION) of its length, the run
-    /// went beyond what its modal model holds. Empty without beams.
+    /// Each watched flexible body's largest deflection over the accepted steps of the runs
+    /// so far (the initial state not among them), in the model's body order: a beam's tip,
+    /// or for given modes the watched point bent most for its distance from the body's
+    /// frame. Where one passed [`SMALL_DEFLECTION`](satsim_tree::flexible::SMALL_DEFLECTION)
+    /// of its length, the run went beyond what its modal model holds. Empty without
+    /// watched bodies.
     pub fn deflection_peaks(&self) -> &[DeflectionPeak] {
         &self.data.deflection_peaks
     }
-    /// A warning for each beam whose tip went past
+    /// A warning for each watched body whose deflection went past
     /// [`SMALL_DEFLECTION`](satsim_tree::flexible::SMALL_DEFLECTION) of its length in the
     /// runs so far ([`Self::deflection_peaks`]): the results from then on are not the
     /// structure's, though the model may go on without a sign (the linear model, without
@@ -255,14 +257,26 @@ impl Simulation {
             .iter()
             .filter_map(|p| {
                 let passed = p.passed?;
-                Some(format!(
-                    "body `{}`'s tip passed a tenth of its {} m length at t = {passed:.4} s and went {:.4} m off its axis ({:.0} % of the length) at t = {:.4} s: beyond what its modal model holds (a few per cent of the length), so the run's results from t = {passed:.4} s on are not the structure's: stiffen the body, or soften what drives it (a spring, a controller, a load)",
-                    f.rigid().bodies()[p.body].name(),
-                    satsim_tree::error::Num(p.length),
-                    p.tip.abs(),
-                    100.0 * p.fraction(),
-                    p.t,
-                ))
+                let body = f.rigid().bodies()[p.body].name();
+                let consequence = format!(
+                    "beyond what its modal model holds (a few per cent of the length), so the run's results from t = {passed:.4} s on are not the structure's: stiffen the body, or soften what drives it (a spring, a controller, a load)"
+                );
+                let length = satsim_tree::error::Num(p.length);
+                Some(match p.point {
+                    None => format!(
+                        "body `{body}`'s tip passed a tenth of its {length} m length at t = {passed:.4} s and went {:.4} m off its axis ({:.0} % of the length) at t = {:.4} s: {consequence}",
+                        p.tip.abs(),
+                        100.0 * p.fraction(),
+                        p.t,
+                    ),
+                    Some(k) => format!(
+                        "body `{body}` passed a tenth of its size at t = {passed:.4} s: its node `{}` moved {:.4} m at t = {:.4} s, {:.0} % of its {length} m from the body's frame, {consequence}",
+                        f.watch_points(p.body)[k].name,
+                        p.tip.abs(),
+                        p.t,
+                        100.0 * p.fraction(),
+                    ),
+                })
             })
             .collect()
     }

@@ -122,14 +122,25 @@ impl SimModel {
             0 => String::new(),
             _ => format!(" (also {})", others.join(", ")),
         };
-        let size = format!(
-            "body `{}`'s tip is {:.4} m off its axis, {:.0} % of its {} m length (modal coordinates [{}]){others}",
-            name(worst.body),
-            worst.tip.abs(),
-            100.0 * worst.tip.abs() / worst.length,
-            satsim_tree::error::Num(worst.length),
-            eta.join(", ")
-        );
+        let size = match worst.point {
+            None => format!(
+                "body `{}`'s tip is {:.4} m off its axis, {:.0} % of its {} m length (modal coordinates [{}]){others}",
+                name(worst.body),
+                worst.tip.abs(),
+                100.0 * worst.tip.abs() / worst.length,
+                satsim_tree::error::Num(worst.length),
+                eta.join(", ")
+            ),
+            Some(k) => format!(
+                "body `{}`'s node `{}` has moved {:.4} m, {:.0} % of its {} m from the body's frame (modal coordinates [{}]){others}",
+                name(worst.body),
+                f.watch_points(worst.body)[k].name,
+                worst.tip.abs(),
+                100.0 * worst.tip.abs() / worst.length,
+                satsim_tree::error::Num(worst.length),
+                eta.join(", ")
+            ),
+        };
         SystemError::new(format!(
             "{error}: the flexible bodies are deflected beyond what their modal model holds: {size}. A modal model is meant for deflections of a few per cent of a body's length: stiffen the body, or soften what drives it (a spring, a controller, a load)"
         ))

@@ -39,18 +39,21 @@ impl System for Simulation {
         q[self.model.work.clone()].fill(true);
     }
 
-    /// Each beam's largest tip deflection so far ([`Simulation::deflection_peaks`]).
+    /// Each watched flexible body's largest deflection so far
+    /// ([`Simulation::deflection_peaks`]).
     fn step_accepted(&mut self, t: f64, x: &[f64]) {
         let Some(f) = &self.model.flex else {
             return;
         };
         let eta = &x[self.model.layout.eta.clone()];
         for p in &mut self.data.deflection_peaks {
-            let tip = f.tip_of(p.body, eta).unwrap_or(0.0);
-            if tip.abs() > p.tip.abs() {
-                (p.tip, p.t) = (tip, t);
+            let Some(d) = f.deflection_of(p.body, eta) else {
+                continue;
+            };
+            if d.fraction() > p.fraction() {
+                (p.tip, p.length, p.point, p.t) = (d.offset, d.length, d.point, t);
             }
-            if p.passed.is_none() && tip.abs() > SMALL_DEFLECTION * p.length {
+            if p.passed.is_none() && d.fraction() > SMALL_DEFLECTION {
                 p.passed = Some(t);
             }
         }

@@ -204,7 +204,7 @@ pub struct Finished {
     pub failed: u64,
     /// Runs of the campaign (or shard) that `runs.csv` does not hold.
     pub missing: u64,
-    /// Finished runs that bent a beam beyond what its modal model holds: a
+    /// Finished runs that bent a flexible body beyond what its modal model holds: a
     /// `peak_deflection_<body>` past
     /// [`SMALL_DEFLECTION`] (the run `ok`, its
     /// results from then on not the structure's).

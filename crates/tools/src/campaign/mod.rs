@@ -113,7 +113,8 @@ pub struct Campaign {
     /// The trajectory columns (contract section 7) of the nominal scene, `t` first.
     pub columns: Vec<String>,
     /// The columns after the statistics for the nominal scene's beams, in body order:
-    /// `peak_deflection_<body>` ([`RunStats::peaks`]); empty without beams.
+    /// `peak_deflection_<body>` ([`RunStats::peaks`]); empty without watched flexible
+    /// bodies.
     pub peak_columns: Vec<String>,
     /// The nominal scene.
     pub nominal: Scene,
@@ -698,10 +699,11 @@ pub(crate) fn catch_panic<T>(f: impl FnOnce() -> Result<T, String>) -> Result<T,
     })
 }
 
-/// The name of a beam's [`RunStats::peaks`] column, before the body's name.
+/// The name of a watched flexible body's [`RunStats::peaks`] column, before the body's name.
 pub const PEAK_PREFIX: &str = "peak_deflection_";
 
-/// `peak_deflection_<body>` for each beam of `sim`'s model, in body order: the columns of
+/// `peak_deflection_<body>` for each watched flexible body of `sim`'s model (a beam, or
+/// given modes with a node off the body's frame), in body order: the columns of
 /// [`RunStats::peaks`].
 fn peak_columns(sim: &Simulation) -> Vec<String> {
     let bodies = sim.model().bodies();
@@ -711,12 +713,12 @@ fn peak_columns(sim: &Simulation) -> Vec<String> {
         .collect()
 }
 
-/// The warning after a campaign whose `beyond` of its `ok` finished runs bent a beam past
+/// The warning after a campaign whose `beyond` of its `ok` finished runs bent a body past
 /// [`SMALL_DEFLECTION`](satsim_tree::flexible::SMALL_DEFLECTION) of its length
 /// ([`Finished::beyond`]): `satsim campaign`'s and Python's `satsim.campaign`'s.
 pub fn beyond_warning(beyond: u64, ok: u64) -> String {
     format!(
-        "{beyond} of the {ok} finished runs bent a beam's tip past a tenth of its length at some step: beyond what its modal model holds (a few per cent of the length), so those runs' results from then on are not the structure's (`peak_deflection_<body>` in runs.csv, the largest over every step as a fraction of the length; `satsim run` of a run's scene says when)"
+        "{beyond} of the {ok} finished runs bent a flexible body past a tenth of its length at some step (a beam's tip, or a modes file's node for its distance from the body's frame): beyond what its modal model holds (a few per cent of the length), so those runs' results from then on are not the structure's (`peak_deflection_<body>` in runs.csv, the largest over every step as a fraction of the length; `satsim run` of a run's scene says when)"
     )
 }
 

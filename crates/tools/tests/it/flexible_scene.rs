@@ -606,3 +606,103 @@ fn a_campaign_counts_the_runs_beyond_the_modal_model() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A body whose modes come from a modes file is watched at the file's nodes: a run that
+/// bends it past a tenth of a node's distance from its frame warns, naming the node, and a
+/// campaign of it has the body's `peak_deflection_<body>` column. The contract beam's modes
+/// file (nodes at 0, 1 and 2 m along the panel; the linear model, without its
+/// `[stiffening]`, whose deformed inertia a start this bent would take out of a body's) on
+/// a free hub, started with its first mode at 15 % of the tip's 2 m and at 2 %.
+#[test]
+fn a_modes_file_body_bent_beyond_its_modal_model_is_a_warning() {
+    use satsim_tools::campaign::Campaign;
+    let dir = satsim_testkit::temp_dir_with(
+        "modes-file-deflection",
+        &["examples/modes/panel_beam_modes.toml"],
+    );
+    // The tip's translation per unit first-mode coordinate (the file's `tip` node).
+    let unit = 0.63246;
+    let text = |fraction: f64| {
+        format!(
+            r#"duration = 1.0
+[model]
+[[model.body]]
+name = "hub"
+mass = 50.0
+inertia = [[5.0, 0.0, 0.0], [0.0, 5.0, 0.0], [0.0, 0.0, 5.0]]
+[[model.body]]
+name = "panel"
+mass = 0.0
+[model.body.flexible]
+modes_file = "panel_beam_modes.toml"
+stiffening = false
+[[model.hinge]]
+name = "h"
+parent = "hub"
+child = "panel"
+axis = [1.0, 0.0, 0.0]
+at = [0.0, 0.5, 0.0]
+[initial]
+hinges = {{ angle = [0.0], rate = [0.0] }}
+flexible = {{ panel = {{ eta = [{:?}, 0.0, 0.0] }} }}
+[integrator]
+method = "rk4"
+step = 0.005
+[output]
+every = 0.1
+plots = false
+view = false
+[effects.hinge_springs]
+stiffness = [10.0]
+"#,
+            fraction * 2.0 / unit
+        )
+    };
+    let run = |fraction: f64| {
+        let path = dir.join(format!("bent_{fraction}.toml"));
+        std::fs::write(&path, text(fraction)).unwrap();
+        let scene = Scene::read(&path).expect("a valid scene");
+        let mut sim = scene.simulation().expect("a simulation");
+        sim.run(
+            &scene.options,
+            1.0,
+            &satsim_integrate::Output::Interval(0.1),
+            |_, _| Ok::<(), std::convert::Infallible>(()),
+        )
+        .expect("it runs");
+        sim
+    };
+    let small = run(0.02);
+    let peaks = small.deflection_peaks();
+    assert_eq!(peaks.len(), 1, "{peaks:?}");
+    // The panel rings about its start: never past it (the free hub takes part of the
+    // motion), and not far below.
+    assert!(
+        peaks[0].fraction() > 0.01 && peaks[0].fraction() <= 0.02,
+        "{peaks:?}"
+    );
+    assert!(small.deflection_warnings().is_empty());
+    let bent = run(0.15);
+    let p = &bent.deflection_peaks()[0];
+    assert_eq!((p.body, p.point, p.length), (1, Some(1), 2.0), "{p:?}");
+    assert!(
+        p.fraction() > 0.1 && p.fraction() <= 0.15 && p.passed.is_some(),
+        "{p:?}"
+    );
+    let warnings = bent.deflection_warnings();
+    assert_eq!(warnings.len(), 1, "{warnings:?}");
+    assert!(
+        warnings[0].starts_with("body `panel` passed a tenth of its size at t = ")
+            && warnings[0].contains(": its node `tip` moved ")
+            && warnings[0]
+                .contains("of its 2 m from the body's frame, beyond what its modal model holds"),
+        "{}",
+        warnings[0]
+    );
+    let path = dir.join("campaign.toml");
+    let campaign_table = "\n[campaign]\nruns = 2\n[[campaign.disperse]]\nkey = \"model.body.0.mass\"\nnormal = { sigma = 0.5 }\n";
+    std::fs::write(&path, text(0.15) + campaign_table).unwrap();
+    let campaign = Campaign::read(&path).expect("a valid campaign");
+    assert_eq!(campaign.peak_columns, ["peak_deflection_panel"]);
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -64,7 +64,8 @@ pub use field::FieldLoad;
 pub use kinematics::{forward_kinematics, momentum};
 pub use modal::{ModalData, NodeShape};
 pub use model::{
-    FlexError, FlexModel, Flexible, LargeDeflection, Modes, SMALL_DEFLECTION, UNRESOLVED,
+    Deflection, FlexError, FlexModel, Flexible, LargeDeflection, Modes, SMALL_DEFLECTION,
+    UNRESOLVED, WatchPoint,
 };
 pub use rnea::{bias, gyrostat_torques, gyrostat_torques_on_base, rnea, rnea_with_kinematics};
 

@@ -9,7 +9,7 @@ use super::modal::{ModalData, NodeShape};
 use super::node::Node;
 use crate::error::{ModelError, Num};
 use crate::model::{Model, ModelBuilder, UNIT_NORM_TOLERANCE};
-use crate::spatial::{Force, Mat3, Motion, RigidInertia};
+use crate::spatial::{Force, Mat3, Motion, RigidInertia, Vec3};
 use thiserror::Error;
 
 /// Why the dynamics cannot resolve a mode whose articulated pivot comes out not positive
@@ -37,7 +37,23 @@ pub enum Modes {
         /// The second-order inertia of a beam-like structure along one axis (a modes file's
         /// `[stiffening]`), or none: the stiffening of given modes is what this says.
         stiffening: Option<Box<Stiffening>>,
+        /// Points whose deflection tells how far the body is bent (a modes file's nodes):
+        /// [`FlexModel::deflection_of`] watches those off the body frame's origin.
+        watch: Vec<WatchPoint>,
     },
+}
+
+/// A point of a body with given modes where their translations are known (a modes file's
+/// node), watched for a deflection beyond what the modal model holds
+/// ([`FlexModel::deflection_of`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct WatchPoint {
+    /// Its name (for messages).
+    pub name: String,
+    /// Where it is undeformed, body frame (m).
+    pub at: Vec3,
+    /// Each mode's translation there, body axes (m per unit `ηₖ`).
+    pub translation: Vec<Vec3>,
 }
 
 /// A flexible body as given to [`FlexModel::build`].
@@ -143,6 +159,9 @@ pub struct FlexModel {
     pub(crate) children: Vec<Vec<usize>>,
     /// Per body: its beam's second-order inertia (centrifugal stiffening), when on.
     pub(crate) stiffening: Vec<Option<Stiffening>>,
+    /// Per body with given modes: the points [`FlexModel::deflection_of`] watches (those of
+    /// [`Modes::Given`]'s `watch` off the frame's origin).
+    pub(crate) watch: Vec<Vec<WatchPoint>>,
     /// The flexible bodies as given (to attach them again to a grown tree).
     pub(crate) spec: Vec<Flexible>,
     /// Every balanced rotor of the rigid model ([`crate::Gyrostat`]) rides on a rigid
@@ -277,6 +296,7 @@ impl FlexModel {
         let mut data: Vec<Option<(ModalData, f64)>> = vec![None; n];
         let mut beams: Vec<Option<Beam>> = vec![None; n];
         let mut stiffening: Vec<Option<Stiffening>> = vec![None; n];
+        let mut watch: Vec<Vec<WatchPoint>> = vec![Vec::new(); n];
         for f in flexible {
             let b = rigid
                 .body_index(&f.body)
@@ -307,11 +327,39 @@ impl FlexModel {
                 Modes::Given {
                     data,
                     stiffening: given,
+                    watch: points,
                     ..
                 } => {
                     if data.momentum.len() != data.omega.len() {
                         return Err(invalid(&f.body, "momentum and omega lengths differ"));
                     }
+                    for p in points {
+                        if p.translation.len() != data.omega.len() {
+                            return Err(invalid(
+                                &f.body,
+                                format!(
+                                    "watched point `{}`: {} translations for {} modes",
+                                    p.name,
+                                    p.translation.len(),
+                                    data.omega.len()
+                                ),
+                            ));
+                        }
+                        let finite = p.at.iter().chain(p.translation.iter().flatten());
+                        if !finite.into_iter().all(|x| x.is_finite()) {
+                            return Err(invalid(
+                                &f.body,
+                                format!("watched point `{}`: a value is not finite", p.name),
+                            ));
+                        }
+                    }
+                    // A point at the frame's origin has no distance to measure its
+                    // deflection against.
+                    watch[b] = points
+                        .iter()
+                        .filter(|p| p.at.norm() > 0.0)
+                        .cloned()
+                        .collect();
                     if f.stiffening {
                         let m = data.omega.len();
                         match given {
@@ -468,6 +516,7 @@ impl FlexModel {
             beams,
             children,
             stiffening,
+            watch,
             spec: flexible.to_vec(),
         };
         model.check_resolved()?;
@@ -629,22 +678,63 @@ impl FlexModel {
         let eta = &eta[self.offset[i]..][..self.modes[i]];
         Some(self.tips[i].iter().zip(eta).map(|(p, e)| p * e).sum())
     }
-    /// The beams whose tip in `q` is off its axis by more than [`SMALL_DEFLECTION`] of the
-    /// beam's length, the largest first: deflections beyond what a modal model holds. Empty
-    /// where every beam's deflection is small (and for bodies whose modes are given by a
-    /// file, whose deflection has no tip to measure). A solve that fails on such a state
-    /// fails where the model does not hold: with `stiffening` the inertia is right to
-    /// second order only, and on a bus with two 2 m beams the moment about a beam's own
-    /// axis (zero undeformed) is already `−2.6e-5` of the trace at a tenth of the length.
+    /// How far body `i` is bent in `eta` (all elastic coordinates, in order), against the
+    /// size the modal model is meant for: for a beam, its tip's deflection along `bend`
+    /// against its length; for given modes, the watched point ([`WatchPoint`], off the
+    /// frame's origin) displaced most for its distance from the frame's origin, that
+    /// displacement's size against the distance. `None` for a rigid body and for given modes
+    /// without such a point.
+    pub fn deflection_of(&self, i: usize, eta: &[f64]) -> Option<Deflection> {
+        if let Some(beam) = &self.beams[i] {
+            return Some(Deflection {
+                offset: self.tip_of(i, eta)?,
+                length: beam.length,
+                point: None,
+            });
+        }
+        let eta = &eta[self.offset[i]..][..self.modes[i]];
+        let mut worst: Option<Deflection> = None;
+        for (k, p) in self.watch[i].iter().enumerate() {
+            let d: Vec3 = p.translation.iter().zip(eta).map(|(t, e)| t * *e).sum();
+            let here = Deflection {
+                offset: d.norm(),
+                length: p.at.norm(),
+                point: Some(k),
+            };
+            if worst.is_none_or(|w| here.fraction() > w.fraction()) {
+                worst = Some(here);
+            }
+        }
+        worst
+    }
+    /// Whether [`Self::deflection_of`] watches body `i`: a beam, or given modes with a
+    /// point off the frame's origin.
+    pub fn watched(&self, i: usize) -> bool {
+        self.beams[i].is_some() || !self.watch[i].is_empty()
+    }
+    /// The points of body `i` that [`Self::deflection_of`] watches, for given modes (a
+    /// [`Deflection`]'s `point` indexes them); empty for a beam, whose tip is watched.
+    pub fn watch_points(&self, i: usize) -> &[WatchPoint] {
+        &self.watch[i]
+    }
+    /// The bodies bent in `q` by more than [`SMALL_DEFLECTION`] of their size
+    /// ([`Self::deflection_of`]), the largest first: deflections beyond what a modal model
+    /// holds. Empty where every deflection is small (and for given modes with no watched
+    /// point). A solve that fails on such a state fails where the model does not hold: with
+    /// `stiffening` the inertia is right to second order only, and on a bus with two 2 m
+    /// beams the moment about a beam's own axis (zero undeformed) is already `−2.6e-5` of
+    /// the trace at a tenth of the length.
     pub fn large_deflections(&self, q: &[f64]) -> Vec<LargeDeflection> {
+        let eta = &q[self.rigid.nq()..];
         let mut out: Vec<LargeDeflection> = (0..self.rigid.n_bodies())
             .filter_map(|i| {
-                let (tip, length) = (self.tip_deflection(i, q)?, self.beam(i)?.length);
-                (tip.abs() > SMALL_DEFLECTION * length).then(|| LargeDeflection {
+                let d = self.deflection_of(i, eta)?;
+                (d.fraction() > SMALL_DEFLECTION).then(|| LargeDeflection {
                     body: i,
-                    tip,
-                    length,
-                    eta: q[self.rigid.nq() + self.offset[i]..][..self.modes[i]].to_vec(),
+                    tip: d.offset,
+                    length: d.length,
+                    point: d.point,
+                    eta: eta[self.offset[i]..][..self.modes[i]].to_vec(),
                 })
             })
             .collect();
@@ -799,21 +889,44 @@ impl FlexModel {
     }
 }
 
-/// The tip deflection, as a fraction of a beam's length, beyond which
-/// [`FlexModel::large_deflections`] calls it large: a modal model (the floating frame's
-/// linear deformation, with `stiffening` its second-order foreshortening) is meant for
-/// deflections of a few per cent of the length.
+/// The deflection, as a fraction of a beam's length (or of a watched point's distance from
+/// its body's frame), beyond which [`FlexModel::large_deflections`] calls it large: a modal
+/// model (the floating frame's linear deformation, with `stiffening` its second-order
+/// foreshortening) is meant for deflections of a few per cent of the length.
 pub const SMALL_DEFLECTION: f64 = 0.1;
 
-/// A beam deflected beyond what its modal model holds ([`FlexModel::large_deflections`]).
+/// How far a flexible body is bent ([`FlexModel::deflection_of`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Deflection {
+    /// A beam's tip deflection along `bend` (signed), or the size of a watched point's
+    /// displacement (m).
+    pub offset: f64,
+    /// The beam's length, or the watched point's distance from the body frame's origin (m).
+    pub length: f64,
+    /// The watched point ([`FlexModel::watch_points`]); `None` for a beam's tip.
+    pub point: Option<usize>,
+}
+
+impl Deflection {
+    /// The deflection as a fraction of the length: past [`SMALL_DEFLECTION`], beyond the
+    /// modal model.
+    pub fn fraction(&self) -> f64 {
+        self.offset.abs() / self.length
+    }
+}
+
+/// A flexible body deflected beyond what its modal model holds
+/// ([`FlexModel::large_deflections`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct LargeDeflection {
     /// The body.
     pub body: usize,
-    /// Its beam's tip deflection along `bend` (m).
+    /// Its beam's tip deflection along `bend`, or its watched point's displacement (m).
     pub tip: f64,
-    /// Its beam's length (m).
+    /// Its beam's length, or the watched point's distance from the frame's origin (m).
     pub length: f64,
+    /// The watched point ([`FlexModel::watch_points`]); `None` for a beam's tip.
+    pub point: Option<usize>,
     /// Its elastic coordinates.
     pub eta: Vec<f64>,
 }

@@ -26,7 +26,7 @@ use crate::error::Num;
 use crate::flexible::model::MAX_BEAM_MODES;
 use crate::flexible::{
     Beam, FlexError, FlexModel, Flexible, ModalData, Modes, NodeShape, Stiffening,
-    StiffeningIntegrals,
+    StiffeningIntegrals, WatchPoint,
 };
 use crate::model::{Body, UNIT_NORM_TOLERANCE};
 use crate::spatial::{Force, Mat3, RigidInertia, Vec3, skew};
@@ -149,6 +149,20 @@ impl ModesFile {
             phi: n.translation.get_ref().iter().map(v3).collect(),
             psi: n.rotation.get_ref().iter().map(v3).collect(),
         }
+    }
+    /// Every node as a point whose deflection a run watches ([`WatchPoint`]).
+    pub fn watch_points(&self) -> Vec<WatchPoint> {
+        self.node
+            .iter()
+            .map(|n| {
+                let n = n.get_ref();
+                WatchPoint {
+                    name: n.name.get_ref().clone(),
+                    at: v3(n.at.get_ref()),
+                    translation: n.translation.get_ref().iter().map(v3).collect(),
+                }
+            })
+            .collect()
     }
     /// The structure's inertia about the body origin.
     pub fn inertia(&self) -> RigidInertia {
@@ -712,6 +726,7 @@ pub fn flex_model_of(file: &ModelFile, text: &str, origin: &Path) -> Result<Flex
                     data: modes.modal_data(),
                     nodes,
                     stiffening: modes.stiffening(),
+                    watch: modes.watch_points(),
                 }
             }
         };

@@ -197,6 +197,7 @@ pub(crate) fn with_random_modes(rigid: Model, seed: u64) -> FlexModel {
                 data,
                 nodes,
                 stiffening: None,
+                watch: Vec::new(),
             }
         };
         flex.push(Flexible {

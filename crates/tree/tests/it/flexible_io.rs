@@ -245,6 +245,16 @@ fn example_path() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/modes/panel_beam_modes.toml")
 }
 
+/// A model file's path in `examples/`, whose `modes/panel_beam_modes.toml` is the example.
+fn examples_model_path() -> PathBuf {
+    example_path()
+        .parent()
+        .unwrap()
+        .parent()
+        .unwrap()
+        .join("flex.toml")
+}
+
 fn example_nodes() -> [(&'static str, Vec3); 3] {
     [
         ("root", Vec3::zeros()),
@@ -312,12 +322,7 @@ fn the_beam_as_a_modes_file_gives_the_same_dynamics() {
     // The file's [stiffening] block: the beam's dynamics, spinning and deformed (the
     // state `same_dynamics` takes), with the stiffening on, its default for both.
     let beam_line = MODEL.lines().nth(9).unwrap();
-    let origin = example_path()
-        .parent()
-        .unwrap()
-        .parent()
-        .unwrap()
-        .join("flex.toml");
+    let origin = examples_model_path();
     let stiff = parse_flex_model(
         &MODEL.replace("stiffening = true\n", ""),
         Path::new("flex.toml"),
@@ -669,5 +674,92 @@ fn a_beam_far_lighter_than_what_it_carries_is_refused_at_its_line() {
             "body `panel`'s mode 3",
             "coordinate 11",
         ]
+    );
+}
+
+/// A body whose modes come from a file is watched at the file's nodes off its frame's
+/// origin: its deflection is the node displaced most for its distance from the frame. The
+/// contract beam written as a modes file (nodes at its root, middle and tip) gives, at any
+/// deformation, the larger of the beam's own deflections at 1 m and 2 m for those
+/// distances, and with its first mode alone the beam's tip fraction itself; the root's
+/// node (at the origin) is not watched.
+#[test]
+fn a_modes_file_body_is_watched_at_its_nodes() {
+    use satsim_tree::flexible::SMALL_DEFLECTION;
+    let beam_line = MODEL.lines().nth(9).unwrap();
+    let origin = examples_model_path();
+    let beam = parse_flex_model(MODEL, Path::new("flex.toml")).unwrap();
+    let given = parse_flex_model(
+        &MODEL
+            .replace(beam_line, "modes_file = \"modes/panel_beam_modes.toml\"")
+            .replace("stiffening = true\n", ""),
+        &origin,
+    )
+    .unwrap();
+    let panel = 1;
+    assert!(given.watched(panel) && !given.watched(0) && !given.watched(2));
+    let names: Vec<&str> = given
+        .watch_points(panel)
+        .iter()
+        .map(|p| p.name.as_str())
+        .collect();
+    assert_eq!(names, ["middle", "tip"]);
+    assert!(given.tip_deflection(panel, &given.neutral()).is_none());
+    let shape = |at: Vec3| contract_beam().node(&at).phi;
+    let mut rng = 0x9e37_79b9_7f4a_7c15_u64;
+    for _ in 0..20 {
+        let eta: Vec<f64> = (0..3)
+            .map(|_| {
+                rng = rng.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1);
+                ((rng >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 0.4
+            })
+            .collect();
+        let at = |p: Vec3| -> f64 {
+            let d: Vec3 = shape(p).iter().zip(&eta).map(|(s, e)| s * *e).sum();
+            d.norm() / p.norm()
+        };
+        let (middle, tip) = (at(Vec3::new(0.0, 1.0, 0.0)), at(Vec3::new(0.0, 2.0, 0.0)));
+        let d = given.deflection_of(panel, &eta).unwrap();
+        assert!(
+            (d.fraction() - middle.max(tip)).abs() <= 1e-12,
+            "{d:?} {middle} {tip}"
+        );
+        assert_eq!(d.point, Some(if tip >= middle { 1 } else { 0 }));
+    }
+    // The first mode alone: the tip is bent most for its distance, as the beam's own tip.
+    let eta = [0.4, 0.0, 0.0];
+    let (a, b) = (
+        beam.deflection_of(panel, &eta).unwrap(),
+        given.deflection_of(panel, &eta).unwrap(),
+    );
+    assert_eq!(
+        (a.point, a.length, b.point, b.length),
+        (None, 2.0, Some(1), 2.0)
+    );
+    assert!(
+        (a.offset.abs() - b.offset).abs() <= 1e-12 * b.offset,
+        "{a:?} {b:?}"
+    );
+    // Past a tenth: listed with the node, as the beam is with its tip.
+    let mut q = given.neutral();
+    let nq = given.rigid().nq();
+    q[nq] = 1.1 * SMALL_DEFLECTION * 2.0 / b.offset * 0.4;
+    let large = given.large_deflections(&q);
+    assert_eq!(large.len(), 1, "{large:?}");
+    assert_eq!((large[0].body, large[0].point), (panel, Some(1)));
+    assert!((large[0].tip / large[0].length - 1.1 * SMALL_DEFLECTION).abs() < 1e-12);
+    q[nq] *= 0.9 / 1.1;
+    assert!(given.large_deflections(&q).is_empty());
+    // Through the API, a point's translations must match the modes.
+    let mut spec = given.flexible().to_vec();
+    let Modes::Given { watch, .. } = &mut spec[0].modes else {
+        panic!("given modes")
+    };
+    watch[2].translation.pop();
+    let err = FlexModel::attach(given.rigid().clone(), &spec).unwrap_err();
+    assert!(
+        err.to_string()
+            .contains("watched point `tip`: 2 translations for 3 modes"),
+        "{err}"
     );
 }
