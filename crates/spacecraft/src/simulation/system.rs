@@ -50,10 +50,11 @@ impl System for Simulation {
             let Some(d) = f.deflection_of(p.body, eta) else {
                 continue;
             };
-            if d.fraction() > p.fraction() {
+            let fraction = d.fraction();
+            if fraction > p.fraction() {
                 (p.tip, p.length, p.point, p.t) = (d.offset, d.length, d.point, t);
             }
-            if p.passed.is_none() && d.fraction() > SMALL_DEFLECTION {
+            if p.passed.is_none() && fraction > SMALL_DEFLECTION {
                 p.passed = Some(t);
             }
         }
