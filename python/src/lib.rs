@@ -714,10 +714,11 @@ impl NativeSimulation {
             .map_err(err)?;
         Ok(written.iter().map(|p| p.display().to_string()).collect())
     }
-    /// What `satsim run` warns of after a run, for the steps taken so far: a flexible beam
-    /// bent past a tenth of its length, beyond what its modal model holds.
+    /// What `satsim run` warns of after a run, for the steps taken so far: a flexible body
+    /// bent past a tenth of its length, beyond what its modal model holds; an energy budget
+    /// that did not close.
     fn warnings(&self) -> PyResult<Vec<String>> {
-        Ok(self.lock()?.stepping().simulation().deflection_warnings())
+        Ok(self.lock()?.stepping().simulation().run_warnings())
     }
     /// Whether `close` was called.
     #[getter]

@@ -74,8 +74,8 @@ fn run_scene(scene: &Scene) -> Run {
         );
     }
     // Every scene run here keeps its flexible beams within their modal model (each tip
-    // within a tenth of its length at every accepted step).
-    let warnings = sim.deflection_warnings();
+    // within a tenth of its length at every accepted step) and closes its energy budget.
+    let warnings = sim.run_warnings();
     assert!(warnings.is_empty(), "{warnings:?}");
     Run {
         columns,

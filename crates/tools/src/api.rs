@@ -356,8 +356,9 @@ pub fn run_scene(scene: &Scene, stop: impl FnMut() -> bool) -> Result<Trajectory
 
 /// [`run_scene`], with the warnings `satsim run` prints after a run that finished: the
 /// scene reader's ([`Scene::warnings`]), then the simulation's
-/// ([`Simulation::deflection_warnings`](satsim_spacecraft::simulation::Simulation::deflection_warnings):
-/// a beam bent beyond what its modal model holds).
+/// ([`Simulation::run_warnings`](satsim_spacecraft::simulation::Simulation::run_warnings):
+/// a flexible body bent beyond what its modal model holds, an energy budget that did not
+/// close).
 pub fn run_scene_warned(
     scene: &Scene,
     mut stop: impl FnMut() -> bool,
@@ -380,7 +381,7 @@ pub fn run_scene_warned(
     match result {
         Ok(_) => {
             let mut warnings = scene.warnings.clone();
-            warnings.extend(sim.deflection_warnings());
+            warnings.extend(sim.run_warnings());
             Ok((out, warnings))
         }
         Err(RunError::Sink { .. }) => Err(RunFailure::Stopped { partial: out }),

@@ -154,7 +154,7 @@ pub fn run_limited(
     let mut files = RunFiles::open(scene_path, out, &scene, &sim)?;
     let streamed = stream(&scene, &mut sim, &mut files);
     let done = finish(scene_path, &scene, &sim, files, streamed)?;
-    super::print_warnings(&sim.deflection_warnings());
+    super::print_warnings(&sim.run_warnings());
     Ok(summary(scene_path, &scene, &sim, &done))
 }
 

@@ -88,6 +88,41 @@ pub struct SimData {
     pub(super) ahead: Ahead,
     /// Each watched flexible body's largest deflection over the accepted steps so far.
     pub(super) deflection_peaks: Vec<DeflectionPeak>,
+    /// The energy budget over the output rows so far.
+    pub(super) budget: BudgetWatch,
+}
+
+/// The energy budget `T + V − W + D` at the first output row and the last, and the largest
+/// of its four terms any row showed (J): what
+/// [`Simulation::budget_warning`](super::Simulation::budget_warning) weighs.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct BudgetWatch {
+    pub(super) first: f64,
+    pub(super) last: f64,
+    pub(super) scale: f64,
+}
+
+impl Default for BudgetWatch {
+    fn default() -> Self {
+        Self {
+            first: f64::NAN,
+            last: f64::NAN,
+            scale: 0.0,
+        }
+    }
+}
+
+impl BudgetWatch {
+    /// A row's budget and its terms.
+    pub(super) fn see(&mut self, budget: f64, terms: [f64; 4]) {
+        if self.first.is_nan() {
+            self.first = budget;
+        }
+        self.last = budget;
+        for x in terms {
+            self.scale = self.scale.max(x.abs());
+        }
+    }
 }
 
 /// A flexible body's largest deflection over a run's accepted steps
@@ -190,6 +225,7 @@ impl SimData {
             base_tau: vec![0.0; nh],
             ahead: Ahead::new(n_states),
             deflection_peaks: Vec::new(),
+            budget: BudgetWatch::default(),
         }
     }
     /// The loads the effects applied in the last pass.

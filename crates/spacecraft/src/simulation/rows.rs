@@ -94,9 +94,13 @@ impl Simulation {
         row.push(d.h.norm());
         if !self.model.work.is_empty() {
             let (work, lost) = (x[self.model.work.start], x[self.model.work.start + 1]);
+            let budget = d.kinetic + d.potential - work + lost;
             row.push(work);
             row.push(lost);
-            row.push(d.kinetic + d.potential - work + lost);
+            row.push(budget);
+            self.data
+                .budget
+                .see(budget, [d.kinetic, d.potential, work, lost]);
         }
         Ok(())
     }
