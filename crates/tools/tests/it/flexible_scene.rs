@@ -622,18 +622,7 @@ fn a_modes_file_body_bent_beyond_its_modal_model_is_a_warning() {
     );
     let text = |fraction: f64| modes_file_scene(fraction * 2.0 / TIP_PER_UNIT_MODE_1);
     let run = |fraction: f64| {
-        let path = dir.join(format!("bent_{fraction}.toml"));
-        std::fs::write(&path, text(fraction)).unwrap();
-        let scene = Scene::read(&path).expect("a valid scene");
-        let mut sim = scene.simulation().expect("a simulation");
-        sim.run(
-            &scene.options,
-            1.0,
-            &satsim_integrate::Output::Interval(0.1),
-            |_, _| Ok::<(), std::convert::Infallible>(()),
-        )
-        .expect("it runs");
-        sim
+        run_for_a_second(&dir.join(format!("bent_{fraction}.toml")), &text(fraction))
     };
     let small = run(0.02);
     let peaks = small.deflection_peaks();
@@ -668,6 +657,21 @@ fn a_modes_file_body_bent_beyond_its_modal_model_is_a_warning() {
     let campaign = Campaign::read(&path).expect("a valid campaign");
     assert_eq!(campaign.peak_columns, ["peak_deflection_panel"]);
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The scene `text`, written at `path`, run for its first second (rows every 0.1 s).
+fn run_for_a_second(path: &Path, text: &str) -> satsim_spacecraft::simulation::Simulation {
+    std::fs::write(path, text).unwrap();
+    let scene = Scene::read(path).expect("a valid scene");
+    let mut sim = scene.simulation().expect("a simulation");
+    sim.run(
+        &scene.options,
+        1.0,
+        &satsim_integrate::Output::Interval(0.1),
+        |_, _| Ok::<(), std::convert::Infallible>(()),
+    )
+    .expect("it runs");
+    sim
 }
 
 /// The contract beam's modes file's tip translation per unit first-mode coordinate (its
@@ -727,18 +731,7 @@ fn an_energy_budget_that_does_not_close_is_a_warning() {
     let run = |integrator: &str| {
         let text = modes_file_scene(eta1)
             .replace("[integrator]\nmethod = \"rk4\"\nstep = 0.005\n", integrator);
-        let path = dir.join("budget.toml");
-        std::fs::write(&path, text).unwrap();
-        let scene = Scene::read(&path).expect("a valid scene");
-        let mut sim = scene.simulation().expect("a simulation");
-        sim.run(
-            &scene.options,
-            1.0,
-            &satsim_integrate::Output::Interval(0.1),
-            |_, _| Ok::<(), std::convert::Infallible>(()),
-        )
-        .expect("it runs");
-        sim
+        run_for_a_second(&dir.join("budget.toml"), &text)
     };
     let rk4 = run("[integrator]\nmethod = \"rk4\"\nstep = 0.005\n");
     let warning = rk4.budget_warning().expect("a warning");
