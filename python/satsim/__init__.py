@@ -601,6 +601,17 @@ def _warn_beyond(res: CampaignResult) -> CampaignResult:
         warnings.warn(
             _satsim.beyond_warning(int(past.sum()), int(res.ok.sum())), UserWarning, stacklevel=3
         )
+    # An energy budget that moved beyond the integration's error, counted as the command
+    # line counts it.
+    columns = list(res.columns)
+    drifted = sum(
+        _satsim.budget_drifted_row(columns, [float(x) for x in res.data[i]])
+        for i in np.flatnonzero(res.ok)
+    )
+    if drifted:
+        warnings.warn(
+            _satsim.budget_warning(int(drifted), int(res.ok.sum())), UserWarning, stacklevel=3
+        )
     return res
 
 

@@ -398,6 +398,29 @@ fn beyond_warning(beyond: u64, ok: u64) -> String {
     satsim_tools::campaign::beyond_warning(beyond, ok)
 }
 
+/// Whether a finished run's campaign row (`values`, named by `columns`) moved its energy
+/// budget beyond `BUDGET_DRIFT` of its largest term, as `satsim campaign` counts it.
+#[pyfunction]
+fn budget_drifted_row(columns: Vec<String>, values: Vec<f64>) -> PyResult<bool> {
+    if columns.len() != values.len() {
+        return Err(PyValueError::new_err(format!(
+            "{} columns for {} values",
+            columns.len(),
+            values.len()
+        )));
+    }
+    Ok(satsim_tools::campaign::budget_drifted_row(
+        &columns, &values,
+    ))
+}
+
+/// `satsim campaign`'s warning where `drifted` of its `ok` finished runs moved their energy
+/// budget beyond `BUDGET_DRIFT` of its largest term.
+#[pyfunction]
+fn budget_warning(drifted: u64, ok: u64) -> String {
+    satsim_tools::campaign::budget_warning(drifted, ok)
+}
+
 /// Runs the scene file at `path`; writes `out/trajectory.csv` (and the plots) when `out` is
 /// given. Returns `(columns, data, warnings)`.
 #[pyfunction]
@@ -750,6 +773,8 @@ fn _satsim(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(run_text, m)?)?;
     m.add_function(wrap_pyfunction!(campaign, m)?)?;
     m.add_function(wrap_pyfunction!(beyond_warning, m)?)?;
+    m.add_function(wrap_pyfunction!(budget_drifted_row, m)?)?;
+    m.add_function(wrap_pyfunction!(budget_warning, m)?)?;
     m.add("SMALL_DEFLECTION", satsim_tree::flexible::SMALL_DEFLECTION)?;
     m.add_function(wrap_pyfunction!(linearize, m)?)?;
     m.add_function(wrap_pyfunction!(modes, m)?)?;

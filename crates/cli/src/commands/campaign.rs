@@ -182,6 +182,9 @@ fn summary_lines(s: &mut String, dir: &Path, f: &Finished) {
     if f.beyond > 0 {
         super::print_warnings(&[campaign::beyond_warning(f.beyond, f.ok)]);
     }
+    if f.drifted > 0 {
+        super::print_warnings(&[campaign::budget_warning(f.drifted, f.ok)]);
+    }
     let _ = writeln!(
         s,
         "runs       {} in runs.csv: {} ok, {} failed{}",

@@ -92,21 +92,21 @@ pub struct SimData {
     pub(super) budget: BudgetWatch,
 }
 
-/// The energy budget `T + V − W + D` at the first output row and the last, and the largest
-/// of its four terms any row showed (J): what
+/// The smallest and largest energy budget `T + V − W + D` of the output rows so far, and
+/// the largest of its four terms any row showed (J): what
 /// [`Simulation::budget_warning`](super::Simulation::budget_warning) weighs.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct BudgetWatch {
-    pub(super) first: f64,
-    pub(super) last: f64,
+    pub(super) min: f64,
+    pub(super) max: f64,
     pub(super) scale: f64,
 }
 
 impl Default for BudgetWatch {
     fn default() -> Self {
         Self {
-            first: f64::NAN,
-            last: f64::NAN,
+            min: f64::INFINITY,
+            max: f64::NEG_INFINITY,
             scale: 0.0,
         }
     }
@@ -115,10 +115,8 @@ impl Default for BudgetWatch {
 impl BudgetWatch {
     /// A row's budget and its terms.
     pub(super) fn see(&mut self, budget: f64, terms: [f64; 4]) {
-        if self.first.is_nan() {
-            self.first = budget;
-        }
-        self.last = budget;
+        self.min = self.min.min(budget);
+        self.max = self.max.max(budget);
         for x in terms {
             self.scale = self.scale.max(x.abs());
         }

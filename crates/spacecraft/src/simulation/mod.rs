@@ -114,6 +114,14 @@ use thiserror::Error;
 /// damps where `elastic_error = false` leaves it unresolved).
 pub const BUDGET_DRIFT: f64 = 0.01;
 
+/// Whether an energy budget whose output rows spread over `spread` J (largest less
+/// smallest), its terms reaching `scale` J, moved by more than [`BUDGET_DRIFT`] of it:
+/// [`Simulation::budget_warning`]'s test, and a campaign's for each run from its
+/// `min_`/`max_` columns.
+pub fn budget_drifted(spread: f64, scale: f64) -> bool {
+    spread > BUDGET_DRIFT * scale
+}
+
 /// Why a simulation could not be set up.
 #[derive(Debug, Error)]
 pub enum SimError {
@@ -287,19 +295,21 @@ impl Simulation {
             .collect()
     }
     /// A warning where the energy budget (`T + V − W + D`, constant along the exact motion)
-    /// changed from the first output row to the last by more than [`BUDGET_DRIFT`] of the
-    /// largest of its terms any row showed: the integration's error, not the structure's
-    /// behaviour. RK4 at a step inside a fast mode's stability limit but near it damps that
+    /// moved over the output rows (its largest less its smallest) by more than
+    /// [`BUDGET_DRIFT`] of the largest of its terms any row showed
+    /// ([`budget_drifted`]): the integration's error, not the structure's behaviour. RK4 at a step inside a fast mode's stability limit but near it damps that
     /// mode (a third of a panel's energy in a second, where the stability check passes),
     /// and a loose tolerance lets the energy wander. `None` without an energy budget
     /// (`SimulationBuilder::energy_budget(false)`) or rows.
     pub fn budget_warning(&self) -> Option<String> {
         let b = self.data.budget;
-        let change = b.last - b.first;
-        (change.abs() > BUDGET_DRIFT * b.scale).then(|| {
+        let spread = b.max - b.min;
+        budget_drifted(spread, b.scale).then(|| {
             format!(
-                "the energy budget changed by {change:.3e} J over the run ({:.1} % of the {:.3e} J its largest energy term reached): along the exact motion it is constant, so this is the integration's error, not the structure's behaviour: a fixed step near a fast mode's stability limit damps that mode (shorten `integrator.step`: `satsim modes` lists the modes; or use an adaptive method), or the tolerance is too loose (tighten `rtol` and `atol`)",
-                100.0 * change.abs() / b.scale,
+                "the energy budget moved by {spread:.3e} J over the run (between {:.6e} J and {:.6e} J, {:.1} % of the {:.3e} J its largest energy term reached): along the exact motion it is constant, so this is the integration's error, not the structure's behaviour: a fixed step near a fast mode's stability limit damps that mode (shorten `integrator.step`: `satsim modes` lists the modes; or use an adaptive method), or the tolerance is too loose (tighten `rtol` and `atol`)",
+                b.min,
+                b.max,
+                100.0 * spread / b.scale,
                 b.scale,
             )
         })

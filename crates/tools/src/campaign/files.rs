@@ -209,6 +209,10 @@ pub struct Finished {
     /// [`SMALL_DEFLECTION`] (the run `ok`, its
     /// results from then on not the structure's).
     pub beyond: u64,
+    /// Finished runs whose energy budget moved by more than
+    /// [`BUDGET_DRIFT`](satsim_spacecraft::simulation::BUDGET_DRIFT) of its largest term
+    /// ([`budget_drifted_row`](super::budget_drifted_row)): the integration's error.
+    pub drifted: u64,
     /// The files written (names in the folder).
     pub files: Vec<String>,
 }
@@ -371,6 +375,10 @@ pub fn finish(dir: &Path, meta: &Meta) -> Result<Finished, CampaignError> {
         .iter()
         .filter(|(_, v)| peaks.iter().any(|&c| v[c] > SMALL_DEFLECTION))
         .count() as u64;
+    let drifted = ok_rows
+        .iter()
+        .filter(|(_, v)| super::budget_drifted_row(stat_names, v))
+        .count() as u64;
     let n_runs = runs.rows.len() as u64;
     let missing = meta.expected().saturating_sub(n_runs);
     let mut all_stats: Vec<Option<ColumnStats>> = Vec::with_capacity(stat_names.len());
@@ -413,6 +421,7 @@ pub fn finish(dir: &Path, meta: &Meta) -> Result<Finished, CampaignError> {
         failed,
         missing,
         beyond,
+        drifted,
         files,
     })
 }

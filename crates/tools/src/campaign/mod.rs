@@ -722,6 +722,42 @@ pub fn beyond_warning(beyond: u64, ok: u64) -> String {
     )
 }
 
+/// Whether the finished run whose statistics are `row` (named by `names`: `runs.csv`'s
+/// columns after `message`) moved its energy budget by more than
+/// [`BUDGET_DRIFT`](satsim_spacecraft::simulation::BUDGET_DRIFT) of its largest term over
+/// its output rows: `max_energy_budget − min_energy_budget` against the largest `min_` or
+/// `max_` of `kinetic_energy`, `potential_energy`, `work_actuators` and
+/// `energy_dissipated`, the test `satsim run` applies to its one run
+/// ([`budget_drifted`](satsim_spacecraft::simulation::budget_drifted)). `false` without an
+/// energy budget.
+pub fn budget_drifted_row(names: &[String], row: &[f64]) -> bool {
+    let at = |name: &str| names.iter().position(|n| n == name).map(|i| row[i]);
+    let (Some(min), Some(max)) = (at("min_energy_budget"), at("max_energy_budget")) else {
+        return false;
+    };
+    let scale = [
+        "kinetic_energy",
+        "potential_energy",
+        "work_actuators",
+        "energy_dissipated",
+    ]
+    .iter()
+    .flat_map(|t| [at(&format!("min_{t}")), at(&format!("max_{t}"))])
+    .flatten()
+    .fold(0.0, |s: f64, x| s.max(x.abs()));
+    satsim_spacecraft::simulation::budget_drifted(max - min, scale)
+}
+
+/// The warning after a campaign whose `drifted` of its `ok` finished runs moved their energy
+/// budget beyond what the integration should leave ([`Finished::drifted`]): `satsim
+/// campaign`'s and Python's `satsim.campaign`'s.
+pub fn budget_warning(drifted: u64, ok: u64) -> String {
+    format!(
+        "{drifted} of the {ok} finished runs moved their energy budget by more than {:.0} % of its largest term (`max_energy_budget` − `min_energy_budget` in runs.csv): along the exact motion it is constant, so those runs carry the integration's error, not the structure's behaviour: a fixed step near a fast mode's stability limit damps that mode, or the tolerance is too loose (`satsim run` of a run's scene says how much)",
+        100.0 * satsim_spacecraft::simulation::BUDGET_DRIFT
+    )
+}
+
 /// [`RunStats::peaks`] of the runs `sim` made.
 pub(crate) fn peaks(sim: &Simulation) -> Vec<f64> {
     sim.deflection_peaks()

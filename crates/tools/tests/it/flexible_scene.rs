@@ -736,12 +736,38 @@ fn an_energy_budget_that_does_not_close_is_a_warning() {
     let rk4 = run("[integrator]\nmethod = \"rk4\"\nstep = 0.005\n");
     let warning = rk4.budget_warning().expect("a warning");
     assert!(
-        warning.starts_with("the energy budget changed by -5.0")
+        warning.starts_with("the energy budget moved by 5.0")
             && warning.contains("this is the integration's error, not the structure's behaviour"),
         "{warning}"
     );
     assert_eq!(rk4.run_warnings(), [warning]);
     let dp54 = run("[integrator]\nmethod = \"dp54\"\nrtol = 1e-8\natol = 1e-8\n");
     assert_eq!(dp54.budget_warning(), None);
+    // A campaign counts such runs from their rows' budget and energies, as the run does.
+    use satsim_tools::campaign::{Campaign, Quiet, RunOptions, Shard, run_campaign};
+    for (integrator, drifted) in [
+        ("[integrator]\nmethod = \"rk4\"\nstep = 0.005\n", 2),
+        (
+            "[integrator]\nmethod = \"dp54\"\nrtol = 1e-8\natol = 1e-8\n",
+            0,
+        ),
+    ] {
+        let text = modes_file_scene(eta1)
+            .replace("[integrator]\nmethod = \"rk4\"\nstep = 0.005\n", integrator)
+            + "\n[campaign]\nruns = 2\n[[campaign.disperse]]\nkey = \"model.body.0.mass\"\nnormal = { sigma = 0.5 }\n";
+        let path = dir.join("budget_campaign.toml");
+        std::fs::write(&path, text).unwrap();
+        let campaign = Campaign::read(&path).expect("a valid campaign");
+        let opts = RunOptions {
+            threads: Some(1),
+            shard: Shard::ALL,
+            resume: false,
+            lanes: true,
+        };
+        let out = dir.join(format!("out_{drifted}"));
+        let report = run_campaign(&campaign, &out, &opts, &Quiet).expect("the campaign runs");
+        assert_eq!(report.finished.ok, 2);
+        assert_eq!(report.finished.drifted, drifted, "{integrator}");
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }
