@@ -296,10 +296,11 @@ impl Simulation {
     }
     /// A warning where the energy budget (`T + V − W + D`, constant along the exact motion)
     /// moved over the output rows (its largest less its smallest) by more than
-    /// [`BUDGET_DRIFT`] of the largest of its terms any row showed
-    /// ([`budget_drifted`]): the integration's error, not the structure's behaviour. RK4 at a step inside a fast mode's stability limit but near it damps that
-    /// mode (a third of a panel's energy in a second, where the stability check passes),
-    /// and a loose tolerance lets the energy wander. `None` without an energy budget
+    /// [`BUDGET_DRIFT`] of the largest of its terms any row showed ([`budget_drifted`]):
+    /// the integration's error, not the structure's behaviour. RK4 at a step inside a fast
+    /// mode's stability limit but near it damps that mode (a third of a panel's energy in a
+    /// second, where the stability check passes), and a loose tolerance lets the energy
+    /// wander. `None` without an energy budget
     /// (`SimulationBuilder::energy_budget(false)`) or rows.
     pub fn budget_warning(&self) -> Option<String> {
         let b = self.data.budget;
