@@ -451,6 +451,16 @@ fn read_scene(origin: &Path, text: Option<&str>) -> Result<Scene, String> {
     .map_err(|e| e.to_string())
 }
 
+/// [`read_scene`] for a linearisation, which integrates nothing: without the fixed step's
+/// checks ([`Scene::read_to_linearise`]).
+fn read_scene_to_linearise(origin: &Path, text: Option<&str>) -> Result<Scene, String> {
+    match text {
+        Some(t) => Scene::parse_to_linearise(t, origin),
+        None => Scene::read_to_linearise(origin, &[]),
+    }
+    .map_err(|e| e.to_string())
+}
+
 /// A campaign's `runs.csv` in memory: `(columns, data, status, messages)`; see
 /// [`api::campaign_table`] for the encoding of the text columns in `data`.
 type CampaignOut<'py> = (
@@ -526,7 +536,7 @@ fn linearize<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let lin = py
         .detach(|| {
-            let scene = read_scene(&origin, text.as_deref())?;
+            let scene = read_scene_to_linearise(&origin, text.as_deref())?;
             linearize_scene(&scene).map_err(|e| format!("{}: {e}", origin.display()))
         })
         .map_err(err)?;
@@ -554,7 +564,7 @@ fn modes<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let m = py
         .detach(|| {
-            let scene = read_scene(&origin, text.as_deref())?;
+            let scene = read_scene_to_linearise(&origin, text.as_deref())?;
             modes_of_scene(&scene).map_err(|e| format!("{}: {e}", origin.display()))
         })
         .map_err(err)?;

@@ -369,6 +369,8 @@ pub fn inline_sources(base: &mut Table, text: &str, path: &Path) -> Result<(), F
                     message: e.message().trim_end().to_owned(),
                     path: file.clone(),
                 })?;
+            let mut t = t;
+            rebase_modes_files(&mut t, Path::new(p).parent().unwrap_or(Path::new("")));
             Value::Table(t)
         } else {
             let json: serde_json::Value =
@@ -386,6 +388,25 @@ pub fn inline_sources(base: &mut Table, text: &str, path: &Path) -> Result<(), F
         base.insert(key.into(), v);
     }
     Ok(())
+}
+
+/// A model file's bodies' `flexible.modes_file` paths, which are relative to the model
+/// file's folder, made relative to the scene's (the model file's folder being `model_dir`
+/// from the scene's), so that the model read in as an inline table still finds them. An
+/// absolute path stays as it is.
+fn rebase_modes_files(model: &mut Table, model_dir: &Path) {
+    let Some(Value::Array(bodies)) = model.get_mut("body") else {
+        return;
+    };
+    for body in bodies {
+        if let Some(Value::String(file)) = body
+            .get_mut("flexible")
+            .and_then(|f| f.get_mut("modes_file"))
+        {
+            let rebased = model_dir.join(file.as_str());
+            *file = rebased.to_string_lossy().into_owned();
+        }
+    }
 }
 
 /// The error for a `model` or `initial` file that does not exist, at the scene's line.

@@ -36,7 +36,7 @@ struct Json<'a> {
 
 /// Runs `satsim linearize`.
 pub fn run(args: &Args) -> Result<Output, CliError> {
-    let scene = Scene::read_with(&args.scene, &args.set)?;
+    let scene = Scene::read_to_linearise(&args.scene, &args.set)?;
     super::print_warnings(&scene.warnings);
     let lin = linearize(&scene).map_err(|e| scene_error(&args.scene, e))?;
     super::print_warnings(lin.not_an_equilibrium().as_slice());

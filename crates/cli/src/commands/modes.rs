@@ -82,7 +82,7 @@ pub fn run(args: &Args) -> Result<Output, CliError> {
         .as_deref()
         .map(|a| parse_along(a).map_err(|e| usage(&["modes"], format!("`--along` {e}"))))
         .transpose()?;
-    let scene = Scene::read_with(path, &args.set)?;
+    let scene = Scene::read_to_linearise(path, &args.set)?;
     super::print_warnings(&scene.warnings);
     let Some((along, steps)) = along else {
         let m = modes(&scene).map_err(|e| scene_error(path, e))?;

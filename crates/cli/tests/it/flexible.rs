@@ -126,6 +126,27 @@ fn a_cantilever_on_a_fixed_base_has_the_analytic_frequencies() {
     assert_eq!(v["rigid_modes"], 0);
 }
 
+/// `satsim modes` and `satsim linearize` integrate nothing: a fixed RK4 step too long for
+/// the modes refuses the run, not the list of the modes that says which step would do.
+#[test]
+fn modes_and_linearize_take_a_scene_whose_rk4_step_is_too_long_for_its_modes() {
+    let dir = setup("rk4-modes");
+    let text = "model = \"cantilever.toml\"\nduration = 1.0\n[integrator]\nmethod = \"rk4\"\nstep = 0.03\n[output]\nevery = 0.1\n";
+    scene(&dir, "c.toml", text);
+    // The third mode, 2π × 24.5 Hz, takes rk4 only up to 2√2/ω = 18.3 ms.
+    fails(
+        &satsim_in(&dir, &["run", "c.toml", "--out", "o"]),
+        &["too long for rk4", "body `beam`'s mode 3"],
+    );
+    let v = json(&satsim_in(&dir, &["modes", "c.toml"]));
+    let f = numbers(&v["frequencies_hz"]);
+    let third = beam_hz(BETA_L_CLAMPED[2], EI);
+    assert!((f[2] - third).abs() < 1e-6 * third, "{f:?}");
+    assert!(2.0 * std::f64::consts::PI * f[2] * 0.03 > 2.0 * std::f64::consts::SQRT_2);
+    let lin = json(&satsim_in(&dir, &["linearize", "c.toml"]));
+    assert_eq!(names(&lin["states"]).len(), 6, "{lin}");
+}
+
 #[test]
 fn a_free_bus_with_a_beam_vibrates_above_the_clamped_beam() {
     let dir = setup("bus");
@@ -454,4 +475,62 @@ fn a_campaign_disperses_ei_and_damping_and_each_row_is_satsim_run_of_its_scene()
         err.contains("warning: 4 of the 4 finished runs bent a flexible body past a tenth of its length at some step (a beam's tip, or a modes file's node for its distance from the body's frame): beyond what its modal model holds"),
         "{err}"
     );
+}
+
+/// A model file in a folder of its own finds its `modes_file` beside it (relative to the
+/// model file's folder) in a plain run, under `--set` and in a campaign, which read the
+/// model in as an inline table of the scene: the same trajectory each way.
+#[test]
+fn a_modes_file_beside_its_model_is_found_under_set_and_in_a_campaign() {
+    let dir = setup("modes-file-folder");
+    std::fs::create_dir_all(dir.join("models")).unwrap();
+    std::fs::copy(
+        common::root().join("examples/modes/panel_beam_modes.toml"),
+        dir.join("models/panel.toml"),
+    )
+    .unwrap();
+    let model = "[base]\nkind = \"fixed\"\n[[body]]\nname = \"panel\"\nmass = 1.0\ninertia = [[0.1, 0.0, 0.0], [0.0, 0.1, 0.0], [0.0, 0.0, 0.1]]\n[body.flexible]\nmodes_file = \"panel.toml\"\ndamping = 0.01\n";
+    std::fs::write(dir.join("models/panel_model.toml"), model).unwrap();
+    let base = "model = \"models/panel_model.toml\"\nduration = 0.5\n[initial]\nflexible = { panel = { eta = [0.01, 0.0, 0.0] } }\n[output]\nevery = 0.1\nplots = false\nview = false\n";
+    scene(&dir, "s.toml", base);
+    let plain = satsim_in(&dir, &["run", "s.toml", "--out", "plain"]);
+    assert!(
+        plain.status.success(),
+        "{}",
+        String::from_utf8_lossy(&plain.stderr)
+    );
+    let set = satsim_in(
+        &dir,
+        &[
+            "run",
+            "s.toml",
+            "--out",
+            "set",
+            "--set",
+            "model.body.0.mass=1.0",
+        ],
+    );
+    assert!(
+        set.status.success(),
+        "{}",
+        String::from_utf8_lossy(&set.stderr)
+    );
+    let read = |d: &str| std::fs::read_to_string(dir.join(d).join("trajectory.csv")).unwrap();
+    assert_eq!(read("plain"), read("set"));
+    scene(
+        &dir,
+        "c.toml",
+        &format!(
+            "{base}[campaign]\nruns = 2\nseed = 1\n[[campaign.disperse]]\nkey = \"model.body.0.flexible.damping\"\nuniform = {{ low = 0.0, high = 0.02 }}\n"
+        ),
+    );
+    let c = satsim_in(&dir, &["campaign", "c.toml", "--out", "c"]);
+    assert!(c.status.success(), "{}", String::from_utf8_lossy(&c.stderr));
+    let runs = std::fs::read_to_string(dir.join("c/runs.csv")).unwrap();
+    let header: Vec<&str> = runs.lines().next().unwrap().split(',').collect();
+    let status = header.iter().position(|h| *h == "status").unwrap();
+    assert_eq!(runs.lines().count(), 3, "{runs}");
+    for l in runs.lines().skip(1) {
+        assert_eq!(l.split(',').nth(status), Some("ok"), "{runs}");
+    }
 }

@@ -325,14 +325,26 @@ impl Campaign {
             }
             let floated = toml::to_string(&t).expect("a TOML table serialises");
             if let Err(e) = Scene::parse(&floated, path) {
-                let why = match e {
+                let why = |e: FileError| match e {
                     FileError::Schema { message, .. } | FileError::Syntax { message, .. } => {
                         message
                     }
                     other => other.to_string(),
                 };
+                // Blamed on the key only where the scene as read in takes its nominal values.
+                let nominal = toml::to_string(&base).expect("a TOML table serialises");
+                if let Err(e) = Scene::parse(&nominal, path) {
+                    return Err(schema(
+                        None,
+                        format!(
+                            "the scene with its model and state files read in as tables (as each run is) fails: {}",
+                            why(e)
+                        ),
+                    ));
+                }
                 return Err(named(format!(
-                    "the scene takes only whole numbers there, and dispersed values are real numbers ({why})"
+                    "the scene takes only whole numbers there, and dispersed values are real numbers ({})",
+                    why(e)
                 )));
             }
             dispersed.extend(found);

@@ -264,16 +264,40 @@ impl Scene {
         overrides: &[Override],
         registry: &Registry,
     ) -> Result<Scene, FileError> {
-        let path = path.as_ref();
-        if overrides.is_empty() {
-            return Scene::read_with_registry(path, registry);
-        }
+        Scene::read_as(path.as_ref(), overrides, registry, true)
+    }
+
+    /// [`Scene::read_with`] for a linearisation (`satsim modes`, `satsim linearize`), which
+    /// integrates nothing: a fixed `integrator.step` is not checked against the scene's
+    /// linear motions (RK4's stability) or `max_steps`, so a scene whose step is too long
+    /// for its modes can still have them listed.
+    pub fn read_to_linearise(
+        path: impl AsRef<Path>,
+        overrides: &[Override],
+    ) -> Result<Scene, FileError> {
+        Scene::read_as(path.as_ref(), overrides, &Registry::with_builtins(), false)
+    }
+
+    /// [`Scene::parse`] for a linearisation ([`Scene::read_to_linearise`]).
+    pub fn parse_to_linearise(text: &str, path: &Path) -> Result<Scene, FileError> {
+        Scene::parse_as(text, path, &Registry::with_builtins(), false)
+    }
+
+    fn read_as(
+        path: &Path,
+        overrides: &[Override],
+        registry: &Registry,
+        integrates: bool,
+    ) -> Result<Scene, FileError> {
         let text = std::fs::read_to_string(path).map_err(|source| FileError::Read {
             path: path.to_path_buf(),
             source,
         })?;
+        if overrides.is_empty() {
+            return Scene::parse_as(&text, path, registry, integrates);
+        }
         let rewritten = scene_keys::overridden_text(&text, path, overrides)?;
-        let mut scene = Scene::parse_with_registry(&rewritten, path, registry)
+        let mut scene = Scene::parse_as(&rewritten, path, registry, integrates)
             .map_err(|e| scene_keys::relocate(e, &text, path, &rewritten, overrides))?;
         // A line of the rewritten text means nothing to the user: name where it was written.
         if !scene.warnings.is_empty() || !scene.clocks.is_empty() {
@@ -309,5 +333,19 @@ impl Scene {
         registry: &Registry,
     ) -> Result<Scene, FileError> {
         parse::Parser::new(SceneText::new(text, path), registry).scene()
+    }
+
+    fn parse_as(
+        text: &str,
+        path: &Path,
+        registry: &Registry,
+        integrates: bool,
+    ) -> Result<Scene, FileError> {
+        let parser = parse::Parser::new(SceneText::new(text, path), registry);
+        if integrates {
+            parser.scene()
+        } else {
+            parser.to_linearise().scene()
+        }
     }
 }

@@ -30,6 +30,10 @@ pub(crate) struct Parser<'a> {
     registry: &'a Registry,
     /// Whether to work out the warnings that cost time (the sampled laws' loops).
     advise: bool,
+    /// Whether the scene is read to be integrated: a fixed step's checks (its stability on
+    /// the scene's linear motions, its count against `max_steps`) are about the run, and a
+    /// linearisation (`satsim modes`, `satsim linearize`) integrates nothing.
+    integrates: bool,
 }
 
 impl<'a> Deref for Parser<'a> {
@@ -45,7 +49,14 @@ impl<'a> Parser<'a> {
             src,
             registry,
             advise: true,
+            integrates: true,
         }
+    }
+
+    /// Reads the scene to linearise it, not to integrate it: without the fixed step's checks.
+    pub(crate) fn to_linearise(mut self) -> Self {
+        self.integrates = false;
+        self
     }
 
     /// Leaves out the warnings that cost time to work out (whether each sampled law is
@@ -167,7 +178,9 @@ impl<'a> Parser<'a> {
             None => None,
         };
         let options = self.integrator(file.integrator.as_ref())?;
-        self.check_step_count(&file, &options, duration)?;
+        if self.integrates {
+            self.check_step_count(&file, &options, duration)?;
+        }
         let elastic_error = match file
             .integrator
             .as_ref()
@@ -201,7 +214,10 @@ impl<'a> Parser<'a> {
                 )
             }
         };
-        if let Some(w) = self.step_warning(&file, &options, duration, every) {
+        if let Some(w) = self
+            .step_warning(&file, &options, duration, every)
+            .filter(|_| self.integrates)
+        {
             warnings.push(w);
         }
         let mut effects = EffectSet::default();
@@ -233,10 +249,11 @@ impl<'a> Parser<'a> {
         // The tree for the checks of the linear motions. Where it cannot be made, a fixed
         // step's check is an error, as before; the sampled laws' warnings are left out, and
         // the simulation's set-up says what is wrong.
-        let tree = (options.fixed_step.is_some() || !sampled.is_empty())
+        let fixed_step = options.fixed_step.filter(|_| self.integrates);
+        let tree = (fixed_step.is_some() || !sampled.is_empty())
             .then(|| super::step_limit::integrated_tree(&model, flex.as_ref(), &effects))
             .transpose()
-            .or_else(|e| match options.fixed_step {
+            .or_else(|e| match fixed_step {
                 Some(_) => Err(self.error(None, e.to_string())),
                 None => Ok(None),
             })?;
@@ -244,7 +261,7 @@ impl<'a> Parser<'a> {
             let q = super::step_limit::integrated_q(&initial.q, n_rotors, &elastic.eta);
             let gains = super::step_limit::HingeGains::of(&effects, model.n_hinges());
             warnings.extend(sampled.warnings(self, &file, &model, &tree, &q, &gains));
-            if let Some(h) = options.fixed_step {
+            if let Some(h) = fixed_step {
                 self.fixed_step_checked(&file, &tree, &q, &gains, h, duration, every)?;
             }
         }
