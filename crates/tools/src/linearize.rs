@@ -40,7 +40,11 @@
 //! integrates, every enabled effect included), with one step of Richardson extrapolation:
 //! `D(h) = (f(z + h eⱼ) − f(z − h eⱼ)) / 2h` at `h` and `h/2`, combined as
 //! `(4 D(h/2) − D(h)) / 3`, whose truncation error is `O(h⁴)`. The step is
-//! `h = 10⁻³ · max(|x₀ⱼ|, s)` with `s` = 1 (rad, rad/s, m/s) for the tree's states and, for
+//! `h = 10⁻³ · max(|x₀ⱼ|, s)` with `s` = 1 (rad, rad/s, m/s) for the tree's rigid states,
+//! for a flexible body's modal coordinate and rate the coordinate that bends the body by its
+//! size ([`satsim_tree::flexible::FlexModel::modal_scale`]: its tip by its length or its tip's
+//! slope by a radian, per second for the rate; a light strip's or a high mode's is far below
+//! 1 √kg m, where `η = 10⁻³` would bend it out of the linear range), and, for
 //! an effect's states, the larger of 1 and 10⁻³ times the norm of that effect's state
 //! (so an orbit radius of 7000 km is stepped by metres, not millimetres). The difference
 //! `|(4 D(h/2) − D(h))/3 − D(h/2)|` bounds the error of the plain estimate and is reported
@@ -381,7 +385,15 @@ pub fn linearize_simulation(sim: &mut Simulation) -> Result<Linearization, Linea
     for j in 0..n + m {
         let h0 = if j < n {
             let base = x_index[j].map_or(0.0, |i| x0[i].abs());
-            STEP * base.max(scale[j])
+            let f: f64 = if states[j].starts_with("eta") {
+                std::env::var("SATSIM_LIN_ETA")
+                    .ok()
+                    .and_then(|v| v.parse().ok())
+                    .unwrap_or(1.0)
+            } else {
+                1.0
+            };
+            f * STEP * base.max(scale[j])
         } else {
             STEP * tau0[j - n].abs().max(1.0)
         };
@@ -422,6 +434,16 @@ pub fn linearize_simulation(sim: &mut Simulation) -> Result<Linearization, Linea
             }
             if !frozen[r] {
                 error_estimate = error_estimate.max((rich - d[1][r]).abs());
+                if std::env::var("SATSIM_LIN_DEBUG").is_ok()
+                    && (rich - d[1][r]).abs() > 1e-6 * rich.abs().max(1.0)
+                {
+                    eprintln!(
+                        "DBG col {} row {} h {h0:e} rich {rich:e} err {:e}",
+                        states.get(j).unwrap_or(&String::new()),
+                        states[r],
+                        (rich - d[1][r]).abs()
+                    );
+                }
             }
             if j < n {
                 a[(r, j)] = value;
@@ -530,15 +552,22 @@ fn linear_states(sim: &Simulation, x0: &[f64], locked: &[bool]) -> LinearStates 
         group(g, &states);
     }
     // A flexible body's modal coordinates and rates (√kg m, √kg m/s), after the hinge rates.
+    // Their steps are scaled by the coordinate that bends the body by its size (per second
+    // for the rates): in `√kg m` a light strip is bent past its length by `η = 1e-3`.
     let elastic = sim.elastic_names();
+    let modal_scale = |e: usize| {
+        sim.flex_model()
+            .and_then(|f| f.modal_scale(e))
+            .unwrap_or(1.0)
+    };
     for (prefix, range, g) in [
         ("eta", &layout.eta, "elastic coordinates (√kg m/s)"),
         ("etadot", &layout.etadot, "elastic rates (√kg m/s²)"),
     ] {
-        for (name, i) in elastic.iter().zip(range.clone()) {
+        for (e, (name, i)) in elastic.iter().zip(range.clone()).enumerate() {
             states.push(format!("{prefix}_{name}"));
             x_index.push(Some(i));
-            scale.push(1.0);
+            scale.push(modal_scale(e));
             frozen.push(false);
         }
         group(g, &states);

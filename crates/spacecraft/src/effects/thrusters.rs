@@ -145,10 +145,23 @@ pub struct Thrusters {
     failed: Vec<Option<bool>>,
     /// Faults happened and not yet logged.
     said: Vec<String>,
-    /// Per thruster on a flexible body: where its body's modes lie among the elastic
-    /// coordinates, and the translation `φₖ` of each mode at its point (body axes): its
-    /// force `f` loads mode `k` with `φₖ · f` (set by `connect`).
-    modal: Vec<Option<(Range<usize>, Vec<Vec3>)>>,
+    /// Per thruster on a flexible body: how its force bends it (set by `connect`).
+    modal: Vec<Option<ModalPoint>>,
+}
+
+/// A thruster's point on a flexible body.
+#[derive(Clone, Debug)]
+struct ModalPoint {
+    /// Where the body's modes lie among the elastic coordinates.
+    range: Range<usize>,
+    /// The translation `φₖ` of each mode at the point (body axes): the force `f` loads mode
+    /// `k` with `φₖ · f`.
+    phi: Vec<Vec3>,
+    /// On a stiffened beam, its axis `a` and the foreshortening `C` at the point (`m × m`,
+    /// row-major; [`satsim_tree::flexible::Beam::foreshortening`]): the point drawn in by
+    /// `½ ηᵀ C η` along `a`, the force's axial part does the work `−(a · f) (C η)ₖ` on mode
+    /// `k` (a thrust towards the root compresses the beam and softens it).
+    shortening: Option<(Vec3, Vec<f64>)>,
 }
 
 impl Thrusters {
@@ -306,7 +319,7 @@ impl Effect for Thrusters {
     }
     fn apply(
         &mut self,
-        _ctx: &Context,
+        ctx: &Context,
         forces: &mut Forces,
         _own: &[f64],
         _own_dot: &mut [f64],
@@ -316,9 +329,16 @@ impl Effect for Thrusters {
                 let f = th.thrust * th.direction;
                 forces.add_wrench(th.body, Force::new(th.at.cross(&f), f));
                 // On a flexible body the force also bends it: its work on each mode.
-                if let Some((range, phi)) = modal {
-                    for (q, p) in forces.elastic[range.clone()].iter_mut().zip(phi) {
+                if let Some(m) = modal {
+                    for (q, p) in forces.elastic[m.range.clone()].iter_mut().zip(&m.phi) {
                         *q += p.dot(&f);
+                    }
+                    if let Some((axis, c)) = &m.shortening {
+                        let (eta, pull) = (&ctx.eta[m.range.clone()], axis.dot(&f));
+                        let q = &mut forces.elastic[m.range.clone()];
+                        for (row, q) in c.chunks_exact(eta.len()).zip(q) {
+                            *q -= pull * row.iter().zip(eta).map(|(c, e)| c * e).sum::<f64>();
+                        }
                     }
                 }
             }
@@ -330,8 +350,13 @@ impl Effect for Thrusters {
             .thrusters
             .iter()
             .map(|th| {
-                let (range, shape) = links.flex?.point_shape(th.body, &th.at)?;
-                Some((range, shape.phi))
+                let flex = links.flex?;
+                let (range, shape) = flex.point_shape(th.body, &th.at)?;
+                Some(ModalPoint {
+                    range,
+                    phi: shape.phi,
+                    shortening: flex.point_shortening(th.body, &th.at),
+                })
             })
             .collect();
     }

@@ -4,6 +4,7 @@
 use super::Simulation;
 use super::run::{RunError, Shared};
 use satsim_integrate::{IntegrateError, Options, Output, System, SystemError, stop_due};
+use satsim_tree::flexible::{self, FlexData};
 use satsim_tree::spatial::{Force, Vec3};
 use satsim_tree::{Data, rnea};
 use std::cell::RefCell;
@@ -18,8 +19,10 @@ pub struct EffectLoads {
     /// axes, about the body frame's origin (force N, torque N m).
     pub wrenches: Vec<Force>,
     /// Per degree of freedom of the scene's model (`satsim dynamics`'s order: a free base's
-    /// 6, angular first, then the hinges in file order): `Σ_i J_iᵀ f_i` plus its hinge
-    /// torques (N m, N).
+    /// 6, angular first, the hinges in file order, then the flexible bodies' modal
+    /// coordinates): `Σ_i J_iᵀ f_i` plus its hinge torques (N m, N) and, on the modes, the
+    /// generalised forces it puts on them directly (its loads at points of a flexible body,
+    /// facets riding it, the gravity gradient over it; N √kg⁻¹).
     pub generalized: Vec<f64>,
 }
 
@@ -44,11 +47,13 @@ impl Simulation {
         let n_bodies = self.model.tree.n_bodies() - self.model.n_rotors;
         let n_user = self.model.n_user;
         let nb = self.model.tree.base_nv();
-        let mut steps: Vec<(String, Vec<Force>, Vec<f64>)> = Vec::new();
+        type Step = (String, Vec<Force>, Vec<f64>, Vec<f64>);
+        let mut steps: Vec<Step> = Vec::new();
         self.with_context(t, x, true, |ctx, h| {
             h.forces.reset_to(&vec![0.0; h.forces.hinge_torque.len()]);
             let mut wrench_before = h.forces.body_wrench.clone();
             let mut tau_before = h.forces.hinge_torque.clone();
+            let mut elastic_before = h.forces.elastic.clone();
             for (e, r) in h.effects.iter_mut().zip(h.own) {
                 e.apply(ctx, h.forces, &x[r.clone()], &mut h.scratch[r.clone()])?;
                 let w: Vec<Force> = h.forces.body_wrench[..n_bodies]
@@ -61,9 +66,17 @@ impl Simulation {
                     .zip(&tau_before)
                     .map(|(a, b)| a - b)
                     .collect();
-                steps.push((e.name().to_owned(), w, tau));
+                let elastic: Vec<f64> = h
+                    .forces
+                    .elastic
+                    .iter()
+                    .zip(&elastic_before)
+                    .map(|(a, b)| a - b)
+                    .collect();
+                steps.push((e.name().to_owned(), w, tau, elastic));
                 wrench_before.clone_from(&h.forces.body_wrench);
                 tau_before.clone_from(&h.forces.hinge_torque);
+                elastic_before.clone_from(&h.forces.elastic);
             }
             Ok::<(), SystemError>(())
         })?;
@@ -73,12 +86,42 @@ impl Simulation {
         let zero = vec![0.0; tree.nv()];
         let mut fext = vec![Force::zero(); tree.n_bodies()];
         let mut out = Vec::with_capacity(steps.len());
-        for (name, wrenches, tau) in steps {
+        // A flexible tree's: the same at rest in its deformation, less that of no force (its
+        // stiffness's `K η`), so that each mode gets the work of the wrenches through it (a
+        // body hung on a node moves with the mode).
+        let mut flex = match (&self.model.flex, &self.data.flex) {
+            (Some(f), Some(w)) => {
+                let mut data = FlexData::new(f);
+                let zero = vec![0.0; f.nv()];
+                let unloaded = flexible::rnea(f, &mut data, &w.q, &zero, &zero, None)
+                    .map_err(SystemError::from_error)?
+                    .clone();
+                Some((f, data, zero, unloaded, &w.q))
+            }
+            _ => None,
+        };
+        for (name, wrenches, tau, elastic) in steps {
             fext[..n_bodies].copy_from_slice(&wrenches);
-            let id = rnea(tree, &mut data, &self.data.q, &zero, &zero, Some(&fext))
-                .map_err(SystemError::from_error)?;
-            let mut generalized: Vec<f64> = id.iter().take(nb + n_user).map(|v| -v).collect();
-            for (g, t) in generalized[nb..].iter_mut().zip(&tau) {
+            let mut generalized: Vec<f64> = match &mut flex {
+                None => rnea(tree, &mut data, &self.data.q, &zero, &zero, Some(&fext))
+                    .map_err(SystemError::from_error)?
+                    .iter()
+                    .take(nb + n_user)
+                    .map(|v| -v)
+                    .collect(),
+                Some((f, data, zero, unloaded, q)) => {
+                    let id = flexible::rnea(f, data, q, zero, zero, Some(&fext))
+                        .map_err(SystemError::from_error)?;
+                    let modes = f.nv() - f.n_elastic()..f.nv();
+                    let rows = (0..nb + n_user).chain(modes);
+                    let mut g: Vec<f64> = rows.map(|r| unloaded[r] - id[r]).collect();
+                    for (g, e) in g[nb + n_user..].iter_mut().zip(&elastic) {
+                        *g += e;
+                    }
+                    g
+                }
+            };
+            for (g, t) in generalized[nb..nb + n_user].iter_mut().zip(&tau) {
                 *g += t;
             }
             out.push(EffectLoads {

@@ -294,6 +294,19 @@ impl Simulation {
             })
             .collect()
     }
+    /// The [`Self::deflection_warnings`] of the body bent most for its size, where one went
+    /// past a tenth of it: why a run that failed there failed.
+    pub fn deflection_failure(&self) -> Option<String> {
+        let passed = self
+            .deflection_peaks()
+            .iter()
+            .filter(|p| p.passed.is_some());
+        let worst = passed
+            .enumerate()
+            .max_by(|a, b| a.1.fraction().total_cmp(&b.1.fraction()))?
+            .0;
+        self.deflection_warnings().into_iter().nth(worst)
+    }
     /// A warning where the energy budget (`T + V − W + D`, constant along the exact motion)
     /// moved over the output rows (its largest less its smallest) by more than
     /// [`BUDGET_DRIFT`] of the largest of its terms any row showed ([`budget_drifted`]):

@@ -145,6 +145,20 @@ pub(super) fn outcome<E>(
                 stepping: sim.stepping_through(fixed),
             }))
         }
+        // A step that could not get smaller is where the motion left what the model holds,
+        // when a flexible body had been bent past a tenth of its size: say so (the solve's
+        // own failure says it at its state, `SimModel::flexible_error`).
+        (Err(e @ IntegrateError::StepSizeUnderflow { t, .. }), None) => {
+            Err(RunError::Integrate(match sim.deflection_failure() {
+                Some(why) => IntegrateError::System {
+                    t,
+                    source: SystemError::new(format!(
+                        "{e}, after the flexible bodies were deflected beyond what their modal model holds: {why}"
+                    )),
+                },
+                None => e,
+            }))
+        }
         (Err(e), None) => Err(RunError::Integrate(sim.named(e))),
     }
 }

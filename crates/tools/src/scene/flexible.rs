@@ -267,3 +267,56 @@ pub fn mode_of(flex: &FlexModel, e: usize) -> (String, usize) {
         .map(|(i, k)| (flex.rigid().bodies()[i].name().to_owned(), k))
         .unwrap_or_default()
 }
+
+/// What reaches a body whose modes come from a file but not its modes, as warnings: the
+/// file's shapes are known at its nodes only, so a thruster off its nodes and the pressure
+/// on its facets (sunlight and the Earth's light, `solar_radiation`; the air, `drag`) act
+/// on the body's frame alone. A thruster at a node loads the modes through the node's
+/// shapes; a `beam` takes them over its facets.
+pub(super) fn unloaded_modes(
+    flex: &FlexModel,
+    effects: &satsim_spacecraft::effects::EffectSet,
+) -> Vec<String> {
+    use satsim_spacecraft::effects::{Drag, SolarRadiation, Thrusters};
+    let bodies = flex.rigid().bodies();
+    let given = |i: usize| flex.modes(i) > 0 && flex.beam(i).is_none();
+    let nodes = |i: usize| {
+        flex.watch_points(i)
+            .iter()
+            .map(|n| format!("`{}` at [{}, {}, {}]", n.name, n.at.x, n.at.y, n.at.z))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let mut out = Vec::new();
+    if let Some(t) = effects.get::<Thrusters>() {
+        for th in t.list() {
+            if given(th.body) && flex.node_at(th.body, &th.at).is_none() {
+                out.push(format!(
+                    "thruster `{}` on body `{}` is at none of its modes file's nodes: its force moves the body but does not bend it (a modes file's shapes are known at its nodes only; place it at one for its load to reach the modes: {})",
+                    th.name,
+                    bodies[th.body].name(),
+                    nodes(th.body)
+                ));
+            }
+        }
+    }
+    let pressing: Vec<&str> = [
+        effects.get::<SolarRadiation>().map(|_| "`solar_radiation`"),
+        effects.get::<Drag>().map(|_| "`drag`"),
+    ]
+    .into_iter()
+    .flatten()
+    .collect();
+    if !pressing.is_empty() {
+        for (i, b) in bodies.iter().enumerate() {
+            if given(i) && !b.facets().is_empty() {
+                out.push(format!(
+                    "body `{}`'s facets take {} on the body but not on its modes: its modes come from a file, whose shapes are known at its nodes only (a `beam` body's facets load its modes and ride its deflection)",
+                    b.name(),
+                    pressing.join(" and ")
+                ));
+            }
+        }
+    }
+    out
+}

@@ -345,7 +345,7 @@ impl Scene {
         if integrates {
             parser.scene()
         } else {
-            parser.to_linearise().scene()
+            parser.for_linearisation().scene()
         }
     }
 }

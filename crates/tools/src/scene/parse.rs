@@ -54,7 +54,7 @@ impl<'a> Parser<'a> {
     }
 
     /// Reads the scene to linearise it, not to integrate it: without the fixed step's checks.
-    pub(crate) fn to_linearise(mut self) -> Self {
+    pub(crate) fn for_linearisation(mut self) -> Self {
         self.integrates = false;
         self
     }
@@ -241,6 +241,9 @@ impl<'a> Parser<'a> {
             wheel_laws = super::fsw::read(self, f, &model, epoch, &mut effects, &mut clocks)?;
         }
         super::faults::read(self, &file.faults, &mut effects)?;
+        if let Some(f) = flex.as_ref() {
+            warnings.extend(super::flexible::unloaded_modes(f, &effects));
+        }
         let sampled = if self.advise {
             super::sampled_loop::SampledLaws::in_scene(&effects, wheel_laws)
         } else {

@@ -418,3 +418,68 @@ fn a_torquer_dipole_held_through_the_stepping_inputs_equals_its_constant_command
     let (a, b) = (run.rows().last().unwrap(), stepped.rows().last().unwrap());
     assert_eq!(a, b);
 }
+
+/// A flexible strip's modes are degrees of freedom of `satsim dynamics` and take their own
+/// generalised forces: sunlight on a facet covering the whole strip, a uniform load `F / L`,
+/// loads mode `k` with `(F / L) ∫φₖ`, where the cantilever's `∫₀ᴸ φₖ = 2σₖ / (βₖ √(ρA L))`
+/// (`σₖ = (sinh βL − sin βL) / (cosh βL + cos βL)`) against its tip's `φₖ(L) = ±2 / √(ρA L)`.
+#[test]
+fn a_flexible_strip_in_sunlight_takes_generalised_forces_on_its_modes() {
+    let (length, rho_a): (f64, f64) = (2.0, 5.0);
+    let text = format!(
+        r#"
+epoch = "{EPOCH}"
+duration = 10.0
+[model]
+{}{}facets = [{{ size = [0.2, 2.0], normal = [1.0, 0.0, 0.0], at = [0.0, 1.0, 0.0], edge = [0.0, 0.0, 1.0] }}]
+[model.body.flexible]
+beam = {{ root = [0.0, 0.0, 0.0], axis = [0.0, 1.0, 0.0], bend = [1.0, 0.0, 0.0], length = {length}, EI = 500.0, rho_A = {rho_a}, modes = 3 }}
+{}[initial]
+base = {{ attitude = {:?} }}
+hinges = {{ angle = [0.0], rate = [0.0] }}
+[orbit]
+altitude = 500e3
+[effects.solar_radiation]
+shadow = "none"
+"#,
+        body("bus", 500.0, [100.0; 3]),
+        body("panel", 1.0, [0.1; 3]),
+        z_hinge("h", "bus", "panel", 1.0, None),
+        x_onto(sun_dir()),
+    );
+    let s = scene(&text);
+    let env = environment(&s, 0.0).unwrap();
+    let srp = effect(&env, "solar_radiation");
+    let g = &srp.generalized_forces;
+    // A free base's 6, the hinge, the three modes (`satsim dynamics`'s 10).
+    assert_eq!(g.len(), 10, "{g:?}");
+    let force = srp.bodies[1].force.x;
+    assert!(force < 0.0, "the light pushes the strip along -x: {force}");
+    let flex = s.flexible.as_ref().unwrap();
+    let beta_l: [f64; 3] = [
+        1.875_104_068_711_961,
+        4.694_091_132_974_175,
+        7.854_757_438_237_613,
+    ];
+    let root = (rho_a * length).sqrt();
+    for (k, bl) in beta_l.iter().enumerate() {
+        let sigma = (bl.sinh() - bl.sin()) / (bl.cosh() + bl.cos());
+        let integral = 2.0 * sigma / (bl / length * root);
+        let tip = if k % 2 == 0 { 2.0 } else { -2.0 } / root;
+        let mut unit = vec![0.0; 3];
+        unit[k] = 1.0;
+        // The modes' sign is the program's: compare the products with the tip.
+        let code_tip = flex.tip_of(1, &unit).unwrap();
+        assert!(
+            (code_tip.abs() - tip.abs()).abs() < 1e-9,
+            "{code_tip} vs {tip}"
+        );
+        let expected = force / length * integral * tip;
+        let got = g[7 + k] * code_tip;
+        assert!(
+            (got - expected).abs() < 1e-6 * expected.abs(),
+            "mode {}: {got} vs {expected}",
+            k + 1
+        );
+    }
+}

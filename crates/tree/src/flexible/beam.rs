@@ -216,7 +216,11 @@ impl Beam {
             phi.push(self.bend * f + (n * df).cross(&d));
             psi.push(n * df);
         }
-        super::NodeShape { phi, psi }
+        super::NodeShape {
+            phi,
+            psi,
+            shortening: None,
+        }
     }
 }
 
@@ -310,6 +314,28 @@ impl Beam {
             .map(|md| self.rho_a * integrate(l, PANELS, &rule, |x| x * md.shape(x)[0]))
             .collect();
         StiffeningIntegrals { j0, j1, s1, s2 }
+    }
+
+    /// The foreshortening at the section of a point `p` (body frame):
+    /// `C(ξ) = ∫₀^ξ φ'φ'ᵀ` (`m × m`, row-major; 1/kg), `ξ = (p − root) · axis` clamped to
+    /// `[0, L]`. Bent by `η`, the section is drawn towards the root by `½ ηᵀ C(ξ) η` along
+    /// `axis`, so a load carried there along the axis (a body hung on it, pulled outwards
+    /// by its centrifugal force) does work through the bending: its geometric stiffness.
+    pub fn foreshortening(&self, p: &Vec3) -> Vec<f64> {
+        let rule = gauss_legendre(POINTS);
+        let modes = self.cantilever_modes();
+        let m = modes.len();
+        let xi = (p - self.root).dot(&self.axis).clamp(0.0, self.length);
+        let mut c = vec![0.0; m * m];
+        for i in 0..m {
+            for j in 0..=i {
+                let (a, b) = (&modes[i], &modes[j]);
+                let v = integrate(xi, PANELS, &rule, |x| a.shape(x)[1] * b.shape(x)[1]);
+                c[i * m + j] = v;
+                c[j * m + i] = v;
+            }
+        }
+        c
     }
 
     /// The beam's second-order inertia: the centrifugal-stiffening integrals and the

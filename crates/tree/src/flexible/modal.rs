@@ -34,4 +34,9 @@ pub struct NodeShape {
     pub phi: Vec<Vec3>,
     /// Rotation (a rotation vector per unit `ηₖ`) per mode, body axes.
     pub psi: Vec<Vec3>,
+    /// The foreshortening `C` at the point (`m × m`, row-major, 1/kg), where known: a
+    /// stiffened structure draws the point in along its axis by `½ ηᵀ C η`, so a load it
+    /// carries there along the axis stiffens its bending (a modes file's node `shortening`;
+    /// a beam's is [`super::Beam::foreshortening`]).
+    pub shortening: Option<Vec<f64>>,
 }

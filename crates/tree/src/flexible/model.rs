@@ -43,9 +43,10 @@ pub enum Modes {
     },
 }
 
-/// A point of a body with given modes where their translations are known (a modes file's
-/// node), watched for a deflection beyond what the modal model holds
-/// ([`FlexModel::deflection_of`]).
+/// A point of a body with given modes where their shapes are known (a modes file's node):
+/// watched for a deflection beyond what the modal model holds
+/// ([`FlexModel::deflection_of`]), and where a load reaches the modes
+/// ([`FlexModel::point_shape`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct WatchPoint {
     /// Its name (for messages).
@@ -54,6 +55,10 @@ pub struct WatchPoint {
     pub at: Vec3,
     /// Each mode's translation there, body axes (m per unit `ηₖ`).
     pub translation: Vec<Vec3>,
+    /// Each mode's small rotation there, body axes (rad per unit `ηₖ`).
+    pub rotation: Vec<Vec3>,
+    /// The foreshortening there, where the file gives it ([`NodeShape::shortening`]).
+    pub shortening: Option<Vec<f64>>,
 }
 
 /// A flexible body as given to [`FlexModel::build`].
@@ -456,7 +461,15 @@ impl FlexModel {
                     format!("hinge `{hinge}`: one shape per mode"),
                 ));
             }
-            nodes[i] = Some(Node::new(*joint.at(), &shape));
+            let mut node = Node::new(*joint.at(), &shape);
+            if let Some(s) = &stiffening[p] {
+                let c = match &beams[p] {
+                    Some(beam) => Some(beam.foreshortening(joint.at())),
+                    None => shape.shortening.clone(),
+                };
+                node.shortening = c.map(|c| super::node::Shortening { axis: s.axis, c });
+            }
+            nodes[i] = Some(node);
         }
         let node_axis = (0..n)
             .map(|i| {
@@ -656,15 +669,46 @@ impl FlexModel {
     /// The mode shapes of body `i` at its point `p` (body frame, m), with where its modes lie
     /// among the elastic coordinates: a load `(n, f)` (couple, force; body axes) at `p`
     /// does the work `Σₖ (ψₖ·n + φₖ·f) δηₖ`, its generalised forces on them. `None` for a
-    /// rigid body, and for given modes (a modes file's shapes are known at its nodes only).
+    /// rigid body, and for given modes at a point that is none of their nodes (a modes
+    /// file's shapes are known at its nodes only; [`crate::io::MODES_FILE_NODE_TOLERANCE`]).
     pub fn point_shape(
         &self,
         i: usize,
         p: &crate::spatial::Vec3,
     ) -> Option<(std::ops::Range<usize>, NodeShape)> {
-        let beam = self.beams.get(i)?.as_ref()?;
         let at = self.offset[i];
-        Some((at..at + self.modes[i], beam.node(p)))
+        let range = at..at + self.modes[i];
+        if let Some(beam) = self.beams.get(i)?.as_ref() {
+            return Some((range, beam.node(p)));
+        }
+        let node = self.node_at(i, p)?;
+        Some((
+            range,
+            NodeShape {
+                phi: node.translation.clone(),
+                psi: node.rotation.clone(),
+                shortening: node.shortening.clone(),
+            },
+        ))
+    }
+    /// For a stiffened beam, its axis and the foreshortening at its point `p`
+    /// ([`Beam::foreshortening`]), and for stiffened given modes at a node whose
+    /// `shortening` the file gives: a force `f` there does the work `−(a · f) (C η)ₖ` on mode
+    /// `k` besides `φₖ · f`, the geometric stiffness of a load carried along the beam (as a
+    /// body hung on a node has through the node's kinematics). `None` otherwise.
+    pub fn point_shortening(&self, i: usize, p: &Vec3) -> Option<(Vec3, Vec<f64>)> {
+        let axis = self.stiffening.get(i)?.as_ref()?.axis;
+        match self.beams[i].as_ref() {
+            Some(beam) => Some((axis, beam.foreshortening(p))),
+            None => Some((axis, self.node_at(i, p)?.shortening.clone()?)),
+        }
+    }
+    /// The node of body `i`'s given modes at `p` (within [`crate::io::MODES_FILE_NODE_TOLERANCE`]), if any.
+    pub fn node_at(&self, i: usize, p: &crate::spatial::Vec3) -> Option<&WatchPoint> {
+        self.watch
+            .get(i)?
+            .iter()
+            .find(|n| (n.at - p).norm() <= crate::io::MODES_FILE_NODE_TOLERANCE)
     }
     /// The deflection of body `i`'s beam tip along `bend` (m) in `q`; `None` unless its
     /// modes are a beam's.
@@ -707,6 +751,29 @@ impl FlexModel {
         }
         worst
     }
+    /// The size of elastic coordinate `e` (from 0, all the elastic coordinates in order)
+    /// that bends its body by its whole size: `1 / max(|φₖ(p)| / ℓ + |ψₖ(p)|)` over the
+    /// points [`Self::deflection_of`] watches (a beam's tip, `ℓ` its length, `ψₖ` its slope;
+    /// a modes file's watched nodes, `ℓ` their distance from the frame's origin, translation
+    /// only). A scale for finite differences in `ηₖ`: its unit, `√kg m`, is the body's size
+    /// only for a body of about a kilogram (a 0.4 g strip of 0.2 m is bent past its length by
+    /// `ηₖ = 2e-3`). `None` where nothing is watched or the mode moves no watched point.
+    pub fn modal_scale(&self, e: usize) -> Option<f64> {
+        let (i, k) = self.mode_of(e)?;
+        let k = k - 1;
+        let largest = if let Some(beam) = &self.beams[i] {
+            let tip = beam.node(&(beam.root + beam.axis * beam.length));
+            tip.phi[k].norm() / beam.length + tip.psi[k].norm()
+        } else {
+            self.watch[i]
+                .iter()
+                .filter(|p| p.at.norm() > 0.0)
+                .map(|p| p.translation[k].norm() / p.at.norm())
+                .fold(0.0, f64::max)
+        };
+        (largest > 0.0 && largest.is_finite()).then(|| 1.0 / largest)
+    }
+
     /// Whether [`Self::deflection_of`] watches body `i`: a beam, or given modes with a
     /// point off the frame's origin.
     pub fn watched(&self, i: usize) -> bool {

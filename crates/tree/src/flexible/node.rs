@@ -33,6 +33,15 @@ impl RotationStage {
     }
 }
 
+/// The foreshortening of a stiffened beam at a node: the node is drawn towards the root by
+/// `½ ηᵀ C η` along the beam's `axis` ([`super::Beam::foreshortening`]).
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct Shortening {
+    pub(crate) axis: Vec3,
+    /// `C`, `m × m`, row-major.
+    pub(crate) c: Vec<f64>,
+}
+
 /// A child hinge's node on its flexible parent (parent body frame).
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct Node {
@@ -40,6 +49,11 @@ pub(crate) struct Node {
     pub(crate) at: Vec3,
     /// `Φₖ` per parent mode.
     pub(crate) phi: Vec<Vec3>,
+    /// On a stiffened beam, the foreshortening that moves the node along the beam's axis
+    /// (second order in `η`): the translation stage then has the subspace
+    /// `[0; Φₖ − a (C η)ₖ]` and the velocity product `[0; −a η̇ᵀ C η̇]`. Through it the loads
+    /// the node carries along the beam stiffen (or soften) its bending.
+    pub(crate) shortening: Option<Shortening>,
     /// The rotation stages (none when `Ψ = 0`).
     pub(crate) rotations: Vec<RotationStage>,
     /// The coordinate axis of a single rotation stage about `±x`, `±y` or `±z` (a beam
@@ -100,6 +114,7 @@ impl Node {
         Self {
             at,
             phi: shape.phi.clone(),
+            shortening: None,
             rotations,
             coord,
         }
@@ -125,10 +140,32 @@ impl Node {
             g[k].ang = Vec3::new(0.0, 0.0, 0.0);
             g[k].lin = *p;
         }
+        // The foreshortening `−½ a ηᵀCη`: its rate `−a ηᵀCη̇`, its subspace columns
+        // `−a (Cη)ₖ`, and `Ṡ η̇ = −a η̇ᵀCη̇` (C symmetric).
+        let mut shortened = Vec3::zeros();
+        if let Some(s) = &self.shortening {
+            let m = self.phi.len();
+            let (mut along, mut along_rate, mut product) = (0.0, 0.0, 0.0);
+            for (k, row) in s.c.chunks_exact(m).enumerate() {
+                let (mut ce, mut ced) = (0.0, 0.0);
+                for l in 0..m {
+                    ce += row[l] * eta[l];
+                    ced += row[l] * etad[l];
+                }
+                along += eta[k] * ce;
+                along_rate += eta[k] * ced;
+                product += etad[k] * ced;
+                g[k].lin -= s.axis * ce;
+            }
+            disp -= s.axis * (0.5 * along);
+            rate -= s.axis * along_rate;
+            shortened = -s.axis * product;
+        }
         let mut x = Transform::new(Mat3::identity(), disp);
         let vj = Motion::new(Vec3::zeros(), rate);
         let mut w = x.apply_motion(vp) + vj;
         let mut c = w.cross_motion(&vj);
+        c.lin += shortened;
         if let (Some(ca), [r]) = (&self.coord, self.rotations.as_slice()) {
             // One rotation about a coordinate axis: the rigid hinges' fast path, and the
             // node frame `(E, disp)` made at once (the translation stage has `E = 1`).

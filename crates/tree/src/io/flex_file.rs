@@ -114,6 +114,11 @@ pub struct NodeFile {
     /// Per mode, the small rotation of the structure there (rad/√kg).
     #[serde(deserialize_with = "exact")]
     pub rotation: Spanned<Vec<[f64; 3]>>,
+    /// The foreshortening `C` there (`m` rows of `m`, 1/kg; used with `[stiffening]`, whose
+    /// `axis` it is along): the node drawn in along the axis by `½ ηᵀ C η`, so that what it
+    /// carries along the axis stiffens the bending.
+    #[serde(default)]
+    pub shortening: Option<Spanned<Vec<Vec<f64>>>>,
 }
 
 fn v3(a: &[f64; 3]) -> Vec3 {
@@ -148,9 +153,11 @@ impl ModesFile {
         NodeShape {
             phi: n.translation.get_ref().iter().map(v3).collect(),
             psi: n.rotation.get_ref().iter().map(v3).collect(),
+            shortening: n.shortening.as_ref().map(|c| c.get_ref().concat()),
         }
     }
-    /// Every node as a point whose deflection a run watches ([`WatchPoint`]).
+    /// Every node as a point whose deflection a run watches, and where a load reaches the
+    /// modes ([`WatchPoint`]).
     pub fn watch_points(&self) -> Vec<WatchPoint> {
         self.node
             .iter()
@@ -160,6 +167,8 @@ impl ModesFile {
                     name: n.name.get_ref().clone(),
                     at: v3(n.at.get_ref()),
                     translation: n.translation.get_ref().iter().map(v3).collect(),
+                    rotation: n.rotation.get_ref().iter().map(v3).collect(),
+                    shortening: n.shortening.as_ref().map(|c| c.get_ref().concat()),
                 }
             })
             .collect()
@@ -371,6 +380,23 @@ impl ModesFile {
                     return Err((rows.span(), format!("node `{name}`: `{key}` is not finite")));
                 }
             }
+            if let Some(c) = &node.shortening {
+                let rows = c.get_ref();
+                let at = |m: String| Err((c.span(), format!("node `{name}`: `shortening`: {m}")));
+                if rows.len() != m || rows.iter().any(|r| r.len() != m) {
+                    return at(format!("{m} rows of {m} (a matrix per mode pair) expected"));
+                }
+                if !finite(&rows.concat()) {
+                    return at("not finite".into());
+                }
+                let largest = rows.concat().iter().fold(0.0f64, |a, x| a.max(x.abs()));
+                let asymmetric = (0..m)
+                    .flat_map(|i| (0..i).map(move |j| (i, j)))
+                    .find(|&(i, j)| (rows[i][j] - rows[j][i]).abs() > 1e-12 * largest);
+                if let Some((i, j)) = asymmetric {
+                    return at(format!("not symmetric (row {}, column {})", i + 1, j + 1));
+                }
+            }
         }
         self.validate_stiffening(m)
     }
@@ -473,10 +499,11 @@ pub fn write_modes_file(beam: &Beam, damping: Option<f64>, nodes: &[(&str, Vec3)
         };
         let _ = writeln!(
             s,
-            "\n[[node]]\nname = {name:?}\nat = {}\ntranslation = {}\nrotation = {}",
+            "\n[[node]]\nname = {name:?}\nat = {}\ntranslation = {}\nrotation = {}\nshortening = {}",
             list(at.as_slice()),
             rows(&shape.phi),
-            rows(&shape.psi)
+            rows(&shape.psi),
+            square(&beam.foreshortening(at))
         );
     }
     s

@@ -189,6 +189,7 @@ pub(crate) fn with_random_modes(rigid: Model, seed: u64) -> FlexModel {
                         NodeShape {
                             phi: (0..m).map(|_| rng.vec3(0.5)).collect(),
                             psi: (0..m).map(|_| rng.vec3(0.8)).collect(),
+                            shortening: None,
                         },
                     )
                 })
