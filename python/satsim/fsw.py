@@ -300,15 +300,17 @@ class Guidance:
 
     @classmethod
     def inertial(cls, q: Sequence[float]) -> "Guidance":
-        """A fixed attitude ``q`` ``[w, x, y, z]`` (body to inertial; normalised): zero rate
-        and acceleration; needs no orbit."""
+        """A fixed attitude ``q`` ``[w, x, y, z]`` (body to inertial; within 1e-3 of unit norm it
+        is normalised, with a :class:`UserWarning` when more than rounding off; beyond, a
+        :class:`satsim.SatsimError`, as a scene's quaternions): zero rate and acceleration;
+        needs no orbit."""
         return cls(_satsim.NativeGuidance.inertial(_vec(q, 4, "q")))
 
     @classmethod
     def nadir(cls, offset: Optional[Sequence[float]] = None) -> "Guidance":
         """The local orbital frame (LVLH: z towards the Earth's centre, y along ``−r × v``,
         x = y × z) times the fixed ``offset`` ``[w, x, y, z]`` (body to orbital; none: the
-        identity), turning at ``r × v / r²``."""
+        identity; normalised or refused as :meth:`inertial`'s ``q``), turning at ``r × v / r²``."""
         q = (1.0, 0.0, 0.0, 0.0) if offset is None else offset
         return cls(_satsim.NativeGuidance.nadir(_vec(q, 4, "offset")))
 

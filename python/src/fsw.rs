@@ -14,6 +14,8 @@ use satsim_spacecraft::fsw::{
     Guidance, GyroModel, Mekf, MekfParams, Pid, Reference, Slew, attitude_error, bdot_dipole,
     gyro_mean, momentum_dipole, triad, triad_covariance,
 };
+use satsim_tree::error::Num;
+use satsim_tree::io::near_unit_quaternion;
 
 /// The attitude and gyro-bias MEKF ([`Mekf`]).
 #[pyclass(module = "satsim._satsim", name = "NativeMekf")]
@@ -142,6 +144,25 @@ fn unit_quaternion(name: &str, q: [f64; 4]) -> PyResult<UnitQuaternion<f64>> {
     )))
 }
 
+/// A quaternion `[w, x, y, z]` the user wrote (a guidance law's attitude or offset), by a
+/// scene's rule ([`near_unit_quaternion`]): within 1e-3 of unit norm normalised, with a
+/// `UserWarning` when more than rounding off; refused beyond.
+fn written_quaternion(py: Python<'_>, name: &str, q: [f64; 4]) -> PyResult<UnitQuaternion<f64>> {
+    let q = finite(name, q)?;
+    let ([w, x, y, z], off) = near_unit_quaternion(q).map_err(|m| err(format!("{name}: {m}")))?;
+    if let Some(n) = off {
+        let message = format!("{name}: quaternion norm {} is not 1; normalised", Num(n));
+        let message = std::ffi::CString::new(message).expect("no NUL in the message");
+        PyErr::warn(
+            py,
+            &py.get_type::<pyo3::exceptions::PyUserWarning>(),
+            &message,
+            2,
+        )?;
+    }
+    Ok(UnitQuaternion::new_unchecked(Quaternion::new(w, x, y, z)))
+}
+
 /// `[w, x, y, z]` with `w >= 0`.
 fn wxyz(q: &UnitQuaternion<f64>) -> [f64; 4] {
     let c = q.quaternion();
@@ -249,15 +270,15 @@ pub(crate) struct NativeGuidance {
 #[pymethods]
 impl NativeGuidance {
     #[staticmethod]
-    fn inertial(q: [f64; 4]) -> PyResult<Self> {
+    fn inertial(py: Python<'_>, q: [f64; 4]) -> PyResult<Self> {
         Ok(Self {
-            inner: Guidance::Inertial(unit_quaternion("the attitude", q)?),
+            inner: Guidance::Inertial(written_quaternion(py, "q", q)?),
         })
     }
     #[staticmethod]
-    fn nadir(offset: [f64; 4]) -> PyResult<Self> {
+    fn nadir(py: Python<'_>, offset: [f64; 4]) -> PyResult<Self> {
         Ok(Self {
-            inner: Guidance::Nadir(unit_quaternion("the offset", offset)?),
+            inner: Guidance::Nadir(written_quaternion(py, "offset", offset)?),
         })
     }
     #[staticmethod]

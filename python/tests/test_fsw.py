@@ -425,3 +425,20 @@ def test_magnetic_laws_oppose_the_rate_and_the_momentum():
     assert np.allclose(satsim.fsw.gyro_mean([0, 1, 2], [2, 3, 4]), [1, 2, 3])
     with pytest.raises(ValueError, match="dt"):
         satsim.fsw.bdot_dipole(k, [0, 0, 0], [1, 0, 0], 0.0)
+
+
+def test_guidance_quaternions_follow_the_scene_rule():
+    # Within 1e-3 of unit norm: normalised, a UserWarning when more than rounding off.
+    with pytest.warns(UserWarning, match="normalised"):
+        g = satsim.fsw.Guidance.inertial([0.70711, 0.0, 0.0, 0.70711])
+    q = np.asarray(g.reference(0.0)[0])
+    assert abs(np.linalg.norm(q) - 1.0) < 1e-15
+    assert abs(q[0] - q[3]) < 1e-15
+    with pytest.warns(UserWarning, match="normalised"):
+        satsim.fsw.Guidance.nadir([1.0, 0.01, 0.0, 0.0])
+    # Beyond: refused, the tolerance stated.
+    for bad in ([2.0, 0.0, 0.0, 0.0], [1.0, 0.1, 0.0, 0.0], [0.0, 0.0, 0.0, 0.0]):
+        with pytest.raises(satsim.SatsimError, match="within 1e-3"):
+            satsim.fsw.Guidance.inertial(bad)
+    with pytest.raises(satsim.SatsimError, match="within 1e-3"):
+        satsim.fsw.Guidance.nadir([2.0, 0.0, 0.0, 0.0])

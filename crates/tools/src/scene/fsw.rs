@@ -74,7 +74,7 @@ use satsim_spacecraft::fsw::{
 };
 use satsim_spacecraft::sensors::{Kind, Sensors};
 use satsim_tree::error::Num;
-use satsim_tree::io::{FileError, exact, line_of};
+use satsim_tree::io::{FileError, exact, line_of, near_unit_quaternion};
 use satsim_tree::{BaseKind, Model};
 
 use super::sampled_loop::PidLaw;
@@ -328,6 +328,8 @@ struct Within<'a> {
     epoch: Option<Epoch>,
     /// The controls on the wheels read so far, for the check of their sampled loops.
     wheel_laws: RefCell<Vec<WheelLaw>>,
+    /// What the reader accepts but the user should hear about, `file:line: message`.
+    warnings: RefCell<Vec<String>>,
 }
 
 /// A control table on the wheels: where it is (`[title]` and its line) and its law, whose
@@ -342,6 +344,15 @@ pub(crate) struct WheelLaw {
 impl Within<'_> {
     fn sensors(&self) -> Option<&Sensors> {
         self.effects.get::<Sensors>()
+    }
+
+    /// Notes a warning at the line of `span`.
+    fn warn(&self, span: Range<usize>, message: String) {
+        self.warnings.borrow_mut().push(format!(
+            "{}:{}: {message}",
+            self.text.path().display(),
+            line_of(self.text.text(), span.start)
+        ));
     }
 
     /// Whether `period` is a whole multiple (>= 1) of `base`.
@@ -616,16 +627,20 @@ impl Within<'_> {
             "inertial" | "nadir" => {
                 let attitude = match &g.attitude {
                     Some(q) => {
-                        let [w, x, y, z] = *q.get_ref();
-                        let quat = Quaternion::new(w, x, y, z);
-                        let n = quat.norm();
-                        if !n.is_finite() || (n - 1.0).abs() > 1e-6 {
-                            return Err(text.error(
-                                Some(q.span()),
-                                format!("`{at}.attitude`: quaternion norm {} is not 1", Num(n)),
-                            ));
+                        let ([w, x, y, z], off) =
+                            near_unit_quaternion(*q.get_ref()).map_err(|m| {
+                                text.error(Some(q.span()), format!("`{at}.attitude`: {m}"))
+                            })?;
+                        if let Some(n) = off {
+                            self.warn(
+                                q.span(),
+                                format!(
+                                    "`{at}.attitude`: quaternion norm {} is not 1; normalised",
+                                    Num(n)
+                                ),
+                            );
                         }
-                        UnitQuaternion::from_quaternion(quat)
+                        UnitQuaternion::new_unchecked(Quaternion::new(w, x, y, z))
                     }
                     None if mode == "inertial" => {
                         return Err(text.error(
@@ -1035,8 +1050,8 @@ struct TopBlocks {
 
 /// Reads `[fsw]` against the model, the epoch, the enabled effects and the sensors (in
 /// `effects`), and hands the blocks to the sensors ([`Sensors::set_fsw`]); the controls'
-/// clocks go to `clocks`. Returns the controls on the wheels, for the check of their
-/// sampled loops.
+/// clocks go to `clocks`, its warnings to `warnings`. Returns the controls on the wheels,
+/// for the check of their sampled loops.
 pub(crate) fn read(
     text: &SceneText,
     file: &Spanned<FswFile>,
@@ -1044,6 +1059,7 @@ pub(crate) fn read(
     epoch: Option<Epoch>,
     effects: &mut EffectSet,
     clocks: &mut Vec<super::Clock>,
+    warnings: &mut Vec<String>,
 ) -> Result<Vec<WheelLaw>, FileError> {
     let f = file.get_ref();
     let on = |e: Option<bool>| e != Some(false);
@@ -1053,6 +1069,7 @@ pub(crate) fn read(
         effects,
         epoch,
         wheel_laws: RefCell::new(Vec::new()),
+        warnings: RefCell::new(Vec::new()),
     };
     // A magnetic block: read, and checked against the scene when it is enabled.
     let magnetic = |block: &str, file: &Spanned<MagneticFile>| {
@@ -1104,6 +1121,7 @@ pub(crate) fn read(
         Some(modes) => with_modes(&w, &top, modes, clocks)?,
     };
     let laws = w.wheel_laws.take();
+    warnings.extend(w.warnings.take());
     let Some(onboard) = onboard else {
         return Ok(laws);
     };

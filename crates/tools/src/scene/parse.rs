@@ -222,7 +222,15 @@ impl<'a> Parser<'a> {
         }
         let mut wheel_laws = Vec::new();
         if let Some(f) = &file.fsw {
-            wheel_laws = super::fsw::read(self, f, &model, epoch, &mut effects, &mut clocks)?;
+            wheel_laws = super::fsw::read(
+                self,
+                f,
+                &model,
+                epoch,
+                &mut effects,
+                &mut clocks,
+                &mut warnings,
+            )?;
         }
         super::faults::read(self, &file.faults, &mut effects)?;
         let sampled = if self.advise {
