@@ -1688,7 +1688,10 @@ fn a_quaternion_within_1e_3_of_unit_is_normalised_with_a_warning_and_refused_bey
     let scene = parse(&text, "bad_fsw.toml");
     let q = guidance_attitude(&scene);
     // The written components in the same ratio, on unit norm.
-    assert!((q[0] - q[3]).abs() < 1e-15 && q[1] == 0.0 && q[2] == 0.0, "{q:?}");
+    assert!(
+        (q[0] - q[3]).abs() < 1e-15 && q[1] == 0.0 && q[2] == 0.0,
+        "{q:?}"
+    );
     assert!((q[0] * q[0] + q[3] * q[3] - 1.0).abs() < 1e-15, "{q:?}");
     let line = line_of(&text, "attitude = [0.70711");
     assert!(
@@ -1786,4 +1789,32 @@ fn a_campaign_dispersing_a_quaternion_component_normalises_each_drawn_quaternion
         beyond >= 2,
         "{beyond} of the draws moved the norm by more than 1e-3"
     );
+}
+
+/// A noiseless gyro (with a bias) and star tracker: the MEKF's updates take the least 1σ
+/// (`MIN_SIGMA`, 1e-6 rad) and stay well posed; the estimate follows the truth within it and
+/// finds the gyro's bias.
+#[test]
+fn the_mekf_on_a_noiseless_gyro_and_star_tracker_runs_and_follows_the_truth() {
+    let text = bus_text("[1.0, 0.0, 0.0, 0.0]", 60.0, "")
+        .replacen("noise_density = 1e-5", "bias = [1e-5, -1e-5, 2e-5]", 1)
+        .replacen(
+            "noise_arcsec = [5.0, 5.0, 40.0]",
+            "noise_arcsec = [0.0, 0.0, 0.0]",
+            1,
+        );
+    assert!(text.contains("noise_arcsec = [0.0, 0.0, 0.0]") && !text.contains("noise_density"));
+    let t = run(&parse(&text, "noiseless.toml"));
+    let mut rows = 0;
+    for row in t.rows().filter(|r| r[0] >= 1.0) {
+        let [error] = get(&t, row, ["est_error"]);
+        assert!(error < 1e-6, "t = {}: est_error {error}", row[0]);
+        if row[0] >= 10.0 {
+            let b = get(&t, row, ["est_bias_x", "est_bias_y", "est_bias_z"]);
+            let off = norm([b[0] - 1e-5, b[1] + 1e-5, b[2] - 2e-5]);
+            assert!(off < 1e-8, "t = {}: bias {b:?}", row[0]);
+        }
+        rows += 1;
+    }
+    assert!(rows >= 60, "{rows}");
 }
