@@ -346,6 +346,70 @@ impl Within<'_> {
         self.effects.get::<Sensors>()
     }
 
+    /// Checks the root body's wheel `axes` that a control on the wheels allocates to (the
+    /// wheels on other bodies turn out of the bus's axes and are left out): none is an error
+    /// at the control's table; axes that span fewer than 3 directions are a warning there,
+    /// naming each body axis about which no wheel torque reaches the bus.
+    fn root_wheel_axes(
+        &self,
+        title: &str,
+        span: Range<usize>,
+        axes: &[Vector3<f64>],
+    ) -> Result<(), FileError> {
+        if axes.is_empty() {
+            return Err(self.text.error(
+                Some(span),
+                format!(
+                    "{title} actuator = \"wheels\" needs a wheel on the root body: the control allocates to the root body's wheels only (the others turn with their bodies, out of the bus's axes)"
+                ),
+            ));
+        }
+        // The directions the wheels reach: the eigenvectors of Σ a aᵀ whose eigenvalue is
+        // not zero next to the largest.
+        let m = axes
+            .iter()
+            .fold(nalgebra::Matrix3::zeros(), |m, a| m + a * a.transpose());
+        let eig = m.symmetric_eigen();
+        let largest = eig.eigenvalues.max();
+        let unreached: Vec<String> = (0..3)
+            .filter(|&i| eig.eigenvalues[i] <= 1e-9 * largest)
+            .map(|i| {
+                let v = eig.eigenvectors.column(i);
+                // The sign that makes the largest component positive, rounded for reading.
+                let s = if v
+                    .iter()
+                    .fold(0.0f64, |a, x| if x.abs() > a.abs() { *x } else { a })
+                    < 0.0
+                {
+                    -1.0
+                } else {
+                    1.0
+                };
+                format!(
+                    "[{}]",
+                    v.iter()
+                        .map(|x| Num(((s * x) * 1e6).round() / 1e6 + 0.0).to_string())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                )
+            })
+            .collect();
+        if !unreached.is_empty() {
+            self.warn(
+                span,
+                format!(
+                    "{title} allocates to the root body's {} wheel{} only, which span {} of the 3 axes: no wheel torque reaches the bus about {} (body axes), so the control cannot hold the attitude about {}",
+                    axes.len(),
+                    if axes.len() == 1 { "" } else { "s" },
+                    3 - unreached.len(),
+                    unreached.join(" or "),
+                    if unreached.len() == 1 { "it" } else { "them" },
+                ),
+            );
+        }
+        Ok(())
+    }
+
     /// Notes a warning at the line of `span`.
     fn warn(&self, span: Range<usize>, message: String) {
         self.warnings.borrow_mut().push(format!(
@@ -872,6 +936,20 @@ impl Within<'_> {
                 }
             }
         };
+        if matches!(actuator, Actuator::Wheels(_)) {
+            let axes: Vec<Vector3<f64>> = self
+                .effects
+                .get::<ReactionWheels>()
+                .map(|w| {
+                    w.wheels
+                        .iter()
+                        .filter(|w| w.body.is_none())
+                        .map(|w| w.axis)
+                        .collect()
+                })
+                .unwrap_or_default();
+            self.root_wheel_axes(&title, span.clone(), &axes)?;
+        }
         let period = match (&c.period, est_period) {
             (Some(p), _) => {
                 let v = text.positive(p, &format!("{at}.period"))?;

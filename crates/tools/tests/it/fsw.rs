@@ -1818,3 +1818,27 @@ fn the_mekf_on_a_noiseless_gyro_and_star_tracker_runs_and_follows_the_truth() {
     }
     assert!(rows >= 60, "{rows}");
 }
+
+/// `[fsw.control]` on the wheels allocates to the root body's wheels: two of them reach two
+/// axes, a warning at the table names the third; three reach every axis, no warning.
+#[test]
+fn a_control_on_root_wheels_that_span_two_axes_is_warned_of_naming_the_third() {
+    let y_wheel = "[[effects.reaction_wheels.wheel]]\nname = \"y\"\naxis = [0.0, 1.0, 0.0]\ninertia = 0.05\nmax_torque = 0.2\n";
+    let full = bus_text("[1.0, 0.0, 0.0, 0.0]", 1.0, "");
+    assert!(full.contains(y_wheel));
+    let scene = parse(&full, "bus.toml");
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    let text = full.replacen(y_wheel, "", 1);
+    let scene = parse(&text, "bus.toml");
+    let line = text.lines().position(|l| l == "[fsw.control]").unwrap() + 1;
+    assert!(
+        scene
+            .warnings
+            .iter()
+            .any(|w| w.contains(&format!("bus.toml:{line}:"))
+                && w.contains("span 2 of the 3 axes")
+                && w.contains("about [0, 1, 0] (body axes)")),
+        "{:?}",
+        scene.warnings
+    );
+}
