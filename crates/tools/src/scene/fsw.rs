@@ -836,11 +836,10 @@ impl Within<'_> {
         let inertia = match &c.inertia {
             Some(j) => {
                 let m = *j.get_ref();
-                let symmetric = (0..3).all(|r| (0..3).all(|k| m[r][k] == m[k][r]));
-                if !m.iter().flatten().all(|v| v.is_finite()) || !symmetric {
+                if !satsim_spacecraft::fsw::inertia_is_valid(&m) {
                     return Err(text.error(
                         Some(j.span()),
-                        format!("`{at}.inertia` must be a symmetric 3 x 3 matrix of finite numbers (kg m², body axes)"),
+                        format!("`{at}.inertia` must be a symmetric positive definite 3 x 3 matrix of finite numbers (kg m², body axes)"),
                     ));
                 }
                 Some(m)

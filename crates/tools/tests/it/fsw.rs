@@ -548,6 +548,8 @@ fn bad_fsw_input_is_an_error_naming_the_file_and_line() {
         (base.replacen("actuator = \"wheels\"", "actuator = \"ion_engines\"", 1), "actuator = \"ion_engines\"", "unknown actuator"),
         (base.replacen("actuator = \"wheels\"", "actuator = \"thrusters\"", 1), "[fsw.control]", "needs [effects.thrusters]"),
         (base.replacen("kp = [40.0, 40.0, 40.0]", "kp = [40.0, -1.0, 40.0]", 1), "kp = [40.0, -1.0", ">= 0"),
+        (base.replacen("actuator = \"wheels\"", "actuator = \"wheels\"\ninertia = [[-20.0, 0.0, 0.0], [0.0, 25.0, 0.0], [0.0, 0.0, 30.0]]", 1), "inertia = [[-20.0", "symmetric positive definite"),
+        (base.replacen("actuator = \"wheels\"", "actuator = \"wheels\"\ninertia = [[20.0, 1.0, 0.0], [0.0, 25.0, 0.0], [0.0, 0.0, 30.0]]", 1), "inertia = [[20.0, 1.0", "symmetric positive definite"),
         (base.replacen("period = 0.1                # s\n", "period = 0.0\n", 1), "period = 0.0", "> 0"),
         (format!("{base}\n[fsw.momentum]\ngain = 1e-3\nmagnetometer = \"mag\"\n"), "magnetometer = \"mag\"", "`fsw.momentum.magnetometer`: unknown sensor `mag` (the scene's magnetometer sensors: none)"),
         (format!("{base}\n[fsw.bdot]\nmagnetometer = \"mag\"\ngain = 4e5\n"), "magnetometer = \"mag\"", "`fsw.bdot.magnetometer`: unknown sensor `mag`"),
