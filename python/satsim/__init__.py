@@ -760,11 +760,17 @@ class Simulation:
 
     def set_inputs(self, values: Mapping[str, float]) -> None:
         """Sets inputs by name, held until changed. An unknown name or a non-finite value
-        raises :class:`SatsimError` and sets none of them."""
+        raises :class:`SatsimError` and sets none of them; so does ``values`` that is not a
+        mapping, or a value that is not a number (a string such as ``"1"`` included)."""
+        if not isinstance(values, Mapping):
+            raise SatsimError(
+                f"set_inputs takes a mapping of input names to numbers, got {values!r}")
         pairs: List[Tuple[str, float]] = []
         for name, value in values.items():
             if not isinstance(name, str):
                 raise SatsimError(f"input names are strings, got {name!r}")
+            if isinstance(value, (str, bytes)):
+                raise SatsimError(f"input `{name}` must be a number, got {value!r}")
             try:
                 v = float(value)
             except (TypeError, ValueError):

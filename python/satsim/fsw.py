@@ -104,7 +104,8 @@ class Mekf:
             [float(x) for x in attitude], [float(x) for x in bias], gyro_model == "sampled")
 
     def propagate(self, omega: Sequence[float], dt: float) -> None:
-        """Propagates over ``dt`` (s) with the gyro reading ``omega`` (rad/s) held."""
+        """Propagates over ``dt`` (s) with the gyro reading ``omega`` (rad/s) held; a result
+        that is not finite raises :class:`satsim.SatsimError` and leaves the filter as it was."""
         self._native.propagate([float(x) for x in omega], float(dt))
 
     def update(self, q: Sequence[float], sigma: Union[float, Sequence[float]]) -> None:
@@ -236,7 +237,7 @@ def gyro_mean(before: Sequence[float], after: Sequence[float]) -> np.ndarray:
 def bdot_dipole(gain: float, b_prev: Sequence[float], b: Sequence[float],
                 dt: float) -> np.ndarray:
     """The B-dot dipole (A m², body axes) ``−gain (b − b_prev) / dt`` from two magnetometer
-    readings (T, body axes) ``dt`` seconds apart (``[fsw.bdot]``; ``gain`` in A m² s/T)."""
+    readings (T, body axes) ``dt`` seconds apart (``[fsw.bdot]``; ``gain`` in A m² s/T, > 0)."""
     return np.array(_satsim.bdot_dipole(float(gain), _vec(b_prev, 3, "b_prev"), _vec(b, 3, "b"),
                                         float(dt)))
 
@@ -244,7 +245,7 @@ def bdot_dipole(gain: float, b_prev: Sequence[float], b: Sequence[float],
 def momentum_dipole(gain: float, h: Sequence[float], b: Sequence[float]) -> np.ndarray:
     """The momentum-dumping dipole (A m², body axes) ``gain (h × b) / |b|²`` for the wheels'
     momentum ``h`` (N m s) and the field ``b`` (T), both body axes (``[fsw.momentum]``;
-    ``gain`` in 1/s); zero where ``b`` is zero."""
+    ``gain`` in 1/s, > 0); zero where ``b`` is zero."""
     return np.array(_satsim.momentum_dipole(float(gain), _vec(h, 3, "h"), _vec(b, 3, "b")))
 
 
@@ -300,15 +301,17 @@ class Guidance:
 
     @classmethod
     def inertial(cls, q: Sequence[float]) -> "Guidance":
-        """A fixed attitude ``q`` ``[w, x, y, z]`` (body to inertial; normalised): zero rate
-        and acceleration; needs no orbit."""
+        """A fixed attitude ``q`` ``[w, x, y, z]`` (body to inertial; within 1e-3 of unit norm it
+        is normalised, with a :class:`UserWarning` when more than rounding off; beyond, a
+        :class:`satsim.SatsimError`, as a scene's quaternions): zero rate and acceleration;
+        needs no orbit."""
         return cls(_satsim.NativeGuidance.inertial(_vec(q, 4, "q")))
 
     @classmethod
     def nadir(cls, offset: Optional[Sequence[float]] = None) -> "Guidance":
         """The local orbital frame (LVLH: z towards the Earth's centre, y along ``−r × v``,
         x = y × z) times the fixed ``offset`` ``[w, x, y, z]`` (body to orbital; none: the
-        identity), turning at ``r × v / r²``."""
+        identity; normalised or refused as :meth:`inertial`'s ``q``), turning at ``r × v / r²``."""
         q = (1.0, 0.0, 0.0, 0.0) if offset is None else offset
         return cls(_satsim.NativeGuidance.nadir(_vec(q, 4, "offset")))
 

@@ -14,6 +14,8 @@ use satsim_spacecraft::fsw::{
     Guidance, GyroModel, Mekf, MekfParams, Pid, Reference, Slew, attitude_error, bdot_dipole,
     gyro_mean, momentum_dipole, triad, triad_covariance,
 };
+use satsim_tree::error::Num;
+use satsim_tree::io::near_unit_quaternion;
 
 /// The attitude and gyro-bias MEKF ([`Mekf`]).
 #[pyclass(module = "satsim._satsim", name = "NativeMekf")]
@@ -52,9 +54,21 @@ impl NativeMekf {
             .with_gyro_model(model);
         Ok(Self { inner })
     }
-    /// Propagates over `dt` with the gyro reading `omega` held.
+    /// Propagates over `dt` with the gyro reading `omega` held; an error (the filter as it
+    /// was) where the result is not finite (a rate of 1e200 rad/s).
     fn propagate(&mut self, omega: [f64; 3], dt: f64) -> PyResult<()> {
-        self.inner.propagate(omega, dt).map_err(err)
+        let mut next = self.inner.clone();
+        next.propagate(omega, dt).map_err(err)?;
+        let finite = next.attitude().iter().all(|x| x.is_finite())
+            && next.bias().iter().all(|x| x.is_finite())
+            && next.covariance().iter().flatten().all(|x| x.is_finite());
+        if !finite {
+            return Err(err(format!(
+                "propagating with omega {omega:?} over dt {dt} gives a non-finite attitude or covariance"
+            )));
+        }
+        self.inner = next;
+        Ok(())
     }
     /// A star tracker's reading `q` with its 1-sigma `sigma` (rad) about the body's axes.
     fn update_attitude(&mut self, q: [f64; 4], sigma: [f64; 3]) -> PyResult<()> {
@@ -120,6 +134,15 @@ pub(crate) fn attitude_error_py(q_est: [f64; 4], q_true: [f64; 4]) -> [f64; 3] {
 // ---------------------------------------------------------------------------------------
 // Helpers: checked conversions from Python's numbers.
 
+/// A magnetic law's gain: a finite number > 0, as `[fsw.bdot]` and `[fsw.momentum]` take.
+fn positive_gain(gain: f64) -> PyResult<()> {
+    if gain.is_finite() && gain > 0.0 {
+        Ok(())
+    } else {
+        Err(err(format!("gain must be a finite number > 0, not {gain}")))
+    }
+}
+
 fn finite<const N: usize>(name: &str, v: [f64; N]) -> PyResult<[f64; N]> {
     if v.iter().all(|x| x.is_finite()) {
         Ok(v)
@@ -140,6 +163,25 @@ fn unit_quaternion(name: &str, q: [f64; 4]) -> PyResult<UnitQuaternion<f64>> {
     Ok(UnitQuaternion::from_quaternion(Quaternion::new(
         q[0], q[1], q[2], q[3],
     )))
+}
+
+/// A quaternion `[w, x, y, z]` the user wrote (a guidance law's attitude or offset), by a
+/// scene's rule ([`near_unit_quaternion`]): within 1e-3 of unit norm normalised, with a
+/// `UserWarning` when more than rounding off; refused beyond.
+fn written_quaternion(py: Python<'_>, name: &str, q: [f64; 4]) -> PyResult<UnitQuaternion<f64>> {
+    let q = finite(name, q)?;
+    let ([w, x, y, z], off) = near_unit_quaternion(q).map_err(|m| err(format!("{name}: {m}")))?;
+    if let Some(n) = off {
+        let message = format!("{name}: quaternion norm {} is not 1; normalised", Num(n));
+        let message = std::ffi::CString::new(message).expect("no NUL in the message");
+        PyErr::warn(
+            py,
+            &py.get_type::<pyo3::exceptions::PyUserWarning>(),
+            &message,
+            2,
+        )?;
+    }
+    Ok(UnitQuaternion::new_unchecked(Quaternion::new(w, x, y, z)))
 }
 
 /// `[w, x, y, z]` with `w >= 0`.
@@ -205,8 +247,9 @@ pub(crate) fn triad_covariance_py<'py>(
 
 /// The trapezoidal mean of two gyro readings (rad/s).
 #[pyfunction(name = "gyro_mean")]
-pub(crate) fn gyro_mean_py(before: [f64; 3], after: [f64; 3]) -> [f64; 3] {
-    gyro_mean(&before, &after)
+pub(crate) fn gyro_mean_py(before: [f64; 3], after: [f64; 3]) -> PyResult<[f64; 3]> {
+    let (before, after) = (finite("before", before)?, finite("after", after)?);
+    Ok(gyro_mean(&before, &after))
 }
 
 /// `−k (b − b_prev) / dt` (A m²).
@@ -217,9 +260,7 @@ pub(crate) fn bdot_dipole_py(
     b: [f64; 3],
     dt: f64,
 ) -> PyResult<[f64; 3]> {
-    if !gain.is_finite() {
-        return Err(err(format!("gain must be finite, not {gain}")));
-    }
+    positive_gain(gain)?;
     if !(dt.is_finite() && dt > 0.0) {
         return Err(err(format!("dt must be a finite number > 0, not {dt}")));
     }
@@ -230,9 +271,7 @@ pub(crate) fn bdot_dipole_py(
 /// `k (h × b) / |b|²` (A m²), zero where `b` is zero.
 #[pyfunction(name = "momentum_dipole")]
 pub(crate) fn momentum_dipole_py(gain: f64, h: [f64; 3], b: [f64; 3]) -> PyResult<[f64; 3]> {
-    if !gain.is_finite() {
-        return Err(err(format!("gain must be finite, not {gain}")));
-    }
+    positive_gain(gain)?;
     let (h, b) = (vector("h", h)?, vector("b", b)?);
     Ok(momentum_dipole(gain, &h, &b).into())
 }
@@ -249,15 +288,15 @@ pub(crate) struct NativeGuidance {
 #[pymethods]
 impl NativeGuidance {
     #[staticmethod]
-    fn inertial(q: [f64; 4]) -> PyResult<Self> {
+    fn inertial(py: Python<'_>, q: [f64; 4]) -> PyResult<Self> {
         Ok(Self {
-            inner: Guidance::Inertial(unit_quaternion("the attitude", q)?),
+            inner: Guidance::Inertial(written_quaternion(py, "q", q)?),
         })
     }
     #[staticmethod]
-    fn nadir(offset: [f64; 4]) -> PyResult<Self> {
+    fn nadir(py: Python<'_>, offset: [f64; 4]) -> PyResult<Self> {
         Ok(Self {
-            inner: Guidance::Nadir(unit_quaternion("the offset", offset)?),
+            inner: Guidance::Nadir(written_quaternion(py, "offset", offset)?),
         })
     }
     #[staticmethod]
@@ -318,11 +357,23 @@ impl NativeGuidance {
             return Err(err(format!("t must be finite, not {t}")));
         }
         let orbit = match (r, v) {
-            (Some(r), Some(v)) => Some(OrbitState {
-                r: vector("r", r)?,
-                v: vector("v", v)?,
-                mu,
-            }),
+            (Some(r), Some(v)) => {
+                let (r, v) = (vector("r", r)?, vector("v", v)?);
+                // The orbital frame is along r and across r × v: neither may vanish.
+                if self.inner.needs_orbit() {
+                    if r.norm() == 0.0 {
+                        return Err(err("r is zero: the orbit's position fixes the frame"));
+                    }
+                    if r.cross(&v).norm() <= 1e-12 * r.norm() * v.norm() || v.norm() == 0.0 {
+                        return Err(err(format!(
+                            "v {:?} is zero or parallel to r {:?}: the orbit normal r × v is undefined",
+                            <[f64; 3]>::from(v),
+                            <[f64; 3]>::from(r)
+                        )));
+                    }
+                }
+                Some(OrbitState { r, v, mu })
+            }
             (None, None) => None,
             _ => return Err(err("give both r and v, or neither")),
         };
@@ -416,9 +467,11 @@ impl NativePid {
             }
         }
         if let Some(j) = inertia
-            && !j.iter().flatten().all(|x| x.is_finite())
+            && !satsim_spacecraft::fsw::inertia_is_valid(&j)
         {
-            return Err(err(format!("the inertia must be finite, not {j:?}")));
+            return Err(err(format!(
+                "the inertia must be a symmetric positive definite 3 x 3 matrix of finite numbers (kg m², body axes), not {j:?}"
+            )));
         }
         Ok(Self {
             inner: Pid::new(kp, ki, kd, inertia),

@@ -240,8 +240,11 @@ def test_nadir_guidance_is_the_lvlh_frame():
         law.reference(0.0, r=r)
     # Inertial: fixed, no orbit.
     q = _random_q(rng)
-    ri = satsim.fsw.Guidance.inertial(q * 3.0).reference(100.0)
+    ri = satsim.fsw.Guidance.inertial(q).reference(100.0)
     assert np.allclose(ri.attitude, q, atol=1e-15)
+    # Three times unit norm is refused, as a scene refuses it.
+    with pytest.raises(satsim.SatsimError, match="within 1e-3"):
+        satsim.fsw.Guidance.inertial(q * 3.0)
     assert np.array_equal(ri.rate, np.zeros(3)) and np.array_equal(ri.acceleration, np.zeros(3))
 
 
@@ -425,3 +428,45 @@ def test_magnetic_laws_oppose_the_rate_and_the_momentum():
     assert np.allclose(satsim.fsw.gyro_mean([0, 1, 2], [2, 3, 4]), [1, 2, 3])
     with pytest.raises(ValueError, match="dt"):
         satsim.fsw.bdot_dipole(k, [0, 0, 0], [1, 0, 0], 0.0)
+
+
+def test_guidance_quaternions_follow_the_scene_rule():
+    # Within 1e-3 of unit norm: normalised, a UserWarning when more than rounding off.
+    with pytest.warns(UserWarning, match="normalised"):
+        g = satsim.fsw.Guidance.inertial([0.70711, 0.0, 0.0, 0.70711])
+    q = np.asarray(g.reference(0.0).attitude)
+    assert abs(np.linalg.norm(q) - 1.0) < 1e-15
+    assert abs(q[0] - q[3]) < 1e-15
+    with pytest.warns(UserWarning, match="normalised"):
+        satsim.fsw.Guidance.nadir([1.0, 0.01, 0.0, 0.0])
+    # Beyond: refused, the tolerance stated.
+    for bad in ([2.0, 0.0, 0.0, 0.0], [1.0, 0.1, 0.0, 0.0], [0.0, 0.0, 0.0, 0.0]):
+        with pytest.raises(satsim.SatsimError, match="within 1e-3"):
+            satsim.fsw.Guidance.inertial(bad)
+    with pytest.raises(satsim.SatsimError, match="within 1e-3"):
+        satsim.fsw.Guidance.nadir([2.0, 0.0, 0.0, 0.0])
+
+
+def test_degenerate_and_non_finite_input_is_refused_as_a_scene_refuses_it():
+    law = satsim.fsw.Guidance.nadir()
+    v = [0.0, 7.6e3, 0.0]
+    with pytest.raises(satsim.SatsimError, match="r is zero"):
+        law.reference(0.0, r=[0.0, 0.0, 0.0], v=v)
+    with pytest.raises(satsim.SatsimError, match="parallel to r"):
+        law.reference(0.0, r=[7e6, 0.0, 0.0], v=[7.6e3, 0.0, 0.0])
+    att = law.reference(0.0, r=[7e6, 0.0, 0.0], v=v).attitude
+    assert np.all(np.isfinite(att))
+    with pytest.raises(satsim.SatsimError, match="finite"):
+        satsim.fsw.gyro_mean([float("nan"), 0.0, 0.0], [0.0, 0.0, 0.0])
+    f = satsim.fsw.Mekf(noise_density=1e-5, bias_walk=1e-7, sigma_attitude=0.01,
+                        sigma_bias=1e-4, attitude=[1.0, 0.0, 0.0, 0.0], bias=[0.0, 0.0, 0.0])
+    with pytest.raises(satsim.SatsimError, match="non-finite"):
+        f.propagate([1e200, 0.0, 0.0], 0.1)
+    assert np.all(np.isfinite(f.attitude)) and np.all(np.isfinite(f.covariance))
+    for gain in (-1.0, 0.0):
+        with pytest.raises(satsim.SatsimError, match="> 0"):
+            satsim.fsw.bdot_dipole(gain, [1e-5, 0.0, 0.0], [2e-5, 0.0, 0.0], 1.0)
+        with pytest.raises(satsim.SatsimError, match="> 0"):
+            satsim.fsw.momentum_dipole(gain, [0.1, 0.0, 0.0], [0.0, 3e-5, 0.0])
+    with pytest.raises(satsim.SatsimError, match="positive definite"):
+        satsim.fsw.Pid(1.0, 0.0, 1.0, inertia=-np.diag([20.0, 25.0, 30.0]))

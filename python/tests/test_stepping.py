@@ -78,6 +78,11 @@ def test_bad_input_raises_and_changes_nothing():
             sim.set_inputs({"torque_h4": math.inf})
         with pytest.raises(satsim.SatsimError, match="must be a number"):
             sim.set_inputs({"torque_h4": "a lot"})
+        # A number written as a string is not a number; nor is the mapping None.
+        with pytest.raises(satsim.SatsimError, match="must be a number"):
+            sim.set_inputs({"wheel_x": "1"})
+        with pytest.raises(satsim.SatsimError, match="mapping"):
+            sim.set_inputs(None)
         for dt in (0.0, -1.0, math.nan, math.inf):
             with pytest.raises(satsim.SatsimError, match="dt"):
                 sim.advance(dt)

@@ -71,7 +71,8 @@ pub use model_file::{
 };
 pub use state_file::{
     BaseFrame, BaseStateFile, FieldError, FrameMotion, HingesStateFile, RATE_WARNING,
-    STATE_ATTITUDE_TOLERANCE, State, StateFile, parse_state, parse_state_file, read_state,
+    STATE_ATTITUDE_TOLERANCE, State, StateFile, near_unit_quaternion, parse_state,
+    parse_state_file, read_state,
 };
 
 use std::path::Path;

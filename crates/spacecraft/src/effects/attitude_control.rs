@@ -29,7 +29,8 @@ use super::{
 };
 use nalgebra::{DMatrix, Matrix3, Quaternion, Rotation3, UnitQuaternion};
 use satsim_integrate::SystemError;
-use satsim_tree::io::{FileError, exact};
+use satsim_tree::error::Num;
+use satsim_tree::io::{FileError, exact, near_unit_quaternion};
 use satsim_tree::spatial::Vec3;
 use serde::Deserialize;
 use toml::Spanned;
@@ -244,15 +245,18 @@ impl SceneEffect for AttitudeControl {
         )?;
         let q = match &af.attitude {
             Some(q) => {
-                let [w, x, y, z] = *q.get_ref();
-                let quat = Quaternion::new(w, x, y, z);
-                if (quat.norm() - 1.0).abs().is_nan() || (quat.norm() - 1.0).abs() > 1e-6 {
-                    return Err(section.error(
-                        Some(q.span()),
-                        format!("`attitude`: quaternion norm {} is not 1", quat.norm()),
-                    ));
+                let ([w, x, y, z], off) = near_unit_quaternion(*q.get_ref())
+                    .map_err(|m| section.error(Some(q.span()), format!("`attitude`: {m}")))?;
+                if let Some(n) = off {
+                    section.warn(
+                        q.span(),
+                        format!(
+                            "`effects.attitude_control.attitude`: quaternion norm {} is not 1; normalised",
+                            Num(n)
+                        ),
+                    );
                 }
-                UnitQuaternion::from_quaternion(quat)
+                UnitQuaternion::new_unchecked(Quaternion::new(w, x, y, z))
             }
             None => UnitQuaternion::identity(),
         };

@@ -363,8 +363,13 @@ fn msis_of_section(file: &DragFile, section: &Section) -> Result<MsisTrack, File
         None => {
             let value = |x: &Option<Spanned<f64>>, key: &str, default: f64, max: f64| {
                 let Some(x) = x else { return Ok(default) };
-                let v = section.non_negative(x, &format!("effects.drag.{key}"))?;
-                if v > max || (key != "ap" && v == 0.0) {
+                // F10.7 is above 0 (its "> 0" refuses 0 and the negatives alike), Ap from 0.
+                let v = if key == "ap" {
+                    section.non_negative(x, &format!("effects.drag.{key}"))?
+                } else {
+                    section.positive(x, &format!("effects.drag.{key}"))?
+                };
+                if v > max {
                     return Err(at(
                         x,
                         format!(
@@ -562,8 +567,13 @@ mod tests {
         assert!(m.contains("scene.toml:5") && m.contains("not both"), "{m}");
         let m = err("ap = 500.0\n", epoch);
         assert!(m.contains("scene.toml:4") && m.contains("up to 400"), "{m}");
-        let m = err("f107 = 0.0\n", epoch);
-        assert!(m.contains("`effects.drag.f107`"), "{m}");
+        // Zero and the negatives alike: "> 0", as the reference says.
+        for f in ["f107 = 0.0\n", "f107 = -1.0\n", "f107a = 0.0\n"] {
+            let m = err(f, epoch);
+            assert!(m.contains("`effects.drag.f107") && m.contains("> 0"), "{m}");
+        }
+        let m = err("ap = -1.0\n", epoch);
+        assert!(m.contains("`effects.drag.ap`") && m.contains(">= 0"), "{m}");
         let m = err("density_step = -1.0\n", epoch);
         assert!(m.contains("density_step"), "{m}");
         let m = read("[effects.drag]\nf107 = 100.0\n", &path, epoch)

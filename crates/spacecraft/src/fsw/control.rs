@@ -25,6 +25,14 @@
 use super::mekf::log_rotation;
 use nalgebra::{DMatrix, Matrix3, UnitQuaternion, Vector3};
 
+/// Whether `j` is a feed-forward inertia [`Pid::new`] takes (kg m², body axes): finite,
+/// symmetric and positive definite (a rigid body's, or near enough: a negative diagonal
+/// would turn the feed-forward `ω × (J ω)` against the motion).
+pub fn inertia_is_valid(j: &[[f64; 3]; 3]) -> bool {
+    let m = Matrix3::from_fn(|r, c| j[r][c]);
+    m.iter().all(|x| x.is_finite()) && m == m.transpose() && m.cholesky().is_some()
+}
+
 /// A least-squares allocation of a body vector `v` over unit axes `a_j` within per-axis
 /// limits: `x = s A⁺ v`, `A = [a_1 … a_k]`, `A⁺` its pseudo-inverse (the smallest `x` with
 /// `A x = v` when the axes span `v`), `s = min(1, min_j max_j / |(A⁺ v)_j|)` so that the

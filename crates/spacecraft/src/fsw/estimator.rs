@@ -40,16 +40,16 @@ use crate::effects::OrbitState;
 use crate::sensors::{Kind, Sensor};
 use nalgebra::Vector3;
 
-/// The least angular 1σ (rad) a Sun and field estimator's update takes (about 0.2
-/// arcsecond, far below any Sun sensor's or magnetometer's), so that a noiseless sensor's
-/// update stays well posed.
+/// The least angular 1σ (rad) an estimator's update takes (about 0.2 arcsecond, far below
+/// any star tracker's, Sun sensor's or magnetometer's), so that a noiseless sensor's update
+/// stays well posed.
 pub const MIN_SIGMA: f64 = 1e-6;
 
 /// What aids the gyro.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Aiding {
     /// Star trackers (indices in the sensor set) and their 1σ noise about the body's x, y, z
-    /// (rad), in update order.
+    /// (rad), in update order; each update floors them at [`MIN_SIGMA`].
     StarTrackers(Vec<(usize, [f64; 3])>),
     /// A Sun sensor and a magnetometer (indices in the sensor set) and their noise for the
     /// filter's updates. The field's direction has the angular 1σ `field_noise / |B|` of
@@ -209,7 +209,7 @@ impl Estimator {
                 let f = self.filter.as_mut().expect("started above");
                 for ((_, sigma), r) in trackers.iter().zip(fresh) {
                     if let Some(r) = r {
-                        f.update_attitude(quaternion(r), *sigma)?;
+                        f.update_attitude(quaternion(r), sigma.map(|s| s.max(MIN_SIGMA)))?;
                     }
                 }
             }

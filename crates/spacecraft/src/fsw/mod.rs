@@ -42,7 +42,7 @@ pub mod slew;
 pub mod thrust;
 pub mod triad;
 
-pub use control::{Allocation, Pid};
+pub use control::{Allocation, Pid, inertia_is_valid};
 pub use estimator::{Aiding, EstimatorSpec, gyro_mean};
 pub use guidance::{Guidance, Reference, geodetic_to_itrf};
 pub use magnetic::{DipoleLaw, DipoleSpec, bdot_dipole, momentum_dipole};

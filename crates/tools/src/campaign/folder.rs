@@ -206,12 +206,16 @@ impl Folder {
             ));
         }
         if let Some((n, v)) = r.metrics.iter().find(|(_, v)| !v.is_finite()) {
-            let why = format!("the metric `{n}` is {v}: a metric must be a finite number");
+            let why = format!(
+                "run {} at its end: the metric `{n}` is {v}: a metric must be a finite number",
+                r.k
+            );
             return Ok(RunRecord::failed(r.k, r.values, why));
         }
         let names: Vec<&str> = r.metrics.iter().map(|(n, _)| n.as_str()).collect();
         if self.metrics.is_empty() && !names.is_empty() {
             if let Some(why) = metric_names_refused(campaign, &names) {
+                let why = format!("run {} at its end: {why}", r.k);
                 return Ok(RunRecord::failed(r.k, r.values, why));
             }
             // Named now: the header gets the columns, the rows before (all failed runs) the
@@ -224,7 +228,8 @@ impl Folder {
         }
         if names != self.metrics.iter().map(String::as_str).collect::<Vec<_>>() {
             let why = format!(
-                "the metrics returned the keys [{}], the campaign's columns are [{}] (every run must return the same keys, in the same order)",
+                "run {} at its end: the metrics returned the keys [{}], the campaign's columns are [{}] (every run must return the same keys, in the same order)",
+                r.k,
                 names.join(", "),
                 self.metrics.join(", ")
             );
@@ -330,7 +335,12 @@ mod tests {
             lines[2]
         );
         assert!(lines[1].contains("the metrics returned the keys [b, a]"));
-        assert!(lines[3].contains("the metric `a` is NaN"));
+        assert!(
+            lines[3].contains("run 2 at its end: the metric `a` is NaN"),
+            "{}",
+            lines[3]
+        );
+        assert!(lines[1].contains("run 0 at its end: "), "{}", lines[1]);
         assert!(lines[4].contains("boom") && lines[4].ends_with(",,"));
         // Resumed with another controller: refused.
         let e = Folder::open(&c, &dir, Shard::ALL, true, None, false)

@@ -439,6 +439,7 @@ impl Campaign {
         for (d, v) in self.dispersed.iter().zip(values) {
             spec::set(&mut t, &d.path, *v);
         }
+        spec::normalise_quaternions(&mut t, &self.dispersed);
         toml::to_string(&t).expect("a TOML table serialises")
     }
 
@@ -461,6 +462,7 @@ impl Campaign {
         for (d, v) in self.dispersed.iter().zip(values) {
             spec::set(&mut t, &d.path, *v);
         }
+        spec::normalise_quaternions(&mut t, &self.dispersed);
         if let Some(toml::Value::Table(s)) = t.get_mut("sensors") {
             s.insert(
                 "seed".into(),

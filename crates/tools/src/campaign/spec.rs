@@ -214,6 +214,63 @@ pub(crate) fn set(root: &mut Table, path: &[Segment], value: f64) {
     scene_keys::set(root, path, Value::Float(value));
 }
 
+/// The keys whose value, when it is an array of four numbers, is a quaternion `[w, x, y, z]`:
+/// `initial.base.attitude`, `fsw.guidance.attitude`, `effects.attitude_control.attitude`, a
+/// hinge's `rotation`.
+const QUATERNION_KEYS: [&str; 2] = ["attitude", "rotation"];
+
+/// Normalises each quaternion of `root` one of whose components `dispersed` draws: a drawn
+/// component moves the norm off 1 by more than a scene accepts (`sigma = 0.05` on one
+/// component moves it by 1.3e-3), and the run takes the attitude the drawn quaternion points
+/// at. `runs.csv` keeps the component as drawn. A quaternion drawn zero or not finite is left
+/// as drawn, for the run's scene to refuse.
+pub(crate) fn normalise_quaternions(root: &mut Table, dispersed: &[Dispersed]) {
+    for d in dispersed {
+        let Some((Segment::Index(_), parent)) = d.path.split_last() else {
+            continue;
+        };
+        let Some(Segment::Key(key)) = parent.last() else {
+            continue;
+        };
+        if !QUATERNION_KEYS.contains(&key.as_str()) {
+            continue;
+        }
+        let Some(Value::Array(a)) = value_mut(root, parent) else {
+            continue;
+        };
+        let q: Vec<f64> = a
+            .iter()
+            .filter_map(|v| match v {
+                Value::Float(x) => Some(*x),
+                Value::Integer(i) => Some(*i as f64),
+                _ => None,
+            })
+            .collect();
+        let norm = q.iter().map(|x| x * x).sum::<f64>().sqrt();
+        if q.len() == 4 && a.len() == 4 && norm.is_finite() && norm > 0.0 {
+            for (v, x) in a.iter_mut().zip(q) {
+                *v = Value::Float(x / norm);
+            }
+        }
+    }
+}
+
+/// The value at `path` in `root`, if there is one.
+fn value_mut<'a>(root: &'a mut Table, path: &[Segment]) -> Option<&'a mut Value> {
+    let (Segment::Key(first), rest) = path.split_first()? else {
+        return None;
+    };
+    let mut here = root.get_mut(first)?;
+    for seg in rest {
+        here = match (here, seg) {
+            (Value::Table(t), Segment::Key(k)) => t.get_mut(k)?,
+            (Value::Array(a), Segment::Index(i)) => a.get_mut(*i)?,
+            _ => return None,
+        };
+    }
+    Some(here)
+}
+
 /// The largest |z| a standard normal variate is taken to reach when checking that draws stay
 /// finite: beyond 40 the normal's probability is below 1e-300.
 const Z_REACH: f64 = 40.0;

@@ -74,7 +74,7 @@ use satsim_spacecraft::fsw::{
 };
 use satsim_spacecraft::sensors::{Kind, Sensors};
 use satsim_tree::error::Num;
-use satsim_tree::io::{FileError, exact, line_of};
+use satsim_tree::io::{FileError, exact, line_of, near_unit_quaternion};
 use satsim_tree::{BaseKind, Model};
 
 use super::sampled_loop::PidLaw;
@@ -328,6 +328,8 @@ struct Within<'a> {
     epoch: Option<Epoch>,
     /// The controls on the wheels read so far, for the check of their sampled loops.
     wheel_laws: RefCell<Vec<WheelLaw>>,
+    /// What the reader accepts but the user should hear about, `file:line: message`.
+    warnings: RefCell<Vec<String>>,
 }
 
 /// A control table on the wheels: where it is (`[title]` and its line) and its law, whose
@@ -342,6 +344,79 @@ pub(crate) struct WheelLaw {
 impl Within<'_> {
     fn sensors(&self) -> Option<&Sensors> {
         self.effects.get::<Sensors>()
+    }
+
+    /// Checks the root body's wheel `axes` that a control on the wheels allocates to (the
+    /// wheels on other bodies turn out of the bus's axes and are left out): none is an error
+    /// at the control's table; axes that span fewer than 3 directions are a warning there,
+    /// naming each body axis about which no wheel torque reaches the bus.
+    fn root_wheel_axes(
+        &self,
+        title: &str,
+        span: Range<usize>,
+        axes: &[Vector3<f64>],
+    ) -> Result<(), FileError> {
+        if axes.is_empty() {
+            return Err(self.text.error(
+                Some(span),
+                format!(
+                    "{title} actuator = \"wheels\" needs a wheel on the root body: the control allocates to the root body's wheels only (the others turn with their bodies, out of the bus's axes)"
+                ),
+            ));
+        }
+        // The directions the wheels reach: the eigenvectors of Σ a aᵀ whose eigenvalue is
+        // not zero next to the largest.
+        let m = axes
+            .iter()
+            .fold(nalgebra::Matrix3::zeros(), |m, a| m + a * a.transpose());
+        let eig = m.symmetric_eigen();
+        let largest = eig.eigenvalues.max();
+        let unreached: Vec<String> = (0..3)
+            .filter(|&i| eig.eigenvalues[i] <= 1e-9 * largest)
+            .map(|i| {
+                let v = eig.eigenvectors.column(i);
+                // The sign that makes the largest component positive, rounded for reading.
+                let s = if v
+                    .iter()
+                    .fold(0.0f64, |a, x| if x.abs() > a.abs() { *x } else { a })
+                    < 0.0
+                {
+                    -1.0
+                } else {
+                    1.0
+                };
+                format!(
+                    "[{}]",
+                    v.iter()
+                        .map(|x| Num(((s * x) * 1e6).round() / 1e6 + 0.0).to_string())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                )
+            })
+            .collect();
+        if !unreached.is_empty() {
+            self.warn(
+                span,
+                format!(
+                    "{title} allocates to the root body's {} wheel{} only, which span {} of the 3 axes: no wheel torque reaches the bus about {} (body axes), so the control cannot hold the attitude about {}",
+                    axes.len(),
+                    if axes.len() == 1 { "" } else { "s" },
+                    3 - unreached.len(),
+                    unreached.join(" or "),
+                    if unreached.len() == 1 { "it" } else { "them" },
+                ),
+            );
+        }
+        Ok(())
+    }
+
+    /// Notes a warning at the line of `span`.
+    fn warn(&self, span: Range<usize>, message: String) {
+        self.warnings.borrow_mut().push(format!(
+            "{}:{}: {message}",
+            self.text.path().display(),
+            line_of(self.text.text(), span.start)
+        ));
     }
 
     /// Whether `period` is a whole multiple (>= 1) of `base`.
@@ -616,16 +691,20 @@ impl Within<'_> {
             "inertial" | "nadir" => {
                 let attitude = match &g.attitude {
                     Some(q) => {
-                        let [w, x, y, z] = *q.get_ref();
-                        let quat = Quaternion::new(w, x, y, z);
-                        let n = quat.norm();
-                        if !n.is_finite() || (n - 1.0).abs() > 1e-6 {
-                            return Err(text.error(
-                                Some(q.span()),
-                                format!("`{at}.attitude`: quaternion norm {} is not 1", Num(n)),
-                            ));
+                        let ([w, x, y, z], off) =
+                            near_unit_quaternion(*q.get_ref()).map_err(|m| {
+                                text.error(Some(q.span()), format!("`{at}.attitude`: {m}"))
+                            })?;
+                        if let Some(n) = off {
+                            self.warn(
+                                q.span(),
+                                format!(
+                                    "`{at}.attitude`: quaternion norm {} is not 1; normalised",
+                                    Num(n)
+                                ),
+                            );
                         }
-                        UnitQuaternion::from_quaternion(quat)
+                        UnitQuaternion::new_unchecked(Quaternion::new(w, x, y, z))
                     }
                     None if mode == "inertial" => {
                         return Err(text.error(
@@ -757,11 +836,10 @@ impl Within<'_> {
         let inertia = match &c.inertia {
             Some(j) => {
                 let m = *j.get_ref();
-                let symmetric = (0..3).all(|r| (0..3).all(|k| m[r][k] == m[k][r]));
-                if !m.iter().flatten().all(|v| v.is_finite()) || !symmetric {
+                if !satsim_spacecraft::fsw::inertia_is_valid(&m) {
                     return Err(text.error(
                         Some(j.span()),
-                        format!("`{at}.inertia` must be a symmetric 3 x 3 matrix of finite numbers (kg m², body axes)"),
+                        format!("`{at}.inertia` must be a symmetric positive definite 3 x 3 matrix of finite numbers (kg m², body axes)"),
                     ));
                 }
                 Some(m)
@@ -857,6 +935,20 @@ impl Within<'_> {
                 }
             }
         };
+        if matches!(actuator, Actuator::Wheels(_)) {
+            let axes: Vec<Vector3<f64>> = self
+                .effects
+                .get::<ReactionWheels>()
+                .map(|w| {
+                    w.wheels
+                        .iter()
+                        .filter(|w| w.body.is_none())
+                        .map(|w| w.axis)
+                        .collect()
+                })
+                .unwrap_or_default();
+            self.root_wheel_axes(&title, span.clone(), &axes)?;
+        }
         let period = match (&c.period, est_period) {
             (Some(p), _) => {
                 let v = text.positive(p, &format!("{at}.period"))?;
@@ -1035,8 +1127,8 @@ struct TopBlocks {
 
 /// Reads `[fsw]` against the model, the epoch, the enabled effects and the sensors (in
 /// `effects`), and hands the blocks to the sensors ([`Sensors::set_fsw`]); the controls'
-/// clocks go to `clocks`. Returns the controls on the wheels, for the check of their
-/// sampled loops.
+/// clocks go to `clocks`, its warnings to `warnings`. Returns the controls on the wheels,
+/// for the check of their sampled loops.
 pub(crate) fn read(
     text: &SceneText,
     file: &Spanned<FswFile>,
@@ -1044,6 +1136,7 @@ pub(crate) fn read(
     epoch: Option<Epoch>,
     effects: &mut EffectSet,
     clocks: &mut Vec<super::Clock>,
+    warnings: &mut Vec<String>,
 ) -> Result<Vec<WheelLaw>, FileError> {
     let f = file.get_ref();
     let on = |e: Option<bool>| e != Some(false);
@@ -1053,6 +1146,7 @@ pub(crate) fn read(
         effects,
         epoch,
         wheel_laws: RefCell::new(Vec::new()),
+        warnings: RefCell::new(Vec::new()),
     };
     // A magnetic block: read, and checked against the scene when it is enabled.
     let magnetic = |block: &str, file: &Spanned<MagneticFile>| {
@@ -1104,6 +1198,7 @@ pub(crate) fn read(
         Some(modes) => with_modes(&w, &top, modes, clocks)?,
     };
     let laws = w.wheel_laws.take();
+    warnings.extend(w.warnings.take());
     let Some(onboard) = onboard else {
         return Ok(laws);
     };

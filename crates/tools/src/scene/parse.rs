@@ -238,7 +238,15 @@ impl<'a> Parser<'a> {
         }
         let mut wheel_laws = Vec::new();
         if let Some(f) = &file.fsw {
-            wheel_laws = super::fsw::read(self, f, &model, epoch, &mut effects, &mut clocks)?;
+            wheel_laws = super::fsw::read(
+                self,
+                f,
+                &model,
+                epoch,
+                &mut effects,
+                &mut clocks,
+                &mut warnings,
+            )?;
         }
         super::faults::read(self, &file.faults, &mut effects)?;
         if let Some(f) = flex.as_ref() {

@@ -15,6 +15,7 @@ use satsim_spacecraft::fsw::{GyroModel, Mekf, MekfParams, Pid, attitude_error, g
 use satsim_spacecraft::sensors::star_tracker::ARCSEC;
 use satsim_spacecraft::sensors::{Kind, Sensors};
 use satsim_tools::api::{Trajectory, run_scene};
+use satsim_tools::campaign::Campaign;
 use satsim_tools::scene::Scene;
 use satsim_tools::scene_keys::Override;
 use satsim_tools::stepping::SceneStepper;
@@ -547,6 +548,8 @@ fn bad_fsw_input_is_an_error_naming_the_file_and_line() {
         (base.replacen("actuator = \"wheels\"", "actuator = \"ion_engines\"", 1), "actuator = \"ion_engines\"", "unknown actuator"),
         (base.replacen("actuator = \"wheels\"", "actuator = \"thrusters\"", 1), "[fsw.control]", "needs [effects.thrusters]"),
         (base.replacen("kp = [40.0, 40.0, 40.0]", "kp = [40.0, -1.0, 40.0]", 1), "kp = [40.0, -1.0", ">= 0"),
+        (base.replacen("actuator = \"wheels\"", "actuator = \"wheels\"\ninertia = [[-20.0, 0.0, 0.0], [0.0, 25.0, 0.0], [0.0, 0.0, 30.0]]", 1), "inertia = [[-20.0", "symmetric positive definite"),
+        (base.replacen("actuator = \"wheels\"", "actuator = \"wheels\"\ninertia = [[20.0, 1.0, 0.0], [0.0, 25.0, 0.0], [0.0, 0.0, 30.0]]", 1), "inertia = [[20.0, 1.0", "symmetric positive definite"),
         (base.replacen("period = 0.1                # s\n", "period = 0.0\n", 1), "period = 0.0", "> 0"),
         (format!("{base}\n[fsw.momentum]\ngain = 1e-3\nmagnetometer = \"mag\"\n"), "magnetometer = \"mag\"", "`fsw.momentum.magnetometer`: unknown sensor `mag` (the scene's magnetometer sensors: none)"),
         (format!("{base}\n[fsw.bdot]\nmagnetometer = \"mag\"\ngain = 4e5\n"), "magnetometer = \"mag\"", "`fsw.bdot.magnetometer`: unknown sensor `mag`"),
@@ -1591,4 +1594,253 @@ fn a_pid_unstable_at_its_period_is_a_warning_at_its_table() {
     };
     let (stable, unstable) = (largest(&below), largest(&deployed("3.8")));
     assert!(stable < 1e-3 && unstable > 5e-3, "{stable} {unstable}");
+}
+
+/// A 100 kg bus on three wheels, a gyro and a star tracker, the MEKF, an inertial guidance
+/// to `attitude` and the PID on the wheels, for `duration` s, plus `extra`.
+fn bus_text(attitude: &str, duration: f64, extra: &str) -> String {
+    format!(
+        r#"duration = {duration}
+
+[model]
+[[model.body]]
+name = "bus"
+mass = 100.0
+inertia = [[20.0, 0.0, 0.0], [0.0, 25.0, 0.0], [0.0, 0.0, 30.0]]
+
+[initial]
+base = {{ attitude = [1.0, 0.0, 0.0, 0.0], angular_velocity = [0.001, -0.002, 0.0015] }}
+
+[integrator]
+method = "rk4"
+step = 0.05
+
+[output]
+every = 1.0
+plots = false
+view = false
+
+[effects.reaction_wheels]
+[[effects.reaction_wheels.wheel]]
+name = "x"
+axis = [1.0, 0.0, 0.0]
+inertia = 0.05
+max_torque = 0.2
+[[effects.reaction_wheels.wheel]]
+name = "y"
+axis = [0.0, 1.0, 0.0]
+inertia = 0.05
+max_torque = 0.2
+[[effects.reaction_wheels.wheel]]
+name = "z"
+axis = [0.0, 0.0, 1.0]
+inertia = 0.05
+max_torque = 0.2
+
+[sensors]
+seed = 3
+[[sensors.gyro]]
+name = "gyro"
+body = "bus"
+period = 0.1
+noise_density = 1e-5
+[[sensors.star_tracker]]
+name = "st"
+body = "bus"
+period = 0.1
+noise_arcsec = [5.0, 5.0, 40.0]
+
+[fsw.estimator]
+kind = "mekf"
+gyro = "gyro"
+star_tracker = "st"
+period = 0.1
+
+[fsw.guidance]
+mode = "inertial"
+attitude = {attitude}
+
+[fsw.control]
+kind = "pid"
+kp = [2.0, 2.0, 2.0]
+kd = [20.0, 20.0, 20.0]
+actuator = "wheels"
+period = 0.1
+{extra}"#
+    )
+}
+
+/// The inertial guidance's reference attitude in `scene`.
+fn guidance_attitude(scene: &Scene) -> [f64; 4] {
+    let onboard = scene.effects.get::<Sensors>().unwrap().fsw().unwrap();
+    let q = onboard.reference_at(0.0, None).unwrap().attitude;
+    [q.w, q.i, q.j, q.k]
+}
+
+#[test]
+fn a_quaternion_within_1e_3_of_unit_is_normalised_with_a_warning_and_refused_beyond() {
+    let line_of = |text: &str, at: &str| {
+        text.lines()
+            .position(|l| l.trim_start().starts_with(at))
+            .unwrap()
+            + 1
+    };
+    // Five digits (norm 1 + 4.6e-6): normalised, a warning at its line.
+    let text = bus_text("[0.70711, 0.0, 0.0, 0.70711]", 1.0, "");
+    let scene = parse(&text, "bad_fsw.toml");
+    let q = guidance_attitude(&scene);
+    // The written components in the same ratio, on unit norm.
+    assert!(
+        (q[0] - q[3]).abs() < 1e-15 && q[1] == 0.0 && q[2] == 0.0,
+        "{q:?}"
+    );
+    assert!((q[0] * q[0] + q[3] * q[3] - 1.0).abs() < 1e-15, "{q:?}");
+    let line = line_of(&text, "attitude = [0.70711");
+    assert!(
+        scene
+            .warnings
+            .iter()
+            .any(|w| w.contains(&format!("bad_fsw.toml:{line}:"))
+                && w.contains("`fsw.guidance.attitude`: quaternion norm 1.00000455")
+                && w.contains("normalised")),
+        "{:?}",
+        scene.warnings
+    );
+    // Rounding only: no warning.
+    let scene = parse(
+        &bus_text("[1.0000000001, 0.0, 0.0, 0.0]", 1.0, ""),
+        "ok.toml",
+    );
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    // Beyond 1e-3: refused, the tolerance stated.
+    let text = bus_text("[1.0, 0.05, 0.0, 0.0]", 1.0, "");
+    assert_error_at(
+        &text,
+        "attitude = [1.0, 0.05",
+        "within 1e-3 of 1 it is normalised",
+    );
+    assert_error_at(&text, "attitude = [1.0, 0.05", "quaternion norm 1.00124");
+
+    // The truth-based controller's target, by the same rule.
+    let control = |q: &str| {
+        let deploy = std::fs::read_to_string(example("scenes/fsw_in_the_loop.toml")).unwrap();
+        let (head, tail) = deploy.split_once("[effects.attitude_control]").unwrap();
+        let tail = tail.replacen(
+            "attitude = [1.0, 0.0, 0.0, 0.0]",
+            &format!("attitude = {q}"),
+            1,
+        );
+        assert!(tail.contains(&format!("attitude = {q}")));
+        format!("{head}[effects.attitude_control]{tail}")
+    };
+    let text = control("[1.0, 0.01, 0.0, 0.0]");
+    let scene = parse(&text, "bad_fsw.toml");
+    let line = line_of(&text, "attitude = [1.0, 0.01");
+    assert!(
+        scene
+            .warnings
+            .iter()
+            .any(|w| w.contains(&format!("bad_fsw.toml:{line}:"))
+                && w.contains("`effects.attitude_control.attitude`: quaternion norm 1.00004999")
+                && w.contains("normalised")),
+        "{:?}",
+        scene.warnings
+    );
+    use satsim_spacecraft::effects::{AttitudeControl, Target};
+    let Target::Inertial(q) = scene.effects.get::<AttitudeControl>().unwrap().target else {
+        panic!("an inertial target")
+    };
+    let n = 1.0001f64.sqrt();
+    assert!((q.w - 1.0 / n).abs() < 1e-15 && (q.i - 0.01 / n).abs() < 1e-15);
+    let text = control("[1.0, 0.1, 0.0, 0.0]");
+    assert_error_at(
+        &text,
+        "attitude = [1.0, 0.1",
+        "within 1e-3 of 1 it is normalised",
+    );
+}
+
+/// A campaign that disperses one component of the guidance's quaternion by more than the
+/// scene's 1e-3 normalises the drawn quaternion: every run finishes, on the attitude the
+/// drawn quaternion points at, and `runs.csv` keeps the component as drawn.
+#[test]
+fn a_campaign_dispersing_a_quaternion_component_normalises_each_drawn_quaternion() {
+    let campaign = "\n[campaign]\nruns = 8\nseed = 5\n[[campaign.disperse]]\n\
+        key = \"fsw.guidance.attitude\"\nindex = 1\nnormal = { sigma = 0.1 }\n";
+    let text = bus_text("[1.0, 0.0, 0.0, 0.0]", 2.0, campaign);
+    let c =
+        Campaign::parse(&text, std::path::Path::new("bus.toml")).unwrap_or_else(|e| panic!("{e}"));
+    let ref_x = c.columns.iter().position(|n| n == "ref_q_x").unwrap() - 1;
+    let mut beyond = 0;
+    for k in 0..8 {
+        let r = c.run_one(k);
+        let x = r.values[0];
+        let stats = r
+            .outcome
+            .as_ref()
+            .unwrap_or_else(|e| panic!("run {k}: {e}"));
+        beyond += usize::from((1.0 + x * x).sqrt() - 1.0 > 1e-3);
+        // The reference is the drawn quaternion normalised.
+        let want = x / (1.0 + x * x).sqrt();
+        assert!((stats.last[ref_x] - want).abs() < 1e-12, "run {k}: {x}");
+        let scene = Scene::parse(&c.run_text(k, &r.values), std::path::Path::new("bus.toml"))
+            .unwrap_or_else(|e| panic!("{e}"));
+        assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    }
+    assert!(
+        beyond >= 2,
+        "{beyond} of the draws moved the norm by more than 1e-3"
+    );
+}
+
+/// A noiseless gyro (with a bias) and star tracker: the MEKF's updates take the least 1σ
+/// (`MIN_SIGMA`, 1e-6 rad) and stay well posed; the estimate follows the truth within it and
+/// finds the gyro's bias.
+#[test]
+fn the_mekf_on_a_noiseless_gyro_and_star_tracker_runs_and_follows_the_truth() {
+    let text = bus_text("[1.0, 0.0, 0.0, 0.0]", 60.0, "")
+        .replacen("noise_density = 1e-5", "bias = [1e-5, -1e-5, 2e-5]", 1)
+        .replacen(
+            "noise_arcsec = [5.0, 5.0, 40.0]",
+            "noise_arcsec = [0.0, 0.0, 0.0]",
+            1,
+        );
+    assert!(text.contains("noise_arcsec = [0.0, 0.0, 0.0]") && !text.contains("noise_density"));
+    let t = run(&parse(&text, "noiseless.toml"));
+    let mut rows = 0;
+    for row in t.rows().filter(|r| r[0] >= 1.0) {
+        let [error] = get(&t, row, ["est_error"]);
+        assert!(error < 1e-6, "t = {}: est_error {error}", row[0]);
+        if row[0] >= 10.0 {
+            let b = get(&t, row, ["est_bias_x", "est_bias_y", "est_bias_z"]);
+            let off = norm([b[0] - 1e-5, b[1] + 1e-5, b[2] - 2e-5]);
+            assert!(off < 1e-8, "t = {}: bias {b:?}", row[0]);
+        }
+        rows += 1;
+    }
+    assert!(rows >= 60, "{rows}");
+}
+
+/// `[fsw.control]` on the wheels allocates to the root body's wheels: two of them reach two
+/// axes, a warning at the table names the third; three reach every axis, no warning.
+#[test]
+fn a_control_on_root_wheels_that_span_two_axes_is_warned_of_naming_the_third() {
+    let y_wheel = "[[effects.reaction_wheels.wheel]]\nname = \"y\"\naxis = [0.0, 1.0, 0.0]\ninertia = 0.05\nmax_torque = 0.2\n";
+    let full = bus_text("[1.0, 0.0, 0.0, 0.0]", 1.0, "");
+    assert!(full.contains(y_wheel));
+    let scene = parse(&full, "bus.toml");
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    let text = full.replacen(y_wheel, "", 1);
+    let scene = parse(&text, "bus.toml");
+    let line = text.lines().position(|l| l == "[fsw.control]").unwrap() + 1;
+    assert!(
+        scene
+            .warnings
+            .iter()
+            .any(|w| w.contains(&format!("bus.toml:{line}:"))
+                && w.contains("span 2 of the 3 axes")
+                && w.contains("about [0, 1, 0] (body axes)")),
+        "{:?}",
+        scene.warnings
+    );
 }

@@ -159,6 +159,24 @@ fn check_array(field: &str, x: &[f64], n: usize, what: &str) -> Result<(), Field
 /// this (a quaternion typed with a few digits), and refused beyond.
 pub const STATE_ATTITUDE_TOLERANCE: f64 = 1e-3;
 
+/// A quaternion `[w, x, y, z]` a user wrote (a state's or a scene's attitude, a guidance
+/// target, a controller's): within [`STATE_ATTITUDE_TOLERANCE`] of unit norm it is
+/// normalised, beyond it (or not finite) refused with a message that states the tolerance.
+/// Returns the unit quaternion and, when its norm was more than [`UNIT_NORM_TOLERANCE`]
+/// from 1 (more than rounding: a quaternion typed with a few digits), that norm, for the
+/// reader to warn of.
+pub fn near_unit_quaternion(a: [f64; 4]) -> Result<([f64; 4], Option<f64>), String> {
+    let norm = a.iter().map(|x| x * x).sum::<f64>().sqrt();
+    if !norm.is_finite() || (norm - 1.0).abs() > STATE_ATTITUDE_TOLERANCE {
+        return Err(format!(
+            "quaternion norm {} is not 1 (within 1e-3 of 1 it is normalised)",
+            Num(norm)
+        ));
+    }
+    let warn = ((norm - 1.0).abs() > UNIT_NORM_TOLERANCE).then_some(norm);
+    Ok((a.map(|x| x / norm), warn))
+}
+
 /// The rate (rad/s) beyond which a state's angular velocity or hinge rate is warned about
 /// ([`StateFile::warnings`]): degrees per second written as radians per second?
 pub const RATE_WARNING: f64 = 2.0;
@@ -279,16 +297,9 @@ impl StateFile {
                 state.q[..4].copy_from_slice(&[q.w, q.i, q.j, q.k]);
             } else if let Some(Attitude::Quaternion(a)) = &base.attitude {
                 check_array("base.attitude", a, 4, "a quaternion [w, x, y, z]")?;
-                let norm = a.iter().map(|x| x * x).sum::<f64>().sqrt();
-                if (norm - 1.0).abs() > STATE_ATTITUDE_TOLERANCE {
-                    return Err(FieldError::new(
-                        "base.attitude",
-                        format!("quaternion norm {norm} is not 1 (within 1e-3)"),
-                    ));
-                }
-                for (k, x) in a.iter().enumerate() {
-                    state.q[k] = x / norm;
-                }
+                let (q, _) = near_unit_quaternion([a[0], a[1], a[2], a[3]])
+                    .map_err(|m| FieldError::new("base.attitude", m))?;
+                state.q[..4].copy_from_slice(&q);
             }
             if let Some(w) = &base.angular_velocity {
                 check_array("base.angular_velocity", w, 3, "a vector")?;
