@@ -19,6 +19,10 @@ pub const UNRESOLVED: &str = "each mode has unit modal mass, so the shapes of a 
      their inertia drowns its own in round-off; give the body its real mass, or model it as a \
      hinge spring";
 
+/// Largest distance (m) between a child hinge's `at` and the modes-file node that carries it,
+/// and between a thruster's point and the node whose shapes it takes.
+pub const MODES_FILE_NODE_TOLERANCE: f64 = 1e-6;
+
 /// Largest number of beam modes (the beam integrals' quadrature is sized for it).
 pub const MAX_BEAM_MODES: usize = 12;
 
@@ -670,7 +674,7 @@ impl FlexModel {
     /// among the elastic coordinates: a load `(n, f)` (couple, force; body axes) at `p`
     /// does the work `Σₖ (ψₖ·n + φₖ·f) δηₖ`, its generalised forces on them. `None` for a
     /// rigid body, and for given modes at a point that is none of their nodes (a modes
-    /// file's shapes are known at its nodes only; [`crate::io::MODES_FILE_NODE_TOLERANCE`]).
+    /// file's shapes are known at its nodes only; [`MODES_FILE_NODE_TOLERANCE`]).
     pub fn point_shape(
         &self,
         i: usize,
@@ -703,12 +707,12 @@ impl FlexModel {
             None => Some((axis, self.node_at(i, p)?.shortening.clone()?)),
         }
     }
-    /// The node of body `i`'s given modes at `p` (within [`crate::io::MODES_FILE_NODE_TOLERANCE`]), if any.
+    /// The node of body `i`'s given modes at `p` (within [`MODES_FILE_NODE_TOLERANCE`]), if any.
     pub fn node_at(&self, i: usize, p: &crate::spatial::Vec3) -> Option<&WatchPoint> {
         self.watch
             .get(i)?
             .iter()
-            .find(|n| (n.at - p).norm() <= crate::io::MODES_FILE_NODE_TOLERANCE)
+            .find(|n| (n.at - p).norm() <= MODES_FILE_NODE_TOLERANCE)
     }
     /// The deflection of body `i`'s beam tip along `bend` (m) in `q`; `None` unless its
     /// modes are a beam's.

@@ -36,8 +36,7 @@ use std::ops::Range;
 use std::path::Path;
 use toml::Spanned;
 
-/// Largest distance (m) between a child hinge's `at` and the modes-file node that carries it.
-pub const MODES_FILE_NODE_TOLERANCE: f64 = 1e-6;
+pub use crate::flexible::MODES_FILE_NODE_TOLERANCE;
 
 /// Most modes a modes file may give a body. A model reduced for dynamics keeps the modes up
 /// to a few times the bandwidth of interest: tens, not hundreds. Each right-hand side

@@ -33,14 +33,19 @@ fn stiffened(body: &str, beam: Beam) -> Flexible {
     }
 }
 
+/// A 10 kg hub on a hinge about z (`spin`) on a fixed base.
+fn spinning_hub() -> ModelBuilder {
+    ModelBuilder::new(BaseKind::Fixed)
+        .body(Body::new("ground", 0.0, Mat3::zeros()))
+        .body(Body::new("hub", 10.0, Mat3::identity() * 5.0))
+        .hinge(Hinge::revolute("spin", "ground", "hub", Vec3::z()))
+}
+
 /// A hub spinning about z on a fixed base carrying the unit beam at radius `r`: rooted
 /// off-axis in the hub itself (`hinged` false) or as its own body on a hinge about z at
 /// `(r, 0, 0)` (`hinged` true, the way arrays are built).
 fn hub(r: f64, bend: Vec3, modes: usize, hinged: bool) -> FlexModel {
-    let b = ModelBuilder::new(BaseKind::Fixed)
-        .body(Body::new("ground", 0.0, Mat3::zeros()))
-        .body(Body::new("hub", 10.0, Mat3::identity() * 5.0))
-        .hinge(Hinge::revolute("spin", "ground", "hub", Vec3::z()));
+    let b = spinning_hub();
     if hinged {
         let b = b
             .body(Body::new("beam", 0.0, Mat3::zeros()))
@@ -61,10 +66,10 @@ fn hub(r: f64, bend: Vec3, modes: usize, hinged: bool) -> FlexModel {
     .unwrap()
 }
 
-/// The beam's frequencies (rad/s, ascending) on the hub spinning steadily at `spin`: every
-/// hinge locked (held at its rate), the modal stiffness `−∂η̈/∂η` of the hybrid ABA by
-/// central differences (the modal equations are linear there, and free of `η̇`: checked).
-fn spinning_frequencies(model: &FlexModel, spin: f64) -> Vec<f64> {
+/// `−∂η̈/∂η` on the hub spinning steadily at `spin`, every hinge locked (held at its rate),
+/// by central differences of the hybrid ABA (the modal equations are linear there, and free
+/// of `η̇`: checked): `M⁻¹K`, the modal stiffness over the modal mass.
+fn modal_stiffness(model: &FlexModel, spin: f64) -> DMatrix<f64> {
     let (nq, nv, m) = (model.rigid().nq(), model.rigid().nv(), model.n_elastic());
     let mut data = FlexData::new(model);
     let locked = vec![true; model.rigid().n_hinges()];
@@ -96,6 +101,13 @@ fn spinning_frequencies(model: &FlexModel, spin: f64) -> Vec<f64> {
         let g = eval(&zero, &ed);
         assert!(g.iter().all(|x| x.abs() < 1e-9), "{g:?}");
     }
+    k
+}
+
+/// The beam's frequencies (rad/s, ascending) on the hub spinning steadily at `spin`
+/// ([`modal_stiffness`], symmetric: the beam's modes alone have unit modal mass).
+fn spinning_frequencies(model: &FlexModel, spin: f64) -> Vec<f64> {
+    let k = modal_stiffness(model, spin);
     let asym = (&k - k.transpose()).amax();
     assert!(
         asym < 1e-6 * k.amax(),
@@ -405,6 +417,47 @@ fn dopri(
     steps
 }
 
+/// The largest relative changes of the energy and of the linear and angular momenta (about
+/// the centre of mass at the deformation) over `duration` s of DP5(4) at 1e-12 from `x`,
+/// `each` seeing every step's state.
+struct Drifts {
+    energy: f64,
+    linear: f64,
+    angular: f64,
+    /// The linear momentum at the start.
+    p0: Vec3,
+    steps: usize,
+}
+
+fn drifts(model: &FlexModel, x: &mut [f64], duration: f64, mut each: impl FnMut(&[f64])) -> Drifts {
+    let nq = model.nq();
+    let mut data = FlexData::new(model);
+    let mut rigid = Data::new(model.rigid());
+    let mut conserved = |x: &[f64]| {
+        let (q, v) = x.split_at(nq);
+        let (t, u) = flexible::energy(model, &mut data, q, v).unwrap();
+        flexible::forward_kinematics(model, &mut data, &mut rigid, q, v).unwrap();
+        let (p, h) = flexible::momentum(model, &rigid, q, v);
+        (t + u, p, h)
+    };
+    let (e0, p0, h0) = conserved(x);
+    let (mut energy, mut linear, mut angular) = (0.0_f64, 0.0_f64, 0.0_f64);
+    let steps = dopri(model, x, duration, 1e-12, |s| {
+        let (e, p, h) = conserved(s);
+        energy = energy.max(rel(e, e0));
+        linear = linear.max((p - p0).norm() / p0.norm());
+        angular = angular.max((h - h0).norm() / h0.norm());
+        each(s);
+    });
+    Drifts {
+        energy,
+        linear,
+        angular,
+        p0,
+        steps,
+    }
+}
+
 // 3. Energy: a free bus spinning at 2 rad/s with two beams on hinges off its axis (one
 // bending across the spin, one in its plane), deflected, hinges swinging: every new term
 // (the foreshortening's first moment and momentum, the frame's velocity in the geometric
@@ -451,28 +504,12 @@ fn spinning_bus_with_off_axis_hinged_beams_conserves_energy() {
     x[10] = -0.004;
     x[12] = -0.015;
     x[13] = 0.003;
-    let mut data = FlexData::new(&model);
-    let mut rigid = Data::new(model.rigid());
-    // Energy, and the linear and angular momenta (about the centre of mass at the
-    // deformation; the linear momentum is not zero).
-    let mut conserved = |x: &[f64]| {
-        let (q, v) = x.split_at(nq);
-        let (t, u) = flexible::energy(&model, &mut data, q, v).unwrap();
-        flexible::forward_kinematics(&model, &mut data, &mut rigid, q, v).unwrap();
-        let (p, h) = flexible::momentum(&model, &rigid, q, v);
-        (t + u, p, h)
-    };
-    let (e0, p0, h0) = conserved(&x);
-    let (mut worst, mut dp, mut dh, mut moved) = (0.0_f64, 0.0_f64, 0.0_f64, 0.0_f64);
-    let steps = dopri(&model, &mut x, 20.0, 1e-12, |s| {
-        let (e, p, h) = conserved(s);
-        worst = worst.max(rel(e, e0));
-        dp = dp.max((p - p0).norm() / p0.norm());
-        dh = dh.max((h - h0).norm() / h0.norm());
-        moved = moved.max(s[12].abs());
-    });
+    let mut moved = 0.0_f64;
+    let d = drifts(&model, &mut x, 20.0, |s| moved = moved.max(s[12].abs()));
+    let (worst, dp, dh, p0) = (d.energy, d.linear, d.angular, d.p0);
     println!(
-        "over 20 s, DP5(4) at 1e-12 ({steps} steps): energy drift {worst:e}, linear momentum {dp:e} (|p| {:.4}), angular momentum about the centre of mass {dh:e}",
+        "over 20 s, DP5(4) at 1e-12 ({} steps): energy drift {worst:e}, linear momentum {dp:e} (|p| {:.4}), angular momentum about the centre of mass {dh:e}",
+        d.steps,
         p0.norm()
     );
     assert!(worst < 1e-8, "relative energy drift {worst:e}");
@@ -958,50 +995,18 @@ fn spinning_free_spacecraft_modes_match_rigid_chains() {
 /// The hub of [`hub`] with the unit beam rooted in it at radius `r` and a point body of
 /// mass `tip` on a hinge about z at the beam's tip.
 fn hub_with_tip_mass(r: f64, bend: Vec3, modes: usize, tip: f64) -> FlexModel {
-    let b = ModelBuilder::new(BaseKind::Fixed)
-        .body(Body::new("ground", 0.0, Mat3::zeros()))
-        .body(Body::new("hub", 10.0, Mat3::identity() * 5.0))
+    let b = spinning_hub()
         .body(Body::new("tip", tip, Mat3::zeros()))
-        .hinge(Hinge::revolute("spin", "ground", "hub", Vec3::z()))
         .hinge(Hinge::revolute("end", "hub", "tip", Vec3::z()).at(Vec3::new(r + 1.0, 0.0, 0.0)));
-    FlexModel::build(
-        b,
-        &[stiffened(
-            "hub",
-            unit_beam(Vec3::new(r, 0.0, 0.0), bend, modes),
-        )],
-    )
-    .unwrap()
+    let beam = unit_beam(Vec3::new(r, 0.0, 0.0), bend, modes);
+    FlexModel::build(b, &[stiffened("hub", beam)]).unwrap()
 }
 
 /// [`spinning_frequencies`] where the modal mass is not the identity (a body carried by the
-/// beam): the eigenvalues of `−∂η̈/∂η = M⁻¹K`, real and positive for a stable spin.
+/// beam): the eigenvalues of [`modal_stiffness`]'s `M⁻¹K`, real and positive for a stable
+/// spin.
 fn carrying_frequencies(model: &FlexModel, spin: f64) -> Vec<f64> {
-    let (nq, nv, m) = (model.rigid().nq(), model.rigid().nv(), model.n_elastic());
-    let mut data = FlexData::new(model);
-    let locked = vec![true; model.rigid().n_hinges()];
-    let tau = vec![0.0; model.nv()];
-    let mut eval = |eta: &[f64]| -> Vec<f64> {
-        let mut q = model.neutral();
-        q[nq..].copy_from_slice(eta);
-        let mut v = vec![0.0; model.nv()];
-        v[0] = spin;
-        let a = flexible::aba_hybrid(model, &mut data, &q, &v, &tau, None, &locked).unwrap();
-        a.as_slice()[nv..].to_vec()
-    };
-    let d = 1e-6;
-    let mut k = DMatrix::zeros(m, m);
-    for j in 0..m {
-        let mut e = vec![0.0; m];
-        e[j] = d;
-        let plus = eval(&e);
-        e[j] = -d;
-        let minus = eval(&e);
-        for i in 0..m {
-            k[(i, j)] = -(plus[i] - minus[i]) / (2.0 * d);
-        }
-    }
-    let mut w: Vec<f64> = k
+    let mut w: Vec<f64> = modal_stiffness(model, spin)
         .complex_eigenvalues()
         .iter()
         .map(|l| {
@@ -1124,24 +1129,12 @@ fn a_body_on_a_spinning_stiffened_beam_conserves_energy_and_momentum() {
     x[8] = 0.3;
     x[9] = 0.03;
     x[10] = -0.004;
-    let mut data = FlexData::new(&model);
-    let mut rigid = Data::new(model.rigid());
-    let mut conserved = |x: &[f64]| {
-        let (q, v) = x.split_at(nq);
-        let (t, u) = flexible::energy(&model, &mut data, q, v).unwrap();
-        flexible::forward_kinematics(&model, &mut data, &mut rigid, q, v).unwrap();
-        let (p, h) = flexible::momentum(&model, &rigid, q, v);
-        (t + u, p, h)
-    };
-    let (e0, p0, h0) = conserved(&x);
-    let (mut worst, mut dp, mut dh) = (0.0_f64, 0.0_f64, 0.0_f64);
-    let steps = dopri(&model, &mut x, 10.0, 1e-12, |s| {
-        let (e, p, h) = conserved(s);
-        worst = worst.max(rel(e, e0));
-        dp = dp.max((p - p0).norm() / p0.norm());
-        dh = dh.max((h - h0).norm() / h0.norm());
-    });
-    println!("over 10 s ({steps} steps): energy {worst:e}, momenta {dp:e} {dh:e}");
+    let d = drifts(&model, &mut x, 10.0, |_| {});
+    let (worst, dp, dh) = (d.energy, d.linear, d.angular);
+    println!(
+        "over 10 s ({} steps): energy {worst:e}, momenta {dp:e} {dh:e}",
+        d.steps
+    );
     assert!(worst < 1e-8, "relative energy drift {worst:e}");
     assert!(dp < 1e-8 && dh < 1e-8, "momentum drift {dp:e} {dh:e}");
 }
