@@ -19,7 +19,9 @@
 //!    (`orbit_r_x` … `orbit_v_z` in m and m/s, `wheel_<name>_speed` in rad/s).
 //!
 //! Every part but the attitude is the deviation of the run's state from the reference
-//! trajectory through the initial state `x₀`. The attitude error is measured from the
+//! trajectory through the initial state `x₀`. The sampled laws due at the start have
+//! latched their outputs first, as a run latches them before its first step, and hold them
+//! (a thruster's constant duty fires; a sampled controller's output has no derivative). The attitude error is measured from the
 //! reference attitude as it moves: with `ω_ref` the reference's angular velocity, the
 //! error obeys `δθ̇ = J_r⁻¹(δθ) (ω − exp(δθ)ᵀ ω_ref)`, which to first order is
 //! `δθ̇ = δω − ω_ref × δθ`. At rest this is `δθ̇ = δω`; for a spinning or orbit-following
@@ -88,7 +90,7 @@
 
 use crate::scene::Scene;
 use nalgebra::{DMatrix, Matrix3, Quaternion, UnitQuaternion};
-use satsim_integrate::System;
+use satsim_integrate::{System, stop_due};
 use satsim_spacecraft::simulation::{SimError, Simulation};
 use satsim_tree::spatial::Vec3;
 use std::ops::Range;
@@ -288,8 +290,15 @@ pub fn linearize(scene: &Scene) -> Result<Linearization, LinearizeError> {
 pub fn linearize_simulation(sim: &mut Simulation) -> Result<Linearization, LinearizeError> {
     let layout = sim.layout().clone();
     let model = sim.model().clone();
-    let x0 = sim.x0().to_vec();
+    let mut x0 = sim.x0().to_vec();
     let t0 = sim.t0();
+    // A run latches the sampled laws due at its start (a thruster's duty, a sampled
+    // controller's output) before its first step: the linear model holds what they latch
+    // there, as the run does until their next sample.
+    if stop_due(t0, sim.next_stop()) {
+        sim.on_stop(t0, &mut x0)
+            .map_err(|e| LinearizeError::Dynamics(e.to_string()))?;
+    }
     let n_user = layout.n_hinges;
     let n_rotors = model.n_hinges() - n_user;
     let mut released = Vec::new();
@@ -385,15 +394,7 @@ pub fn linearize_simulation(sim: &mut Simulation) -> Result<Linearization, Linea
     for j in 0..n + m {
         let h0 = if j < n {
             let base = x_index[j].map_or(0.0, |i| x0[i].abs());
-            let f: f64 = if states[j].starts_with("eta") {
-                std::env::var("SATSIM_LIN_ETA")
-                    .ok()
-                    .and_then(|v| v.parse().ok())
-                    .unwrap_or(1.0)
-            } else {
-                1.0
-            };
-            f * STEP * base.max(scale[j])
+            STEP * base.max(scale[j])
         } else {
             STEP * tau0[j - n].abs().max(1.0)
         };
@@ -434,16 +435,6 @@ pub fn linearize_simulation(sim: &mut Simulation) -> Result<Linearization, Linea
             }
             if !frozen[r] {
                 error_estimate = error_estimate.max((rich - d[1][r]).abs());
-                if std::env::var("SATSIM_LIN_DEBUG").is_ok()
-                    && (rich - d[1][r]).abs() > 1e-6 * rich.abs().max(1.0)
-                {
-                    eprintln!(
-                        "DBG col {} row {} h {h0:e} rich {rich:e} err {:e}",
-                        states.get(j).unwrap_or(&String::new()),
-                        states[r],
-                        (rich - d[1][r]).abs()
-                    );
-                }
             }
             if j < n {
                 a[(r, j)] = value;

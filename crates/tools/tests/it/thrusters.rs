@@ -484,3 +484,43 @@ fn a_thruster_on_a_panel_through_the_centre_of_mass_translates_the_whole_without
     // As in the one-body case: the differential gravity, ~1e-7 of the push.
     assert!((dv - 3.0 * t_on / 100.0).abs() < 1e-6 * dv, "{dv}");
 }
+
+/// `satsim linearize` (and `modes`) start where a run does: the duty latched at the start
+/// fires in the linear model's state. A thruster of duty 1 at `COM + (0, 0.5, 0)` pushing
+/// along x turns the bus about its centre of mass by `r × F = (0, 0, −1)` N m: the linear
+/// model's residual (the drift of its initial state) is the run's angular and linear
+/// acceleration just after its start, where it was zero before the start's sample was
+/// taken.
+#[test]
+fn a_constant_duty_fires_in_the_linearisation_as_in_the_run() {
+    let at = [COM[0], COM[1] + 0.5, COM[2]];
+    let th = thruster("x", at, [1.0, 0.0, 0.0], "duty = 1.0");
+    let scene = parse(&scene_text(false, "", &th, 1.0));
+    let lin = satsim_tools::linearize::linearize(&scene).expect("linearises");
+    // The run's derivative just after its start, where the duty has latched.
+    let mut sim = scene.simulation().expect("the scene builds");
+    let (_, x) = sim.state_at(&scene.options, 1e-9).expect("a first step");
+    let mut dx = vec![0.0; x.len()];
+    satsim_integrate::System::rhs(&mut sim, 1e-9, &x, &mut dx).expect("rhs");
+    let layout = sim.layout().clone();
+    let omega = lin.state("omega_x").expect("omega");
+    let vel = lin.state("vel_x").expect("vel");
+    let mut torque_free = true;
+    for k in 0..3 {
+        let (r_w, r_v) = (lin.residual[omega + k], lin.residual[vel + k]);
+        assert!(
+            (r_w - dx[layout.omega.start + k]).abs() < 1e-9,
+            "omega {k}: {r_w} against the run's {}",
+            dx[layout.omega.start + k]
+        );
+        assert!(
+            (r_v - dx[layout.velocity.start + k]).abs() < 1e-9,
+            "vel {k}: {r_v} against the run's {}",
+            dx[layout.velocity.start + k]
+        );
+        torque_free &= r_w == 0.0;
+    }
+    // The couple is there (before, the start's sample was not taken and this was zero).
+    assert!(!torque_free, "{:?}", lin.residual);
+    assert!(lin.not_an_equilibrium().is_some());
+}
