@@ -125,10 +125,14 @@ impl NativeMekf {
     }
 }
 
-/// The rotation vector `δθ` (rad) with `q_true = q_est ⊗ exp(δθ/2)`.
+/// The rotation vector `δθ` (rad) with `q_true = q_est ⊗ exp(δθ/2)`; the quaternions of any
+/// non-zero norm (a quantised star tracker's reading compared with the truth), an error for
+/// a zero or non-finite one (for which [`attitude_error`] gives NaN).
 #[pyfunction(name = "attitude_error")]
-pub(crate) fn attitude_error_py(q_est: [f64; 4], q_true: [f64; 4]) -> [f64; 3] {
-    attitude_error(q_est, q_true)
+pub(crate) fn attitude_error_py(q_est: [f64; 4], q_true: [f64; 4]) -> PyResult<[f64; 3]> {
+    let q_est = nonzero_quaternion("q_est", q_est)?;
+    let q_true = nonzero_quaternion("q_true", q_true)?;
+    Ok(attitude_error(q_est, q_true))
 }
 
 // ---------------------------------------------------------------------------------------
@@ -151,23 +155,22 @@ fn finite<const N: usize>(name: &str, v: [f64; N]) -> PyResult<[f64; N]> {
     }
 }
 
-/// `[w, x, y, z]` as a unit quaternion (normalised); an error when not finite or zero.
-fn unit_quaternion(name: &str, q: [f64; 4]) -> PyResult<UnitQuaternion<f64>> {
+/// A quaternion `[w, x, y, z]` of any non-zero norm, as the MEKF takes a star tracker's
+/// (a quantised reading is not of unit norm); an error when not finite or zero.
+fn nonzero_quaternion(name: &str, q: [f64; 4]) -> PyResult<[f64; 4]> {
     let q = finite(name, q)?;
-    let n = q.iter().map(|x| x * x).sum::<f64>().sqrt();
-    if n == 0.0 {
+    if q.iter().all(|x| *x == 0.0) {
         return Err(err(format!(
             "{name} must be a non-zero quaternion [w, x, y, z]"
         )));
     }
-    Ok(UnitQuaternion::from_quaternion(Quaternion::new(
-        q[0], q[1], q[2], q[3],
-    )))
+    Ok(q)
 }
 
-/// A quaternion `[w, x, y, z]` the user wrote (a guidance law's attitude or offset), by a
-/// scene's rule ([`near_unit_quaternion`]): within 1e-3 of unit norm normalised, with a
-/// `UserWarning` when more than rounding off; refused beyond.
+/// A quaternion `[w, x, y, z]` the user gives a block (a guidance law's attitude or offset,
+/// the slew's and the controller's attitudes), by a scene's rule ([`near_unit_quaternion`]):
+/// within 1e-3 of unit norm normalised, with a `UserWarning` when more than rounding off;
+/// refused beyond, so that a quaternion off by a factor is not silently taken for another.
 fn written_quaternion(py: Python<'_>, name: &str, q: [f64; 4]) -> PyResult<UnitQuaternion<f64>> {
     let q = finite(name, q)?;
     let ([w, x, y, z], off) = near_unit_quaternion(q).map_err(|m| err(format!("{name}: {m}")))?;
@@ -399,21 +402,22 @@ impl NativeSlew {
             inner: Slew::new(max_rate, max_acceleration).map_err(err)?,
         })
     }
-    fn reset(&mut self, attitude: [f64; 4], rate: [f64; 3]) -> PyResult<()> {
-        let q = unit_quaternion("the attitude", attitude)?;
+    fn reset(&mut self, py: Python<'_>, attitude: [f64; 4], rate: [f64; 3]) -> PyResult<()> {
+        let q = written_quaternion(py, "attitude", attitude)?;
         let w = vector("the rate", rate)?;
         self.inner.reset(q, w);
         Ok(())
     }
     fn step(
         &mut self,
+        py: Python<'_>,
         attitude: [f64; 4],
         rate: [f64; 3],
         acceleration: [f64; 3],
         dt: f64,
     ) -> PyResult<RefTuple> {
         let target = Reference {
-            attitude: unit_quaternion("the reference's attitude", attitude)?,
+            attitude: written_quaternion(py, "the reference's attitude", attitude)?,
             rate: vector("the reference's rate", rate)?,
             acceleration: vector("the reference's acceleration", acceleration)?,
         };
@@ -509,15 +513,16 @@ impl NativePid {
     }
     fn torque(
         &mut self,
+        py: Python<'_>,
         q_est: [f64; 4],
         w_est: [f64; 3],
         q_ref: [f64; 4],
         w_ref: [f64; 3],
         dt: f64,
     ) -> PyResult<[f64; 3]> {
-        let qe = unit_quaternion("q_est", q_est)?;
+        let qe = written_quaternion(py, "q_est", q_est)?;
         let we = vector("w_est", w_est)?;
-        let qr = unit_quaternion("q_ref", q_ref)?;
+        let qr = written_quaternion(py, "q_ref", q_ref)?;
         let wr = vector("w_ref", w_ref)?;
         if !(dt.is_finite() && dt >= 0.0) {
             return Err(err(format!("dt must be a finite number >= 0, not {dt}")));

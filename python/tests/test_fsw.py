@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -445,6 +447,63 @@ def test_guidance_quaternions_follow_the_scene_rule():
             satsim.fsw.Guidance.inertial(bad)
     with pytest.raises(satsim.SatsimError, match="within 1e-3"):
         satsim.fsw.Guidance.nadir([2.0, 0.0, 0.0, 0.0])
+
+
+def test_the_slew_and_the_pid_take_quaternions_by_the_scene_rule():
+    """Slew and Pid follow Guidance's (a scene's) rule: beyond 1e-3 of unit norm a quaternion
+    is refused, naming the argument, before anything moves; within it, normalised with a
+    UserWarning. A star tracker's reading is any non-zero norm, as the scene's estimator's."""
+    zero = [0.0, 0.0, 0.0]
+    q_est, q_ref = _axis_angle([1, 0, 0], 0.1), _axis_angle([0, 1, 1], 0.2)
+    for bad in ([2.0, 0.0, 0.0, 0.0], [0.1, 0.0, 0.0, 0.0], [1.0, 0.1, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0]):
+        pid = satsim.fsw.Pid(1.0, 0.1, 1.0)
+        with pytest.raises(satsim.SatsimError, match=r"^q_est: .*within 1e-3"):
+            pid.torque(bad, zero, q_ref, zero, 0.5)
+        with pytest.raises(satsim.SatsimError, match=r"^q_ref: .*within 1e-3"):
+            pid.torque(q_est, zero, bad, zero, 0.5)
+        assert np.array_equal(pid.integral, np.zeros(3))      # the refusals integrated nothing
+        slew = satsim.fsw.Slew(0.02, 1e-3)
+        with pytest.raises(satsim.SatsimError, match=r"^attitude: .*within 1e-3"):
+            slew.reset(bad)
+        for target in (bad, satsim.fsw.Reference(bad), {"attitude": bad}):
+            with pytest.raises(satsim.SatsimError, match=r"^the reference's attitude: .*1e-3"):
+                slew.step(target, 0.1)
+        assert slew.remaining_angle is None                    # nothing stepped
+    with pytest.raises(satsim.SatsimError, match="q_est must be finite"):
+        satsim.fsw.Pid(1.0, 0.0, 1.0).torque([np.nan, 0, 0, 1], zero, q_ref, zero, 0.1)
+    # Within 1e-3: normalised, with a warning; the torque is the unit quaternions'.
+    pid, unit = satsim.fsw.Pid(1.0, 0.1, 1.0), satsim.fsw.Pid(1.0, 0.1, 1.0)
+    with pytest.warns(UserWarning, match="q_est: quaternion norm 1.0005 is not 1; normalised"):
+        u = pid.torque(q_est * 1.0005, [0.0, 0.01, 0.0], q_ref, zero, 0.5)
+    assert np.allclose(u, unit.torque(q_est, [0.0, 0.01, 0.0], q_ref, zero, 0.5),
+                       rtol=1e-15, atol=0)
+    with pytest.warns(UserWarning, match="q_ref: quaternion norm 0.9995 is not 1"):
+        pid.torque(q_est, zero, q_ref * 0.9995, zero, 0.5)
+    slew = satsim.fsw.Slew(0.02, 1e-3)
+    with pytest.warns(UserWarning, match="attitude: quaternion norm"):
+        slew.reset(q_est * 1.0005)
+    with pytest.warns(UserWarning, match="the reference's attitude: quaternion norm"):
+        ref = slew.step(q_ref * 1.0005, 0.1)
+    assert np.allclose(ref.attitude, q_est, rtol=0, atol=1e-15)   # reset: not advanced
+    # Unit to rounding: silent.
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        pid.torque(q_est, zero, q_ref, zero, 0.5)
+        slew.step(q_ref, 0.1)
+    # A star tracker's reading may be quantised: any non-zero norm, as the scene's estimator.
+    kw = dict(noise_density=1e-5, bias_walk=1e-7, sigma_attitude=0.01, sigma_bias=1e-4)
+    f, g = satsim.fsw.Mekf(**kw), satsim.fsw.Mekf(**kw)
+    f.update(q_est * 1.01, 1e-3)
+    g.update(q_est, 1e-3)
+    assert np.allclose(f.attitude, g.attitude, rtol=0, atol=1e-15)
+    assert np.allclose(satsim.fsw.attitude_error(q_est * 1.01, q_ref),
+                       satsim.fsw.attitude_error(q_est, q_ref), rtol=0, atol=1e-15)
+    with pytest.raises(satsim.SatsimError, match="non-zero"):
+        f.update([0.0, 0.0, 0.0, 0.0], 1e-3)
+    # attitude_error gave NaN for a zero quaternion: refused, naming it.
+    with pytest.raises(satsim.SatsimError, match="q_true must be a non-zero quaternion"):
+        satsim.fsw.attitude_error(q_est, [0.0, 0.0, 0.0, 0.0])
 
 
 def test_degenerate_and_non_finite_input_is_refused_as_a_scene_refuses_it():
