@@ -40,6 +40,7 @@ takes a quantised reading; only a zero or non-finite one is refused.
 
 from __future__ import annotations
 
+import math
 from typing import Optional, Sequence, Union
 
 import numpy as np
@@ -63,6 +64,12 @@ __all__ = [
 #: The Earth's gravitational parameter (m³/s²), the default ``mu`` of :meth:`Guidance.reference`.
 MU_EARTH = 3.986004418e14
 
+#: The least 1-sigma (rad, about 0.2 arcsecond) the filter's updates take: a smaller one,
+#: zero included, is raised to it, as a scene's estimator raises a noiseless sensor's, so
+#: that the update stays well posed (a sigma near zero makes the innovation covariance
+#: singular once the updates have shrunk the covariance).
+MIN_SIGMA: float = _satsim.MIN_SIGMA
+
 
 def _vec(x: Sequence[float], n: int = 3, name: str = "vector") -> list:
     """``x`` as a list of ``n`` floats, or :class:`satsim.SatsimError`."""
@@ -70,6 +77,15 @@ def _vec(x: Sequence[float], n: int = 3, name: str = "vector") -> list:
     if a.shape != (n,):
         raise _satsim.SatsimError(f"{name} must have {n} numbers, not {np.shape(x)}")
     return a.tolist()
+
+
+def _floored_sigma(sigma: float, name: str) -> float:
+    """``sigma`` raised to :data:`MIN_SIGMA`, or :class:`satsim.SatsimError` unless finite and
+    >= 0 (checked first: the floor would hide a negative one)."""
+    s = float(sigma)
+    if not (math.isfinite(s) and s >= 0.0):
+        raise _satsim.SatsimError(f"{name} must be a finite number >= 0 (rad), not {s}")
+    return max(s, MIN_SIGMA)
 
 
 def _gains(k: Union[float, Sequence[float]], name: str) -> list:
@@ -118,7 +134,9 @@ class Mekf:
     def update(self, q: Sequence[float], sigma: Union[float, Sequence[float]]) -> None:
         """A star tracker reading ``q`` ``[w, x, y, z]`` (normalised whatever its norm, as a
         scene's estimator takes a quantised reading; a zero or non-finite one is refused) with
-        its 1-sigma ``sigma`` (rad, about the body's x, y, z axes; one number for all three)."""
+        its 1-sigma ``sigma`` (rad, about the body's x, y, z axes; one number for all three;
+        each >= 0, and raised to :data:`MIN_SIGMA` when below it, as a scene's estimator does,
+        so that a noiseless star tracker's update stays well posed)."""
         s = [float(sigma)] * 3 if np.ndim(sigma) == 0 else [float(x) for x in sigma]
         self._native.update_attitude([float(x) for x in q], s)
 
@@ -131,7 +149,9 @@ class Mekf:
         axes from an on-board model (any units: both are normalised), with 1-sigma angular
         noise ``sigma`` (rad) about each axis across it. It corrects the attitude across the
         direction only: the rotation about it is not observed. For a magnetometer of noise
-        ``σ_B`` (T), ``sigma = σ_B / |B|``. A zero vector (a Sun sensor in umbra) is refused."""
+        ``σ_B`` (T), ``sigma = σ_B / |B|``. ``sigma`` >= 0 is raised to :data:`MIN_SIGMA` when
+        below it, as a scene's estimator does for a noiseless Sun sensor or magnetometer. A
+        zero vector (a Sun sensor in umbra) is refused."""
         self._native.update_vector(_vec(body, 3, "body"), _vec(reference, 3, "reference"),
                                    float(sigma))
 
@@ -163,8 +183,10 @@ class Mekf:
         "sun_mag"`` starts: the attitude by :func:`triad` (``b1``, ``b2`` measured in the
         body's axes, ``r1``, ``r2`` their inertial references; ``b1`` the primary, e.g. the
         Sun), its covariance by :func:`triad_covariance` for the 1-sigma angular noises
-        ``sigma1``, ``sigma2`` (rad) of ``b1`` and ``b2``; the bias as in the constructor."""
-        p = triad_covariance(b1, b2, sigma1, sigma2)
+        ``sigma1``, ``sigma2`` (rad, >= 0; raised to :data:`MIN_SIGMA` as the scene's are) of
+        ``b1`` and ``b2``; the bias as in the constructor."""
+        p = triad_covariance(b1, b2, _floored_sigma(sigma1, "sigma1"),
+                             _floored_sigma(sigma2, "sigma2"))
         q = triad(b1, b2, r1, r2)
         f = cls(noise_density=noise_density, bias_walk=bias_walk,
                 sigma_attitude=float(np.sqrt(np.max(np.diag(p)))), sigma_bias=sigma_bias,

@@ -10,6 +10,7 @@ use numpy::{PyArray2, PyArrayMethods, ToPyArray};
 use pyo3::prelude::*;
 use satsim_environment::parse_epoch;
 use satsim_spacecraft::effects::OrbitState;
+use satsim_spacecraft::fsw::estimator::MIN_SIGMA;
 use satsim_spacecraft::fsw::{
     Guidance, GyroModel, Mekf, MekfParams, Pid, Reference, Slew, attitude_error, bdot_dipole,
     gyro_mean, momentum_dipole, triad, triad_covariance,
@@ -70,15 +71,30 @@ impl NativeMekf {
         self.inner = next;
         Ok(())
     }
-    /// A star tracker's reading `q` with its 1-sigma `sigma` (rad) about the body's axes.
+    /// A star tracker's reading `q` with its 1-sigma `sigma` (rad) about the body's axes,
+    /// each floored at [`MIN_SIGMA`] as a scene's estimator floors them.
     fn update_attitude(&mut self, q: [f64; 4], sigma: [f64; 3]) -> PyResult<()> {
-        self.inner.update_attitude(q, sigma).map_err(err)
+        let mut floored = [0.0; 3];
+        for (f, s) in floored.iter_mut().zip(sigma) {
+            *f = floored_sigma(s).ok_or_else(|| {
+                err(format!(
+                    "sigma must be finite numbers >= 0 (rad), not {sigma:?}"
+                ))
+            })?;
+        }
+        self.inner.update_attitude(q, floored).map_err(err)
     }
     /// A direction measured in the body's axes, `body`, and its inertial direction
-    /// `reference` (any units; both normalised), 1-sigma `sigma` (rad) across it.
+    /// `reference` (any units; both normalised), 1-sigma `sigma` (rad) across it, floored at
+    /// [`MIN_SIGMA`] as a scene's estimator floors a Sun sensor's and a magnetometer's.
     fn update_vector(&mut self, body: [f64; 3], reference: [f64; 3], sigma: f64) -> PyResult<()> {
+        let floored = floored_sigma(sigma).ok_or_else(|| {
+            err(format!(
+                "sigma must be a finite number >= 0 (rad), not {sigma}"
+            ))
+        })?;
         self.inner
-            .update_vector(body, reference, sigma)
+            .update_vector(body, reference, floored)
             .map_err(err)
     }
     /// Sets the attitude block of the covariance (rad², body axes), its correlation with the
@@ -137,6 +153,14 @@ pub(crate) fn attitude_error_py(q_est: [f64; 4], q_true: [f64; 4]) -> PyResult<[
 
 // ---------------------------------------------------------------------------------------
 // Helpers: checked conversions from Python's numbers.
+
+/// An update's 1-sigma (rad) floored at [`MIN_SIGMA`], as a scene's estimator floors its
+/// sensors' (a sigma near zero leaves the innovation covariance singular once the updates
+/// have shrunk the covariance, or destroys it); `None` unless finite and `>= 0`, checked
+/// before the floor, which would turn a NaN or a negative sigma into `MIN_SIGMA`.
+fn floored_sigma(s: f64) -> Option<f64> {
+    (s.is_finite() && s >= 0.0).then(|| s.max(MIN_SIGMA))
+}
 
 /// A magnetic law's gain: a finite number > 0, as `[fsw.bdot]` and `[fsw.momentum]` take.
 fn positive_gain(gain: f64) -> PyResult<()> {

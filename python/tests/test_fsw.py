@@ -177,9 +177,80 @@ def test_update_vector_corrects_across_the_direction_only():
     p = g.covariance.copy()
     with pytest.raises(ValueError, match="non-zero"):
         g.update_vector([0, 0, 0], r, s_meas)
-    with pytest.raises(ValueError, match="sigma"):
-        g.update_vector(r, r, 0.0)
+    for bad in (-1e-3, np.nan, np.inf):
+        with pytest.raises(ValueError, match="sigma must be a finite number >= 0"):
+            g.update_vector(r, r, bad)
     assert np.array_equal(g.covariance, p)
+
+
+def _symmetric_positive_definite(c):
+    assert np.all(np.isfinite(c)), c
+    assert np.array_equal(c, c.T), c
+    np.linalg.cholesky(c)              # raises LinAlgError unless positive definite
+    assert np.min(np.linalg.eigvalsh(c)) > 0, np.linalg.eigvalsh(c)
+
+
+def test_the_mekf_floors_its_update_sigmas_as_the_scene_estimator_does():
+    """A sigma below MIN_SIGMA (1e-6 rad), zero included, is taken as MIN_SIGMA by the star
+    tracker's and the direction updates, as a scene's estimator takes a noiseless sensor's:
+    the same filter to the bit as at MIN_SIGMA, its covariance symmetric positive definite and
+    finite after every update. A negative or non-finite sigma is refused."""
+    assert satsim.fsw.MIN_SIGMA == 1e-6
+    q_true = _axis_angle([1, 2, 3], 0.3)
+    sun, field = np.array([0.3, 0.9, 0.1]), np.array([2e-5, -1e-5, 3e-5])
+    # A noiseless gyro (Q = 0): nothing regrows the covariance between the updates. The
+    # filter starts 5 mrad off the truth (its 1-sigma 10 mrad).
+    kw = dict(noise_density=0.0, bias_walk=0.0, sigma_attitude=0.01, sigma_bias=1e-4,
+              gyro_model="sampled", attitude=_qmul(q_true, _axis_angle([1, -1, 2], 5e-3)))
+
+    def star_tracker(sigma):
+        f = satsim.fsw.Mekf(**kw)
+        for _ in range(20):
+            f.update(q_true, sigma)
+            _symmetric_positive_definite(f.covariance)
+            f.propagate([0.0, 0.0, 0.0], 0.1)
+        return f
+
+    def directions(sigma):
+        f = satsim.fsw.Mekf(**kw)
+        for _ in range(20):
+            for r in (sun, field):
+                f.update_vector(_qmat(q_true).T @ r, r, sigma)
+                _symmetric_positive_definite(f.covariance)
+            f.propagate([0.0, 0.0, 0.0], 0.1)
+        return f
+
+    for run, tiny in ((star_tracker, (0.0, 1e-12, [0.0, 1e-9, 1e-300])),
+                      (directions, (0.0, 1e-12, 1e-300))):
+        floor = run(1e-6)
+        assert np.all(floor.sigma_attitude < 1e-6), floor.sigma_attitude
+        # The exact readings bring it within the filter's own 3-sigma.
+        error = satsim.fsw.attitude_error(floor.attitude, q_true)
+        assert np.all(np.abs(error) < 3 * floor.sigma_attitude), (error, floor.sigma_attitude)
+        for s in tiny:
+            f = run(s)
+            assert np.array_equal(f.covariance, floor.covariance), (run.__name__, s)
+            assert np.array_equal(f.attitude, floor.attitude), (run.__name__, s)
+        # Above the floor a sigma is its own.
+        assert not np.array_equal(run(2e-6).covariance, floor.covariance)
+    # Refused, the filter as it was: the floor does not hide a negative or NaN sigma.
+    f = star_tracker(1e-6)
+    p = f.covariance.copy()
+    for bad in (-1e-3, np.nan, [1e-6, -1e-9, 1e-6]):
+        with pytest.raises(satsim.SatsimError, match="sigma must be finite numbers >= 0"):
+            f.update(q_true, bad)
+        with pytest.raises(satsim.SatsimError, match="sigma must be a finite number >= 0"):
+            f.update_vector(sun, sun, -1e-3 if np.ndim(bad) else bad)
+    assert np.array_equal(f.covariance, p)
+    # from_triad floors TRIAD's sigmas too, as the sun_mag estimator's start does.
+    b1, b2 = _qmat(q_true).T @ sun, _qmat(q_true).T @ field
+    tri = dict(noise_density=0.0, bias_walk=0.0, sigma_bias=1e-4)
+    g = satsim.fsw.Mekf.from_triad(b1, b2, sun, field, 0.0, 0.0, **tri)
+    assert np.array_equal(g.covariance[:3, :3],
+                          satsim.fsw.triad_covariance(b1, b2, 1e-6, 1e-6))
+    _symmetric_positive_definite(g.covariance)
+    with pytest.raises(satsim.SatsimError, match="sigma2 must be a finite number >= 0"):
+        satsim.fsw.Mekf.from_triad(b1, b2, sun, field, 1e-3, -1e-3, **tri)
 
 
 def test_mekf_from_triad_starts_as_the_sun_mag_estimator():
