@@ -101,11 +101,22 @@ class Model:
         return cls(_satsim.NativeModel.from_file(os.fspath(path)))
 
     @classmethod
-    def from_toml(cls, text: str, name: str = MODEL_TEXT) -> "Model":
-        """Parses a model file's text; ``name`` stands for the file in error messages."""
+    def from_toml(cls, text: str, name: str = MODEL_TEXT, *,
+                  base_dir: Optional[PathLike] = None) -> "Model":
+        """Parses a model file's text; ``name`` stands for the file in error messages.
+
+        ``base_dir``: the folder that a flexible body's ``modes_file`` given as a relative
+        path is read from, as :meth:`from_file` reads it from the file's folder: the text
+        stands for a file named ``name`` in ``base_dir`` (so messages and :attr:`origin` name
+        ``<base_dir>/<model text>``). Without it, relative paths are read from ``name``'s
+        folder: the current directory for the default name."""
         if not isinstance(text, str):
             raise TypeError(f"the model text must be a str, got {type(text).__name__}")
-        return cls(_satsim.NativeModel.from_toml(text, name))
+        origin = name
+        if base_dir is not None:
+            # The reader resolves `modes_file` from its origin's folder.
+            origin = os.path.join(os.fspath(base_dir), os.path.basename(name) or MODEL_TEXT)
+        return cls(_satsim.NativeModel.from_toml(text, origin))
 
     @property
     def dof(self) -> int:
@@ -135,7 +146,8 @@ class Model:
 
     @property
     def origin(self) -> str:
-        """The model file's path, or ``<model text>``."""
+        """The model file's path, or ``<model text>`` (in ``base_dir`` when :meth:`from_toml`
+        was given one)."""
         return os.fspath(self._native.origin)
 
     @property

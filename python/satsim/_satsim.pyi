@@ -139,6 +139,8 @@ class NativeFolder:
 def choose_shard(flag: Optional[str] = None, shards: Optional[int] = None
                  ) -> Tuple[int, int, str]: ...
 
+MIN_SIGMA: float
+
 class NativeMekf:
     def __init__(self, sigma_v: float, sigma_u: float, sigma_attitude: float, sigma_bias: float,
                  q0: List[float], bias0: List[float], sampled: bool = False) -> None: ...

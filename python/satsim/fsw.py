@@ -29,10 +29,18 @@ axes) with ``q_true = q_est ⊗ exp(δθ/2)`` (:func:`attitude_error`). Inertial
 (Earth-centred; m, m/s). Vectors and quaternions may be lists, tuples or numpy arrays; results
 are numpy arrays. Bad input raises :class:`satsim.SatsimError` (a :class:`ValueError`) with
 the Rust message.
+
+A quaternion given to the guidance, the slew shaper or the control law (an attitude, a
+reference, an estimate) follows a scene's rule: within 1e-3 of unit norm it is normalised,
+with a :class:`UserWarning` when off by more than rounding; beyond, it is refused with a
+:class:`satsim.SatsimError` naming the argument. A star tracker's reading (:meth:`Mekf.update`,
+the filter's starting ``attitude``) is normalised whatever its norm, as a scene's estimator
+takes a quantised reading; only a zero or non-finite one is refused.
 """
 
 from __future__ import annotations
 
+import math
 from typing import Optional, Sequence, Union
 
 import numpy as np
@@ -56,6 +64,12 @@ __all__ = [
 #: The Earth's gravitational parameter (m³/s²), the default ``mu`` of :meth:`Guidance.reference`.
 MU_EARTH = 3.986004418e14
 
+#: The least 1-sigma (rad, about 0.2 arcsecond) the filter's updates take: a smaller one,
+#: zero included, is raised to it, as a scene's estimator raises a noiseless sensor's, so
+#: that the update stays well posed (a sigma near zero makes the innovation covariance
+#: singular once the updates have shrunk the covariance).
+MIN_SIGMA: float = _satsim.MIN_SIGMA
+
 
 def _vec(x: Sequence[float], n: int = 3, name: str = "vector") -> list:
     """``x`` as a list of ``n`` floats, or :class:`satsim.SatsimError`."""
@@ -63,6 +77,15 @@ def _vec(x: Sequence[float], n: int = 3, name: str = "vector") -> list:
     if a.shape != (n,):
         raise _satsim.SatsimError(f"{name} must have {n} numbers, not {np.shape(x)}")
     return a.tolist()
+
+
+def _floored_sigma(sigma: float, name: str) -> float:
+    """``sigma`` raised to :data:`MIN_SIGMA`, or :class:`satsim.SatsimError` unless finite and
+    >= 0 (checked first: the floor would hide a negative one)."""
+    s = float(sigma)
+    if not (math.isfinite(s) and s >= 0.0):
+        raise _satsim.SatsimError(f"{name} must be a finite number >= 0 (rad), not {s}")
+    return max(s, MIN_SIGMA)
 
 
 def _gains(k: Union[float, Sequence[float]], name: str) -> list:
@@ -76,7 +99,7 @@ class Mekf:
     ``noise_density`` (rad/s/√Hz) and ``bias_walk`` (rad/s²/√Hz) are the gyro's, as in the
     scene's ``[[sensors.gyro]]``; ``sigma_attitude`` (rad) and ``sigma_bias`` (rad/s) the
     initial 1-sigmas; ``attitude`` and ``bias`` the initial estimate (a first star tracker
-    reading is the natural start). ``gyro_model``: ``"continuous"`` (Farrenkopf's model,
+    reading is the natural start; normalised, as :meth:`update`'s ``q``). ``gyro_model``: ``"continuous"`` (Farrenkopf's model,
     Markley & Crassidis sec. 6.2.4) or ``"sampled"`` (satsim's gyro exactly: its noise held
     over each period). Propagate once per gyro sample with ``dt`` its period. Bad input
     (a negative sigma, a non-finite reading) raises :class:`satsim.SatsimError` and leaves the
@@ -109,8 +132,11 @@ class Mekf:
         self._native.propagate([float(x) for x in omega], float(dt))
 
     def update(self, q: Sequence[float], sigma: Union[float, Sequence[float]]) -> None:
-        """A star tracker reading ``q`` ``[w, x, y, z]`` with its 1-sigma ``sigma`` (rad,
-        about the body's x, y, z axes; one number for all three)."""
+        """A star tracker reading ``q`` ``[w, x, y, z]`` (normalised whatever its norm, as a
+        scene's estimator takes a quantised reading; a zero or non-finite one is refused) with
+        its 1-sigma ``sigma`` (rad, about the body's x, y, z axes; one number for all three;
+        each >= 0, and raised to :data:`MIN_SIGMA` when below it, as a scene's estimator does,
+        so that a noiseless star tracker's update stays well posed)."""
         s = [float(sigma)] * 3 if np.ndim(sigma) == 0 else [float(x) for x in sigma]
         self._native.update_attitude([float(x) for x in q], s)
 
@@ -123,7 +149,9 @@ class Mekf:
         axes from an on-board model (any units: both are normalised), with 1-sigma angular
         noise ``sigma`` (rad) about each axis across it. It corrects the attitude across the
         direction only: the rotation about it is not observed. For a magnetometer of noise
-        ``σ_B`` (T), ``sigma = σ_B / |B|``. A zero vector (a Sun sensor in umbra) is refused."""
+        ``σ_B`` (T), ``sigma = σ_B / |B|``. ``sigma`` >= 0 is raised to :data:`MIN_SIGMA` when
+        below it, as a scene's estimator does for a noiseless Sun sensor or magnetometer. A
+        zero vector (a Sun sensor in umbra) is refused."""
         self._native.update_vector(_vec(body, 3, "body"), _vec(reference, 3, "reference"),
                                    float(sigma))
 
@@ -155,8 +183,10 @@ class Mekf:
         "sun_mag"`` starts: the attitude by :func:`triad` (``b1``, ``b2`` measured in the
         body's axes, ``r1``, ``r2`` their inertial references; ``b1`` the primary, e.g. the
         Sun), its covariance by :func:`triad_covariance` for the 1-sigma angular noises
-        ``sigma1``, ``sigma2`` (rad) of ``b1`` and ``b2``; the bias as in the constructor."""
-        p = triad_covariance(b1, b2, sigma1, sigma2)
+        ``sigma1``, ``sigma2`` (rad, >= 0; raised to :data:`MIN_SIGMA` as the scene's are) of
+        ``b1`` and ``b2``; the bias as in the constructor."""
+        p = triad_covariance(b1, b2, _floored_sigma(sigma1, "sigma1"),
+                             _floored_sigma(sigma2, "sigma2"))
         q = triad(b1, b2, r1, r2)
         f = cls(noise_density=noise_density, bias_walk=bias_walk,
                 sigma_attitude=float(np.sqrt(np.max(np.diag(p)))), sigma_bias=sigma_bias,
@@ -199,7 +229,9 @@ class Mekf:
 
 def attitude_error(q_est: Sequence[float], q_true: Sequence[float]) -> np.ndarray:
     """The rotation vector ``δθ`` (rad, the estimate's body axes) with
-    ``q_true = q_est ⊗ exp(δθ/2)``: its norm is the estimate's error angle."""
+    ``q_true = q_est ⊗ exp(δθ/2)``: its norm is the estimate's error angle. The quaternions
+    are normalised whatever their norm (a quantised star tracker's reading may be compared);
+    a zero or non-finite one raises :class:`satsim.SatsimError`."""
     return np.array(_satsim.attitude_error([float(x) for x in q_est], [float(x) for x in q_true]))
 
 
@@ -373,15 +405,17 @@ class Slew:
         self._native = _satsim.NativeSlew(float(max_rate), float(max_acceleration))
 
     def reset(self, attitude: Sequence[float], rate: Sequence[float] = (0.0, 0.0, 0.0)) -> None:
-        """Starts again from the spacecraft's ``attitude`` ``[w, x, y, z]`` (body to inertial)
-        and body ``rate`` (rad/s) now: the next :meth:`step` returns them without advancing.
-        Never reset, the shaper starts at its first target."""
+        """Starts again from the spacecraft's ``attitude`` ``[w, x, y, z]`` (body to inertial;
+        normalised within 1e-3 of unit norm, refused beyond, as :meth:`Guidance.inertial`'s
+        ``q``) and body ``rate`` (rad/s) now: the next :meth:`step` returns them without
+        advancing. Never reset, the shaper starts at its first target."""
         self._native.reset(_vec(attitude, 4, "attitude"), _vec(rate, 3, "rate"))
 
     def step(self, reference, dt: float) -> Reference:
         """The shaped :class:`Reference` at the instant of the target ``reference`` (a
-        :class:`Reference`, a dict with its keys or a bare attitude ``[w, x, y, z]``), ``dt``
-        seconds (>= 0) after the previous step."""
+        :class:`Reference`, a dict with its keys or a bare attitude ``[w, x, y, z]``; its
+        attitude normalised or refused as :meth:`reset`'s), ``dt`` seconds (>= 0) after the
+        previous step."""
         q, w, a = self._native.step(*_reference(reference), float(dt))
         return Reference(q, w, a)
 
@@ -449,7 +483,9 @@ class Pid:
         """One control sample: the wanted body torque ``u`` (N m, body axes) from the estimate
         ``q_est`` ``[w, x, y, z]`` (body to inertial) and rate ``w_est`` (rad/s, body axes),
         the reference ``q_ref`` and its rate ``w_ref`` (rad/s, the reference's axes), over the
-        sample period ``dt`` (s, the integral's step)."""
+        sample period ``dt`` (s, the integral's step). ``q_est`` and ``q_ref`` are normalised
+        within 1e-3 of unit norm (a :class:`UserWarning` when off by more than rounding) and
+        refused beyond with :class:`satsim.SatsimError`, as a scene's quaternions."""
         return np.array(self._native.torque(
             _vec(q_est, 4, "q_est"), _vec(w_est, 3, "w_est"), _vec(q_ref, 4, "q_ref"),
             _vec(w_ref, 3, "w_ref"), float(dt)))

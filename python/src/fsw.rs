@@ -10,6 +10,7 @@ use numpy::{PyArray2, PyArrayMethods, ToPyArray};
 use pyo3::prelude::*;
 use satsim_environment::parse_epoch;
 use satsim_spacecraft::effects::OrbitState;
+use satsim_spacecraft::fsw::estimator::MIN_SIGMA;
 use satsim_spacecraft::fsw::{
     Guidance, GyroModel, Mekf, MekfParams, Pid, Reference, Slew, attitude_error, bdot_dipole,
     gyro_mean, momentum_dipole, triad, triad_covariance,
@@ -70,15 +71,30 @@ impl NativeMekf {
         self.inner = next;
         Ok(())
     }
-    /// A star tracker's reading `q` with its 1-sigma `sigma` (rad) about the body's axes.
+    /// A star tracker's reading `q` with its 1-sigma `sigma` (rad) about the body's axes,
+    /// each floored at [`MIN_SIGMA`] as a scene's estimator floors them.
     fn update_attitude(&mut self, q: [f64; 4], sigma: [f64; 3]) -> PyResult<()> {
-        self.inner.update_attitude(q, sigma).map_err(err)
+        let mut floored = [0.0; 3];
+        for (f, s) in floored.iter_mut().zip(sigma) {
+            *f = floored_sigma(s).ok_or_else(|| {
+                err(format!(
+                    "sigma must be finite numbers >= 0 (rad), not {sigma:?}"
+                ))
+            })?;
+        }
+        self.inner.update_attitude(q, floored).map_err(err)
     }
     /// A direction measured in the body's axes, `body`, and its inertial direction
-    /// `reference` (any units; both normalised), 1-sigma `sigma` (rad) across it.
+    /// `reference` (any units; both normalised), 1-sigma `sigma` (rad) across it, floored at
+    /// [`MIN_SIGMA`] as a scene's estimator floors a Sun sensor's and a magnetometer's.
     fn update_vector(&mut self, body: [f64; 3], reference: [f64; 3], sigma: f64) -> PyResult<()> {
+        let floored = floored_sigma(sigma).ok_or_else(|| {
+            err(format!(
+                "sigma must be a finite number >= 0 (rad), not {sigma}"
+            ))
+        })?;
         self.inner
-            .update_vector(body, reference, sigma)
+            .update_vector(body, reference, floored)
             .map_err(err)
     }
     /// Sets the attitude block of the covariance (rad², body axes), its correlation with the
@@ -125,14 +141,26 @@ impl NativeMekf {
     }
 }
 
-/// The rotation vector `δθ` (rad) with `q_true = q_est ⊗ exp(δθ/2)`.
+/// The rotation vector `δθ` (rad) with `q_true = q_est ⊗ exp(δθ/2)`; the quaternions of any
+/// non-zero norm (a quantised star tracker's reading compared with the truth), an error for
+/// a zero or non-finite one (for which [`attitude_error`] gives NaN).
 #[pyfunction(name = "attitude_error")]
-pub(crate) fn attitude_error_py(q_est: [f64; 4], q_true: [f64; 4]) -> [f64; 3] {
-    attitude_error(q_est, q_true)
+pub(crate) fn attitude_error_py(q_est: [f64; 4], q_true: [f64; 4]) -> PyResult<[f64; 3]> {
+    let q_est = nonzero_quaternion("q_est", q_est)?;
+    let q_true = nonzero_quaternion("q_true", q_true)?;
+    Ok(attitude_error(q_est, q_true))
 }
 
 // ---------------------------------------------------------------------------------------
 // Helpers: checked conversions from Python's numbers.
+
+/// An update's 1-sigma (rad) floored at [`MIN_SIGMA`], as a scene's estimator floors its
+/// sensors' (a sigma near zero leaves the innovation covariance singular once the updates
+/// have shrunk the covariance, or destroys it); `None` unless finite and `>= 0`, checked
+/// before the floor, which would turn a NaN or a negative sigma into `MIN_SIGMA`.
+fn floored_sigma(s: f64) -> Option<f64> {
+    (s.is_finite() && s >= 0.0).then(|| s.max(MIN_SIGMA))
+}
 
 /// A magnetic law's gain: a finite number > 0, as `[fsw.bdot]` and `[fsw.momentum]` take.
 fn positive_gain(gain: f64) -> PyResult<()> {
@@ -151,23 +179,22 @@ fn finite<const N: usize>(name: &str, v: [f64; N]) -> PyResult<[f64; N]> {
     }
 }
 
-/// `[w, x, y, z]` as a unit quaternion (normalised); an error when not finite or zero.
-fn unit_quaternion(name: &str, q: [f64; 4]) -> PyResult<UnitQuaternion<f64>> {
+/// A quaternion `[w, x, y, z]` of any non-zero norm, as the MEKF takes a star tracker's
+/// (a quantised reading is not of unit norm); an error when not finite or zero.
+fn nonzero_quaternion(name: &str, q: [f64; 4]) -> PyResult<[f64; 4]> {
     let q = finite(name, q)?;
-    let n = q.iter().map(|x| x * x).sum::<f64>().sqrt();
-    if n == 0.0 {
+    if q.iter().all(|x| *x == 0.0) {
         return Err(err(format!(
             "{name} must be a non-zero quaternion [w, x, y, z]"
         )));
     }
-    Ok(UnitQuaternion::from_quaternion(Quaternion::new(
-        q[0], q[1], q[2], q[3],
-    )))
+    Ok(q)
 }
 
-/// A quaternion `[w, x, y, z]` the user wrote (a guidance law's attitude or offset), by a
-/// scene's rule ([`near_unit_quaternion`]): within 1e-3 of unit norm normalised, with a
-/// `UserWarning` when more than rounding off; refused beyond.
+/// A quaternion `[w, x, y, z]` the user gives a block (a guidance law's attitude or offset,
+/// the slew's and the controller's attitudes), by a scene's rule ([`near_unit_quaternion`]):
+/// within 1e-3 of unit norm normalised, with a `UserWarning` when more than rounding off;
+/// refused beyond, so that a quaternion off by a factor is not silently taken for another.
 fn written_quaternion(py: Python<'_>, name: &str, q: [f64; 4]) -> PyResult<UnitQuaternion<f64>> {
     let q = finite(name, q)?;
     let ([w, x, y, z], off) = near_unit_quaternion(q).map_err(|m| err(format!("{name}: {m}")))?;
@@ -399,21 +426,22 @@ impl NativeSlew {
             inner: Slew::new(max_rate, max_acceleration).map_err(err)?,
         })
     }
-    fn reset(&mut self, attitude: [f64; 4], rate: [f64; 3]) -> PyResult<()> {
-        let q = unit_quaternion("the attitude", attitude)?;
+    fn reset(&mut self, py: Python<'_>, attitude: [f64; 4], rate: [f64; 3]) -> PyResult<()> {
+        let q = written_quaternion(py, "attitude", attitude)?;
         let w = vector("the rate", rate)?;
         self.inner.reset(q, w);
         Ok(())
     }
     fn step(
         &mut self,
+        py: Python<'_>,
         attitude: [f64; 4],
         rate: [f64; 3],
         acceleration: [f64; 3],
         dt: f64,
     ) -> PyResult<RefTuple> {
         let target = Reference {
-            attitude: unit_quaternion("the reference's attitude", attitude)?,
+            attitude: written_quaternion(py, "the reference's attitude", attitude)?,
             rate: vector("the reference's rate", rate)?,
             acceleration: vector("the reference's acceleration", acceleration)?,
         };
@@ -509,15 +537,16 @@ impl NativePid {
     }
     fn torque(
         &mut self,
+        py: Python<'_>,
         q_est: [f64; 4],
         w_est: [f64; 3],
         q_ref: [f64; 4],
         w_ref: [f64; 3],
         dt: f64,
     ) -> PyResult<[f64; 3]> {
-        let qe = unit_quaternion("q_est", q_est)?;
+        let qe = written_quaternion(py, "q_est", q_est)?;
         let we = vector("w_est", w_est)?;
-        let qr = unit_quaternion("q_ref", q_ref)?;
+        let qr = written_quaternion(py, "q_ref", q_ref)?;
         let wr = vector("w_ref", w_ref)?;
         if !(dt.is_finite() && dt >= 0.0) {
             return Err(err(format!("dt must be a finite number >= 0, not {dt}")));

@@ -770,6 +770,7 @@ fn _satsim(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<stepped::NativeFolder>()?;
     m.add_function(wrap_pyfunction!(stepped::choose_shard, m)?)?;
     m.add_class::<fsw::NativeMekf>()?;
+    m.add("MIN_SIGMA", satsim_spacecraft::fsw::estimator::MIN_SIGMA)?;
     m.add_function(wrap_pyfunction!(fsw::attitude_error_py, m)?)?;
     m.add_class::<fsw::NativeGuidance>()?;
     m.add_class::<fsw::NativeSlew>()?;

@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import json
 import math
+import os
+import shutil
 import subprocess
 import warnings
 
@@ -265,6 +267,64 @@ def test_a_flexible_models_coupled_modes_solve_k_x_equals_omega2_m_x():
     # A rigid model has none.
     rigid = satsim.Model.from_file(EXAMPLES / "satellite.toml").modes(EXAMPLES / "state.json")
     assert rigid["omega"].shape == (0,) and rigid["shapes"].shape == (11, 0)
+
+
+# A hub with a hinged panel whose modes come from the committed example modes file, named
+# relative to examples/.
+MODES_FILE_MODEL = """
+[[body]]
+name = "hub"
+mass = 50.0
+inertia = [[5.0, 0.0, 0.0], [0.0, 5.0, 0.0], [0.0, 0.0, 5.0]]
+[[body]]
+name = "panel"
+mass = 0.0
+[body.flexible]
+modes_file = "modes/panel_beam_modes.toml"
+[[hinge]]
+name = "h"
+parent = "hub"
+child = "panel"
+axis = [1.0, 0.0, 0.0]
+at = [0.0, 0.5, 0.0]
+"""
+
+
+def test_from_toml_reads_a_relative_modes_file_from_base_dir(tmp_path, monkeypatch):
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    monkeypatch.chdir(elsewhere)
+    # Without base_dir the current directory, which has no modes/: refused, naming the key.
+    with pytest.raises(satsim.SatsimError,
+                       match=r"^<model text>:10: .*`modes_file` = \"modes/panel_beam_modes.toml\""):
+        satsim.Model.from_toml(MODES_FILE_MODEL)
+    # With base_dir (a str or a path, relative or not): read from there.
+    for base in (EXAMPLES, str(EXAMPLES), os.path.relpath(EXAMPLES)):
+        m = satsim.Model.from_toml(MODES_FILE_MODEL, base_dir=base)
+        assert m.flexible == {"panel": 3}
+        assert m.origin == os.path.join(os.fspath(base), "<model text>")
+    # The file's frequencies (frequencies_hz of examples/modes/panel_beam_modes.toml).
+    assert np.array_equal(m.modal_frequencies["panel"],
+                          [1.398978024920942, 8.767245627583467, 24.54854162229218])
+    # The same model, to the bit, as from_file on the text saved where the modes file is.
+    (tmp_path / "modes").mkdir()
+    shutil.copy(EXAMPLES / "modes" / "panel_beam_modes.toml", tmp_path / "modes")
+    (tmp_path / "panel.toml").write_text(MODES_FILE_MODEL)
+    f = satsim.Model.from_file(tmp_path / "panel.toml")
+    state = {"base": {"angular_velocity": [0.01, -0.02, 0.03]},
+             "hinges": {"angle": [0.3], "rate": [0.1]},
+             "flexible": {"panel": {"eta": [0.01, -0.002, 0.0], "etadot": [0.1, 0.0, 0.0]}}}
+    a, b = m.dynamics(state), f.dynamics(state)
+    for key in ("mass_matrix", "bias", "acceleration"):
+        assert np.array_equal(bits(a[key]), bits(b[key])), key
+    # A name stands for a file in base_dir; an error there names it so.
+    g = satsim.Model.from_toml(MODES_FILE_MODEL, "sat/panel.toml", base_dir=tmp_path)
+    assert g.origin == os.path.join(str(tmp_path), "panel.toml")
+    with pytest.raises(satsim.SatsimError, match=r"nowhere.<model text>:10: .*cannot read it"):
+        satsim.Model.from_toml(MODES_FILE_MODEL, base_dir=tmp_path / "nowhere")
+    # The default is still the current directory.
+    monkeypatch.chdir(EXAMPLES)
+    assert satsim.Model.from_toml(MODES_FILE_MODEL).flexible == {"panel": 3}
 
 
 # A free hub with a panel whose modes come from the contract beam's modes file (its first mode

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -175,9 +177,80 @@ def test_update_vector_corrects_across_the_direction_only():
     p = g.covariance.copy()
     with pytest.raises(ValueError, match="non-zero"):
         g.update_vector([0, 0, 0], r, s_meas)
-    with pytest.raises(ValueError, match="sigma"):
-        g.update_vector(r, r, 0.0)
+    for bad in (-1e-3, np.nan, np.inf):
+        with pytest.raises(ValueError, match="sigma must be a finite number >= 0"):
+            g.update_vector(r, r, bad)
     assert np.array_equal(g.covariance, p)
+
+
+def _symmetric_positive_definite(c):
+    assert np.all(np.isfinite(c)), c
+    assert np.array_equal(c, c.T), c
+    np.linalg.cholesky(c)              # raises LinAlgError unless positive definite
+    assert np.min(np.linalg.eigvalsh(c)) > 0, np.linalg.eigvalsh(c)
+
+
+def test_the_mekf_floors_its_update_sigmas_as_the_scene_estimator_does():
+    """A sigma below MIN_SIGMA (1e-6 rad), zero included, is taken as MIN_SIGMA by the star
+    tracker's and the direction updates, as a scene's estimator takes a noiseless sensor's:
+    the same filter to the bit as at MIN_SIGMA, its covariance symmetric positive definite and
+    finite after every update. A negative or non-finite sigma is refused."""
+    assert satsim.fsw.MIN_SIGMA == 1e-6
+    q_true = _axis_angle([1, 2, 3], 0.3)
+    sun, field = np.array([0.3, 0.9, 0.1]), np.array([2e-5, -1e-5, 3e-5])
+    # A noiseless gyro (Q = 0): nothing regrows the covariance between the updates. The
+    # filter starts 5 mrad off the truth (its 1-sigma 10 mrad).
+    kw = dict(noise_density=0.0, bias_walk=0.0, sigma_attitude=0.01, sigma_bias=1e-4,
+              gyro_model="sampled", attitude=_qmul(q_true, _axis_angle([1, -1, 2], 5e-3)))
+
+    def star_tracker(sigma):
+        f = satsim.fsw.Mekf(**kw)
+        for _ in range(20):
+            f.update(q_true, sigma)
+            _symmetric_positive_definite(f.covariance)
+            f.propagate([0.0, 0.0, 0.0], 0.1)
+        return f
+
+    def directions(sigma):
+        f = satsim.fsw.Mekf(**kw)
+        for _ in range(20):
+            for r in (sun, field):
+                f.update_vector(_qmat(q_true).T @ r, r, sigma)
+                _symmetric_positive_definite(f.covariance)
+            f.propagate([0.0, 0.0, 0.0], 0.1)
+        return f
+
+    for run, tiny in ((star_tracker, (0.0, 1e-12, [0.0, 1e-9, 1e-300])),
+                      (directions, (0.0, 1e-12, 1e-300))):
+        floor = run(1e-6)
+        assert np.all(floor.sigma_attitude < 1e-6), floor.sigma_attitude
+        # The exact readings bring it within the filter's own 3-sigma.
+        error = satsim.fsw.attitude_error(floor.attitude, q_true)
+        assert np.all(np.abs(error) < 3 * floor.sigma_attitude), (error, floor.sigma_attitude)
+        for s in tiny:
+            f = run(s)
+            assert np.array_equal(f.covariance, floor.covariance), (run.__name__, s)
+            assert np.array_equal(f.attitude, floor.attitude), (run.__name__, s)
+        # Above the floor a sigma is its own.
+        assert not np.array_equal(run(2e-6).covariance, floor.covariance)
+    # Refused, the filter as it was: the floor does not hide a negative or NaN sigma.
+    f = star_tracker(1e-6)
+    p = f.covariance.copy()
+    for bad in (-1e-3, np.nan, [1e-6, -1e-9, 1e-6]):
+        with pytest.raises(satsim.SatsimError, match="sigma must be finite numbers >= 0"):
+            f.update(q_true, bad)
+        with pytest.raises(satsim.SatsimError, match="sigma must be a finite number >= 0"):
+            f.update_vector(sun, sun, -1e-3 if np.ndim(bad) else bad)
+    assert np.array_equal(f.covariance, p)
+    # from_triad floors TRIAD's sigmas too, as the sun_mag estimator's start does.
+    b1, b2 = _qmat(q_true).T @ sun, _qmat(q_true).T @ field
+    tri = dict(noise_density=0.0, bias_walk=0.0, sigma_bias=1e-4)
+    g = satsim.fsw.Mekf.from_triad(b1, b2, sun, field, 0.0, 0.0, **tri)
+    assert np.array_equal(g.covariance[:3, :3],
+                          satsim.fsw.triad_covariance(b1, b2, 1e-6, 1e-6))
+    _symmetric_positive_definite(g.covariance)
+    with pytest.raises(satsim.SatsimError, match="sigma2 must be a finite number >= 0"):
+        satsim.fsw.Mekf.from_triad(b1, b2, sun, field, 1e-3, -1e-3, **tri)
 
 
 def test_mekf_from_triad_starts_as_the_sun_mag_estimator():
@@ -445,6 +518,63 @@ def test_guidance_quaternions_follow_the_scene_rule():
             satsim.fsw.Guidance.inertial(bad)
     with pytest.raises(satsim.SatsimError, match="within 1e-3"):
         satsim.fsw.Guidance.nadir([2.0, 0.0, 0.0, 0.0])
+
+
+def test_the_slew_and_the_pid_take_quaternions_by_the_scene_rule():
+    """Slew and Pid follow Guidance's (a scene's) rule: beyond 1e-3 of unit norm a quaternion
+    is refused, naming the argument, before anything moves; within it, normalised with a
+    UserWarning. A star tracker's reading is any non-zero norm, as the scene's estimator's."""
+    zero = [0.0, 0.0, 0.0]
+    q_est, q_ref = _axis_angle([1, 0, 0], 0.1), _axis_angle([0, 1, 1], 0.2)
+    for bad in ([2.0, 0.0, 0.0, 0.0], [0.1, 0.0, 0.0, 0.0], [1.0, 0.1, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0]):
+        pid = satsim.fsw.Pid(1.0, 0.1, 1.0)
+        with pytest.raises(satsim.SatsimError, match=r"^q_est: .*within 1e-3"):
+            pid.torque(bad, zero, q_ref, zero, 0.5)
+        with pytest.raises(satsim.SatsimError, match=r"^q_ref: .*within 1e-3"):
+            pid.torque(q_est, zero, bad, zero, 0.5)
+        assert np.array_equal(pid.integral, np.zeros(3))      # the refusals integrated nothing
+        slew = satsim.fsw.Slew(0.02, 1e-3)
+        with pytest.raises(satsim.SatsimError, match=r"^attitude: .*within 1e-3"):
+            slew.reset(bad)
+        for target in (bad, satsim.fsw.Reference(bad), {"attitude": bad}):
+            with pytest.raises(satsim.SatsimError, match=r"^the reference's attitude: .*1e-3"):
+                slew.step(target, 0.1)
+        assert slew.remaining_angle is None                    # nothing stepped
+    with pytest.raises(satsim.SatsimError, match="q_est must be finite"):
+        satsim.fsw.Pid(1.0, 0.0, 1.0).torque([np.nan, 0, 0, 1], zero, q_ref, zero, 0.1)
+    # Within 1e-3: normalised, with a warning; the torque is the unit quaternions'.
+    pid, unit = satsim.fsw.Pid(1.0, 0.1, 1.0), satsim.fsw.Pid(1.0, 0.1, 1.0)
+    with pytest.warns(UserWarning, match="q_est: quaternion norm 1.0005 is not 1; normalised"):
+        u = pid.torque(q_est * 1.0005, [0.0, 0.01, 0.0], q_ref, zero, 0.5)
+    assert np.allclose(u, unit.torque(q_est, [0.0, 0.01, 0.0], q_ref, zero, 0.5),
+                       rtol=1e-15, atol=0)
+    with pytest.warns(UserWarning, match="q_ref: quaternion norm 0.9995 is not 1"):
+        pid.torque(q_est, zero, q_ref * 0.9995, zero, 0.5)
+    slew = satsim.fsw.Slew(0.02, 1e-3)
+    with pytest.warns(UserWarning, match="attitude: quaternion norm"):
+        slew.reset(q_est * 1.0005)
+    with pytest.warns(UserWarning, match="the reference's attitude: quaternion norm"):
+        ref = slew.step(q_ref * 1.0005, 0.1)
+    assert np.allclose(ref.attitude, q_est, rtol=0, atol=1e-15)   # reset: not advanced
+    # Unit to rounding: silent.
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        pid.torque(q_est, zero, q_ref, zero, 0.5)
+        slew.step(q_ref, 0.1)
+    # A star tracker's reading may be quantised: any non-zero norm, as the scene's estimator.
+    kw = dict(noise_density=1e-5, bias_walk=1e-7, sigma_attitude=0.01, sigma_bias=1e-4)
+    f, g = satsim.fsw.Mekf(**kw), satsim.fsw.Mekf(**kw)
+    f.update(q_est * 1.01, 1e-3)
+    g.update(q_est, 1e-3)
+    assert np.allclose(f.attitude, g.attitude, rtol=0, atol=1e-15)
+    assert np.allclose(satsim.fsw.attitude_error(q_est * 1.01, q_ref),
+                       satsim.fsw.attitude_error(q_est, q_ref), rtol=0, atol=1e-15)
+    with pytest.raises(satsim.SatsimError, match="non-zero"):
+        f.update([0.0, 0.0, 0.0, 0.0], 1e-3)
+    # attitude_error gave NaN for a zero quaternion: refused, naming it.
+    with pytest.raises(satsim.SatsimError, match="q_true must be a non-zero quaternion"):
+        satsim.fsw.attitude_error(q_est, [0.0, 0.0, 0.0, 0.0])
 
 
 def test_degenerate_and_non_finite_input_is_refused_as_a_scene_refuses_it():
