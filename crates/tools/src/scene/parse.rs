@@ -339,6 +339,20 @@ impl<'a> Parser<'a> {
                 ),
             ));
         }
+        if let Some((i, mode, ratio)) = flex.magnified_mode(&rest) {
+            return Err(self.error(
+                Some(file.model.span()),
+                format!(
+                    "`model`: at the initial state the dynamics cannot resolve body `{}`'s \
+                     mode {mode} (it carries {:.3e} times its own modal mass, past the {} at \
+                     which round-off of that inertia reaches a millionth of the mode's own): \
+                     {UNRESOLVED}",
+                    name(i),
+                    ratio,
+                    Num(satsim_tree::flexible::MAGNIFICATION_LIMIT)
+                ),
+            ));
+        }
         if elastic.eta.iter().all(|e| *e == 0.0) {
             return Ok(());
         }

@@ -354,13 +354,15 @@ fn an_initial_deformation_that_makes_the_mass_matrix_indefinite_is_refused() {
     );
 }
 
-/// The flexible deployment with its first strip made 1e16 times lighter than the panels it
-/// carries: the model passes its own check at its neutral configuration (panels flat), but at
-/// the scene's initial state (stowed) round-off leaves a mode's articulated pivot negative, so
-/// every run would end at its first step in "mass matrix is not positive definite". The scene
-/// is refused at its `model` line, naming the body; as shipped it reads.
+/// The flexible deployment with its first strip made far lighter than the panels it carries
+/// (`rho_A` 1e-12 and 1e-15 where it is 10): its modes carry 1e13 and more times their own
+/// modal mass, and their pivots are round-off. At 1e-15 the pivot at the stowed start was
+/// negative; at 1e-12 it kept its sign there and the run failed at 2e-4 s ("mass matrix is
+/// not positive definite"). Both are refused where the model is read, naming the body and
+/// the mode; as shipped the strips carry far less than the limit.
 #[test]
-fn a_strip_too_light_for_the_panels_it_carries_is_refused_at_the_model_line() {
+fn a_strip_too_light_for_the_panels_it_carries_is_refused_where_it_is_read() {
+    use satsim_tree::flexible::{FlexData, MAGNIFICATION_LIMIT, UNRESOLVED, crba};
     let dir = satsim_testkit::temp_dir_with(
         "light-strip",
         &[
@@ -368,28 +370,53 @@ fn a_strip_too_light_for_the_panels_it_carries_is_refused_at_the_model_line() {
             "examples/satellite_flexible.toml",
         ],
     );
-    Scene::read(dir.join("flexible_array.toml")).expect("the scene as shipped");
-    let model = std::fs::read_to_string(dir.join("satellite_flexible.toml")).unwrap();
-    let light = model.replacen("rho_A = 10.0", "rho_A = 1e-15", 1);
-    assert_ne!(light, model);
-    std::fs::write(dir.join("light.toml"), light).unwrap();
-    satsim_tree::io::parse_flex_model(
-        &std::fs::read_to_string(dir.join("light.toml")).unwrap(),
-        &dir.join("light.toml"),
-    )
-    .expect("resolved at the neutral configuration");
-    let scene = std::fs::read_to_string(dir.join("flexible_array.toml"))
-        .unwrap()
-        .replace("\"satellite_flexible.toml\"", "\"light.toml\"");
-    std::fs::write(dir.join("scene.toml"), scene).unwrap();
-    let err = Scene::read(dir.join("scene.toml")).unwrap_err().to_string();
+    let shipped = Scene::read(dir.join("flexible_array.toml")).expect("the scene as shipped");
+    let flex = shipped.flexible.as_ref().expect("flexible");
+    let q: Vec<f64> = shipped
+        .initial
+        .q
+        .iter()
+        .copied()
+        .chain(std::iter::repeat_n(0.0, flex.n_elastic()))
+        .collect();
+    let m = crba(flex, &mut FlexData::new(flex), &q).expect("M").clone();
+    let nv = flex.rigid().nv();
+    let carried: Vec<f64> = (0..flex.n_elastic()).map(|e| m[(nv + e, nv + e)]).collect();
+    println!("shipped: each mode's diagonal entry {carried:.3?}");
     assert!(
-        err.contains(
-            "scene.toml:13: `model`: at the initial state the dynamics cannot resolve body \
-             `panel1`'s mode "
-        ) && err.contains(satsim_tree::flexible::UNRESOLVED),
-        "{err}"
+        carried
+            .iter()
+            .all(|r| *r >= 1.0 && *r < 1e-6 * MAGNIFICATION_LIMIT)
     );
+    assert!(flex.magnified_mode(&q).is_none());
+    let model = std::fs::read_to_string(dir.join("satellite_flexible.toml")).unwrap();
+    for rho in ["1e-12", "1e-15"] {
+        let light = model.replacen("rho_A = 10.0", &format!("rho_A = {rho}"), 1);
+        assert_ne!(light, model);
+        std::fs::write(dir.join("light.toml"), &light).unwrap();
+        let err = satsim_tree::io::parse_flex_model(&light, &dir.join("light.toml"))
+            .expect_err("refused")
+            .to_string();
+        println!("{rho}: {err}");
+        assert!(
+            err.contains("light.toml:")
+                && err.contains(
+                    "flexible body `panel1`: at rest the dynamics cannot resolve its mode "
+                )
+                && err.contains(" times its own modal mass, past the 1e10 at which")
+                && err.contains(UNRESOLVED),
+            "{err}"
+        );
+        let scene = std::fs::read_to_string(dir.join("flexible_array.toml"))
+            .unwrap()
+            .replace("\"satellite_flexible.toml\"", "\"light.toml\"");
+        std::fs::write(dir.join("scene.toml"), scene).unwrap();
+        let err = Scene::read(dir.join("scene.toml")).unwrap_err().to_string();
+        assert!(
+            err.contains("light.toml:") && err.contains("`panel1`") && err.contains(UNRESOLVED),
+            "{err}"
+        );
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }
 

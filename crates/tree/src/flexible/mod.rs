@@ -64,8 +64,8 @@ pub use field::FieldLoad;
 pub use kinematics::{forward_kinematics, momentum};
 pub use modal::{ModalData, NodeShape};
 pub use model::{
-    Deflection, FlexError, FlexModel, Flexible, LargeDeflection, MODES_FILE_NODE_TOLERANCE, Modes,
-    SMALL_DEFLECTION, UNRESOLVED, WatchPoint,
+    Deflection, FlexError, FlexModel, Flexible, LargeDeflection, MAGNIFICATION_LIMIT,
+    MODES_FILE_NODE_TOLERANCE, Modes, SMALL_DEFLECTION, UNRESOLVED, WatchPoint,
 };
 pub use rnea::{bias, gyrostat_torques, gyrostat_torques_on_base, rnea, rnea_with_kinematics};
 

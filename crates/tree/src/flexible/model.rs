@@ -19,6 +19,14 @@ pub const UNRESOLVED: &str = "each mode has unit modal mass, so the shapes of a 
      their inertia drowns its own in round-off; give the body its real mass, or model it as a \
      hinge spring";
 
+/// The largest entry of the mass matrix's diagonal at an elastic coordinate, in units of the
+/// mode's own modal mass (1), that the dynamics resolve: the inertia a mode carries, magnified
+/// by its unit-modal-mass shapes, enters its articulated pivot with round-off of about
+/// `1e-16` of itself, which at this ratio is `1e-6` of the mode's own mass. The flexible
+/// deployment's strips carry up to 220 times theirs; a strip 1e13 times lighter (`rho_A =
+/// 1e-12`) passes the pivot's sign at rest and fails at its first steps.
+pub const MAGNIFICATION_LIMIT: f64 = 1e10;
+
 /// Largest distance (m) between a child hinge's `at` and the modes-file node that carries it,
 /// and between a thruster's point and the node whose shapes it takes.
 pub const MODES_FILE_NODE_TOLERANCE: f64 = 1e-6;
@@ -132,6 +140,23 @@ pub enum FlexError {
         mode: usize,
         /// The pivot the articulated-body algorithm found.
         pivot: Num,
+    },
+    /// At rest, a mode carries more than [`MAGNIFICATION_LIMIT`] times its own modal mass:
+    /// its pivot is round-off, whatever its sign.
+    #[error(
+        "flexible body `{body}`: at rest the dynamics cannot resolve its mode {mode} (it \
+         carries {ratio:.3e} times its own modal mass, past the {} at which round-off of that \
+         inertia reaches a millionth of the mode's own): {}",
+        Num(MAGNIFICATION_LIMIT),
+        UNRESOLVED
+    )]
+    Magnified {
+        /// The body.
+        body: String,
+        /// Its mode (from 1).
+        mode: usize,
+        /// The mass matrix's diagonal entry at the mode (its own modal mass is 1).
+        ratio: f64,
     },
 }
 
@@ -551,13 +576,42 @@ impl FlexModel {
         if self.n_elastic == 0 {
             return Ok(());
         }
-        match self.unresolved_mode(&self.neutral()) {
-            Some((i, mode, pivot)) => Err(FlexError::Unresolved {
-                body: self.rigid.bodies()[i].name.clone(),
+        let rest = self.neutral();
+        let name = |i: usize| self.rigid.bodies()[i].name.clone();
+        if let Some((i, mode, pivot)) = self.unresolved_mode(&rest) {
+            return Err(FlexError::Unresolved {
+                body: name(i),
                 mode,
                 pivot: Num(pivot),
+            });
+        }
+        match self.magnified_mode(&rest) {
+            Some((i, mode, ratio)) => Err(FlexError::Magnified {
+                body: name(i),
+                mode,
+                ratio,
             }),
             None => Ok(()),
+        }
+    }
+
+    /// The mode that carries the most inertia at positions `q`, if more than
+    /// [`MAGNIFICATION_LIMIT`] times its own modal mass: its body, the mode (from 1) and the
+    /// mass matrix's diagonal entry there (the mode's own modal mass is 1). A mode past it
+    /// has a pivot of round-off, which can keep its sign at rest and lose it at the first
+    /// steps.
+    pub fn magnified_mode(&self, q: &[f64]) -> Option<(usize, usize, f64)> {
+        let mut data = super::FlexData::new(self);
+        let m = super::crba(self, &mut data, q).ok()?;
+        let nv = self.rigid.nv();
+        let (e, ratio) = (0..self.n_elastic)
+            .map(|e| (e, m[(nv + e, nv + e)]))
+            .fold((0, f64::NEG_INFINITY), |a, b| if b.1 > a.1 { b } else { a });
+        if ratio > MAGNIFICATION_LIMIT {
+            let (i, mode) = self.mode_of(e)?;
+            Some((i, mode, ratio))
+        } else {
+            None
         }
     }
 

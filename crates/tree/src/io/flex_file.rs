@@ -599,7 +599,8 @@ fn body_of(e: &FlexError) -> Option<&str> {
         }
         FlexError::Invalid { body, .. }
         | FlexError::MissingNode { body, .. }
-        | FlexError::Unresolved { body, .. } => Some(body),
+        | FlexError::Unresolved { body, .. }
+        | FlexError::Magnified { body, .. } => Some(body),
     }
 }
 
