@@ -199,14 +199,27 @@ pub(super) fn eigen(
     q: &[f64],
     k: &[f64],
 ) -> Option<(DVector<f64>, DMatrix<f64>)> {
+    eigen_of(
+        flex,
+        q,
+        &DMatrix::from_diagonal(&DVector::from_column_slice(k)),
+    )
+}
+
+/// [`eigen`] of a full stiffness matrix `k` (its symmetric part: a motion's skew part does
+/// no work and leaves out of the undamped frequencies).
+pub(super) fn eigen_of(
+    flex: &FlexModel,
+    q: &[f64],
+    k: &DMatrix<f64>,
+) -> Option<(DVector<f64>, DMatrix<f64>)> {
     use nalgebra::SymmetricEigen;
     use satsim_tree::flexible::{FlexData, crba};
     let mut data = FlexData::new(flex);
     let m = crba(flex, &mut data, q).ok()?.clone();
     let l = m.cholesky()?.l();
     let l_inv = l.clone().try_inverse()?;
-    let k = DMatrix::from_diagonal(&DVector::from_column_slice(k));
-    // L⁻¹ K L⁻ᵀ: symmetric, with the eigenvalues of M⁻¹ K.
+    // L⁻¹ K L⁻ᵀ: symmetric for a symmetric K, with the eigenvalues of M⁻¹ K.
     let a = &l_inv * k * l_inv.transpose();
     let eig = SymmetricEigen::new((&a + a.transpose()) * 0.5);
     // The mode shapes in the coordinates: x = L⁻ᵀ y.

@@ -273,7 +273,13 @@ impl<'a> Parser<'a> {
             let gains = super::step_limit::HingeGains::of(&effects, model.n_hinges());
             warnings.extend(sampled.warnings(self, &file, &model, &tree, &q, &gains));
             if let Some(h) = fixed_step {
-                self.fixed_step_checked(&file, &tree, &q, &gains, h, duration, every)?;
+                let v = super::step_limit::integrated_v(
+                    &initial.v,
+                    &effects,
+                    n_rotors,
+                    &elastic.etadot,
+                );
+                self.fixed_step_checked(&file, &tree, (&q, &v), &gains, h, duration, every)?;
             }
         }
         let scene = Scene {
@@ -379,7 +385,7 @@ impl<'a> Parser<'a> {
         &self,
         file: &SceneFile,
         tree: &FlexModel,
-        q: &[f64],
+        state: (&[f64], &[f64]),
         gains: &super::step_limit::HingeGains,
         h: f64,
         duration: f64,
@@ -394,27 +400,28 @@ impl<'a> Parser<'a> {
         } else {
             None
         };
-        self.check_rk4_step(file, tree, q, gains, h, cut)
+        self.check_rk4_step(file, tree, state, gains, h, cut)
     }
 
-    /// A fixed RK4 step must keep the scene's linear motions at the initial state (the
-    /// flexible bodies' modes, the hinges on their springs, dampers and continuous
-    /// controllers) within RK4's stability region, damping included
-    /// ([`super::step_limit::rk4_limit`]): beyond it they grow without bound, so it is an
-    /// error at `integrator.step` naming what limits the step, its frequency and damping, and
-    /// the largest stable step. `cut` is what the steps are cut to, where they are (the output
-    /// interval or the duration, and its value): the longest step taken is what must be stable.
+    /// A fixed RK4 step must keep the scene's linear motions at the initial state `(q, v)`
+    /// (the flexible bodies' modes, stiffened by the initial motion where they have
+    /// `stiffening`, the hinges on their springs, dampers and continuous controllers) within
+    /// RK4's stability region, damping included ([`super::step_limit::rk4_limit`]): beyond it
+    /// they grow without bound, so it is an error at `integrator.step` naming what limits the
+    /// step, its frequency and damping, and the largest stable step. `cut` is what the steps
+    /// are cut to, where they are (the output interval or the duration, and its value): the
+    /// longest step taken is what must be stable.
     fn check_rk4_step(
         &self,
         file: &SceneFile,
         flex: &FlexModel,
-        q: &[f64],
+        (q, v): (&[f64], &[f64]),
         gains: &super::step_limit::HingeGains,
         h: f64,
         cut: Option<(&str, f64)>,
     ) -> Result<(), FileError> {
         use super::step_limit::{Limiting, rk4_limit};
-        let Some(limit) = rk4_limit(flex, q, gains) else {
+        let Some(limit) = rk4_limit(flex, q, v, gains) else {
             return Ok(());
         };
         let taken = cut.map_or(h, |(_, to)| to);
@@ -447,7 +454,16 @@ impl<'a> Parser<'a> {
         } else {
             format!("{} 1/s", fixed(l.re, 4))
         };
-        let what = limit.what(flex);
+        let mut what = limit.what(flex);
+        // The initial motion's part in the stiffness, where it shows in the frequency.
+        let g = limit.geometric;
+        if matches!(limit.by, Limiting::Mode(_)) && g.abs() >= 1e-3 {
+            let how = if g > 0.0 { "stiffened" } else { "softened" };
+            what += &format!(
+                ", {how} by the initial motion, whose geometric stiffness is {:.1} % of the mode's",
+                100.0 * g
+            );
+        }
         let (with, motion) = match limit.by {
             Limiting::Mode(_) => ("the flexible modes", "mode"),
             Limiting::Hinge(_) if limit.on_rotor(flex) => {

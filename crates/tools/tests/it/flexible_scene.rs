@@ -209,7 +209,7 @@ fn an_rk4_step_limit_takes_the_modes_damping_in() {
     let q = s.initial_q();
     let (w, _) = highest_frequency(flex, &q).unwrap();
     let gains = HingeGains::of(&s.effects, flex.rigid().n_hinges());
-    let limit = rk4_limit(flex, &q, &gains).unwrap();
+    let limit = rk4_limit(flex, &q, &s.initial_v(), &gains).unwrap();
     assert!(limit.lambda.im == 0.0 && limit.zeta > 4.5, "{limit:?}");
     // The real eigenvalue ω (ζ + √(ζ² − 1)) of the highest mode: RK4's real-axis limit 2.785.
     assert!(
