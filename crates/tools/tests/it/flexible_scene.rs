@@ -450,9 +450,9 @@ fn deployment(
 /// (the largest at the second latch's ringing, 10.39 s). At 80 N m/rad the panels slam open
 /// and bend their strips by more than half their length within a second: the run goes on, and
 /// warns of each strip from the step its tip passed a tenth of its length. At 200 N m/rad the
-/// steps cannot get past 0.55 s: the run's error says the deflection went beyond the modal
-/// model, naming the strip bent most, where the integrator's own words were only "step size
-/// underflow".
+/// steps cannot get past 0.55 s: the run's error names the state the steps were last
+/// shortened for and says the deflection went beyond the modal model, naming the strip bent
+/// most, where the integrator's own words were only "step size underflow".
 #[test]
 fn a_deflection_beyond_the_modal_model_is_a_warning_or_in_the_error() {
     let dir = satsim_testkit::temp_dir_with(
@@ -490,6 +490,7 @@ fn a_deflection_beyond_the_modal_model_is_a_warning_or_in_the_error() {
     let err = outcome.unwrap_err();
     assert!(
         err.contains("step size underflow at t = ")
+            && err.contains(": the steps were last shortened for `")
             && err.contains(
                 ", after the flexible bodies were deflected beyond what their modal model holds: body `panel"
             )
