@@ -2,7 +2,7 @@
 //! initial step selection and the explicit methods' step-size controller.
 
 use crate::{
-    error::IntegrateError,
+    error::{IntegrateError, NonFiniteEntry},
     options::Options,
     system::{System, SystemError},
 };
@@ -34,6 +34,12 @@ pub(crate) struct Ctx {
     pub stages_refused: u32,
     /// The time of the earliest of those refused stages.
     pub refused_at: f64,
+    /// The state entry the step was last shortened for: the one whose error estimate was
+    /// the largest against its tolerance where the error control last shortened it
+    /// ([`Ctx::shortened`]; radau5's Newton increment too), or the first entry that was not
+    /// finite in a refused stage; `None` where it was last cut for another reason. A step
+    /// size underflow names it.
+    pub rejected_by: Option<usize>,
 }
 
 /// How many trial stages in a row the system may refuse before its error ends the run: each
@@ -84,6 +90,7 @@ impl Ctx {
             lu_decompositions: 0,
             stages_refused: 0,
             refused_at: f64::INFINITY,
+            rejected_by: None,
         })
     }
 
@@ -138,6 +145,14 @@ impl Ctx {
         if self.fixed.is_some() || self.stages_refused >= STAGE_RETRIES {
             return Err(e);
         }
+        // A stage with a value that is not finite: its entry is what the step was cut for.
+        self.rejected_by = match &e {
+            IntegrateError::NonFinite {
+                entry: Some(NonFiniteEntry::State(i) | NonFiniteEntry::Derivative(i)),
+                ..
+            } => Some(*i),
+            _ => None,
+        };
         self.stages_refused += 1;
         self.refused_at = self.refused_at.min(t);
         Ok(())
@@ -148,6 +163,28 @@ impl Ctx {
         if t > self.refused_at {
             self.stages_refused = 0;
             self.refused_at = f64::INFINITY;
+        }
+    }
+
+    /// A step the error control shortened (rejected, or accepted with a shorter step next)
+    /// on the estimate `e` of the step from `x0` to `x1`: records the entry that weighed
+    /// most in it ([`largest_error`], the scale of [`Ctx::norm`]). Only where the step
+    /// shrinks, so that the steps that keep or grow it pay nothing.
+    pub fn shortened(&mut self, e: &[f64], x0: &[f64], x1: &[f64]) {
+        let (rtol, atol) = (self.rtol, self.atol);
+        self.rejected_by = largest_error(&self.weights, e, |i| {
+            atol + rtol * x0[i].abs().max(x1[i].abs())
+        });
+    }
+
+    /// Fails when `h` is too small to change `t`, naming the entry the steps were last
+    /// rejected for.
+    #[inline]
+    pub fn check_step_size(&self, t: f64, h: f64) -> Result<(), IntegrateError> {
+        if h <= 8.0 * f64::EPSILON * t.abs() || h < f64::MIN_POSITIVE * 1e10 {
+            Err(IntegrateError::step_size_underflow(t, h, self.rejected_by))
+        } else {
+            Ok(())
         }
     }
 
@@ -313,14 +350,27 @@ pub(crate) fn all_finite(x: &[f64]) -> bool {
     any >> 63 == 0
 }
 
-/// Fails when `h` is too small to change `t`.
-#[inline]
-pub(crate) fn check_step_size(t: f64, h: f64) -> Result<(), IntegrateError> {
-    if h <= 8.0 * f64::EPSILON * t.abs() || h < f64::MIN_POSITIVE * 1e10 {
-        Err(IntegrateError::StepSizeUnderflow { t, h })
-    } else {
-        Ok(())
+/// The weighted entry of the error estimate `e` that weighs most in the error norm,
+/// `wᵢ (eᵢ / scaleᵢ)²` (a non-finite one first): what a rejected step was rejected for.
+/// `None` without a weighted entry.
+pub(crate) fn largest_error(
+    weights: &[f64],
+    e: &[f64],
+    scale: impl Fn(usize) -> f64,
+) -> Option<usize> {
+    let mut largest: Option<(usize, f64)> = None;
+    for (i, (&w, &ei)) in weights.iter().zip(e).enumerate() {
+        if w == 0.0 {
+            continue;
+        }
+        let r = ei / scale(i);
+        let size = w * r * r;
+        let size = if size.is_nan() { f64::INFINITY } else { size };
+        if largest.is_none_or(|(_, s)| size > s) {
+            largest = Some((i, size));
+        }
     }
+    largest.map(|(i, _)| i)
 }
 
 /// Chooses the step toward `limit`: the whole remainder when it is within a

@@ -10,10 +10,7 @@
 #![allow(clippy::excessive_precision)]
 
 use crate::{
-    common::{
-        Ctx, PiController, STAGE_RETRY_FACTOR, Stepper, all_finite, check_step_size,
-        clamp_to_limit, combine,
-    },
+    common::{Ctx, PiController, STAGE_RETRY_FACTOR, Stepper, all_finite, clamp_to_limit, combine},
     error::IntegrateError,
     system::System,
 };
@@ -262,7 +259,7 @@ impl Stepper for Dop853 {
             ctx.check_budget(t)?;
             let (h, land) = clamp_to_limit(t, self.h.min(ctx.h_max), limit);
             if ctx.fixed.is_none() {
-                check_step_size(t, h)?;
+                ctx.check_step_size(t, h)?;
             }
             for s in 1..12 {
                 combine(&mut self.tmp, &self.x_old, h, A[s], &self.k[..s]);
@@ -303,6 +300,9 @@ impl Stepper for Dop853 {
                 let err = error(ctx, h, &self.x_old, &self.x, &self.tmp, &self.err3);
                 let (ok, h_new) = self.ctrl.control(err, h);
                 self.h = h_new;
+                if h_new < h {
+                    ctx.shortened(&self.tmp, &self.x_old, &self.x);
+                }
                 ok
             };
             if !accepted {

@@ -3,8 +3,8 @@
 
 use crate::{
     common::{
-        Ctx, PiController, STAGE_RETRY_FACTOR, Stepper, all_finite, check_step_size,
-        clamp_to_limit, combine, lincomb,
+        Ctx, PiController, STAGE_RETRY_FACTOR, Stepper, all_finite, clamp_to_limit, combine,
+        lincomb,
     },
     error::IntegrateError,
     system::System,
@@ -134,7 +134,7 @@ impl Stepper for Dp54 {
             ctx.check_budget(t)?;
             let (h, land) = clamp_to_limit(t, self.h.min(ctx.h_max), limit);
             if ctx.fixed.is_none() {
-                check_step_size(t, h)?;
+                ctx.check_step_size(t, h)?;
             }
             for s in 1..7 {
                 combine(&mut self.tmp, &self.x, h, A[s], &self.k[..s]);
@@ -158,6 +158,9 @@ impl Stepper for Dp54 {
                 let err = ctx.norm(&self.tmp, &self.x, &self.x_new);
                 let (ok, h_new) = self.ctrl.control(err, h);
                 self.h = h_new;
+                if h_new < h {
+                    ctx.shortened(&self.tmp, &self.x, &self.x_new);
+                }
                 ok
             };
             if !accepted {

@@ -30,13 +30,24 @@ pub enum IntegrateError {
     #[error("invalid options: {0}")]
     InvalidOptions(String),
     /// The step size became negligible relative to `t` (e.g. a finite-time
-    /// blow-up or a discontinuity the error control cannot pass).
-    #[error("step size underflow at t = {} (h = {h:e})", Num(*.t))]
+    /// blow-up, a discontinuity the error control cannot pass, or a stiff motion under an
+    /// explicit method).
+    #[error("step size underflow at t = {} (h = {h:e}){what}", Num(*.t))]
     StepSizeUnderflow {
         /// Time reached.
         t: f64,
         /// Step size that was too small.
         h: f64,
+        /// The state entry the steps were last cut for: the one whose error estimate was the
+        /// largest against its tolerance at the last step the error control rejected (for
+        /// radau5 also its Newton increment, where the iteration did not contract), or the
+        /// first that was not finite in a trial stage. `None` where the last cut was for a
+        /// stage the system refused with its own error or a singular iteration matrix.
+        entry: Option<usize>,
+        /// What limited the step (`": …"`, appended to the message): the integrator names
+        /// the entry by its index; a caller that knows the system may name it, and say what
+        /// to try, instead.
+        what: String,
     },
     /// More step attempts than `Options::max_steps` (typically: a stiff
     /// problem given to an explicit method).
@@ -89,6 +100,14 @@ pub enum NonFiniteEntry {
 }
 
 impl IntegrateError {
+    /// A step size underflow at `t` (step `h`), the steps shortened last for the error of
+    /// state entry `entry` where it is known.
+    pub(crate) fn step_size_underflow(t: f64, h: f64, entry: Option<usize>) -> Self {
+        let what = entry
+            .map(|i| format!(": the steps were last cut for state entry {i}"))
+            .unwrap_or_default();
+        IntegrateError::StepSizeUnderflow { t, h, entry, what }
+    }
     /// The first non-finite entry of the state `x` at `t` (none found: no entry named).
     pub(crate) fn non_finite_state(t: f64, x: &[f64]) -> Self {
         Self::non_finite(

@@ -15,7 +15,7 @@
 //! that a new step size costs `O(n²)`.
 
 use crate::{
-    common::{Ctx, STAGE_RETRY_FACTOR, Stepper, all_finite, check_step_size, clamp_to_limit},
+    common::{Ctx, STAGE_RETRY_FACTOR, Stepper, all_finite, clamp_to_limit, largest_error},
     error::IntegrateError,
     jacobian::Jacobian,
     stage_matrices::StageMatrices,
@@ -292,6 +292,27 @@ impl Radau5 {
     /// Simplified Newton iteration for the stage increments at step `h`.
     /// `Ok(Ok(iterations))` on convergence, `Ok(Err(factor))` when the step
     /// must be retried with `h * factor`.
+    /// A Newton iteration that did not contract: records the entry whose last increment
+    /// (over the three stages, against its scale, the quadrature states left out as the
+    /// iteration's test leaves them) was the largest, as a shortened step's
+    /// ([`Ctx::shortened`]), and returns `fac`, the factor the step is cut by.
+    fn newton_failed(&self, ctx: &mut Ctx, fac: f64) -> f64 {
+        let n = self.n;
+        let (quadrature, scal) = (&ctx.quadrature[..n], &self.scal[..n]);
+        let size = |i: usize| {
+            let s = self
+                .dz
+                .chunks_exact(n)
+                .map(|dz| (dz[i] / scal[i]).abs())
+                .fold(0.0, f64::max);
+            if s.is_nan() { f64::INFINITY } else { s }
+        };
+        ctx.rejected_by = (0..n)
+            .filter(|&i| !quadrature[i])
+            .max_by(|&a, &b| size(a).total_cmp(&size(b)));
+        fac
+    }
+
     fn newton<S: System + ?Sized>(
         &mut self,
         sys: &mut S,
@@ -336,7 +357,7 @@ impl Radau5 {
         let mut newt = 0;
         loop {
             if newt >= NIT {
-                return Ok(Err(0.5));
+                return Ok(Err(self.newton_failed(ctx, 0.5)));
             }
             for s in 0..3 {
                 let (tmp, x, z) = (&mut self.tmp[..n], &self.x[..n], &self.z[s * n..][..n]);
@@ -393,7 +414,7 @@ impl Radau5 {
                 0.0
             };
             if !dyno.is_finite() {
-                return Ok(Err(0.5));
+                return Ok(Err(self.newton_failed(ctx, 0.5)));
             }
             if newt > 1 && newt < NIT {
                 let thq = dyno / dyno_old;
@@ -410,10 +431,11 @@ impl Radau5 {
                         self.faccon * dyno * self.theta.powi((NIT - 1 - newt) as i32) / self.fnewt;
                     if dyth >= 1.0 {
                         let qnewt = dyth.clamp(1e-4, 20.0);
-                        return Ok(Err(0.8 * qnewt.powf(-1.0 / (4.0 + (NIT - 1 - newt) as f64))));
+                        let fac = 0.8 * qnewt.powf(-1.0 / (4.0 + (NIT - 1 - newt) as f64));
+                        return Ok(Err(self.newton_failed(ctx, fac)));
                     }
                 } else {
-                    return Ok(Err(0.5));
+                    return Ok(Err(self.newton_failed(ctx, 0.5)));
                 }
             }
             dyno_old = dyno.max(f64::EPSILON);
@@ -568,7 +590,7 @@ impl Stepper for Radau5 {
             ctx.check_budget(t)?;
             let (h, land) = clamp_to_limit(t, self.h.min(ctx.h_max), limit);
             if !fixed {
-                check_step_size(t, h)?;
+                ctx.check_step_size(t, h)?;
             }
             if self.need_jac {
                 self.compute_jacobian(sys, ctx)?;
@@ -581,6 +603,7 @@ impl Stepper for Radau5 {
                 }
                 self.h = 0.5 * h;
                 self.reject = true;
+                ctx.rejected_by = None;
                 ctx.steps_rejected += 1;
                 continue;
             }
@@ -644,10 +667,14 @@ impl Stepper for Radau5 {
                     self.h = h_new;
                     self.need_jac = self.theta > self.thet;
                 }
+                if self.h < h {
+                    ctx.rejected_by = largest_error(&ctx.weights, &self.err, |i| self.scal[i]);
+                }
                 return Ok(());
             }
             self.reject = true;
             ctx.steps_rejected += 1;
+            ctx.rejected_by = largest_error(&ctx.weights, &self.err, |i| self.scal[i]);
             self.h = if self.first { 0.1 * h } else { h_new };
             // Unlike RADAU5, a Jacobian under which Newton contracted well is kept: the step
             // was too long for the error, not for the iteration. On the flexible deployment

@@ -260,11 +260,17 @@ fn bad_elastic_states_exit_2_naming_file_and_line() {
         ),
         (
             "flexible = { beam = { eta = [0.0, 1.0] } }",
-            vec!["bad.toml:4", "expected 3 values", "got 2"],
+            vec![
+                "bad.toml:4",
+                "initial.flexible.beam.eta: expected 3 values, one per mode of body `beam`, got 2 (mode 3 has none)",
+            ],
         ),
         (
             "flexible = { beam = { etadot = [0.0, nan, 0.0] } }",
-            vec!["bad.toml:4", "finite"],
+            vec![
+                "bad.toml:4",
+                "initial.flexible.beam.etadot: body `beam`'s mode 2 is NaN: values must be finite",
+            ],
         ),
         (
             "flexible = { beam = { eta = [0.0, 0.0, 0.0], speed = 1 } }",

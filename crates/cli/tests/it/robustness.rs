@@ -977,3 +977,61 @@ fn set_takes_either_attitude_form() {
         }
     }
 }
+
+/// A bus on an orbit whose velocity is all but radial (1 mm/s across 10 km/s inwards): its
+/// periapsis is a fraction of a micrometre from the Earth's centre, where the gravity's
+/// singularity shortens the steps until they no longer move the time on.
+const FALL: &str = r#"duration = 2000.0
+[model]
+[[model.body]]
+name = "bus"
+mass = 100.0
+inertia = [[10.0, 0.0, 0.0], [0.0, 10.0, 0.0], [0.0, 0.0, 10.0]]
+[orbit]
+position = [7.0e6, 0.0, 0.0]
+velocity = [-1.0e4, 1.0e-3, 0.0]
+[integrator]
+method = "dp54"
+[output]
+every = 10.0
+plots = false
+view = false
+"#;
+
+/// A step size underflow says when, which state the steps were last shortened for (named
+/// as its column), why, and what to try: an implicit method after an explicit one, looser
+/// tolerances (with their values), the initial state; under `radau5` it does not offer
+/// `radau5` again. The run exits 1 and keeps its rows.
+#[test]
+fn a_step_size_underflow_names_the_state_and_what_to_try() {
+    let dir = setup("underflow");
+    std::fs::write(dir.join("fall.toml"), FALL).unwrap();
+    let o = satsim_in(&dir, &["run", "fall.toml"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("fall.toml: the run failed: step size underflow at t = 454.42")
+            && err.contains(": the steps were last shortened for `orbit_v_y`;")
+            && err.contains("or it runs into a singularity or a jump in the forces")
+            && err.contains("The method `dp54` is explicit and must follow every motion: try `integrator.method = \"radau5\"`")
+            && err.contains("looser tolerances (`integrator.rtol` = 1e-9 and `atol` = 1e-12 now)")
+            && err.contains("check the initial state for a value far too large")
+            && err.contains("holds the rows up to t = 450 s"),
+        "{err}"
+    );
+    let implicit = FALL.replace("\"dp54\"", "\"radau5\"\nrtol = 1e-8\natol = 1e-10");
+    std::fs::write(dir.join("fall.toml"), implicit).unwrap();
+    let o = satsim_in(&dir, &["run", "fall.toml"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("step size underflow at t = 454.42")
+            && err.contains(": the steps were last shortened for `orbit_")
+            && err.contains(
+                "Try looser tolerances (`integrator.rtol` = 1e-8 and `atol` = 1e-10 now)"
+            )
+            && !err.contains("explicit")
+            && !err.contains("\"radau5\""),
+        "{err}"
+    );
+}

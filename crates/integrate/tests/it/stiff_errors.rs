@@ -172,7 +172,12 @@ fn error_messages_write_extreme_times_in_exponent_form() {
         e.to_string(),
         "maximum number of steps exceeded at t = 1.5e-293"
     );
-    let e = IntegrateError::StepSizeUnderflow { t: 0.25, h: 1e-17 };
+    let e = IntegrateError::StepSizeUnderflow {
+        t: 0.25,
+        h: 1e-17,
+        entry: None,
+        what: String::new(),
+    };
     assert_eq!(e.to_string(), "step size underflow at t = 0.25 (h = 1e-17)");
     let e = IntegrateError::System {
         t: f64::INFINITY,
@@ -385,11 +390,47 @@ impl System for BlowUp {
 fn step_size_underflow_at_blow_up() {
     for method in [Method::Dp54, Method::Dop853, Method::Radau5] {
         match run(&mut BlowUp, &Options::new(method), &[1.0], 0.0, 2.0) {
-            Err(IntegrateError::StepSizeUnderflow { t, h }) => {
+            Err(IntegrateError::StepSizeUnderflow { t, h, .. }) => {
                 assert!((t - 1.0).abs() < 1e-3 && h > 0.0, "{method}: t = {t}");
             }
             other => panic!("{method}: expected StepSizeUnderflow, got {other:?}"),
         }
+    }
+}
+
+/// A constant, a decay and, last but one, [`BlowUp`]'s `y' = y²`, which blows up at t = 1.
+struct BlowUpAmong;
+impl System for BlowUpAmong {
+    fn dim(&self) -> usize {
+        4
+    }
+    fn rhs(&mut self, _t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), SystemError> {
+        dx[0] = 0.0;
+        dx[1] = -x[1];
+        dx[2] = x[2] * x[2];
+        dx[3] = -2.0 * x[3];
+        Ok(())
+    }
+}
+
+/// A step size underflow names the state entry whose error the steps were shortened for
+/// (the one that weighs most in the last rejected step's error norm), through every
+/// adaptive method.
+#[test]
+fn a_step_size_underflow_names_the_entry_whose_error_limited_it() {
+    for method in [Method::Dp54, Method::Dop853, Method::Radau5] {
+        let x0 = [1.0, 1.0, 1.0, 1.0];
+        let err = run(&mut BlowUpAmong, &Options::new(method), &x0, 0.0, 2.0).unwrap_err();
+        let IntegrateError::StepSizeUnderflow { t, entry, .. } = &err else {
+            panic!("{method}: expected StepSizeUnderflow, got {err:?}");
+        };
+        assert!((t - 1.0).abs() < 1e-3, "{method}: {err}");
+        assert_eq!(*entry, Some(2), "{method}: {err}");
+        assert!(
+            err.to_string()
+                .ends_with("): the steps were last cut for state entry 2"),
+            "{method}: {err}"
+        );
     }
 }
 

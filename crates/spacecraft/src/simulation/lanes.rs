@@ -95,7 +95,7 @@ impl Simulation {
     pub fn run_lanes_with<J: LaneJobs>(options: &Options, width: usize, jobs: &mut J) {
         let mut runs = Adapter {
             jobs,
-            fixed: options.fixed_step,
+            options: options.clone(),
         };
         match width {
             0 | 1 => integrate_lanes(options, 1, &mut Lanes::<2>::default(), &mut runs),
@@ -130,8 +130,8 @@ impl<K: RowSink> SimCell for Cell<K> {
 /// [`LaneJobs`] as the integrator's [`Runs`].
 struct Adapter<'j, J> {
     jobs: &'j mut J,
-    /// The runs' fixed step, if they have one (for the message of a run out of steps).
-    fixed: Option<f64>,
+    /// The runs' options (their method and step, for the message of a failed run).
+    options: Options,
 }
 
 impl<'j, J: LaneJobs> Runs<Shared<Cell<J::Sink>>, Observer<'j>> for Adapter<'j, J>
@@ -190,7 +190,7 @@ where
             unreachable!("the observer, the cell's only other owner, is dropped")
         };
         let run = run.into_inner();
-        let result = outcome(result, run.failure, &run.sim, self.fixed);
+        let result = outcome(result, run.failure, &run.sim, &self.options);
         self.jobs.done(run.sim, run.sink, result);
     }
 }

@@ -2,8 +2,8 @@
 
 use super::Simulation;
 use satsim_integrate::{
-    EventAction, EventDirection, IntegrateError, NonFiniteEntry, Options, Output, Stats, System,
-    SystemError,
+    EventAction, EventDirection, IntegrateError, Method, NonFiniteEntry, Options, Output, Stats,
+    System, SystemError,
 };
 use satsim_tree::error::Num;
 use std::cell::{Ref, RefCell, RefMut};
@@ -53,7 +53,7 @@ impl Simulation {
                     }
                 }
             });
-        outcome(result, failure, &cell.borrow(), options.fixed_step)
+        outcome(result, failure, &cell.borrow(), options)
     }
 
     /// What a run that ran out of steps was stepping through, for its message: the effects
@@ -128,13 +128,13 @@ pub(super) fn deliver<E>(
     sink(t, row).map_err(|error| RunError::Sink { t, error })
 }
 
-/// A run's outcome from the integrator's result and the failure its observer kept.
-/// `fixed`: the run's fixed step, if it has one.
+/// A run's outcome from the integrator's result and the failure its observer kept, under
+/// the run's `options`.
 pub(super) fn outcome<E>(
     result: Result<Stats, IntegrateError>,
     failure: Option<RunError<E>>,
     sim: &Simulation,
-    fixed: Option<f64>,
+    options: &Options,
 ) -> Result<Stats, RunError<E>> {
     match (result, failure) {
         (_, Some(f)) => Err(f),
@@ -142,28 +142,66 @@ pub(super) fn outcome<E>(
         (Err(IntegrateError::MaxSteps { t, .. }), None) => {
             Err(RunError::Integrate(IntegrateError::MaxSteps {
                 t,
-                stepping: sim.stepping_through(fixed),
+                stepping: sim.stepping_through(options.fixed_step),
             }))
         }
-        // A step that could not get smaller is where the motion left what the model holds,
-        // when a flexible body had been bent past a tenth of its size: say so (the solve's
-        // own failure says it at its state, `SimModel::flexible_error`).
-        (Err(e @ IntegrateError::StepSizeUnderflow { t, .. }), None) => {
-            Err(RunError::Integrate(match sim.deflection_failure() {
-                Some(why) => IntegrateError::System {
-                    t,
-                    source: SystemError::new(format!(
-                        "{e}, after the flexible bodies were deflected beyond what their modal model holds: {why}"
-                    )),
-                },
-                None => e,
-            }))
-        }
-        (Err(e), None) => Err(RunError::Integrate(sim.named(e))),
+        (Err(e), None) => Err(RunError::Integrate(sim.explained(e, options))),
     }
 }
 
 impl Simulation {
+    /// `e` as a run under `options` reports it: a state named as its column
+    /// ([`Self::named`]), and a step size underflow with what the steps were shortened for
+    /// and why ([`Self::underflow`]).
+    pub(super) fn explained(&self, e: IntegrateError, options: &Options) -> IntegrateError {
+        match e {
+            IntegrateError::StepSizeUnderflow { t, h, entry, .. } => {
+                self.underflow(t, h, entry, options)
+            }
+            e => self.named(e),
+        }
+    }
+
+    /// A step size underflow at `t` (step `h`) under `options`, the steps last shortened
+    /// for state entry `entry` where the integrator knows it: that state named as its
+    /// column, then why. Where a flexible body had been bent past a tenth of its size, the
+    /// motion left what the model holds, and the body is named (the solve's own failure
+    /// says it at its state, `SimModel::flexible_error`); else the error control shortened
+    /// the steps for a motion far faster than the rest or a jump, and the message says what
+    /// to try: an implicit method for an explicit one, looser tolerances, the initial state.
+    fn underflow(&self, t: f64, h: f64, entry: Option<usize>, options: &Options) -> IntegrateError {
+        let state = entry
+            .map(|i| {
+                format!(
+                    ": the steps were last shortened for `{}`",
+                    self.state_name(i)
+                )
+            })
+            .unwrap_or_default();
+        let what = match self.deflection_failure() {
+            Some(why) => format!(
+                "{state}, after the flexible bodies were deflected beyond what their modal model holds: {why}"
+            ),
+            None => {
+                let tolerances = format!(
+                    "looser tolerances (`integrator.rtol` = {:e} and `atol` = {:e} now)",
+                    options.rtol, options.atol
+                );
+                let what_to_try = match options.method {
+                    Method::Radau5 => format!("Try {tolerances}"),
+                    m => format!(
+                        "The method `{}` is explicit and must follow every motion: try `integrator.method = \"radau5\"` (implicit, it steps over fast motions), or {tolerances}",
+                        m.name()
+                    ),
+                };
+                format!(
+                    "{state}; the error control shortened the steps until they no longer moved the time on: the motion there is far faster than the rest (a stiff spring or damper, a high mode, a huge initial rate or deformation), or it runs into a singularity or a jump in the forces. {what_to_try}, and check the initial state for a value far too large"
+                )
+            }
+        };
+        IntegrateError::StepSizeUnderflow { t, h, entry, what }
+    }
+
     /// `e` with the state it found not finite named as a column is (`rate_h4`, not "state
     /// entry 11"), and where that comes from: the first entry to overflow points at the
     /// value that drove it.

@@ -448,7 +448,7 @@ impl Stepping {
         }
         let failure = match (result, failure) {
             (_, Some(f)) => Some(f),
-            (Err(e), None) => Some(StepError::Integrate(self.sim.named(e))),
+            (Err(e), None) => Some(StepError::Integrate(self.sim.explained(e, &options))),
             (Ok(stats), None) => {
                 self.t = stats.t_final;
                 self.x = stats.x_final;

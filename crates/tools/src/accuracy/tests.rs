@@ -175,7 +175,13 @@ view = false
     let (stable, what) = rk4_stable_step(&scene).unwrap();
     assert!(what.starts_with("body `beam`'s mode 2 ("), "{what}");
     let flex = scene.flexible.as_ref().unwrap();
-    let limit = rk4_limit(flex, &scene.initial_q(), &HingeGains::none(0)).unwrap();
+    let limit = rk4_limit(
+        flex,
+        &scene.initial_q(),
+        &scene.initial_v(),
+        &HingeGains::none(0),
+    )
+    .unwrap();
     assert_eq!(limit.step, stable);
     let hz = limit.omega / std::f64::consts::TAU;
     // The second clamped mode: (4.694)² √(EI / ρA L⁴) / 2π.

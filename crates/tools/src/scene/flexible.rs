@@ -55,9 +55,10 @@ impl Elastic {
 }
 
 /// The elastic state of `flex` (whose rigid tree is `rigid`) from the written entries
-/// `(body, entry)`: zeros where not given. The error names the body and what is wrong (an
-/// unknown body, a body that is not flexible, a wrong length, a value that is not finite),
-/// with the index of its entry.
+/// `(body, entry)`: zeros where not given. The error names the key (`flexible.<body>.eta`),
+/// the body and what is wrong (an unknown body, a body that is not flexible, a wrong length
+/// and the mode without a value, a value that is not finite and its mode), with the index of
+/// its entry.
 pub fn elastic_state<'a>(
     flex: Option<&FlexModel>,
     rigid: &Model,
@@ -94,18 +95,27 @@ pub fn elastic_state<'a>(
         ] {
             let Some(v) = values else { continue };
             if v.len() != m {
+                // Which mode lacks its value, or which value has no mode.
+                let which = if v.len() < m {
+                    format!("mode {} has none", v.len() + 1)
+                } else {
+                    format!("value {} is no mode's", m + 1)
+                };
                 return Err((
                     k,
                     format!(
-                        "flexible.{body}.{key}: expected {m} values (one per mode), got {}",
+                        "flexible.{body}.{key}: expected {m} values, one per mode of body `{body}`, got {} ({which})",
                         v.len()
                     ),
                 ));
             }
-            if let Some(x) = v.iter().find(|x| !x.is_finite()) {
+            if let Some((j, x)) = v.iter().enumerate().find(|(_, x)| !x.is_finite()) {
                 return Err((
                     k,
-                    format!("flexible.{body}.{key}: values must be finite, got {x}"),
+                    format!(
+                        "flexible.{body}.{key}: body `{body}`'s mode {} is {x}: values must be finite",
+                        j + 1
+                    ),
                 ));
             }
             target[o..o + m].copy_from_slice(v);
@@ -199,14 +209,27 @@ pub(super) fn eigen(
     q: &[f64],
     k: &[f64],
 ) -> Option<(DVector<f64>, DMatrix<f64>)> {
+    eigen_of(
+        flex,
+        q,
+        &DMatrix::from_diagonal(&DVector::from_column_slice(k)),
+    )
+}
+
+/// [`eigen`] of a full stiffness matrix `k` (its symmetric part: a motion's skew part does
+/// no work and leaves out of the undamped frequencies).
+pub(super) fn eigen_of(
+    flex: &FlexModel,
+    q: &[f64],
+    k: &DMatrix<f64>,
+) -> Option<(DVector<f64>, DMatrix<f64>)> {
     use nalgebra::SymmetricEigen;
     use satsim_tree::flexible::{FlexData, crba};
     let mut data = FlexData::new(flex);
     let m = crba(flex, &mut data, q).ok()?.clone();
     let l = m.cholesky()?.l();
     let l_inv = l.clone().try_inverse()?;
-    let k = DMatrix::from_diagonal(&DVector::from_column_slice(k));
-    // L⁻¹ K L⁻ᵀ: symmetric, with the eigenvalues of M⁻¹ K.
+    // L⁻¹ K L⁻ᵀ: symmetric for a symmetric K, with the eigenvalues of M⁻¹ K.
     let a = &l_inv * k * l_inv.transpose();
     let eig = SymmetricEigen::new((&a + a.transpose()) * 0.5);
     // The mode shapes in the coordinates: x = L⁻ᵀ y.
@@ -259,6 +282,63 @@ pub fn highest_frequency(flex: &FlexModel, q: &[f64]) -> Option<(f64, usize)> {
         .map(|e| (e, x[(first + e, top)].abs()))
         .max_by(|a, b| a.1.total_cmp(&b.1))?;
     (w2 > 0.0 && w2.is_finite()).then(|| (w2.sqrt(), e))
+}
+
+/// Whether the mass matrix of `flex` at `q` is positive definite; `None` where it cannot be
+/// formed (a value that is not finite).
+pub(super) fn mass_positive(flex: &FlexModel, q: &[f64]) -> Option<bool> {
+    use satsim_tree::flexible::{FlexData, crba};
+    let mut data = FlexData::new(flex);
+    let m = crba(flex, &mut data, q).ok()?.clone();
+    Some(m.cholesky().is_some())
+}
+
+/// The body and mode (from 1) an initial deformation `eta` (at the rigid positions
+/// `rigid_q`) that leaves the mass matrix not positive definite is to blame on, with the
+/// pivot where the flexible ABA's fails at a mode: that mode. Else the first body whose
+/// deformation alone does it (where none does alone, the one bent most for its size), and
+/// in it the mode that bends it most (`|ηₖ|` over the coordinate that bends the body by its
+/// size, [`FlexModel::modal_scale`]).
+pub(super) fn blamed_mode(
+    flex: &FlexModel,
+    rigid_q: &[f64],
+    eta: &[f64],
+) -> (usize, usize, Option<f64>) {
+    let q_of = |eta: &[f64]| -> Vec<f64> { rigid_q.iter().chain(eta).copied().collect() };
+    if let Some((i, mode, pivot)) = flex.unresolved_mode(&q_of(eta)) {
+        return (i, mode, Some(pivot));
+    }
+    let n = flex.rigid().n_bodies();
+    let deformed: Vec<usize> = (0..n)
+        .filter(|&i| {
+            let o = flex.elastic_offset(i);
+            eta[o..o + flex.modes(i)].iter().any(|e| *e != 0.0)
+        })
+        .collect();
+    let alone = |i: usize| {
+        let o = flex.elastic_offset(i);
+        let mut only = vec![0.0; eta.len()];
+        only[o..o + flex.modes(i)].copy_from_slice(&eta[o..o + flex.modes(i)]);
+        mass_positive(flex, &q_of(&only)) == Some(false)
+    };
+    let bent = |i: usize| flex.deflection_of(i, eta).map_or(0.0, |d| d.fraction());
+    let i = deformed
+        .iter()
+        .copied()
+        .find(|&i| alone(i))
+        .or_else(|| {
+            deformed
+                .iter()
+                .copied()
+                .max_by(|a, b| bent(*a).total_cmp(&bent(*b)))
+        })
+        .unwrap_or(0);
+    let o = flex.elastic_offset(i);
+    let bends = |k: usize| eta[o + k].abs() / flex.modal_scale(o + k).unwrap_or(1.0);
+    let k = (0..flex.modes(i))
+        .max_by(|a, b| bends(*a).total_cmp(&bends(*b)))
+        .unwrap_or(0);
+    (i, k + 1, None)
 }
 
 /// The body (name) and mode number (from 1) of elastic coordinate `e`.

@@ -140,6 +140,17 @@ impl Scene {
             .collect()
     }
 
+    /// The initial velocities of the model with its flexible bodies: the model's `v`, then
+    /// the elastic rates (as [`Scene::initial_q`]).
+    pub fn initial_v(&self) -> Vec<f64> {
+        self.initial
+            .v
+            .iter()
+            .chain(&self.elastic.etadot)
+            .copied()
+            .collect()
+    }
+
     /// How many rows a run writes: `t = 0, every, 2 every, …` and the end (counted as a
     /// float, since `duration / every` may exceed every integer type).
     pub fn output_rows(&self) -> f64 {

@@ -21,6 +21,14 @@ use std::ops::{Deref, Range};
 use std::path::{Path, PathBuf};
 use toml::Spanned;
 
+/// Where a flexible body's initial elastic state is written, for the errors about it: its
+/// entry in the scene's `[initial] flexible` (the entry's span), or in a JSON state file
+/// (the file and the entry's line).
+enum ElasticAt {
+    Scene(Range<usize>),
+    File(PathBuf, Option<usize>),
+}
+
 /// The built-in effects whose `period` is a sample period: a clock each ([`Clock`]).
 const SAMPLED: [&str; 3] = ["attitude_control", "hinge_control", "thrusters"];
 
@@ -119,6 +127,7 @@ impl<'a> Parser<'a> {
         });
         let mut warnings = Vec::new();
         let mut elastic = Elastic::rest(flex.as_ref());
+        let mut elastic_at: Vec<(String, ElasticAt)> = Vec::new();
         let initial = match file.initial.as_ref().map(|s| (s.get_ref(), s.span())) {
             None => State::rest(&model),
             Some((StateSource::Path(p), span)) => {
@@ -139,6 +148,13 @@ impl<'a> Parser<'a> {
                     line: json_line(&text, &given[k].0),
                     message,
                 })?;
+                elastic_at = given
+                    .iter()
+                    .map(|(b, _)| {
+                        let line = json_line(&text, b);
+                        (b.clone(), ElasticAt::File(state_path.clone(), line))
+                    })
+                    .collect();
                 warnings.extend(
                     sf.warnings()
                         .into_iter()
@@ -154,6 +170,10 @@ impl<'a> Parser<'a> {
                     given.iter().map(|(b, e)| (b.as_str(), e.get_ref())),
                 )
                 .map_err(|(k, m)| self.error(Some(given[k].1.span()), format!("initial.{m}")))?;
+                elastic_at = given
+                    .iter()
+                    .map(|(b, e)| (b.clone(), ElasticAt::Scene(e.span())))
+                    .collect();
                 warnings.extend(s.warnings().into_iter().map(|w| {
                     format!(
                         "{}:{}: initial.{w}",
@@ -196,7 +216,7 @@ impl<'a> Parser<'a> {
             None => true,
         };
         if let Some(f) = flex.as_ref() {
-            self.check_initial_modes(&file, f, &initial, &elastic)?;
+            self.check_initial_modes(&file, f, &initial, &elastic, &elastic_at)?;
         }
         let (every, plots, view, energy_budget) = match &file.output {
             None => (duration / 100.0, true, true, true),
@@ -273,7 +293,13 @@ impl<'a> Parser<'a> {
             let gains = super::step_limit::HingeGains::of(&effects, model.n_hinges());
             warnings.extend(sampled.warnings(self, &file, &model, &tree, &q, &gains));
             if let Some(h) = fixed_step {
-                self.fixed_step_checked(&file, &tree, &q, &gains, h, duration, every)?;
+                let v = super::step_limit::integrated_v(
+                    &initial.v,
+                    &effects,
+                    n_rotors,
+                    &elastic.etadot,
+                );
+                self.fixed_step_checked(&file, &tree, (&q, &v), &gains, h, duration, every)?;
             }
         }
         let scene = Scene {
@@ -309,17 +335,20 @@ impl<'a> Parser<'a> {
     /// its neutral configuration, and round-off's sign depends on the configuration): an
     /// error at the scene's `model` line, naming the mode. Deformed, the deformed inertia
     /// depends on `η` (to first and second order), and an `eta` large enough makes it no
-    /// body's: an error at the scene's `initial` line, naming the mode whose pivot failed
-    /// where the flexible ABA says. Either way the run would end at its first step in "mass
-    /// matrix is not positive definite".
+    /// body's: an error at the body's entry (`elastic_at`: in the scene, or in its state
+    /// file) naming the key, the body and the mode to blame
+    /// ([`super::flexible::blamed_mode`]) and how far the deformation bends the body. Either
+    /// way the run would end at its first step in "mass matrix is not positive definite".
     fn check_initial_modes(
         &self,
         file: &SceneFile,
         flex: &FlexModel,
         initial: &State,
         elastic: &Elastic,
+        elastic_at: &[(String, ElasticAt)],
     ) -> Result<(), FileError> {
-        use satsim_tree::flexible::{FlexData, UNRESOLVED, crba};
+        use super::flexible::{blamed_mode, mass_positive};
+        use satsim_tree::flexible::UNRESOLVED;
         let name = |i: usize| flex.rigid().bodies()[i].name().to_owned();
         let rest: Vec<f64> = initial
             .q
@@ -358,31 +387,54 @@ impl<'a> Parser<'a> {
         }
         let q: Vec<f64> = initial.q.iter().chain(&elastic.eta).copied().collect();
         // Other failures (a non-finite value) are the run's to report.
-        let mut data = FlexData::new(flex);
-        let Ok(m) = crba(flex, &mut data, &q) else {
-            return Ok(());
-        };
-        if m.clone().cholesky().is_some() {
+        if mass_positive(flex, &q) != Some(false) {
             return Ok(());
         }
-        let which = flex
-            .unresolved_mode(&q)
-            .map(|(i, mode, pivot)| {
-                format!(
-                    " (at body `{}`'s mode {mode}, pivot {})",
-                    name(i),
-                    Num(pivot)
-                )
+        let (i, mode, pivot) = blamed_mode(flex, &initial.q, &elastic.eta);
+        let body = name(i);
+        let value = elastic.eta[flex.elastic_offset(i) + mode - 1];
+        let pivot = pivot
+            .map(|p| format!(", pivot {}", Num(p)))
+            .unwrap_or_default();
+        let bent = flex
+            .deflection_of(i, &elastic.eta)
+            .map(|d| {
+                let (offset, length, pct) = (d.offset.abs(), Num(d.length), 100.0 * d.fraction());
+                let moved = match d.point {
+                    None => format!(
+                        "its tip {offset:.4} m off its axis, {pct:.0} % of its {length} m length"
+                    ),
+                    Some(k) => format!(
+                        "its node `{}` {offset:.4} m, {pct:.0} % of its {length} m from the body's frame",
+                        flex.watch_points(i)[k].name
+                    ),
+                };
+                format!(": the deformation moves {moved}, where a modal model holds a few per cent")
             })
             .unwrap_or_default();
-        Err(self.error(
-            file.initial.as_ref().map(|s| s.span()),
-            format!(
-                "`initial` flexible: the initial deformation makes the mass matrix not positive \
-                 definite{which}: an `eta` this large takes the deformed inertia out of a body's; \
-                 start closer to rest"
+        let message = format!(
+            "the initial deformation makes the mass matrix not positive definite at body \
+             `{body}`'s mode {mode} (eta = {}{pivot}){bent}; with `stiffening` the deformed \
+             inertia depends on `eta`, and one this large takes it out of any body's: start \
+             closer to rest",
+            Num(value)
+        );
+        Err(match elastic_at.iter().find(|(b, _)| *b == body) {
+            Some((_, ElasticAt::Scene(span))) => self.error(
+                Some(span.clone()),
+                format!("initial.flexible.{body}.eta: {message}"),
             ),
-        ))
+            Some((_, ElasticAt::File(path, line))) => FileError::Schema {
+                path: path.clone(),
+                line: *line,
+                message: format!("flexible.{body}.eta: {message}"),
+            },
+            // Only a body given a deformation can be blamed for it.
+            None => self.error(
+                file.initial.as_ref().map(|s| s.span()),
+                format!("initial.flexible.{body}.eta: {message}"),
+            ),
+        })
     }
 
     /// [`Self::check_rk4_step`] for a fixed step `h`, cut to the output interval and the
@@ -393,7 +445,7 @@ impl<'a> Parser<'a> {
         &self,
         file: &SceneFile,
         tree: &FlexModel,
-        q: &[f64],
+        state: (&[f64], &[f64]),
         gains: &super::step_limit::HingeGains,
         h: f64,
         duration: f64,
@@ -408,27 +460,28 @@ impl<'a> Parser<'a> {
         } else {
             None
         };
-        self.check_rk4_step(file, tree, q, gains, h, cut)
+        self.check_rk4_step(file, tree, state, gains, h, cut)
     }
 
-    /// A fixed RK4 step must keep the scene's linear motions at the initial state (the
-    /// flexible bodies' modes, the hinges on their springs, dampers and continuous
-    /// controllers) within RK4's stability region, damping included
-    /// ([`super::step_limit::rk4_limit`]): beyond it they grow without bound, so it is an
-    /// error at `integrator.step` naming what limits the step, its frequency and damping, and
-    /// the largest stable step. `cut` is what the steps are cut to, where they are (the output
-    /// interval or the duration, and its value): the longest step taken is what must be stable.
+    /// A fixed RK4 step must keep the scene's linear motions at the initial state `(q, v)`
+    /// (the flexible bodies' modes, stiffened by the initial motion where they have
+    /// `stiffening`, the hinges on their springs, dampers and continuous controllers) within
+    /// RK4's stability region, damping included ([`super::step_limit::rk4_limit`]): beyond it
+    /// they grow without bound, so it is an error at `integrator.step` naming what limits the
+    /// step, its frequency and damping, and the largest stable step. `cut` is what the steps
+    /// are cut to, where they are (the output interval or the duration, and its value): the
+    /// longest step taken is what must be stable.
     fn check_rk4_step(
         &self,
         file: &SceneFile,
         flex: &FlexModel,
-        q: &[f64],
+        (q, v): (&[f64], &[f64]),
         gains: &super::step_limit::HingeGains,
         h: f64,
         cut: Option<(&str, f64)>,
     ) -> Result<(), FileError> {
         use super::step_limit::{Limiting, rk4_limit};
-        let Some(limit) = rk4_limit(flex, q, gains) else {
+        let Some(limit) = rk4_limit(flex, q, v, gains) else {
             return Ok(());
         };
         let taken = cut.map_or(h, |(_, to)| to);
@@ -461,7 +514,16 @@ impl<'a> Parser<'a> {
         } else {
             format!("{} 1/s", fixed(l.re, 4))
         };
-        let what = limit.what(flex);
+        let mut what = limit.what(flex);
+        // The initial motion's part in the stiffness, where it shows in the frequency.
+        let g = limit.geometric;
+        if matches!(limit.by, Limiting::Mode(_)) && g.abs() >= 1e-3 {
+            let how = if g > 0.0 { "stiffened" } else { "softened" };
+            what += &format!(
+                ", {how} by the initial motion, whose geometric stiffness is {:.1} % of the mode's",
+                100.0 * g
+            );
+        }
         let (with, motion) = match limit.by {
             Limiting::Mode(_) => ("the flexible modes", "mode"),
             Limiting::Hinge(_) if limit.on_rotor(flex) => {

@@ -173,7 +173,8 @@ const GROWTH_TOLERANCE: f64 = 1e-5;
 
 /// A sampled attitude law (`[effects.attitude_control]` with a `period`) on the scene's linear
 /// motions at the initial state (as [`rk4_limit`](super::step_limit::rk4_limit)'s: `M` of the
-/// tree with the rotors, `K` and `D` of `hinges`' continuous gains, friction and modes): the
+/// tree with the rotors, `K` and `D` of `hinges`' continuous gains, friction and modes, the
+/// modes' geometric stiffness at the initial motion left out): the
 /// bus torque `u = −kp θ − kd ω` taken at each sample and held to the next (zero-order hold),
 /// through the rotors' commands `τ = −A⁺ u`: over one period `x⁺ = Φ x + Γ u`
 /// (`[[Φ, Γ], [0, 1]] = exp([[A, B], [0, 0]] T)`), so the loop is `x⁺ = (Φ − Γ G) x` with

@@ -14,9 +14,14 @@
 //! controller's `kp` and its damping plus `kd` on its coordinate, a wheel's viscous friction
 //! on its rotor's; the attitude controller's motor commands `τ = −A⁺ u` with
 //! `u = −kp θ − kd ω` (its small-error law, `θ` the bus's rotation) put `−kp A⁺` and
-//! `−kd A⁺` in the rotors' rows and the bus's rotation columns. Left out: geometric
-//! stiffening, sampled controllers, stops, the wheels' torque limits (the linear motion is
-//! the one inside them) and their Coulomb and Stribeck friction (not linear at a slip).
+//! `−kd A⁺` in the rotors' rows and the bus's rotation columns. A flexible body with
+//! `stiffening` on a moving spacecraft adds its geometric stiffness at the initial
+//! velocities to the elastic block of `K` ([`geometric_stiffness`]): a spinning beam is
+//! stiffer, its modes faster, and the step shorter. Left out: the other velocity terms'
+//! slopes (gyroscopic coupling, the rigid bodies' centrifugal stiffness), the effects' loads
+//! (thrust, the gravity gradient), sampled controllers, stops, the wheels' torque limits (the
+//! linear motion is the one inside them) and their Coulomb and Stribeck friction (not linear
+//! at a slip).
 
 use nalgebra::{Complex, DMatrix};
 use satsim_spacecraft::effects::{
@@ -25,7 +30,7 @@ use satsim_spacecraft::effects::{
 use satsim_tree::Model;
 use satsim_tree::flexible::{FlexError, FlexModel};
 
-use super::flexible::{eigen, modal_stiffness, mode_of};
+use super::flexible::{eigen_of, modal_stiffness, mode_of};
 
 /// RK4's stability limit on the imaginary axis: an undamped oscillation of angular frequency
 /// `ω` stays bounded for `ω h <= 2√2` (the largest `|λ h|` on the imaginary axis where
@@ -251,8 +256,12 @@ pub struct Rk4Limit {
     pub omega: f64,
     /// ... its damping ratio (its share of the damping, `xᵀ D x / 2ω`; infinite at `ω = 0`) ...
     pub zeta: f64,
-    /// ... and the coordinate whose stiffness and damping take the largest share of it.
+    /// ... the coordinate whose stiffness and damping take the largest share of it ...
     pub by: Limiting,
+    /// ... and the share of its stiffness (`xᵀ K x = ω²`) that the flexible bodies'
+    /// geometric stiffness at the initial motion gives ([`geometric_stiffness`]): zero at
+    /// rest or without `stiffening`, negative where the motion softens it.
+    pub geometric: f64,
 }
 
 impl Rk4Limit {
@@ -319,6 +328,75 @@ fn diagonal_matrices(flex: &FlexModel, hinges: &HingeGains) -> (DMatrix<f64>, DM
     (diagonal(k), diagonal(d))
 }
 
+/// The relative step of [`geometric_stiffness`]'s central differences, of the coordinate
+/// that bends a body by its size ([`FlexModel::modal_scale`]): the terms are linear in `η`
+/// but for the deflection's rotation of what a body carries, whose error is this squared.
+const GEOMETRIC_STEP: f64 = 1e-4;
+
+/// The flexible bodies' geometric stiffness at the motion `v` (the tree's velocities, the
+/// elastic rates included) and the positions `q`: `∂/∂η` of the modal rows of the velocity
+/// products `b(q, v) − b(q, 0)` ([`bias`](satsim_tree::flexible::bias), the tree's inverse
+/// dynamics at zero acceleration less the modes' own stiffness), an `n_e × n_e` matrix over
+/// the elastic coordinates. With `stiffening` a beam on a spinning spacecraft is stiffened
+/// by its sections' centrifugal pull and softened in the plane of the spin by the deflection's
+/// own inertia, and what it carries pulls on it too; the dynamics give it as
+/// `K_g(v) η − (ωᵀ A₂ ω) η` and the foreshortening of its loads' points (the theory page,
+/// "Geometric stiffening"), and so does this, by central differences. `None` where nothing
+/// moves, no body has `stiffening`, or the dynamics fail at `q`.
+pub fn geometric_stiffness(flex: &FlexModel, q: &[f64], v: &[f64]) -> Option<DMatrix<f64>> {
+    use satsim_tree::flexible::{FlexData, bias};
+    let rigid = flex.rigid();
+    let n = flex.n_elastic();
+    let stiffened = (0..rigid.n_bodies()).any(|i| flex.stiffened(i));
+    if n == 0 || !stiffened || v.iter().all(|x| *x == 0.0) {
+        return None;
+    }
+    let (nq, nv) = (rigid.nq(), rigid.nv());
+    let mut data = FlexData::new(flex);
+    let still = vec![0.0; v.len()];
+    // The modal rows of b(q, v) − b(q, 0): the velocity products alone (the modes' own
+    // stiffness `ωₖ² ηₖ` cancels, so that its round-off does not swamp them).
+    let mut moving = |x: &[f64]| -> Option<Vec<f64>> {
+        let with = bias(flex, &mut data, x, v, None).ok()?.as_slice()[nv..].to_vec();
+        let without = bias(flex, &mut data, x, &still, None).ok()?;
+        Some(
+            with.iter()
+                .zip(&without.as_slice()[nv..])
+                .map(|(a, b)| a - b)
+                .collect(),
+        )
+    };
+    let mut kg = DMatrix::zeros(n, n);
+    let mut x = q.to_vec();
+    for j in 0..n {
+        let h = GEOMETRIC_STEP * flex.modal_scale(j).unwrap_or(1.0).max(q[nq + j].abs());
+        x[nq + j] = q[nq + j] + h;
+        let plus = moving(&x)?;
+        x[nq + j] = q[nq + j] - h;
+        let minus = moving(&x)?;
+        x[nq + j] = q[nq + j];
+        for i in 0..n {
+            kg[(i, j)] = (plus[i] - minus[i]) / (2.0 * h);
+        }
+    }
+    kg.iter().all(|k| k.is_finite()).then_some(kg)
+}
+
+/// `km` with the geometric stiffness `kg` added to its elastic block (the last rows and
+/// columns, after the rigid tree's).
+fn with_geometric(
+    mut km: DMatrix<f64>,
+    flex: &FlexModel,
+    kg: Option<&DMatrix<f64>>,
+) -> DMatrix<f64> {
+    if let Some(kg) = kg {
+        let first = flex.rigid().nv();
+        let mut block = km.view_mut((first, first), (kg.nrows(), kg.ncols()));
+        block += kg;
+    }
+    km
+}
+
 /// `K` and `D` as matrices, with a continuous attitude controller's gains from the bus's
 /// rotation to the rotors (`hinges.attitude`, where the tree has the rotors it commands):
 /// `Q_r = τ_r = −(A⁺ u)_r = (A⁺ (kp θ + kd ω))_r`, written `Q = −K x − D ẋ`.
@@ -337,8 +415,9 @@ pub(super) fn matrices(flex: &FlexModel, hinges: &HingeGains) -> (DMatrix<f64>, 
     (km, dm)
 }
 
-/// The largest step RK4 is stable at on the scene's linear motions at `q` (the flexible
-/// bodies' modes and the `hinges`' gains, damping included): the eigenvalues `λ` of
+/// The largest step RK4 is stable at on the scene's linear motions at `q` moving at `v` (the
+/// flexible bodies' modes, stiffened by the motion where they have `stiffening`
+/// ([`geometric_stiffness`]), and the `hinges`' gains, damping included): the eigenvalues `λ` of
 /// `ẋ = [[0, I], [−M⁻¹K, −M⁻¹D]] x`, the smallest [`rk4_step_limit`]. Undamped it is `2√2 / ω`
 /// of the highest mode; a heavily damped motion (`ζ > 1`) has a real eigenvalue up to `2ζω`
 /// in size and limits the step below that (a damper alone, `−c` over the inertia it moves).
@@ -356,8 +435,9 @@ pub(super) fn matrices(flex: &FlexModel, hinges: &HingeGains) -> (DMatrix<f64>, 
 /// the limit is theirs ([`Limiting::Attitude`], `ω = |λ|` and `ζ = −Re λ / |λ|` of the
 /// limiting eigenvalue: a second-order motion's own for a complex pair, `ζ = 1` for a real
 /// one).
-pub fn rk4_limit(flex: &FlexModel, q: &[f64], hinges: &HingeGains) -> Option<Rk4Limit> {
-    let diagonal = diagonal_limit(flex, q, hinges);
+pub fn rk4_limit(flex: &FlexModel, q: &[f64], v: &[f64], hinges: &HingeGains) -> Option<Rk4Limit> {
+    let kg = geometric_stiffness(flex, q, v);
+    let diagonal = diagonal_limit(flex, q, kg.as_ref(), hinges);
     let Some(att) = &hinges.attitude else {
         return diagonal;
     };
@@ -366,6 +446,7 @@ pub fn rk4_limit(flex: &FlexModel, q: &[f64], hinges: &HingeGains) -> Option<Rk4
         return diagonal;
     }
     let (km, dm) = matrices(flex, hinges);
+    let km = with_geometric(km, flex, kg.as_ref());
     let (lambda, step) = coupled_limit(flex, q, &km, &dm)?;
     if diagonal
         .as_ref()
@@ -380,6 +461,7 @@ pub fn rk4_limit(flex: &FlexModel, q: &[f64], hinges: &HingeGains) -> Option<Rk4
         omega: lambda.norm(),
         zeta: -lambda.re / lambda.norm(),
         by: Limiting::Attitude,
+        geometric: 0.0,
     })
 }
 
@@ -417,13 +499,21 @@ pub(super) fn plant(
     Some((a, m_inv))
 }
 
-/// [`rk4_limit`] on the diagonal `K` and `D` (everything but the attitude controller).
-fn diagonal_limit(flex: &FlexModel, q: &[f64], hinges: &HingeGains) -> Option<Rk4Limit> {
+/// [`rk4_limit`] on the diagonal `K` and `D` (everything but the attitude controller), with
+/// the geometric stiffness `kg` on the elastic block of `K`.
+fn diagonal_limit(
+    flex: &FlexModel,
+    q: &[f64],
+    kg: Option<&DMatrix<f64>>,
+    hinges: &HingeGains,
+) -> Option<Rk4Limit> {
     let (k, d, hinge_of) = diagonals(flex, hinges);
-    if k.iter().chain(&d).all(|v| *v == 0.0) {
+    let km = DMatrix::from_diagonal(&nalgebra::DVector::from_column_slice(&k));
+    let km = with_geometric(km, flex, kg);
+    if km.iter().chain(&d).all(|v| *v == 0.0) {
         return None;
     }
-    let (w2, x) = eigen(flex, q, &k)?;
+    let (w2, x) = eigen_of(flex, q, &km)?;
     let n = flex.nv();
     let dm = DMatrix::from_diagonal(&nalgebra::DVector::from_column_slice(&d));
     // Each undamped motion with its share of the damping: which one limits the step.
@@ -444,12 +534,20 @@ fn diagonal_limit(flex: &FlexModel, q: &[f64], hinges: &HingeGains) -> Option<Rk
         .min_by(|a, b| a.2.total_cmp(&b.2))?;
     // The step itself from the coupled system's eigenvalues (the damping need not be
     // proportional to the stiffness), where the Schur decomposition converges.
-    let km = DMatrix::from_diagonal(&nalgebra::DVector::from_column_slice(&k));
     let (lambda, step) = coupled_limit(flex, q, &km, &dm).unwrap_or((lambda, step));
     let omega = w2[mode].max(0.0).sqrt();
     let xm = x.column(mode);
-    let share = |i: usize| (k[i] + lambda.norm() * d[i]) * xm[i] * xm[i];
+    let kx = &km * xm;
+    let share = |i: usize| xm[i] * kx[i] + lambda.norm() * d[i] * xm[i] * xm[i];
     let top = (0..n).max_by(|a, b| share(*a).total_cmp(&share(*b)))?;
+    // The geometric stiffness's part of `xᵀ K x` (= ω², the shapes mass-normalised).
+    let geometric = match kg {
+        Some(kg) if omega > 0.0 => {
+            let xe = xm.rows(flex.rigid().nv(), kg.nrows());
+            xe.dot(&(kg * xe)) / (omega * omega)
+        }
+        _ => 0.0,
+    };
     let first = flex.rigid().nv();
     let by = match hinge_of[top] {
         Some(h) => Limiting::Hinge(h),
@@ -463,6 +561,7 @@ fn diagonal_limit(flex: &FlexModel, q: &[f64], hinges: &HingeGains) -> Option<Rk
         omega,
         zeta,
         by,
+        geometric,
     })
 }
 
@@ -503,8 +602,19 @@ pub fn integrated_q(q: &[f64], n_rotors: usize, eta: &[f64]) -> Vec<f64> {
         .collect()
 }
 
-/// The largest step RK4 is stable at for `scene` ([`rk4_limit`] at its initial state, with
-/// its hinge gains), and what limits it in words ([`Rk4Limit::what`], with the frequency);
+/// The velocities of [`integrated_tree`]'s tree: the model's `v`, the `n_rotors` rotors'
+/// speeds (the reaction wheels' initial `speed`, where they are the rotors; else zero),
+/// then the elastic rates `etadot`.
+pub fn integrated_v(v: &[f64], effects: &EffectSet, n_rotors: usize, etadot: &[f64]) -> Vec<f64> {
+    let speeds: Vec<f64> = match effects.get::<ReactionWheels>() {
+        Some(w) if w.wheels.len() == n_rotors => w.wheels.iter().map(|w| w.speed).collect(),
+        _ => vec![0.0; n_rotors],
+    };
+    v.iter().chain(&speeds).chain(etadot).copied().collect()
+}
+
+/// The largest step RK4 is stable at for `scene` ([`rk4_limit`] at its initial state and
+/// motion, with its hinge gains), and what limits it in words ([`Rk4Limit::what`], with the frequency);
 /// `None` where nothing limits it. What the scene reader checks a given `integrator.step`
 /// against, for the callers that choose steps themselves (the accuracy sweep).
 pub fn rk4_stable_step(scene: &super::Scene) -> Option<(f64, String)> {
@@ -512,8 +622,14 @@ pub fn rk4_stable_step(scene: &super::Scene) -> Option<(f64, String)> {
         integrated_tree(&scene.model, scene.flexible.as_ref(), &scene.effects).ok()?;
     let flex = &tree;
     let q = integrated_q(&scene.initial.q, n_rotors, &scene.elastic.eta);
+    let v = integrated_v(
+        &scene.initial.v,
+        &scene.effects,
+        n_rotors,
+        &scene.elastic.etadot,
+    );
     let gains = HingeGains::of(&scene.effects, scene.model.n_hinges());
-    let limit = rk4_limit(flex, &q, &gains)?;
+    let limit = rk4_limit(flex, &q, &v, &gains)?;
     let what = format!(
         "{} ({:.3} Hz)",
         limit.what(flex),

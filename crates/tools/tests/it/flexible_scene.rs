@@ -209,7 +209,7 @@ fn an_rk4_step_limit_takes_the_modes_damping_in() {
     let q = s.initial_q();
     let (w, _) = highest_frequency(flex, &q).unwrap();
     let gains = HingeGains::of(&s.effects, flex.rigid().n_hinges());
-    let limit = rk4_limit(flex, &q, &gains).unwrap();
+    let limit = rk4_limit(flex, &q, &s.initial_v(), &gains).unwrap();
     assert!(limit.lambda.im == 0.0 && limit.zeta > 4.5, "{limit:?}");
     // The real eigenvalue ω (ζ + √(ζ² − 1)) of the highest mode: RK4's real-axis limit 2.785.
     assert!(
@@ -334,8 +334,9 @@ fn elastic_error_is_refused_on_a_rigid_model_and_must_be_a_bool() {
 }
 
 /// An initial deformation large enough to make the mass matrix indefinite (the deformed
-/// inertia no body's) is refused when the scene is read, at its `initial` table, naming the
-/// mode whose pivot failed: the run would fail at its first step.
+/// inertia no body's) is refused when the scene is read, at the body's entry, naming the key,
+/// the mode whose pivot failed and how far the body is bent: the run would fail at its first
+/// step.
 #[test]
 fn an_initial_deformation_that_makes_the_mass_matrix_indefinite_is_refused() {
     let with_eta = |eta: f64| {
@@ -348,7 +349,8 @@ fn an_initial_deformation_that_makes_the_mass_matrix_indefinite_is_refused() {
     };
     let err = err.to_string();
     assert!(
-        err.starts_with("flex.toml:25: `initial` flexible: the initial deformation makes the mass matrix not positive definite (at body `panel`'s mode 1, pivot -")
+        err.starts_with("flex.toml:28: initial.flexible.panel.eta: the initial deformation makes the mass matrix not positive definite at body `panel`'s mode 1 (eta = 3, pivot -")
+            && err.contains("): the deformation moves its tip 3.0000 m off its axis, 150 % of its 2 m length, where a modal model holds a few per cent;")
             && err.contains("start closer to rest"),
         "{err}"
     );
@@ -477,9 +479,9 @@ fn deployment(
 /// (the largest at the second latch's ringing, 10.39 s). At 80 N m/rad the panels slam open
 /// and bend their strips by more than half their length within a second: the run goes on, and
 /// warns of each strip from the step its tip passed a tenth of its length. At 200 N m/rad the
-/// steps cannot get past 0.55 s: the run's error says the deflection went beyond the modal
-/// model, naming the strip bent most, where the integrator's own words were only "step size
-/// underflow".
+/// steps cannot get past 0.55 s: the run's error names the state the steps were last
+/// shortened for and says the deflection went beyond the modal model, naming the strip bent
+/// most, where the integrator's own words were only "step size underflow".
 #[test]
 fn a_deflection_beyond_the_modal_model_is_a_warning_or_in_the_error() {
     let dir = satsim_testkit::temp_dir_with(
@@ -517,6 +519,7 @@ fn a_deflection_beyond_the_modal_model_is_a_warning_or_in_the_error() {
     let err = outcome.unwrap_err();
     assert!(
         err.contains("step size underflow at t = ")
+            && err.contains(": the steps were last shortened for `")
             && err.contains(
                 ", after the flexible bodies were deflected beyond what their modal model holds: body `panel"
             )
@@ -1006,4 +1009,92 @@ duty = 1.0
         (linear[0] - unloaded[0]).abs() < 1e-6 * unloaded[0],
         "{linear:?}"
     );
+}
+
+/// The unit beam (L = EI = ρA = 1, two modes, `stiffening` on by default) on a hinge of a hub
+/// fixed to the inertial frame, with `initial` (the hinge's state first).
+fn hinged_beam(initial: &str) -> String {
+    format!(
+        r#"duration = 1.0
+[model]
+[model.base]
+kind = "fixed"
+[[model.body]]
+name = "hub"
+mass = 10.0
+inertia = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+[[model.body]]
+name = "boom"
+mass = 0.0
+[model.body.flexible]
+beam = {{ root = [0.0, 0.0, 0.0], axis = [1.0, 0.0, 0.0], bend = [0.0, 0.0, 1.0],
+         length = 1.0, EI = 1.0, rho_A = 1.0, modes = 2 }}
+[[model.hinge]]
+name = "spin"
+parent = "hub"
+child = "boom"
+axis = [0.0, 0.0, 1.0]
+{initial}
+[output]
+every = 0.1
+plots = false
+view = false
+"#
+    )
+}
+
+/// Every error about a flexible body's initial elastic state names the key, the body and
+/// the mode, at the line of the body's entry, in the scene or in its JSON state file: a value
+/// missing or one too many, a value that is not finite, and a deformation that makes the
+/// mass matrix indefinite where the dynamics' pivot fails at the hinge, not at a mode (the
+/// mode to blame is the one that bends the body most: here the second, its tip 10 m off).
+#[test]
+fn initial_deformation_errors_name_the_key_the_body_and_the_mode() {
+    let inline = |entry: &str| {
+        let text = hinged_beam(&format!(
+            "[initial]\nhinges = {{ angle = [0.0], rate = [0.0] }}\nflexible = {{ boom = {{ {entry} }} }}"
+        ));
+        Scene::parse(&text, Path::new("beam.toml"))
+            .map(|_| ())
+            .unwrap_err()
+            .to_string()
+    };
+    for (entry, expected) in [
+        (
+            "eta = [0.0]",
+            "beam.toml:22: initial.flexible.boom.eta: expected 2 values, one per mode of body `boom`, got 1 (mode 2 has none)",
+        ),
+        (
+            "etadot = [0.0, 0.0, 1.0]",
+            "beam.toml:22: initial.flexible.boom.etadot: expected 2 values, one per mode of body `boom`, got 3 (value 3 is no mode's)",
+        ),
+        (
+            "etadot = [0.0, inf]",
+            "beam.toml:22: initial.flexible.boom.etadot: body `boom`'s mode 2 is inf: values must be finite",
+        ),
+    ] {
+        assert_eq!(inline(entry), expected);
+    }
+    let indefinite = "initial.flexible.boom.eta: the initial deformation makes the mass matrix not positive definite at body `boom`'s mode 2 (eta = 5): the deformation moves its tip 10.0000 m off its axis, 1000 % of its 1 m length, where a modal model holds a few per cent; with `stiffening`";
+    let err = inline("eta = [0.0, 5.0]");
+    assert!(
+        err.starts_with(&format!("beam.toml:22: {indefinite}"))
+            && err.ends_with("start closer to rest"),
+        "{err}"
+    );
+    // From a state file, at the body's line there.
+    let dir = satsim_testkit::temp_dir("initial-deformation-errors");
+    std::fs::write(
+        dir.join("s.json"),
+        "{\n  \"hinges\": {\"angle\": [0.0], \"rate\": [0.0]},\n  \"flexible\": {\n    \"boom\": {\"eta\": [0.0, 5.0]}\n  }\n}\n",
+    )
+    .unwrap();
+    let text = format!("initial = \"s.json\"\n{}", hinged_beam(""));
+    let err = Scene::parse(&text, &dir.join("beam.toml"))
+        .map(|_| ())
+        .unwrap_err()
+        .to_string();
+    let in_file = format!("{}:4: {}", dir.join("s.json").display(), &indefinite[8..]);
+    assert!(err.starts_with(&in_file), "{err}\nnot\n{in_file}");
+    let _ = std::fs::remove_dir_all(&dir);
 }

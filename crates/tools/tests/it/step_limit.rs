@@ -4,7 +4,8 @@
 
 use satsim_tools::scene::Scene;
 use satsim_tools::scene::step_limit::{
-    HingeGains, Limiting, integrated_q, integrated_tree, rk4_limit, rk4_stable_step, rk4_step_limit,
+    HingeGains, Limiting, integrated_q, integrated_tree, integrated_v, rk4_limit, rk4_stable_step,
+    rk4_step_limit,
 };
 use satsim_tree::flexible::FlexModel;
 use std::path::Path;
@@ -54,7 +55,7 @@ const I: f64 = 0.6;
 fn limit_of(s: &Scene) -> satsim_tools::scene::step_limit::Rk4Limit {
     let tree = FlexModel::attach(s.model.clone(), &[]).unwrap();
     let gains = HingeGains::of(&s.effects, 1);
-    rk4_limit(&tree, &s.initial.q, &gains).unwrap()
+    rk4_limit(&tree, &s.initial.q, &s.initial.v, &gains).unwrap()
 }
 
 /// The largest |value| of `column` over a run of `scene` at step `h`, the reader's check
@@ -228,7 +229,13 @@ view = false
 fn tree_limit_of(s: &Scene) -> Option<satsim_tools::scene::step_limit::Rk4Limit> {
     let (tree, n) = integrated_tree(&s.model, s.flexible.as_ref(), &s.effects).unwrap();
     let q = integrated_q(&s.initial.q, n, &s.elastic.eta);
-    rk4_limit(&tree, &q, &HingeGains::of(&s.effects, s.model.n_hinges()))
+    let v = integrated_v(&s.initial.v, &s.effects, n, &s.elastic.etadot);
+    rk4_limit(
+        &tree,
+        &q,
+        &v,
+        &HingeGains::of(&s.effects, s.model.n_hinges()),
+    )
 }
 
 /// The largest |ω_x| of the bus over a run at step `h`.
@@ -259,7 +266,15 @@ fn a_continuous_attitude_controller_limits_the_step_as_the_bus_on_its_gains() {
     assert_eq!(rk4_stable_step(&s).unwrap().0, limit.step);
     // The model alone (no rotors) has nothing to check.
     let alone = FlexModel::attach(s.model.clone(), &[]).unwrap();
-    assert!(rk4_limit(&alone, &s.initial.q, &HingeGains::of(&s.effects, 0)).is_none());
+    assert!(
+        rk4_limit(
+            &alone,
+            &s.initial.q,
+            &s.initial.v,
+            &HingeGains::of(&s.effects, 0)
+        )
+        .is_none()
+    );
     // Sharp against runs: bounded at 0.98 of the limit, growing at 1.02.
     let start = largest_rate(&s, 0.001).unwrap();
     let inside = largest_rate(&s, 0.98 * limit.step).unwrap();
@@ -555,5 +570,124 @@ fn a_sampled_pid_on_the_wheels_is_checked_against_its_closed_form_loop() {
     assert!(
         (a.growth - p.growth).abs() < 1e-12 * a.growth,
         "{a:?} {p:?}"
+    );
+}
+
+/// The unit beam (L = EI = ρA = 1 kg/m, one mode, `stiffening` on by default) along x on a
+/// hub fixed to the inertial frame, swinging about z on hinge `spin` at `rate`, bending along
+/// the spin axis, undeformed: the spin stiffens it (`ω² = ω₀² + Ω² J₁`, Southwell's
+/// 1.193 Ω²) and leaves its bending out of the hinge's motion, so that its mode alone limits
+/// the step.
+fn spinning_beam(rate: f64, step: f64) -> String {
+    format!(
+        "duration = 20.0
+[model]
+[model.base]
+kind = \"fixed\"
+[[model.body]]
+name = \"hub\"
+mass = 10.0
+inertia = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+[[model.body]]
+name = \"boom\"
+mass = 0.0
+[model.body.flexible]
+beam = {{ root = [0.0, 0.0, 0.0], axis = [1.0, 0.0, 0.0], bend = [0.0, 0.0, 1.0],
+         length = 1.0, EI = 1.0, rho_A = 1.0, modes = 1 }}
+[[model.hinge]]
+name = \"spin\"
+parent = \"hub\"
+child = \"boom\"
+axis = [0.0, 0.0, 1.0]
+[initial]
+hinges = {{ angle = [0.0], rate = [{rate}] }}
+[integrator]
+method = \"rk4\"
+step = {step}
+[output]
+every = 20.0
+plots = false
+view = false
+"
+    )
+}
+
+/// A beam with `stiffening` on a spinning spacecraft is stiffer than at rest, and RK4's limit
+/// is the stiffened mode's: spun at 5 rad/s the unit beam's mode goes from 0.5596 Hz to
+/// 1.0338 Hz, its limit from 0.804 s to 0.435 s. A step of 0.6 s between them, which a check
+/// of the modes at rest passes, grows without bound; the reader refuses it, naming the
+/// stiffened frequency, and the limit's frequency is `satsim modes`' (the linearised dynamics
+/// at the initial state, every velocity term included) and the closed form's. (Deformed at
+/// the start, the beam's foreshortening changes its inertia about the spin axis, which
+/// couples its bending with the free hinge's rate: `satsim modes` has that gyroscopic
+/// coupling and the check does not, a difference of second order in the deformation.)
+#[test]
+fn a_spinning_stiffened_beams_step_limit_is_its_stiffened_modes() {
+    use satsim_tools::scene::flexible::highest_frequency;
+    use satsim_tools::scene::step_limit::RK4_LIMIT;
+    let spin = 5.0;
+    let s = Scene::parse(&spinning_beam(spin, 0.01), Path::new("spin.toml")).unwrap();
+    let flex = s.flexible.as_ref().unwrap();
+    let gains = HingeGains::of(&s.effects, 1);
+    let limit = rk4_limit(flex, &s.initial_q(), &s.initial_v(), &gains).unwrap();
+    assert_eq!(limit.by, Limiting::Mode(0));
+    // The closed form: ω² = ω₀² + Ω² J₁, J₁ = ρA ∫ (L² − x²)/2 φ'² dx (1.193 for mode 1).
+    let (w0, _) = highest_frequency(flex, &s.initial_q()).unwrap();
+    let j1 = flex.beam(1).unwrap().stiffening_integrals().j1[0];
+    assert!((j1 - 1.193).abs() < 1e-3, "{j1}");
+    let w = (w0 * w0 + spin * spin * j1).sqrt();
+    assert!(
+        (limit.omega - w).abs() < 1e-6 * w,
+        "{} against {w}",
+        limit.omega
+    );
+    assert!(
+        (limit.step - RK4_LIMIT / w).abs() < 1e-6 * limit.step,
+        "{limit:?}"
+    );
+    assert!(
+        (limit.geometric - spin * spin * j1 / (w * w)).abs() < 1e-6,
+        "{limit:?}"
+    );
+    // `satsim modes`' highest frequency is the limit's, to the linearisation's accuracy.
+    let modes = satsim_tools::modes::modes(&s).unwrap();
+    let highest = modes.frequencies_hz.last().copied().unwrap();
+    let hz = limit.omega / std::f64::consts::TAU;
+    assert!(
+        (highest - hz).abs() < 1e-6 * hz,
+        "{highest} Hz against {hz} Hz"
+    );
+    // At rest the check is the unstiffened mode's.
+    let still = Scene::parse(&spinning_beam(0.0, 0.01), Path::new("spin.toml")).unwrap();
+    let rest = rk4_limit(flex, &still.initial_q(), &still.initial_v(), &gains).unwrap();
+    assert!((rest.omega - w0).abs() < 1e-12 * w0 && rest.geometric == 0.0);
+    // 0.6 s: within the unstiffened limit (0.804 s), beyond the stiffened one (0.435 s).
+    let between = 0.6;
+    assert!(RK4_LIMIT / w0 > between && limit.step < between);
+    // The mode deflected at the start, tip 2 cm off the axis.
+    let mut deflected = s.clone();
+    deflected.elastic.eta[0] = 0.01;
+    let eta = |h: f64| largest(&deflected, h, "eta_boom_1");
+    let under = eta(0.98 * limit.step).unwrap();
+    assert!(under <= 0.01 + 1e-9, "{under}");
+    let over = eta(between);
+    assert!(over.is_none_or(|m| m > 1e3), "{over:?}");
+    // Read from the file, the step is refused at its line with the stiffened frequency.
+    let err = Scene::parse(&spinning_beam(spin, between), Path::new("spin.toml"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("spin.toml:24")
+            && err.contains("mostly body `boom`'s mode 1, stiffened by the initial motion, whose geometric stiffness is 70.7 % of the mode's")
+            && err.contains(&format!("is at {hz:.4} Hz"))
+            && err.contains("1.0338 Hz")
+            && err.contains("stable on it only for steps up to 4.3542e-1 s"),
+        "{err}"
+    );
+    Scene::parse(&spinning_beam(spin, 0.4), Path::new("spin.toml")).expect("a stable step");
+    let (step, what) = rk4_stable_step(&s).unwrap();
+    assert_eq!(
+        (step, what.as_str()),
+        (limit.step, "body `boom`'s mode 1 (1.034 Hz)")
     );
 }
