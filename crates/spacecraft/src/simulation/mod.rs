@@ -264,49 +264,48 @@ impl Simulation {
     /// structure's, though the model may go on without a sign (the linear model, without
     /// `stiffening`, has no term that fails with the deflection).
     pub fn deflection_warnings(&self) -> Vec<String> {
-        let Some(f) = &self.model.flex else {
-            return Vec::new();
-        };
         self.deflection_peaks()
             .iter()
-            .filter_map(|p| {
-                let passed = p.passed?;
-                let body = f.rigid().bodies()[p.body].name();
-                let consequence = format!(
-                    "beyond what its modal model holds (a few per cent of the length), so the run's results from t = {passed:.4} s on are not the structure's: stiffen the body, or soften what drives it (a spring, a controller, a load)"
-                );
-                let length = satsim_tree::error::Num(p.length);
-                Some(match p.point {
-                    None => format!(
-                        "body `{body}`'s tip passed a tenth of its {length} m length at t = {passed:.4} s and went {:.4} m off its axis ({:.0} % of the length) at t = {:.4} s: {consequence}",
-                        p.tip.abs(),
-                        100.0 * p.fraction(),
-                        p.t,
-                    ),
-                    Some(k) => format!(
-                        "body `{body}` passed a tenth of its size at t = {passed:.4} s: its node `{}` moved {:.4} m at t = {:.4} s, {:.0} % of its {length} m from the body's frame, {consequence}",
-                        f.watch_points(p.body)[k].name,
-                        p.tip.abs(),
-                        p.t,
-                        100.0 * p.fraction(),
-                    ),
-                })
-            })
+            .filter_map(|p| self.deflection_warning(p))
             .collect()
     }
+
     /// The [`Self::deflection_warnings`] of the body bent most for its size, where one went
     /// past a tenth of it: why a run that failed there failed.
     pub fn deflection_failure(&self) -> Option<String> {
-        let passed = self
-            .deflection_peaks()
+        self.deflection_peaks()
             .iter()
-            .filter(|p| p.passed.is_some());
-        let worst = passed
-            .enumerate()
-            .max_by(|a, b| a.1.fraction().total_cmp(&b.1.fraction()))?
-            .0;
-        self.deflection_warnings().into_iter().nth(worst)
+            .filter(|p| p.passed.is_some())
+            .max_by(|a, b| a.fraction().total_cmp(&b.fraction()))
+            .and_then(|p| self.deflection_warning(p))
     }
+
+    /// The warning of peak `p`, where its body went past a tenth of its size.
+    fn deflection_warning(&self, p: &DeflectionPeak) -> Option<String> {
+        let f = self.model.flex.as_ref()?;
+        let passed = p.passed?;
+        let body = f.rigid().bodies()[p.body].name();
+        let consequence = format!(
+            "beyond what its modal model holds (a few per cent of the length), so the run's results from t = {passed:.4} s on are not the structure's: stiffen the body, or soften what drives it (a spring, a controller, a load)"
+        );
+        let length = satsim_tree::error::Num(p.length);
+        Some(match p.point {
+            None => format!(
+                "body `{body}`'s tip passed a tenth of its {length} m length at t = {passed:.4} s and went {:.4} m off its axis ({:.0} % of the length) at t = {:.4} s: {consequence}",
+                p.tip.abs(),
+                100.0 * p.fraction(),
+                p.t,
+            ),
+            Some(k) => format!(
+                "body `{body}` passed a tenth of its size at t = {passed:.4} s: its node `{}` moved {:.4} m at t = {:.4} s, {:.0} % of its {length} m from the body's frame, {consequence}",
+                f.watch_points(p.body)[k].name,
+                p.tip.abs(),
+                p.t,
+                100.0 * p.fraction(),
+            ),
+        })
+    }
+
     /// A warning where the energy budget (`T + V − W + D`, constant along the exact motion)
     /// moved over the output rows (its largest less its smallest) by more than
     /// [`BUDGET_DRIFT`] of the largest of its terms any row showed ([`budget_drifted`]):
