@@ -48,6 +48,7 @@ pub mod beam;
 mod chain;
 pub mod crba;
 pub mod data;
+mod deflection;
 mod dense;
 pub mod field;
 pub mod kinematics;
