@@ -112,10 +112,14 @@ pub fn run(args: &Args) -> Result<Output, CliError> {
         .out
         .clone()
         .unwrap_or_else(|| Path::new("out").join(format!("{}-campaign", stem(scene_path))));
-    eprintln!(
-        "satsim campaign: shard {} ({})",
-        choice.shard, choice.source
-    );
+    // A split campaign names its shard before it runs, for a scheduler's log of a job that
+    // never finishes; the whole campaign's shard is only in the summary.
+    if choice.shard != Shard::ALL {
+        eprintln!(
+            "satsim campaign: shard {} ({})",
+            choice.shard, choice.source
+        );
+    }
     let threads_used = args.threads.unwrap_or_else(|| {
         std::thread::available_parallelism()
             .map(|n| n.get())

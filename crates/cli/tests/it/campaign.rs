@@ -141,10 +141,14 @@ fn fields(line: &str) -> Vec<String> {
 fn threads_and_shards_do_not_change_a_byte_of_runs_csv() {
     let dir = temp_dir("threads");
     write_campaign(&dir, CAMPAIGN);
-    ok(&satsim(
+    let whole = satsim(
         &dir,
         &["campaign", "scene.toml", "--out", "t1", "--threads", "1"],
-    ));
+    );
+    // The whole campaign names its shard once, in the summary; a split one (below) also
+    // before it runs, on standard error.
+    let said = format!("{}{}", ok(&whole), String::from_utf8_lossy(&whole.stderr));
+    assert_eq!(said.matches("0/1").count(), 1, "{said}");
     ok(&satsim(
         &dir,
         &["campaign", "scene.toml", "--out", "t2", "--threads", "2"],
