@@ -127,7 +127,9 @@ impl SimulationBuilder {
     /// methods of structural dynamics do on purpose, where the default resolves every mode's
     /// ringing to the tolerance. The elastic coordinates are then right only where they vary
     /// slowly against the steps; the rigid motion's accuracy is to be checked against a
-    /// reference (`satsim accuracy`).
+    /// reference (`satsim accuracy`). Only for Radau IIA: an explicit method's steps, no
+    /// longer held by the modes, go past their stability limit and the modes grow without
+    /// bound (the scene reader refuses `false` with `dp54` and `dop853`).
     pub fn elastic_error(mut self, on: bool) -> Self {
         self.elastic_error = on;
         self

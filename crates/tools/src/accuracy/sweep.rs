@@ -50,6 +50,14 @@ pub fn sweep(
         } else {
             &ref_main
         };
+        // `elastic_error = false` is Radau IIA's (the scene reader refuses it with an
+        // explicit method, whose steps would go past the modes' stability limit): the other
+        // methods count the elastic coordinates, as the references do.
+        let scene = if method == Method::Radau5 {
+            scene
+        } else {
+            &full
+        };
         let opts = sweep.options(scene, method, setting);
         let mut best: Option<Trajectory> = None;
         let mut failure = None;

@@ -212,3 +212,68 @@ view = false
         report.points[1].result
     );
 }
+
+/// `elastic_error = false` is Radau IIA's: the sweep runs the other methods with the elastic
+/// coordinates in their error (an explicit method's steps would go past the modes' stability
+/// limit), so a scene with it gives them the same runs as one without it.
+#[test]
+fn explicit_methods_count_the_elastic_coordinates_whatever_the_scene_says() {
+    let text = r#"duration = 1.0
+[model]
+[model.base]
+kind = "fixed"
+[[model.body]]
+name = "hub"
+mass = 10.0
+inertia = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+[[model.body]]
+name = "arm"
+mass = 1.0
+inertia = [[0.1, 0.0, 0.0], [0.0, 0.1, 0.0], [0.0, 0.0, 0.1]]
+[model.body.flexible]
+beam = { root = [0.0, 0.0, 0.0], axis = [0.0, 1.0, 0.0], bend = [0.0, 0.0, 1.0], length = 2.0, EI = 500.0, rho_A = 5.0, modes = 2 }
+[[model.hinge]]
+name = "h"
+parent = "hub"
+child = "arm"
+axis = [1.0, 0.0, 0.0]
+[initial]
+hinges = { angle = [0.3], rate = [0.0] }
+[effects.hinge_springs]
+stiffness = [20.0]
+damping = [0.5]
+reference = [0.0]
+[integrator]
+method = "radau5"
+elastic_error = false
+[output]
+every = 0.25
+plots = false
+view = false
+"#;
+    let path = std::path::Path::new("arm.toml");
+    let rigid_only = crate::scene::Scene::parse(text, path).unwrap();
+    let every_state = crate::scene::Scene::parse(&text.replace("false", "true"), path).unwrap();
+    assert!(!rigid_only.elastic_error && every_state.elastic_error);
+    let sweep = Sweep {
+        methods: vec![Method::Dp54, Method::Radau5],
+        tolerances: vec![1e-6],
+        rk4_steps: vec![],
+        atol_scale: 1.0,
+        repeats: 1,
+        reference: (Method::Dop853, 1e-10),
+        cross_reference: (Method::Dp54, 1e-10),
+    };
+    let rhs = |scene: &crate::scene::Scene| -> Vec<usize> {
+        let report = sweep::sweep(scene, &sweep, |_| {}).unwrap();
+        report
+            .points
+            .iter()
+            .map(|p| p.result.as_ref().unwrap().rhs_evals)
+            .collect()
+    };
+    let (a, b) = (rhs(&rigid_only), rhs(&every_state));
+    assert_eq!(a[0], b[0], "dp54: {a:?} against {b:?}");
+    // Radau IIA takes the scene's setting: fewer steps with the modes out of its error.
+    assert!(a[1] < b[1], "radau5: {a:?} against {b:?}");
+}

@@ -306,7 +306,7 @@ fn the_elastic_coordinates_left_out_of_the_error_take_fewer_steps_for_the_same_r
 }
 
 #[test]
-fn elastic_error_is_refused_on_a_rigid_model_and_must_be_a_bool() {
+fn elastic_error_is_refused_on_a_rigid_model_and_with_an_explicit_method_and_must_be_a_bool() {
     let rigid = "duration = 1.0\n[model]\n[[model.body]]\nname = \"hub\"\nmass = 50.0\ninertia = [[5.0, 0.0, 0.0], [0.0, 5.0, 0.0], [0.0, 0.0, 5.0]]\n[integrator]\nmethod = \"radau5\"\nelastic_error = false\n";
     let err = Scene::parse(rigid, Path::new("r.toml"))
         .unwrap_err()
@@ -321,6 +321,22 @@ fn elastic_error_is_refused_on_a_rigid_model_and_must_be_a_bool() {
     );
     let s = Scene::parse(&flexible, Path::new("f.toml")).expect("a flexible model takes it");
     assert!(!s.elastic_error);
+    // Only Radau IIA is stable on the modes its steps go past; an explicit method is refused
+    // at the key's line, saying what to do.
+    for method in ["dp54", "dop853"] {
+        let text = flexible.replace("\"radau5\"", &format!("\"{method}\""));
+        let err = Scene::parse(&text, Path::new("f.toml"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("f.toml:11")
+                && err.contains(&format!("with `{method}`"))
+                && err.contains("radau5")
+                && err.contains("elastic_error = true"),
+            "{err}"
+        );
+        assert!(Scene::parse(&text.replace("false", "true"), Path::new("f.toml")).is_ok());
+    }
     let err = Scene::parse(
         &flexible.replace("elastic_error = false", "elastic_error = 0"),
         Path::new("f.toml"),
