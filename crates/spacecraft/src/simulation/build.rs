@@ -129,7 +129,9 @@ impl SimulationBuilder {
     /// slowly against the steps; the rigid motion's accuracy is to be checked against a
     /// reference (`satsim accuracy`). Only for Radau IIA: an explicit method's steps, no
     /// longer held by the modes, go past their stability limit and the modes grow without
-    /// bound (the scene reader refuses `false` with `dp54` and `dop853`).
+    /// bound: a run under `dp54` or `dop853` with `false` is refused
+    /// ([`elastic_error_refusal`](super::elastic_error_refusal)), as the scene reader refuses
+    /// it at its line.
     pub fn elastic_error(mut self, on: bool) -> Self {
         self.elastic_error = on;
         self

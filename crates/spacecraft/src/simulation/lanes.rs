@@ -141,7 +141,11 @@ where
     fn next(&mut self) -> Option<LaneRun<Shared<Cell<J::Sink>>, Observer<'j>>> {
         let mut job = self.jobs.next()?;
         // A simulation that has run starts again as `Simulation::run` does, or its job fails.
-        while let Err(source) = job.sim.restart() {
+        while let Err(source) = job
+            .sim
+            .takes(&self.options)
+            .and_then(|()| job.sim.restart())
+        {
             let t = job.sim.t0;
             let e = RunError::Integrate(IntegrateError::System { t, source });
             self.jobs.done(job.sim, job.sink, Err(e));

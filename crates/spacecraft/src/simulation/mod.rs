@@ -98,7 +98,7 @@ pub use loads::{EffectLoads, moment_about};
 pub use log::RunLog;
 pub use model::{NamedDynamicsError, SimModel};
 pub use rows::Diagnostics;
-pub use run::RunError;
+pub use run::{RunError, elastic_error_refusal};
 pub use stepping::{EventRecord, OutputGrid, StepError, Stepping};
 
 use crate::effects::{Effect, Rotor};

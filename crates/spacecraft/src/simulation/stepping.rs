@@ -392,6 +392,9 @@ impl Stepping {
         if let Some(why) = &self.failed {
             return Err(StepError::Failed(why.clone()));
         }
+        if let Err(e) = self.sim.takes(options) {
+            return Err(StepError::Input(e.to_string()));
+        }
         if !(t_end.is_finite() && t_end > self.t) {
             return Err(StepError::Input(format!(
                 "the end time must be a finite number after t = {}, got {t_end}",

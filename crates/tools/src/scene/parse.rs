@@ -10,6 +10,7 @@ use crate::scene_keys;
 use satsim_integrate::{Method, Options};
 use satsim_spacecraft::effects::section::reword;
 use satsim_spacecraft::effects::{EffectSet, Registry, SceneText, Section};
+use satsim_spacecraft::simulation::elastic_error_refusal;
 use satsim_tree::error::Num;
 use satsim_tree::flexible::FlexModel;
 use satsim_tree::io::{FileError, FrameMotion, ModelFile, flex_model_of, line_of, with_key};
@@ -212,19 +213,9 @@ impl<'a> Parser<'a> {
                     "`integrator.elastic_error`: the model has no flexible bodies",
                 ));
             }
-            // Left out of the error, the modes must be stable at whatever steps the rigid
-            // motion takes: Radau IIA's L-stability damps them. An explicit method goes past
-            // its stability limit on them, and they grow until what they pollute holds the
-            // steps (the shipped flexible deployment with `dp54`: 35 719 steps, and the energy
-            // budget from 20 J to 7 580 J, where Radau IIA's moves by the 0.14 J it damps).
+            // Refused where it is written, as a run would refuse it.
             Some(e) if !*e.get_ref() && matches!(options.method, Method::Dp54 | Method::Dop853) => {
-                return Err(self.error(
-                    Some(e.span()),
-                    format!(
-                        "`integrator.elastic_error = false` needs `method = \"radau5\"`: it leaves the steps to the rigid motion, which only an implicit method keeps stable on the structural modes those steps go past; with `{}` the modes grow without bound. Keep the elastic coordinates in the error (`elastic_error = true`, the default) or use `radau5`",
-                        options.method.name()
-                    ),
-                ));
+                return Err(self.error(Some(e.span()), elastic_error_refusal(options.method)));
             }
             Some(e) => *e.get_ref(),
             None => true,

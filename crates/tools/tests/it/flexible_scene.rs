@@ -284,6 +284,33 @@ fn the_elastic_coordinates_left_out_of_the_error_take_fewer_steps_for_the_same_r
     let radau = Options::new(Method::Radau5).with_tolerances(1e-6, 1e-6);
     let (all, steps_all) = rigid_rows(&s, &radau);
     s.elastic_error = false;
+    // An explicit method is refused with the modes out of its error, by a run and by the
+    // stepping API alike (the scene reader refuses it at its line).
+    let dp54 = Options::new(Method::Dp54).with_tolerances(1e-6, 1e-6);
+    let refusal = satsim_spacecraft::simulation::elastic_error_refusal(Method::Dp54);
+    let mut sim = s.simulation().unwrap();
+    let err = sim
+        .run(
+            &dp54,
+            0.1,
+            &satsim_integrate::Output::Interval(0.05),
+            |_, _| Ok::<(), String>(()),
+        )
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains(&refusal), "{err}");
+    let grid = satsim_spacecraft::simulation::OutputGrid {
+        t0: 0.0,
+        every: 0.05,
+        t_end: 0.1,
+    };
+    let mut st = satsim_spacecraft::simulation::Stepping::new(s.simulation().unwrap(), grid);
+    let err = st
+        .advance(&dp54, 0.1, |_, _| Ok::<(), String>(()))
+        .unwrap_err()
+        .to_string();
+    assert_eq!(err, refusal);
+    assert!(st.advance(&radau, 0.1, |_, _| Ok::<(), String>(())).is_ok());
     let (rigid, steps_rigid) = rigid_rows(&s, &radau);
     let largest = |rows: &[Vec<f64>]| {
         rows.iter()
