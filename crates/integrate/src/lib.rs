@@ -50,6 +50,7 @@ pub mod lanes;
 mod options;
 mod radau5;
 mod rk4;
+mod stability;
 mod stage_matrices;
 mod system;
 mod wide;

@@ -358,7 +358,8 @@ pub fn run_scene(scene: &Scene, stop: impl FnMut() -> bool) -> Result<Trajectory
 /// scene reader's ([`Scene::warnings`]), then the simulation's
 /// ([`Simulation::run_warnings`](satsim_spacecraft::simulation::Simulation::run_warnings):
 /// a flexible body bent beyond what its modal model holds, an energy budget that did not
-/// close).
+/// close) and an explicit method's steps held by a stiff motion
+/// ([`held_steps_warning`](crate::scene::step_limit::held_steps_warning)).
 pub fn run_scene_warned(
     scene: &Scene,
     mut stop: impl FnMut() -> bool,
@@ -379,9 +380,14 @@ pub fn run_scene_warned(
         },
     );
     match result {
-        Ok(_) => {
+        Ok(stats) => {
             let mut warnings = scene.warnings.clone();
             warnings.extend(sim.run_warnings());
+            warnings.extend(crate::scene::step_limit::held_steps_warning(
+                scene,
+                stats.t_final - sim.t0(),
+                stats.steps_accepted,
+            ));
             Ok((out, warnings))
         }
         Err(RunError::Sink { .. }) => Err(RunFailure::Stopped { partial: out }),

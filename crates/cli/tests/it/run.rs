@@ -149,3 +149,30 @@ fn the_summary_counts_every_event_a_fault_too() {
     let events = std::fs::read_to_string(dir.join("out/faults/events.csv")).unwrap();
     assert_eq!(events.lines().count(), 2, "{events}");
 }
+
+#[test]
+fn an_explicit_method_held_by_a_stiff_hinge_says_so_after_the_run() {
+    // The stiff hinge (56.7 Hz) under DP5(4): the steps sit at the method's stability limit
+    // on it, and the run names the hinge and the implicit method; under its own Radau IIA,
+    // nothing.
+    let dir = temp_dir("held-steps");
+    let scene = common::root().join("examples/scenes/stiff_hinge.toml");
+    let scene = scene.to_str().unwrap();
+    let run = |extra: &[&str]| {
+        let mut args = vec!["run", scene, "--out", "o", "--set", "duration=10"];
+        args.extend_from_slice(extra);
+        let o = satsim_in(&dir, &args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        String::from_utf8_lossy(&o.stderr).into_owned()
+    };
+    let err = run(&["--set", "integrator.method=dp54"]);
+    assert!(
+        err.contains("stiff_hinge.toml: the ")
+            && err.contains("steps of dp54 averaged")
+            && err.contains("its stability limit on hinge `h5` (56.669 Hz), 7.039e-3 s")
+            && err.contains("`integrator.method = \"radau5\"` (implicit) steps over it"),
+        "{err}"
+    );
+    let err = run(&[]);
+    assert!(!err.contains("held the steps"), "{err}");
+}

@@ -52,7 +52,7 @@ view = false
 
 const I: f64 = 0.6;
 
-fn limit_of(s: &Scene) -> satsim_tools::scene::step_limit::Rk4Limit {
+fn limit_of(s: &Scene) -> satsim_tools::scene::step_limit::StepLimit {
     let tree = FlexModel::attach(s.model.clone(), &[]).unwrap();
     let gains = HingeGains::of(&s.effects, 1);
     rk4_limit(&tree, &s.initial.q, &s.initial.v, &gains).unwrap()
@@ -226,7 +226,7 @@ view = false
 }
 
 /// The limit of a scene on the tree it integrates (the wheels' rotors included).
-fn tree_limit_of(s: &Scene) -> Option<satsim_tools::scene::step_limit::Rk4Limit> {
+fn tree_limit_of(s: &Scene) -> Option<satsim_tools::scene::step_limit::StepLimit> {
     let (tree, n) = integrated_tree(&s.model, s.flexible.as_ref(), &s.effects).unwrap();
     let q = integrated_q(&s.initial.q, n, &s.elastic.eta);
     let v = integrated_v(&s.initial.v, &s.effects, n, &s.elastic.etadot);
@@ -690,4 +690,76 @@ fn a_spinning_stiffened_beams_step_limit_is_its_stiffened_modes() {
         (step, what.as_str()),
         (limit.step, "body `boom`'s mode 1 (1.034 Hz)")
     );
+}
+
+/// The arm on a stiff spring (ω = 129 rad/s, damper `c`) for 60 s under `method`: at ζ = 0.2 its swing
+/// dies in a tenth of a second, and then only the stability of that motion holds an explicit
+/// method's steps for the rest of the run.
+fn damped_arm(method: &str, rtol: f64, c: f64) -> Scene {
+    let text = arm(1e4, c, "", 0.001).replace(
+        "method = \"rk4\"\nstep = 0.001",
+        &format!("method = \"{method}\"\nrtol = {rtol}\natol = {rtol}"),
+    );
+    let text = text.replace("duration = 2.0", "duration = 60.0");
+    Scene::parse(&text, Path::new("arm.toml")).unwrap()
+}
+
+/// DP5(4)'s and DOP853's regions (`step_limit`) hold their runs' steps where nothing else does:
+/// on the arm's damped spring their mean steps come within a factor 1.5 of the limits, and the
+/// run says so, naming the hinge and Radau IIA; with the swing kept up (ζ = 0.0006) and a tight
+/// tolerance, the tolerance holds the steps far below the limit and nothing is said.
+#[test]
+fn an_explicit_methods_steps_held_by_a_stiff_motion_are_a_warning_after_the_run() {
+    use satsim_integrate::Method;
+    use satsim_tools::scene::step_limit::{HELD, step_limit};
+    let c = 0.2 * 2.0 * (1e4 * I).sqrt();
+    for (method, name) in [(Method::Dp54, "dp54"), (Method::Dop853, "dop853")] {
+        let s = damped_arm(name, 1e-6, c);
+        let (w, z) = ((1e4 / I).sqrt(), 0.2);
+        let lambda = nalgebra::Complex::new(-z * w, w * (1.0 - z * z).sqrt());
+        let (limit, what) = satsim_tools::scene::step_limit::stable_step(&s, method).unwrap();
+        assert!(
+            (limit - step_limit(method, lambda)).abs() < 1e-12 * limit,
+            "{limit}"
+        );
+        assert_eq!(what, "hinge `h` (20.547 Hz)");
+        let (_, warnings) = satsim_tools::api::run_scene_warned(&s, || false).unwrap();
+        let held = warnings
+            .iter()
+            .find(|w| w.contains("held the steps"))
+            .unwrap_or_else(|| panic!("{name}: {warnings:?}"));
+        assert!(
+            held.contains(&format!("steps of {name} averaged"))
+                && held.contains("its stability limit on hinge `h` (20.547 Hz)")
+                && held.contains("`integrator.method = \"radau5\"`")
+                && !held.contains("elastic_error"),
+            "{held}"
+        );
+        // The mean step it quotes is within the factor of the limit.
+        let mean: f64 = held
+            .split("averaged ")
+            .nth(1)
+            .and_then(|r| r.split(' ').next())
+            .unwrap()
+            .parse()
+            .unwrap();
+        assert!(
+            mean <= HELD * limit && mean >= limit / HELD,
+            "{mean} {limit}"
+        );
+        // Radau IIA steps over it: far fewer steps, nothing said.
+        let radau = damped_arm("radau5", 1e-6, c);
+        let (_, warnings) = satsim_tools::api::run_scene_warned(&radau, || false).unwrap();
+        assert!(
+            warnings.iter().all(|w| !w.contains("held the steps")),
+            "{warnings:?}"
+        );
+        // Kept swinging and held to 1e-10, the steps are the tolerance's.
+        let tight = damped_arm(name, 1e-10, 0.1);
+        let (_, warnings) = satsim_tools::api::run_scene_warned(&tight, || false).unwrap();
+        assert!(
+            warnings.iter().all(|w| !w.contains("held the steps")),
+            "{name}: {warnings:?}"
+        );
+    }
 }
