@@ -8,6 +8,8 @@
 //! one (Hairer & Wanner, Solving ODEs I, II.4: `R(z) = Σ_{k<=5} zᵏ/k! + z⁶/600`) and DOP853's
 //! eighth-order one (degree 12).
 
+use std::sync::OnceLock;
+
 use crate::{dop853, dp54, options::Method};
 
 /// `p(z) · z`, coefficients in increasing powers.
@@ -42,7 +44,18 @@ fn from_tableau(a: &[&[f64]], b: &[f64]) -> Vec<f64> {
     r
 }
 
+/// The polynomials, made once each (a step limit's scan evaluates them thousands of times).
+static RK4: [f64; 5] = [1.0, 1.0, 0.5, 1.0 / 6.0, 1.0 / 24.0];
+static DP54: OnceLock<Vec<f64>> = OnceLock::new();
+static DOP853: OnceLock<Vec<f64>> = OnceLock::new();
+
 impl Method {
+    /// Whether the method chooses its steps by an error estimate without solving for its
+    /// stages (DP5(4), DOP853): explicit, so held by its stability region on a stiff motion.
+    pub fn is_explicit_adaptive(self) -> bool {
+        matches!(self, Method::Dp54 | Method::Dop853)
+    }
+
     /// The coefficients of the method's stability polynomial `R(z)`, in increasing powers of
     /// `z = λ h`; `None` for the implicit Radau IIA, whose stability function is rational and
     /// bounded by 1 over the whole left half-plane (A- and L-stable: no step limit from a
@@ -51,15 +64,15 @@ impl Method {
     /// ```
     /// use satsim_integrate::Method;
     /// let r = Method::Rk4.stability_polynomial().unwrap();
-    /// assert_eq!(r, vec![1.0, 1.0, 0.5, 1.0 / 6.0, 1.0 / 24.0]);
+    /// assert_eq!(r, [1.0, 1.0, 0.5, 1.0 / 6.0, 1.0 / 24.0]);
     /// assert!(Method::Radau5.stability_polynomial().is_none());
     /// ```
-    pub fn stability_polynomial(self) -> Option<Vec<f64>> {
+    pub fn stability_polynomial(self) -> Option<&'static [f64]> {
         match self {
-            Method::Rk4 => Some(vec![1.0, 1.0, 0.5, 1.0 / 6.0, 1.0 / 24.0]),
+            Method::Rk4 => Some(&RK4),
             // Row 6 is the fifth-order weights (the FSAL stage's row).
-            Method::Dp54 => Some(from_tableau(&dp54::A, dp54::A[6])),
-            Method::Dop853 => Some(from_tableau(&dop853::A, &dop853::B)),
+            Method::Dp54 => Some(DP54.get_or_init(|| from_tableau(&dp54::A, dp54::A[6]))),
+            Method::Dop853 => Some(DOP853.get_or_init(|| from_tableau(&dop853::A, &dop853::B))),
             Method::Radau5 => None,
         }
     }

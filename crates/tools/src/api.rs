@@ -354,12 +354,28 @@ pub fn run_scene(scene: &Scene, stop: impl FnMut() -> bool) -> Result<Trajectory
     run_scene_warned(scene, stop).map(|(t, _)| t)
 }
 
-/// [`run_scene`], with the warnings `satsim run` prints after a run that finished: the
-/// scene reader's ([`Scene::warnings`]), then the simulation's
-/// ([`Simulation::run_warnings`](satsim_spacecraft::simulation::Simulation::run_warnings):
-/// a flexible body bent beyond what its modal model holds, an energy budget that did not
-/// close) and an explicit method's steps held by a stiff motion
+/// What `satsim run` warns of after `sim`, built from `scene`, finished with `stats`: the
+/// simulation's warnings ([`Simulation::run_warnings`](satsim_spacecraft::simulation::Simulation::run_warnings))
+/// and an explicit method's steps held by a stiff motion
 /// ([`held_steps_warning`](crate::scene::step_limit::held_steps_warning)).
+pub fn after_run_warnings(
+    scene: &Scene,
+    sim: &satsim_spacecraft::simulation::Simulation,
+    stats: &satsim_integrate::Stats,
+) -> Vec<String> {
+    let mut warnings = sim.run_warnings();
+    warnings.extend(crate::scene::step_limit::held_steps_warning(
+        scene,
+        stats.t_final - sim.t0(),
+        stats.steps_accepted,
+    ));
+    warnings
+}
+
+/// [`run_scene`], with the warnings `satsim run` prints after a run that finished: the
+/// scene reader's ([`Scene::warnings`]), then [`after_run_warnings`] (a flexible body bent
+/// beyond what its modal model holds, an energy budget that did not close, an explicit
+/// method's steps held by a stiff motion).
 pub fn run_scene_warned(
     scene: &Scene,
     mut stop: impl FnMut() -> bool,
@@ -382,12 +398,7 @@ pub fn run_scene_warned(
     match result {
         Ok(stats) => {
             let mut warnings = scene.warnings.clone();
-            warnings.extend(sim.run_warnings());
-            warnings.extend(crate::scene::step_limit::held_steps_warning(
-                scene,
-                stats.t_final - sim.t0(),
-                stats.steps_accepted,
-            ));
+            warnings.extend(after_run_warnings(scene, &sim, &stats));
             Ok((out, warnings))
         }
         Err(RunError::Sink { .. }) => Err(RunFailure::Stopped { partial: out }),

@@ -154,13 +154,11 @@ pub fn run_limited(
     let mut files = RunFiles::open(scene_path, out, &scene, &sim)?;
     let streamed = stream(&scene, &mut sim, &mut files);
     let done = finish(scene_path, &scene, &sim, files, streamed)?;
-    let mut warnings = sim.run_warnings();
-    warnings.extend(satsim_tools::scene::step_limit::held_steps_warning(
+    super::print_warnings(&satsim_tools::api::after_run_warnings(
         &scene,
-        done.stats.t_final - sim.t0(),
-        done.stats.steps_accepted,
+        &sim,
+        &done.stats,
     ));
-    super::print_warnings(&warnings);
     Ok(summary(scene_path, &scene, &sim, &done))
 }
 

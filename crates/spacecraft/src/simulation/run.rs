@@ -61,10 +61,9 @@ impl Simulation {
     /// under an explicit adaptive method, whose steps, no longer held by the modes, go past
     /// their stability limit ([`elastic_error_refusal`]).
     pub(super) fn takes(&self, options: &Options) -> Result<(), SystemError> {
-        let explicit = matches!(options.method, Method::Dp54 | Method::Dop853);
         if self.model.flex.is_some()
             && !self.model.elastic_error
-            && explicit
+            && options.method.is_explicit_adaptive()
             && options.fixed_step.is_none()
         {
             return Err(SystemError::new(elastic_error_refusal(options.method)));

@@ -7,7 +7,7 @@ use super::file::{ArmatureFile, ModelSource, SceneFile, StateSource};
 use super::flexible::{Elastic, elastic_state, json_line, parse_state_json};
 use super::{Clock, Scene};
 use crate::scene_keys;
-use satsim_integrate::{Method, Options};
+use satsim_integrate::Options;
 use satsim_spacecraft::effects::section::reword;
 use satsim_spacecraft::effects::{EffectSet, Registry, SceneText, Section};
 use satsim_spacecraft::simulation::elastic_error_refusal;
@@ -214,7 +214,7 @@ impl<'a> Parser<'a> {
                 ));
             }
             // Refused where it is written, as a run would refuse it.
-            Some(e) if !*e.get_ref() && matches!(options.method, Method::Dp54 | Method::Dop853) => {
+            Some(e) if !*e.get_ref() && options.method.is_explicit_adaptive() => {
                 return Err(self.error(Some(e.span()), elastic_error_refusal(options.method)));
             }
             Some(e) => *e.get_ref(),

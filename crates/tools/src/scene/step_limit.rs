@@ -61,14 +61,13 @@ pub fn step_limit(method: Method, lambda: Complex<f64>) -> f64 {
         return f64::INFINITY;
     }
     let u = lambda / r;
-    let end = if method == Method::Rk4 { 3.0 } else { 8.0 };
     // Round-off's allowance: on the imaginary axis `|R| = 1` at the origin (and at RK4's end).
     let stable = |s: f64| {
         method
             .stability_gain(u.re * s, u.im * s)
             .is_some_and(|g| g <= 1.0 + 1e-12)
     };
-    last_stable(stable, end, (100.0 * end) as usize, 60) / r
+    last_stable(stable, 8.0, 800, 60) / r
 }
 
 /// The end of the interval `[0, s*]` on which `stable` holds, within `[0, end]`: a scan of
@@ -694,7 +693,7 @@ pub const HELD: f64 = 1.5;
 /// held.
 pub fn held_steps_warning(scene: &super::Scene, span: f64, accepted: usize) -> Option<String> {
     let method = scene.options.method;
-    if !matches!(method, Method::Dp54 | Method::Dop853) || accepted < 1000 {
+    if !method.is_explicit_adaptive() || accepted < 1000 {
         return None;
     }
     let mean = span / accepted as f64;
