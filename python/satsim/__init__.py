@@ -528,7 +528,9 @@ def campaign(
     flexible bodies, each run's ``peak_deflection_<body>`` is its largest deflection over every
     step as a fraction of its length (a beam's tip; a modes file's node for its distance from
     the body's frame); where finished runs passed 0.1 (beyond what the
-    modal model holds) a :class:`UserWarning` says how many, as ``satsim campaign`` warns.
+    modal model holds) a :class:`UserWarning` says how many, as ``satsim campaign`` warns; so
+    for runs whose energy budget drifted and for runs of an explicit adaptive method whose
+    steps its stability limit held (``stability_held`` 1), not the tolerance.
 
     **The built-in controllers** (no ``controller``): as ``satsim campaign`` runs it, on
     ``threads`` threads (default every core), in memory. Ctrl-C stops it (no run starts, the
@@ -624,6 +626,14 @@ def _warn_beyond(res: CampaignResult) -> CampaignResult:
         warnings.warn(
             _satsim.budget_warning(int(drifted), int(res.ok.sum())), UserWarning, stacklevel=3
         )
+    # Steps held by an explicit method's stability limit, not the tolerance (a failed run's
+    # NaN is not held).
+    if "stability_held" in res.columns:
+        held = int((np.nan_to_num(res["stability_held"]) == 1.0).sum())
+        if held:
+            warnings.warn(
+                _satsim.held_warning(held, int(res.ok.sum())), UserWarning, stacklevel=3
+            )
     return res
 
 

@@ -421,6 +421,13 @@ fn budget_warning(drifted: u64, ok: u64) -> String {
     satsim_tools::campaign::budget_warning(drifted, ok)
 }
 
+/// `satsim campaign`'s warning where `held` of its `ok` finished runs had their steps held by
+/// their explicit method's stability limit (`stability_held`).
+#[pyfunction]
+fn held_warning(held: u64, ok: u64) -> String {
+    satsim_tools::campaign::held_warning(held, ok)
+}
+
 /// Runs the scene file at `path`; writes `out/trajectory.csv` (and the plots) when `out` is
 /// given. Returns `(columns, data, warnings)`.
 #[pyfunction]
@@ -786,6 +793,7 @@ fn _satsim(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(beyond_warning, m)?)?;
     m.add_function(wrap_pyfunction!(budget_drifted_row, m)?)?;
     m.add_function(wrap_pyfunction!(budget_warning, m)?)?;
+    m.add_function(wrap_pyfunction!(held_warning, m)?)?;
     m.add("SMALL_DEFLECTION", satsim_tree::flexible::SMALL_DEFLECTION)?;
     m.add_function(wrap_pyfunction!(linearize, m)?)?;
     m.add_function(wrap_pyfunction!(modes, m)?)?;

@@ -57,11 +57,13 @@ fn from_rec(r: Rec) -> RunRecord {
         k,
         values,
         outcome: match failure {
+            // Stepped by flight software: its control period bounds the steps.
             None => Ok(RunStats {
                 last,
                 min,
                 max,
                 peaks,
+                held: false,
             }),
             Some(why) => Err(why),
         },

@@ -82,7 +82,8 @@ def test_shards_together_are_the_campaign(scene):
 def test_campaign_text_with_base_dir_equals_the_file(scene):
     text = small_campaign_text(failing=True)
     a = satsim.campaign(text, base_dir=scene.parent)
-    assert a.columns[0] == "run" and a.columns[-3].startswith("final_")
+    assert a.columns[0] == "run" and a.columns[-4].startswith("final_")
+    assert a.columns[-1] == "stability_held"
     np.testing.assert_array_equal(bits(a.data), bits(satsim.campaign(scene).data))
     assert a.status == satsim.campaign(scene).status
 
@@ -129,3 +130,32 @@ def test_ctrl_c_stops_a_campaign(tmp_path, python_sigint):
     finally:
         timer.cancel()
     assert time.monotonic() - started < 30.0
+
+
+def test_runs_held_by_a_stability_limit_warn_as_the_command_line_does(tmp_path):
+    """The stiff hinge (56.7 Hz) under DP5(4): every run's steps sit at the method's stability
+    limit; `stability_held` says so per run and one warning counts them, in `satsim
+    campaign`'s words. Under the scene's own Radau IIA, none."""
+    text = (SCENES / "stiff_hinge.toml").read_text()
+    text = text.replace("duration = 100.0", "duration = 10.0") + """
+[campaign]
+runs = 2
+seed = 7
+[[campaign.disperse]]
+key = "initial.base.angular_velocity"
+index = 0
+normal = { sigma = 0.005 }
+"""
+    held = text.replace('method = "radau5"', 'method = "dp54"')
+    assert held != text
+    (tmp_path / "scenes").mkdir()
+    shutil.copy(EXAMPLES / "satellite.toml", tmp_path / "satellite.toml")
+    with pytest.warns(UserWarning, match="2 of the 2 finished runs took steps held by their explicit"):
+        c = satsim.campaign(held, base_dir=tmp_path / "scenes")
+    assert list(c["stability_held"]) == [1.0, 1.0]
+    import warnings as w
+
+    with w.catch_warnings():
+        w.simplefilter("error")
+        c = satsim.campaign(text, base_dir=tmp_path / "scenes")
+    assert list(c["stability_held"]) == [0.0, 0.0]

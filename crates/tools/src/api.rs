@@ -480,7 +480,8 @@ pub fn campaign_table_until(
     }
     let records: Vec<RunRecord> = records.into_iter().flatten().collect();
     let columns = campaign.header();
-    let n_stats = 3 * (campaign.columns.len() - 1) + campaign.peak_columns.len();
+    // With the column `stability_held`.
+    let n_stats = 3 * (campaign.columns.len() - 1) + campaign.peak_columns.len() + 1;
     let mut out = CampaignTable {
         values: Vec::with_capacity(records.len() * columns.len()),
         columns,
@@ -497,6 +498,7 @@ pub fn campaign_table_until(
                         .extend_from_slice(&[st.last[c], st.min[c], st.max[c]]);
                 }
                 out.values.extend_from_slice(&st.peaks);
+                out.values.push(f64::from(u8::from(st.held)));
                 out.status.push("ok".into());
                 out.messages.push(String::new());
             }
@@ -849,7 +851,8 @@ beam = { root = [0.0, 0.0, 0.0], axis = [0.0, 1.0, 0.0], bend = [0.0, 0.0, 1.0],
                     _ => assert_eq!(f.parse::<f64>().unwrap().to_bits(), v.to_bits()),
                 }
             }
-            assert_eq!(all.status[k], fields[w - 3 * (c.columns.len() - 1) - 2]);
+            let status = all.columns.iter().position(|c| c == "status").unwrap();
+            assert_eq!(all.status[k], fields[status]);
         }
         // Two shards on one thread each hold the same rows.
         let even = campaign_table(&c, Some(1), Shard::new(0, 2).unwrap()).unwrap();

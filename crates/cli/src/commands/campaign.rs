@@ -181,13 +181,17 @@ pub fn run(args: &Args) -> Result<Output, CliError> {
 }
 
 /// The summary's lines; a warning on standard error where finished runs bent a body
-/// beyond its modal model (as `satsim run` warns of its one run).
+/// beyond its modal model, moved their energy budget, or had their steps held by a stability
+/// limit (as `satsim run` warns of its one run).
 fn summary_lines(s: &mut String, dir: &Path, f: &Finished) {
     if f.beyond > 0 {
         super::print_warnings(&[campaign::beyond_warning(f.beyond, f.ok)]);
     }
     if f.drifted > 0 {
         super::print_warnings(&[campaign::budget_warning(f.drifted, f.ok)]);
+    }
+    if f.held > 0 {
+        super::print_warnings(&[campaign::held_warning(f.held, f.ok)]);
     }
     let _ = writeln!(
         s,

@@ -917,3 +917,53 @@ fn every_instruction_cap_gives_the_same_bytes() {
     assert!(!dir.join("bad").exists());
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The stiff hinge (56.7 Hz) under DP5(4), as `satsim run` warns of its one run
+/// (`run.rs`): every run's steps sit at the method's stability limit, each row says so in
+/// `stability_held`, and the campaign warns once, counting them; under the scene's own
+/// Radau IIA, no row and no warning.
+#[test]
+fn runs_held_by_a_stability_limit_are_counted_and_warned_of() {
+    let dir = temp_dir("held");
+    let shipped = read(&root().join("examples/scenes/stiff_hinge.toml"));
+    let text = shipped
+        .replace(
+            "model = \"../satellite.toml\"",
+            "model = \"satellite.toml\"",
+        )
+        .replace("duration = 100.0", "duration = 10.0")
+        + r#"
+[campaign]
+runs = 3
+seed = 7
+
+[[campaign.disperse]]
+key = "initial.base.angular_velocity"
+index = 0
+normal = { sigma = 0.005 }
+"#;
+    std::fs::write(dir.join("scene.toml"), text).unwrap();
+    let campaign = |out: &str, extra: &[&str]| {
+        let mut args = vec!["campaign", "scene.toml", "--out", out, "--threads", "1"];
+        args.extend_from_slice(extra);
+        let o = satsim(&dir, &args);
+        ok(&o);
+        let runs = read(&dir.join(out).join("runs.csv"));
+        let mut lines = runs.lines();
+        let header = fields(lines.next().unwrap());
+        assert_eq!(header.last().map(String::as_str), Some("stability_held"));
+        let held: Vec<String> = lines.map(|l| fields(l).pop().unwrap()).collect();
+        (held, String::from_utf8_lossy(&o.stderr).into_owned())
+    };
+    let (held, err) = campaign("dp54", &["--set", "integrator.method=dp54"]);
+    assert_eq!(held, ["1", "1", "1"], "{err}");
+    assert!(
+        err.contains(
+            "3 of the 3 finished runs took steps held by their explicit method's stability limit"
+        ) && err.contains("`integrator.method = \"radau5\"` (implicit) steps over that motion"),
+        "{err}"
+    );
+    let (held, err) = campaign("radau5", &[]);
+    assert_eq!(held, ["0", "0", "0"], "{err}");
+    assert!(!err.contains("stability limit"), "{err}");
+}

@@ -8,7 +8,10 @@
 
 pub use super::meta::Meta;
 use super::stats::{ColumnStats, column_stats};
-use super::{CAMPAIGN_JSON, CampaignError, PEAK_PREFIX, RUNS_CSV, SUMMARY_JSON, Shard, TRACES_CSV};
+use super::{
+    CAMPAIGN_JSON, CampaignError, HELD_COLUMN, PEAK_PREFIX, RUNS_CSV, SUMMARY_JSON, Shard,
+    TRACES_CSV,
+};
 use crate::output::quote;
 use satsim_tree::flexible::SMALL_DEFLECTION;
 use std::collections::{BTreeMap, HashMap};
@@ -213,6 +216,9 @@ pub struct Finished {
     /// [`BUDGET_DRIFT`](satsim_spacecraft::simulation::BUDGET_DRIFT) of its largest term
     /// ([`budget_drifted_row`](super::budget_drifted_row)): the integration's error.
     pub drifted: u64,
+    /// Finished runs whose steps their explicit method's stability limit held rather than
+    /// the tolerance: a 1 in [`HELD_COLUMN`] ([`RunStats::held`](super::RunStats::held)).
+    pub held: u64,
     /// The files written (names in the folder).
     pub files: Vec<String>,
 }
@@ -379,6 +385,11 @@ pub fn finish(dir: &Path, meta: &Meta) -> Result<Finished, CampaignError> {
         .iter()
         .filter(|(_, v)| super::budget_drifted_row(stat_names, v))
         .count() as u64;
+    // A folder written before the column was: none counted.
+    let held = stat_names
+        .iter()
+        .position(|c| c == HELD_COLUMN)
+        .map_or(0, |c| ok_rows.iter().filter(|(_, v)| v[c] == 1.0).count()) as u64;
     let n_runs = runs.rows.len() as u64;
     let missing = meta.expected().saturating_sub(n_runs);
     let mut all_stats: Vec<Option<ColumnStats>> = Vec::with_capacity(stat_names.len());
@@ -422,6 +433,7 @@ pub fn finish(dir: &Path, meta: &Meta) -> Result<Finished, CampaignError> {
         missing,
         beyond,
         drifted,
+        held,
         files,
     })
 }

@@ -39,6 +39,7 @@ pub use folder::Folder;
 pub use shard::{Shard, ShardChoice, choose_shard};
 pub use spec::{Dispersed, Law, Segment, draw, run_rng};
 
+use crate::scene::step_limit::{held, may_be_held, stable_step};
 use crate::scene::{DEFAULT_MAX_ROWS, Scene};
 use crate::scene_keys::{KeyError, Override, inline_sources};
 use rayon::prelude::*;
@@ -49,8 +50,8 @@ use serde::Deserialize;
 use spec::CampaignFile;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
-use std::sync::Mutex;
 use std::sync::atomic::AtomicU64;
+use std::sync::{Mutex, OnceLock};
 use thiserror::Error;
 use toml::{Spanned, Table};
 
@@ -128,6 +129,10 @@ pub struct Campaign {
     stride: usize,
     /// The most output rows one run may have.
     max_rows: u64,
+    /// The nominal scene's stability limit on its fastest linear motion for its explicit
+    /// adaptive method ([`stable_step`]), worked out the first time a run may have been held
+    /// by it ([`Campaign::stability_held`]).
+    stability_limit: OnceLock<Option<f64>>,
 }
 
 /// The largest number of samples of a run's trace for the envelope plots.
@@ -157,6 +162,11 @@ pub struct RunStats {
     /// [`SMALL_DEFLECTION`](satsim_tree::flexible::SMALL_DEFLECTION) the run went beyond
     /// what its modal model holds. Empty without beams.
     pub peaks: Vec<f64>,
+    /// Whether the run's steps were held by its explicit method's stability limit on the
+    /// scene's fastest linear motion rather than by the tolerance, as `satsim run` warns of
+    /// its one run ([`Campaign::stability_held`]): the column [`HELD_COLUMN`]. Always false
+    /// for a run stepped by flight software (its control period bounds its steps).
+    pub held: bool,
 }
 
 /// The outcome of run `k`.
@@ -402,6 +412,7 @@ impl Campaign {
             trace_columns,
             stride,
             max_rows: DEFAULT_MAX_ROWS,
+            stability_limit: OnceLock::new(),
         })
     }
 
@@ -424,7 +435,26 @@ impl Campaign {
         h.push("message".into());
         h.extend(stat_columns(&self.columns));
         h.extend(self.peak_columns.iter().cloned());
+        h.push(HELD_COLUMN.into());
         h
+    }
+
+    /// Whether a run of this campaign that took `accepted` steps over `span` seconds had its
+    /// steps held by its explicit adaptive method's stability limit rather than by the
+    /// tolerance: at least [`HELD_MIN_STEPS`](crate::scene::step_limit::HELD_MIN_STEPS)
+    /// accepted steps whose mean is within a factor [`HELD`](crate::scene::step_limit::HELD) of the nominal scene's limit
+    /// ([`stable_step`]; a dispersed run's own moves with its values, and the factor covers
+    /// that). The test `satsim run` applies to its one run
+    /// ([`held_steps_warning`](crate::scene::step_limit::held_steps_warning)).
+    pub fn stability_held(&self, span: f64, accepted: usize) -> bool {
+        let method = self.nominal.options.method;
+        if !may_be_held(method, accepted) {
+            return false;
+        }
+        let limit = self
+            .stability_limit
+            .get_or_init(|| stable_step(&self.nominal, method).map(|(limit, _)| limit));
+        limit.is_some_and(|limit| held(span / accepted as f64, limit))
     }
 
     /// The values run `k` uses.
@@ -550,6 +580,7 @@ impl Campaign {
                 for p in &st.peaks {
                     let _ = write!(s, ",{p}");
                 }
+                let _ = write!(s, ",{}", u8::from(st.held));
             }
             Err(m) => {
                 s.push_str(",failed,");
@@ -560,6 +591,7 @@ impl Campaign {
                 for _ in &self.peak_columns {
                     s.push(',');
                 }
+                s.push(',');
             }
         }
         s.push('\n');
@@ -590,6 +622,8 @@ pub(crate) struct Collect<'c> {
     k: u64,
     stats: RunStats,
     rows: usize,
+    /// The time of the first row: the run's start.
+    t0: f64,
     trace: Vec<Vec<f64>>,
     stop: &'c (dyn Fn() -> bool + Sync),
     stopped: bool,
@@ -610,8 +644,10 @@ impl<'c> Collect<'c> {
                 min: vec![f64::INFINITY; n],
                 max: vec![f64::NEG_INFINITY; n],
                 peaks: Vec::new(),
+                held: false,
             },
             rows: 0,
+            t0: f64::NAN,
             trace,
             stop,
             stopped: false,
@@ -628,7 +664,13 @@ impl<'c> Collect<'c> {
             return None;
         }
         Some(match result {
-            Ok(_) => self.into_record(values),
+            Ok(stats) => {
+                let mut c = self;
+                // The run's own span: its first output row is at its start.
+                let span = stats.t_final - c.t0;
+                c.stats.held = c.campaign.stability_held(span, stats.steps_accepted);
+                c.into_record(values)
+            }
             Err(RunError::Integrate(e)) => RunRecord::failed(self.k, values, e.to_string()),
             Err(RunError::Sink { error, .. }) => {
                 RunRecord::failed(self.k, values, format!("non-finite result: {error}"))
@@ -677,6 +719,9 @@ impl RowSink for Collect<'_> {
         }
         for (m, &v) in s.max.iter_mut().zip(values) {
             *m = m.max(v);
+        }
+        if self.rows == 0 {
+            self.t0 = t;
         }
         if self.rows.is_multiple_of(self.campaign.stride) {
             for (s, &c) in self.trace.iter_mut().zip(&self.campaign.trace_columns) {
@@ -760,6 +805,19 @@ pub fn budget_drifted_row(names: &[String], row: &[f64]) -> bool {
     .flatten()
     .fold(0.0, |s: f64, x| s.max(x.abs()));
     satsim_spacecraft::simulation::budget_drifted(max - min, scale)
+}
+
+/// The column of `runs.csv` after the statistics (and the beams' peaks): 1 where the run's
+/// steps were held by its explicit method's stability limit ([`RunStats::held`]), else 0.
+pub const HELD_COLUMN: &str = "stability_held";
+
+/// The warning after a campaign whose `held` of its `ok` finished runs had their steps held by
+/// their explicit method's stability limit ([`Finished::held`]): `satsim campaign`'s and
+/// Python's `satsim.campaign`'s.
+pub fn held_warning(held: u64, ok: u64) -> String {
+    format!(
+        "{held} of the {ok} finished runs took steps held by their explicit method's stability limit on the scene's fastest motion, not by the tolerance (`{HELD_COLUMN}` in runs.csv): `integrator.method = \"radau5\"` (implicit) steps over that motion, with `elastic_error = false` where a flexible body's own ringing need not be resolved (`satsim run` of the scene names the motion and its limit)"
+    )
 }
 
 /// The warning after a campaign whose `drifted` of its `ok` finished runs moved their energy

@@ -685,20 +685,37 @@ pub fn stable_step(scene: &super::Scene, method: Method) -> Option<(f64, String)
 /// `two_wings.toml`), and 12 where the motion is never excited (`deployment_modes.toml`).
 pub const HELD: f64 = 1.5;
 
+/// The fewest accepted steps of a run whose steps [`held_steps_warning`] weighs: below it the
+/// cost is not worth a warning.
+pub const HELD_MIN_STEPS: usize = 1000;
+
+/// Whether a run of `method` that took `accepted` steps can have been held by a stability
+/// limit worth a warning: an adaptive explicit method (DP5(4), DOP853) and at least
+/// [`HELD_MIN_STEPS`] steps. Cheap: the limit ([`stable_step`]) is worked out only then.
+pub fn may_be_held(method: Method, accepted: usize) -> bool {
+    method.is_explicit_adaptive() && accepted >= HELD_MIN_STEPS
+}
+
+/// Whether a `mean` accepted step is within a factor [`HELD`] of the stability `limit`
+/// either way: the stiff motion, not the tolerance, held the steps.
+pub fn held(mean: f64, limit: f64) -> bool {
+    mean <= HELD * limit && mean >= limit / HELD
+}
+
 /// A warning where an adaptive explicit run of `scene` (DP5(4), DOP853) took `accepted`
 /// steps over `span` seconds, a mean step within a factor [`HELD`] of its stability limit on the
 /// scene's fastest linear motion ([`stable_step`]): that motion, not the tolerance, held the
 /// steps, and the implicit Radau IIA would step over it. `None` for other methods, runs of
-/// fewer than 1000 steps (a cost not worth a warning) and runs whose steps the tolerance
+/// fewer than [`HELD_MIN_STEPS`] steps (a cost not worth a warning) and runs whose steps the tolerance
 /// held.
 pub fn held_steps_warning(scene: &super::Scene, span: f64, accepted: usize) -> Option<String> {
     let method = scene.options.method;
-    if !method.is_explicit_adaptive() || accepted < 1000 {
+    if !may_be_held(method, accepted) {
         return None;
     }
     let mean = span / accepted as f64;
     let (limit, what) = stable_step(scene, method)?;
-    if mean > HELD * limit || mean < limit / HELD {
+    if !held(mean, limit) {
         return None;
     }
     let modes = if scene.flexible.is_some() {

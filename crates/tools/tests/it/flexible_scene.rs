@@ -609,7 +609,9 @@ fn a_campaign_counts_the_runs_beyond_the_modal_model() {
                 "peak_deflection_panel3"
             ]
         );
-        assert!(campaign.header().ends_with(&campaign.peak_columns.clone()));
+        let mut last = campaign.peak_columns.clone();
+        last.push("stability_held".into());
+        assert!(campaign.header().ends_with(&last));
         let out = dir.join(format!("out_{k}"));
         let opts = RunOptions {
             threads: Some(1),
