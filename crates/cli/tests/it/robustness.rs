@@ -760,7 +760,8 @@ fn gimbal_lock_is_refused_with_hinges_and_time_and_armature_runs_through() {
     assert!(
         err.contains("lock.toml: the run failed: system error at t = 1.65")
             && err.contains("singular configuration at hinge `h1` (gimbal lock with `h2`, `h3`")
-            && err.contains("holds the rows up to t = 1.6 s"),
+            && err.contains("holds the rows up to t = 1.6 s")
+            && !err.contains("masses span"),
         "{err}"
     );
     let (_, rows) = csv(&dir.join("out/lock/trajectory.csv"));
@@ -772,6 +773,41 @@ fn gimbal_lock_is_refused_with_hinges_and_time_and_armature_runs_through() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let (_, rows) = csv(&dir.join("out/lock/trajectory.csv"));
     assert_eq!(rows.len(), 41);
+}
+
+/// A panel of 1e20 kg (a slip of units) on the 800 kg bus: the dynamics are singular at the
+/// first step, and the message says why, naming the heaviest and the lightest body; the
+/// same under a flexible panel whose beam's `rho_A` is 1e20 kg/m.
+#[test]
+fn a_singular_solve_of_masses_beyond_round_off_says_so() {
+    let dir = setup("mass-span");
+    let model = std::fs::read_to_string(root().join("examples/satellite.toml")).unwrap();
+    let heavy = model.replacen("mass = 20.0", "mass = 1e20", 1);
+    assert_ne!(heavy, model);
+    std::fs::write(dir.join("satellite.toml"), heavy).unwrap();
+    std::fs::write(dir.join("scene.toml"), SCENE).unwrap();
+    let o = satsim_in(&dir, &["run", "scene.toml"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{err}");
+    assert!(
+        err.contains("singular configuration at hinge")
+            && err.contains("the bodies' masses span 5.0e18: body `panel1` has 1e20 kg")
+            && err.contains("body `panel2` 20 kg")
+            && err.contains("check the units"),
+        "{err}"
+    );
+    let flexible = std::fs::read_to_string(root().join("examples/satellite_flexible.toml"))
+        .unwrap()
+        .replacen("rho_A = 10.0", "rho_A = 1e20", 1);
+    std::fs::write(dir.join("satellite.toml"), flexible).unwrap();
+    let o = satsim_in(&dir, &["run", "scene.toml"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{err}");
+    assert!(
+        err.contains("body `panel1` has 1e20 kg (with any beam's rho_A x length)")
+            && err.contains("check the units (kg; kg/m for a beam's rho_A)"),
+        "{err}"
+    );
 }
 
 /// Ctrl-C: `satsim run` on a long scene, SIGINT after a second: exit status 130, the message

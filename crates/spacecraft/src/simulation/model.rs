@@ -2,6 +2,7 @@
 
 use super::StateLayout;
 use satsim_integrate::SystemError;
+use satsim_tree::error::Num;
 use satsim_tree::flexible::FlexModel;
 use satsim_tree::{DynamicsError, ForwardDynamics, Model};
 use std::ops::Range;
@@ -78,6 +79,12 @@ pub struct SimModel {
     pub(super) serial: u64,
 }
 
+/// The span of the bodies' masses past which a singular solve is put down to it
+/// ([`SimModel::dynamics_error`]): double precision keeps 16 digits, and a light body's
+/// inertia added to a heavy one's must keep some. Real spacecraft span far less (a 400 t
+/// station and a 10 g sensor: 4e7).
+pub const MASS_SPAN: f64 = 1e12;
+
 impl SimModel {
     /// A dynamics error as the right-hand side reports it, the coordinate it names put in
     /// words ([`NamedDynamicsError`]).
@@ -94,8 +101,36 @@ impl SimModel {
                     what,
                 })
             }
+            // A singular pivot where the masses span more than round-off leaves of the light
+            // bodies' inertia: that is why (a slip of units, most likely).
+            e @ (DynamicsError::SingularBase | DynamicsError::SingularHinge { .. }) => {
+                match self.mass_span() {
+                    Some(why) => SystemError::new(format!("{e}; {why}")),
+                    None => SystemError::from_error(e),
+                }
+            }
             e => SystemError::from_error(e),
         }
+    }
+
+    /// Where the bodies' masses (a flexible body's with its structure's) span more than
+    /// [`MASS_SPAN`], why a solve of the tree can be singular: the light bodies' inertia
+    /// added to the heavy one's across a hinge falls below its round-off.
+    fn mass_span(&self) -> Option<String> {
+        let tree = self.flex.as_ref().map_or(&self.tree, |f| f.rigid());
+        let with_mass = || tree.bodies().iter().filter(|b| b.mass() > 0.0);
+        let heavy = with_mass().max_by(|a, b| a.mass().total_cmp(&b.mass()))?;
+        let light = with_mass().min_by(|a, b| a.mass().total_cmp(&b.mass()))?;
+        let span = heavy.mass() / light.mass();
+        (span > MASS_SPAN).then(|| {
+            format!(
+                "the bodies' masses span {span:.1e}: body `{}` has {} kg (with any beam's rho_A x length) and body `{}` {} kg, and beyond {MASS_SPAN:.0e} the light bodies' inertia is lost in the heavy one's round-off; check the units (kg; kg/m for a beam's rho_A)",
+                heavy.name(),
+                Num(heavy.mass()),
+                light.name(),
+                Num(light.mass()),
+            )
+        })
     }
 
     /// [`Self::dynamics_error`] for a solve of the flexible tree at `q` (its rigid and
