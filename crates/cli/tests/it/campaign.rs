@@ -430,6 +430,30 @@ fn resume_skips_the_runs_already_in_runs_csv() {
     ));
     assert!(out.contains("ran        0 runs"), "{out}");
     assert_eq!(read(&dir.join("part/runs.csv")), full);
+    // A folder of an earlier satsim, without the last column, is refused by name.
+    std::fs::create_dir_all(dir.join("old")).unwrap();
+    std::fs::copy(
+        dir.join("full/campaign.json"),
+        dir.join("old/campaign.json"),
+    )
+    .unwrap();
+    let older: String = full
+        .lines()
+        .map(|l| format!("{}\n", l.rsplit_once(',').unwrap().0))
+        .collect();
+    assert!(full.lines().next().unwrap().ends_with(",stability_held"));
+    std::fs::write(dir.join("old/runs.csv"), &older).unwrap();
+    let o = satsim(
+        &dir,
+        &["campaign", "scene.toml", "--out", "old", "--resume"],
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("it lacks `stability_held`") && err.contains("earlier version"),
+        "{err}"
+    );
+    assert_eq!(read(&dir.join("old/runs.csv")), older);
     // Another seed does not resume this folder.
     let scene = read(&dir.join("scene.toml")).replace("seed = 42", "seed = 43");
     std::fs::write(dir.join("scene.toml"), scene).unwrap();

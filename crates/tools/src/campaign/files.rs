@@ -66,6 +66,51 @@ fn complete_lines(text: &str) -> (Vec<&str>, usize) {
     (text[..end].lines().collect(), end)
 }
 
+/// Where a `runs.csv` header `found` departs from the `expected` one, in words: the first
+/// column that differs, or the columns one lacks. Columns after `expected` are the user's
+/// metrics where `extra` allows them. A folder written by an earlier satsim lacks the columns
+/// added since (`stability_held`, after the statistics and the beams' peaks), so its rows
+/// cannot be completed: the message says so rather than only that the headers differ.
+fn columns_differ(found: &[String], expected: &[String], extra: bool) -> String {
+    let lacks: Vec<&str> = expected
+        .iter()
+        .filter(|e| !found.contains(e))
+        .map(String::as_str)
+        .collect();
+    // The columns satsim appended after the first campaigns: a folder without them, its
+    // other columns in order, is an earlier version's.
+    let added = |c: &str| c == HELD_COLUMN || c.starts_with(PEAK_PREFIX);
+    let kept: Vec<&String> = expected.iter().filter(|e| found.contains(e)).collect();
+    let earlier = !lacks.is_empty()
+        && lacks.iter().all(|c| added(c))
+        && found.len() >= kept.len()
+        && found.iter().zip(&kept).all(|(f, k)| f == *k)
+        && (found.len() == kept.len() || extra);
+    if earlier {
+        return format!(
+            "it lacks `{}`, which this satsim writes: a folder from an earlier version",
+            lacks.join("`, `")
+        );
+    }
+    let common = found.len().min(expected.len());
+    match (0..common).find(|&c| found[c] != expected[c]) {
+        Some(c) => format!(
+            "column {} is `{}` where this campaign writes `{}`: other dispersions or another scene",
+            c + 1,
+            found[c],
+            expected[c]
+        ),
+        None if found.len() < expected.len() => format!(
+            "it ends before `{}`: other dispersions or another scene",
+            expected[common]
+        ),
+        None => format!(
+            "`{}` after this campaign's {common} columns: other dispersions or another scene",
+            found[common]
+        ),
+    }
+}
+
 /// `runs.csv` and `traces.csv` opened for streaming ([`open_streams`]).
 pub(crate) struct Streams {
     pub(crate) runs: Appender,
@@ -106,8 +151,9 @@ pub(crate) fn open_streams(
             Some(rest) if extra && rest.starts_with(',') => more = split(&rest[1..]),
             _ => {
                 return Err(CampaignError::Other(format!(
-                    "{}: its header is not this campaign's (other dispersions or another scene): use another --out, or run without --resume to start again",
-                    runs_path.display()
+                    "{}: its header is not this campaign's ({}); use another --out, or run without --resume to start again",
+                    runs_path.display(),
+                    columns_differ(&split(first), header, extra)
                 )));
             }
         }
@@ -571,9 +617,10 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<Finished, CampaignError> {
             None => header = Some((r.header.clone(), path.clone())),
             Some((h, first)) if *h != r.header => {
                 return Err(CampaignError::Other(format!(
-                    "{}: its columns differ from {}'s (another campaign?)",
+                    "{}: its columns differ from {}'s (another campaign?): {}",
                     path.display(),
-                    first.display()
+                    first.display(),
+                    columns_differ(&split(&r.header), &split(h), false)
                 )));
             }
             Some(_) => {}
@@ -617,6 +664,37 @@ mod tests {
         }
         assert_eq!(quote("a,b"), "\"a,b\"");
         assert_eq!(quote("q\""), "\"q\"\"\"");
+    }
+
+    /// A header without the columns added since an earlier version is named as such; one
+    /// of other dispersions names its first differing column.
+    #[test]
+    fn a_header_that_differs_is_described() {
+        let cols = |s: &str| s.split(',').map(String::from).collect::<Vec<_>>();
+        let now = cols("run,status,mass_bus,final_a,peak_deflection_p1,stability_held");
+        let older = cols("run,status,mass_bus,final_a,peak_deflection_p1");
+        assert_eq!(
+            columns_differ(&older, &now, false),
+            "it lacks `stability_held`, which this satsim writes: a folder from an earlier version"
+        );
+        // With the user's metrics after it, where they are allowed.
+        let mut metrics = older.clone();
+        metrics.push("settle_time".into());
+        assert!(columns_differ(&metrics, &now, true).contains("earlier version"));
+        assert!(!columns_differ(&metrics, &now, false).contains("earlier version"));
+        // Older still: without the beams' peaks either.
+        let oldest = cols("run,status,mass_bus,final_a");
+        assert!(
+            columns_differ(&oldest, &now, false)
+                .starts_with("it lacks `peak_deflection_p1`, `stability_held`")
+        );
+        let other = cols("run,status,inertia_bus,final_a,peak_deflection_p1,stability_held");
+        assert_eq!(
+            columns_differ(&other, &now, false),
+            "column 3 is `inertia_bus` where this campaign writes `mass_bus`: other dispersions or another scene"
+        );
+        let more = cols("run,status,mass_bus,final_a,peak_deflection_p1,stability_held,x");
+        assert!(columns_differ(&more, &now, false).starts_with("`x` after this campaign's 6"));
     }
 
     /// `finish` rewrites `traces.csv` sorted by run, for the runs that finished, the last
