@@ -847,9 +847,13 @@ class Simulation:
     def close(self) -> None:
         """Ends the simulation and, with ``out=DIR``, writes the rest of the folder
         (``events.csv``, the plots, ``view.html``). Calling it again does nothing; after
-        it, :meth:`advance` and :meth:`set_inputs` raise :class:`SatsimError`. A flexible
-        beam bent past a tenth of its length in the steps taken (beyond what its modal model
-        holds) is a :class:`UserWarning` here, as ``satsim run`` warns after a run."""
+        it, :meth:`advance` and :meth:`set_inputs` raise :class:`SatsimError`. What
+        ``satsim run`` warns of after a run is a :class:`UserWarning` here, for the steps
+        taken: a flexible beam bent past a tenth of its length (beyond what its modal model
+        holds), an energy budget that did not close, and steps of ``dp54`` or ``dop853``
+        held by their stability limit on the scene's fastest motion (weighed over the
+        advances the integrator took in more than one step: a ``dt`` below the limit sets
+        the steps itself)."""
         said = [] if self._native.closed else self._native.warnings()
         self._native.close()
         for w in said:

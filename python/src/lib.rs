@@ -756,9 +756,10 @@ impl NativeSimulation {
     }
     /// What `satsim run` warns of after a run, for the steps taken so far: a flexible body
     /// bent past a tenth of its length, beyond what its modal model holds; an energy budget
-    /// that did not close.
+    /// that did not close; an explicit method's steps held by a stiff motion (over the
+    /// advances it took in more than one step).
     fn warnings(&self) -> PyResult<Vec<String>> {
-        Ok(self.lock()?.stepping().simulation().run_warnings())
+        Ok(self.lock()?.warnings())
     }
     /// Whether `close` was called.
     #[getter]

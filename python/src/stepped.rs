@@ -23,9 +23,9 @@ use satsim_tools::stepping::SceneStepper;
 use std::path::PathBuf;
 use std::sync::Mutex;
 
-/// A run's record as a tuple: `(k, values, failure, last, min, max, peaks, trace,
-/// metrics)`; `failure` is `None` for a finished run (then `last`, `min`, `max` and `peaks`
-/// are its statistics), else why it failed. The metrics come last: the Python side replaces
+/// A run's record as a tuple: `(k, values, failure, last, min, max, peaks, held, trace,
+/// metrics)`; `failure` is `None` for a finished run (then `last`, `min`, `max`, `peaks` and
+/// `held` are its statistics), else why it failed. The metrics come last: the Python side replaces
 /// them.
 type Rec = (
     u64,
@@ -35,6 +35,7 @@ type Rec = (
     Vec<f64>,
     Vec<f64>,
     Vec<f64>,
+    bool,
     Vec<Vec<f64>>,
     Vec<(String, f64)>,
 );
@@ -44,26 +45,26 @@ fn to_rec(r: RunRecord) -> Rec {
         Ok(s) => (None, Some(s)),
         Err(why) => (Some(why), None),
     };
-    let (last, min, max, peaks) =
-        stats.map_or_else(Default::default, |s| (s.last, s.min, s.max, s.peaks));
+    let (last, min, max, peaks, held) = stats.map_or_else(Default::default, |s| {
+        (s.last, s.min, s.max, s.peaks, s.held)
+    });
     (
-        r.k, r.values, failure, last, min, max, peaks, r.trace, r.metrics,
+        r.k, r.values, failure, last, min, max, peaks, held, r.trace, r.metrics,
     )
 }
 
 fn from_rec(r: Rec) -> RunRecord {
-    let (k, values, failure, last, min, max, peaks, trace, metrics) = r;
+    let (k, values, failure, last, min, max, peaks, held, trace, metrics) = r;
     RunRecord {
         k,
         values,
         outcome: match failure {
-            // Stepped by flight software: its control period bounds the steps.
             None => Ok(RunStats {
                 last,
                 min,
                 max,
                 peaks,
-                held: false,
+                held,
             }),
             Some(why) => Err(why),
         },

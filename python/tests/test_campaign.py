@@ -159,3 +159,14 @@ normal = { sigma = 0.005 }
         w.simplefilter("error")
         c = satsim.campaign(text, base_dir=tmp_path / "scenes")
     assert list(c["stability_held"]) == [0.0, 0.0]
+    # Stepped by flight software once a second, the integrator's steps are held as before;
+    # stepped every 6 ms (below the limit), the period is the step.
+    import fsw_controllers as ctl
+
+    with pytest.warns(UserWarning, match="2 of the 2 finished runs took steps held by their explicit"):
+        c = satsim.campaign(held, base_dir=tmp_path / "scenes", controller=ctl.nothing, period=1.0)
+    assert list(c["stability_held"]) == [1.0, 1.0]
+    with w.catch_warnings():
+        w.simplefilter("error")
+        c = satsim.campaign(held, base_dir=tmp_path / "scenes", controller=ctl.nothing, period=0.006)
+    assert list(c["stability_held"]) == [0.0, 0.0]

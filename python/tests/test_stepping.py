@@ -216,3 +216,26 @@ def test_advance_goes_on_past_the_scenes_end_on_the_same_grid():
         assert sim.t == pytest.approx(1.5, abs=1e-15)
         t = sim.trajectory()["t"]
         assert len(t) == 16 and t[10] == 1.0 and t[-1] == pytest.approx(1.5, abs=1e-15)
+
+
+def test_steps_held_by_a_stiff_motion_warn_at_close_as_the_command_line_does():
+    """The stiff hinge under DP5(4), advanced a second at a time: the integrator's steps sit
+    at the method's stability limit (about 7 ms), and `close` warns in `satsim run`'s words.
+    Advanced in pieces shorter than the limit, the pieces are the steps: no warning."""
+    text = (SCENES / "stiff_hinge.toml").read_text()
+    text = text.replace("duration = 100.0", "duration = 10.0")
+    text = text.replace('method = "radau5"', 'method = "dp54"')
+    assert 'method = "dp54"' in text
+    sim = satsim.Simulation(text, base_dir=SCENES)
+    for _ in range(10):
+        sim.advance(1.0)
+    with pytest.warns(UserWarning, match=r"held the steps; `integrator.method = \"radau5\"`"):
+        sim.close()
+    import warnings
+
+    sim = satsim.Simulation(text, base_dir=SCENES)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        for _ in range(1700):
+            sim.advance(0.006)
+        sim.close()

@@ -13,6 +13,10 @@ pub(crate) struct Ctx {
     pub rtol: f64,
     pub atol: f64,
     pub h0: Option<f64>,
+    /// The first step of a run that continues another ([`crate::integrate_on`]): the step
+    /// that run proposed next, taken by the first [`Ctx::initial_step`] in place of its
+    /// estimate (the restarts after it estimate theirs).
+    pub h_resume: Option<f64>,
     pub h_max: f64,
     /// The run's end: no first step looks past it.
     pub t_end: f64,
@@ -75,6 +79,7 @@ impl Ctx {
             rtol: opts.rtol,
             atol: opts.atol,
             h0: opts.h0,
+            h_resume: None,
             h_max: opts.h_max,
             t_end,
             fixed: opts.fixed_step,
@@ -257,6 +262,9 @@ impl Ctx {
     ) -> Result<f64, IntegrateError> {
         if let Some(h0) = self.h0 {
             return Ok(h0.min(self.h_max));
+        }
+        if let Some(h) = self.h_resume.take() {
+            return Ok(h.min(self.h_max));
         }
         // At the end already (a restart there), the distance is no bound: the step is unused.
         let to_end = self.t_end - t;
@@ -474,6 +482,9 @@ pub(crate) trait Stepper {
 
     /// Interpolated state at `t` in `[t_old, t]` of the last step.
     fn dense(&self, t: f64, out: &mut [f64]);
+
+    /// The step the method would take next (after its last accepted or rejected one).
+    fn proposed_step(&self) -> f64;
 
     fn t(&self) -> f64;
     fn t_old(&self) -> f64;

@@ -370,6 +370,9 @@ impl Stepper for Dop853 {
         }
     }
 
+    fn proposed_step(&self) -> f64 {
+        self.h
+    }
     fn t(&self) -> f64 {
         self.t
     }

@@ -202,6 +202,9 @@ impl Stepper for Dp54 {
         }
     }
 
+    fn proposed_step(&self) -> f64 {
+        self.h
+    }
     fn t(&self) -> f64 {
         self.t
     }

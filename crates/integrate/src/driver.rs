@@ -301,6 +301,17 @@ where
         (result, self.sys, self.observer)
     }
 
+    /// As `go`, giving back the stepper (its workspace, for a run that continues this one).
+    pub(crate) fn go_keep(
+        mut self,
+        t0: f64,
+        x0: &[f64],
+        t_end: f64,
+    ) -> (Result<Stats, IntegrateError>, St) {
+        let result = self.go_on(t0, x0, t_end);
+        (result, self.st)
+    }
+
     fn go_on(&mut self, t0: f64, x0: &[f64], t_end: f64) -> Result<Stats, IntegrateError> {
         if let Some(stats) = self.begin(t0, x0)? {
             return Ok(stats);

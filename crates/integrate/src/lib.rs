@@ -37,6 +37,7 @@
 // Index loops over stage/component arrays read like the published formulas.
 #![allow(clippy::needless_range_loop)]
 
+mod carry;
 mod common;
 mod dense_lu;
 mod dop853;
@@ -58,6 +59,7 @@ mod wide;
 #[cfg(test)]
 mod tests;
 
+pub use carry::{Carry, integrate_on};
 pub use driver::{Stats, StopReason, integrate};
 pub use error::{IntegrateError, NonFiniteEntry};
 pub use options::{Method, Options, Output, UnknownMethod};

@@ -549,7 +549,9 @@ impl Stepper for Radau5 {
         let survives = sys.jacobian_survives_restart();
         self.need_jac = !(self.has_jacobian && survives);
         self.jac_current = false;
-        self.h_lu = f64::NAN;
+        // The factors stay valid with the Jacobian they were made from (a new one clears
+        // them, `compute_jacobian`): a run continued at the step size it ended with
+        // (`integrate_on`) keeps them too.
         self.theta = THET;
         self.faccon = 1.0;
         self.n_accepted = 0;
@@ -697,6 +699,9 @@ impl Stepper for Radau5 {
         }
     }
 
+    fn proposed_step(&self) -> f64 {
+        self.h
+    }
     fn t(&self) -> f64 {
         self.t
     }

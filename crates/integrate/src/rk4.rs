@@ -172,6 +172,9 @@ impl Stepper for Rk4 {
         );
     }
 
+    fn proposed_step(&self) -> f64 {
+        self.h
+    }
     fn t(&self) -> f64 {
         self.t
     }

@@ -15,6 +15,7 @@
 
 use crate::api::Trajectory;
 use crate::output::{CsvWriter, PlotRecorder, write_events};
+use crate::scene::step_limit::{held_steps_message, may_be_held, stable_step};
 use crate::scene::{DEFAULT_MAX_ROWS, Scene};
 use crate::view::PoseRecorder;
 use satsim_integrate::Options;
@@ -23,6 +24,7 @@ use satsim_spacecraft::simulation::{EventRecord, OutputGrid, SimError, StepError
 use satsim_tree::error::{Count, Num};
 use std::fmt;
 use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
 
 /// Why a [`SceneStepper`] call failed.
 #[derive(Debug)]
@@ -71,6 +73,11 @@ pub struct SceneStepper {
     max_rows: u64,
     /// Each sensor's name and kind (`gyro`, `star_tracker`, ...), in the scene's order.
     sensors: Vec<(String, &'static str)>,
+    /// The scene, where its method is explicit and adaptive (its steps may be held by a
+    /// stiff motion: [`SceneStepper::warnings`]), and that motion's stability limit once
+    /// worked out.
+    explicit: Option<Box<Scene>>,
+    limit: OnceLock<Option<(f64, String)>>,
 }
 
 impl SceneStepper {
@@ -158,6 +165,12 @@ impl SceneStepper {
             closed: false,
             max_rows: DEFAULT_MAX_ROWS,
             sensors,
+            explicit: scene
+                .options
+                .method
+                .is_explicit_adaptive()
+                .then(|| Box::new(scene.clone())),
+            limit: OnceLock::new(),
         };
         stepper.record_start()?;
         Ok(stepper)
@@ -205,6 +218,28 @@ impl SceneStepper {
             }
         }
         Ok(())
+    }
+
+    /// What `satsim run` warns of after a run, for the steps taken so far
+    /// ([`after_run_warnings`](crate::api::after_run_warnings)): a flexible body bent beyond
+    /// what its modal model holds, an energy budget that did not close, and an explicit
+    /// method's steps held by a stiff motion. The last weighs only the advances that took
+    /// more than one step ([`Stepping::substeps`]): pieces shorter than the stability limit
+    /// are the caller's steps, which Radau IIA would take as they are.
+    pub fn warnings(&self) -> Vec<String> {
+        let mut warnings = self.stepping.simulation().run_warnings();
+        if let Some(scene) = &self.explicit {
+            let (span, accepted) = self.stepping.substeps();
+            if may_be_held(scene.options.method, accepted) {
+                let limit = self
+                    .limit
+                    .get_or_init(|| stable_step(scene, scene.options.method));
+                if let Some(limit) = limit {
+                    warnings.extend(held_steps_message(scene, span, accepted, limit));
+                }
+            }
+        }
+        warnings
     }
 
     /// The underlying [`Stepping`] (time, state, inputs, the simulation).

@@ -1,5 +1,6 @@
 //! The integrators' tests: one binary (one link), one module per subject; `common` holds the test problems.
 
+mod carry;
 mod common;
 mod convergence;
 mod dense_events;

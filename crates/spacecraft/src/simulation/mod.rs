@@ -99,7 +99,7 @@ pub use log::RunLog;
 pub use model::{NamedDynamicsError, SimModel};
 pub use rows::Diagnostics;
 pub use run::{RunError, elastic_error_refusal};
-pub use stepping::{EventRecord, OutputGrid, StepError, Stepping};
+pub use stepping::{EventRecord, OutputGrid, StepError, StepWork, Stepping};
 
 use crate::effects::{Effect, Rotor};
 use satsim_integrate::SystemError;

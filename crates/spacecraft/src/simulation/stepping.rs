@@ -12,8 +12,11 @@
 //!   round-off of an output time or of a grid point is taken to be that point. So, with the
 //!   inputs never set, stepping to the end in any pieces reproduces
 //!   [`Simulation::run`]'s rows: bit for bit for a fixed-step method when each piece is a
-//!   whole number of steps, within the tolerance for an adaptive method (each piece starts
-//!   it afresh).
+//!   whole number of steps, within the tolerance for an adaptive method. An adaptive
+//!   method goes on from one piece to the next as one run would ([`integrate_on`]): each
+//!   piece starts with the step the last proposed and Radau IIA with its Jacobian, so a
+//!   short piece (a 10 Hz control loop) costs a step or two, not a new Jacobian and a
+//!   first step's estimate.
 //! - **Rows** go to `sink(t, row)` at the times of the [`OutputGrid`] that fall in each
 //!   piece (the first call also gives the row at the start), exactly as a run gives them.
 //! - **Inputs** ([`Stepping::inputs`]): `torque_<hinge>` for each model hinge, a torque
@@ -44,7 +47,9 @@
 
 use super::Simulation;
 use super::run::Shared;
-use satsim_integrate::{IntegrateError, Options, Output, System, SystemError, integrate, stop_due};
+use satsim_integrate::{
+    Carry, IntegrateError, Options, Output, System, SystemError, integrate_on, stop_due,
+};
 use std::cell::RefCell;
 use std::ops::ControlFlow;
 use thiserror::Error;
@@ -175,6 +180,30 @@ pub struct Stepping {
     failed: Option<String>,
     row: Vec<f64>,
     outs: Vec<f64>,
+    /// The time and the accepted steps of the advances that took more than one step
+    /// ([`Stepping::substeps`]).
+    substep_span: f64,
+    substeps: usize,
+    /// What each piece leaves the next ([`integrate_on`]): an adaptive method's next step,
+    /// Radau IIA's Jacobian.
+    carry: Carry,
+    work: StepWork,
+}
+
+/// The integrator's work over the advances so far ([`Stepping::work`]), as
+/// [`Stats`](satsim_integrate::Stats) counts one run's.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct StepWork {
+    /// Right-hand side evaluations (finite-difference Jacobians' included).
+    pub rhs_evals: usize,
+    /// Accepted steps.
+    pub steps_accepted: usize,
+    /// Rejected step attempts.
+    pub steps_rejected: usize,
+    /// Jacobians (Radau IIA).
+    pub jacobian_evals: usize,
+    /// LU factorisations (Radau IIA).
+    pub lu_decompositions: usize,
 }
 
 impl Stepping {
@@ -230,6 +259,10 @@ impl Stepping {
             failed,
             row: Vec::new(),
             outs: Vec::new(),
+            substep_span: 0.0,
+            substeps: 0,
+            carry: Carry::new(),
+            work: StepWork::default(),
         }
     }
     /// The simulation (its model, layout, effects, event log).
@@ -247,6 +280,17 @@ impl Stepping {
     /// The state at [`Stepping::t`] (see [`StateLayout`](super::StateLayout)).
     pub fn x(&self) -> &[f64] {
         &self.x
+    }
+    /// The time (s) and the accepted steps of the advances that took more than one step: the
+    /// steps the integrator, not the caller's pieces, set (an advance of one step took the
+    /// piece whole). Their mean is what an explicit method's stability limit would hold, as
+    /// a run's mean step is for `satsim run`'s warning of steps held by a stiff motion.
+    pub fn substeps(&self) -> (f64, usize) {
+        (self.substep_span, self.substeps)
+    }
+    /// The integrator's work over the advances that finished so far.
+    pub fn work(&self) -> StepWork {
+        self.work
     }
     /// The output grid.
     pub fn output_grid(&self) -> OutputGrid {
@@ -414,7 +458,7 @@ impl Stepping {
         let mut row = std::mem::take(&mut self.row);
         let output = Output::Times(outs);
         let cell = RefCell::new(&mut self.sim);
-        let result = integrate(
+        let result = integrate_on(
             &mut Shared(&cell),
             &options,
             self.t,
@@ -444,6 +488,7 @@ impl Stepping {
                 }
                 ControlFlow::Continue(())
             },
+            &mut self.carry,
         );
         self.row = row;
         if let Output::Times(outs) = output {
@@ -453,6 +498,16 @@ impl Stepping {
             (_, Some(f)) => Some(f),
             (Err(e), None) => Some(StepError::Integrate(self.sim.explained(e, &options))),
             (Ok(stats), None) => {
+                let w = &mut self.work;
+                w.rhs_evals += stats.rhs_evals;
+                w.steps_accepted += stats.steps_accepted;
+                w.steps_rejected += stats.steps_rejected;
+                w.jacobian_evals += stats.jacobian_evals;
+                w.lu_decompositions += stats.lu_decompositions;
+                if stats.steps_accepted > 1 {
+                    self.substep_span += stats.t_final - self.t;
+                    self.substeps += stats.steps_accepted;
+                }
                 self.t = stats.t_final;
                 self.x = stats.x_final;
                 self.cursor = cursor;

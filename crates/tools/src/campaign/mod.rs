@@ -166,8 +166,10 @@ pub struct RunStats {
     pub peaks: Vec<f64>,
     /// Whether the run's steps were held by its explicit method's stability limit on the
     /// scene's fastest linear motion rather than by the tolerance, as `satsim run` warns of
-    /// its one run ([`Campaign::stability_held`]): the column [`HELD_COLUMN`]. Always false
-    /// for a run stepped by flight software (its control period bounds its steps).
+    /// its one run ([`Campaign::stability_held`]): the column [`HELD_COLUMN`]. For a run
+    /// stepped by flight software, over the control periods the integrator took in more
+    /// than one step ([`Stepping::substeps`](satsim_spacecraft::simulation::Stepping::substeps)):
+    /// a period shorter than the limit bounds the steps itself.
     pub held: bool,
 }
 

@@ -123,15 +123,19 @@ impl Campaign {
             Ok((
                 s.trajectory().clone(),
                 super::peaks(s.stepping().simulation()),
+                s.stepping().substeps(),
             ))
         });
         if stopped {
             return None;
         }
         Some(match outcome {
-            Ok((trajectory, peaks)) => {
+            Ok((trajectory, peaks, (span, accepted))) => {
                 let mut c = Collect::new(self, k, &|| false);
                 c.stats.peaks = peaks;
+                // The advances of more than one step: a control period longer than the
+                // stability limit leaves the integrator's steps to it.
+                c.stats.held = self.stability_held(span, accepted);
                 let width = trajectory.columns.len();
                 for row in trajectory.values.chunks_exact(width) {
                     // Rows from the stepper are finite (it refuses any that is not).
@@ -223,5 +227,28 @@ mod tests {
                 .contains("control instants")
         );
         assert!(c.check_period(f64::NAN).is_err());
+    }
+
+    /// A run stepped by flight software under DP5(4) is held by the stiff hinge's modes
+    /// where its control period leaves the integrator steps to take (1 s), as the same run
+    /// of the built-in controllers is; a period below the limit (about 7 ms) is what sets
+    /// the steps, and the run is not held.
+    #[test]
+    fn a_stepped_run_is_held_where_its_period_leaves_the_steps_to_the_integrator() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../examples/scenes/stiff_hinge.toml");
+        let text = std::fs::read_to_string(&path)
+            .unwrap()
+            .replace("duration = 100.0", "duration = 10.0")
+            .replace("method = \"radau5\"", "method = \"dp54\"")
+            + "[campaign]\nruns = 1\nseed = 7\n";
+        let c = Campaign::parse(&text, &path).unwrap();
+        assert!(c.run_one(0).outcome.unwrap().held);
+        let held = |period: f64| {
+            let s = c.run_stepped(0, period, &mut |_, _| Ok(())).unwrap();
+            s.record.outcome.unwrap().held
+        };
+        assert!(held(1.0));
+        assert!(!held(6e-3));
     }
 }

@@ -713,9 +713,20 @@ pub fn held_steps_warning(scene: &super::Scene, span: f64, accepted: usize) -> O
     if !may_be_held(method, accepted) {
         return None;
     }
+    held_steps_message(scene, span, accepted, &stable_step(scene, method)?)
+}
+
+/// [`held_steps_warning`] with the stability limit and what sets it (`stable_step`'s) worked
+/// out already: for a caller that weighs its steps more than once (a stepped simulation).
+pub fn held_steps_message(
+    scene: &super::Scene,
+    span: f64,
+    accepted: usize,
+    (limit, what): &(f64, String),
+) -> Option<String> {
+    let method = scene.options.method;
     let mean = span / accepted as f64;
-    let (limit, what) = stable_step(scene, method)?;
-    if !held(mean, limit) {
+    if !may_be_held(method, accepted) || !held(mean, *limit) {
         return None;
     }
     let modes = if scene.flexible.is_some() {

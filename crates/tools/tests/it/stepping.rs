@@ -561,3 +561,107 @@ fn an_advance_that_would_keep_more_than_max_rows_is_refused_before_it_integrates
     let last = t.rows().last().unwrap()[0];
     assert!((last - (2.0 + 2.0 * every)).abs() < 1e-12, "{last}");
 }
+
+/// `stiff_hinge.toml` under DP5(4) for 10 s: its hinge modes hold the steps at the method's
+/// stability limit (about 7 ms), as `satsim run` warns.
+fn stiff_under_dp54() -> Scene {
+    let path = example("scenes/stiff_hinge.toml");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let text = replace(text, "duration = 100.0", "duration = 10.0");
+    let text = replace(text, "method = \"radau5\"", "method = \"dp54\"");
+    Scene::parse(&text, &path).expect("valid scene")
+}
+
+/// A stepped simulation warns of steps held by a stiff motion as `satsim run` does, over
+/// the pieces the integrator took in more than one step; pieces shorter than the limit are
+/// the caller's steps, and no warning comes of them.
+#[test]
+fn steps_held_by_a_stiff_motion_are_warned_of_over_pieces_longer_than_the_limit() {
+    use satsim_integrate::Method;
+    use satsim_tools::scene::step_limit::stable_step;
+    let scene = stiff_under_dp54();
+    let (limit, _) = stable_step(&scene, Method::Dp54).unwrap();
+    assert!(limit > 5e-3 && limit < 1e-2, "{limit}");
+    // The run's warning, for comparison.
+    let (_, said) = satsim_tools::api::run_scene_warned(&scene, || false).unwrap();
+    assert!(
+        said.iter().any(|w| w.contains("held the steps")),
+        "{said:?}"
+    );
+
+    let mut s = stepper(&scene);
+    step_to_end(&mut s, 10.0, || 1.0);
+    let (span, steps) = s.stepping().substeps();
+    assert!(
+        (span - 10.0).abs() < 1e-9 && steps >= 1000,
+        "{span} {steps}"
+    );
+    let said = s.warnings();
+    let held: Vec<_> = said
+        .iter()
+        .filter(|w| w.contains("held the steps"))
+        .collect();
+    assert_eq!(held.len(), 1, "{said:?}");
+    assert!(
+        held[0].contains("`integrator.method = \"radau5\"` (implicit) steps over it"),
+        "{}",
+        held[0]
+    );
+
+    // Pieces of 1/1.2 of the limit, more than a thousand: counted as steps they would be
+    // held (their mean within a factor 1.5 of it); the integrator took each in one step, or
+    // in several of at most half a piece, which are not.
+    let piece = limit / 1.2;
+    let mut s = stepper(&scene);
+    let mut pieces = 0;
+    step_to_end(&mut s, 10.0, || {
+        pieces += 1;
+        piece
+    });
+    assert!(pieces >= 1000, "{pieces}");
+    let (span, steps) = s.stepping().substeps();
+    // (`span` sums the pieces: round-off of a part in 1e12.)
+    let mean = span / steps.max(1) as f64;
+    assert!(mean <= piece / 2.0 * (1.0 + 1e-9), "{span} {steps}");
+    assert!(
+        !s.warnings().iter().any(|w| w.contains("held the steps")),
+        "{:?}",
+        s.warnings()
+    );
+}
+
+/// The flexible deployment (Radau IIA, its modes left out of the error) stepped at 10 Hz, as
+/// a flight-software loop steps it: each piece goes on from the last with its step and
+/// Jacobian, so the loop takes a new Jacobian only where the run does (a latch), not one a
+/// piece, and its hinge angles stay within the scene's accuracy (1e-4 rad) of the run's.
+#[test]
+fn a_flexible_scene_stepped_at_10_hz_keeps_its_jacobian_and_the_runs_accuracy() {
+    let path = example("flexible_array.toml");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let scene = Scene::parse(&replace(text, "duration = 300.0", "duration = 30.0"), &path)
+        .expect("valid scene");
+    let run = run_scene(&scene, || false).unwrap();
+    let mut s = stepper(&scene);
+    let mut pieces = 0;
+    step_to_end(&mut s, 30.0, || {
+        pieces += 1;
+        0.1
+    });
+    // 15 Jacobians for the 300 pieces (5 509 right-hand sides, 632 steps); afresh, a
+    // piece took one each.
+    let work = s.stepping().work();
+    assert!(
+        work.jacobian_evals * 10 < pieces,
+        "{work:?} over {pieces} pieces"
+    );
+    let got = s.trajectory();
+    let mut worst: f64 = 0.0;
+    for h in ["angle_h1", "angle_h2", "angle_h3", "angle_h4", "angle_h5"] {
+        let c = column(&run, h);
+        for (a, b) in got.rows().zip(run.rows()) {
+            worst = worst.max((a[c] - b[c]).abs());
+        }
+    }
+    // 3.3e-5 rad: the run's own error against a converged reference is 6.7e-5 rad.
+    assert!(worst < 1e-4, "{worst}");
+}

@@ -1,0 +1,262 @@
+//! An integration continued across calls (`integrate_on`): pieces that carry the proposed
+//! step and Radau IIA's Jacobian cost less than pieces started afresh, give the one run's
+//! solution within the tolerance, and start afresh where the system, the tolerances or a
+//! failure say so.
+
+use std::ops::ControlFlow;
+
+use satsim_integrate::{
+    Carry, IntegrateError, Method, Options, Output, Stats, System, SystemError, integrate,
+    integrate_on,
+};
+
+/// A stiff oscillator and a slow forced mode: `x0'' = −k x0 − c x0'` (k = 1e4, c = 200: a
+/// critically damped, stiff pair) driven by `x2`, `x2' = −0.1 x2 + sin t`. Its Jacobian is
+/// constant, so a kept one is exact; `survives` says whether it may be kept.
+struct Stiff {
+    survives: bool,
+    fail_after: Option<f64>,
+}
+
+impl System for Stiff {
+    fn dim(&self) -> usize {
+        3
+    }
+    fn rhs(&mut self, t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), SystemError> {
+        if self.fail_after.is_some_and(|f| t > f) {
+            return Err(SystemError::new("refused"));
+        }
+        dx[0] = x[1];
+        dx[1] = -1e4 * (x[0] - x[2]) - 200.0 * x[1];
+        dx[2] = -0.1 * x[2] + t.sin();
+        Ok(())
+    }
+    fn jacobian_survives_restart(&mut self) -> bool {
+        self.survives
+    }
+}
+
+fn stiff() -> Stiff {
+    Stiff {
+        survives: true,
+        fail_after: None,
+    }
+}
+
+fn options(method: Method) -> Options {
+    Options {
+        method,
+        rtol: 1e-8,
+        atol: 1e-10,
+        ..Options::default()
+    }
+}
+
+const X0: [f64; 3] = [0.0, 0.0, 0.0];
+
+/// Totals over pieces of `dt` from 0 to `t_end`, continued (`carry`) or each afresh.
+#[derive(Default, Debug)]
+struct Totals {
+    rhs: usize,
+    steps: usize,
+    jacobians: usize,
+    x: Vec<f64>,
+}
+
+fn pieces(
+    sys: &mut Stiff,
+    opts: &Options,
+    dt: f64,
+    t_end: f64,
+    carry: Option<&mut Carry>,
+) -> Totals {
+    let mut totals = Totals {
+        x: X0.to_vec(),
+        ..Totals::default()
+    };
+    let (mut t, n) = (0.0, (t_end / dt).round() as usize);
+    let mut own = Carry::new();
+    let carry = carry.unwrap_or(&mut own);
+    for i in 0..n {
+        let to = if i + 1 == n { t_end } else { t + dt };
+        let none = |_: f64, _: &[f64]| ControlFlow::Continue(());
+        let times = Output::Times(vec![]);
+        let stats = integrate_on(&mut *sys, opts, t, &totals.x, to, &times, none, carry).unwrap();
+        totals.rhs += stats.rhs_evals;
+        totals.steps += stats.steps_accepted;
+        totals.jacobians += stats.jacobian_evals;
+        totals.x = stats.x_final;
+        t = to;
+    }
+    totals
+}
+
+/// The same pieces, each started afresh (`integrate`).
+fn afresh(sys: &mut Stiff, opts: &Options, dt: f64, t_end: f64) -> Totals {
+    let mut totals = Totals {
+        x: X0.to_vec(),
+        ..Totals::default()
+    };
+    let (mut t, n) = (0.0, (t_end / dt).round() as usize);
+    for i in 0..n {
+        let to = if i + 1 == n { t_end } else { t + dt };
+        let none = |_: f64, _: &[f64]| ControlFlow::Continue(());
+        let stats = integrate(
+            &mut *sys,
+            opts,
+            t,
+            &totals.x,
+            to,
+            &Output::Times(vec![]),
+            none,
+        )
+        .unwrap();
+        totals.rhs += stats.rhs_evals;
+        totals.steps += stats.steps_accepted;
+        totals.jacobians += stats.jacobian_evals;
+        totals.x = stats.x_final;
+        t = to;
+    }
+    totals
+}
+
+fn one_run(sys: &mut Stiff, opts: &Options, t_end: f64) -> Stats {
+    let none = |_: f64, _: &[f64]| ControlFlow::Continue(());
+    integrate(sys, opts, 0.0, &X0, t_end, &Output::Times(vec![]), none).unwrap()
+}
+
+fn max_diff(a: &[f64], b: &[f64]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f64::max)
+}
+
+/// Radau IIA in 100 pieces of 0.1 s: one Jacobian where pieces afresh take one each, fewer
+/// right-hand sides, and the one run's end state within the tolerance either way.
+#[test]
+fn radau5_pieces_carry_one_jacobian() {
+    let opts = options(Method::Radau5);
+    let run = one_run(&mut stiff(), &opts, 10.0);
+    let mut carry = Carry::new();
+    let on = pieces(&mut stiff(), &opts, 0.1, 10.0, Some(&mut carry));
+    let fresh = afresh(&mut stiff(), &opts, 0.1, 10.0);
+    assert_eq!(on.jacobians, 1, "{on:?}");
+    assert_eq!(fresh.jacobians, 100, "{fresh:?}");
+    assert!(carry.has_jacobian() && carry.step().is_some());
+    // Each piece ends a step where the one run would not: at most one step more a piece.
+    assert!(
+        on.steps <= run.steps_accepted + 100,
+        "{on:?} against {run:?}"
+    );
+    // The 99 Jacobians not taken (three columns each) and the first steps not estimated;
+    // within twice the one run's (1 065 against 1 655 and 626).
+    assert!(on.rhs + 99 * 3 < fresh.rhs, "{on:?} against {fresh:?}");
+    assert!(on.rhs < 2 * run.rhs_evals, "{on:?} against {run:?}");
+    for t in [&on.x, &fresh.x] {
+        assert!(
+            max_diff(t, &run.x_final) < 1e-6,
+            "{t:?} against {:?}",
+            run.x_final
+        );
+    }
+}
+
+/// Where the system says its Jacobian did not survive, each piece takes a new one; where
+/// the tolerances change, the carried workspace is not used.
+#[test]
+fn radau5_pieces_take_a_new_jacobian_where_the_system_or_the_tolerances_say_so() {
+    let opts = options(Method::Radau5);
+    let mut sys = Stiff {
+        survives: false,
+        fail_after: None,
+    };
+    let on = pieces(&mut sys, &opts, 0.1, 1.0, None);
+    assert_eq!(on.jacobians, 10, "{on:?}");
+
+    let mut carry = Carry::new();
+    pieces(&mut stiff(), &opts, 0.1, 1.0, Some(&mut carry));
+    assert!(carry.has_jacobian());
+    let looser = Options {
+        rtol: 1e-6,
+        ..opts.clone()
+    };
+    let none = |_: f64, _: &[f64]| ControlFlow::Continue(());
+    let x = [0.0; 3];
+    let s = integrate_on(
+        &mut stiff(),
+        &looser,
+        1.0,
+        &x,
+        1.1,
+        &Output::Times(vec![]),
+        none,
+        &mut carry,
+    )
+    .unwrap();
+    assert_eq!(s.jacobian_evals, 1);
+}
+
+/// DP5(4) in pieces carries its proposed step: no first-step estimate per piece (two
+/// right-hand sides and the short steps that follow it), so fewer right-hand sides than
+/// pieces afresh, and the solution within the tolerance.
+#[test]
+fn dp54_pieces_carry_the_step_they_proposed() {
+    let opts = options(Method::Dp54);
+    let run = one_run(&mut stiff(), &opts, 10.0);
+    let on = pieces(&mut stiff(), &opts, 0.5, 10.0, None);
+    let fresh = afresh(&mut stiff(), &opts, 0.5, 10.0);
+    assert!(on.rhs < fresh.rhs, "{on:?} against {fresh:?}");
+    for t in [&on.x, &fresh.x] {
+        assert!(
+            max_diff(t, &run.x_final) < 1e-6,
+            "{t:?} against {:?}",
+            run.x_final
+        );
+    }
+}
+
+/// A failed piece leaves nothing to carry; a fixed-step run carries nothing.
+#[test]
+fn a_failed_or_fixed_step_piece_carries_nothing() {
+    let opts = options(Method::Radau5);
+    let mut carry = Carry::new();
+    pieces(&mut stiff(), &opts, 0.1, 1.0, Some(&mut carry));
+    assert!(carry.step().is_some());
+    let mut failing = Stiff {
+        survives: true,
+        fail_after: Some(1.05),
+    };
+    let none = |_: f64, _: &[f64]| ControlFlow::Continue(());
+    let r = integrate_on(
+        &mut failing,
+        &opts,
+        1.0,
+        &X0,
+        1.2,
+        &Output::Times(vec![]),
+        none,
+        &mut carry,
+    );
+    assert!(matches!(r, Err(IntegrateError::System { .. })), "{r:?}");
+    assert!(carry.step().is_none() && !carry.has_jacobian());
+
+    pieces(&mut stiff(), &opts, 0.1, 1.0, Some(&mut carry));
+    let rk4 = Options {
+        method: Method::Rk4,
+        fixed_step: Some(1e-3),
+        ..Options::default()
+    };
+    integrate_on(
+        &mut stiff(),
+        &rk4,
+        1.0,
+        &X0,
+        1.1,
+        &Output::Times(vec![]),
+        none,
+        &mut carry,
+    )
+    .unwrap();
+    assert!(carry.step().is_none() && !carry.has_jacobian());
+}
