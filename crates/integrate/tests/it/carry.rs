@@ -63,6 +63,30 @@ struct Totals {
     x: Vec<f64>,
 }
 
+/// Totals over pieces of `dt` from 0 to `t_end`, each integrated by `piece(t, x, to)`.
+fn in_pieces(dt: f64, t_end: f64, mut piece: impl FnMut(f64, &[f64], f64) -> Stats) -> Totals {
+    let mut totals = Totals {
+        x: X0.to_vec(),
+        ..Totals::default()
+    };
+    let (mut t, n) = (0.0, (t_end / dt).round() as usize);
+    for i in 0..n {
+        let to = if i + 1 == n { t_end } else { t + dt };
+        let stats = piece(t, &totals.x, to);
+        totals.rhs += stats.rhs_evals;
+        totals.steps += stats.steps_accepted;
+        totals.jacobians += stats.jacobian_evals;
+        totals.x = stats.x_final;
+        t = to;
+    }
+    totals
+}
+
+fn none(_: f64, _: &[f64]) -> ControlFlow<()> {
+    ControlFlow::Continue(())
+}
+
+/// The pieces, each going on from the last (`integrate_on`, with `carry` or its own).
 fn pieces(
     sys: &mut Stiff,
     opts: &Options,
@@ -70,58 +94,31 @@ fn pieces(
     t_end: f64,
     carry: Option<&mut Carry>,
 ) -> Totals {
-    let mut totals = Totals {
-        x: X0.to_vec(),
-        ..Totals::default()
-    };
-    let (mut t, n) = (0.0, (t_end / dt).round() as usize);
     let mut own = Carry::new();
     let carry = carry.unwrap_or(&mut own);
-    for i in 0..n {
-        let to = if i + 1 == n { t_end } else { t + dt };
-        let none = |_: f64, _: &[f64]| ControlFlow::Continue(());
-        let times = Output::Times(vec![]);
-        let stats = integrate_on(&mut *sys, opts, t, &totals.x, to, &times, none, carry).unwrap();
-        totals.rhs += stats.rhs_evals;
-        totals.steps += stats.steps_accepted;
-        totals.jacobians += stats.jacobian_evals;
-        totals.x = stats.x_final;
-        t = to;
-    }
-    totals
+    let times = Output::Times(vec![]);
+    in_pieces(dt, t_end, |t, x, to| {
+        integrate_on(&mut *sys, opts, t, x, to, &times, none, carry).unwrap()
+    })
 }
 
 /// The same pieces, each started afresh (`integrate`).
 fn afresh(sys: &mut Stiff, opts: &Options, dt: f64, t_end: f64) -> Totals {
-    let mut totals = Totals {
-        x: X0.to_vec(),
-        ..Totals::default()
-    };
-    let (mut t, n) = (0.0, (t_end / dt).round() as usize);
-    for i in 0..n {
-        let to = if i + 1 == n { t_end } else { t + dt };
-        let none = |_: f64, _: &[f64]| ControlFlow::Continue(());
-        let stats = integrate(
-            &mut *sys,
-            opts,
-            t,
-            &totals.x,
-            to,
-            &Output::Times(vec![]),
-            none,
-        )
-        .unwrap();
-        totals.rhs += stats.rhs_evals;
-        totals.steps += stats.steps_accepted;
-        totals.jacobians += stats.jacobian_evals;
-        totals.x = stats.x_final;
-        t = to;
+    let times = Output::Times(vec![]);
+    in_pieces(dt, t_end, |t, x, to| {
+        integrate(&mut *sys, opts, t, x, to, &times, none).unwrap()
+    })
+}
+
+/// Each end state within `1e-6` of the one run's.
+fn near_run(ends: [&Totals; 2], run: &Stats) {
+    for t in ends {
+        let d = max_diff(&t.x, &run.x_final);
+        assert!(d < 1e-6, "{t:?} against {:?}", run.x_final);
     }
-    totals
 }
 
 fn one_run(sys: &mut Stiff, opts: &Options, t_end: f64) -> Stats {
-    let none = |_: f64, _: &[f64]| ControlFlow::Continue(());
     integrate(sys, opts, 0.0, &X0, t_end, &Output::Times(vec![]), none).unwrap()
 }
 
@@ -153,13 +150,7 @@ fn radau5_pieces_carry_one_jacobian() {
     // within twice the one run's (1 065 against 1 655 and 626).
     assert!(on.rhs + 99 * 3 < fresh.rhs, "{on:?} against {fresh:?}");
     assert!(on.rhs < 2 * run.rhs_evals, "{on:?} against {run:?}");
-    for t in [&on.x, &fresh.x] {
-        assert!(
-            max_diff(t, &run.x_final) < 1e-6,
-            "{t:?} against {:?}",
-            run.x_final
-        );
-    }
+    near_run([&on, &fresh], &run);
 }
 
 /// Where the system says its Jacobian did not survive, each piece takes a new one; where
@@ -181,7 +172,6 @@ fn radau5_pieces_take_a_new_jacobian_where_the_system_or_the_tolerances_say_so()
         rtol: 1e-6,
         ..opts.clone()
     };
-    let none = |_: f64, _: &[f64]| ControlFlow::Continue(());
     let x = [0.0; 3];
     let s = integrate_on(
         &mut stiff(),
@@ -207,13 +197,7 @@ fn dp54_pieces_carry_the_step_they_proposed() {
     let on = pieces(&mut stiff(), &opts, 0.5, 10.0, None);
     let fresh = afresh(&mut stiff(), &opts, 0.5, 10.0);
     assert!(on.rhs < fresh.rhs, "{on:?} against {fresh:?}");
-    for t in [&on.x, &fresh.x] {
-        assert!(
-            max_diff(t, &run.x_final) < 1e-6,
-            "{t:?} against {:?}",
-            run.x_final
-        );
-    }
+    near_run([&on, &fresh], &run);
 }
 
 /// A failed piece leaves nothing to carry; a fixed-step run carries nothing.
@@ -227,7 +211,6 @@ fn a_failed_or_fixed_step_piece_carries_nothing() {
         survives: true,
         fail_after: Some(1.05),
     };
-    let none = |_: f64, _: &[f64]| ControlFlow::Continue(());
     let r = integrate_on(
         &mut failing,
         &opts,
