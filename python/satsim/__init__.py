@@ -772,6 +772,15 @@ class Simulation:
         return list(self._native.inputs)
 
     @property
+    def work(self) -> Dict[str, int]:
+        """The integrator's work over the :meth:`advance` calls so far, as ``satsim run``
+        counts a run's: ``rhs_evals`` (right-hand sides, a finite-difference Jacobian's
+        included), ``steps_accepted``, ``steps_rejected``, ``jacobian_evals`` and
+        ``lu_decompositions`` (Radau IIA). Each call goes on from the last with its step
+        and Jacobian, so a short ``dt`` costs a step or two."""
+        return {k: int(v) for k, v in self._native.work}
+
+    @property
     def closed(self) -> bool:
         """Whether :meth:`close` was called."""
         return bool(self._native.closed)

@@ -708,6 +708,18 @@ impl NativeSimulation {
     fn max_rows(&self) -> PyResult<u64> {
         Ok(self.lock()?.max_rows())
     }
+    /// The integrator's work over the advances so far: `(name, count)` pairs.
+    #[getter]
+    fn work(&self) -> PyResult<Vec<(&'static str, usize)>> {
+        let w = self.lock()?.stepping().work();
+        Ok(vec![
+            ("rhs_evals", w.rhs_evals),
+            ("steps_accepted", w.steps_accepted),
+            ("steps_rejected", w.steps_rejected),
+            ("jacobian_evals", w.jacobian_evals),
+            ("lu_decompositions", w.lu_decompositions),
+        ])
+    }
     /// The input names.
     #[getter]
     fn inputs(&self) -> PyResult<Vec<String>> {

@@ -239,3 +239,30 @@ def test_steps_held_by_a_stiff_motion_warn_at_close_as_the_command_line_does():
         for _ in range(1700):
             sim.advance(0.006)
         sim.close()
+
+
+def test_work_counts_the_steps_and_the_advances_keep_radaus_jacobian():
+    """`work` sums the integrator's counts over the advances: RK4 at 0.01 s takes its 1000
+    steps in 10 s of pieces; the flexible deployment under Radau IIA at 10 Hz takes a
+    Jacobian only where a latch or a slow Newton iteration asks, not one a piece."""
+    with satsim.Simulation(deploy_text(10.0), base_dir=SCENES) as sim:
+        for _ in range(100):
+            sim.advance(0.1)
+        w = sim.work
+    assert set(w) == {"rhs_evals", "steps_accepted", "steps_rejected", "jacobian_evals",
+                      "lu_decompositions"}
+    # A step split at an event (the wheels' friction) counts twice: 1004.
+    assert 1000 <= w["steps_accepted"] < 1010 and w["jacobian_evals"] == 0, w
+    assert w["rhs_evals"] >= 4 * 1000, w
+    flexible = SCENES.parent / "flexible_array.toml"
+    text = flexible.read_text().replace("duration = 300.0", "duration = 10.0")
+    with satsim.Simulation(text, base_dir=flexible.parent) as sim:
+        assert sim.work["rhs_evals"] == 0
+        for _ in range(100):
+            sim.advance(0.1)
+        w = sim.work
+    assert w["steps_accepted"] >= 100, w
+    # 14, as the one run of these 10 s takes (`satsim run`: the latches, Newton slowing in
+    # the strips' ringing); a piece started afresh would take one each, 100.
+    assert 1 <= w["jacobian_evals"] <= 20, w
+    assert w["lu_decompositions"] >= 1, w

@@ -647,8 +647,9 @@ fn a_flexible_scene_stepped_at_10_hz_keeps_its_jacobian_and_the_runs_accuracy() 
         pieces += 1;
         0.1
     });
-    // 15 Jacobians for the 300 pieces (5 509 right-hand sides, 632 steps); afresh, a
-    // piece took one each.
+    // 15 Jacobians for the 300 pieces (5 509 right-hand sides, 632 steps), as the one run
+    // of these 30 s takes (4 085 right-hand sides, 413 steps); afresh, a piece took one
+    // each.
     let work = s.stepping().work();
     assert!(
         work.jacobian_evals * 10 < pieces,
