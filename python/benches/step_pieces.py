@@ -11,23 +11,14 @@ Jacobian, so a short piece costs a step or two (docs: "Python", the stepping API
 from __future__ import annotations
 
 import argparse
-import time
 from pathlib import Path
 
 import satsim
+from step_loop import best  # the same best-of-N timer
 
 ROOT = Path(__file__).resolve().parents[2]
 SCENE = ROOT / "examples" / "flexible_array.toml"
 DURATION = 60.0
-
-
-def best(f, repeat: int) -> float:
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        f()
-        times.append(time.perf_counter() - t0)
-    return min(times)
 
 
 def main() -> None:

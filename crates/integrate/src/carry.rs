@@ -149,26 +149,28 @@ where
             }
             (result, h)
         }
-        Method::Dp54 => {
-            let run = Run::new(system, Dp54::new(n), ctx, options, outputs, observer);
-            let (result, st) = run.go_keep(t0, x0, t_end);
-            (result, st.proposed_step())
-        }
-        Method::Dop853 => {
-            let run = Run::new(system, Dop853::new(n), ctx, options, outputs, observer);
-            let (result, st) = run.go_keep(t0, x0, t_end);
-            (result, st.proposed_step())
-        }
-        // RK4 has a fixed step (`Options::validate`): the branch above.
-        Method::Rk4 => {
-            let run = Run::new(system, Rk4::new(n), ctx, options, outputs, observer);
-            let (result, st) = run.go_keep(t0, x0, t_end);
-            (result, st.proposed_step())
-        }
+        Method::Dp54 => proposed(
+            Run::new(system, Dp54::new(n), ctx, options, outputs, observer).go_keep(t0, x0, t_end),
+        ),
+        Method::Dop853 => proposed(
+            Run::new(system, Dop853::new(n), ctx, options, outputs, observer)
+                .go_keep(t0, x0, t_end),
+        ),
+        // Not reached: `Options::validate` gives RK4 a fixed step (the return above).
+        Method::Rk4 => proposed(
+            Run::new(system, Rk4::new(n), ctx, options, outputs, observer).go_keep(t0, x0, t_end),
+        ),
     };
     match &result {
         Ok(_) if h.is_finite() && h > 0.0 => carry.h = Some(h),
         _ => carry.clear(),
     }
     result
+}
+
+/// A finished run's result and the step its stepper proposed next.
+fn proposed<St: Stepper>(
+    (result, st): (Result<Stats, IntegrateError>, St),
+) -> (Result<Stats, IntegrateError>, f64) {
+    (result, st.proposed_step())
 }
