@@ -138,7 +138,10 @@ where
                 atol: options.atol,
             };
             let st = match carry.radau.take() {
-                Some((k, st)) if k == key => st,
+                Some((k, mut st)) if k == key => {
+                    st.resume();
+                    st
+                }
                 _ => Radau5::new(n, options.rtol, options.atol),
             };
             let (result, st) =

@@ -33,6 +33,10 @@ pub(crate) struct Ctx {
     pub steps_rejected: usize,
     pub jacobian_evals: usize,
     pub lu_decompositions: usize,
+    /// Accepted steps that landed on a time stop or the run's end, or that `h_max` cut
+    /// ([`crate::Stats::steps_capped`]), and the time they covered.
+    pub steps_capped: usize,
+    pub capped_span: f64,
     /// Trial stages the system refused ([`Ctx::stage_refused`]) since the steps last went
     /// past the earliest of them.
     pub stages_refused: u32,
@@ -58,6 +62,14 @@ pub(crate) const STAGE_RETRY_FACTOR: f64 = 0.25;
 pub(crate) const TRIAL_RETRIES: u32 = 4;
 
 impl Ctx {
+    /// Counts an accepted step of `h` whose attempt was `capped` ([`Ctx::steps_capped`]).
+    pub fn count_capped(&mut self, capped: bool, h: f64) {
+        if capped {
+            self.steps_capped += 1;
+            self.capped_span += h;
+        }
+    }
+
     /// The context of a run of `sys` under `opts` that ends at `t_end`.
     pub fn new<S: System + ?Sized>(
         sys: &S,
@@ -93,6 +105,8 @@ impl Ctx {
             steps_rejected: 0,
             jacobian_evals: 0,
             lu_decompositions: 0,
+            steps_capped: 0,
+            capped_span: 0.0,
             stages_refused: 0,
             refused_at: f64::INFINITY,
             rejected_by: None,

@@ -258,6 +258,7 @@ impl Stepper for Dop853 {
         'step: loop {
             ctx.check_budget(t)?;
             let (h, land) = clamp_to_limit(t, self.h.min(ctx.h_max), limit);
+            let capped = land || h < self.h;
             if ctx.fixed.is_none() {
                 ctx.check_step_size(t, h)?;
             }
@@ -316,6 +317,7 @@ impl Stepper for Dop853 {
             self.fsal_pending = true;
             self.dense_ready = false;
             ctx.steps_accepted += 1;
+            ctx.count_capped(capped, h);
             ctx.passed(self.t);
             return Ok(());
         }

@@ -133,6 +133,7 @@ impl Stepper for Dp54 {
         'step: loop {
             ctx.check_budget(t)?;
             let (h, land) = clamp_to_limit(t, self.h.min(ctx.h_max), limit);
+            let capped = land || h < self.h;
             if ctx.fixed.is_none() {
                 ctx.check_step_size(t, h)?;
             }
@@ -187,6 +188,7 @@ impl Stepper for Dp54 {
             self.t_old = t;
             self.t = if land { limit } else { t + h };
             ctx.steps_accepted += 1;
+            ctx.count_capped(capped, h);
             ctx.passed(self.t);
             return Ok(());
         }

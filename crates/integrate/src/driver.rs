@@ -44,6 +44,13 @@ pub struct Stats {
     pub jacobian_evals: usize,
     /// LU factorisations (implicit methods).
     pub lu_decompositions: usize,
+    /// Accepted steps of an adaptive method that landed on a time stop
+    /// ([`System::next_stop`]) or the run's end, or were cut short of the error control's
+    /// proposal to keep within `h_max`. What held them was not the error control, nor a
+    /// stiff motion.
+    pub steps_capped: usize,
+    /// The time those steps covered (s).
+    pub capped_span: f64,
     /// Located events `(t, k)`, in order.
     pub events: Vec<(f64, usize)>,
     /// Time at which the run ended.
@@ -52,6 +59,57 @@ pub struct Stats {
     pub x_final: Vec<f64>,
     /// Why the run ended.
     pub stop: StopReason,
+}
+
+/// The steps of an adaptive run, or of runs one after the other, over `span` seconds: what
+/// tells whether a stiff motion held them ([`Stats::steps_capped`]). `Default` is none.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Steps {
+    /// The time the steps covered (s).
+    pub span: f64,
+    /// Accepted steps.
+    pub accepted: usize,
+    /// Those that landed on a time stop or the run's end, or that `h_max` cut.
+    pub capped: usize,
+    /// The time the capped steps covered (s).
+    pub capped_span: f64,
+}
+
+impl Steps {
+    /// The steps of a run that started at `t0` and finished with `stats`.
+    pub fn of(stats: &Stats, t0: f64) -> Self {
+        Self {
+            span: stats.t_final - t0,
+            accepted: stats.steps_accepted,
+            capped: stats.steps_capped,
+            capped_span: stats.capped_span,
+        }
+    }
+
+    /// Adds the steps of a run that followed.
+    pub fn add(&mut self, more: Steps) {
+        self.span += more.span;
+        self.accepted += more.accepted;
+        self.capped += more.capped;
+        self.capped_span += more.capped_span;
+    }
+
+    /// The mean of the steps the error control (or a stiff motion) set, the capped ones
+    /// left out; `None` where every step was capped.
+    pub fn mean_free(&self) -> Option<f64> {
+        let free = self.accepted.checked_sub(self.capped).filter(|&n| n > 0)?;
+        Some((self.span - self.capped_span) / free as f64)
+    }
+
+    /// The mean time between the capped steps: about how often time stops came (or
+    /// `h_max`'s step); infinite where none was capped.
+    pub fn mean_capped_spacing(&self) -> f64 {
+        if self.capped == 0 {
+            f64::INFINITY
+        } else {
+            self.span / self.capped as f64
+        }
+    }
 }
 
 /// Integrates `system` from `(t0, x0)` to `t_end`, calling `observer(t, x)`
@@ -289,6 +347,8 @@ where
             steps_rejected: self.ctx.steps_rejected,
             jacobian_evals: self.ctx.jacobian_evals,
             lu_decompositions: self.ctx.lu_decompositions,
+            steps_capped: self.ctx.steps_capped,
+            capped_span: self.ctx.capped_span,
             events: std::mem::take(&mut self.events),
             t_final: t,
             x_final: x.to_vec(),
@@ -454,6 +514,14 @@ where
         if changed {
             if !all_finite(&self.x_ev) {
                 return Err(IntegrateError::non_finite_state(t, &self.x_ev));
+            }
+            // The solution goes on through the stop (only its right-hand side, or a state
+            // the system set, changed): the step the error control proposed serves the next
+            // step as well as an estimate from scratch would, which after every sample of a
+            // law would take the steps down and grow them back.
+            let h = self.st.proposed_step();
+            if self.ctx.fixed.is_none() && h.is_finite() && h > 0.0 {
+                self.ctx.h_resume = Some(h);
             }
             self.st
                 .restart(&mut self.sys, &mut self.ctx, t, &self.x_ev)?;

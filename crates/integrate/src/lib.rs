@@ -60,7 +60,7 @@ mod wide;
 mod tests;
 
 pub use carry::{Carry, integrate_on};
-pub use driver::{Stats, StopReason, integrate};
+pub use driver::{Stats, Steps, StopReason, integrate};
 pub use error::{IntegrateError, NonFiniteEntry};
 pub use options::{Method, Options, Output, UnknownMethod};
 pub use system::{EventAction, EventDirection, STOP_ROUNDOFF, System, SystemError, stop_due};

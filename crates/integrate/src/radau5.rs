@@ -151,6 +151,9 @@ pub(crate) struct Radau5 {
     atol: f64,
     fnewt: f64,
     first: bool,
+    /// The next restart may continue the last step's collocation polynomial (set by
+    /// [`Radau5::resume`]).
+    resumable: bool,
     reject: bool,
     /// The Jacobian was evaluated at the current step start.
     jac_current: bool,
@@ -188,6 +191,12 @@ fn stages_mut(v: &mut [f64], n: usize) -> (&mut [f64], &mut [f64], &mut [f64]) {
 }
 
 impl Radau5 {
+    /// Lets the next restart continue this workspace's last step, where it starts at that
+    /// step's end with its state ([`crate::integrate_on`]).
+    pub(crate) fn resume(&mut self) {
+        self.resumable = true;
+    }
+
     pub fn new(n: usize, rtol: f64, atol: f64) -> Self {
         let z = || vec![0.0; n];
         let rt = 0.1 * rtol.powf(2.0 / 3.0);
@@ -218,6 +227,7 @@ impl Radau5 {
             atol: at,
             fnewt,
             first: true,
+            resumable: false,
             reject: false,
             jac_current: false,
             has_jacobian: false,
@@ -540,10 +550,16 @@ impl Stepper for Radau5 {
         t: f64,
         x: &[f64],
     ) -> Result<(), IntegrateError> {
+        // A run continued from where the last one ended, its state untouched, starts
+        // Newton from the last step's collocation polynomial, as a step within a run does.
+        let continues = std::mem::take(&mut self.resumable)
+            && self.h_old > 0.0
+            && t == self.t
+            && x == &self.x[..];
         self.t = t;
         self.t_old = t;
         self.x.copy_from_slice(x);
-        self.first = true;
+        self.first = !continues;
         self.reject = false;
         // Asked at every restart, so that each answer covers the handling since the last.
         let survives = sys.jacobian_survives_restart();
@@ -591,6 +607,7 @@ impl Stepper for Radau5 {
         loop {
             ctx.check_budget(t)?;
             let (h, land) = clamp_to_limit(t, self.h.min(ctx.h_max), limit);
+            let capped = land || h < self.h;
             if !fixed {
                 ctx.check_step_size(t, h)?;
             }
@@ -655,6 +672,7 @@ impl Stepper for Radau5 {
                 self.erracc = err.max(1e-2);
                 self.accept(h, t_new);
                 ctx.steps_accepted += 1;
+                ctx.count_capped(capped, h);
                 ctx.passed(t_new);
                 h_new = h_new.min(ctx.h_max);
                 if self.reject {

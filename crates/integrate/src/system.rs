@@ -362,7 +362,8 @@ pub trait System {
     /// the end of the step that landed there, bit for bit). Returns whether the right-hand
     /// side (or `x`, modified in place) changed: the integrator then restarts from `(t, x)`
     /// as after an [`EventAction::Reset`], so that no stage of the old right-hand side is
-    /// reused. Returning `Err` stops the integration with
+    /// reused, but an adaptive method with the step its error control proposed rather than
+    /// a first step estimated anew. Returning `Err` stops the integration with
     /// [`IntegrateError::System`](crate::IntegrateError::System).
     fn on_stop(&mut self, _t: f64, _x: &mut [f64]) -> Result<bool, SystemError> {
         Ok(false)

@@ -366,8 +366,7 @@ pub fn after_run_warnings(
     let mut warnings = sim.run_warnings();
     warnings.extend(crate::scene::step_limit::held_steps_warning(
         scene,
-        stats.t_final - sim.t0(),
-        stats.steps_accepted,
+        &satsim_integrate::Steps::of(stats, sim.t0()),
     ));
     warnings
 }

@@ -223,19 +223,20 @@ impl SceneStepper {
     /// What `satsim run` warns of after a run, for the steps taken so far
     /// ([`after_run_warnings`](crate::api::after_run_warnings)): a flexible body bent beyond
     /// what its modal model holds, an energy budget that did not close, and an explicit
-    /// method's steps held by a stiff motion. The last weighs only the advances that took
-    /// more than one step ([`Stepping::substeps`]): pieces shorter than the stability limit
-    /// are the caller's steps, which Radau IIA would take as they are.
+    /// method's steps held by a stiff motion. The last weighs the steps the integrator set,
+    /// not those cut to end a piece ([`Stepping::steps`], [`held`](crate::scene::step_limit::held)):
+    /// pieces shorter than about the stability limit are the caller's steps, which Radau IIA
+    /// would take as they are.
     pub fn warnings(&self) -> Vec<String> {
         let mut warnings = self.stepping.simulation().run_warnings();
         if let Some(scene) = &self.explicit {
-            let (span, accepted) = self.stepping.substeps();
-            if may_be_held(scene.options.method, accepted) {
+            let steps = self.stepping.steps();
+            if may_be_held(scene.options.method, steps.accepted) {
                 let limit = self
                     .limit
                     .get_or_init(|| stable_step(scene, scene.options.method));
                 if let Some(limit) = limit {
-                    warnings.extend(held_steps_message(scene, span, accepted, limit));
+                    warnings.extend(held_steps_message(scene, &steps, limit));
                 }
             }
         }

@@ -153,6 +153,55 @@ fn radau5_pieces_carry_one_jacobian() {
     near_run([&on, &fresh], &run);
 }
 
+/// Van der Pol's oscillator, `x0'' = μ (1 − x0²) x0' − x0` with μ = 10: nonlinear, so where
+/// Newton starts decides how many iterations it takes.
+struct VanDerPol;
+
+impl System for VanDerPol {
+    fn dim(&self) -> usize {
+        2
+    }
+    fn rhs(&mut self, _t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), SystemError> {
+        dx[0] = x[1];
+        dx[1] = 10.0 * (1.0 - x[0] * x[0]) * x[1] - x[0];
+        Ok(())
+    }
+    fn jacobian_survives_restart(&mut self) -> bool {
+        true
+    }
+}
+
+/// A piece that starts where the last one ended, its state untouched, starts Newton from the
+/// last step's collocation polynomial, as a step within a run does; one whose state the
+/// caller changed (here by an ulp) starts it from zero, as after an event. Van der Pol's
+/// oscillator in 200 pieces of 0.05 s: the untouched ones take fewer right-hand sides (3 933
+/// against 5 092, the one run 2 786), and both end within the tolerance of the one run.
+#[test]
+fn radau5_pieces_untouched_go_on_from_the_last_steps_polynomial() {
+    let (opts, times, x0) = (options(Method::Radau5), Output::Times(vec![]), [2.0, 0.0]);
+    let run = integrate(&mut VanDerPol, &opts, 0.0, &x0, 10.0, &times, none).unwrap();
+    let chain = |nudge: bool| {
+        let (mut carry, mut x, mut rhs) = (Carry::new(), x0.to_vec(), 0);
+        for i in 0..200 {
+            let t = 0.05 * i as f64;
+            if nudge {
+                x[1] = x[1].next_up();
+            }
+            let to = if i == 199 { 10.0 } else { t + 0.05 };
+            let s = integrate_on(&mut VanDerPol, &opts, t, &x, to, &times, none, &mut carry);
+            let s = s.unwrap();
+            rhs += s.rhs_evals;
+            x = s.x_final;
+        }
+        (rhs, x)
+    };
+    let (on, nudged) = (chain(false), chain(true));
+    assert!(on.0 < nudged.0, "{on:?} against {nudged:?}");
+    for (_, x) in [&on, &nudged] {
+        assert!(max_diff(x, &run.x_final) < 1e-6, "{x:?} against {run:?}");
+    }
+}
+
 /// Where the system says its Jacobian did not survive, each piece takes a new one; where
 /// the tolerances change, the carried workspace is not used.
 #[test]

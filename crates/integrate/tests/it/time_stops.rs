@@ -219,3 +219,35 @@ fn a_fixed_step_run_in_pieces_takes_the_same_steps_as_one_run() {
         assert_eq!(a, b);
     }
 }
+
+/// At a sample instant only the held input changes: an adaptive method goes on with the step
+/// its error control proposed. The held input's parabolas are integrated exactly, so nothing
+/// holds the steps but the instants: after the first few, each period of 0.1 s is one step
+/// landing on its instant. (A first step estimated anew at every instant took two a period:
+/// DP5(4) 203 steps for the 100 instants.)
+#[test]
+fn an_adaptive_method_goes_on_through_a_sample_instant_with_its_proposed_step() {
+    for method in [Method::Dp54, Method::Dop853, Method::Radau5] {
+        let mut sys = Sampled::new(0.1);
+        let stats = integrate(
+            &mut sys,
+            &options(method),
+            0.0,
+            &[1.0, 0.0],
+            10.0,
+            &Output::Times(vec![]),
+            |_, _| ControlFlow::Continue(()),
+        )
+        .unwrap();
+        // A step landing on each of the 100 instants after the start (the run's end one).
+        assert!(stats.steps_capped >= 100, "{method:?} {stats:?}");
+        assert!(
+            stats.steps_accepted <= stats.steps_capped + 10,
+            "{method:?}: {} steps, {} landing",
+            stats.steps_accepted,
+            stats.steps_capped
+        );
+        let span = stats.capped_span;
+        assert!(span <= 10.0 + 1e-9, "{span}");
+    }
+}

@@ -48,7 +48,7 @@
 use super::Simulation;
 use super::run::Shared;
 use satsim_integrate::{
-    Carry, IntegrateError, Options, Output, System, SystemError, integrate_on, stop_due,
+    Carry, IntegrateError, Options, Output, Steps, System, SystemError, integrate_on, stop_due,
 };
 use std::cell::RefCell;
 use std::ops::ControlFlow;
@@ -180,10 +180,8 @@ pub struct Stepping {
     failed: Option<String>,
     row: Vec<f64>,
     outs: Vec<f64>,
-    /// The time and the accepted steps of the advances that took more than one step
-    /// ([`Stepping::substeps`]).
-    substep_span: f64,
-    substeps: usize,
+    /// The steps of the advances so far ([`Stepping::steps`]).
+    steps: Steps,
     /// What each piece leaves the next ([`integrate_on`]): an adaptive method's next step,
     /// Radau IIA's Jacobian.
     carry: Carry,
@@ -259,8 +257,7 @@ impl Stepping {
             failed,
             row: Vec::new(),
             outs: Vec::new(),
-            substep_span: 0.0,
-            substeps: 0,
+            steps: Steps::default(),
             carry: Carry::new(),
             work: StepWork::default(),
         }
@@ -281,12 +278,14 @@ impl Stepping {
     pub fn x(&self) -> &[f64] {
         &self.x
     }
-    /// The time (s) and the accepted steps of the advances that took more than one step: the
-    /// steps the integrator, not the caller's pieces, set (an advance of one step took the
-    /// piece whole). Their mean is what an explicit method's stability limit would hold, as
-    /// a run's mean step is for `satsim run`'s warning of steps held by a stiff motion.
-    pub fn substeps(&self) -> (f64, usize) {
-        (self.substep_span, self.substeps)
+    /// The steps of the advances so far: the time they covered, the accepted steps and
+    /// those that landed on a piece's end or a time stop
+    /// ([`Stats::steps_capped`](satsim_integrate::Stats::steps_capped)). Those the
+    /// integrator set, and how often the pieces end, tell whether an explicit method's
+    /// stability limit held them, as a run's steps do for `satsim run`'s warning of steps
+    /// held by a stiff motion.
+    pub fn steps(&self) -> Steps {
+        self.steps
     }
     /// The integrator's work over the advances that finished so far.
     pub fn work(&self) -> StepWork {
@@ -504,10 +503,7 @@ impl Stepping {
                 w.steps_rejected += stats.steps_rejected;
                 w.jacobian_evals += stats.jacobian_evals;
                 w.lu_decompositions += stats.lu_decompositions;
-                if stats.steps_accepted > 1 {
-                    self.substep_span += stats.t_final - self.t;
-                    self.substeps += stats.steps_accepted;
-                }
+                self.steps.add(Steps::of(&stats, self.t));
                 self.t = stats.t_final;
                 self.x = stats.x_final;
                 self.cursor = cursor;

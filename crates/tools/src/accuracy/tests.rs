@@ -51,6 +51,8 @@ fn traj(times: &[f64], states: Vec<Vec<f64>>) -> Trajectory {
             steps_rejected: 0,
             jacobian_evals: 0,
             lu_decompositions: 0,
+            steps_capped: 0,
+            capped_span: 0.0,
             events: vec![],
             t_final: *times.last().unwrap(),
             x_final: vec![],

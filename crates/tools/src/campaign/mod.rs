@@ -167,9 +167,9 @@ pub struct RunStats {
     /// Whether the run's steps were held by its explicit method's stability limit on the
     /// scene's fastest linear motion rather than by the tolerance, as `satsim run` warns of
     /// its one run ([`Campaign::stability_held`]): the column [`HELD_COLUMN`]. For a run
-    /// stepped by flight software, over the control periods the integrator took in more
-    /// than one step ([`Stepping::substeps`](satsim_spacecraft::simulation::Stepping::substeps)):
-    /// a period shorter than the limit bounds the steps itself.
+    /// stepped by flight software, over the steps the integrator set within the control
+    /// periods ([`Stepping::steps`](satsim_spacecraft::simulation::Stepping::steps)): a
+    /// period shorter than about the limit bounds the steps itself.
     pub held: bool,
 }
 
@@ -443,22 +443,23 @@ impl Campaign {
         h
     }
 
-    /// Whether a run of this campaign that took `accepted` steps over `span` seconds had its
-    /// steps held by its explicit adaptive method's stability limit rather than by the
-    /// tolerance: at least [`HELD_MIN_STEPS`](crate::scene::step_limit::HELD_MIN_STEPS)
-    /// accepted steps whose mean is within a factor [`HELD`](crate::scene::step_limit::HELD) of the nominal scene's limit
-    /// ([`stable_step`]; a dispersed run's own moves with its values, and the factor covers
-    /// that). The test `satsim run` applies to its one run
+    /// Whether a run of this campaign that took `steps` had them held by its explicit
+    /// adaptive method's stability limit rather than by the tolerance: at least
+    /// [`HELD_MIN_STEPS`](crate::scene::step_limit::HELD_MIN_STEPS) accepted steps, those the
+    /// error control set within a factor [`HELD`](crate::scene::step_limit::HELD) of the
+    /// nominal scene's limit ([`stable_step`]; a dispersed run's own moves with its values,
+    /// and the factor covers that), the time stops no more often ([`held`]). The test
+    /// `satsim run` applies to its one run
     /// ([`held_steps_warning`](crate::scene::step_limit::held_steps_warning)).
-    pub fn stability_held(&self, span: f64, accepted: usize) -> bool {
+    pub fn stability_held(&self, steps: &satsim_integrate::Steps) -> bool {
         let method = self.nominal.options.method;
-        if !may_be_held(method, accepted) {
+        if !may_be_held(method, steps.accepted) {
             return false;
         }
         let limit = self
             .stability_limit
             .get_or_init(|| stable_step(&self.nominal, method).map(|(limit, _)| limit));
-        limit.is_some_and(|limit| held(span / accepted as f64, limit))
+        limit.is_some_and(|limit| held(steps, limit))
     }
 
     /// The values run `k` uses.
@@ -671,8 +672,8 @@ impl<'c> Collect<'c> {
             Ok(stats) => {
                 let mut c = self;
                 // The run's own span: its first output row is at its start.
-                let span = stats.t_final - c.t0;
-                c.stats.held = c.campaign.stability_held(span, stats.steps_accepted);
+                let steps = satsim_integrate::Steps::of(&stats, c.t0);
+                c.stats.held = c.campaign.stability_held(&steps);
                 c.into_record(values)
             }
             Err(RunError::Integrate(e)) => RunRecord::failed(self.k, values, e.to_string()),

@@ -123,19 +123,19 @@ impl Campaign {
             Ok((
                 s.trajectory().clone(),
                 super::peaks(s.stepping().simulation()),
-                s.stepping().substeps(),
+                s.stepping().steps(),
             ))
         });
         if stopped {
             return None;
         }
         Some(match outcome {
-            Ok((trajectory, peaks, (span, accepted))) => {
+            Ok((trajectory, peaks, steps)) => {
                 let mut c = Collect::new(self, k, &|| false);
                 c.stats.peaks = peaks;
-                // The advances of more than one step: a control period longer than the
-                // stability limit leaves the integrator's steps to it.
-                c.stats.held = self.stability_held(span, accepted);
+                // A control period longer than the stability limit leaves the integrator's
+                // steps to it.
+                c.stats.held = self.stability_held(&steps);
                 let width = trajectory.columns.len();
                 for row in trajectory.values.chunks_exact(width) {
                     // Rows from the stepper are finite (it refuses any that is not).

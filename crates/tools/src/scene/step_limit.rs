@@ -24,7 +24,7 @@
 //! at a slip).
 
 use nalgebra::{Complex, DMatrix};
-use satsim_integrate::Method;
+use satsim_integrate::{Method, Steps};
 use satsim_spacecraft::effects::{
     AttitudeControl, EffectSet, HingeControl, HingeSprings, ReactionWheels,
 };
@@ -696,39 +696,44 @@ pub fn may_be_held(method: Method, accepted: usize) -> bool {
     method.is_explicit_adaptive() && accepted >= HELD_MIN_STEPS
 }
 
-/// Whether a `mean` accepted step is within a factor [`HELD`] of the stability `limit`
-/// either way: the stiff motion, not the tolerance, held the steps.
-pub fn held(mean: f64, limit: f64) -> bool {
-    mean <= HELD * limit && mean >= limit / HELD
+/// Whether the `steps` of an explicit run were held by the stability `limit`: the steps the
+/// error control set (those cut to land on a time stop, the run's end or `h_max` left out,
+/// [`Steps::mean_free`]) have a mean within a factor [`HELD`] of the limit either way, and the
+/// time stops (a sampled law's period, a stepped simulation's pieces) come no more often than
+/// [`HELD`] times the limit. Stops that come more often than that bound the steps about as
+/// much as the limit does, and an implicit method would take about as many.
+pub fn held(steps: &Steps, limit: f64) -> bool {
+    steps.mean_capped_spacing() >= HELD * limit
+        && steps
+            .mean_free()
+            .is_some_and(|mean| mean <= HELD * limit && mean >= limit / HELD)
 }
 
-/// A warning where an adaptive explicit run of `scene` (DP5(4), DOP853) took `accepted`
-/// steps over `span` seconds, a mean step within a factor [`HELD`] of its stability limit on the
-/// scene's fastest linear motion ([`stable_step`]): that motion, not the tolerance, held the
-/// steps, and the implicit Radau IIA would step over it. `None` for other methods, runs of
-/// fewer than [`HELD_MIN_STEPS`] steps (a cost not worth a warning) and runs whose steps the tolerance
-/// held.
-pub fn held_steps_warning(scene: &super::Scene, span: f64, accepted: usize) -> Option<String> {
+/// A warning where the `steps` of an adaptive explicit run of `scene` (DP5(4), DOP853) were
+/// held by its stability limit on the scene's fastest linear motion ([`stable_step`],
+/// [`held`]): that motion, not the tolerance, held the steps, and the implicit Radau IIA
+/// would step over it. `None` for other methods, runs of fewer than [`HELD_MIN_STEPS`] steps
+/// (a cost not worth a warning) and runs whose steps the tolerance or the time stops held.
+pub fn held_steps_warning(scene: &super::Scene, steps: &Steps) -> Option<String> {
     let method = scene.options.method;
-    if !may_be_held(method, accepted) {
+    if !may_be_held(method, steps.accepted) {
         return None;
     }
-    held_steps_message(scene, span, accepted, &stable_step(scene, method)?)
+    held_steps_message(scene, steps, &stable_step(scene, method)?)
 }
 
 /// [`held_steps_warning`] with the stability limit and what sets it (`stable_step`'s) worked
 /// out already: for a caller that weighs its steps more than once (a stepped simulation).
 pub fn held_steps_message(
     scene: &super::Scene,
-    span: f64,
-    accepted: usize,
+    steps: &Steps,
     (limit, what): &(f64, String),
 ) -> Option<String> {
     let method = scene.options.method;
-    let mean = span / accepted as f64;
-    if !may_be_held(method, accepted) || !held(mean, *limit) {
+    if !may_be_held(method, steps.accepted) || !held(steps, *limit) {
         return None;
     }
+    let (accepted, mean) = (steps.accepted - steps.capped, steps.mean_free()?);
     let modes = if scene.flexible.is_some() {
         " (with `elastic_error = false` where the modes' own ringing need not be resolved)"
     } else {

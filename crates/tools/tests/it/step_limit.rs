@@ -763,3 +763,51 @@ fn an_explicit_methods_steps_held_by_a_stiff_motion_are_a_warning_after_the_run(
         );
     }
 }
+
+/// A sampled law's instants bound an explicit run's steps as its stability limit would: on
+/// the damped arm under DP5(4), a hinge law sampled at 1/1.2 of the limit lands almost every
+/// step on an instant, their mean within the factor of the limit, and nothing is said (an
+/// implicit method would take as many steps). Sampled at ten times the limit, the steps between the
+/// instants are the limit's, and the run says so.
+#[test]
+fn steps_held_by_a_sampled_laws_instants_are_not_a_warning() {
+    use satsim_integrate::Method;
+    let c = 0.2 * 2.0 * (1e4 * I).sqrt();
+    let (limit, _) =
+        satsim_tools::scene::step_limit::stable_step(&damped_arm("dp54", 1e-6, c), Method::Dp54)
+            .unwrap();
+    let sampled = |period: f64| {
+        let law = format!(
+            "[effects.hinge_control]\nperiod = {period}\n[[effects.hinge_control.hinge]]\nname = \"h\"\nstart = 0.0\nend = 0.0\nduration = 1.0\nkp = 1.0\n"
+        );
+        let text = arm(1e4, c, &law, 0.001)
+            .replace(
+                "method = \"rk4\"\nstep = 0.001",
+                "method = \"dp54\"\nrtol = 1e-6\natol = 1e-6",
+            )
+            .replace("duration = 2.0", "duration = 60.0");
+        let s = Scene::parse(&text, Path::new("arm.toml")).unwrap();
+        let mut sim = s.simulation().unwrap();
+        let every = satsim_integrate::Output::Interval(s.every);
+        let run: Result<_, satsim_spacecraft::simulation::RunError<()>> =
+            sim.run(&s.options, s.duration, &every, |_, _| Ok(()));
+        let stats = run.unwrap();
+        let warnings = satsim_tools::api::after_run_warnings(&s, &sim, &stats);
+        let held = warnings.iter().any(|w| w.contains("held the steps"));
+        (satsim_integrate::Steps::of(&stats, 0.0), held)
+    };
+    let (steps, held) = sampled(limit / 1.2);
+    let mean = steps.span / steps.accepted as f64;
+    assert!(
+        !held && steps.accepted > 1000 && mean > limit / 1.5 && mean < 1.5 * limit,
+        "{steps:?} {limit}"
+    );
+    // About a step a period: each instant goes on with the step the error control proposed
+    // (3 247 steps for 3 098 instants, where a first step estimated at each took 18 342).
+    assert!(steps.accepted < 2 * steps.capped, "{steps:?}");
+    let (steps, held) = sampled(10.0 * limit);
+    assert!(
+        held && steps.capped < steps.accepted / 2,
+        "{steps:?} {limit}"
+    );
+}

@@ -573,8 +573,8 @@ fn stiff_under_dp54() -> Scene {
 }
 
 /// A stepped simulation warns of steps held by a stiff motion as `satsim run` does, over
-/// the pieces the integrator took in more than one step; pieces shorter than the limit are
-/// the caller's steps, and no warning comes of them.
+/// the steps the integrator set, not those cut to end a piece; pieces shorter than about the
+/// limit are the caller's steps, and no warning comes of them.
 #[test]
 fn steps_held_by_a_stiff_motion_are_warned_of_over_pieces_longer_than_the_limit() {
     use satsim_integrate::Method;
@@ -591,10 +591,11 @@ fn steps_held_by_a_stiff_motion_are_warned_of_over_pieces_longer_than_the_limit(
 
     let mut s = stepper(&scene);
     step_to_end(&mut s, 10.0, || 1.0);
-    let (span, steps) = s.stepping().substeps();
+    let steps = s.stepping().steps();
+    // Ten pieces, each ending in a step cut to land on it.
     assert!(
-        (span - 10.0).abs() < 1e-9 && steps >= 1000,
-        "{span} {steps}"
+        (steps.span - 10.0).abs() < 1e-9 && steps.capped == 10 && steps.accepted >= 1000,
+        "{steps:?}"
     );
     let said = s.warnings();
     let held: Vec<_> = said
@@ -609,8 +610,9 @@ fn steps_held_by_a_stiff_motion_are_warned_of_over_pieces_longer_than_the_limit(
     );
 
     // Pieces of 1/1.2 of the limit, more than a thousand: counted as steps they would be
-    // held (their mean within a factor 1.5 of it); the integrator took each in one step, or
-    // in several of at most half a piece, which are not.
+    // held (their mean within a factor 1.5 of it). Each ends in a step cut to land on it,
+    // and they come more often than 1.5 times the limit: the pieces, not the motion, bound
+    // the steps.
     let piece = limit / 1.2;
     let mut s = stepper(&scene);
     let mut pieces = 0;
@@ -619,10 +621,11 @@ fn steps_held_by_a_stiff_motion_are_warned_of_over_pieces_longer_than_the_limit(
         piece
     });
     assert!(pieces >= 1000, "{pieces}");
-    let (span, steps) = s.stepping().substeps();
+    let steps = s.stepping().steps();
+    assert_eq!(steps.capped, pieces, "{steps:?}");
     // (`span` sums the pieces: round-off of a part in 1e12.)
-    let mean = span / steps.max(1) as f64;
-    assert!(mean <= piece / 2.0 * (1.0 + 1e-9), "{span} {steps}");
+    let spacing = steps.mean_capped_spacing();
+    assert!(spacing <= piece * (1.0 + 1e-9), "{steps:?}");
     assert!(
         !s.warnings().iter().any(|w| w.contains("held the steps")),
         "{:?}",
