@@ -708,14 +708,18 @@ impl NativeSimulation {
     fn max_rows(&self) -> PyResult<u64> {
         Ok(self.lock()?.max_rows())
     }
-    /// The integrator's work over the advances so far: `(name, count)` pairs.
+    /// The integrator's work over the advances so far: `(name, count)` pairs. `steps_capped`
+    /// counts the accepted steps that landed on a piece's end or a time stop (or that
+    /// `h_max` cut), as `satsim run`'s summary does.
     #[getter]
     fn work(&self) -> PyResult<Vec<(&'static str, usize)>> {
-        let w = self.lock()?.stepping().work();
+        let guard = self.lock()?;
+        let (w, steps) = (guard.stepping().work(), guard.stepping().steps());
         Ok(vec![
             ("rhs_evals", w.rhs_evals),
             ("steps_accepted", w.steps_accepted),
             ("steps_rejected", w.steps_rejected),
+            ("steps_capped", steps.capped),
             ("jacobian_evals", w.jacobian_evals),
             ("lu_decompositions", w.lu_decompositions),
         ])
