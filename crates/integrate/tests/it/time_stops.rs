@@ -2,8 +2,8 @@
 //! ([`Options::grid_origin`]).
 
 use satsim_integrate::{
-    EventAction, EventDirection, IntegrateError, Method, Options, Output, System, SystemError,
-    integrate,
+    EventAction, EventDirection, IntegrateError, Method, Options, Output, Stats, System,
+    SystemError, integrate,
 };
 use std::ops::ControlFlow;
 
@@ -59,23 +59,29 @@ fn options(method: Method) -> Options {
     }
 }
 
+/// [`Sampled`] at 0.1 s from `[1, 0]` over `0..t_end` under `method`, no output rows.
+fn sampled_run(method: Method, t_end: f64) -> (Sampled, Stats) {
+    let mut sys = Sampled::new(0.1);
+    let stats = integrate(
+        &mut sys,
+        &options(method),
+        0.0,
+        &[1.0, 0.0],
+        t_end,
+        &Output::Times(vec![]),
+        |_, _| ControlFlow::Continue(()),
+    )
+    .unwrap();
+    (sys, stats)
+}
+
 /// A held input makes the motion a parabola on each interval, which every method of order
 /// two or more integrates exactly: the samples match the closed form to round-off, so the
 /// steps landed on the sample instants and the held value was constant between them.
 #[test]
 fn a_held_input_sampled_at_time_stops_is_exact_for_every_method() {
     for method in Method::ALL {
-        let mut sys = Sampled::new(0.1);
-        let stats = integrate(
-            &mut sys,
-            &options(method),
-            0.0,
-            &[1.0, 0.0],
-            2.0,
-            &Output::Times(vec![]),
-            |_, _| ControlFlow::Continue(()),
-        )
-        .unwrap();
+        let (sys, stats) = sampled_run(method, 2.0);
         assert_eq!(stats.t_final, 2.0);
         // Samples at 0, 0.1, ..., 2.0 (the one at t_end included).
         assert_eq!(sys.samples.len(), 21, "{method}");
@@ -228,17 +234,7 @@ fn a_fixed_step_run_in_pieces_takes_the_same_steps_as_one_run() {
 #[test]
 fn an_adaptive_method_goes_on_through_a_sample_instant_with_its_proposed_step() {
     for method in [Method::Dp54, Method::Dop853, Method::Radau5] {
-        let mut sys = Sampled::new(0.1);
-        let stats = integrate(
-            &mut sys,
-            &options(method),
-            0.0,
-            &[1.0, 0.0],
-            10.0,
-            &Output::Times(vec![]),
-            |_, _| ControlFlow::Continue(()),
-        )
-        .unwrap();
+        let (_, stats) = sampled_run(method, 10.0);
         // A step landing on each of the 100 instants after the start (the run's end one).
         assert!(stats.steps_capped >= 100, "{method:?} {stats:?}");
         assert!(
