@@ -181,10 +181,15 @@ fn tidal(k: f64, e: &Vec3, m: f64, rho: &Vec3) -> Vec3 {
     k * m * (3.0 * e.dot(rho) * e - rho)
 }
 
-/// The tidal field's tensor `k (3 E Eᵀ − 1)` (1/s²) for the local vertical `eb`, and its
-/// rate `k̇ (3 E Eᵀ − 1) + 3k (Ė Eᵀ + E Ėᵀ)` for `eb_dot`, in the same axes.
-fn field(k: f64, eb: &Vec3, k_dot: f64, eb_dot: &Vec3) -> (Mat3, Mat3) {
+/// The tidal field's tensor `k (3 E Eᵀ − 1)` (1/s²) for the local vertical `eb`, and with
+/// `RATE` its rate `k̇ (3 E Eᵀ − 1) + 3k (Ė Eᵀ + E Ėᵀ)` for `eb_dot`, in the same axes
+/// (else zero: the right-hand side does not read it).
+#[inline(always)]
+fn field<const RATE: bool>(k: f64, eb: &Vec3, k_dot: f64, eb_dot: &Vec3) -> (Mat3, Mat3) {
     let shape = eb * eb.transpose() * 3.0 - Mat3::identity();
+    if !RATE {
+        return (shape * k, Mat3::zeros());
+    }
     let turn = (eb_dot * eb.transpose() + eb * eb_dot.transpose()) * (3.0 * k);
     (shape * k, shape * k_dot + turn)
 }
@@ -321,7 +326,11 @@ impl GravityGradient {
             let eb = rot.tr_mul(&e);
             if let Some(flex) = self.flex.as_ref().filter(|_| l.deformable) {
                 let rho = rot.tr_mul(&(ctx.data.position[i] - com));
-                let (t, t_dot) = field(k, &eb, k_dot, &rot.tr_mul(&e_dot));
+                let (t, t_dot) = if POWER {
+                    field::<true>(k, &eb, k_dot, &rot.tr_mul(&e_dot))
+                } else {
+                    field::<false>(k, &eb, k_dot, &e_dot)
+                };
                 field_power +=
                     self.load_deformable::<POWER>(ctx, forces, flex, n, &rho, &t, &t_dot);
                 continue;
@@ -454,7 +463,7 @@ impl Effect for GravityGradient {
             let rot = &ctx.data.rotation[i];
             if let Some(flex) = self.deformable(i) {
                 let rho = rot.tr_mul(&(ctx.data.position[i] - com));
-                let (t, _) = field(k, &rot.tr_mul(&e), 0.0, &Vec3::zeros());
+                let (t, _) = field::<false>(k, &rot.tr_mul(&e), 0.0, &Vec3::zeros());
                 let mut scratch = vec![0.0; ctx.eta.len()];
                 let w = flex.linear_field(i, ctx.eta, &t, &rho, &mut scratch).wrench;
                 moment += rot * w.ang + (ctx.data.position[i] - com).cross(&(rot * w.lin));
@@ -480,7 +489,7 @@ impl Effect for GravityGradient {
             let eb = rot.tr_mul(&e);
             if let Some(flex) = self.deformable(i) {
                 let rho = rot.tr_mul(&(ctx.data.position[i] - com));
-                let (t, _) = field(k, &eb, 0.0, &Vec3::zeros());
+                let (t, _) = field::<false>(k, &eb, 0.0, &Vec3::zeros());
                 v += flex.field_potential(i, ctx.eta, &t, &rho);
                 continue;
             }

@@ -37,13 +37,67 @@ pub struct FieldLoad {
     pub potential: f64,
 }
 
-/// `vec(M) = [M₂₃ − M₃₂, M₃₁ − M₁₃, M₁₂ − M₂₁]`: `(∫ p × T p dm)` is `vec(J T)`.
-fn vec(m: &Mat3) -> Vec3 {
-    Vec3::new(
-        m[(1, 2)] - m[(2, 1)],
-        m[(2, 0)] - m[(0, 2)],
-        m[(0, 1)] - m[(1, 0)],
-    )
+/// `vec(I T) = [(IT)₂₃ − (IT)₃₂, (IT)₃₁ − (IT)₁₃, (IT)₁₂ − (IT)₂₁]` (`∫ p × T p dm` is
+/// `vec(J T)`, and `vec(J T) = −vec(I T)` for the symmetric `T`): the six off-diagonal
+/// entries of the product alone, 18 products where the whole product takes 27.
+#[inline(always)]
+fn vec_of_product(i: &Mat3, t: &Mat3) -> Vec3 {
+    let e =
+        |a: usize, b: usize| i[(a, 0)] * t[(0, b)] + i[(a, 1)] * t[(1, b)] + i[(a, 2)] * t[(2, b)];
+    Vec3::new(e(1, 2) - e(2, 1), e(2, 0) - e(0, 2), e(0, 1) - e(1, 0))
+}
+
+/// The weights `w` of `c(A) = ¼ tr T tr A − ½ tr(T A)` as a dot product with the symmetric
+/// `T`'s six entries `[T₁₁, T₂₂, T₃₃, T₁₂, T₁₃, T₂₃]` ([`packed`]): `c(A)` is linear in `T`,
+/// and only `A`'s symmetric part meets a symmetric `T`. Made once a model
+/// ([`FieldWeights`]), so that the field's generalised forces take six products a term
+/// where `tr A` and `T ∘ A` took twelve.
+pub(crate) fn weights(a: &Mat3) -> [f64; 6] {
+    let q = 0.25 * a.trace();
+    [
+        q - 0.5 * a[(0, 0)],
+        q - 0.5 * a[(1, 1)],
+        q - 0.5 * a[(2, 2)],
+        -0.5 * (a[(0, 1)] + a[(1, 0)]),
+        -0.5 * (a[(0, 2)] + a[(2, 0)]),
+        -0.5 * (a[(1, 2)] + a[(2, 1)]),
+    ]
+}
+
+/// The symmetric `t`'s six entries, in the order of [`weights`].
+#[inline(always)]
+fn packed(t: &Mat3) -> [f64; 6] {
+    [
+        t[(0, 0)],
+        t[(1, 1)],
+        t[(2, 2)],
+        t[(0, 1)],
+        t[(0, 2)],
+        t[(1, 2)],
+    ]
+}
+
+#[inline(always)]
+fn dot6(a: &[f64; 6], b: &[f64; 6]) -> f64 {
+    (a[0] * b[0] + a[1] * b[1] + a[2] * b[2]) + (a[3] * b[3] + a[4] * b[4] + a[5] * b[5])
+}
+
+/// A stiffened body's [`weights`] of `A₀`, `A₁`, `A₂` and of each mode's first-order
+/// inertia change `Iₖ`: what the field's generalised forces read of its
+/// [`super::Stiffening`], made with the model.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct FieldWeights {
+    a: [[f64; 6]; 3],
+    first: Vec<[f64; 6]>,
+}
+
+impl FieldWeights {
+    pub(crate) fn of(s: &super::Stiffening) -> Self {
+        Self {
+            a: [weights(&s.a0), weights(&s.a1), weights(&s.a2)],
+            first: s.first.iter().map(|f| weights(&f.inertia)).collect(),
+        }
+    }
 }
 
 /// The potential `V = −½ m ρᵀTρ − ρᵀT h − ½ tr(T J)` (`tr(T J) = ½ tr T tr I − tr(T I)`) of
@@ -100,27 +154,27 @@ impl FlexModel {
     ) -> FieldLoad {
         let t_rho = t * rho;
         let wrench = Force::new(
-            inertia.h.cross(&t_rho) - vec(&(inertia.inertia * t)),
+            inertia.h.cross(&t_rho) - vec_of_product(&inertia.inertia, t),
             t * (rho * inertia.mass + inertia.h),
         );
         let potential = potential(inertia, t, rho);
-        if let Some(s) = &self.stiffening[i] {
-            // ½ tr(T ∂J) for an inertia change `a` (`∂J = ½ tr(a) 1 − a`).
-            let tr = t.trace();
-            let c = |a: &Mat3| 0.25 * tr * a.trace() - 0.5 * t.component_mul(a).sum();
-            let (c0, c1, c2) = (c(&s.a0), c(&s.a1), c(&s.a2));
+        if let (Some(s), Some(w)) = (&self.stiffening[i], &self.field_weights[i]) {
+            // `c(a) = ½ tr(T ∂J)` for an inertia change `a` (`∂J = ½ tr(a) 1 − a`), from
+            // the weights made with the model.
+            let tp = packed(t);
+            let (c0, c1, c2) = (dot6(&tp, &w.a[0]), dot6(&tp, &w.a[1]), dot6(&tp, &w.a[2]));
             let rta = t_rho.dot(&s.axis);
             let at = self.offset[i];
             let eta = &eta[at..][..self.modes[i]];
-            for (k, (q, first)) in elastic[at..][..eta.len()]
+            for (k, ((q, first), wk)) in elastic[at..][..eta.len()]
                 .iter_mut()
                 .zip(&s.first)
+                .zip(&w.first)
                 .enumerate()
             {
                 let j0 = s.j0_row(k, eta);
                 let j1 = s.j1_row(k, eta);
-                *q += t_rho.dot(&first.h) - j0 * rta + c(&first.inertia)
-                    - 2.0 * (j0 * c0 + j1 * c1)
+                *q += t_rho.dot(&first.h) - j0 * rta + dot6(&tp, wk) - 2.0 * (j0 * c0 + j1 * c1)
                     + 2.0 * eta[k] * c2;
             }
         }

@@ -195,6 +195,9 @@ pub struct FlexModel {
     pub(crate) children: Vec<Vec<usize>>,
     /// Per body: its beam's second-order inertia (centrifugal stiffening), when on.
     pub(crate) stiffening: Vec<Option<Stiffening>>,
+    /// Per stiffened body: its stiffening's weights in the field's generalised forces
+    /// (`field.rs`).
+    pub(crate) field_weights: Vec<Option<super::field::FieldWeights>>,
     /// Per body with given modes: the points [`FlexModel::deflection_of`] watches (those of
     /// [`Modes::Given`]'s `watch` off the frame's origin).
     pub(crate) watch: Vec<Vec<WatchPoint>>,
@@ -559,6 +562,10 @@ impl FlexModel {
             node_axis,
             beams,
             children,
+            field_weights: stiffening
+                .iter()
+                .map(|s| s.as_ref().map(super::field::FieldWeights::of))
+                .collect(),
             stiffening,
             watch,
             spec: flexible.to_vec(),
