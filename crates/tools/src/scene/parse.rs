@@ -661,7 +661,9 @@ impl<'a> Parser<'a> {
             return Err(self.error(
                 Some(v.span()),
                 format!(
-                    "unknown key `{name}` in [effects]: no effect of that name is registered (known: {})",
+                    "unknown key `{name}` in [effects]: no effect of that name is registered (known: {}; \
+                     an effect of your own is registered by the program that reads the scene, \
+                     `Registry::register`, as `cargo run --example custom_effect` does)",
                     self.registry.names().join(", ")
                 ),
             ));
