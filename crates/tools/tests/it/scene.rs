@@ -319,13 +319,15 @@ fn an_inline_model_reports_lines_in_the_scene() {
 }
 
 #[test]
-fn an_unknown_effect_section_names_its_line_and_the_known_ones() {
+fn an_unknown_effect_section_names_its_line_the_known_ones_and_how_to_register_one() {
     // BASE has 7 lines; the section header is line 8.
     let e = error(&format!("{BASE}[effects.magnetorquer]\ndipole = 1.0\n"));
     assert!(
         e.contains("test.toml:8")
             && e.contains("unknown key `magnetorquer` in [effects]")
-            && e.contains("gravity_gradient, hinge_springs, hinge_control, hinge_stops, attitude_control, reaction_wheels"),
+            && e.contains("gravity_gradient, hinge_springs, hinge_control, hinge_stops, attitude_control, reaction_wheels")
+            && e.contains("`Registry::register`")
+            && e.contains("cargo run --example custom_effect"),
         "{e}"
     );
 }
