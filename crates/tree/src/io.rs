@@ -52,6 +52,7 @@
 //! ```
 
 mod attitude;
+mod document;
 mod error;
 mod exact;
 mod flex_file;
@@ -59,6 +60,7 @@ mod model_file;
 mod state_file;
 
 pub use attitude::{Attitude, EULER_SEQUENCES, EulerSequence};
+pub use document::Document;
 pub use error::{FileError, SpannedError, line_of};
 pub use exact::{Exact, exact};
 pub use flex_file::{

@@ -342,11 +342,13 @@ fn msis_of_section(file: &DragFile, section: &Section) -> Result<MsisTrack, File
                 .join(path.get_ref());
             let table = SpaceWeather::read(&full).map_err(here)?;
             // The days the run reads: to its end and the lattice's next knot past it.
-            let duration = toml::from_str::<Duration>(section.text())
-                .ok()
-                .and_then(|d| d.duration)
-                .filter(|d| d.is_finite() && *d >= 0.0)
-                .unwrap_or(0.0);
+            let duration = match section.document() {
+                Some(doc) => Duration::deserialize(doc.only(&["duration"])).ok(),
+                None => toml::from_str::<Duration>(section.text()).ok(),
+            }
+            .and_then(|d| d.duration)
+            .filter(|d| d.is_finite() && *d >= 0.0)
+            .unwrap_or(0.0);
             let start = epoch.to_utc_seconds();
             let (first, _) = day_and_seconds(start);
             let (last, _) = day_and_seconds(start + duration + step);
@@ -452,16 +454,31 @@ mod tests {
         assert!(with_layout.len >= layout.len);
     }
 
-    /// `[effects.drag]` of `text` (a scene at `path`, epoch `epoch`) on a 1 m x 2 m x 3 m box.
+    /// `[effects.drag]` of `text` (a scene at `path`, epoch `epoch`) on a 1 m x 2 m x 3 m box,
+    /// read from the text and from the text parsed once as the scene reader parses it: the
+    /// same outcome both ways.
     fn read(text: &str, path: &std::path::Path, epoch: Option<Epoch>) -> Result<Drag, FileError> {
+        use super::super::section::SceneText;
         let model = boxed_model();
-        let scene = super::super::section::SceneText::new(text, path);
-        let section = Section::new(scene, "drag", 0..text.len(), &model, true).with_epoch(epoch);
-        let file = scene
-            .effect_section::<DragFile>("drag")?
-            .unwrap()
-            .into_inner();
-        Drag::from_section(file, &section)
+        let doc = satsim_tree::io::Document::parse(text);
+        let scenes = [
+            Some(SceneText::new(text, path)),
+            doc.as_ref().ok().map(|d| SceneText::parsed(d, path)),
+        ];
+        let mut read = scenes.into_iter().flatten().map(|scene| {
+            let section =
+                Section::new(scene, "drag", 0..text.len(), &model, true).with_epoch(epoch);
+            let file = scene
+                .effect_section::<DragFile>("drag")?
+                .unwrap()
+                .into_inner();
+            Drag::from_section(file, &section)
+        });
+        let first = read.next().unwrap();
+        for other in read {
+            assert_eq!(format!("{other:?}"), format!("{first:?}"));
+        }
+        first
     }
 
     fn boxed_model() -> satsim_tree::Model {
@@ -555,6 +572,18 @@ mod tests {
         let m = err("space_weather = \"msis_space_weather.csv\"\n", late);
         assert!(
             m.contains("msis_space_weather.csv:7:") && m.contains("`AP_AVG`"),
+            "{m}"
+        );
+        // The days to the run's end: 2024-05-13 lacks its `AP_AVG` too.
+        let m = read(
+            "duration = 172800.0\n[effects.drag]\natmosphere = \"nrlmsise00\"\nspace_weather = \"msis_space_weather.csv\"\n",
+            &path,
+            epoch,
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            m.contains("msis_space_weather.csv:7:") && m.contains("reads the days"),
             "{m}"
         );
         let early = satsim_environment::parse_epoch("2024-05-10T00:00:00 UTC").ok();

@@ -8,7 +8,7 @@
 use satsim_environment::Epoch;
 use satsim_tree::Model;
 use satsim_tree::error::Num;
-use satsim_tree::io::{FileError, line_of, with_key};
+use satsim_tree::io::{Document, FileError, line_of, with_key};
 use serde::de::{self, DeserializeOwned, DeserializeSeed, IgnoredAny, MapAccess, Visitor};
 use std::cell::RefCell;
 use std::fmt;
@@ -23,12 +23,34 @@ use toml::Spanned;
 pub struct SceneText<'a> {
     text: &'a str,
     path: &'a Path,
+    /// The text parsed, where the reader parsed it once for every section
+    /// ([`Self::parsed`]); without it each section parses the text.
+    doc: Option<&'a Document<'a>>,
 }
 
 impl<'a> SceneText<'a> {
     /// The scene `text`, read from `path`.
     pub fn new(text: &'a str, path: &'a Path) -> Self {
-        Self { text, path }
+        Self {
+            text,
+            path,
+            doc: None,
+        }
+    }
+
+    /// The scene already parsed into `doc`, read from `path`: each section is read from
+    /// `doc`'s tree rather than by parsing the text again.
+    pub fn parsed(doc: &'a Document<'a>, path: &'a Path) -> Self {
+        Self {
+            text: doc.text(),
+            path,
+            doc: Some(doc),
+        }
+    }
+
+    /// The parsed scene, when it was given ([`Self::parsed`]).
+    pub fn document(&self) -> Option<&'a Document<'a>> {
+        self.doc
     }
     /// The scene's text.
     pub fn text(&self) -> &'a str {
@@ -135,7 +157,10 @@ impl<'a> SceneText<'a> {
             message: with_key(&e, reword(e.message())),
             path: self.path.to_path_buf(),
         };
-        let de = toml::Deserializer::parse(self.text).map_err(schema)?;
+        let de = match self.doc {
+            Some(doc) => doc.only(&["effects", name]),
+            None => toml::Deserializer::parse(self.text).map_err(schema)?,
+        };
         Pick::<T> {
             path: &["effects", name],
             t: PhantomData,

@@ -13,7 +13,9 @@ use satsim_spacecraft::effects::{EffectSet, Registry, SceneText, Section};
 use satsim_spacecraft::simulation::elastic_error_refusal;
 use satsim_tree::error::Num;
 use satsim_tree::flexible::FlexModel;
-use satsim_tree::io::{FileError, FrameMotion, ModelFile, flex_model_of, line_of, with_key};
+use satsim_tree::io::{
+    Document, FileError, FrameMotion, ModelFile, flex_model_of, line_of, with_key,
+};
 use satsim_tree::{Model, State};
 
 use serde::Deserialize;
@@ -82,14 +84,23 @@ impl<'a> Parser<'a> {
             return Err(FileError::Empty { path });
         }
         let located = |e: &toml::de::Error| e.span().map(|s| line_of(self.text(), s.start));
-        if let Err(e) = self.text().parse::<toml::Table>() {
-            return Err(FileError::Syntax {
+        // The text is parsed once, and the scene's keys and every effect's section read
+        // from that tree (`Document`).
+        let Some(doc) = self.document() else {
+            let doc = Document::parse(self.text()).map_err(|e| FileError::Syntax {
                 line: located(&e),
                 message: e.message().trim_end().to_owned(),
                 path,
-            });
-        }
-        let file: SceneFile = toml::from_str(self.text()).map_err(|e| FileError::Schema {
+            })?;
+            return Parser {
+                src: SceneText::parsed(&doc, self.path()),
+                registry: self.registry,
+                advise: self.advise,
+                integrates: self.integrates,
+            }
+            .scene();
+        };
+        let file = SceneFile::deserialize(doc.deserializer()).map_err(|e| FileError::Schema {
             line: located(&e),
             message: with_key(&e, reword(e.message())),
             path: path.clone(),

@@ -689,15 +689,13 @@ pub fn parse_model_file(text: &str, origin: &Path) -> Result<ModelFile, FileErro
         return Err(FileError::Empty { path });
     }
     let located = |e: &toml::de::Error| e.span().map(|s| line_of(text, s.start));
-    // A plain parse first, to tell syntax errors from schema errors.
-    if let Err(e) = text.parse::<toml::Table>() {
-        return Err(FileError::Syntax {
-            line: located(&e),
-            message: e.message().trim_end().to_owned(),
-            path,
-        });
-    }
-    toml::from_str::<ModelFile>(text).map_err(|e| FileError::Schema {
+    // Parsed first, to tell syntax errors from schema errors.
+    let doc = super::Document::parse(text).map_err(|e| FileError::Syntax {
+        line: located(&e),
+        message: e.message().trim_end().to_owned(),
+        path: path.clone(),
+    })?;
+    ModelFile::deserialize(doc.deserializer()).map_err(|e| FileError::Schema {
         line: located(&e),
         message: with_key(&e, schema_message(e.message())),
         path,
