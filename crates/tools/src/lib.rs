@@ -20,6 +20,7 @@ pub mod campaign;
 pub mod environment;
 pub mod linearize;
 pub mod modes;
+mod numbers;
 pub mod output;
 pub mod scene;
 pub mod scene_keys;

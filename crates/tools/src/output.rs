@@ -2,7 +2,6 @@
 //! in-house writer [`Figure`], used by every plot of satsim), in bounded memory whatever the
 //! number of rows.
 
-use satsim_tree::error::Num;
 use std::fmt::Write as _;
 use std::fs::File;
 use std::io::{self, BufWriter, Write};
@@ -38,7 +37,7 @@ impl CsvWriter {
         })
     }
     /// Appends one row (shortest round-trip formatting, in exponent form past 1e9 or below
-    /// 1e-9 in magnitude: [`Num`]). It reaches the file when its block
+    /// 1e-9 in magnitude: [`satsim_tree::error::Num`]). It reaches the file when its block
     /// is full, 0.5 s after the last flush, or at [`CsvWriter::flush`].
     pub fn row(&mut self, values: &[f64]) -> io::Result<()> {
         self.line.clear();
@@ -46,7 +45,7 @@ impl CsvWriter {
             if i > 0 {
                 self.line.push(',');
             }
-            let _ = write!(self.line, "{}", Num(*v));
+            crate::numbers::push_shortest(&mut self.line, *v);
         }
         self.line.push('\n');
         // `BufWriter` writes its buffer out before a line that does not fit: blocks end on
@@ -368,9 +367,7 @@ impl Figure {
         let mut run = String::new();
         for p in points {
             match self.pixel(p) {
-                Some((x, y)) => {
-                    let _ = write!(run, "{x:.2},{y:.2} ");
-                }
+                Some((x, y)) => push_pixel(&mut run, x, y),
                 None => self.polyline(colour, &mut run),
             }
         }
@@ -407,7 +404,7 @@ impl Figure {
         let mut pts = String::new();
         for p in upper.iter().chain(lower.iter().rev()) {
             if let Some((x, y)) = self.pixel(*p) {
-                let _ = write!(pts, "{x:.2},{y:.2} ");
+                push_pixel(&mut pts, x, y);
             }
         }
         let _ = writeln!(
@@ -952,6 +949,14 @@ pub fn quote(field: &str) -> String {
     } else {
         one_line
     }
+}
+
+/// Appends the point `x,y ` of a polyline, as `format!("{x:.2},{y:.2} ")` writes it.
+fn push_pixel(out: &mut String, x: f64, y: f64) {
+    crate::numbers::push_fixed(out, x, 2);
+    out.push(',');
+    crate::numbers::push_fixed(out, y, 2);
+    out.push(' ');
 }
 
 #[cfg(test)]

@@ -285,19 +285,7 @@ fn pose_columns(scene: &ViewScene) -> Vec<String> {
 
 /// Appends `x` rounded to 1e-9, without trailing zeros (`-0` written as `0`).
 fn push_number(out: &mut String, x: f64) {
-    let start = out.len();
-    let _ = write!(out, "{x:.9}");
-    if out[start..].contains('.') {
-        let trimmed = out[start..]
-            .trim_end_matches('0')
-            .trim_end_matches('.')
-            .len();
-        out.truncate(start + trimmed);
-    }
-    if &out[start..] == "-0" {
-        out.truncate(start);
-        out.push('0');
-    }
+    crate::numbers::push_fixed_trimmed(out, x, 9);
 }
 
 impl ViewData {
