@@ -291,26 +291,29 @@ fn push_number(out: &mut String, x: f64) {
 impl ViewData {
     /// The page: the template with the scene and frames inlined as JSON.
     pub fn html(&self) -> String {
-        let mut json = String::with_capacity(self.frames.data.len() * 12 + 4096);
+        self.html_of(&self.frame_rows())
+    }
+
+    /// The page, its frames' numbers taken from `rows` ([`Self::frame_rows`]): the numbers
+    /// are formatted once for both files ([`Self::write`]).
+    fn html_of(&self, rows: &str) -> String {
+        let scene = serde_json::to_string(&self.scene).expect("the scene serialises");
+        let mut json = String::with_capacity(rows.len() + scene.len() + 64);
         json.push_str("{\"scene\":");
-        json.push_str(&serde_json::to_string(&self.scene).expect("the scene serialises"));
+        // Inside a <script> element, `</` could close it: JSON allows `<\/` for `</`. Only
+        // the scene's strings can hold one; the frames are numbers.
+        json.push_str(&scene.replace("</", "<\\/"));
         let _ = write!(json, ",\"width\":{},\"frames\":[", self.frames.width);
-        for (i, x) in self.frames.data.iter().enumerate() {
-            if i > 0 {
-                json.push(',');
-            }
-            push_number(&mut json, *x);
-        }
+        // The rows' numbers in order, one list: each line's end a comma, the last none.
+        json.push_str(&rows.strip_suffix('\n').unwrap_or(rows).replace('\n', ","));
         json.push_str("]}");
-        // Inside a <script> element, `</` could close it: JSON allows `<\/` for `</`.
-        let json = json.replace("</", "<\\/");
         TEMPLATE.replacen(PLACEHOLDER, &json, 1)
     }
 
-    /// `poses.csv`'s text (numbers to 1e-9, as in the page).
-    pub fn poses_csv(&self) -> String {
-        let mut s = pose_columns(&self.scene).join(",");
-        s.push('\n');
+    /// The frames as `poses.csv`'s rows (without its header): each frame a line, its numbers
+    /// to 1e-9 separated by commas.
+    fn frame_rows(&self) -> String {
+        let mut s = String::with_capacity(self.frames.data.len() * 12);
         for k in 0..self.frames.len() {
             for (i, x) in self.frames.frame(k).iter().enumerate() {
                 if i > 0 {
@@ -323,16 +326,29 @@ impl ViewData {
         s
     }
 
+    /// `poses.csv`'s text (numbers to 1e-9, as in the page).
+    pub fn poses_csv(&self) -> String {
+        self.poses_csv_of(&self.frame_rows())
+    }
+
+    fn poses_csv_of(&self, rows: &str) -> String {
+        let mut s = pose_columns(&self.scene).join(",");
+        s.push('\n');
+        s.push_str(rows);
+        s
+    }
+
     /// Writes `dir/poses.csv`, `dir/view.json` and `dir/view.html`; returns the page's path.
     pub fn write(&self, dir: &Path) -> Result<PathBuf, ViewError> {
         let put = |name: &str, text: &str| {
             let path = dir.join(name);
             std::fs::write(&path, text).map_err(|source| ViewError::Io { path, source })
         };
-        put(POSES_CSV, &self.poses_csv())?;
+        let rows = self.frame_rows();
+        put(POSES_CSV, &self.poses_csv_of(&rows))?;
         let scene = serde_json::to_string_pretty(&self.scene).expect("the scene serialises");
         put(VIEW_JSON, &(scene + "\n"))?;
-        self.write_html(&dir.join(VIEW_HTML))?;
+        put(VIEW_HTML, &self.html_of(&rows))?;
         Ok(dir.join(VIEW_HTML))
     }
 
