@@ -75,20 +75,25 @@ pub(crate) fn push_shortest(out: &mut String, x: f64) {
     }
 }
 
+/// `|x| = m 2^e` exactly, `m < 2^53` (finite `x`).
+fn binary(x: f64) -> (u64, i32) {
+    let bits = x.to_bits();
+    let biased = ((bits >> 52) & 0x7ff) as i32;
+    let fraction = bits & ((1u64 << 52) - 1);
+    if biased == 0 {
+        (fraction, -1074)
+    } else {
+        (fraction | (1u64 << 52), biased - 1075)
+    }
+}
+
 /// Whether two shortest digit strings may be equally close to `x`, where `zmij` (to even)
 /// and `std` (up) choose differently: only where `x`'s exact decimal value has 17 or 18
 /// significant digits, the last a 5, halfway between two of 16 or 17 (fewer digits are
 /// too far apart for both to read back to `x`). Those few go through `std`; so does any
 /// `x` of 2^64 or more, which no output column reaches.
 fn may_tie(x: f64) -> bool {
-    let bits = x.to_bits();
-    let biased = ((bits >> 52) & 0x7ff) as i32;
-    let fraction = bits & ((1u64 << 52) - 1);
-    let (m, e) = if biased == 0 {
-        (fraction, -1074)
-    } else {
-        (fraction | (1u64 << 52), biased - 1075)
-    };
+    let (m, e) = binary(x);
     // The exact value's significant digits as an integer `n` (no trailing zeros).
     let n: u128 = if e >= 0 {
         if e > 11 {
@@ -269,16 +274,8 @@ fn rounded(x: f64, p: usize) -> Option<(bool, u128, u64)> {
     if !x.is_finite() {
         return None;
     }
-    let bits = x.to_bits();
-    let negative = bits >> 63 == 1;
-    let biased = ((bits >> 52) & 0x7ff) as i32;
-    let fraction = bits & ((1u64 << 52) - 1);
-    // x = m 2^e exactly.
-    let (m, e) = if biased == 0 {
-        (fraction, -1074)
-    } else {
-        (fraction | (1u64 << 52), biased - 1075)
-    };
+    let negative = x.is_sign_negative();
+    let (m, e) = binary(x);
     let scale = POW10[p];
     if e >= 0 {
         // An integer: no decimals.
