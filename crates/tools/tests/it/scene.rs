@@ -332,6 +332,21 @@ fn an_unknown_effect_section_names_its_line_the_known_ones_and_how_to_register_o
     );
 }
 
+/// The scene is parsed once (`satsim_tree::io::Document`): a syntax error is still TOML's at
+/// its line, and an integer too large for any key, which the parse accepts, is an error at
+/// its key and line where a section or the scene's own keys read it.
+#[test]
+fn a_scene_parsed_once_names_syntax_and_value_errors_at_their_lines() {
+    let e = error(&format!("{BASE}[orbit\n"));
+    assert!(e.contains("test.toml:8"), "{e}");
+    let e = error(&BASE.replace("duration = 2.0", "duration = 99999999999999999999"));
+    assert!(e.contains("test.toml:2") && e.contains("`duration`"), "{e}");
+    let e = error(&format!(
+        "{BASE}[effects.hinge_springs]\nstiffness = [1, 1, 1, 1, 99999999999999999999]\n"
+    ));
+    assert!(e.contains("test.toml:9") && e.contains("stiffness"), "{e}");
+}
+
 #[test]
 fn the_file_order_of_sections_does_not_change_the_run_order() {
     // Written wheels-last and wheels-first: the controller runs before the wheels either way.
