@@ -10,6 +10,7 @@ use crate::{
     dp54::Dp54,
     error::{IntegrateError, Num},
     events::locate,
+    grid::DecimalGrid,
     options::{Method, Options, Output, OutputTimes},
     radau5::Radau5,
     rk4::Rk4,
@@ -261,8 +262,8 @@ pub(crate) struct Run<'a, S, St, F> {
     event_tol: f64,
     /// The fixed-step grid's origin (`None`: the run's start).
     grid_origin: Option<f64>,
-    /// The fixed-step grid, `(origin, step)`, set by [`Run::begin`].
-    grid: Option<(f64, f64)>,
+    /// The fixed-step grid, set by [`Run::begin`].
+    grid: Option<DecimalGrid>,
     events: Vec<(f64, usize)>,
     /// Event function values at the left end of the unprocessed interval,
     /// at the step end, and at a trial point.
@@ -390,7 +391,10 @@ where
     /// The start: the stepper at `(t0, x0)`, the outputs due there, the event functions'
     /// first values. `Some` when the observer stopped the run already.
     pub(crate) fn begin(&mut self, t0: f64, x0: &[f64]) -> Result<Option<Stats>, IntegrateError> {
-        self.grid = self.ctx.fixed.map(|h| (self.grid_origin.unwrap_or(t0), h));
+        self.grid = self
+            .ctx
+            .fixed
+            .map(|h| DecimalGrid::new(self.grid_origin.unwrap_or(t0), h));
         self.st.restart(&mut self.sys, &mut self.ctx, t0, x0)?;
         while let Some(to) = self.outs.peek().filter(|to| *to <= t0) {
             if (self.observer)(to, x0).is_break() {
@@ -427,8 +431,8 @@ where
                 _ => t_end,
             };
             limit = limit.min(stop);
-            if let Some((origin, h)) = self.grid {
-                limit = limit.min(next_grid_point(origin, h, self.st.t()));
+            if let Some(grid) = &self.grid {
+                limit = limit.min(next_grid_point(grid, self.st.t()));
             }
             return Ok(Plan::Step(limit));
         }
@@ -740,8 +744,9 @@ fn count(n: f64) -> String {
 
 /// The first point of the fixed-step grid `origin + n · h` after `t`, skipping one within
 /// `1e-9 h` of it (no sliver steps). Computed from `n`, never accumulated, so that every run
-/// on the same grid meets the same points bit for bit.
-fn next_grid_point(origin: f64, h: f64, t: f64) -> f64 {
-    let n = ((t - origin) / h + 1e-9).floor() + 1.0;
-    origin + n * h
+/// on the same grid meets the same points bit for bit; as decimals ([`DecimalGrid`]), so that
+/// it meets the output times and sample instants that are the same decimals.
+fn next_grid_point(grid: &DecimalGrid, t: f64) -> f64 {
+    let n = ((t - grid.origin()) / grid.step() + 1e-9).floor() + 1.0;
+    grid.point(n)
 }

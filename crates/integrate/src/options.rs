@@ -3,6 +3,7 @@
 use std::{borrow::Cow, fmt, str::FromStr};
 
 use crate::error::IntegrateError;
+use crate::grid::DecimalGrid;
 
 /// An integration method.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -228,7 +229,9 @@ impl Options {
 /// When the observer is called.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Output {
-    /// At `t0 + i * dt` for `i = 0, 1, ...` up to `t_end`, and at `t_end`.
+    /// At `t0 + i * dt` for `i = 0, 1, ...` up to `t_end`, and at `t_end`; each time the
+    /// double nearest to that decimal where `t0` and `dt` are short decimals
+    /// ([`DecimalGrid`](crate::DecimalGrid): rows at `0.3`, not `0.30000000000000004`).
     Interval(f64),
     /// At these times (non-decreasing, within `[t0, t_end]`).
     Times(Vec<f64>),
@@ -244,6 +247,8 @@ pub(crate) struct OutputTimes<'a> {
     kind: Cow<'a, Output>,
     t0: f64,
     t_end: f64,
+    /// `Interval`'s times `t0 + i · dt`, as decimals.
+    grid: Option<DecimalGrid>,
     i: usize,
     done: bool,
 }
@@ -265,10 +270,15 @@ impl<'a> OutputTimes<'a> {
             }
             _ => {}
         }
+        let grid = match &*kind {
+            Output::Interval(dt) => Some(DecimalGrid::new(t0, *dt)),
+            _ => None,
+        };
         Ok(Self {
             kind,
             t0,
             t_end,
+            grid,
             i: 0,
             done: false,
         })
@@ -283,7 +293,7 @@ impl<'a> OutputTimes<'a> {
             Output::Steps => None,
             Output::Times(ts) => ts.get(self.i).copied(),
             Output::Interval(dt) => {
-                let t = self.t0 + self.i as f64 * dt;
+                let t = self.grid.expect("an interval's grid").point(self.i as f64);
                 // Snap to t_end when within rounding of it, so t_end is hit exactly once. The
                 // rounding scale is that of the times themselves (and of the interval, capped
                 // at the span): an interval longer than the run still writes t0 and t_end.

@@ -1,6 +1,7 @@
 //! Time stops ([`System::next_stop`], [`System::on_stop`]) and the fixed-step grid
 //! ([`Options::grid_origin`]).
 
+use crate::common::Smooth;
 use satsim_integrate::{
     EventAction, EventDirection, IntegrateError, Method, Options, Output, Stats, System,
     SystemError, integrate,
@@ -246,4 +247,34 @@ fn an_adaptive_method_goes_on_through_a_sample_instant_with_its_proposed_step() 
         let span = stats.capped_span;
         assert!(span <= 10.0 + 1e-9, "{span}");
     }
+}
+
+/// Rows every 0.1 s on a grid of 0.01 s: the rows are the grid's points, the doubles
+/// nearest to their decimals (`0.3`, where `3 × 0.1` is `0.30000000000000004` and
+/// `30 × 0.01` is `0.3`), and the run takes its 30 000 steps and no sliver between the two
+/// (30 482 steps when the rows were products).
+#[test]
+fn rows_of_a_fixed_step_run_fall_on_its_grid_as_decimals() {
+    let opts = Options::new(Method::Rk4).with_fixed_step(0.01);
+    let mut times = Vec::new();
+    let stats = integrate(
+        &mut Smooth,
+        &opts,
+        0.0,
+        &Smooth::X0,
+        300.0,
+        &Output::Interval(0.1),
+        |t, _| {
+            times.push(t);
+            ControlFlow::Continue(())
+        },
+    )
+    .unwrap();
+    assert_eq!(stats.steps_accepted, 30_000);
+    assert_eq!(times.len(), 3001);
+    for (k, t) in times.iter().enumerate() {
+        let decimal: f64 = format!("{}.{}", k / 10, k % 10).parse().unwrap();
+        assert_eq!(*t, decimal, "row {k}");
+    }
+    assert_eq!(times[3], 0.3);
 }

@@ -48,7 +48,8 @@
 use super::Simulation;
 use super::run::Shared;
 use satsim_integrate::{
-    Carry, IntegrateError, Options, Output, Steps, System, SystemError, integrate_on, stop_due,
+    Carry, DecimalGrid, IntegrateError, Options, Output, Steps, System, SystemError, integrate_on,
+    stop_due,
 };
 use std::cell::RefCell;
 use std::ops::ControlFlow;
@@ -58,7 +59,8 @@ use thiserror::Error;
 pub type EventRecord = (f64, String, String);
 
 /// The output times of a run from `t0` to `t_end` every `every` seconds, exactly as the
-/// integrator's `Output::Interval(every)` gives them (`t0 + i · every`, the last snapped to
+/// integrator's `Output::Interval(every)` gives them (`t0 + i · every` as decimals,
+/// [`DecimalGrid`]; the last snapped to
 /// `t_end` when within rounding of it, and `t_end` always), then continued past `t_end` on
 /// the same grid.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -91,7 +93,7 @@ impl OutputGrid {
                 .max(self.every.min(span.max(0.0)))
     }
     fn raw(&self, i: usize) -> f64 {
-        self.t0 + i as f64 * self.every
+        DecimalGrid::new(self.t0, self.every).point(i as f64)
     }
     /// The time at `c`.
     fn time(&self, c: Cursor) -> f64 {
@@ -553,7 +555,7 @@ impl Stepping {
             return o;
         }
         if let Some(h) = options.fixed_step.filter(|h| *h > 0.0 && h.is_finite()) {
-            let g = self.origin + ((t_end - self.origin) / h).round() * h;
+            let g = DecimalGrid::new(self.origin, h).point(((t_end - self.origin) / h).round());
             if (g - t_end).abs() <= 1e-9 * h && g > self.t {
                 return g;
             }

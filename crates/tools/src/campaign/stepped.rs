@@ -18,6 +18,7 @@
 use super::{Campaign, Collect, RunRecord, catch_panic};
 use crate::api::Trajectory;
 use crate::stepping::SceneStepper;
+use satsim_integrate::DecimalGrid;
 use satsim_tree::error::{Count, Num};
 
 /// Why a control instant did not go on.
@@ -98,6 +99,8 @@ impl Campaign {
             let t_end = s.stepping().output_grid().t_end;
             // An instant within round-off of the end is the end (no sliver of a step).
             let slack = 1e-9 * period;
+            // The instants as decimals, as the fixed step's grid and the rows are.
+            let instants = DecimalGrid::new(t0, period);
             let mut i = 0u64;
             while s.t() < t_end {
                 let t = s.t();
@@ -110,7 +113,7 @@ impl Campaign {
                     }
                 }
                 i += 1;
-                let mut next = t0 + i as f64 * period;
+                let mut next = instants.point(i as f64);
                 if next > t_end - slack {
                     next = t_end;
                 }
