@@ -432,7 +432,10 @@ where
             };
             limit = limit.min(stop);
             if let Some(grid) = &self.grid {
-                limit = limit.min(next_grid_point(grid, self.st.t()));
+                // The next grid point, skipping one within `1e-9 h` of `t` (no sliver
+                // steps): from its index, so every run on the grid meets the same points bit
+                // for bit, and as a decimal, so it meets the rows and samples that are.
+                limit = limit.min(grid.next_after(self.st.t(), 1e-9));
             }
             return Ok(Plan::Step(limit));
         }
@@ -740,13 +743,4 @@ fn count(n: f64) -> String {
     } else {
         format!("{n:.3e}")
     }
-}
-
-/// The first point of the fixed-step grid `origin + n · h` after `t`, skipping one within
-/// `1e-9 h` of it (no sliver steps). Computed from `n`, never accumulated, so that every run
-/// on the same grid meets the same points bit for bit; as decimals ([`DecimalGrid`]), so that
-/// it meets the output times and sample instants that are the same decimals.
-fn next_grid_point(grid: &DecimalGrid, t: f64) -> f64 {
-    let n = ((t - grid.origin()) / grid.step() + 1e-9).floor() + 1.0;
-    grid.point(n)
 }

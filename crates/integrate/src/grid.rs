@@ -81,6 +81,12 @@ impl DecimalGrid {
         self.step
     }
 
+    /// The first instant after `t`, one within `slack` steps past `t` skipped (so that a
+    /// time met within round-off moves on), computed from its index, never accumulated.
+    pub fn next_after(&self, t: f64, slack: f64) -> f64 {
+        self.point(((t - self.origin) / self.step + slack).floor() + 1.0)
+    }
+
     /// The `k`-th instant (`k` a whole number): the double nearest to `origin + k · step`
     /// as decimals, else `origin + k · step` in doubles.
     pub fn point(&self, k: f64) -> f64 {
@@ -187,6 +193,18 @@ mod tests {
         let g = DecimalGrid::new(0.0, 0.123456789012345);
         assert!(g.decimal.is_some());
         assert_eq!(g.point(1e6), 1e6 * 0.123456789012345);
+    }
+
+    #[test]
+    fn the_next_instant_skips_one_within_the_slack() {
+        let g = DecimalGrid::new(0.0, 0.01);
+        assert_eq!(g.next_after(0.3, 1e-9), 0.31);
+        assert_eq!(g.next_after(0.29, 1e-9), 0.3);
+        // 0.3 − 1e-13 is within 1e-9 steps of 0.3: the point after it is 0.31.
+        assert_eq!(g.next_after(0.3 - 1e-13, 1e-9), 0.31);
+        assert_eq!(g.next_after(0.3 - 1e-6, 1e-9), 0.3);
+        // The grid goes on below its origin.
+        assert_eq!(g.next_after(-1.0, 1e-9), -0.99);
     }
 
     #[test]

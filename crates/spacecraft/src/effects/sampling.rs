@@ -54,7 +54,6 @@ impl Sampling {
     /// it (a `t` within a millionth of a period below a multiple counts as that multiple,
     /// so that a stop met within round-off moves on).
     pub fn taken(&mut self, t: f64) {
-        let k = (t / self.period() + 1e-6).floor() + 1.0;
-        self.next = self.grid.point(k);
+        self.next = self.grid.next_after(t, 1e-6);
     }
 }
