@@ -251,6 +251,8 @@ pub(crate) struct OutputTimes<'a> {
     grid: Option<DecimalGrid>,
     i: usize,
     done: bool,
+    /// The time at `i` ([`Self::peek`]).
+    next: Option<f64>,
 }
 
 impl<'a> OutputTimes<'a> {
@@ -274,26 +276,35 @@ impl<'a> OutputTimes<'a> {
             Output::Interval(dt) => Some(DecimalGrid::new(t0, *dt)),
             _ => None,
         };
-        Ok(Self {
+        let mut times = Self {
             kind,
             t0,
             t_end,
             grid,
             i: 0,
             done: false,
-        })
+            next: None,
+        };
+        times.next = times.time_at(0);
+        Ok(times)
     }
 
-    /// The next pending output time, if any (`Steps` has none).
+    /// The next pending output time, if any (`Steps` has none). Read before every step of a
+    /// fixed-step run: kept, and made anew only when the output is taken.
     pub(crate) fn peek(&self) -> Option<f64> {
+        self.next
+    }
+
+    /// The output time at `i`, unless done.
+    fn time_at(&self, i: usize) -> Option<f64> {
         if self.done {
             return None;
         }
         match &*self.kind {
             Output::Steps => None,
-            Output::Times(ts) => ts.get(self.i).copied(),
+            Output::Times(ts) => ts.get(i).copied(),
             Output::Interval(dt) => {
-                let t = self.grid.expect("an interval's grid").point(self.i as f64);
+                let t = self.grid.expect("an interval's grid").point(i as f64);
                 // Snap to t_end when within rounding of it, so t_end is hit exactly once. The
                 // rounding scale is that of the times themselves (and of the interval, capped
                 // at the span): an interval longer than the run still writes t0 and t_end.
@@ -309,10 +320,11 @@ impl<'a> OutputTimes<'a> {
     }
 
     pub(crate) fn advance(&mut self) {
-        if matches!(*self.kind, Output::Interval(_)) && self.peek() == Some(self.t_end) {
+        if matches!(*self.kind, Output::Interval(_)) && self.next == Some(self.t_end) {
             self.done = true;
         }
         self.i += 1;
+        self.next = self.time_at(self.i);
     }
 
     pub(crate) fn every_step(&self) -> bool {
