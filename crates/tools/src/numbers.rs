@@ -32,10 +32,20 @@ pub(crate) fn push_shortest(out: &mut String, x: f64) {
     }
     let mut buffer = zmij::Buffer::new();
     let text = buffer.format_finite(x);
-    // Between 1e-5 and 1e15 `zmij` writes the plain form that `{}` writes, with `.0` on a
-    // whole number; elsewhere its digits are laid out here.
-    if (1e-9..1e9).contains(&x.abs()) && !text.as_bytes().contains(&b'e') {
+    // `zmij` writes the plain form from 1e-5 to 1e16 (`.0` on a whole number), `d.ddde-n`
+    // below (`{:e}`'s form) and `d.ddde+n` above. Where that is `Num`'s form it goes out as
+    // it is; the exponents -6 to -9 are laid out plain from their digits; the rest (from
+    // `1e9`, rare in a run's columns) goes through the digits' layout.
+    let a = x.abs();
+    if (1e-5..1e9).contains(&a) {
         out.push_str(text.strip_suffix(".0").unwrap_or(text));
+        return;
+    }
+    if a < 1e-9 {
+        out.push_str(text);
+        return;
+    }
+    if a < 1e-5 && push_small(out, text) {
         return;
     }
     let d = Decimal::of(text);
@@ -73,6 +83,31 @@ pub(crate) fn push_shortest(out: &mut String, x: f64) {
             out.push_str(&digits[whole..]);
         }
     }
+}
+
+/// Appends `zmij`'s `d.ddde-n`, `n` from 6 to 9, as `{}` writes it: `0.` and `n - 1` zeros
+/// before the digits. Writes nothing and returns `false` for any other form.
+fn push_small(out: &mut String, text: &str) -> bool {
+    let (negative, t) = match text.strip_prefix('-') {
+        Some(t) => (true, t),
+        None => (false, text),
+    };
+    let b = t.as_bytes();
+    let Some(&[e, minus, n]) = b.last_chunk::<3>() else {
+        return false;
+    };
+    if e != b'e' || minus != b'-' || !(b'6'..=b'9').contains(&n) {
+        return false;
+    }
+    let mantissa = &t[..t.len() - 3];
+    if negative {
+        out.push('-');
+    }
+    out.push_str("0.");
+    out.push_str(&"00000000"[..usize::from(n - b'1')]);
+    out.push_str(&mantissa[..1]);
+    out.push_str(mantissa.get(2..).unwrap_or(""));
+    true
 }
 
 /// `|x| = m 2^e` exactly, `m < 2^53` (finite `x`).
@@ -381,6 +416,23 @@ mod tests {
             let n = (next() % 40) as i32;
             v.push(k * 2f64.powi(-n) * if next().is_multiple_of(2) { 1.0 } else { -1.0 });
         }
+        for _ in 0..200_000 {
+            // Full-precision numbers of every magnitude from 1e-12 to 1e18, as a run's
+            // states are, and the edges of `zmij`'s and `Num`'s forms and their neighbours.
+            let p = (next() % 31) as i32 - 12;
+            let x = (1.0 + (next() >> 11) as f64 / (1u64 << 53) as f64 * 9.0) * 10f64.powi(p);
+            v.push(if next().is_multiple_of(2) { x } else { -x });
+        }
+        for edge in [1e-9f64, 1e-5, 1e9, 1e16] {
+            let mut x = edge;
+            for _ in 0..4 {
+                x = x.next_down();
+            }
+            for _ in 0..9 {
+                v.extend([x, -x]);
+                x = x.next_up();
+            }
+        }
         for _ in 0..50_000 {
             // Halfway points of 2 and 9 decimals, and their neighbours.
             let p = if next().is_multiple_of(2) { 2 } else { 9 };
@@ -399,6 +451,22 @@ mod tests {
             push_shortest(&mut out, x);
             assert_eq!(out, Num(x).to_string(), "{x:e} ({:#x})", x.to_bits());
         }
+    }
+
+    #[test]
+    fn numbers_from_1e_9_to_1e_5_take_the_short_layout() {
+        let mut out = String::new();
+        let small = samples()
+            .into_iter()
+            .filter(|x| (1e-9..1e-5).contains(&x.abs()));
+        let mut n = 0;
+        for x in small {
+            out.clear();
+            let mut buffer = zmij::Buffer::new();
+            assert!(push_small(&mut out, buffer.format_finite(x)), "{x:e}");
+            n += 1;
+        }
+        assert!(n > 10_000, "{n} samples");
     }
 
     #[test]
