@@ -46,7 +46,8 @@
 
 use super::{Context, Effect, Forces, Links, Needs, OrbitState, Power, SceneEffect, Section};
 use satsim_integrate::SystemError;
-use satsim_tree::flexible::{FlexModel, field::potential};
+use satsim_tree::flexible::FlexModel;
+use satsim_tree::flexible::field::{field_wrench, potential};
 use satsim_tree::io::FileError;
 use satsim_tree::kernel_parts;
 use satsim_tree::spatial::{Force, Mat3, RigidInertia, Vec3, skew};
@@ -169,6 +170,12 @@ impl Loaded {
     }
 }
 
+/// Body `i`'s inertia at its deformation: the kinematics' own where it is current.
+fn deformed_inertia(ctx: &Context, flex: &FlexModel, i: usize) -> RigidInertia {
+    ctx.deformed
+        .map_or_else(|| flex.deformed_inertia(i, ctx.eta), |d| d[i])
+}
+
 /// The couple `3 k E × I E` on a body of inertia `inertia` (about its centre of mass) with
 /// the local vertical `eb`, both in its axes.
 fn couple(k: f64, eb: &Vec3, inertia: &Mat3) -> Vec3 {
@@ -202,9 +209,7 @@ impl GravityGradient {
             let com = match &self.flex {
                 Some(flex) if l.deformable => {
                     // The dynamics' own, made once by the kinematics, where it is current.
-                    let deformed = ctx
-                        .deformed
-                        .map_or_else(|| flex.deformed_inertia(i, ctx.eta), |d| d[i]);
+                    let deformed = deformed_inertia(ctx, flex, i);
                     *d = deformed;
                     deformed.h / l.mass
                 }
@@ -247,7 +252,7 @@ impl GravityGradient {
         let (mut m, mut first) = (0.0, Vec3::zeros());
         for (i, body) in ctx.model.bodies().iter().enumerate() {
             let h = if self.deformable(i).is_some() {
-                flex.deformed_inertia(i, ctx.eta).h
+                deformed_inertia(ctx, flex, i).h
             } else {
                 body.com() * body.mass()
             };
@@ -464,8 +469,7 @@ impl Effect for GravityGradient {
             if let Some(flex) = self.deformable(i) {
                 let rho = rot.tr_mul(&(ctx.data.position[i] - com));
                 let (t, _) = field::<false>(k, &rot.tr_mul(&e), 0.0, &Vec3::zeros());
-                let mut scratch = vec![0.0; ctx.eta.len()];
-                let w = flex.linear_field(i, ctx.eta, &t, &rho, &mut scratch).wrench;
+                let w = field_wrench(&deformed_inertia(ctx, flex, i), &t, &rho);
                 moment += rot * w.ang + (ctx.data.position[i] - com).cross(&(rot * w.lin));
                 continue;
             }
@@ -490,7 +494,7 @@ impl Effect for GravityGradient {
             if let Some(flex) = self.deformable(i) {
                 let rho = rot.tr_mul(&(ctx.data.position[i] - com));
                 let (t, _) = field::<false>(k, &eb, 0.0, &Vec3::zeros());
-                v += flex.field_potential(i, ctx.eta, &t, &rho);
+                v += potential(&deformed_inertia(ctx, flex, i), &t, &rho);
                 continue;
             }
             v += 0.5 * k * (3.0 * eb.dot(&(body.inertia_com() * eb)) - body.inertia_com().trace());

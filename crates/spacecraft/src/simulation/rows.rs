@@ -135,10 +135,8 @@ impl Simulation {
         let d = &mut self.data;
         let (kinetic, strain, p, h) = match (&self.model.flex, &mut d.flex) {
             (Some(f), Some(w)) => {
-                let (kinetic, strain) = flexible::energy(f, &mut w.data, &w.q, &w.v)
-                    .map_err(SystemError::from_error)?;
-                let (p, h) = flexible::momentum(f, &d.tree, &w.q, &w.v);
-                (kinetic, strain, p, h)
+                // The first pass is the kinematics' on this state.
+                flexible::energy_and_momentum(f, &w.data, &d.tree, &w.q, &w.v)
             }
             _ => {
                 // The energy and momenta in one pass (bit for bit the separate functions').

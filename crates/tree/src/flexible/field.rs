@@ -112,6 +112,23 @@ pub fn potential(inertia: &RigidInertia, t: &Mat3, rho: &Vec3) -> f64 {
     -0.5 * inertia.mass * rho.dot(&(t * rho)) - rho.dot(&(t * inertia.h)) - 0.5 * tj
 }
 
+/// The wrench of the linear field `f(x) = T x` on a body of inertia `inertia` (about its
+/// frame's origin, body axes), that origin at `rho` from the field's centre, on its frame:
+/// [`FlexModel::linear_field_on`]'s, for a caller that reads only the wrench (an output
+/// column).
+#[inline(always)]
+pub fn field_wrench(inertia: &RigidInertia, t: &Mat3, rho: &Vec3) -> Force {
+    wrench_of(inertia, t, rho, &(t * rho))
+}
+
+#[inline(always)]
+fn wrench_of(inertia: &RigidInertia, t: &Mat3, rho: &Vec3, t_rho: &Vec3) -> Force {
+    Force::new(
+        inertia.h.cross(t_rho) - vec_of_product(&inertia.inertia, t),
+        t * (rho * inertia.mass + inertia.h),
+    )
+}
+
 impl FlexModel {
     /// The potential `V` of the linear field `f(x) = T x` (per unit mass, `t` symmetric,
     /// body axes, 1/s²) over body `i` at the elastic coordinates `eta` (all of them), its
@@ -153,10 +170,7 @@ impl FlexModel {
         elastic: &mut [f64],
     ) -> FieldLoad {
         let t_rho = t * rho;
-        let wrench = Force::new(
-            inertia.h.cross(&t_rho) - vec_of_product(&inertia.inertia, t),
-            t * (rho * inertia.mass + inertia.h),
-        );
+        let wrench = wrench_of(inertia, t, rho, &t_rho);
         let potential = potential(inertia, t, rho);
         if let (Some(s), Some(w)) = (&self.stiffening[i], &self.field_weights[i]) {
             // `c(a) = ½ tr(T ∂J)` for an inertia change `a` (`∂J = ½ tr(a) 1 − a`), from

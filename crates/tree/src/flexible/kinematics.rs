@@ -75,3 +75,47 @@ pub fn momentum(model: &FlexModel, data: &Data, q: &[f64], v: &[f64]) -> (Vec3, 
     };
     (p, h_origin - c.cross(&p))
 }
+
+/// [`super::energy`] and [`momentum`] in one pass, after [`forward_kinematics`] on `(q, v)`:
+/// the first pass's velocities and deformed inertias in `flex` are read, not made again (an
+/// output row's kinematics has just made them), and each body's momentum `I vᵢ + P η̇ᵢ` is
+/// formed once for both. Bit for bit the two functions' values, as
+/// `(kinetic, strain, p, h)`.
+pub fn energy_and_momentum(
+    model: &FlexModel,
+    flex: &FlexData,
+    data: &Data,
+    q: &[f64],
+    v: &[f64],
+) -> (f64, f64, Vec3, Vec3) {
+    let rigid = &model.rigid;
+    let nv = rigid.nv();
+    let mut t = 0.0;
+    let (mut p, mut h_origin) = (Vec3::zeros(), Vec3::zeros());
+    let (mut mass, mut first) = (0.0, Vec3::zeros());
+    for i in 0..rigid.n_bodies() {
+        let vi = flex.v[i];
+        let inertia = &flex.inertia[i];
+        let mut f = inertia.mul_motion(&vi);
+        for k in 0..model.modes[i] {
+            let e = model.offset[i] + k;
+            let pk = model.momentum_at(i, q, k);
+            f += pk * v[nv + e];
+            t += 0.5 * v[nv + e] * (v[nv + e] + vi.dot(&pk));
+        }
+        t += 0.5 * vi.dot(&f);
+        mass += inertia.mass;
+        first += data.position[i] * inertia.mass + data.rotation[i] * inertia.h;
+        let r = &data.rotation[i];
+        let lin = r * f.lin;
+        p += lin;
+        h_origin += r * f.ang + data.position[i].cross(&lin);
+    }
+    let (t, strain) = super::add_armature_and_strain(model, q, v, t);
+    let c = if model.stiffening.iter().any(Option::is_some) {
+        first / mass
+    } else {
+        center_of_mass(rigid, data)
+    };
+    (t, strain, p, h_origin - c.cross(&p))
+}

@@ -62,7 +62,7 @@ pub use beam::{Beam, Stiffening, StiffeningIntegrals};
 pub use crba::crba;
 pub use data::FlexData;
 pub use field::FieldLoad;
-pub use kinematics::{forward_kinematics, momentum};
+pub use kinematics::{energy_and_momentum, forward_kinematics, momentum};
 pub use modal::{ModalData, NodeShape};
 pub use model::{
     Deflection, FlexError, FlexModel, Flexible, LargeDeflection, MAGNIFICATION_LIMIT,
@@ -84,7 +84,7 @@ pub fn energy(
     data::check_state(model, q, v)?;
     data::velocities(model, data, q, v);
     let rigid = &model.rigid;
-    let (nq, nv) = (rigid.nq(), rigid.nv());
+    let nv = rigid.nv();
     let mut t = 0.0;
     for i in 0..rigid.n_bodies() {
         let vi = data.v[i];
@@ -98,11 +98,18 @@ pub fn energy(
         }
         t += 0.5 * vi.dot(&h);
     }
-    for j in rigid.joints.iter().flatten() {
+    Ok(add_armature_and_strain(model, q, v, t))
+}
+
+/// `t` plus the rotors' kinetic energy `½ Σ armature φ̇²` (added in order, as the energy
+/// sums), and the strain energy `½ Σ ωₖ² ηₖ²`.
+fn add_armature_and_strain(model: &FlexModel, q: &[f64], v: &[f64], mut t: f64) -> (f64, f64) {
+    for j in model.rigid.joints.iter().flatten() {
         t += 0.5 * j.armature() * v[j.dof] * v[j.dof];
     }
+    let nq = model.rigid.nq();
     let strain = (0..model.n_elastic)
         .map(|e| 0.5 * model.stiffness[e] * q[nq + e] * q[nq + e])
         .sum();
-    Ok((t, strain))
+    (t, strain)
 }

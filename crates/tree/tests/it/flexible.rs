@@ -540,9 +540,16 @@ fn rk4_step(model: &FlexModel, data: &mut FlexData, x: &mut [f64], h: f64, k: &m
 /// total (kinetic plus strain) energy.
 fn energy_drift(model: &FlexModel, x: &mut [f64], h: f64, steps: usize) -> f64 {
     let mut data = FlexData::new(model);
+    let mut rigid = satsim_tree::Data::new(model.rigid());
     let nq = model.nq();
     let mut energy = |x: &[f64]| {
-        let (t, u) = flexible::energy(model, &mut data, &x[..nq], &x[nq..]).unwrap();
+        let (q, v) = x.split_at(nq);
+        let (t, u) = flexible::energy(model, &mut data, q, v).unwrap();
+        // The output rows' one pass: the two functions' values bit for bit.
+        flexible::forward_kinematics(model, &mut data, &mut rigid, q, v).unwrap();
+        let (p, h) = flexible::momentum(model, &rigid, q, v);
+        let one_pass = flexible::energy_and_momentum(model, &data, &rigid, q, v);
+        assert_eq!(one_pass, (t, u, p, h));
         t + u
     };
     let e0 = energy(x);

@@ -438,6 +438,9 @@ fn drifts(model: &FlexModel, x: &mut [f64], duration: f64, mut each: impl FnMut(
         let (t, u) = flexible::energy(model, &mut data, q, v).unwrap();
         flexible::forward_kinematics(model, &mut data, &mut rigid, q, v).unwrap();
         let (p, h) = flexible::momentum(model, &rigid, q, v);
+        // The output rows' one pass: the two functions' values bit for bit.
+        let one_pass = flexible::energy_and_momentum(model, &data, &rigid, q, v);
+        assert_eq!(one_pass, (t, u, p, h));
         (t + u, p, h)
     };
     let (e0, p0, h0) = conserved(x);
