@@ -97,6 +97,8 @@ pub fn run(args: &Args) -> Result<Output, CliError> {
 
     let mut curves: Vec<Decimation> = plotted.iter().map(|_| Decimation::new()).collect();
     let (mut rows, mut first_t, mut last_t) = (0usize, f64::NAN, f64::NAN);
+    // The file's own time span, for the message when the range holds none of its rows.
+    let (mut file_first, mut file_last) = (f64::NAN, f64::NAN);
     for (k, line) in lines.by_ref().enumerate() {
         let line_no = k + 2;
         let line = line.map_err(|e| CliError::Other(format!("{name}:{line_no}: {e}")))?;
@@ -120,6 +122,10 @@ pub fn run(args: &Args) -> Result<Output, CliError> {
             })
         };
         let t = number(t_col)?;
+        if file_first.is_nan() {
+            file_first = t;
+        }
+        file_last = t;
         if t < from || t > to {
             continue;
         }
@@ -140,13 +146,16 @@ pub fn run(args: &Args) -> Result<Output, CliError> {
     if rows == 0 {
         let range = match (args.from, args.to) {
             (None, None) => String::new(),
-            (f, t) => format!(
-                " between t = {} and {} s",
-                f.map_or("the start".into(), |v| v.to_string()),
-                t.map_or("the end".into(), |v| v.to_string())
-            ),
+            (Some(f), None) => format!(" with t >= {f} s"),
+            (None, Some(t)) => format!(" with t <= {t} s"),
+            (Some(f), Some(t)) => format!(" with {f} <= t <= {t} s"),
         };
-        return Err(CliError::Other(format!("{name}: no rows{range}")));
+        let span = if file_first.is_nan() {
+            String::new()
+        } else {
+            format!("; its rows span t = {file_first} .. {file_last} s")
+        };
+        return Err(CliError::Other(format!("{name}: no rows{range}{span}")));
     }
 
     let labels: Vec<&str> = plotted.iter().map(|&c| names[c]).collect();

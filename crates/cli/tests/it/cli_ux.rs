@@ -599,7 +599,7 @@ fn plot_refuses_bad_input_naming_it() {
     );
     fails(
         &["plot", "a.csv", "--columns", "x", "--from", "5"],
-        &["a.csv", "no rows between t = 5"],
+        &["a.csv", "no rows with t >= 5 s; its rows span t = 0 .. 2 s"],
     );
     fails(
         &["plot", "a.csv", "--columns", "x", "--to", "abc"],
