@@ -33,7 +33,7 @@
 use nalgebra::{Rotation3, SymmetricEigen, UnitQuaternion};
 use satsim_tree::flexible::{self, Beam, FlexData, FlexModel};
 use satsim_tree::spatial::{Mat3, Vec3};
-use satsim_tree::{BaseKind, Data, Model, center_of_mass, forward_kinematics};
+use satsim_tree::{BaseKind, Data, Model, center_of_mass, forward_poses};
 use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -531,7 +531,6 @@ struct FlexPoses {
     data: FlexData,
     cols: Vec<usize>,
     q: Vec<f64>,
-    v: Vec<f64>,
 }
 
 /// Records body poses from output rows (see the module's conventions), keeping at most
@@ -555,7 +554,6 @@ pub struct PoseRecorder {
     model: Model,
     data: Data,
     q: Vec<f64>,
-    v: Vec<f64>,
     scene: ViewScene,
     attitude: Option<[usize; 4]>,
     /// For each model hinge, its `angle_<name>` column (a wheel rotor's has none: zero).
@@ -619,7 +617,6 @@ impl PoseRecorder {
         Ok(Self {
             data: Data::new(model),
             q: model.neutral(),
-            v: vec![0.0; model.nv()],
             model: model.clone(),
             scene,
             attitude,
@@ -701,7 +698,6 @@ impl PoseRecorder {
         rec.flex = Some(FlexPoses {
             data: FlexData::new(model),
             q: model.neutral(),
-            v: vec![0.0; model.nv()],
             model: model.clone(),
             cols,
         });
@@ -748,9 +744,9 @@ impl PoseRecorder {
                 for (j, &c) in fx.cols.iter().enumerate() {
                     fx.q[nq + j] = row[c];
                 }
-                flexible::forward_kinematics(&fx.model, &mut fx.data, &mut self.data, &fx.q, &fx.v)
+                flexible::forward_poses(&fx.model, &mut fx.data, &mut self.data, &fx.q)
             }
-            None => forward_kinematics(&self.model, &mut self.data, &self.q, &self.v),
+            None => forward_poses(&self.model, &mut self.data, &self.q),
         }
         .map_err(|e| ViewError::Record(e.to_string()))?;
         let origin = match self.model.base() {

@@ -250,3 +250,26 @@ fn velocities_in(model: &FlexModel, data: &mut FlexData, q: &[f64], v: &[f64]) {
         }
     }
 }
+
+/// Pass 1's `Xup` alone, at `q` (the same transforms as [`velocities`]'s): what the bodies'
+/// poses need, for a caller that reads no motion (a view).
+pub(crate) fn transforms(model: &FlexModel, data: &mut FlexData, q: &[f64]) {
+    let rigid = &model.rigid;
+    let eta = &q[rigid.nq()..];
+    for i in 1..rigid.n_bodies() {
+        let x = rigid.xup(i, q);
+        data.xup[i] = match &model.nodes[i] {
+            None => x,
+            Some(node) => {
+                let p = rigid.parent[i].expect("non-root body has a parent");
+                let (o, m) = (model.offset[p], model.modes[p]);
+                let node_x = node.pose(&eta[o..o + m]);
+                let xc = Transform::new(x.rot, x.trans - node.at);
+                match &model.node_axis[i] {
+                    Some(a) => a.compose(&xc, &node_x),
+                    None => xc.compose(&node_x),
+                }
+            }
+        };
+    }
+}

@@ -1,12 +1,13 @@
 //! Forward kinematics and momentum of a tree with flexible bodies, into the rigid
 //! [`Data`]'s poses: what the effects of a simulation read of each body.
 
-use super::data::{FlexData, check_state, velocities};
+use super::data::{FlexData, check_state, transforms, velocities};
+
 use super::model::FlexModel;
 use crate::data::Data;
 use crate::energy::center_of_mass;
 use crate::error::DynamicsError;
-use crate::kinematics::base_pose;
+use crate::kinematics::{base_pose, check_len};
 use crate::spatial::Vec3;
 
 /// Poses (`data.rotation`, `data.position`), hinge transforms (`data.xup`) and spatial
@@ -23,20 +24,40 @@ pub fn forward_kinematics(
 ) -> Result<(), DynamicsError> {
     check_state(model, q, v)?;
     velocities(model, flex, q, v);
+    place(model, flex, data, q);
+    data.v.copy_from_slice(&flex.v);
+    Ok(())
+}
+
+/// [`forward_kinematics`]'s poses alone (`data.rotation`, `data.position`, `data.xup`), the
+/// same bits, for a caller that reads no velocity (a view): the first pass's transforms
+/// without its velocities, motion subspaces and deformed inertias. `data.v` is left as it
+/// was.
+pub fn forward_poses(
+    model: &FlexModel,
+    flex: &mut FlexData,
+    data: &mut Data,
+    q: &[f64],
+) -> Result<(), DynamicsError> {
+    check_len("q", q.len(), model.nq())?;
+    transforms(model, flex, q);
+    place(model, flex, data, q);
+    Ok(())
+}
+
+/// The bodies' poses in `data` from the first pass's transforms in `flex`.
+fn place(model: &FlexModel, flex: &FlexData, data: &mut Data, q: &[f64]) {
     let rigid = &model.rigid;
     let (att, pos) = base_pose(rigid, q);
     data.rotation[0] = att.to_rotation_matrix().into_inner();
     data.position[0] = pos;
-    data.v[0] = flex.v[0];
     for i in 1..rigid.n_bodies() {
         let p = rigid.parent[i].expect("non-root body has a parent");
         let x = flex.xup[i];
         data.xup[i] = x;
         data.rotation[i] = data.rotation[p] * x.rot.transpose();
         data.position[i] = data.position[p] + data.rotation[p] * x.trans;
-        data.v[i] = flex.v[i];
     }
-    Ok(())
 }
 
 /// Total linear momentum (N s) and angular momentum about the system's centre of mass

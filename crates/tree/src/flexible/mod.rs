@@ -62,7 +62,7 @@ pub use beam::{Beam, Stiffening, StiffeningIntegrals};
 pub use crba::crba;
 pub use data::FlexData;
 pub use field::FieldLoad;
-pub use kinematics::{energy_and_momentum, forward_kinematics, momentum};
+pub use kinematics::{energy_and_momentum, forward_kinematics, forward_poses, momentum};
 pub use modal::{ModalData, NodeShape};
 pub use model::{
     Deflection, FlexError, FlexModel, Flexible, LargeDeflection, MAGNIFICATION_LIMIT,

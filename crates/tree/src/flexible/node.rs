@@ -21,6 +21,16 @@ pub(crate) struct RotationStage {
 }
 
 impl RotationStage {
+    /// The stage's angle `Σₖ coef[k] ηₖ` ([`Self::turn`]'s, the same sum).
+    #[inline(always)]
+    fn angle(&self, eta: &[f64]) -> f64 {
+        let mut angle = 0.0;
+        for (k, &s) in self.coef.iter().enumerate() {
+            angle += s * eta[k];
+        }
+        angle
+    }
+
     /// The stage's angle `Σₖ coef[k] ηₖ` and its rate `Σₖ coef[k] η̇ₖ`.
     #[inline(always)]
     fn turn(&self, eta: &[f64], etad: &[f64]) -> (f64, f64) {
@@ -118,6 +128,41 @@ impl Node {
             rotations,
             coord,
         }
+    }
+
+    /// The node frame at `eta` alone: [`Node::state`]'s `x`, the same sums, for a caller
+    /// that reads no motion (a view's poses).
+    pub(crate) fn pose(&self, eta: &[f64]) -> Transform {
+        let mut disp = self.at;
+        for (k, p) in self.phi.iter().enumerate() {
+            disp += p * eta[k];
+        }
+        if let Some(s) = &self.shortening {
+            let m = self.phi.len();
+            let mut along = 0.0;
+            for (k, row) in s.c.chunks_exact(m).enumerate() {
+                let mut ce = 0.0;
+                for l in 0..m {
+                    ce += row[l] * eta[l];
+                }
+                along += eta[k] * ce;
+            }
+            disp -= s.axis * (0.5 * along);
+        }
+        if let (Some(ca), [r]) = (&self.coord, self.rotations.as_slice()) {
+            let zero = Vec3::zeros();
+            let xr = ca.transform(r.angle(eta), &zero, &zero);
+            return Transform::new(xr.rot, disp);
+        }
+        let mut x = Transform::new(Mat3::identity(), disp);
+        for r in &self.rotations {
+            let xr = Transform::new(
+                rotation_about(&r.axis, r.angle(eta)).transpose(),
+                Vec3::zeros(),
+            );
+            x = xr.compose(&x);
+        }
+        x
     }
 
     /// The node frame at `eta`, `etad` with the parent moving at `vp` (parent coordinates);

@@ -938,3 +938,40 @@ fn deflections_beyond_a_tenth_of_a_beams_length_are_large() {
     set(&mut q, b2, -0.99 * SMALL_DEFLECTION);
     assert!(model.large_deflections(&q).is_empty());
 }
+
+// The view's poses: the transforms alone give forward kinematics' poses bit for bit, on
+// random trees with beams (stiffened: the foreshortening moves their nodes), given modes
+// with general node shapes (three rotation stages) and bodies carried by flexible parents.
+#[test]
+fn poses_alone_are_forward_kinematics_poses_bit_for_bit() {
+    let mut carried = 0;
+    for seed in 0..40u64 {
+        let base = if seed % 3 == 0 {
+            BaseKind::Fixed
+        } else {
+            BaseKind::Free
+        };
+        let model = random_flexible(3 + (seed % 8) as usize, base, seed % 2 == 0, seed);
+        let n = model.rigid().n_bodies();
+        carried += (1..n)
+            .filter(|&i| model.modes(model.rigid().parent()[i].unwrap()) > 0)
+            .count();
+        let mut rng = SplitMix(seed ^ 0x5e7);
+        let (q, v, _, _) = random_state(&model, &mut rng);
+        let mut data = FlexData::new(&model);
+        let mut full = satsim_tree::Data::new(model.rigid());
+        flexible::forward_kinematics(&model, &mut data, &mut full, &q, &v).unwrap();
+        let mut alone = satsim_tree::Data::new(model.rigid());
+        let mut fresh = FlexData::new(&model);
+        flexible::forward_poses(&model, &mut fresh, &mut alone, &q).unwrap();
+        assert_eq!(alone.rotation, full.rotation, "seed {seed}: rotations");
+        assert_eq!(alone.position, full.position, "seed {seed}: positions");
+        assert_eq!(alone.xup, full.xup, "seed {seed}: transforms");
+    }
+    assert!(carried > 20, "{carried} bodies carried by flexible parents");
+    let model = random_flexible(4, BaseKind::Free, false, 1);
+    let mut data = FlexData::new(&model);
+    let mut rigid = satsim_tree::Data::new(model.rigid());
+    let short = vec![0.0; model.nq() - 1];
+    assert!(flexible::forward_poses(&model, &mut data, &mut rigid, &short).is_err());
+}
