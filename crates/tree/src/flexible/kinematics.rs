@@ -110,21 +110,12 @@ pub fn energy_and_momentum(
     v: &[f64],
 ) -> (f64, f64, Vec3, Vec3) {
     let rigid = &model.rigid;
-    let nv = rigid.nv();
     let mut t = 0.0;
     let (mut p, mut h_origin) = (Vec3::zeros(), Vec3::zeros());
     let (mut mass, mut first) = (0.0, Vec3::zeros());
     for i in 0..rigid.n_bodies() {
-        let vi = flex.v[i];
+        let f = super::body_momentum(model, flex, i, q, v, &mut t);
         let inertia = &flex.inertia[i];
-        let mut f = inertia.mul_motion(&vi);
-        for k in 0..model.modes[i] {
-            let e = model.offset[i] + k;
-            let pk = model.momentum_at(i, q, k);
-            f += pk * v[nv + e];
-            t += 0.5 * v[nv + e] * (v[nv + e] + vi.dot(&pk));
-        }
-        t += 0.5 * vi.dot(&f);
         mass += inertia.mass;
         first += data.position[i] * inertia.mass + data.rotation[i] * inertia.h;
         let r = &data.rotation[i];

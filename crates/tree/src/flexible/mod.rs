@@ -71,6 +71,7 @@ pub use model::{
 pub use rnea::{bias, gyrostat_torques, gyrostat_torques_on_base, rnea, rnea_with_kinematics};
 
 use crate::error::DynamicsError;
+use crate::spatial;
 
 /// Kinetic energy `½ Σ ([vᵢ; η̇ᵢ]ᵀ [[I, P], [Pᵀ, 1]] [vᵢ; η̇ᵢ]) + ½ Σ armature φ̇²` (with
 /// stiffening, `I(η)` and `P(η)` at the deformation) and strain energy `½ Σ ωₖ² ηₖ²` (J), as
@@ -83,22 +84,36 @@ pub fn energy(
 ) -> Result<(f64, f64), DynamicsError> {
     data::check_state(model, q, v)?;
     data::velocities(model, data, q, v);
-    let rigid = &model.rigid;
-    let nv = rigid.nv();
     let mut t = 0.0;
-    for i in 0..rigid.n_bodies() {
-        let vi = data.v[i];
-        let mut h = data.inertia[i].mul_motion(&vi);
-        for k in 0..model.modes[i] {
-            let e = model.offset[i] + k;
-            // ½ (vᵀ P η̇ + η̇ᵀ Pᵀ v) adds vᵀ P η̇ once: half of it through h.
-            let pk = model.momentum_at(i, q, k);
-            h += pk * v[nv + e];
-            t += 0.5 * v[nv + e] * (v[nv + e] + vi.dot(&pk));
-        }
-        t += 0.5 * vi.dot(&h);
+    for i in 0..model.rigid.n_bodies() {
+        body_momentum(model, data, i, q, v, &mut t);
     }
     Ok(add_armature_and_strain(model, q, v, t))
+}
+
+/// Body `i`'s momentum `I vᵢ + P η̇ᵢ` (body axes, about its frame's origin) from the first
+/// pass in `data`, its kinetic energy added to `t`.
+#[inline(always)]
+fn body_momentum(
+    model: &FlexModel,
+    data: &FlexData,
+    i: usize,
+    q: &[f64],
+    v: &[f64],
+    t: &mut f64,
+) -> spatial::Force {
+    let nv = model.rigid.nv();
+    let vi = data.v[i];
+    let mut h = data.inertia[i].mul_motion(&vi);
+    for k in 0..model.modes[i] {
+        let e = model.offset[i] + k;
+        // ½ (vᵀ P η̇ + η̇ᵀ Pᵀ v) adds vᵀ P η̇ once: half of it through h.
+        let pk = model.momentum_at(i, q, k);
+        h += pk * v[nv + e];
+        *t += 0.5 * v[nv + e] * (v[nv + e] + vi.dot(&pk));
+    }
+    *t += 0.5 * vi.dot(&h);
+    h
 }
 
 /// `t` plus the rotors' kinetic energy `½ Σ armature φ̇²` (added in order, as the energy
