@@ -7,7 +7,8 @@
 //! - [`rnea()`] (inverse dynamics, [`bias`]), [`crba()`] (mass matrix), [`aba()`] (O(n)
 //!   forward dynamics; [`aba_hybrid`] with locked hinges), [`energy`]; for a simulation's
 //!   effects, [`forward_kinematics`] (the bodies' poses, into a rigid [`crate::Data`]) and
-//!   [`momentum`].
+//!   [`momentum`]; for its output rows, [`energy_and_momentum`] (one pass over the
+//!   kinematics') and [`forward_poses`] (the poses alone, for a view).
 //!
 //! Coordinates: `q = [rigid q…, η…]`, `v = [rigid v…, η̇…]` (see [`model`]). The model is
 //! linear in the deformation (modal integrals evaluated undeformed; with a beam's
