@@ -536,6 +536,24 @@ fn rk4_step(model: &FlexModel, data: &mut FlexData, x: &mut [f64], h: f64, k: &m
     }
 }
 
+/// The kinetic and strain energies and the linear and angular momenta at `(q, v)` by
+/// `energy` and `momentum`, asserted equal bit for bit to the output rows' one pass,
+/// `energy_and_momentum` (after `forward_kinematics`).
+pub(crate) fn energies_and_momenta(
+    model: &FlexModel,
+    data: &mut FlexData,
+    rigid: &mut satsim_tree::Data,
+    q: &[f64],
+    v: &[f64],
+) -> (f64, f64, Vec3, Vec3) {
+    let (t, u) = flexible::energy(model, data, q, v).unwrap();
+    flexible::forward_kinematics(model, data, rigid, q, v).unwrap();
+    let (p, h) = flexible::momentum(model, rigid, q, v);
+    let one_pass = flexible::energy_and_momentum(model, data, rigid, q, v);
+    assert_eq!(one_pass, (t, u, p, h));
+    (t, u, p, h)
+}
+
 /// Integrates `x` over `steps` steps of `h`; returns the largest relative change of the
 /// total (kinetic plus strain) energy.
 fn energy_drift(model: &FlexModel, x: &mut [f64], h: f64, steps: usize) -> f64 {
@@ -544,12 +562,7 @@ fn energy_drift(model: &FlexModel, x: &mut [f64], h: f64, steps: usize) -> f64 {
     let nq = model.nq();
     let mut energy = |x: &[f64]| {
         let (q, v) = x.split_at(nq);
-        let (t, u) = flexible::energy(model, &mut data, q, v).unwrap();
-        // The output rows' one pass: the two functions' values bit for bit.
-        flexible::forward_kinematics(model, &mut data, &mut rigid, q, v).unwrap();
-        let (p, h) = flexible::momentum(model, &rigid, q, v);
-        let one_pass = flexible::energy_and_momentum(model, &data, &rigid, q, v);
-        assert_eq!(one_pass, (t, u, p, h));
+        let (t, u, _, _) = energies_and_momenta(model, &mut data, &mut rigid, q, v);
         t + u
     };
     let e0 = energy(x);
