@@ -2,7 +2,6 @@
 //! [`Data`]'s poses: what the effects of a simulation read of each body.
 
 use super::data::{FlexData, check_state, transforms, velocities};
-
 use super::model::FlexModel;
 use crate::data::Data;
 use crate::energy::center_of_mass;
