@@ -231,7 +231,15 @@ fn velocities_in(model: &FlexModel, data: &mut FlexData, q: &[f64], v: &[f64]) {
             Some(node) => {
                 let (o, m) = (model.offset[p], model.modes[p]);
                 let g = &mut data.g[data.g_offset[i]..][..m];
-                let st = node.state(&eta[o..o + m], &etad[o..o + m], &data.v[p], g);
+                let (eta, etad, vp) = (&eta[o..], &etad[o..], &data.v[p]);
+                // Instances for the common mode counts, as the deformed inertias above.
+                let st = match m {
+                    1 => node.state(&eta[..1], &etad[..1], vp, g),
+                    2 => node.state(&eta[..2], &etad[..2], vp, g),
+                    3 => node.state(&eta[..3], &etad[..3], vp, g),
+                    4 => node.state(&eta[..4], &etad[..4], vp, g),
+                    _ => node.state(&eta[..m], &etad[..m], vp, g),
+                };
                 // The hinge from the node frame (its origin the hinge point) to the child,
                 // by its coordinate-axis fast path where it has one.
                 let xc = Transform::new(x.rot, x.trans - node.at);

@@ -173,25 +173,48 @@ impl FlexModel {
         let wrench = wrench_of(inertia, t, rho, &t_rho);
         let potential = potential(inertia, t, rho);
         if let (Some(s), Some(w)) = (&self.stiffening[i], &self.field_weights[i]) {
-            // `c(a) = ½ tr(T ∂J)` for an inertia change `a` (`∂J = ½ tr(a) 1 − a`), from
-            // the weights made with the model.
-            let tp = packed(t);
-            let (c0, c1, c2) = (dot6(&tp, &w.a[0]), dot6(&tp, &w.a[1]), dot6(&tp, &w.a[2]));
-            let rta = t_rho.dot(&s.axis);
-            let at = self.offset[i];
-            let eta = &eta[at..][..self.modes[i]];
-            for (k, ((q, first), wk)) in elastic[at..][..eta.len()]
-                .iter_mut()
-                .zip(&s.first)
-                .zip(&w.first)
-                .enumerate()
-            {
-                let j0 = s.j0_row(k, eta);
-                let j1 = s.j1_row(k, eta);
-                *q += t_rho.dot(&first.h) - j0 * rta + dot6(&tp, wk) - 2.0 * (j0 * c0 + j1 * c1)
-                    + 2.0 * eta[k] * c2;
+            let (at, eta) = (self.offset[i], &eta[self.offset[i]..]);
+            let elastic = &mut elastic[at..];
+            // An instance for the common mode counts, the loops unrolled (the same sums):
+            // with the count a variable, the loops' own bookkeeping took as many
+            // instructions as their arithmetic.
+            match self.modes[i] {
+                1 => modal_forces(s, w, 1, t, &t_rho, eta, elastic),
+                2 => modal_forces(s, w, 2, t, &t_rho, eta, elastic),
+                3 => modal_forces(s, w, 3, t, &t_rho, eta, elastic),
+                4 => modal_forces(s, w, 4, t, &t_rho, eta, elastic),
+                m => modal_forces(s, w, m, t, &t_rho, eta, elastic),
             }
         }
         FieldLoad { wrench, potential }
+    }
+}
+
+/// The field's generalised forces `Qₖ` on a stiffened body's `m` modes (the module's page),
+/// added to `elastic`; `eta` and `elastic` start at the body's first coordinate. Inlined with
+/// `m` known where [`FlexModel::linear_field_on`] dispatches on it.
+#[inline(always)]
+fn modal_forces(
+    s: &super::Stiffening,
+    w: &FieldWeights,
+    m: usize,
+    t: &Mat3,
+    t_rho: &Vec3,
+    eta: &[f64],
+    elastic: &mut [f64],
+) {
+    // `c(a) = ½ tr(T ∂J)` for an inertia change `a` (`∂J = ½ tr(a) 1 − a`), from the
+    // weights made with the model.
+    let tp = packed(t);
+    let (c0, c1, c2) = (dot6(&tp, &w.a[0]), dot6(&tp, &w.a[1]), dot6(&tp, &w.a[2]));
+    let rta = t_rho.dot(&s.axis);
+    let (eta, elastic) = (&eta[..m], &mut elastic[..m]);
+    let (first, weights) = (&s.first[..m], &w.first[..m]);
+    for k in 0..m {
+        let j0 = s.j0_row(k, eta);
+        let j1 = s.j1_row(k, eta);
+        elastic[k] += t_rho.dot(&first[k].h) - j0 * rta + dot6(&tp, &weights[k])
+            - 2.0 * (j0 * c0 + j1 * c1)
+            + 2.0 * eta[k] * c2;
     }
 }

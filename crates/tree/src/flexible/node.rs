@@ -34,10 +34,12 @@ impl RotationStage {
     /// The stage's angle `Σₖ coef[k] ηₖ` and its rate `Σₖ coef[k] η̇ₖ`.
     #[inline(always)]
     fn turn(&self, eta: &[f64], etad: &[f64]) -> (f64, f64) {
+        let m = eta.len();
+        let (coef, etad) = (&self.coef[..m], &etad[..m]);
         let (mut angle, mut speed) = (0.0, 0.0);
-        for (k, &s) in self.coef.iter().enumerate() {
-            angle += s * eta[k];
-            speed += s * etad[k];
+        for k in 0..m {
+            angle += coef[k] * eta[k];
+            speed += coef[k] * etad[k];
         }
         (angle, speed)
     }
@@ -168,6 +170,10 @@ impl Node {
     /// The node frame at `eta`, `etad` with the parent moving at `vp` (parent coordinates);
     /// writes the node's motion subspace `G` (node coordinates, one column per mode) into
     /// `g`.
+    ///
+    /// Always inlined: the first pass calls it in instances for the common mode counts
+    /// (`m = eta.len()` known there), so that its loops unroll (the same sums).
+    #[inline(always)]
     pub(crate) fn state(
         &self,
         eta: &[f64],
@@ -175,9 +181,12 @@ impl Node {
         vp: &Motion,
         g: &mut [Motion],
     ) -> NodeState {
+        let m = eta.len();
+        let (phi, etad, g) = (&self.phi[..m], &etad[..m], &mut g[..m]);
         let mut disp = self.at;
         let mut rate = Vec3::zeros();
-        for (k, p) in self.phi.iter().enumerate() {
+        for k in 0..m {
+            let p = &phi[k];
             disp += p * eta[k];
             rate += p * etad[k];
             // Written field by field: a `Motion` built on the stack and copied was read
@@ -189,9 +198,10 @@ impl Node {
         // `−a (Cη)ₖ`, and `Ṡ η̇ = −a η̇ᵀCη̇` (C symmetric).
         let mut shortened = Vec3::zeros();
         if let Some(s) = &self.shortening {
-            let m = self.phi.len();
+            let c = &s.c[..m * m];
             let (mut along, mut along_rate, mut product) = (0.0, 0.0, 0.0);
-            for (k, row) in s.c.chunks_exact(m).enumerate() {
+            for k in 0..m {
+                let row = &c[k * m..][..m];
                 let (mut ce, mut ced) = (0.0, 0.0);
                 for l in 0..m {
                     ce += row[l] * eta[l];
