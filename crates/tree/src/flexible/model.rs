@@ -820,7 +820,7 @@ impl FlexModel {
             let (f, _) = s.forms(eta, eta);
             inertia.inertia -= s.g(&f);
             inertia.h -= s.axis * (0.5 * f[0]);
-            for (ik, e) in s.first.iter().zip(eta) {
+            for (ik, e) in s.first[..eta.len()].iter().zip(eta) {
                 inertia.h += ik.h * *e;
                 inertia.inertia += ik.inertia * *e;
             }
@@ -888,7 +888,9 @@ impl FlexModel {
                 h: -s.axis * (0.5 * rate[0]),
                 inertia: -s.g(&rate),
             };
-            for (k, ik) in s.first.iter().enumerate() {
+            // Sliced to `m`: known in the ABA's instances, so the loop unrolls.
+            let (first, etad) = (&s.first[..eta.len()], &etad[..eta.len()]);
+            for (k, ik) in first.iter().enumerate() {
                 idot.h += ik.h * etad[k];
                 idot.inertia += ik.inertia * etad[k];
                 // −∂T/∂ηₖ of the first-order inertia: −½ vᵀ Iₖ v.
