@@ -90,6 +90,9 @@ pub struct GravityGradient {
     /// [`FlexModel::linear_field`] spreads the tidal field over such a body's deformed mass
     /// and onto its modes (see the module's documentation).
     flex: Option<Box<FlexModel>>,
+    /// Per body of the tree, whether it is loaded as deformable (by `connect`): what the
+    /// rows' passes over every body ask of each.
+    deforms: Vec<bool>,
 }
 
 /// A body the field loads: its per-body constants, worked out once.
@@ -236,11 +239,7 @@ impl GravityGradient {
 
     /// The flexible model, when body `i` is loaded as deformable.
     fn deformable(&self, i: usize) -> Option<&FlexModel> {
-        let flex = self.flex.as_deref()?;
-        self.loaded
-            .iter()
-            .any(|l| l.body == i && l.deformable)
-            .then_some(flex)
+        self.flex.as_deref().filter(|_| self.deforms[i])
     }
 
     /// The system's centre of mass (inertial axes, from the tree's reference point), the
@@ -272,6 +271,7 @@ impl GravityGradient {
             at: Vec::new(),
             deformed: Vec::new(),
             flex: None,
+            deforms: Vec::new(),
         }
     }
 
@@ -401,6 +401,10 @@ impl Effect for GravityGradient {
             if self.loaded.iter().any(|l| l.deformable) {
                 self.flex = Some(Box::new(flex.clone()));
             }
+        }
+        self.deforms = vec![false; model.n_bodies()];
+        for l in self.loaded.iter().filter(|l| l.deformable) {
+            self.deforms[l.body] = true;
         }
     }
     fn apply(
