@@ -123,6 +123,24 @@ fn modes_are_mass_normalised_and_orthogonal() {
     let _ = CantileverMode::new(1, 1.0, 1.0);
 }
 
+/// The random flexible tree of the tests that sweep seeds: 3 to 10 bodies, a fixed base for
+/// every third seed, else a free one (`random_flexible`'s `massless_links`).
+pub(crate) fn seeded_flexible(seed: u64, massless_links: bool) -> FlexModel {
+    let base = if seed.is_multiple_of(3) {
+        BaseKind::Fixed
+    } else {
+        BaseKind::Free
+    };
+    random_flexible(3 + (seed % 8) as usize, base, massless_links, seed)
+}
+
+/// How many bodies of `model` hang on a flexible parent (on a node of its deflection).
+pub(crate) fn carried_bodies(model: &FlexModel) -> usize {
+    (1..model.rigid().n_bodies())
+        .filter(|&i| model.modes(model.rigid().parent()[i].unwrap()) > 0)
+        .count()
+}
+
 /// A random flexible tree: `random_tree`'s bodies and hinges, some bodies (the root among
 /// them for odd seeds) flexible: beams of random placement, or given modal data with
 /// general node shapes (three rotation stages). With `massless_links`, some bodies are
@@ -258,17 +276,10 @@ fn rnea_crba_aba_agree_on_random_flexible_trees() {
     let mut carried = 0;
     let mut worst: f64 = 0.0;
     for seed in 0..40u64 {
-        let base = if seed % 3 == 0 {
-            BaseKind::Fixed
-        } else {
-            BaseKind::Free
-        };
-        let model = random_flexible(3 + (seed % 8) as usize, base, false, seed);
+        let model = seeded_flexible(seed, false);
         let n = model.rigid().n_bodies();
         flexible_bodies += (0..n).filter(|&i| model.modes(i) > 0).count();
-        carried += (1..n)
-            .filter(|&i| model.modes(model.rigid().parent()[i].unwrap()) > 0)
-            .count();
+        carried += carried_bodies(&model);
         let mut rng = SplitMix(seed ^ 0xabc);
         let (q, v, a, fext) = random_state(&model, &mut rng);
         let mut data = FlexData::new(&model);
@@ -336,12 +347,7 @@ fn rnea_crba_aba_agree_on_random_flexible_trees() {
 #[test]
 fn an_indefinite_state_is_refused_with_the_failing_pivot() {
     for seed in [903u64, 1261] {
-        let base = if seed % 3 == 0 {
-            BaseKind::Fixed
-        } else {
-            BaseKind::Free
-        };
-        let model = random_flexible(3 + (seed % 8) as usize, base, false, seed);
+        let model = seeded_flexible(seed, false);
         let mut rng = SplitMix(seed ^ 0xabc);
         let (q, v, a, _) = random_state(&model, &mut rng);
         let mut data = FlexData::new(&model);
@@ -365,12 +371,7 @@ fn hybrid_aba_equals_the_reduced_crba_solve() {
     let mut locked_total = 0;
     let mut worst: f64 = 0.0;
     for seed in 0..40u64 {
-        let base = if seed % 3 == 0 {
-            BaseKind::Fixed
-        } else {
-            BaseKind::Free
-        };
-        let model = random_flexible(3 + (seed % 8) as usize, base, false, seed);
+        let model = seeded_flexible(seed, false);
         let r = model.rigid();
         let mut rng = SplitMix(seed ^ 0x10c4);
         let locked: Vec<bool> = (0..r.n_hinges())
@@ -959,16 +960,8 @@ fn deflections_beyond_a_tenth_of_a_beams_length_are_large() {
 fn poses_alone_are_forward_kinematics_poses_bit_for_bit() {
     let mut carried = 0;
     for seed in 0..40u64 {
-        let base = if seed % 3 == 0 {
-            BaseKind::Fixed
-        } else {
-            BaseKind::Free
-        };
-        let model = random_flexible(3 + (seed % 8) as usize, base, seed % 2 == 0, seed);
-        let n = model.rigid().n_bodies();
-        carried += (1..n)
-            .filter(|&i| model.modes(model.rigid().parent()[i].unwrap()) > 0)
-            .count();
+        let model = seeded_flexible(seed, seed % 2 == 0);
+        carried += carried_bodies(&model);
         let mut rng = SplitMix(seed ^ 0x5e7);
         let (q, v, _, _) = random_state(&model, &mut rng);
         let mut data = FlexData::new(&model);
