@@ -126,12 +126,21 @@ fn modes_are_mass_normalised_and_orthogonal() {
 /// The random flexible tree of the tests that sweep seeds: 3 to 10 bodies, a fixed base for
 /// every third seed, else a free one (`random_flexible`'s `massless_links`).
 pub(crate) fn seeded_flexible(seed: u64, massless_links: bool) -> FlexModel {
-    let base = if seed.is_multiple_of(3) {
+    random_flexible(
+        3 + (seed % 8) as usize,
+        seeded_base(seed),
+        massless_links,
+        seed,
+    )
+}
+
+/// The seed sweeps' base: fixed for every third seed, else free.
+fn seeded_base(seed: u64) -> BaseKind {
+    if seed.is_multiple_of(3) {
         BaseKind::Fixed
     } else {
         BaseKind::Free
-    };
-    random_flexible(3 + (seed % 8) as usize, base, massless_links, seed)
+    }
 }
 
 /// How many bodies of `model` hang on a flexible parent (on a node of its deflection).
@@ -157,6 +166,12 @@ pub(crate) fn random_flexible(
 /// `rigid` with random bodies made flexible, as [`random_flexible`] makes them (for odd
 /// seeds the root among them; never a massless body).
 pub(crate) fn with_random_modes(rigid: Model, seed: u64) -> FlexModel {
+    with_random_modes_up_to(rigid, seed, 4)
+}
+
+/// [`with_random_modes`] with 1 to `most` modes a flexible body (4 there: the mode counts the
+/// flexible algorithms have instances for).
+pub(crate) fn with_random_modes_up_to(rigid: Model, seed: u64, most: usize) -> FlexModel {
     let mut rng = SplitMix(seed ^ 0xf1e8);
     let builder = rigid.to_builder();
     let mut flex = Vec::new();
@@ -173,7 +188,7 @@ pub(crate) fn with_random_modes(rigid: Model, seed: u64) -> FlexModel {
         if !pick {
             continue;
         }
-        let m = 1 + (rng.next_f64() * 4.0) as usize;
+        let m = 1 + (rng.next_f64() * most as f64) as usize;
         let damping = rng.range(0.0, 0.05);
         let modes = if rng.next_f64() < 0.5 {
             let axis = rng.unit();
@@ -280,60 +295,90 @@ fn rnea_crba_aba_agree_on_random_flexible_trees() {
         let n = model.rigid().n_bodies();
         flexible_bodies += (0..n).filter(|&i| model.modes(i) > 0).count();
         carried += carried_bodies(&model);
-        let mut rng = SplitMix(seed ^ 0xabc);
-        let (q, v, a, fext) = random_state(&model, &mut rng);
-        let mut data = FlexData::new(&model);
-        let tau = flexible::rnea(&model, &mut data, &q, &v, &a, Some(&fext))
-            .unwrap()
-            .clone();
-        let m = flexible::crba(&model, &mut data, &q).unwrap().clone();
-        let b = flexible::bias(&model, &mut data, &q, &v, Some(&fext))
-            .unwrap()
-            .clone();
-        assert!(
-            (&m - m.transpose()).amax() == 0.0,
-            "seed {seed}: M symmetric"
-        );
-        let av = DVector::from_column_slice(&a);
-        let scale = max_abs(tau.as_slice()) + m.amax() * max_abs(&a) + max_abs(b.as_slice());
-        let residual = (&m * &av + &b - &tau).amax();
-        assert!(
-            residual < 1e-12 * scale,
-            "seed {seed}: M a + b − τ = {residual:e}"
-        );
-        // ½ vᵀ M v is the kinetic energy summed body by body.
-        let vv = DVector::from_column_slice(&v);
-        let (t, _) = flexible::energy(&model, &mut data, &q, &v).unwrap();
-        assert!(
-            rel(0.5 * vv.dot(&(&m * &vv)), t) < 1e-12,
-            "seed {seed}: energy"
-        );
-        // ABA inverts RNEA and equals the dense solve.
-        let ddq = flexible::aba(&model, &mut data, &q, &v, tau.as_slice(), Some(&fext))
-            .unwrap()
-            .clone();
-        let residual = (&m * &ddq + &b - &tau).amax();
-        assert!(
-            residual < 1e-12 * scale,
-            "seed {seed}: M ddq + b − τ = {residual:e}"
-        );
-        // The forward error of a solve whose right-hand side τ − b is known to round-off of
-        // |τ| + |b|: (|τ| + |b|) ε / λ_min(M).
-        let solve = m.clone().cholesky().unwrap().solve(&(&tau - &b));
-        let lowest = SymmetricEigen::new(m.clone()).eigenvalues.min();
-        let bound = 1e-15 * (tau.amax() + b.amax()) / lowest;
-        let err = (&ddq - &solve).amax();
-        worst = worst.max(err / bound);
-        assert!(
-            err < bound,
-            "seed {seed}: ABA vs solve {err:e} (bound {bound:e})"
-        );
-        assert!((&ddq - &av).amax() < bound, "seed {seed}");
+        worst = worst.max(rnea_crba_aba_check(&model, seed));
     }
     println!("ABA vs solve: worst error / bound {worst:e}");
     assert!(
         flexible_bodies > 60 && carried > 40,
         "{flexible_bodies} {carried}"
+    );
+}
+
+/// RNEA, CRBA and ABA on `model` at a random state from `seed`: `M` symmetric, `M a + b = τ`,
+/// `½ vᵀ M v` the kinetic energy, ABA inverting RNEA within the solve's bound; returns the
+/// ABA's error against the dense solve over that bound.
+fn rnea_crba_aba_check(model: &FlexModel, seed: u64) -> f64 {
+    let mut rng = SplitMix(seed ^ 0xabc);
+    let (q, v, a, fext) = random_state(model, &mut rng);
+    let mut data = FlexData::new(model);
+    let tau = flexible::rnea(model, &mut data, &q, &v, &a, Some(&fext))
+        .unwrap()
+        .clone();
+    let m = flexible::crba(model, &mut data, &q).unwrap().clone();
+    let b = flexible::bias(model, &mut data, &q, &v, Some(&fext))
+        .unwrap()
+        .clone();
+    assert!(
+        (&m - m.transpose()).amax() == 0.0,
+        "seed {seed}: M symmetric"
+    );
+    let av = DVector::from_column_slice(&a);
+    let scale = max_abs(tau.as_slice()) + m.amax() * max_abs(&a) + max_abs(b.as_slice());
+    let residual = (&m * &av + &b - &tau).amax();
+    assert!(
+        residual < 1e-12 * scale,
+        "seed {seed}: M a + b − τ = {residual:e}"
+    );
+    // ½ vᵀ M v is the kinetic energy summed body by body.
+    let vv = DVector::from_column_slice(&v);
+    let (t, _) = flexible::energy(model, &mut data, &q, &v).unwrap();
+    assert!(
+        rel(0.5 * vv.dot(&(&m * &vv)), t) < 1e-12,
+        "seed {seed}: energy"
+    );
+    // ABA inverts RNEA and equals the dense solve.
+    let ddq = flexible::aba(model, &mut data, &q, &v, tau.as_slice(), Some(&fext))
+        .unwrap()
+        .clone();
+    let residual = (&m * &ddq + &b - &tau).amax();
+    assert!(
+        residual < 1e-12 * scale,
+        "seed {seed}: M ddq + b − τ = {residual:e}"
+    );
+    // The forward error of a solve whose right-hand side τ − b is known to round-off of
+    // |τ| + |b|: (|τ| + |b|) ε / λ_min(M).
+    let solve = m.clone().cholesky().unwrap().solve(&(&tau - &b));
+    let lowest = SymmetricEigen::new(m.clone()).eigenvalues.min();
+    let bound = 1e-15 * (tau.amax() + b.amax()) / lowest;
+    let err = (&ddq - &solve).amax();
+    assert!(
+        err < bound,
+        "seed {seed}: ABA vs solve {err:e} (bound {bound:e})"
+    );
+    assert!((&ddq - &av).amax() < bound, "seed {seed}");
+    err / bound
+}
+
+/// The same beyond the mode counts the algorithms have instances for (1 to 4): bodies of up
+/// to 7 modes take the general code of the ABA, the first pass and the node's state (against
+/// the node's own `pose`).
+#[test]
+fn rnea_crba_aba_agree_beyond_the_instanced_mode_counts() {
+    let (mut beyond, mut carried_beyond) = (0, 0);
+    for seed in 0..24u64 {
+        let rigid = random_tree(3 + (seed % 8) as usize, seeded_base(seed), false, seed);
+        let model = with_random_modes_up_to(rigid, seed, 7);
+        let r = model.rigid();
+        beyond += (0..r.n_bodies()).filter(|&i| model.modes(i) > 4).count();
+        carried_beyond += (1..r.n_bodies())
+            .filter(|&i| model.modes(r.parent()[i].unwrap()) > 4)
+            .count();
+        rnea_crba_aba_check(&model, seed);
+        poses_check(&model, seed);
+    }
+    assert!(
+        beyond > 10 && carried_beyond > 5,
+        "{beyond} {carried_beyond}"
     );
 }
 
@@ -429,12 +474,7 @@ fn hybrid_aba_equals_the_reduced_crba_solve() {
 #[test]
 fn without_modes_the_rigid_algorithms() {
     for seed in 0..30u64 {
-        let base = if seed % 3 == 0 {
-            BaseKind::Fixed
-        } else {
-            BaseKind::Free
-        };
-        let rigid = random_tree(2 + (seed % 10) as usize, base, false, seed);
+        let rigid = random_tree(2 + (seed % 10) as usize, seeded_base(seed), false, seed);
         let model = FlexModel::attach(rigid.clone(), &[]).unwrap();
         let mut rng = SplitMix(seed);
         let (q, v, a, fext) = random_state(&model, &mut rng);
@@ -962,17 +1002,7 @@ fn poses_alone_are_forward_kinematics_poses_bit_for_bit() {
     for seed in 0..40u64 {
         let model = seeded_flexible(seed, seed % 2 == 0);
         carried += carried_bodies(&model);
-        let mut rng = SplitMix(seed ^ 0x5e7);
-        let (q, v, _, _) = random_state(&model, &mut rng);
-        let mut data = FlexData::new(&model);
-        let mut full = satsim_tree::Data::new(model.rigid());
-        flexible::forward_kinematics(&model, &mut data, &mut full, &q, &v).unwrap();
-        let mut alone = satsim_tree::Data::new(model.rigid());
-        let mut fresh = FlexData::new(&model);
-        flexible::forward_poses(&model, &mut fresh, &mut alone, &q).unwrap();
-        assert_eq!(alone.rotation, full.rotation, "seed {seed}: rotations");
-        assert_eq!(alone.position, full.position, "seed {seed}: positions");
-        assert_eq!(alone.xup, full.xup, "seed {seed}: transforms");
+        poses_check(&model, seed);
     }
     assert!(carried > 20, "{carried} bodies carried by flexible parents");
     let model = random_flexible(4, BaseKind::Free, false, 1);
@@ -980,4 +1010,21 @@ fn poses_alone_are_forward_kinematics_poses_bit_for_bit() {
     let mut rigid = satsim_tree::Data::new(model.rigid());
     let short = vec![0.0; model.nq() - 1];
     assert!(flexible::forward_poses(&model, &mut data, &mut rigid, &short).is_err());
+}
+
+/// [`flexible::forward_poses`] at a random state from `seed` gives
+/// [`flexible::forward_kinematics`]'s poses and transforms bit for bit (the node's `pose`
+/// against its `state`: their own loops).
+fn poses_check(model: &FlexModel, seed: u64) {
+    let mut rng = SplitMix(seed ^ 0x5e7);
+    let (q, v, _, _) = random_state(model, &mut rng);
+    let mut data = FlexData::new(model);
+    let mut full = satsim_tree::Data::new(model.rigid());
+    flexible::forward_kinematics(model, &mut data, &mut full, &q, &v).unwrap();
+    let mut alone = satsim_tree::Data::new(model.rigid());
+    let mut fresh = FlexData::new(model);
+    flexible::forward_poses(model, &mut fresh, &mut alone, &q).unwrap();
+    assert_eq!(alone.rotation, full.rotation, "seed {seed}: rotations");
+    assert_eq!(alone.position, full.position, "seed {seed}: positions");
+    assert_eq!(alone.xup, full.xup, "seed {seed}: transforms");
 }

@@ -13,6 +13,11 @@ const MODES: usize = 4;
 /// A stiffened beam (2 m, EI 50, ρA 3) on a 20 kg body, rooted off the origin, tilted in
 /// the body, bending along `bend`.
 fn beam() -> Beam {
+    beam_of(MODES)
+}
+
+/// [`beam`] with `modes` modes.
+fn beam_of(modes: usize) -> Beam {
     let axis = Vec3::new(1.0, 0.4, -0.2).normalize();
     let bend = axis.cross(&Vec3::new(0.3, -0.2, 1.0)).normalize();
     Beam {
@@ -22,11 +27,15 @@ fn beam() -> Beam {
         length: 2.0,
         ei: 50.0,
         rho_a: 3.0,
-        modes: MODES,
+        modes,
     }
 }
 
 fn model(stiffening: bool) -> FlexModel {
+    model_of(beam(), stiffening)
+}
+
+fn model_of(beam: Beam, stiffening: bool) -> FlexModel {
     let inertia = Mat3::new(4.0, 0.2, 0.1, 0.2, 5.0, -0.3, 0.1, -0.3, 6.0);
     let b = ModelBuilder::new(BaseKind::Free)
         .body(Body::new("panel", 20.0, inertia).with_com(Vec3::new(0.1, 0.05, -0.02)));
@@ -34,7 +43,7 @@ fn model(stiffening: bool) -> FlexModel {
         b,
         &[Flexible {
             body: "panel".into(),
-            modes: Modes::Beam(beam()),
+            modes: Modes::Beam(beam),
             damping: 0.0,
             stiffening,
         }],
@@ -90,6 +99,35 @@ fn the_fields_forces_are_the_gradients_of_its_potential() {
     let mut q = vec![0.0; MODES];
     model(false).linear_field(0, &ETA, &t, &rho, &mut q);
     assert_eq!(q, [0.0; MODES]);
+}
+
+/// The generalised forces are `−∂V/∂η` for every mode count: those the flexible algorithms
+/// have instances for (1 to 4) and the general code beyond.
+#[test]
+fn the_modal_forces_are_the_gradient_for_every_mode_count() {
+    let t = tidal(1.3e-3, Vec3::new(0.2, -0.7, 0.6));
+    let rho = Vec3::new(0.4, 1.1, -0.6);
+    let all = [0.08, -0.03, 0.01, 0.004, -0.002, 0.001, 0.0005];
+    for modes in 1..=all.len() {
+        let m = model_of(beam_of(modes), true);
+        let eta = &all[..modes];
+        let mut q = vec![0.0; modes];
+        m.linear_field(0, eta, &t, &rho, &mut q);
+        let largest = q.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+        let h = 1e-5;
+        for k in 0..modes {
+            let (mut up, mut down) = (eta.to_vec(), eta.to_vec());
+            up[k] += h;
+            down[k] -= h;
+            let fd = -(m.field_potential(0, &up, &t, &rho) - m.field_potential(0, &down, &t, &rho))
+                / (2.0 * h);
+            assert!(
+                (q[k] - fd).abs() < 1e-8 * largest,
+                "{modes} modes: Q{k} {:e}, −∂V/∂η {fd:e}",
+                q[k]
+            );
+        }
+    }
 }
 
 /// Against the continuum, by Simpson's rule on the beam's own mode shapes: the field at a
