@@ -32,6 +32,7 @@ pub(crate) struct Ctx {
     pub steps_accepted: usize,
     pub steps_rejected: usize,
     pub jacobian_evals: usize,
+    pub jacobian_updates: usize,
     pub lu_decompositions: usize,
     /// Accepted steps that landed on a time stop or the run's end, or that `h_max` cut
     /// ([`crate::Stats::steps_capped`]), and the time they covered.
@@ -104,6 +105,7 @@ impl Ctx {
             steps_accepted: 0,
             steps_rejected: 0,
             jacobian_evals: 0,
+            jacobian_updates: 0,
             lu_decompositions: 0,
             steps_capped: 0,
             capped_span: 0.0,

@@ -43,6 +43,9 @@ pub struct Stats {
     pub steps_rejected: usize,
     /// Jacobian evaluations (implicit methods).
     pub jacobian_evals: usize,
+    /// Jacobians the system brought to a new state in place of an evaluation
+    /// ([`System::update_jacobian`]).
+    pub jacobian_updates: usize,
     /// LU factorisations (implicit methods).
     pub lu_decompositions: usize,
     /// Accepted steps of an adaptive method that landed on a time stop
@@ -347,6 +350,7 @@ where
             steps_accepted: self.ctx.steps_accepted,
             steps_rejected: self.ctx.steps_rejected,
             jacobian_evals: self.ctx.jacobian_evals,
+            jacobian_updates: self.ctx.jacobian_updates,
             lu_decompositions: self.ctx.lu_decompositions,
             steps_capped: self.ctx.steps_capped,
             capped_span: self.ctx.capped_span,

@@ -34,6 +34,28 @@ impl Jacobian {
         self.j[r * self.n + c]
     }
 
+    /// Has the system bring `J`, evaluated at `(t0, x0)`, to `(t, x)`
+    /// ([`System::update_jacobian`]); true when it did.
+    pub fn update<S: System + ?Sized>(
+        &mut self,
+        sys: &mut S,
+        (t0, x0): (f64, &[f64]),
+        t: f64,
+        x: &[f64],
+    ) -> Result<bool, IntegrateError> {
+        let updated = sys
+            .update_jacobian(t0, x0, t, x, &mut self.j)
+            .map_err(|source| IntegrateError::System { t, source })?;
+        if updated && !all_finite(&self.j) {
+            return Err(IntegrateError::NonFinite {
+                t,
+                entry: None,
+                what: ": in the system's updated Jacobian".into(),
+            });
+        }
+        Ok(updated)
+    }
+
     /// Evaluates `J` at `(t, x)`, `f0 = f(t, x)`; true when the system gave it. `x` is
     /// perturbed one entry at a time for the differences and left as it was.
     pub fn evaluate<S: System + ?Sized>(

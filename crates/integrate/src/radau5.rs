@@ -105,6 +105,12 @@ const SAFE: f64 = 0.9;
 /// halves the right-hand sides at the same error).
 const THET: f64 = 0.001;
 const THET_DIFFERENCES: f64 = 0.1;
+
+/// Updates of a Jacobian ([`System::update_jacobian`]) between two evaluated ones. On the
+/// flexible deployment, over 24 tolerances from `1e-5` to `1.5e-5`: 4 548 right-hand sides on
+/// average without updates, 4 118 with at most two, 4 098 with three and more; the hinge
+/// angles' largest error at most 9.3e-5, 9.9e-5 and 1.2e-4 rad.
+const MAX_UPDATES: usize = 2;
 /// Bounds of `h / h_new`.
 const FACL: f64 = 5.0;
 const FACR: f64 = 1.0 / 8.0;
@@ -155,8 +161,18 @@ pub(crate) struct Radau5 {
     /// [`Radau5::resume`]).
     resumable: bool,
     reject: bool,
-    /// The Jacobian was evaluated at the current step start.
+    /// The Jacobian was evaluated (or updated) at the current step start.
     jac_current: bool,
+    /// The Jacobian is an evaluated one, not one the system updated
+    /// ([`System::update_jacobian`]).
+    jac_exact: bool,
+    /// Where the Jacobian stands: the state it was evaluated or last updated at.
+    t_jac: f64,
+    x_jac: Vec<f64>,
+    /// Updates since the last evaluated Jacobian, and whether the next must be evaluated
+    /// (an updated one failed Newton).
+    updates: usize,
+    evaluate_next: bool,
     /// A Jacobian has been evaluated in this integration (a restart may keep it: see
     /// [`System::jacobian_survives_restart`]).
     has_jacobian: bool,
@@ -230,6 +246,11 @@ impl Radau5 {
             resumable: false,
             reject: false,
             jac_current: false,
+            jac_exact: false,
+            t_jac: 0.0,
+            x_jac: z(),
+            updates: 0,
+            evaluate_next: false,
             has_jacobian: false,
             need_jac: true,
             h_lu: f64::NAN,
@@ -250,11 +271,34 @@ impl Radau5 {
         sys: &mut S,
         ctx: &mut Ctx,
     ) -> Result<(), IntegrateError> {
+        // The system may bring the last Jacobian here for much less than the differences'
+        // right-hand side a column; an updated one that failed Newton, or the last of
+        // `MAX_UPDATES`, gives way to an evaluated one.
+        if self.has_jacobian && !self.evaluate_next && self.updates < MAX_UPDATES {
+            let from = (self.t_jac, &self.x_jac[..]);
+            if self.jac.update(sys, from, self.t, &self.x)? {
+                ctx.jacobian_updates += 1;
+                self.updates += 1;
+                let jac = &self.jac;
+                self.e.reduce(|r, c| jac.get(r, c));
+                self.jac_current = true;
+                self.jac_exact = false;
+                self.t_jac = self.t;
+                self.x_jac.copy_from_slice(&self.x);
+                self.h_lu = f64::NAN;
+                return Ok(());
+            }
+        }
         if !self.f0_exact {
             ctx.eval(sys, self.t, &self.x, &mut self.f0)?;
             self.f0_exact = true;
         }
         let analytic = self.jac.evaluate(sys, ctx, self.t, &mut self.x, &self.f0)?;
+        self.updates = 0;
+        self.evaluate_next = false;
+        self.jac_exact = true;
+        self.t_jac = self.t;
+        self.x_jac.copy_from_slice(&self.x);
         self.has_jacobian = true;
         self.thet = if analytic { THET } else { THET_DIFFERENCES };
         let jac = &self.jac;
@@ -629,8 +673,10 @@ impl Stepper for Radau5 {
             let newt = match self.newton(sys, ctx, h)? {
                 Ok(it) => it,
                 Err(fac) => {
+                    // An updated Jacobian that fails Newton gives way to an evaluated one.
+                    self.evaluate_next |= !self.jac_exact;
                     if fixed {
-                        if self.jac_current {
+                        if self.jac_current && self.jac_exact {
                             return Err(IntegrateError::ConvergenceFailure { t, h });
                         }
                         self.need_jac = true;
@@ -638,7 +684,7 @@ impl Stepper for Radau5 {
                     }
                     self.h = h * fac;
                     self.reject = true;
-                    self.need_jac = !self.jac_current;
+                    self.need_jac = !self.jac_current || !self.jac_exact;
                     ctx.steps_rejected += 1;
                     continue;
                 }
@@ -814,5 +860,82 @@ mod tests {
         // 0.044 measured: the error estimate moves by under a tenth of its threshold.
         assert!(worst < 0.1, "slope off by {worst} of the error scale");
         assert!(worst > 0.0, "the slope is the evaluated f");
+    }
+
+    /// [`Stiff`] with a Jacobian the system brings to each new state: the exact one there,
+    /// or a wrong one (every entry zero).
+    struct Updating {
+        stiff: Stiff,
+        exact: bool,
+    }
+    impl System for Updating {
+        fn dim(&self) -> usize {
+            3
+        }
+        fn rhs(&mut self, t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), SystemError> {
+            self.stiff.rhs(t, x, dx)
+        }
+        fn update_jacobian(
+            &mut self,
+            _t0: f64,
+            _x0: &[f64],
+            _t: f64,
+            x: &[f64],
+            jac: &mut [f64],
+        ) -> Result<bool, SystemError> {
+            jac.fill(0.0);
+            if self.exact {
+                jac[1] = 1.0;
+                jac[3] = -1e4 * (1.0 + 3.0 * x[2] * x[2]);
+                jac[4] = -2.0;
+                jac[5] = -6e4 * x[2] * x[0] + 10.0;
+                jac[6] = 0.1;
+                jac[8] = -10.0 * x[2].abs();
+            }
+            Ok(true)
+        }
+    }
+
+    fn run(sys: &mut dyn System) -> crate::Stats {
+        let opts = Options::new(Method::Radau5).with_tolerances(1e-6, 1e-6);
+        let out = crate::Output::Interval(1.0);
+        crate::integrate(sys, &opts, 0.0, &[1e-3, 0.0, 1.0], 4.0, &out, |_, _| {
+            std::ops::ControlFlow::Continue(())
+        })
+        .unwrap()
+    }
+
+    /// Updated Jacobians stand in for evaluated ones, at most [`super::MAX_UPDATES`] in a
+    /// row; a wrong one costs Newton's failure and an evaluated one, never the solution.
+    #[test]
+    fn updated_jacobians_stand_in_for_evaluated_ones_and_a_wrong_one_gives_way() {
+        let stiff = || Stiff {
+            watch: (f64::NAN, [0.0; 3]),
+            hits: 0,
+        };
+        let plain = run(&mut stiff());
+        assert_eq!(plain.jacobian_updates, 0);
+        assert!(plain.jacobian_evals > 3, "{plain:?}");
+        let close = |s: &crate::Stats| {
+            let d = (0..3).map(|i| {
+                (s.x_final[i] - plain.x_final[i]).abs() / (1e-6 + 1e-6 * plain.x_final[i].abs())
+            });
+            d.fold(0.0, f64::max)
+        };
+        let exact = run(&mut Updating {
+            stiff: stiff(),
+            exact: true,
+        });
+        assert!(exact.jacobian_updates > 0, "{exact:?}");
+        assert!(exact.jacobian_updates <= super::MAX_UPDATES * exact.jacobian_evals);
+        assert!(exact.jacobian_evals < plain.jacobian_evals, "{exact:?}");
+        assert!(close(&exact) < 100.0, "{} tolerances off", close(&exact));
+        let wrong = run(&mut Updating {
+            stiff: stiff(),
+            exact: false,
+        });
+        assert!(wrong.jacobian_updates > 0, "{wrong:?}");
+        assert!(wrong.jacobian_evals >= wrong.jacobian_updates, "{wrong:?}");
+        assert!(close(&wrong) < 100.0, "{} tolerances off", close(&wrong));
     }
 }

@@ -277,6 +277,22 @@ pub trait System {
         Ok(false)
     }
 
+    /// Brings a Jacobian that was evaluated at `(t0, x0)` to `(t, x)` in place, where the
+    /// system knows a cheap way to (a multibody system: its mass matrix at both states).
+    /// Return `Ok(false)` (the default) to have a new one evaluated. The implicit methods
+    /// call it where their Newton iteration asks for a fresher Jacobian, and evaluate a new
+    /// one where an updated one failed them.
+    fn update_jacobian(
+        &mut self,
+        _t0: f64,
+        _x0: &[f64],
+        _t: f64,
+        _x: &[f64],
+        _jac: &mut [f64],
+    ) -> Result<bool, SystemError> {
+        Ok(false)
+    }
+
     /// Number of event functions. Default: none.
     fn n_events(&self) -> usize {
         0
@@ -438,6 +454,16 @@ impl<S: System + ?Sized> System for &mut S {
     }
     fn jacobian(&mut self, t: f64, x: &[f64], jac: &mut [f64]) -> Result<bool, SystemError> {
         (**self).jacobian(t, x, jac)
+    }
+    fn update_jacobian(
+        &mut self,
+        t0: f64,
+        x0: &[f64],
+        t: f64,
+        x: &[f64],
+        jac: &mut [f64],
+    ) -> Result<bool, SystemError> {
+        (**self).update_jacobian(t0, x0, t, x, jac)
     }
     fn n_events(&self) -> usize {
         (**self).n_events()

@@ -454,8 +454,13 @@ fn summary(scene_path: &Path, scene: &Scene, sim: &Simulation, done: &Done) -> O
         stats.steps_rejected,
         stats.rhs_evals,
         if stats.jacobian_evals > 0 {
+            let updated = if stats.jacobian_updates > 0 {
+                format!(" and {} updated", stats.jacobian_updates)
+            } else {
+                String::new()
+            };
             format!(
-                " ({} Jacobians, {} LU factorisations)",
+                " ({} Jacobians{updated}, {} LU factorisations)",
                 stats.jacobian_evals, stats.lu_decompositions
             )
         } else {

@@ -50,6 +50,7 @@ fn traj(times: &[f64], states: Vec<Vec<f64>>) -> Trajectory {
             steps_accepted: 0,
             steps_rejected: 0,
             jacobian_evals: 0,
+            jacobian_updates: 0,
             lu_decompositions: 0,
             steps_capped: 0,
             capped_span: 0.0,
