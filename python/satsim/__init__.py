@@ -777,7 +777,9 @@ class Simulation:
         counts a run's: ``rhs_evals`` (right-hand sides, a finite-difference Jacobian's
         included), ``steps_accepted``, ``steps_rejected``, ``steps_capped`` (the accepted
         steps an adaptive method cut to land on a call's end or a time stop),
-        ``jacobian_evals`` and ``lu_decompositions`` (Radau IIA). Each call goes on from the
+        ``jacobian_evals``, ``jacobian_updates`` (Jacobians brought to a new state through
+        the mass matrix, on a tree with flexible bodies) and ``lu_decompositions`` (Radau
+        IIA). Each call goes on from the
         last with its step and Jacobian, so a short ``dt`` costs a step or two."""
         return {k: int(v) for k, v in self._native.work}
 

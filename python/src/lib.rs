@@ -721,6 +721,7 @@ impl NativeSimulation {
             ("steps_rejected", w.steps_rejected),
             ("steps_capped", steps.capped),
             ("jacobian_evals", w.jacobian_evals),
+            ("jacobian_updates", w.jacobian_updates),
             ("lu_decompositions", w.lu_decompositions),
         ])
     }

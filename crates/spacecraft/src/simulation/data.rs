@@ -90,6 +90,9 @@ pub struct SimData {
     pub(super) deflection_peaks: Vec<DeflectionPeak>,
     /// The energy budget over the output rows so far.
     pub(super) budget: BudgetWatch,
+    /// The mass matrices' workspace of the Jacobian's updates (`jacobian.rs`), made at the
+    /// first.
+    pub(super) jac_update: Option<Box<super::jacobian::JacobianUpdate>>,
 }
 
 /// The smallest and largest energy budget `T + V − W + D` of the output rows so far, and
@@ -224,6 +227,7 @@ impl SimData {
             ahead: Ahead::new(n_states),
             deflection_peaks: Vec::new(),
             budget: BudgetWatch::default(),
+            jac_update: None,
         }
     }
     /// The loads the effects applied in the last pass.

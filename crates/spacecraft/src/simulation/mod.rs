@@ -78,6 +78,7 @@ mod context;
 mod data;
 mod events;
 mod hold;
+mod jacobian;
 mod lanes;
 mod layout;
 mod loads;

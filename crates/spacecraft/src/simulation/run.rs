@@ -384,6 +384,16 @@ impl<C: SimCell> System for Shared<C> {
     fn on_stop(&mut self, t: f64, x: &mut [f64]) -> Result<bool, SystemError> {
         self.0.sim_mut().on_stop(t, x)
     }
+    fn update_jacobian(
+        &mut self,
+        t0: f64,
+        x0: &[f64],
+        t: f64,
+        x: &[f64],
+        jac: &mut [f64],
+    ) -> Result<bool, SystemError> {
+        self.0.sim_mut().update_jacobian(t0, x0, t, x, jac)
+    }
     fn jacobian_survives_restart(&mut self) -> bool {
         self.0.sim_mut().jacobian_survives_restart()
     }

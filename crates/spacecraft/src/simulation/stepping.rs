@@ -202,6 +202,9 @@ pub struct StepWork {
     pub steps_rejected: usize,
     /// Jacobians (Radau IIA).
     pub jacobian_evals: usize,
+    /// Jacobians brought to a new state through the mass matrix instead (Radau IIA on a
+    /// tree with flexible bodies).
+    pub jacobian_updates: usize,
     /// LU factorisations (Radau IIA).
     pub lu_decompositions: usize,
 }
@@ -504,6 +507,7 @@ impl Stepping {
                 w.steps_accepted += stats.steps_accepted;
                 w.steps_rejected += stats.steps_rejected;
                 w.jacobian_evals += stats.jacobian_evals;
+                w.jacobian_updates += stats.jacobian_updates;
                 w.lu_decompositions += stats.lu_decompositions;
                 self.steps.add(Steps::of(&stats, self.t));
                 self.t = stats.t_final;

@@ -136,6 +136,17 @@ impl System for Simulation {
     /// must see a zero row (the stage system then keeps it exactly zero); a friction torque
     /// changing sign, a hinge released, an impulse or a sampled law's new output leave a
     /// Jacobian Newton still converges with (and renews where it does not).
+    fn update_jacobian(
+        &mut self,
+        _t0: f64,
+        x0: &[f64],
+        _t: f64,
+        x: &[f64],
+        jac: &mut [f64],
+    ) -> Result<bool, SystemError> {
+        self.jacobian_update(x0, x, jac)
+    }
+
     fn jacobian_survives_restart(&mut self) -> bool {
         !std::mem::take(&mut self.data.newly_locked)
     }

@@ -11,6 +11,7 @@ mod faults;
 mod flexible_loads;
 mod flexible_scene;
 mod fsw;
+mod jacobian_update;
 mod lanes;
 mod linearize;
 mod mounting;
