@@ -33,6 +33,7 @@
 
 use super::Simulation;
 use super::model::SimModel;
+use super::rhs::unpack_positions;
 use satsim_integrate::SystemError;
 use satsim_tree::DynamicsError;
 use satsim_tree::flexible::{self, FlexData, FlexModel};
@@ -47,7 +48,6 @@ pub(super) struct JacobianUpdate {
     row: Vec<usize>,
     free_then: Vec<usize>,
     free_now: Vec<usize>,
-    m0: Vec<f64>,
     b: Vec<f64>,
     l: Vec<f64>,
 }
@@ -61,7 +61,6 @@ impl JacobianUpdate {
             row: (0..nt).map(|k| state_row(m, k)).collect(),
             free_then: Vec::with_capacity(nt),
             free_now: Vec::with_capacity(nt),
-            m0: vec![0.0; nt * nt],
             b: vec![0.0; nt * n],
             l: vec![0.0; nt * nt],
         }
@@ -129,14 +128,11 @@ impl Simulation {
         // M at the Jacobian's state, then B = M_FF J_F, row by row.
         positions(m, &d.q, x0, &mut u.q);
         let mass = flexible::crba(f, &mut u.data, &u.q).map_err(err)?;
-        for (i, k) in (0..nt).flat_map(|i| (0..nt).map(move |k| (i, k))) {
-            u.m0[i * nt + k] = mass[(i, k)];
-        }
         for &i in &u.free_then {
             let bi = &mut u.b[i * n..(i + 1) * n];
             bi.fill(0.0);
             for &k in &u.free_then {
-                let mik = u.m0[i * nt + k];
+                let mik = mass[(i, k)];
                 if mik != 0.0 {
                     let r = u.row[k];
                     for (b, j) in bi.iter_mut().zip(&jac[r * n..(r + 1) * n]) {
@@ -192,19 +188,13 @@ impl Simulation {
     }
 }
 
-/// The tree's coordinates at state `x` into `q` (`rhs.rs`'s `unpack`: the attitude and the
-/// hinge angles from `x`, the rest of `template`, the elastic coordinates after them).
+/// The flexible tree's coordinates at state `x` into `q`: the rigid ones as the right-hand
+/// side unpacks them ([`unpack_positions`], over `template`'s, the rotors' angles), then `η`.
 fn positions(m: &SimModel, template: &[f64], x: &[f64], q: &mut [f64]) {
-    let (l, nu) = (&m.layout, m.n_user);
     let nq = template.len();
     q[..nq].copy_from_slice(template);
-    if l.free {
-        q[..4].copy_from_slice(&x[..4]);
-        q[7..7 + nu].copy_from_slice(&x[4..4 + nu]);
-    } else {
-        q[..nu].copy_from_slice(&x[l.angles.clone()]);
-    }
-    q[nq..].copy_from_slice(&x[l.eta.clone()]);
+    unpack_positions(m, x, &mut q[..nq]);
+    q[nq..].copy_from_slice(&x[m.layout.eta.clone()]);
 }
 
 /// `y += a x`.

@@ -17,6 +17,7 @@
 
 use super::Simulation;
 use super::hold::Hold;
+use super::model::SimModel;
 use super::solve::{flexible_dynamics, flexible_forces, forward_dynamics};
 use crate::effects::{Context, Forces, Power};
 use satsim_integrate::SystemError;
@@ -183,14 +184,7 @@ impl Simulation {
         let (m, d) = (&self.model, &mut self.data);
         let l = &m.layout;
         let n = m.n_user;
-        if l.free {
-            // x = [attitude, angles, ω, v, rates, ...] (`StateLayout`); a fixed-size copy
-            // where the length is known (no `memcpy` call).
-            d.q[..4].copy_from_slice(&x[..4]);
-            d.q[7..7 + n].copy_from_slice(&x[4..4 + n]);
-        } else {
-            d.q[..n].copy_from_slice(&x[l.angles.clone()]);
-        }
+        unpack_positions(m, x, &mut d.q);
         if let Some(s) = m.velocity_at {
             // The whole velocity vector is one run of the state: one copy.
             let nv = d.v.len();
@@ -409,6 +403,21 @@ impl Simulation {
             let r = m.own[i].clone();
             dx[r].copy_from_slice(&ddq[nb + n..nb + n + m.n_rotors]);
         }
+    }
+}
+
+/// The attitude and the hinge angles of `x` into the rigid tree's coordinates `q` (the rest
+/// of `q`, the base's position and the rotors' angles, is no state and is left as it is).
+#[inline(always)]
+pub(super) fn unpack_positions(m: &SimModel, x: &[f64], q: &mut [f64]) {
+    let (l, n) = (&m.layout, m.n_user);
+    if l.free {
+        // x = [attitude, angles, ω, v, rates, ...] (`StateLayout`); a fixed-size copy
+        // where the length is known (no `memcpy` call).
+        q[..4].copy_from_slice(&x[..4]);
+        q[7..7 + n].copy_from_slice(&x[4..4 + n]);
+    } else {
+        q[..n].copy_from_slice(&x[l.angles.clone()]);
     }
 }
 
